@@ -1,0 +1,1 @@
+//! Expands experiment grids and schedules jobs. (Grows with the experiment-grid issue.)

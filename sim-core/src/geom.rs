@@ -1,0 +1,222 @@
+//! Plain geometry in world metres (x right, y up, angles in radians counter-clockwise).
+
+/// A point or vector in world metres.
+pub type Vec2 = nalgebra::Vector2<f64>;
+
+/// A robot pose in the world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    pub x_m: f64,
+    pub y_m: f64,
+    pub theta_rad: f64,
+}
+
+impl Pose {
+    pub const fn new(x_m: f64, y_m: f64, theta_rad: f64) -> Self {
+        Self {
+            x_m,
+            y_m,
+            theta_rad,
+        }
+    }
+    pub fn position(&self) -> Vec2 {
+        Vec2::new(self.x_m, self.y_m)
+    }
+    /// `self ∘ other`: `other` expressed in `self`'s frame, brought to the world.
+    pub fn compose(&self, other: &Pose) -> Pose {
+        let (s, c) = self.theta_rad.sin_cos();
+        Pose::new(
+            self.x_m + c * other.x_m - s * other.y_m,
+            self.y_m + s * other.x_m + c * other.y_m,
+            wrap_angle(self.theta_rad + other.theta_rad),
+        )
+    }
+    /// The pose `d` such that `self.compose(d) == other`.
+    pub fn between(&self, other: &Pose) -> Pose {
+        let (s, c) = self.theta_rad.sin_cos();
+        let dx = other.x_m - self.x_m;
+        let dy = other.y_m - self.y_m;
+        Pose::new(
+            c * dx + s * dy,
+            -s * dx + c * dy,
+            wrap_angle(other.theta_rad - self.theta_rad),
+        )
+    }
+}
+
+/// Wraps an angle to (-pi, pi].
+pub fn wrap_angle(a: f64) -> f64 {
+    let mut a = a % std::f64::consts::TAU;
+    if a <= -std::f64::consts::PI {
+        a += std::f64::consts::TAU;
+    } else if a > std::f64::consts::PI {
+        a -= std::f64::consts::TAU;
+    }
+    a
+}
+
+/// A line segment in world metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment {
+    pub a: Vec2,
+    pub b: Vec2,
+}
+
+impl Segment {
+    pub fn new(a: Vec2, b: Vec2) -> Self {
+        Self { a, b }
+    }
+    pub fn length_m(&self) -> f64 {
+        (self.b - self.a).norm()
+    }
+}
+
+/// An axis-aligned box in world metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: Vec2,
+    pub max: Vec2,
+}
+
+impl Aabb {
+    pub fn empty() -> Self {
+        Self {
+            min: Vec2::new(f64::INFINITY, f64::INFINITY),
+            max: Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+        }
+    }
+    pub fn is_empty(&self) -> bool {
+        !(self.min.x <= self.max.x && self.min.y <= self.max.y)
+    }
+    pub fn grow(&mut self, p: Vec2) {
+        self.min = self.min.inf(&p);
+        self.max = self.max.sup(&p);
+    }
+    pub fn width_m(&self) -> f64 {
+        (self.max.x - self.min.x).max(0.0)
+    }
+    pub fn height_m(&self) -> f64 {
+        (self.max.y - self.min.y).max(0.0)
+    }
+    pub fn contains(&self, p: Vec2) -> bool {
+        p.x >= self.min.x && p.x <= self.max.x && p.y >= self.min.y && p.y <= self.max.y
+    }
+}
+
+/// A simple polygon (no self-intersections), vertices in order, implicitly closed
+/// (the last vertex is *not* a repeat of the first).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Polygon {
+    pub vertices: Vec<Vec2>,
+}
+
+impl Polygon {
+    pub fn new(vertices: Vec<Vec2>) -> Self {
+        Self { vertices }
+    }
+
+    /// An axis-aligned rectangle.
+    pub fn rect(min: Vec2, max: Vec2) -> Self {
+        Self::new(vec![
+            min,
+            Vec2::new(max.x, min.y),
+            max,
+            Vec2::new(min.x, max.y),
+        ])
+    }
+
+    /// The rectangle of a wall of `thickness_m` around the segment `a`-`b`
+    /// (extended by half the thickness at both ends, so that walls meeting at a corner close it).
+    pub fn thick_segment(a: Vec2, b: Vec2, thickness_m: f64) -> Self {
+        let d = b - a;
+        let len = d.norm();
+        let h = thickness_m / 2.0;
+        if len <= f64::EPSILON {
+            return Self::rect(a - Vec2::new(h, h), a + Vec2::new(h, h));
+        }
+        let u = d / len;
+        let n = Vec2::new(-u.y, u.x) * h;
+        let a2 = a - u * h;
+        let b2 = b + u * h;
+        Self::new(vec![a2 - n, b2 - n, b2 + n, a2 + n])
+    }
+
+    /// Signed area (positive when counter-clockwise).
+    pub fn signed_area_m2(&self) -> f64 {
+        let n = self.vertices.len();
+        let mut s = 0.0;
+        for i in 0..n {
+            let p = self.vertices[i];
+            let q = self.vertices[(i + 1) % n];
+            s += p.x * q.y - q.x * p.y;
+        }
+        s / 2.0
+    }
+
+    pub fn area_m2(&self) -> f64 {
+        self.signed_area_m2().abs()
+    }
+
+    /// Even-odd point-in-polygon test.
+    pub fn contains(&self, p: Vec2) -> bool {
+        let n = self.vertices.len();
+        let mut inside = false;
+        let mut j = n.wrapping_sub(1);
+        for i in 0..n {
+            let a = self.vertices[i];
+            let b = self.vertices[j];
+            if (a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x {
+                inside = !inside;
+            }
+            j = i;
+        }
+        inside
+    }
+
+    pub fn edges(&self) -> impl Iterator<Item = Segment> + '_ {
+        let n = self.vertices.len();
+        (0..n).map(move |i| Segment::new(self.vertices[i], self.vertices[(i + 1) % n]))
+    }
+
+    pub fn aabb(&self) -> Aabb {
+        let mut b = Aabb::empty();
+        for v in &self.vertices {
+            b.grow(*v);
+        }
+        b
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pose_between_inverts_compose() {
+        let a = Pose::new(1.0, 2.0, 0.7);
+        let d = Pose::new(0.3, -0.2, -1.1);
+        let b = a.compose(&d);
+        let d2 = a.between(&b);
+        assert!((d2.x_m - d.x_m).abs() < 1e-12);
+        assert!((d2.y_m - d.y_m).abs() < 1e-12);
+        assert!((d2.theta_rad - d.theta_rad).abs() < 1e-12);
+    }
+
+    #[test]
+    fn polygon_area_and_contains() {
+        let p = Polygon::rect(Vec2::new(0.0, 0.0), Vec2::new(2.0, 3.0));
+        assert_eq!(p.area_m2(), 6.0);
+        assert!(p.contains(Vec2::new(1.0, 1.0)));
+        assert!(!p.contains(Vec2::new(3.0, 1.0)));
+        let w = Polygon::thick_segment(Vec2::new(0.0, 0.0), Vec2::new(4.0, 0.0), 0.2);
+        assert!((w.area_m2() - 4.2 * 0.2).abs() < 1e-9);
+    }
+
+    #[test]
+    fn wrap_angle_range() {
+        for k in -20..20 {
+            let a = wrap_angle(k as f64 * 0.9);
+            assert!(a > -std::f64::consts::PI && a <= std::f64::consts::PI);
+        }
+    }
+}

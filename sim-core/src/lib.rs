@@ -1,0 +1,15 @@
+//! Simulation kernel: building geometry, robot, laser, occupancy mapping, frontiers,
+//! layout reconstruction, information gain, exploration strategies.
+//!
+//! No IO, no threads, no clock, no global RNG, no async. Randomness arrives as a seed or an
+//! `&mut impl Rng`; time is simulated (`sim_time_s`). The same (building, strategy, seed, config)
+//! gives a bit-identical run.
+
+pub mod building;
+pub mod distance;
+pub mod geom;
+pub mod grid;
+
+pub use building::{Building, Door, Geometry, Room};
+pub use geom::{Aabb, Polygon, Pose, Segment, Vec2};
+pub use grid::{Bitmap, Cell, Grid, GridFrame, Occupancy, OccupancyGrid};

@@ -1,0 +1,1 @@
+//! Runs floorcast jobs. (Grows with the experiment-grid issue.)
