@@ -9,7 +9,9 @@ pub mod building;
 pub mod distance;
 pub mod geom;
 pub mod grid;
+pub mod scan;
 
 pub use building::{Building, Door, Geometry, Room};
 pub use geom::{Aabb, Polygon, Pose, Segment, Vec2};
 pub use grid::{Bitmap, Cell, Grid, GridFrame, Occupancy, OccupancyGrid};
+pub use scan::Scan;
