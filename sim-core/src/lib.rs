@@ -10,6 +10,7 @@ pub mod distance;
 pub mod geom;
 pub mod grid;
 pub mod scan;
+pub mod sim;
 
 pub use building::{Building, Door, Geometry, Room};
 pub use geom::{Aabb, Polygon, Pose, Segment, Vec2};
