@@ -1,0 +1,1 @@
+//! Frontier detection and goal blacklisting.
