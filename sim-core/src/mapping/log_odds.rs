@@ -90,7 +90,7 @@ impl LogOddsMap {
     /// Integrates one scan taken at `pose` (the sensor sits at the robot's centre).
     pub fn insert_scan(&mut self, pose: &Pose, scan: &Scan, cfg: &LogOddsConfig) -> InsertStats {
         let mut stats = InsertStats::default();
-        if self.frame.is_empty() || !(scan.max_range_m > 0.0) {
+        if self.frame.is_empty() || scan.max_range_m.is_nan() || scan.max_range_m <= 0.0 {
             return stats;
         }
         let start = grid_from_world(&self.frame, pose.position());
