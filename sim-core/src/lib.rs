@@ -7,6 +7,7 @@
 
 pub mod building;
 pub mod distance;
+pub mod explore;
 pub mod frontier;
 pub mod gain;
 pub mod geom;
