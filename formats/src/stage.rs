@@ -83,7 +83,7 @@ fn tokenize(text: &str) -> Vec<Tok> {
             '"' => {
                 chars.next();
                 let mut s = String::new();
-                while let Some(c) = chars.next() {
+                for c in chars.by_ref() {
                     if c == '"' || c == '\n' {
                         break;
                     }
