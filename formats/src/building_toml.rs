@@ -687,3 +687,21 @@ theta_deg = 90.0
         );
     }
 }
+
+#[cfg(test)]
+mod doc_example {
+    #[test]
+    fn the_documented_example_parses() {
+        let md = include_str!("../BUILDING_FORMAT.md");
+        let start = md.find("```toml\n").unwrap() + "```toml\n".len();
+        let len = md[start..].find("```").unwrap();
+        let b = super::parse_building_toml(
+            &md[start..start + len],
+            std::path::Path::new("BUILDING_FORMAT.md"),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(b.name, "two-rooms");
+        assert_eq!((b.rooms.len(), b.doors.len()), (2, 1));
+        assert!(b.start.is_some());
+    }
+}
