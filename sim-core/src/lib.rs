@@ -7,6 +7,7 @@
 
 pub mod building;
 pub mod distance;
+pub mod generate;
 pub mod geom;
 pub mod grid;
 pub mod scan;
