@@ -50,6 +50,7 @@ fn slice(
     p: &Params,
     len_m: f64,
     halls_left: &mut u32,
+    force_hall: bool,
     entrance: bool,
     rng: &mut impl Rng,
 ) -> Vec<(f64, &'static str)> {
@@ -95,6 +96,13 @@ fn slice(
     if out.is_empty() {
         out.push((len_m, mods[0].kind));
         sum = len_m;
+    }
+    if force_hall && out.len() >= 3 {
+        let k = out.len() / 4;
+        let w = 2.0 * p.module_m;
+        sum += w - out[k].0;
+        out[k] = (w, "hall");
+        *halls_left = halls_left.saturating_sub(1);
     }
     if entrance {
         let mid = out.len() / 2;
@@ -180,7 +188,12 @@ pub(super) fn fill(p: &Params, sk: &Skeleton, rng: &mut impl Rng) -> Layout {
             continue;
         }
         let is_entrance = bi == 0 && sk.entrance == Entrance::Hall;
-        let rooms = slice(p, hi - lo, &mut halls_left, is_entrance, rng);
+        // A school has at least one hall: the second band gets one if none came up yet.
+        let force_hall = p.kind == BuildingKind::School
+            && bi == 1
+            && halls_left == p.halls
+            && hi - lo >= 4.0 * p.module_m;
+        let rooms = slice(p, hi - lo, &mut halls_left, force_hall, is_entrance, rng);
         let door_mode = rng.random_range(0..3u32);
         let mut t = lo;
         let mut prev: Option<(usize, &'static str)> = None;

@@ -117,8 +117,26 @@ fn check_building(b: &Building) {
     assert!(b.is_free(start.position()), "{label}: start not free");
     let clearance_m = *dist_m.get(sc).unwrap() as f64 * frame.resolution_m;
     assert!(clearance_m >= 0.4, "{label}: start clearance {clearance_m}");
-    // Doors are free at their midpoints.
+    // Doors are free at their midpoints; doors of rooms are 0.9-1.5 m wide (the entrance and
+    // the open junctions between corridors may be wider).
+    let kind_of = |id: Option<u32>| {
+        id.and_then(|i| b.rooms.iter().find(|r| r.id == i))
+            .map(|r| r.kind.as_str())
+    };
     for d in &b.doors {
+        let kinds = d.rooms.map(kind_of);
+        let junction = kinds == [Some("corridor"), Some("corridor")];
+        if !junction && d.rooms.iter().all(|r| r.is_some()) {
+            let w = (d.b - d.a).norm();
+            assert!(
+                (0.9 - 1e-9..=1.5 + 1e-9).contains(&w),
+                "{label}: door {d:?} is {w} m wide"
+            );
+        }
+        assert!(
+            kinds.iter().all(|k| k.is_some()) || d.rooms.contains(&None),
+            "{label}: door to no room"
+        );
         let mid = (d.a + d.b) / 2.0;
         assert!(b.is_free(mid), "{label}: door {d:?} is blocked");
     }
@@ -213,5 +231,15 @@ fn odd_areas_do_not_panic() {
     for area in [0.0, -5.0, f64::NAN, 1e9] {
         let b = generate(&config(1, area, BuildingKind::School));
         assert!(!b.rooms.is_empty());
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+    #[test]
+    fn any_area_from_300_to_5000_is_met(seed in 0u64..10_000, area in 300.0f64..5000.0, school: bool) {
+        let kind = if school { BuildingKind::School } else { BuildingKind::Office };
+        let got = generate(&config(seed, area, kind)).free_area_m2();
+        proptest::prop_assert!((got / area - 1.0).abs() <= 0.15, "{got} for {area}");
     }
 }
