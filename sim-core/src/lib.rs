@@ -10,6 +10,7 @@ pub mod distance;
 pub mod explore;
 pub mod frontier;
 pub mod gain;
+pub mod generate;
 pub mod geom;
 pub mod grid;
 pub mod mapping;
