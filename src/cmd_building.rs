@@ -11,7 +11,6 @@ use sim_core::explore::RunResult;
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 use sim_core::{Building, Vec2};
 
-
 #[derive(Debug, Subcommand)]
 pub enum BuildingCommand {
     /// Generate a school or office building with ground-truth rooms, as floorcast TOML.
@@ -43,7 +42,12 @@ pub struct GenerateArgs {
     #[arg(long)]
     clutter: bool,
     /// Rotate the whole building by this many degrees (non-axis-aligned walls).
-    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     rotation_deg: f64,
     /// Building name (default: the output file's stem).
     #[arg(long)]
@@ -81,13 +85,22 @@ pub fn run(c: BuildingCommand) -> Result<()> {
 
 fn generate_cmd(a: GenerateArgs) -> Result<()> {
     if !(a.area_m2.is_finite() && (100.0..=20_000.0).contains(&a.area_m2)) {
-        bail!("--area-m2 {}: expected a free area between 100 and 20000 m2", a.area_m2);
+        bail!(
+            "--area-m2 {}: expected a free area between 100 and 20000 m2",
+            a.area_m2
+        );
     }
     if !a.rotation_deg.is_finite() {
-        bail!("--rotation-deg {}: expected a number of degrees", a.rotation_deg);
+        bail!(
+            "--rotation-deg {}: expected a number of degrees",
+            a.rotation_deg
+        );
     }
     let name = a.name.clone().unwrap_or_else(|| {
-        a.out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "building".into())
+        a.out
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "building".into())
     });
     let b = generate(&GenerateConfig {
         seed: a.seed,
@@ -138,7 +151,8 @@ fn check_report(file: &std::path::Path, b: &Building) -> Result<CheckReport> {
         .default_start()
         .with_context(|| format!("{}: the building has no free space", file.display()))?;
     let frame = b.area_frame();
-    let reachable = b.reachable_free(frame, start.position()).count_true() as f64 * frame.cell_area_m2();
+    let reachable =
+        b.reachable_free(frame, start.position()).count_true() as f64 * frame.cell_area_m2();
     Ok(CheckReport {
         file: file.display().to_string(),
         name: b.name.clone(),
@@ -171,8 +185,14 @@ fn check_cmd(a: CheckArgs) -> Result<()> {
     }
     println!("file:            {}", r.file);
     println!("name:            {}", r.name);
-    println!("size:            {:.1} x {:.1} m ({})", r.width_m, r.height_m, r.geometry);
-    println!("free area:       {:.1} m2 ({:.1} m2 reachable from the start)", r.free_area_m2, r.reachable_free_area_m2);
+    println!(
+        "size:            {:.1} x {:.1} m ({})",
+        r.width_m, r.height_m, r.geometry
+    );
+    println!(
+        "free area:       {:.1} m2 ({:.1} m2 reachable from the start)",
+        r.free_area_m2, r.reachable_free_area_m2
+    );
     match r.rooms {
         Some(n) => println!("rooms:           {n} ({} doors)", r.doors.unwrap_or(0)),
         None => println!("rooms:           unknown (no ground truth)"),
@@ -202,8 +222,15 @@ pub fn exploration_figure(r: &RunResult) -> Figure {
     fig.grid(&r.map);
     let traj: Vec<Vec2> = r.trajectory.iter().map(|p| p.position()).collect();
     fig.polyline(&traj, &Style::stroke(Color::rgb(30, 90, 220), 1.5));
-    let est: Vec<Vec2> = r.estimated_trajectory.iter().map(|p| p.position()).collect();
-    fig.polyline(&est, &Style::stroke(Color::rgba(220, 120, 30, 160), 1.0).dashed(4.0, 3.0));
+    let est: Vec<Vec2> = r
+        .estimated_trajectory
+        .iter()
+        .map(|p| p.position())
+        .collect();
+    fig.polyline(
+        &est,
+        &Style::stroke(Color::rgba(220, 120, 30, 160), 1.0).dashed(4.0, 3.0),
+    );
     for d in &r.decisions {
         fig.circle(d.goal, 0.25, &Style::fill(Color::rgb(220, 30, 30)));
     }

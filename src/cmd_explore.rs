@@ -83,10 +83,9 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         settings,
         start: a.start,
     };
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("results/explore/{name}-{}-{}", a.strategy, a.seed)));
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from(format!("results/explore/{name}-{}-{}", a.strategy, a.seed))
+    });
     create_dir(&out)?;
 
     let pb = progress_bar(1000, a.quiet, "{spinner} {msg} [{bar:40}] {pos}‰ explored");
@@ -129,18 +128,31 @@ pub fn run(a: ExploreArgs) -> Result<()> {
 fn progress_csv(r: &RunResult) -> String {
     let mut s = String::from("time_s,explored_area_m2,explored_fraction\n");
     for p in &r.progress {
-        let _ = writeln!(s, "{:.1},{:.3},{:.5}", p.time_s, p.explored_area_m2, p.explored_fraction);
+        let _ = writeln!(
+            s,
+            "{:.1},{:.3},{:.5}",
+            p.time_s, p.explored_area_m2, p.explored_fraction
+        );
     }
     s
 }
 
 fn decisions_csv(r: &RunResult) -> String {
-    let mut s = String::from("time_s,x_m,y_m,theta_rad,goal_x_m,goal_y_m,candidates,gain_m2,distance_m\n");
+    let mut s =
+        String::from("time_s,x_m,y_m,theta_rad,goal_x_m,goal_y_m,candidates,gain_m2,distance_m\n");
     for d in &r.decisions {
         let _ = writeln!(
             s,
             "{:.1},{:.3},{:.3},{:.4},{:.3},{:.3},{},{:.3},{:.3}",
-            d.time_s, d.pose.x_m, d.pose.y_m, d.pose.theta_rad, d.goal.x, d.goal.y, d.candidates, d.gain_m2, d.distance_m
+            d.time_s,
+            d.pose.x_m,
+            d.pose.y_m,
+            d.pose.theta_rad,
+            d.goal.x,
+            d.goal.y,
+            d.candidates,
+            d.gain_m2,
+            d.distance_m
         );
     }
     s

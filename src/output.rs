@@ -8,7 +8,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 /// Creates `dir` (and parents), with a message naming it on failure.
 pub fn create_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create directory {}", dir.display()))
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create directory {}", dir.display()))
 }
 
 /// Writes a text file, naming it on failure.
@@ -32,7 +33,9 @@ pub fn progress_bar(len: u64, quiet: bool, template: &str) -> ProgressBar {
 pub fn parse_pose(s: &str) -> Result<sim_core::Pose, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 3 {
-        return Err(format!("expected x,y,theta (metres, metres, degrees), got '{s}'"));
+        return Err(format!(
+            "expected x,y,theta (metres, metres, degrees), got '{s}'"
+        ));
     }
     let mut v = [0.0; 3];
     for (i, p) in parts.iter().enumerate() {

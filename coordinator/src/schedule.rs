@@ -20,7 +20,10 @@ pub enum Event {
     /// A worker asks for one job.
     JobRequested(WorkerId),
     /// A worker returns the result of a job.
-    ResultSubmitted { worker: WorkerId, job: JobId },
+    ResultSubmitted {
+        worker: WorkerId,
+        job: JobId,
+    },
     /// Time passes (check leases).
     Tick,
 }
@@ -29,7 +32,11 @@ pub enum Event {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Action {
     /// Answer the request of `worker` with `job`, leased until `deadline_s`.
-    Lease { worker: WorkerId, job: JobId, deadline_s: f64 },
+    Lease {
+        worker: WorkerId,
+        job: JobId,
+        deadline_s: f64,
+    },
     /// Answer the request: nothing to hand out now, ask again later.
     Wait { worker: WorkerId },
     /// Answer the request: the grid is complete, the worker may leave.
@@ -41,7 +48,11 @@ pub enum Action {
     /// Refuse a result for a job that is not part of this grid.
     RejectUnknown { worker: WorkerId, job: JobId },
     /// A job went back to the queue (for logs and progress).
-    Requeued { job: JobId, worker: WorkerId, reason: RequeueReason },
+    Requeued {
+        job: JobId,
+        worker: WorkerId,
+        reason: RequeueReason,
+    },
     /// Every job is stored.
     Finished,
 }
@@ -128,8 +139,18 @@ impl Scheduler {
                 self.expire(now_s, &mut out);
                 if let Some(job) = self.pending.pop_front() {
                     let deadline_s = now_s + self.lease_s;
-                    self.leased.insert(job.clone(), Lease { worker: w.clone(), deadline_s });
-                    out.push(Action::Lease { worker: w, job, deadline_s });
+                    self.leased.insert(
+                        job.clone(),
+                        Lease {
+                            worker: w.clone(),
+                            deadline_s,
+                        },
+                    );
+                    out.push(Action::Lease {
+                        worker: w,
+                        job,
+                        deadline_s,
+                    });
                 } else if self.is_finished() {
                     out.push(Action::Done { worker: w });
                 } else {
@@ -168,13 +189,21 @@ impl Scheduler {
         reason: RequeueReason,
         out: &mut Vec<Action>,
     ) {
-        let gone: Vec<JobId> =
-            self.leased.iter().filter(|(_, l)| pred(l)).map(|(j, _)| j.clone()).collect();
+        let gone: Vec<JobId> = self
+            .leased
+            .iter()
+            .filter(|(_, l)| pred(l))
+            .map(|(j, _)| j.clone())
+            .collect();
         // Requeued jobs go to the front, in id order, so they finish soon.
         for job in gone.into_iter().rev() {
             let lease = self.leased.remove(&job).expect("listed above");
             self.pending.push_front(job.clone());
-            out.push(Action::Requeued { job, worker: lease.worker, reason });
+            out.push(Action::Requeued {
+                job,
+                worker: lease.worker,
+                reason,
+            });
         }
     }
 }
@@ -196,12 +225,30 @@ mod tests {
         assert!(matches!(&a[..], [Action::Lease { job, .. }] if job == "job000"));
         let b = s.handle(Event::JobRequested("w2".into()), 0.0);
         assert!(matches!(&b[..], [Action::Lease { job, .. }] if job == "job001"));
-        assert!(matches!(&s.handle(Event::JobRequested("w3".into()), 0.0)[..], [Action::Wait { .. }]));
-        let r = s.handle(Event::ResultSubmitted { worker: "w1".into(), job: "job000".into() }, 1.0);
+        assert!(matches!(
+            &s.handle(Event::JobRequested("w3".into()), 0.0)[..],
+            [Action::Wait { .. }]
+        ));
+        let r = s.handle(
+            Event::ResultSubmitted {
+                worker: "w1".into(),
+                job: "job000".into(),
+            },
+            1.0,
+        );
         assert!(matches!(&r[..], [Action::Store { .. }]));
-        let r = s.handle(Event::ResultSubmitted { worker: "w2".into(), job: "job001".into() }, 1.0);
+        let r = s.handle(
+            Event::ResultSubmitted {
+                worker: "w2".into(),
+                job: "job001".into(),
+            },
+            1.0,
+        );
         assert!(matches!(&r[..], [Action::Store { .. }, Action::Finished]));
-        assert!(matches!(&s.handle(Event::JobRequested("w1".into()), 2.0)[..], [Action::Done { .. }]));
+        assert!(matches!(
+            &s.handle(Event::JobRequested("w1".into()), 2.0)[..],
+            [Action::Done { .. }]
+        ));
     }
 
     #[test]
@@ -209,14 +256,38 @@ mod tests {
         let mut s = Scheduler::new(ids(1), &BTreeSet::new(), 60.0);
         s.handle(Event::JobRequested("w1".into()), 0.0);
         let a = s.handle(Event::WorkerLeft("w1".into()), 1.0);
-        assert!(matches!(&a[..], [Action::Requeued { reason: RequeueReason::WorkerLeft, .. }]));
+        assert!(matches!(
+            &a[..],
+            [Action::Requeued {
+                reason: RequeueReason::WorkerLeft,
+                ..
+            }]
+        ));
         let a = s.handle(Event::JobRequested("w2".into()), 2.0);
         assert!(matches!(&a[..], [Action::Lease { worker, .. }] if worker == "w2"));
-        s.handle(Event::ResultSubmitted { worker: "w2".into(), job: "job000".into() }, 3.0);
+        s.handle(
+            Event::ResultSubmitted {
+                worker: "w2".into(),
+                job: "job000".into(),
+            },
+            3.0,
+        );
         // The first worker comes back and submits too: acknowledged, not stored.
-        let a = s.handle(Event::ResultSubmitted { worker: "w1".into(), job: "job000".into() }, 4.0);
+        let a = s.handle(
+            Event::ResultSubmitted {
+                worker: "w1".into(),
+                job: "job000".into(),
+            },
+            4.0,
+        );
         assert!(matches!(&a[..], [Action::AckDuplicate { .. }]));
-        let a = s.handle(Event::ResultSubmitted { worker: "w1".into(), job: "nope".into() }, 4.0);
+        let a = s.handle(
+            Event::ResultSubmitted {
+                worker: "w1".into(),
+                job: "nope".into(),
+            },
+            4.0,
+        );
         assert!(matches!(&a[..], [Action::RejectUnknown { .. }]));
     }
 
@@ -226,7 +297,13 @@ mod tests {
         s.handle(Event::JobRequested("w1".into()), 0.0);
         assert!(s.handle(Event::Tick, 9.0).is_empty());
         let a = s.handle(Event::Tick, 10.0);
-        assert!(matches!(&a[..], [Action::Requeued { reason: RequeueReason::LeaseExpired, .. }]));
+        assert!(matches!(
+            &a[..],
+            [Action::Requeued {
+                reason: RequeueReason::LeaseExpired,
+                ..
+            }]
+        ));
         assert_eq!(s.pending(), 1);
     }
 

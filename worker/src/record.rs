@@ -76,7 +76,11 @@ impl RunSummary {
             map_free_precision: r.map_quality.free_precision,
             map_occupied_precision: r.map_quality.occupied_precision,
             wall_time_s,
-            speedup: if wall_time_s > 0.0 { r.total_time_s / wall_time_s } else { 0.0 },
+            speedup: if wall_time_s > 0.0 {
+                r.total_time_s / wall_time_s
+            } else {
+                0.0
+            },
         }
     }
 

@@ -79,7 +79,11 @@ impl Default for Settings {
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum SettingsError {
     #[error("settings.{field}: {value} is out of range, expected {expected}")]
-    OutOfRange { field: &'static str, value: String, expected: &'static str },
+    OutOfRange {
+        field: &'static str,
+        value: String,
+        expected: &'static str,
+    },
     #[error("settings.localization: unknown value '{0}', expected slam, odometry or ground-truth")]
     Localization(String),
 }
@@ -96,7 +100,11 @@ impl Settings {
             if v.is_finite() && ok {
                 Ok(v)
             } else {
-                Err(SettingsError::OutOfRange { field, value: v.to_string(), expected })
+                Err(SettingsError::OutOfRange {
+                    field,
+                    value: v.to_string(),
+                    expected,
+                })
             }
         }
         let pos = |field, v: f64| check(field, v, v > 0.0, "a positive number");
@@ -123,8 +131,10 @@ impl Settings {
         c.sim.laser.beams = self.laser_beams;
         c.sim.laser.rate_hz = pos("laser_rate_hz", self.laser_rate_hz)?;
         c.sim.laser.range_noise_sd_m = nonneg("laser_noise_sd_m", self.laser_noise_sd_m)?;
-        c.sim.odometry.max_translation_error =
-            nonneg("odometry_translation_error", self.odometry_translation_error)?;
+        c.sim.odometry.max_translation_error = nonneg(
+            "odometry_translation_error",
+            self.odometry_translation_error,
+        )?;
         c.sim.odometry.max_rotation_error = nonneg(
             "odometry_rotation_error_deg_per_rad",
             self.odometry_rotation_error_deg_per_rad,
@@ -143,7 +153,12 @@ impl Settings {
             self.map_resolution_m >= 0.01 && self.map_resolution_m <= 0.5,
             "metres in [0.01, 0.5]",
         )?;
-        c.alpha = check("alpha", self.alpha, (0.0..=1.0).contains(&self.alpha), "a number in [0, 1]")?;
+        c.alpha = check(
+            "alpha",
+            self.alpha,
+            (0.0..=1.0).contains(&self.alpha),
+            "a number in [0, 1]",
+        )?;
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
         c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
         c.blacklist_radius_m = nonneg("blacklist_radius_m", self.blacklist_radius_m)?;
@@ -171,18 +186,33 @@ mod tests {
 
     #[test]
     fn bad_values_name_the_field() {
-        let s = Settings { alpha: 1.5, ..Settings::default() };
+        let s = Settings {
+            alpha: 1.5,
+            ..Settings::default()
+        };
         let e = s.to_explore_config().unwrap_err().to_string();
         assert!(e.contains("settings.alpha") && e.contains("[0, 1]"), "{e}");
-        let s = Settings { localization: "gps".into(), ..Settings::default() };
-        assert!(s.to_explore_config().unwrap_err().to_string().contains("gps"));
-        let s = Settings { robot_radius_m: f64::NAN, ..Settings::default() };
+        let s = Settings {
+            localization: "gps".into(),
+            ..Settings::default()
+        };
+        assert!(s
+            .to_explore_config()
+            .unwrap_err()
+            .to_string()
+            .contains("gps"));
+        let s = Settings {
+            robot_radius_m: f64::NAN,
+            ..Settings::default()
+        };
         assert!(s.to_explore_config().is_err());
     }
 
     #[test]
     fn unknown_keys_are_rejected() {
-        let e = serde_json::from_str::<Settings>(r#"{"alpah": 0.3}"#).unwrap_err().to_string();
+        let e = serde_json::from_str::<Settings>(r#"{"alpah": 0.3}"#)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("alpah"), "{e}");
     }
 }

@@ -19,9 +19,9 @@ use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
 use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
-use crate::plan::dijkstra::{dijkstra, wall_cost};
-use crate::plan::inflate::{nearest_traversable, traversable};
-use crate::plan::waypoints::waypoints;
+use crate::plan::dijkstra::{dijkstra_by, CostField};
+use crate::plan::inflate::{nearest_by, Traversability};
+use crate::plan::waypoints::waypoints_by;
 use crate::sim::{SimConfig, Simulator};
 use crate::utility::{best_candidate, CandidateScore};
 
@@ -236,10 +236,9 @@ pub fn explore(
     let frame = GridFrame::covering(&building.bounds(), cfg.map_resolution_m, 1.0);
     let truth = building.reachable_free(frame, start.position());
     let truth_cells = truth.count_true();
-    let cap_cells = (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m)
-        .ceil() as u32
-        + 4)
-    .max(8);
+    let cap_cells =
+        (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
+            .max(8);
     let sim = Simulator::new(building, start, &cfg.sim, seed);
     let ex = Explorer {
         cfg,
@@ -314,7 +313,22 @@ impl Explorer<'_> {
             Localization::GroundTruth => self.sim.true_pose(),
             Localization::Odometry => prior,
             Localization::Slam => {
-                let m = match_scan(&self.obstacles, &prior, &scan, &cfg.scan_match);
+                // Trust odometry in proportion to the motion since the last match: its error is
+                // proportional (at most ~1 % and 2 deg/rad), so only small corrections are
+                // plausible and large ones are mismatches (e.g. along a featureless corridor).
+                let d = moved.position().norm();
+                let a = moved.theta_rad.abs();
+                let base = &cfg.scan_match;
+                let mc = ScanMatchConfig {
+                    prior_sigma_xy_m: base.prior_sigma_xy_m.min(0.01 + 0.05 * d),
+                    prior_sigma_theta_rad: base.prior_sigma_theta_rad.min(0.005 + 0.05 * a),
+                    max_correction_m: base.max_correction_m.min(0.05 + 0.1 * d),
+                    max_correction_rad: base.max_correction_rad.min(0.02 + 0.1 * a),
+                    search_xy_m: base.search_xy_m.min(0.05),
+                    search_theta_rad: base.search_theta_rad.min(1.5f64.to_radians()),
+                    ..*base
+                };
+                let m = match_scan(&self.obstacles, &prior, &scan, &mc);
                 if m.accepted {
                     self.matches_accepted += 1;
                     m.pose
@@ -323,40 +337,22 @@ impl Explorer<'_> {
                 }
             }
         };
-        // Only cells within range of the sensor can change: recount there.
-        let reach = self.map.frame.cell_from_world(self.estimate.position());
-        let r = (scan.max_range_m / self.map.frame.resolution_m).ceil() as i32 + 2;
-        let before = self.count_explored_near(reach, r);
         self.map.insert_scan(&self.estimate, &scan, &cfg.log_odds);
         let flips = self.map.take_occupied_flips();
         self.obstacles.update(&self.map.occupancy, &flips);
-        let after = self.count_explored_near(reach, r);
-        self.explored_cells = (self.explored_cells + after).saturating_sub(before);
+        for (i, became_free) in self.map.take_free_changes() {
+            if self.truth.data[i as usize] {
+                if became_free {
+                    self.explored_cells += 1;
+                } else {
+                    self.explored_cells -= 1;
+                }
+            }
+        }
         self.last_update_pose = self.estimate;
         self.last_update_time_s = self.sim.time_s();
         self.trajectory.push(self.sim.true_pose());
         self.estimated_trajectory.push(self.estimate);
-    }
-
-    /// Map-free, truth-free cells in the square of half-side `r` cells around `c`.
-    fn count_explored_near(&self, c: Cell, r: i32) -> usize {
-        let f = self.map.frame;
-        let x0 = (c.x - r).max(0) as usize;
-        let x1 = ((c.x + r).min(f.width as i32 - 1)).max(-1) as isize;
-        let y0 = (c.y - r).max(0);
-        let y1 = (c.y + r).min(f.height as i32 - 1);
-        if x1 < x0 as isize {
-            return 0;
-        }
-        let x1 = x1 as usize;
-        let mut n = 0;
-        for y in y0..=y1 {
-            let row = y as usize * f.width as usize;
-            let occ = &self.map.occupancy.data[row + x0..=row + x1];
-            let tru = &self.truth.data[row + x0..=row + x1];
-            n += occ.iter().zip(tru).filter(|(s, t)| **t && **s == Occupancy::Free).count();
-        }
-        n
     }
 
     fn explored_area_m2(&self) -> f64 {
@@ -427,12 +423,52 @@ impl Explorer<'_> {
         false
     }
 
-    fn traversable(&self) -> Bitmap {
-        traversable(
+    fn traversability(&self) -> Traversability<'_> {
+        Traversability::new(
             &self.map.occupancy,
             &self.obstacles,
             self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m,
         )
+    }
+
+    /// Path costs from `start` (metres, plus a penalty for passing close to walls, so paths keep
+    /// to the middle of corridors and doors), stopping once every target is settled.
+    fn plan_field(&self, start: Cell, targets: &[Cell]) -> CostField {
+        const WALL_BAND_M: f64 = 0.3;
+        const MAX_EXTRA: u32 = 10;
+        let trav = self.traversability();
+        let res = self.map.frame.resolution_m;
+        let radius_m = self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m;
+        let obstacles = &self.obstacles.data;
+        dijkstra_by(
+            self.map.frame,
+            start,
+            |i| trav.at_index(i),
+            |j| {
+                let beyond = (obstacles[j] as f64 * res - radius_m) / WALL_BAND_M;
+                if beyond >= 1.0 {
+                    0
+                } else {
+                    (MAX_EXTRA as f64 * (1.0 - beyond.max(0.0))).round() as u32
+                }
+            },
+            MAX_EXTRA,
+            targets,
+        )
+    }
+
+    /// Where plans start: the robot's cell, or the nearest traversable cell when the robot stands
+    /// closer to a wall than the inflation radius (it then first drives out).
+    fn planning_start(&self) -> Cell {
+        let trav = self.traversability();
+        let robot = self.map.frame.cell_from_world(self.estimate.position());
+        if trav.at(robot) {
+            return robot;
+        }
+        let r = ((self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m) * 2.0
+            / self.map.frame.resolution_m)
+            .ceil() as i32;
+        nearest_by(robot, r, |c| trav.at(c)).unwrap_or(robot)
     }
 
     /// Chooses the next goal. Returns false when no reachable candidate is left.
@@ -447,7 +483,11 @@ impl Explorer<'_> {
         // going there again: blacklist it.
         if let Some(p) = self.last_reached.take() {
             let again = self.goal.as_ref().is_some_and(|g| {
-                g.frontier.iter().filter(|c| is_frontier_cell(&self.map.occupancy, **c)).count() * 2
+                g.frontier
+                    .iter()
+                    .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
+                    .count()
+                    * 2
                     > g.frontier.len()
             });
             if again {
@@ -464,46 +504,56 @@ impl Explorer<'_> {
         if frontiers.is_empty() {
             return false;
         }
-        let trav = self.traversable();
-        let robot = frame.cell_from_world(self.estimate.position());
-        let extra = wall_cost(
-            &self.obstacles,
-            cfg.sim.robot.radius_m + cfg.safety_margin_m,
-            0.3,
-            10,
-        );
-        let field = dijkstra(&trav, robot, Some(&extra));
+        let robot = self.planning_start();
         let search = (0.5 / frame.resolution_m).ceil() as i32;
-        let mut goals = Vec::with_capacity(frontiers.len());
+        let goals: Vec<Option<Cell>> = {
+            let trav = self.traversability();
+            frontiers
+                .iter()
+                .map(|f| {
+                    if trav.at(f.candidate) {
+                        Some(f.candidate)
+                    } else {
+                        nearest_by(f.candidate, search, |c| trav.at(c))
+                    }
+                })
+                .collect()
+        };
+        let targets: Vec<Cell> = goals.iter().flatten().copied().collect();
+        let field = self.plan_field(robot, &targets);
         let mut scores = Vec::with_capacity(frontiers.len());
-        for f in &frontiers {
-            let goal_cell = if trav.get(f.candidate) == Some(&true) {
-                Some(f.candidate)
-            } else {
-                nearest_traversable(&trav, f.candidate, search)
-            };
+        for (f, goal_cell) in frontiers.iter().zip(&goals) {
             let distance_m = goal_cell.and_then(|c| field.distance_m(c));
             let gain_m2 = if distance_m.is_some() {
                 information_gain(&self.map.occupancy, f.candidate, cfg.sim.laser.max_range_m)
             } else {
                 0.0
             };
-            goals.push(goal_cell);
-            scores.push(CandidateScore { distance_m, gain_m2 });
+            scores.push(CandidateScore {
+                distance_m,
+                gain_m2,
+            });
         }
         let Some(best) = best_candidate(&scores, cfg.alpha) else {
             // Frontiers exist but none is reachable: blacklist them all so the run can end.
             for f in &frontiers {
-                self.blacklist.add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
+                self.blacklist
+                    .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
             }
             return false;
         };
         let goal_cell = goals[best].expect("best candidate is reachable");
         let Some(path) = field.path_to(goal_cell) else {
-            self.blacklist.add(frame.world_from_cell(frontiers[best].candidate), cfg.blacklist_radius_m);
+            self.blacklist.add(
+                frame.world_from_cell(frontiers[best].candidate),
+                cfg.blacklist_radius_m,
+            );
             return true;
         };
-        let wps = waypoints(&path, &trav);
+        let wps = {
+            let trav = self.traversability();
+            waypoints_by(&path, &frame, |c| trav.at(c))
+        };
         let now = self.sim.time_s();
         let dist = (self.estimate.position() - frame.world_from_cell(goal_cell)).norm();
         self.decisions.push(Decision {
@@ -534,8 +584,10 @@ impl Explorer<'_> {
         if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
             let to = goal.look_at - self.estimate.position();
             let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
-            let w = (cfg.follow.heading_gain * err)
-                .clamp(-cfg.sim.robot.max_turn_rate_radps, cfg.sim.robot.max_turn_rate_radps);
+            let w = (cfg.follow.heading_gain * err).clamp(
+                -cfg.sim.robot.max_turn_rate_radps,
+                cfg.sim.robot.max_turn_rate_radps,
+            );
             self.sim.step(0.0, w);
             return;
         }
@@ -561,14 +613,14 @@ impl Explorer<'_> {
         let cfg = self.cfg;
         let frame = self.map.frame;
         let start = self.trajectory.first().copied().unwrap_or(self.estimate);
-        let trav = self.traversable();
-        let robot = frame.cell_from_world(self.estimate.position());
-        let field = dijkstra(&trav, robot, None);
+        let robot = self.planning_start();
         let home = frame.cell_from_world(start.position());
+        let field = self.plan_field(robot, &[home]);
         let Some(path) = field.path_to(home) else {
             return;
         };
-        self.follower = PathFollower::new(waypoints(&path, &trav));
+        let trav = self.traversability();
+        self.follower = PathFollower::new(waypoints_by(&path, &frame, |c| trav.at(c)));
         while self.sim.time_s() < cfg.time_limit_s {
             match self.follower.command(
                 &self.estimate,
@@ -632,7 +684,10 @@ fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
 }
 
 fn is_frontier_cell(grid: &OccupancyGrid, c: Cell) -> bool {
-    grid.is(c, Occupancy::Free) && c.neighbours4().iter().any(|n| grid.is(*n, Occupancy::Unknown))
+    grid.is(c, Occupancy::Free)
+        && c.neighbours4()
+            .iter()
+            .any(|n| grid.is(*n, Occupancy::Unknown))
 }
 
 fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {
@@ -658,7 +713,10 @@ fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {
         }
     }
     let ratio = |a: usize, b: usize| if b == 0 { 1.0 } else { a as f64 / b as f64 };
-    MapQuality { free_precision: ratio(free_ok, free), occupied_precision: ratio(occ_ok, occ) }
+    MapQuality {
+        free_precision: ratio(free_ok, free),
+        occupied_precision: ratio(occ_ok, occ),
+    }
 }
 
 #[cfg(test)]

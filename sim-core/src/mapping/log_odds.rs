@@ -68,6 +68,9 @@ pub struct LogOddsMap {
     /// [`LogOddsMap::take_occupied_flips`] (may repeat a cell); feeds incremental consumers such
     /// as [`crate::mapping::distance_field::ObstacleDistance`].
     pub occupied_flips: Vec<u32>,
+    /// Cells that became (`true`) or stopped being (`false`) `Free` since the last
+    /// [`LogOddsMap::take_free_changes`], in order (a cell may appear more than once).
+    pub free_changes: Vec<(u32, bool)>,
     /// Bounding box (inclusive cells) of everything observed so far; `None` before any scan.
     pub known_bounds: Option<(Cell, Cell)>,
     /// Total ternary changes since construction.
@@ -82,6 +85,7 @@ impl LogOddsMap {
             data: vec![0.0; frame.len()],
             occupancy: Grid::filled(frame, Occupancy::Unknown),
             occupied_flips: Vec::new(),
+            free_changes: Vec::new(),
             known_bounds: None,
             total_cells_changed: 0,
         }
@@ -178,6 +182,9 @@ impl LogOddsMap {
             if (old == Occupancy::Occupied) != (new == Occupancy::Occupied) {
                 self.occupied_flips.push(idx as u32);
             }
+            if (old == Occupancy::Free) != (new == Occupancy::Free) {
+                self.free_changes.push((idx as u32, new == Occupancy::Free));
+            }
         }
     }
 
@@ -189,6 +196,11 @@ impl LogOddsMap {
     /// Returns and clears the list of cells whose `Occupied` status flipped.
     pub fn take_occupied_flips(&mut self) -> Vec<u32> {
         std::mem::take(&mut self.occupied_flips)
+    }
+
+    /// Returns and clears the list of `Free` transitions.
+    pub fn take_free_changes(&mut self) -> Vec<(u32, bool)> {
+        std::mem::take(&mut self.free_changes)
     }
 
     /// Probability of occupancy of a cell (0.5 outside the map).

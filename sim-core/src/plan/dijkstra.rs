@@ -92,7 +92,32 @@ pub fn wall_cost(
 /// Dijkstra from `start` over traversable cells. The start cell is always expanded, even if it
 /// is not traversable itself (the robot may stand close to a wall). `extra` must share the frame.
 pub fn dijkstra(trav: &Bitmap, start: Cell, extra: Option<&Grid<u8>>) -> CostField {
-    let frame = trav.frame;
+    let extra = extra
+        .filter(|e| e.frame == trav.frame)
+        .map(|e| e.data.as_slice());
+    let max_extra = extra.map_or(0, |e| e.iter().copied().max().unwrap_or(0) as u32);
+    dijkstra_by(
+        trav.frame,
+        start,
+        |i| trav.data[i],
+        |j| extra.map_or(0, |e| e[j] as u32),
+        max_extra,
+        &[],
+    )
+}
+
+/// The general form of [`dijkstra`]: traversability and the extra cost of entering a cell are
+/// functions of the cell index (so nothing has to be precomputed over the whole grid), and the
+/// search stops as soon as every cell of `targets` is settled (an empty `targets` searches
+/// everything reachable). `max_extra` bounds `extra`.
+pub fn dijkstra_by(
+    frame: GridFrame,
+    start: Cell,
+    traversable: impl Fn(usize) -> bool,
+    extra: impl Fn(usize) -> u32,
+    max_extra: u32,
+    targets: &[Cell],
+) -> CostField {
     let n = frame.len();
     let mut field = CostField {
         frame,
@@ -103,15 +128,20 @@ pub fn dijkstra(trav: &Bitmap, start: Cell, extra: Option<&Grid<u8>>) -> CostFie
     let Some(si) = frame.index(start) else {
         return field;
     };
-    let extra = extra
-        .filter(|e| e.frame == frame)
-        .map(|e| e.data.as_slice());
-    let max_extra = extra.map_or(0, |e| e.iter().copied().max().unwrap_or(0) as u32);
+    let mut target_idx: Vec<u32> = targets
+        .iter()
+        .filter_map(|c| frame.index(*c))
+        .map(|i| i as u32)
+        .collect();
+    target_idx.sort_unstable();
+    target_idx.dedup();
+    let mut targets_left = target_idx.len();
     let nb = (DIAGONAL + max_extra + 1) as usize;
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); nb];
     let w = frame.width as i32;
     let h = frame.height as i32;
-    let ok = |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && trav.data[(y * w + x) as usize];
+    let ok =
+        |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && traversable((y * w + x) as usize);
     field.cost[si] = 0;
     buckets[0].push(si as u32);
     let mut pending = 1usize;
@@ -124,6 +154,12 @@ pub fn dijkstra(trav: &Bitmap, start: Cell, extra: Option<&Grid<u8>>) -> CostFie
             if field.cost[i] != current {
                 continue; // stale entry
             }
+            if !target_idx.is_empty() && target_idx.binary_search(&(i as u32)).is_ok() {
+                targets_left -= 1;
+                if targets_left == 0 {
+                    return field;
+                }
+            }
             let (x, y) = ((i % w as usize) as i32, (i / w as usize) as i32);
             for (k, &(dx, dy, step)) in STEPS.iter().enumerate() {
                 let (nx, ny) = (x + dx, y + dy);
@@ -131,7 +167,7 @@ pub fn dijkstra(trav: &Bitmap, start: Cell, extra: Option<&Grid<u8>>) -> CostFie
                     continue;
                 }
                 let j = (ny * w + nx) as usize;
-                let c = current + step + extra.map_or(0, |e| e[j] as u32);
+                let c = current + step + extra(j).min(max_extra);
                 if c < field.cost[j] {
                     field.cost[j] = c;
                     field.parent[j] = k as u8;

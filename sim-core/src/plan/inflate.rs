@@ -26,6 +26,38 @@ pub fn traversable(grid: &OccupancyGrid, obstacles: &ObstacleDistance, radius_m:
     }
 }
 
+/// Traversability read on demand from a map and its obstacle field (same rule as
+/// [`traversable`]), for planners that touch only part of a large grid.
+#[derive(Debug, Clone, Copy)]
+pub struct Traversability<'a> {
+    pub grid: &'a OccupancyGrid,
+    pub obstacles: &'a ObstacleDistance,
+    radius_cells: f32,
+}
+
+impl<'a> Traversability<'a> {
+    pub fn new(grid: &'a OccupancyGrid, obstacles: &'a ObstacleDistance, radius_m: f64) -> Self {
+        debug_assert!(grid.frame == obstacles.frame);
+        Self {
+            grid,
+            obstacles,
+            radius_cells: (radius_m / grid.frame.resolution_m) as f32,
+        }
+    }
+
+    /// Whether the cell with row-major index `i` is traversable.
+    #[inline]
+    pub fn at_index(&self, i: usize) -> bool {
+        self.grid.data[i] == Occupancy::Free
+            && (self.obstacles.data[i] > self.radius_cells
+                || self.obstacles.data[i] >= self.obstacles.cap_cells as f32)
+    }
+
+    pub fn at(&self, c: Cell) -> bool {
+        self.grid.frame.index(c).is_some_and(|i| self.at_index(i))
+    }
+}
+
 /// Like [`traversable`], building the obstacle field itself (for one-off use and tests).
 pub fn traversable_from_grid(grid: &OccupancyGrid, radius_m: f64) -> Bitmap {
     let cap = (radius_m / grid.frame.resolution_m).ceil() as u32 + 2;
@@ -66,12 +98,17 @@ pub fn downsample(trav: &Bitmap, factor: u32) -> Bitmap {
 /// The traversable cell nearest to `c` within `radius_cells` (Chebyshev box, Euclidean order,
 /// ties broken by row-major order), e.g. "a reachable free cell near the candidate".
 pub fn nearest_traversable(trav: &Bitmap, c: Cell, radius_cells: i32) -> Option<Cell> {
+    nearest_by(c, radius_cells, |n| trav.get(n) == Some(&true))
+}
+
+/// [`nearest_traversable`] with any traversability test.
+pub fn nearest_by(c: Cell, radius_cells: i32, traversable: impl Fn(Cell) -> bool) -> Option<Cell> {
     let mut best: Option<(i32, Cell)> = None;
     for dy in -radius_cells..=radius_cells {
         for dx in -radius_cells..=radius_cells {
             let n = Cell::new(c.x + dx, c.y + dy);
             let d2 = dx * dx + dy * dy;
-            if d2 > radius_cells * radius_cells || trav.get(n) != Some(&true) {
+            if d2 > radius_cells * radius_cells || !traversable(n) {
                 continue;
             }
             if best.is_none_or(|(bd, _)| d2 < bd) {

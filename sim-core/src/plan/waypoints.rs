@@ -1,32 +1,36 @@
 //! Path pruning for a simple follower: keep only the cells where the line of sight breaks.
 
 use crate::geom::Vec2;
-use crate::grid::{Bitmap, Cell};
+use crate::grid::{Bitmap, Cell, GridFrame};
 use crate::mapping::ray::line_of_sight;
 
 /// Waypoints (cell centres, world metres) along `path`, start excluded, goal included: from each
 /// waypoint the next is the farthest path cell still in line of sight over traversable cells.
 pub fn waypoints(path: &[Cell], trav: &Bitmap) -> Vec<Vec2> {
+    waypoints_by(path, &trav.frame, |c| trav.get(c) == Some(&true))
+}
+
+/// [`waypoints`] with any traversability test.
+pub fn waypoints_by(path: &[Cell], frame: &GridFrame, clear: impl Fn(Cell) -> bool) -> Vec<Vec2> {
     let mut out = Vec::new();
     if path.len() < 2 {
         return path
             .iter()
             .skip(1)
-            .map(|c| trav.frame.world_from_cell(*c))
+            .map(|c| frame.world_from_cell(*c))
             .collect();
     }
-    let clear = |c: Cell| trav.get(c) == Some(&true);
     let mut anchor = 0;
     while anchor < path.len() - 1 {
         let mut next = anchor + 1;
         for j in anchor + 2..path.len() {
-            if line_of_sight(path[anchor], path[j], clear) {
+            if line_of_sight(path[anchor], path[j], &clear) {
                 next = j;
             } else {
                 break;
             }
         }
-        out.push(trav.frame.world_from_cell(path[next]));
+        out.push(frame.world_from_cell(path[next]));
         anchor = next;
     }
     out
