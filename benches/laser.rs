@@ -24,7 +24,7 @@ fn poses(b: &Building, n: usize) -> Vec<Pose> {
             rng.random_range(bb.min.y..bb.max.y),
         );
         if b.is_free(p) {
-            out.push(Pose::new(p.x, p.y, rng.random_range(-3.14..3.14)));
+            out.push(Pose::new(p.x, p.y, rng.random_range(-std::f64::consts::PI..std::f64::consts::PI)));
         }
     }
     out
