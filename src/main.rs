@@ -2,6 +2,7 @@
 
 mod cmd_building;
 mod cmd_explore;
+mod cmd_run;
 mod output;
 
 use std::process::ExitCode;
@@ -27,6 +28,10 @@ enum Command {
     Building(cmd_building::BuildingCommand),
     /// Run one exploration and write its summary, curve, map and picture.
     Explore(cmd_explore::ExploreArgs),
+    /// Run an experiment grid (buildings x seeds x strategies) on this machine; resumable.
+    Run(cmd_run::RunArgs),
+    /// Print the table of a results directory and export it as CSV.
+    Report(cmd_run::ReportArgs),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +39,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Building(c) => cmd_building::run(c),
         Command::Explore(a) => cmd_explore::run(a),
+        Command::Run(a) => cmd_run::run(a),
+        Command::Report(a) => cmd_run::report(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,7 +1,14 @@
 //! Expands experiment grids into jobs, schedules them over workers, stores and aggregates
 //! results.
 //!
-//! The scheduling logic is [`schedule::Scheduler`], a state machine without IO or clock: events
-//! and the current time in, actions out. The transport around it is thin.
+//! - [`grid`]: a grid file as written, validated into a [`grid::Plan`] before anything runs.
+//! - [`schedule`]: the scheduler, a state machine without IO or clock (events in, actions out).
+//! - [`store`]: the SQLite results store (WAL), one row per job, resumable.
+//! - [`local`]: runs a plan with embedded worker threads.
+//! - [`table`]: the paper's Table 1 for a grid, and CSV export.
 
+pub mod grid;
+pub mod local;
 pub mod schedule;
+pub mod store;
+pub mod table;

@@ -1,0 +1,384 @@
+//! Experiment grids: a TOML file as written (parsed with serde), then a validated [`Plan`]
+//! (buildings loaded and hashed, seeds and strategies expanded into jobs with stable ids) before
+//! anything runs.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde::Deserialize;
+use sha2::{Digest, Sha256};
+use sim_core::generate::{generate, BuildingKind, GenerateConfig};
+use sim_core::Building;
+use floorcast_worker::{Settings, FLOORCAST_VERSION, STRATEGIES, SUMMARY_VERSION};
+
+pub const GRID_FORMAT: &str = "floorcast-grid";
+pub const GRID_VERSION: u32 = 1;
+
+/// A grid file as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GridFile {
+    format: String,
+    version: u32,
+    name: String,
+    /// Where results go (relative to the current directory); default `results/<name>`.
+    results: Option<String>,
+    /// Building files or glob patterns, relative to the grid file's directory.
+    #[serde(default)]
+    buildings: Vec<String>,
+    /// Buildings generated on the fly.
+    #[serde(default)]
+    generated: Vec<GeneratedSpec>,
+    /// Explicit seeds...
+    seeds: Option<Vec<u64>>,
+    /// ...or an inclusive range `[first, last]`.
+    seed_range: Option<[u64; 2]>,
+    strategies: Vec<StrategySpec>,
+    /// Settings shared by all jobs (robot, laser, mapping...), as in `--settings` files.
+    #[serde(default)]
+    settings: toml::Table,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GeneratedSpec {
+    seed: u64,
+    area_m2: f64,
+    #[serde(default = "default_kind")]
+    kind: String,
+    #[serde(default)]
+    clutter: bool,
+    #[serde(default)]
+    rotation_deg: f64,
+    name: Option<String>,
+}
+
+fn default_kind() -> String {
+    "school".into()
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StrategySpec {
+    name: String,
+    /// How the strategy is reported (default: its name). Lets one grid compare parameter sets.
+    label: Option<String>,
+    /// Settings overriding the shared ones for this strategy (e.g. `alpha`).
+    #[serde(default)]
+    settings: toml::Table,
+}
+
+/// A building of the plan.
+#[derive(Debug, Clone)]
+pub struct PlannedBuilding {
+    pub name: String,
+    /// The file it came from, or `generated(seed=…, area_m2=…, …)`.
+    pub source: String,
+    pub hash: String,
+    pub building: Arc<Building>,
+}
+
+/// One job of the plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedJob {
+    /// Hash of everything that determines the result.
+    pub id: String,
+    /// Index into [`Plan::buildings`].
+    pub building: usize,
+    pub strategy: String,
+    pub label: String,
+    pub seed: u64,
+    pub settings: Settings,
+}
+
+/// A validated grid.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    pub name: String,
+    pub grid_path: PathBuf,
+    pub results_dir: PathBuf,
+    pub buildings: Vec<PlannedBuilding>,
+    /// Strategy labels in file order (the first `baseline` one is the reference of gains).
+    pub labels: Vec<String>,
+    pub jobs: Vec<PlannedJob>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum GridError {
+    #[error("cannot read grid file {path}: {source}")]
+    Read { path: PathBuf, source: std::io::Error },
+    #[error("{path}: {message}")]
+    Syntax { path: PathBuf, message: String },
+    #[error("{path}: {field}: {problem}")]
+    Invalid { path: PathBuf, field: String, problem: String },
+    #[error("{path}: {field}: {source}")]
+    Building { path: PathBuf, field: String, source: floorcast_formats::Error },
+}
+
+impl Plan {
+    /// Reads, validates and expands a grid file. `results_override` replaces its `results`.
+    pub fn load(path: &Path, results_override: Option<&Path>) -> Result<Plan, GridError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| GridError::Read { path: path.to_path_buf(), source })?;
+        Self::parse(&text, path, results_override)
+    }
+
+    pub fn parse(text: &str, path: &Path, results_override: Option<&Path>) -> Result<Plan, GridError> {
+        let invalid = |field: &str, problem: String| GridError::Invalid {
+            path: path.to_path_buf(),
+            field: field.to_string(),
+            problem,
+        };
+        // Check the header first, so that a newer file says so instead of failing on a key.
+        let value: toml::Table = toml::from_str(text)
+            .map_err(|e| GridError::Syntax { path: path.to_path_buf(), message: one_line(&e.to_string()) })?;
+        match (value.get("format").and_then(|v| v.as_str()), value.get("version").and_then(|v| v.as_integer())) {
+            (Some(GRID_FORMAT), Some(v)) if v == GRID_VERSION as i64 => {}
+            (Some(GRID_FORMAT), v) => {
+                return Err(invalid("version", format!("version {v:?} is not supported, expected {GRID_VERSION}")))
+            }
+            (f, _) => {
+                return Err(invalid("format", format!("expected format = \"{GRID_FORMAT}\", found {f:?}")))
+            }
+        }
+        let file: GridFile = toml::from_str(text)
+            .map_err(|e| GridError::Syntax { path: path.to_path_buf(), message: one_line(&e.to_string()) })?;
+        let _ = (&file.format, file.version);
+        if file.name.trim().is_empty() || !file.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
+            return Err(invalid("name", format!("'{}' must be non-empty and use only letters, digits, '-', '_', '.'", file.name)));
+        }
+        let base_dir = path.parent().unwrap_or(Path::new("."));
+
+        // Buildings.
+        let mut buildings: Vec<PlannedBuilding> = Vec::new();
+        for (i, pattern) in file.buildings.iter().enumerate() {
+            let field = format!("buildings[{i}]");
+            let full = base_dir.join(pattern);
+            let full_str = full.to_string_lossy().into_owned();
+            let mut matched: Vec<PathBuf> = glob::glob(&full_str)
+                .map_err(|e| invalid(&field, format!("bad glob pattern '{pattern}': {e}")))?
+                .filter_map(Result::ok)
+                .collect();
+            matched.sort();
+            if matched.is_empty() {
+                return Err(invalid(&field, format!("'{pattern}' matches no file (paths are relative to the grid file's folder)")));
+            }
+            for p in matched {
+                let b = floorcast_formats::read_building(&p)
+                    .map_err(|source| GridError::Building { path: path.to_path_buf(), field: field.clone(), source })?;
+                let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                buildings.push(PlannedBuilding {
+                    name,
+                    source: p.display().to_string(),
+                    hash: b.content_hash(),
+                    building: Arc::new(b),
+                });
+            }
+        }
+        for (i, g) in file.generated.iter().enumerate() {
+            let field = format!("generated[{i}]");
+            if !(g.area_m2.is_finite() && (100.0..=20_000.0).contains(&g.area_m2)) {
+                return Err(invalid(&format!("{field}.area_m2"), format!("{} is not a free area in [100, 20000] m2", g.area_m2)));
+            }
+            let kind = match g.kind.as_str() {
+                "school" => BuildingKind::School,
+                "office" => BuildingKind::Office,
+                k => return Err(invalid(&format!("{field}.kind"), format!("'{k}' is not school or office"))),
+            };
+            if !g.rotation_deg.is_finite() {
+                return Err(invalid(&format!("{field}.rotation_deg"), "not a number".into()));
+            }
+            let name = g.name.clone().unwrap_or_else(|| format!("gen-{}-{}-{}", g.kind, g.area_m2 as u64, g.seed));
+            let b = generate(&GenerateConfig {
+                seed: g.seed,
+                area_m2: g.area_m2,
+                kind,
+                clutter: g.clutter,
+                rotation_rad: g.rotation_deg.to_radians(),
+                name: name.clone(),
+            });
+            buildings.push(PlannedBuilding {
+                name,
+                source: format!(
+                    "generated(seed={}, area_m2={}, kind={}, clutter={}, rotation_deg={})",
+                    g.seed, g.area_m2, g.kind, g.clutter, g.rotation_deg
+                ),
+                hash: b.content_hash(),
+                building: Arc::new(b),
+            });
+        }
+        if buildings.is_empty() {
+            return Err(invalid("buildings", "the grid names no building (give `buildings` or `[[generated]]`)".into()));
+        }
+        let mut names = BTreeMap::new();
+        for b in &buildings {
+            if let Some(prev) = names.insert(b.name.clone(), b.source.clone()) {
+                return Err(invalid("buildings", format!("two buildings are named '{}' ({prev} and {}); rename one", b.name, b.source)));
+            }
+        }
+
+        // Seeds.
+        let seeds: Vec<u64> = match (&file.seeds, &file.seed_range) {
+            (Some(s), None) if !s.is_empty() => s.clone(),
+            (None, Some([a, b])) if a <= b => (*a..=*b).collect(),
+            (None, Some(r)) => return Err(invalid("seed_range", format!("[{}, {}] is empty; expected [first, last] with first <= last", r[0], r[1]))),
+            (Some(_), Some(_)) => return Err(invalid("seeds", "give either `seeds` or `seed_range`, not both".into())),
+            _ => return Err(invalid("seeds", "expected `seeds = [1, 2, 3]` or `seed_range = [1, 10]`".into())),
+        };
+        let mut seen = std::collections::BTreeSet::new();
+        for s in &seeds {
+            if !seen.insert(*s) {
+                return Err(invalid("seeds", format!("seed {s} is listed twice")));
+            }
+        }
+
+        // Strategies and settings.
+        if file.strategies.is_empty() {
+            return Err(invalid("strategies", "the grid names no strategy".into()));
+        }
+        let mut labels = Vec::new();
+        let mut resolved = Vec::new();
+        for (i, s) in file.strategies.iter().enumerate() {
+            let field = format!("strategies[{i}]");
+            if !STRATEGIES.contains(&s.name.as_str()) {
+                return Err(invalid(&format!("{field}.name"), format!("unknown strategy '{}' (available: {})", s.name, STRATEGIES.join(", "))));
+            }
+            let label = s.label.clone().unwrap_or_else(|| s.name.clone());
+            if labels.contains(&label) {
+                return Err(invalid(&format!("{field}.label"), format!("label '{label}' is used twice; give each strategy a distinct label")));
+            }
+            let mut merged = file.settings.clone();
+            for (k, v) in &s.settings {
+                merged.insert(k.clone(), v.clone());
+            }
+            let settings: Settings = toml::Value::Table(merged)
+                .try_into()
+                .map_err(|e: toml::de::Error| invalid(&format!("{field}.settings"), one_line(&e.to_string())))?;
+            settings
+                .to_explore_config()
+                .map_err(|e| invalid(&format!("{field}.settings"), e.to_string()))?;
+            if resolved.iter().any(|(n, st, _): &(String, Settings, String)| n == &s.name && st == &settings) {
+                return Err(invalid(&field, format!("strategy '{label}' repeats another with the same name and settings")));
+            }
+            labels.push(label.clone());
+            resolved.push((s.name.clone(), settings, label));
+        }
+
+        // Jobs: building-major, then seed, then strategy (so partial grids compare fairly).
+        let mut jobs = Vec::new();
+        for (bi, b) in buildings.iter().enumerate() {
+            for &seed in &seeds {
+                for (name, settings, label) in &resolved {
+                    jobs.push(PlannedJob {
+                        id: job_id(&b.hash, name, seed, settings),
+                        building: bi,
+                        strategy: name.clone(),
+                        label: label.clone(),
+                        seed,
+                        settings: settings.clone(),
+                    });
+                }
+            }
+        }
+        let results_dir = match results_override {
+            Some(p) => p.to_path_buf(),
+            None => PathBuf::from(file.results.clone().unwrap_or_else(|| format!("results/{}", file.name))),
+        };
+        Ok(Plan { name: file.name, grid_path: path.to_path_buf(), results_dir, buildings, labels, jobs })
+    }
+}
+
+/// The identity of a job: a hash of everything that determines its result.
+pub fn job_id(building_hash: &str, strategy: &str, seed: u64, settings: &Settings) -> String {
+    let canonical = serde_json::json!({
+        "floorcast_version": FLOORCAST_VERSION,
+        "result_format": SUMMARY_VERSION,
+        "building_hash": building_hash,
+        "strategy": strategy,
+        "seed": seed,
+        "settings": settings,
+    });
+    let digest = Sha256::digest(canonical.to_string().as_bytes());
+    digest[..16].iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Plan, GridError> {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../grids/x.toml");
+        Plan::parse(text, &dir, None)
+    }
+
+    const GOOD: &str = r#"
+format = "floorcast-grid"
+version = 1
+name = "t"
+buildings = ["../buildings/small.toml"]
+seed_range = [1, 3]
+[[generated]]
+seed = 4
+area_m2 = 500
+[[strategies]]
+name = "baseline"
+[[strategies]]
+name = "baseline"
+label = "near"
+settings = { alpha = 0.8 }
+[settings]
+time_limit_s = 600
+"#;
+
+    #[test]
+    fn expands_buildings_seeds_and_strategies() {
+        let p = parse(GOOD).unwrap();
+        assert_eq!(p.buildings.len(), 2);
+        assert_eq!(p.jobs.len(), 2 * 3 * 2);
+        assert_eq!(p.labels, vec!["baseline", "near"]);
+        assert_eq!(p.results_dir, PathBuf::from("results/t"));
+        let near = p.jobs.iter().find(|j| j.label == "near").unwrap();
+        assert_eq!(near.settings.alpha, 0.8);
+        assert_eq!(near.settings.time_limit_s, 600.0);
+        // Ids are unique and stable.
+        let ids: std::collections::BTreeSet<_> = p.jobs.iter().map(|j| j.id.clone()).collect();
+        assert_eq!(ids.len(), p.jobs.len());
+        assert_eq!(parse(GOOD).unwrap().jobs, p.jobs);
+    }
+
+    #[test]
+    fn errors_name_the_field() {
+        let cases = [
+            (GOOD.replace("name = \"baseline\"\n[[strategies]]", "name = \"nope\"\n[[strategies]]"), "strategies[0].name"),
+            (GOOD.replace("seed_range = [1, 3]", "seed_range = [3, 1]"), "seed_range"),
+            (GOOD.replace("alpha = 0.8", "alpha = 2.0"), "strategies[1].settings"),
+            (GOOD.replace("alpha = 0.8", "alpah = 0.8"), "alpah"),
+            (GOOD.replace("../buildings/small.toml", "../buildings/nothing*.toml"), "buildings[0]"),
+            (GOOD.replace("version = 1", "version = 9"), "version"),
+            (GOOD.replace("area_m2 = 500", "area_m2 = -5"), "generated[0].area_m2"),
+            (GOOD.replace("label = \"near\"", "label = \"baseline\""), "strategies[1].label"),
+            (GOOD.replace("seed_range = [1, 3]", "seeds = [1, 1]"), "seeds"),
+            (GOOD.replace("name = \"t\"", "name = \"t\"\nbogus = 1"), "bogus"),
+        ];
+        for (text, needle) in cases {
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(e.contains(needle) && e.contains("x.toml"), "{needle}: {e}");
+            assert_eq!(e.lines().count(), 1, "{e}");
+        }
+    }
+
+    #[test]
+    fn job_id_depends_on_every_input() {
+        let s = Settings::default();
+        let a = job_id("h", "baseline", 1, &s);
+        assert_eq!(a, job_id("h", "baseline", 1, &s));
+        assert_ne!(a, job_id("g", "baseline", 1, &s));
+        assert_ne!(a, job_id("h", "baseline", 2, &s));
+        assert_ne!(a, job_id("h", "baseline", 1, &Settings { alpha: 0.4, ..Settings::default() }));
+    }
+}

@@ -1,0 +1,304 @@
+//! The results store: one SQLite database (WAL mode) per results directory, one row per job.
+//! A row is committed before its result is acknowledged, so a killed coordinator loses nothing
+//! it acknowledged, and a second run skips every stored job.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use rusqlite::{params, Connection, OptionalExtension};
+
+/// Version of the database layout.
+pub const STORE_VERSION: u32 = 1;
+pub const DB_FILE: &str = "results.sqlite";
+
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error("results store {path}: {source}")]
+    Sql { path: PathBuf, source: rusqlite::Error },
+    #[error("cannot create results directory {path}: {source}")]
+    Dir { path: PathBuf, source: std::io::Error },
+    #[error("results store {path} has layout version {found}, this floorcast writes version {STORE_VERSION}; use another --results directory")]
+    Version { path: PathBuf, found: String },
+    #[error("no results store in {0} (expected {DB_FILE}); run `floorcast run GRID` first")]
+    Missing(PathBuf),
+}
+
+/// One stored job.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoredResult {
+    pub job_id: String,
+    pub grid: String,
+    pub building: String,
+    pub building_hash: String,
+    pub strategy: String,
+    pub label: String,
+    pub seed: u64,
+    pub settings_json: String,
+    /// `ok` or `failed`.
+    pub status: String,
+    pub error: Option<String>,
+    pub summary_json: Option<String>,
+    pub progress_csv: Option<String>,
+    pub worker: String,
+    pub wall_time_s: f64,
+    pub floorcast_version: String,
+}
+
+/// Where a grid run came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Provenance {
+    pub grid: String,
+    pub command: String,
+    pub git_commit: String,
+    pub git_dirty: bool,
+    pub rustc: String,
+    pub host: String,
+    pub floorcast_version: String,
+    pub started_unix_s: f64,
+}
+
+#[derive(Debug)]
+pub struct Store {
+    path: PathBuf,
+    conn: Connection,
+}
+
+impl Store {
+    /// Opens (creating if needed) the store in `dir`.
+    pub fn open(dir: &Path) -> Result<Store, StoreError> {
+        std::fs::create_dir_all(dir).map_err(|source| StoreError::Dir { path: dir.to_path_buf(), source })?;
+        let path = dir.join(DB_FILE);
+        let conn = Connection::open(&path).map_err(|source| StoreError::Sql { path: path.clone(), source })?;
+        let s = Store { path, conn };
+        s.init()?;
+        Ok(s)
+    }
+
+    /// Opens an existing store read-only-ish (errors if absent).
+    pub fn open_existing(dir: &Path) -> Result<Store, StoreError> {
+        if !dir.join(DB_FILE).exists() {
+            return Err(StoreError::Missing(dir.to_path_buf()));
+        }
+        Self::open(dir)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn sql<T>(&self, r: rusqlite::Result<T>) -> Result<T, StoreError> {
+        r.map_err(|source| StoreError::Sql { path: self.path.clone(), source })
+    }
+
+    fn init(&self) -> Result<(), StoreError> {
+        self.sql(self.conn.pragma_update(None, "journal_mode", "WAL"))?;
+        self.sql(self.conn.pragma_update(None, "synchronous", "FULL"))?;
+        self.sql(self.conn.busy_timeout(std::time::Duration::from_secs(10)))?;
+        self.sql(self.conn.execute_batch(
+            "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+             CREATE TABLE IF NOT EXISTS results (
+                job_id TEXT PRIMARY KEY,
+                grid TEXT NOT NULL,
+                building TEXT NOT NULL,
+                building_hash TEXT NOT NULL,
+                strategy TEXT NOT NULL,
+                label TEXT NOT NULL,
+                seed INTEGER NOT NULL,
+                settings_json TEXT NOT NULL,
+                status TEXT NOT NULL,
+                error TEXT,
+                summary_json TEXT,
+                progress_csv TEXT,
+                worker TEXT NOT NULL,
+                wall_time_s REAL NOT NULL,
+                floorcast_version TEXT NOT NULL,
+                stored_unix_s REAL NOT NULL
+             );
+             CREATE TABLE IF NOT EXISTS runs (
+                id INTEGER PRIMARY KEY AUTOINCREMENT,
+                grid TEXT NOT NULL,
+                command TEXT NOT NULL,
+                git_commit TEXT NOT NULL,
+                git_dirty INTEGER NOT NULL,
+                rustc TEXT NOT NULL,
+                host TEXT NOT NULL,
+                floorcast_version TEXT NOT NULL,
+                started_unix_s REAL NOT NULL
+             );",
+        ))?;
+        let found: Option<String> = self.sql(
+            self.conn
+                .query_row("SELECT value FROM meta WHERE key = 'store_version'", [], |r| r.get(0))
+                .optional(),
+        )?;
+        match found {
+            None => {
+                self.sql(self.conn.execute(
+                    "INSERT INTO meta (key, value) VALUES ('store_version', ?1)",
+                    params![STORE_VERSION.to_string()],
+                ))?;
+            }
+            Some(v) if v == STORE_VERSION.to_string() => {}
+            Some(v) => return Err(StoreError::Version { path: self.path.clone(), found: v }),
+        }
+        Ok(())
+    }
+
+    /// Stores a result unless one for the same job exists. Returns whether it was inserted.
+    /// The row is committed (durable) when this returns.
+    pub fn insert(&self, r: &StoredResult) -> Result<bool, StoreError> {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_secs_f64())
+            .unwrap_or(0.0);
+        let n = self.sql(self.conn.execute(
+            "INSERT OR IGNORE INTO results (job_id, grid, building, building_hash, strategy, label, seed,
+                settings_json, status, error, summary_json, progress_csv, worker, wall_time_s,
+                floorcast_version, stored_unix_s)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)",
+            params![
+                r.job_id, r.grid, r.building, r.building_hash, r.strategy, r.label, r.seed as i64,
+                r.settings_json, r.status, r.error, r.summary_json, r.progress_csv, r.worker,
+                r.wall_time_s, r.floorcast_version, now
+            ],
+        ))?;
+        Ok(n == 1)
+    }
+
+    /// Ids of every stored job.
+    pub fn stored_ids(&self) -> Result<BTreeSet<String>, StoreError> {
+        let mut st = self.sql(self.conn.prepare("SELECT job_id FROM results"))?;
+        let rows = self.sql(st.query_map([], |r| r.get::<_, String>(0)))?;
+        let mut out = BTreeSet::new();
+        for r in rows {
+            out.insert(self.sql(r)?);
+        }
+        Ok(out)
+    }
+
+    /// Every stored result, ordered by building, label, seed.
+    pub fn all(&self) -> Result<Vec<StoredResult>, StoreError> {
+        let mut st = self.sql(self.conn.prepare(
+            "SELECT job_id, grid, building, building_hash, strategy, label, seed, settings_json, status,
+                    error, summary_json, progress_csv, worker, wall_time_s, floorcast_version
+             FROM results ORDER BY building, label, seed, job_id",
+        ))?;
+        let rows = self.sql(st.query_map([], |r| {
+            Ok(StoredResult {
+                job_id: r.get(0)?,
+                grid: r.get(1)?,
+                building: r.get(2)?,
+                building_hash: r.get(3)?,
+                strategy: r.get(4)?,
+                label: r.get(5)?,
+                seed: r.get::<_, i64>(6)? as u64,
+                settings_json: r.get(7)?,
+                status: r.get(8)?,
+                error: r.get(9)?,
+                summary_json: r.get(10)?,
+                progress_csv: r.get(11)?,
+                worker: r.get(12)?,
+                wall_time_s: r.get(13)?,
+                floorcast_version: r.get(14)?,
+            })
+        }))?;
+        let mut out = Vec::new();
+        for r in rows {
+            out.push(self.sql(r)?);
+        }
+        Ok(out)
+    }
+
+    pub fn record_run(&self, p: &Provenance) -> Result<(), StoreError> {
+        self.sql(self.conn.execute(
+            "INSERT INTO runs (grid, command, git_commit, git_dirty, rustc, host, floorcast_version, started_unix_s)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)",
+            params![p.grid, p.command, p.git_commit, p.git_dirty as i64, p.rustc, p.host, p.floorcast_version, p.started_unix_s],
+        ))?;
+        Ok(())
+    }
+}
+
+/// Provenance of this process: git commit and dirty flag of the current directory's repository
+/// (or "unknown"), compiler, host, version.
+pub fn provenance(grid: &str, command: &str) -> Provenance {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let git_commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    let git_dirty = git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    let host = std::fs::read_to_string("/etc/hostname")
+        .ok()
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "unknown".into());
+    Provenance {
+        grid: grid.to_string(),
+        command: command.to_string(),
+        git_commit,
+        git_dirty,
+        rustc: env!("FLOORCAST_RUSTC_VERSION").to_string(),
+        host,
+        floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
+        started_unix_s: std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_secs_f64())
+            .unwrap_or(0.0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(id: &str) -> StoredResult {
+        StoredResult {
+            job_id: id.into(),
+            grid: "g".into(),
+            building: "b".into(),
+            building_hash: "h".into(),
+            strategy: "baseline".into(),
+            label: "baseline".into(),
+            seed: 1,
+            settings_json: "{}".into(),
+            status: "ok".into(),
+            error: None,
+            summary_json: Some("{}".into()),
+            progress_csv: Some("time_s\n".into()),
+            worker: "local-0".into(),
+            wall_time_s: 1.0,
+            floorcast_version: "0".into(),
+        }
+    }
+
+    #[test]
+    fn inserts_once_and_survives_reopening() {
+        let dir = tempfile::tempdir().unwrap();
+        {
+            let s = Store::open(dir.path()).unwrap();
+            assert!(s.insert(&row("a")).unwrap());
+            assert!(!s.insert(&row("a")).unwrap(), "duplicate is ignored");
+            assert!(s.insert(&row("b")).unwrap());
+        }
+        let s = Store::open(dir.path()).unwrap();
+        assert_eq!(s.stored_ids().unwrap().len(), 2);
+        assert_eq!(s.all().unwrap()[0], row("a"));
+    }
+
+    #[test]
+    fn refuses_another_layout_version() {
+        let dir = tempfile::tempdir().unwrap();
+        {
+            let s = Store::open(dir.path()).unwrap();
+            s.conn.execute("UPDATE meta SET value = '99' WHERE key = 'store_version'", []).unwrap();
+        }
+        let e = Store::open(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("99"), "{e}");
+    }
+}
