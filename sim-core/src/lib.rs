@@ -9,6 +9,7 @@ pub mod building;
 pub mod distance;
 pub mod geom;
 pub mod grid;
+pub mod layout;
 pub mod scan;
 
 pub use building::{Building, Door, Geometry, Room};

@@ -1,0 +1,233 @@
+//! Wall evidence: occupied cells on the boundary of free space, each with the orientation of the
+//! local boundary, plus a mask of the cells near any occupied cell.
+
+use super::LayoutConfig;
+use crate::geom::Vec2;
+use crate::grid::{Bitmap, Cell, Occupancy, OccupancyGrid};
+
+/// An occupied cell next to free space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoundaryCell {
+    /// Centre of the cell, world metres.
+    pub p: Vec2,
+    /// Orientation of the boundary normal, in `[0, pi)`.
+    pub normal_rad: f64,
+}
+
+/// What the later stages read from the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WallEvidence {
+    pub cells: Vec<BoundaryCell>,
+    /// Cells within [`LayoutConfig::wall_tolerance_m`] (square neighbourhood) of an occupied cell.
+    pub near_wall: Bitmap,
+    /// Inclusive cell box of the known (free or occupied) cells; `None` when there are none.
+    pub known_box: Option<(Cell, Cell)>,
+    pub known_cells: usize,
+}
+
+/// Extracts the wall evidence of `grid`.
+pub fn wall_evidence(grid: &OccupancyGrid, config: &LayoutConfig) -> WallEvidence {
+    let f = grid.frame;
+    let (w, h) = (f.width as usize, f.height as usize);
+    // Integral image of "free" with a zero border row/column.
+    let mut integral = vec![0u32; (w + 1) * (h + 1)];
+    let mut known_cells = 0usize;
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0usize, 0usize);
+    for y in 0..h {
+        let mut row_sum = 0u32;
+        for x in 0..w {
+            let s = grid.data[y * w + x];
+            if s != Occupancy::Unknown {
+                known_cells += 1;
+                x0 = x0.min(x);
+                y0 = y0.min(y);
+                x1 = x1.max(x);
+                y1 = y1.max(y);
+            }
+            row_sum += (s == Occupancy::Free) as u32;
+            integral[(y + 1) * (w + 1) + x + 1] = integral[y * (w + 1) + x + 1] + row_sum;
+        }
+    }
+    let known_box = (known_cells > 0).then(|| {
+        (
+            Cell::new(x0 as i32, y0 as i32),
+            Cell::new(x1 as i32, y1 as i32),
+        )
+    });
+    // Sum of "free" over the inclusive cell box, clamped to the grid.
+    let box_sum = |xa: isize, ya: isize, xb: isize, yb: isize| -> i64 {
+        let xa = xa.clamp(0, w as isize) as usize;
+        let ya = ya.clamp(0, h as isize) as usize;
+        let xb = (xb + 1).clamp(0, w as isize) as usize;
+        let yb = (yb + 1).clamp(0, h as isize) as usize;
+        if xa >= xb || ya >= yb {
+            return 0;
+        }
+        let at = |x: usize, y: usize| integral[y * (w + 1) + x] as i64;
+        at(xb, yb) - at(xa, yb) - at(xb, ya) + at(xa, ya)
+    };
+    let is_free = |x: usize, y: usize| grid.data[y * w + x] == Occupancy::Free;
+    let mut cells = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            if grid.data[y * w + x] != Occupancy::Occupied {
+                continue;
+            }
+            let touches_free = (x > 0 && is_free(x - 1, y))
+                || (x + 1 < w && is_free(x + 1, y))
+                || (y > 0 && is_free(x, y - 1))
+                || (y + 1 < h && is_free(x, y + 1));
+            if !touches_free {
+                continue;
+            }
+            let (xi, yi) = (x as isize, y as isize);
+            let gx =
+                box_sum(xi + 1, yi - 2, xi + 2, yi + 2) - box_sum(xi - 2, yi - 2, xi - 1, yi + 2);
+            let gy =
+                box_sum(xi - 2, yi + 1, xi + 2, yi + 2) - box_sum(xi - 2, yi - 2, xi + 2, yi - 1);
+            if gx == 0 && gy == 0 {
+                continue;
+            }
+            let mut a = (gy as f64).atan2(gx as f64);
+            if a < 0.0 {
+                a += std::f64::consts::PI;
+            }
+            if a >= std::f64::consts::PI {
+                a -= std::f64::consts::PI;
+            }
+            cells.push(BoundaryCell {
+                p: f.world_from_cell(Cell::new(x as i32, y as i32)),
+                normal_rad: a,
+            });
+        }
+    }
+    let radius = (config.wall_tolerance_m / f.resolution_m).round().max(0.0) as usize;
+    let near_wall = dilate_occupied(grid, radius);
+    WallEvidence {
+        cells,
+        near_wall,
+        known_box,
+        known_cells,
+    }
+}
+
+/// Occupied cells dilated by a square of half-side `radius` cells (separable, linear time).
+fn dilate_occupied(grid: &OccupancyGrid, radius: usize) -> Bitmap {
+    let f = grid.frame;
+    let (w, h) = (f.width as usize, f.height as usize);
+    let src: Vec<bool> = grid
+        .data
+        .iter()
+        .map(|s| *s == Occupancy::Occupied)
+        .collect();
+    let mut rows = vec![false; w * h];
+    let mut line = Vec::new();
+    for y in 0..h {
+        dilate_1d(&src[y * w..(y + 1) * w], radius, &mut line);
+        rows[y * w..(y + 1) * w].copy_from_slice(&line);
+    }
+    // Columns, row-major: the row of the last true cell above and below, per column.
+    let mut out = rows.clone();
+    let mut last = vec![usize::MAX; w];
+    for y in 0..h {
+        let row = &rows[y * w..(y + 1) * w];
+        for x in 0..w {
+            if row[x] {
+                last[x] = y;
+            }
+            if last[x] != usize::MAX && y - last[x] <= radius {
+                out[y * w + x] = true;
+            }
+        }
+    }
+    last.fill(usize::MAX);
+    for y in (0..h).rev() {
+        let row = &rows[y * w..(y + 1) * w];
+        for x in 0..w {
+            if row[x] {
+                last[x] = y;
+            }
+            if last[x] != usize::MAX && last[x] - y <= radius {
+                out[y * w + x] = true;
+            }
+        }
+    }
+    Bitmap {
+        frame: f,
+        data: out,
+    }
+}
+
+/// `out[i]` is true when some `src[j]` with `|i - j| <= radius` is.
+fn dilate_1d(src: &[bool], radius: usize, out: &mut Vec<bool>) {
+    let n = src.len();
+    out.clear();
+    out.resize(n, false);
+    // Distance to the last true on the left, then on the right.
+    let mut last: Option<usize> = None;
+    for i in 0..n {
+        if src[i] {
+            last = Some(i);
+        }
+        if last.is_some_and(|j| i - j <= radius) {
+            out[i] = true;
+        }
+    }
+    last = None;
+    for i in (0..n).rev() {
+        if src[i] {
+            last = Some(i);
+        }
+        if last.is_some_and(|j| j - i <= radius) {
+            out[i] = true;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn boundary_cells_face_the_free_side() {
+        let g = OccupancyGrid::from_ascii(
+            "
+            ##########
+            #........#
+            #........#
+            #........#
+            #........#
+            ##########
+            ",
+            0.1,
+        );
+        let e = wall_evidence(&g, &LayoutConfig::default());
+        // Corners touch no free cell; the 8 + 8 + 4 + 4 side cells do.
+        assert_eq!(e.cells.len(), 24);
+        let exact = e
+            .cells
+            .iter()
+            .filter(|c| {
+                let horizontal_wall = (c.p.y < 0.1) || (c.p.y > 0.5);
+                let expected = if horizontal_wall {
+                    std::f64::consts::FRAC_PI_2
+                } else {
+                    0.0
+                };
+                (c.normal_rad - expected).abs() < 1e-9
+            })
+            .count();
+        // Cells next to a corner see both walls; the others are exact.
+        assert!(exact >= 12, "{exact}: {:?}", e.cells);
+        assert_eq!(e.known_box, Some((Cell::new(0, 0), Cell::new(9, 5))));
+        // Tolerance 0.15 m = 2 cells here: every cell is near a wall.
+        assert_eq!(e.near_wall.count_true(), 60);
+    }
+
+    #[test]
+    fn dilation_is_square() {
+        let mut out = Vec::new();
+        dilate_1d(&[false, false, true, false, false, false], 2, &mut out);
+        assert_eq!(out, vec![true, true, true, true, true, false]);
+    }
+}

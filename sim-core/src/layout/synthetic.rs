@@ -1,0 +1,168 @@
+//! Synthetic buildings with ground truth, for tests and benchmarks of the layout: a corridor
+//! with rooms of repeated widths on both sides, its complete occupancy map, and what a simple
+//! 360 degree laser sees of it from a few points.
+
+use crate::building::{fill_polygon, Building, Geometry, Room};
+use crate::geom::{Polygon, Vec2};
+use crate::grid::{Bitmap, GridFrame, Occupancy, OccupancyGrid};
+
+/// A corridor along x with rooms on both sides.
+#[derive(Debug, Clone)]
+pub struct BuildingSpec {
+    /// Widths of the rooms along the corridor, repeated on both sides.
+    pub room_widths_m: Vec<f64>,
+    pub room_depth_m: f64,
+    pub corridor_width_m: f64,
+    pub wall_m: f64,
+    pub door_m: f64,
+    /// Rotation of the whole building about the origin.
+    pub rotation_rad: f64,
+}
+
+impl Default for BuildingSpec {
+    fn default() -> Self {
+        Self {
+            room_widths_m: vec![4.0, 4.0, 6.0, 4.0],
+            room_depth_m: 5.0,
+            corridor_width_m: 2.4,
+            wall_m: 0.15,
+            door_m: 0.9,
+            rotation_rad: 0.0,
+        }
+    }
+}
+
+pub fn corridor_building(spec: &BuildingSpec) -> Building {
+    let (s, c) = spec.rotation_rad.sin_cos();
+    let rot = |p: Vec2| Vec2::new(c * p.x - s * p.y + 40.0, s * p.x + c * p.y + 40.0);
+    let length: f64 = spec.room_widths_m.iter().sum::<f64>().max(8.0);
+    let (d, cw, t) = (spec.room_depth_m, spec.corridor_width_m, spec.wall_m);
+    let y_c0 = d;
+    let y_c1 = d + cw;
+    let height = 2.0 * d + cw;
+    let mut solids = Vec::new();
+    let mut wall = |a: Vec2, b: Vec2| solids.push(Polygon::thick_segment(rot(a), rot(b), t));
+    let v = Vec2::new;
+    // Envelope.
+    wall(v(0.0, 0.0), v(length, 0.0));
+    wall(v(length, 0.0), v(length, height));
+    wall(v(length, height), v(0.0, height));
+    wall(v(0.0, height), v(0.0, 0.0));
+    let mut rooms = Vec::new();
+    let inset = t / 2.0;
+    let mut add_room = |x0: f64, y0: f64, x1: f64, y1: f64, kind: &str| {
+        let p = [
+            v(x0 + inset, y0 + inset),
+            v(x1 - inset, y0 + inset),
+            v(x1 - inset, y1 - inset),
+            v(x0 + inset, y1 - inset),
+        ];
+        rooms.push(Room {
+            id: rooms.len() as u32,
+            kind: kind.into(),
+            polygon: Polygon::new(p.iter().map(|q| rot(*q)).collect()),
+        });
+    };
+    add_room(0.0, y_c0, length, y_c1, "corridor");
+    if !spec.room_widths_m.is_empty() {
+        // Corridor walls with one door per room, partitions.
+        for (y, y_far) in [(y_c0, 0.0), (y_c1, height)] {
+            let mut x = 0.0;
+            for (i, w) in spec.room_widths_m.iter().enumerate() {
+                let door0 = x + w / 2.0 - spec.door_m / 2.0;
+                let door1 = door0 + spec.door_m;
+                wall(v(x, y), v(door0, y));
+                wall(v(door1, y), v(x + w, y));
+                if i + 1 < spec.room_widths_m.len() {
+                    wall(v(x + w, y), v(x + w, y_far));
+                }
+                let (ya, yb) = if y_far < y { (y_far, y) } else { (y, y_far) };
+                add_room(x, ya, x + w, yb, "room");
+                x += w;
+            }
+        }
+    }
+    let outline = Polygon::new(
+        [
+            v(-t / 2.0, -t / 2.0),
+            v(length + t / 2.0, -t / 2.0),
+            v(length + t / 2.0, height + t / 2.0),
+            v(-t / 2.0, height + t / 2.0),
+        ]
+        .iter()
+        .map(|q| rot(*q))
+        .collect(),
+    );
+    Building {
+        name: "corridor".into(),
+        geometry: Geometry::Vector { outline, solids },
+        rooms,
+        doors: vec![],
+        start: None,
+    }
+}
+
+/// The complete map of a building: free cells free, other cells in the outline's box occupied,
+/// a 1 m unknown margin around.
+pub fn rasterise(b: &Building, resolution_m: f64) -> OccupancyGrid {
+    let frame = GridFrame::covering(&b.bounds(), resolution_m, 1.0);
+    let free = b.free_mask(frame);
+    let mut inside = Bitmap::filled(frame, false);
+    if let Geometry::Vector { outline, .. } = &b.geometry {
+        fill_polygon(&mut inside, outline, true);
+    }
+    OccupancyGrid {
+        frame,
+        data: free
+            .data
+            .iter()
+            .zip(&inside.data)
+            .map(|(f, i)| match (f, i) {
+                (true, _) => Occupancy::Free,
+                (false, true) => Occupancy::Occupied,
+                _ => Occupancy::Unknown,
+            })
+            .collect(),
+    }
+}
+
+/// What a 360 degree laser of `range_m` sees from `views` in the complete map `full`.
+pub fn observe(full: &OccupancyGrid, views: &[Vec2], range_m: f64) -> OccupancyGrid {
+    let f = full.frame;
+    let mut out = OccupancyGrid::filled(f, Occupancy::Unknown);
+    let step = f.resolution_m / 2.0;
+    for p in views {
+        for k in 0..1440 {
+            let a = k as f64 * std::f64::consts::TAU / 1440.0;
+            let d = Vec2::new(a.cos(), a.sin());
+            let mut r = 0.0;
+            while r <= range_m {
+                let c = f.cell_from_world(p + d * r);
+                match full.get(c) {
+                    Some(Occupancy::Free) => out.set(c, Occupancy::Free),
+                    Some(Occupancy::Occupied) => {
+                        out.set(c, Occupancy::Occupied);
+                        break;
+                    }
+                    _ => break,
+                }
+                r += step;
+            }
+        }
+    }
+    out
+}
+
+/// View points every metre along the corridor's centre line, up to `fraction` of its length.
+pub fn corridor_views(spec: &BuildingSpec, fraction: f64) -> Vec<Vec2> {
+    let length: f64 = spec.room_widths_m.iter().sum::<f64>().max(8.0);
+    let (s, c) = spec.rotation_rad.sin_cos();
+    let y = spec.room_depth_m + spec.corridor_width_m / 2.0;
+    let mut out = Vec::new();
+    let mut x = 0.8;
+    while x <= fraction * length {
+        out.push(Vec2::new(c * x - s * y + 40.0, s * x + c * y + 40.0));
+        x += 1.0;
+    }
+    out
+}

@@ -1,0 +1,251 @@
+//! End-to-end tests of the layout pipeline: ASCII maps, synthetic buildings with ground truth,
+//! partial maps, properties.
+
+use proptest::prelude::*;
+
+use super::synthetic::{corridor_building, corridor_views, observe, rasterise, BuildingSpec};
+use super::*;
+use crate::building::fill_polygon;
+use crate::geom::Vec2;
+use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
+
+fn ascii_config() -> LayoutConfig {
+    LayoutConfig {
+        min_room_area_m2: 0.5,
+        ..LayoutConfig::default()
+    }
+}
+
+#[test]
+fn two_rooms_and_a_door() {
+    let g = OccupancyGrid::from_ascii(
+        "
+        ##########################
+        #...........#............#
+        #...........#............#
+        #...........#............#
+        #........................#
+        #........................#
+        #...........#............#
+        #...........#............#
+        #...........#............#
+        ##########################
+        ",
+        0.25,
+    );
+    let l = reconstruct_layout(&g, &ascii_config());
+    assert_eq!(l.rooms.len(), 2, "{l:#?}");
+    let mut areas: Vec<f64> = l.rooms.iter().map(|r| r.area_m2).collect();
+    areas.sort_by(f64::total_cmp);
+    // Interiors 2.75 x 2 and 3 x 2 m, plus half walls.
+    assert!((areas[0] - 6.2).abs() < 0.8, "{areas:?}");
+    assert!((areas[1] - 6.7).abs() < 0.8, "{areas:?}");
+    assert!(l
+        .rooms
+        .iter()
+        .all(|r| r.label == RoomLabel::Full && !r.predicted));
+    // The point in the middle of each room finds its room.
+    let a = room_at(&l, Vec2::new(1.5, 1.2)).map(|r| r.id);
+    let b = room_at(&l, Vec2::new(4.8, 1.2)).map(|r| r.id);
+    assert!(a.is_some() && b.is_some() && a != b);
+    assert!(layout_walls(&l).len() >= 8);
+}
+
+#[test]
+fn l_corridor_is_one_room() {
+    let g = OccupancyGrid::from_ascii(
+        "
+        ########
+        #......#
+        #......#
+        #......#
+        #......#
+        #......#
+        #......#
+        #......#
+        #......##################
+        #.......................#
+        #.......................#
+        #.......................#
+        #.......................#
+        #########################
+        ",
+        0.25,
+    );
+    let l = reconstruct_layout(&g, &ascii_config());
+    assert_eq!(l.rooms.len(), 1, "{l:#?}");
+    let free_m2 = g.count(Occupancy::Free) as f64 * 0.0625;
+    let r = &l.rooms[0];
+    assert!(
+        r.area_m2 > free_m2 && r.area_m2 < free_m2 * 1.35,
+        "{} vs {free_m2}",
+        r.area_m2
+    );
+    // Concave: the corner opposite the bend is not in the room.
+    assert!(room_at(&l, Vec2::new(4.0, 3.0)).is_none());
+}
+
+#[test]
+fn room_cut_by_the_frontier_is_predicted_to_the_shared_wall() {
+    let g = OccupancyGrid::from_ascii(
+        "
+        ##############################????????
+        #........#........#.........#?????????
+        #........#........#.........#?????????
+        #........#........#.........#?????????
+        #........#........#.........#?????????
+        #........#........#.........#?????????
+        #........#........#.........#.........
+        #........#........#.........#.........
+        #........#........#.........#.........
+        ###.########.########.########.......#
+        #....................................#
+        #....................................#
+        #....................................#
+        ######################################
+        ",
+        0.25,
+    );
+    let l = reconstruct_layout(&g, &ascii_config());
+    let r = room_at(&l, Vec2::new(8.5, 1.2 + 0.25 * 6.0)).expect("the cut room");
+    assert_ne!(r.label, RoomLabel::Full, "{l:#?}");
+    assert!(r.predicted, "{r:#?}");
+    // Predicted up to the top wall line seen on the other rooms (y about 3.4 m).
+    let top = r
+        .polygon
+        .vertices
+        .iter()
+        .map(|v| v.y)
+        .fold(f64::MIN, f64::max);
+    assert!((top - 3.4).abs() < 0.2, "top {top}: {r:#?}");
+    assert!(r.area_m2 > r.observed_area_m2 + 1.0);
+    assert!(r.unknown_area_m2 > 1.0);
+}
+
+#[test]
+fn degenerate_inputs_give_empty_layouts() {
+    let cfg = LayoutConfig::default();
+    let empty = OccupancyGrid::filled(GridFrame::new(Vec2::zeros(), 0.05, 0, 0), Occupancy::Free);
+    assert!(reconstruct_layout(&empty, &cfg).rooms.is_empty());
+    let frame = GridFrame::new(Vec2::zeros(), 0.05, 50, 40);
+    let unknown = OccupancyGrid::filled(frame, Occupancy::Unknown);
+    assert!(reconstruct_layout(&unknown, &cfg).rooms.is_empty());
+    // All free: no walls, no lines; the whole box is one room at most.
+    let free = OccupancyGrid::filled(frame, Occupancy::Free);
+    let l = reconstruct_layout(&free, &cfg);
+    assert!(l.lines.is_empty());
+    assert!(l.rooms.len() <= 1);
+    let occ = OccupancyGrid::filled(frame, Occupancy::Occupied);
+    assert!(reconstruct_layout(&occ, &cfg).rooms.is_empty());
+    let zero_res = OccupancyGrid::filled(GridFrame::new(Vec2::zeros(), 0.0, 3, 3), Occupancy::Free);
+    assert!(reconstruct_layout(&zero_res, &cfg).rooms.is_empty());
+    let one = OccupancyGrid::from_ascii(".", 0.05);
+    assert!(reconstruct_layout(&one, &cfg).rooms.is_empty());
+}
+
+#[test]
+fn single_room_gives_one_full_room() {
+    let b = corridor_building(&BuildingSpec {
+        room_widths_m: vec![],
+        ..BuildingSpec::default()
+    });
+    let g = rasterise(&b, 0.05);
+    let l = reconstruct_layout(&g, &LayoutConfig::default());
+    assert_eq!(l.rooms.len(), 1, "{:?}", l.diagnostics);
+    assert_eq!(l.rooms[0].label, RoomLabel::Full);
+}
+
+fn long_spec() -> BuildingSpec {
+    BuildingSpec {
+        room_widths_m: vec![4.0, 4.0, 6.0, 4.0, 4.0, 6.0, 4.0, 4.0],
+        ..BuildingSpec::default()
+    }
+}
+
+#[test]
+fn complete_synthetic_building_is_accurate() {
+    for rotation_rad in [0.0, 0.5, std::f64::consts::FRAC_PI_4] {
+        let spec = BuildingSpec {
+            rotation_rad,
+            ..long_spec()
+        };
+        let b = corridor_building(&spec);
+        let g = rasterise(&b, 0.05);
+        let l = reconstruct_layout(&g, &LayoutConfig::default());
+        let a = evaluate(&l, &b.rooms, g.frame);
+        assert!(
+            a.matched_room_iou >= 0.9,
+            "rotation {rotation_rad}: {a:?} {:?}",
+            l.diagnostics
+        );
+        assert!(a.pixel_accuracy >= 0.9, "{a:?}");
+        assert_eq!(
+            a.rooms_found,
+            b.rooms.len(),
+            "rotation {rotation_rad}: {a:?}"
+        );
+        assert!(l.rooms.iter().all(|r| r.label == RoomLabel::Full));
+    }
+}
+
+#[test]
+fn prediction_improves_partial_rooms() {
+    for rotation_rad in [0.0, 0.3] {
+        let spec = BuildingSpec {
+            rotation_rad,
+            ..long_spec()
+        };
+        let b = corridor_building(&spec);
+        let full = rasterise(&b, 0.05);
+        for fraction in [0.3, 0.5, 0.7] {
+            let g = observe(&full, &corridor_views(&spec, fraction), 6.0);
+            let l = reconstruct_layout(&g, &LayoutConfig::default());
+            let a = evaluate(&l, &b.rooms, g.frame);
+            let (p, o) = (a.predicted_iou.unwrap(), a.observed_only_iou.unwrap());
+            assert!(a.partial_rooms >= 2, "{a:?}");
+            assert!(
+                p > o + 0.05,
+                "rotation {rotation_rad} fraction {fraction}: {a:?}"
+            );
+        }
+    }
+}
+
+fn rooms_raster(l: &Layout, frame: GridFrame) -> Vec<u8> {
+    let mut cover = vec![0u8; frame.len()];
+    for r in &l.rooms {
+        let mut m = Bitmap::filled(frame, false);
+        fill_polygon(&mut m, &r.polygon, true);
+        for (c, b) in cover.iter_mut().zip(&m.data) {
+            *c += *b as u8;
+        }
+    }
+    cover
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+    #[test]
+    fn rooms_are_disjoint_and_full_rooms_are_free(
+        widths in prop::collection::vec(3.0f64..6.0, 1..5),
+        depth in 3.0f64..6.0,
+        rotation_rad in 0.0f64..1.6,
+        fraction in 0.2f64..1.2,
+    ) {
+        let spec = BuildingSpec { room_widths_m: widths, room_depth_m: depth, rotation_rad, ..BuildingSpec::default() };
+        let b = corridor_building(&spec);
+        let full = rasterise(&b, 0.1);
+        let g = observe(&full, &corridor_views(&spec, fraction), 6.0);
+        let l = reconstruct_layout(&g, &LayoutConfig::default());
+        let cover = rooms_raster(&l, g.frame);
+        prop_assert!(cover.iter().all(|c| *c <= 1));
+        for r in l.rooms.iter().filter(|r| r.label == RoomLabel::Full) {
+            let mut m = Bitmap::filled(g.frame, false);
+            fill_polygon(&mut m, &r.polygon, true);
+            let n = m.count_true();
+            let free = m.data.iter().zip(&g.data).filter(|(b, s)| **b && **s == Occupancy::Free).count();
+            prop_assert!(free as f64 >= 0.75 * n as f64, "room {} {free}/{n}", r.id);
+        }
+        let _ = Cell::new(0, 0);
+    }
+}
