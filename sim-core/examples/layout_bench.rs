@@ -64,8 +64,8 @@ fn draw(grid: &OccupancyGrid, layout: &Layout, path: &std::path::Path) {
             if *b {
                 let c = f.cell_of_index(i);
                 let p = img.get_pixel_mut(c.x as u32, h - 1 - c.y as u32);
-                for k in 0..3 {
-                    p.0[k] = ((p.0[k] as u16 + col[k] as u16) / 2) as u8;
+                for (v, c) in p.0.iter_mut().zip(col) {
+                    *v = ((*v as u16 + c as u16) / 2) as u8;
                 }
             }
         }

@@ -22,9 +22,16 @@ pub fn wall_lines(
         let direction_rad = (phi - PI / 2.0).rem_euclid(PI);
         let n = Vec2::new(-direction_rad.sin(), direction_rad.cos());
         let u = Vec2::new(direction_rad.cos(), direction_rad.sin());
+        // Cells whose local normal is nearest this direction, within the tolerance.
         let pts: Vec<Vec2> = cells
             .iter()
-            .filter(|c| angle_diff_mod_pi(c.normal_rad, phi) <= config.direction_tolerance_rad)
+            .filter(|c| {
+                let d = angle_diff_mod_pi(c.normal_rad, phi);
+                d <= config.direction_tolerance_rad
+                    && normals_rad
+                        .iter()
+                        .all(|o| angle_diff_mod_pi(c.normal_rad, *o) >= d)
+            })
             .map(|c| c.p)
             .collect();
         if pts.is_empty() {

@@ -132,15 +132,17 @@ pub struct Layout {
 /// Parameters. Lengths in metres, angles in radians.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LayoutConfig {
-    /// A direction is kept when its histogram peak is at least this fraction of the highest one.
-    /// Default 0.12.
+    /// A direction is kept when the square root of its sharpness peak (above the lowest; the
+    /// sharpness grows with the square of wall length) is at least this fraction of the highest
+    /// one's. Default 0.15.
     pub min_direction_fraction: f64,
     /// Minimum angle between two dominant directions. Default 10 degrees.
     pub min_direction_separation_rad: f64,
     /// At most this many dominant directions. Default 4.
     pub max_directions: usize,
-    /// Boundary cells whose orientation is within this angle of a direction support its lines.
-    /// Default 10 degrees.
+    /// Boundary cells whose local orientation is within this angle of a direction (and nearer to
+    /// it than to any other) support its lines. Local orientations of rotated walls are biased
+    /// by their staircases, hence a wide default: 25 degrees.
     pub direction_tolerance_rad: f64,
     /// Parallel wall evidence closer than this is one line (both sides of a wall). Default 0.35 m
     /// (the authors' 7 px at 0.05 m).
@@ -178,10 +180,10 @@ pub struct LayoutConfig {
 impl Default for LayoutConfig {
     fn default() -> Self {
         Self {
-            min_direction_fraction: 0.12,
+            min_direction_fraction: 0.15,
             min_direction_separation_rad: 10f64.to_radians(),
             max_directions: 4,
-            direction_tolerance_rad: 10f64.to_radians(),
+            direction_tolerance_rad: 25f64.to_radians(),
             min_line_separation_m: 0.35,
             min_line_support_m: 0.8,
             wall_tolerance_m: 0.15,

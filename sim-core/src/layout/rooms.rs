@@ -227,7 +227,7 @@ pub fn union_outline(
     if out.len() < 3 {
         return None;
     }
-    out.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    out.sort_by_key(|e| (e.0, e.1));
     let mut used = vec![false; out.len()];
     let mut best: Option<(f64, Vec<Vec2>, Vec<u32>)> = None;
     let mut loops = 0;
