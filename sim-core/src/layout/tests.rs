@@ -252,37 +252,3 @@ proptest! {
         let _ = Cell::new(0, 0);
     }
 }
-
-#[test]
-#[ignore]
-fn debug_directions() {
-    let spec = BuildingSpec {
-        rotation_rad: 0.5,
-        ..long_spec()
-    };
-    let b = corridor_building(&spec);
-    let g = rasterise(&b, 0.05);
-    let cfg = LayoutConfig::default();
-    let e = super::evidence::wall_evidence(&g, &cfg);
-    let mut hist = [0usize; 36];
-    for c in &e.cells {
-        hist[((c.normal_rad.to_degrees() / 5.0) as usize).min(35)] += 1;
-    }
-    println!("{hist:?}");
-    let mut d = LayoutDiagnostics::default();
-    let dirs = super::directions::dominant_directions(&e.cells, 0.05, &cfg, &mut d);
-    println!(
-        "{:?}",
-        dirs.iter().map(|a| a.to_degrees()).collect::<Vec<_>>()
-    );
-    let lines = super::lines::wall_lines(&e.cells, &dirs, 0.05, &cfg);
-    for l in &lines {
-        println!(
-            "{} {:.2} {:.2} {:.2}",
-            l.family,
-            l.direction_rad.to_degrees(),
-            l.offset_m,
-            l.support_m
-        );
-    }
-}
