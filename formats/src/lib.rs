@@ -1,1 +1,157 @@
-//! x
+//! File formats at floorcast's edge: ROS map_server maps (YAML + PGM/PNG), Stage `.world`
+//! files and floorcast's own building TOML, read into `sim_core` types and validated on the way
+//! in.
+//!
+//! Bad input never panics: every error is an [`Error`] whose message is one line naming the file,
+//! the problem and what was expected. Nothing here simulates or decides anything; the kernel
+//! (`sim_core`) never sees a path.
+
+pub mod building_toml;
+pub mod error;
+pub mod map_server;
+pub mod stage;
+
+use std::path::Path;
+
+use sim_core::{Building, GridFrame, Occupancy, OccupancyGrid};
+
+pub use building_toml::{
+    parse_building_toml, read_building_toml, to_toml_string, write_building_toml,
+};
+pub use error::Error;
+pub use map_server::{building_from_map, read_map, write_map};
+pub use stage::read_world;
+
+/// Resolution at which [`read_occupancy`] rasterises a building file.
+pub const OCCUPANCY_RESOLUTION_M: f64 = 0.05;
+
+const SUPPORTED: &str =
+    ".yaml/.yml (ROS map_server map), .world (Stage world), .toml (floorcast building)";
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    MapServer,
+    Stage,
+    Toml,
+}
+
+fn kind_of(path: &Path) -> Result<Kind, Error> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("yaml" | "yml") => Ok(Kind::MapServer),
+        Some("world") => Ok(Kind::Stage),
+        Some("toml") => Ok(Kind::Toml),
+        Some(e) => Err(Error::unsupported(
+            path,
+            format!("file extension .{e}; expected one of {SUPPORTED}"),
+        )),
+        None => Err(Error::unsupported(
+            path,
+            format!("a file without an extension; expected one of {SUPPORTED}"),
+        )),
+    }
+}
+
+fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// Reads a building from any supported file, chosen by extension. A map becomes a raster world
+/// (every cell that is not free is solid). The name is the file's stem unless a TOML file names
+/// the building.
+pub fn read_building(path: &Path) -> Result<Building, Error> {
+    match kind_of(path)? {
+        Kind::MapServer => Ok(building_from_map(&read_map(path)?, &stem(path))),
+        Kind::Stage => read_world(path),
+        Kind::Toml => read_building_toml(path),
+    }
+}
+
+/// Reads an occupancy map for layout reconstruction: a map_server map as its ternary grid, any
+/// other building file rasterised at [`OCCUPANCY_RESOLUTION_M`] over its bounds (free where the
+/// building is free, else occupied).
+pub fn read_occupancy(path: &Path) -> Result<OccupancyGrid, Error> {
+    match kind_of(path)? {
+        Kind::MapServer => read_map(path),
+        Kind::Stage | Kind::Toml => {
+            let b = read_building(path)?;
+            Ok(occupancy_of(&b, OCCUPANCY_RESOLUTION_M))
+        }
+    }
+}
+
+/// A building as a two-state occupancy grid at `resolution_m` over its bounds.
+pub fn occupancy_of(building: &Building, resolution_m: f64) -> OccupancyGrid {
+    let frame = GridFrame::covering(&building.bounds(), resolution_m, 0.0);
+    let free = building.free_mask(frame);
+    OccupancyGrid {
+        frame,
+        data: free
+            .data
+            .iter()
+            .map(|&f| {
+                if f {
+                    Occupancy::Free
+                } else {
+                    Occupancy::Occupied
+                }
+            })
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TOML: &str = r#"
+format = "floorcast-building"
+version = 1
+outline = [[0.0, 0.0], [4.0, 0.0], [4.0, 2.0], [0.0, 2.0], [0.0, 0.0]]
+[[solids]]
+polygon = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 0.0]]
+"#;
+
+    #[test]
+    fn dispatches_on_extension_and_names_by_stem() {
+        let dir = tempfile::tempdir().unwrap();
+        let t = dir.path().join("tiny.toml");
+        std::fs::write(&t, TOML).unwrap();
+        let b = read_building(&t).unwrap();
+        assert_eq!(b.name, "tiny");
+        let g = read_occupancy(&t).unwrap();
+        assert_eq!(g.frame.resolution_m, 0.05);
+        assert_eq!((g.width(), g.height()), (80, 40));
+        assert_eq!(g.count(Occupancy::Free), 80 * 40 - 20 * 20);
+        assert_eq!(g.count(Occupancy::Unknown), 0);
+
+        let y = dir.path().join("m.yaml");
+        let grid = OccupancyGrid::from_ascii("#.?", 0.1);
+        write_map(&grid, &y).unwrap();
+        assert_eq!(read_occupancy(&y).unwrap(), grid);
+        let b = read_building(&y).unwrap();
+        assert_eq!(b.name, "m");
+        assert!((b.free_area_m2() - 0.01).abs() < 1e-12);
+    }
+
+    #[test]
+    fn error_unknown_extension() {
+        for name in ["plan.dxf", "plan"] {
+            let e = read_building(Path::new(name)).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("{name}: unsupported: ")), "{e}");
+            assert!(e.contains(".yaml/.yml (ROS map_server map), .world (Stage world), .toml (floorcast building)"), "{e}");
+        }
+    }
+
+    #[test]
+    fn error_missing_file() {
+        let e = read_building(Path::new("nowhere/b.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("nowhere/b.toml: cannot read: "), "{e}");
+    }
+}

@@ -69,6 +69,18 @@ impl Segment {
     pub fn length_m(&self) -> f64 {
         (self.b - self.a).norm()
     }
+
+    /// Euclidean distance from `p` to the closest point of the segment.
+    pub fn distance_to(&self, p: Vec2) -> f64 {
+        let d = self.b - self.a;
+        let len2 = d.norm_squared();
+        let t = if len2 > 0.0 {
+            ((p - self.a).dot(&d) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (self.a + d * t - p).norm()
+    }
 }
 
 /// An axis-aligned box in world metres.

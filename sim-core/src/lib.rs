@@ -7,10 +7,18 @@
 
 pub mod building;
 pub mod distance;
+pub mod explore;
+pub mod frontier;
+pub mod gain;
+pub mod generate;
 pub mod geom;
 pub mod grid;
 pub mod layout;
+pub mod mapping;
+pub mod plan;
 pub mod scan;
+pub mod sim;
+pub mod utility;
 
 pub use building::{Building, Door, Geometry, Room};
 pub use geom::{Aabb, Polygon, Pose, Segment, Vec2};

@@ -1,1 +1,87 @@
-//! Runs floorcast jobs. (Grows with the experiment-grid issue.)
+//! Runs floorcast jobs: one exploration of a building with a strategy, a seed and settings,
+//! producing a versioned run record ([`record::RunSummary`]) plus the in-memory result.
+//!
+//! This crate measures wall time and knows the floorcast version; the simulation itself is
+//! `sim-core`'s and stays pure. It does no file IO: the binary and the coordinator store what it
+//! returns.
+
+pub mod record;
+pub mod settings;
+
+use std::time::Instant;
+
+use sim_core::building::StartSource;
+use sim_core::explore::{explore, ProgressSample, RunResult};
+use sim_core::{Building, Pose};
+
+pub use record::{RunSummary, SUMMARY_FORMAT, SUMMARY_VERSION};
+pub use settings::{Settings, SettingsError};
+
+/// The floorcast version recorded in every result.
+pub const FLOORCAST_VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// One exploration to run.
+#[derive(Debug, Clone)]
+pub struct Job<'a> {
+    pub building: &'a Building,
+    /// Name to record (usually the file stem or the building's name).
+    pub building_name: String,
+    pub strategy: String,
+    pub seed: u64,
+    pub settings: Settings,
+    /// Overrides the building's start pose.
+    pub start: Option<Pose>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    #[error("building {0} has no free space to start in")]
+    NoStart(String),
+    #[error("start pose ({x:.2}, {y:.2}) is not in free space of building {name}")]
+    StartInWall { name: String, x: f64, y: f64 },
+    #[error("unknown strategy '{0}' (available: baseline)")]
+    UnknownStrategy(String),
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+}
+
+/// What a job produced.
+#[derive(Debug, Clone)]
+pub struct JobOutput {
+    pub summary: RunSummary,
+    pub result: RunResult,
+}
+
+/// The strategies this version implements.
+pub const STRATEGIES: &[&str] = &["baseline"];
+
+/// Runs one job to completion. `on_progress` sees the exploration curve as it grows.
+pub fn run_job(
+    job: &Job<'_>,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+) -> Result<JobOutput, JobError> {
+    if !STRATEGIES.contains(&job.strategy.as_str()) {
+        return Err(JobError::UnknownStrategy(job.strategy.clone()));
+    }
+    let config = job.settings.to_explore_config()?;
+    let (start, source) = match job.start {
+        Some(p) => (p, "command line"),
+        None => match job.building.default_start() {
+            Some((p, StartSource::File)) => (p, "building file"),
+            Some((p, StartSource::LargestClearance)) => (p, "largest clearance"),
+            None => return Err(JobError::NoStart(job.building_name.clone())),
+        },
+    };
+    if !job.building.is_free(start.position()) {
+        return Err(JobError::StartInWall {
+            name: job.building_name.clone(),
+            x: start.x_m,
+            y: start.y_m,
+        });
+    }
+    let t0 = Instant::now();
+    let result = explore(job.building, start, &config, job.seed, on_progress);
+    let wall_time_s = t0.elapsed().as_secs_f64();
+    let summary = RunSummary::new(job, &result, source, wall_time_s);
+    Ok(JobOutput { summary, result })
+}

@@ -1,0 +1,665 @@
+//! The exploration loop: sense, map (with the chosen localization), decide among frontier
+//! candidates with the paper's utility, drive, until no candidate is left.
+//!
+//! Decisions are re-taken when the goal is reached, when the goal's frontier has (mostly)
+//! disappeared, when the path is blocked, and after `redecide_period_s`. Unreachable goals are
+//! blacklisted with a radius; a goal toward which the robot makes no progress for
+//! `progress_timeout_s` is blacklisted too, so a run never hangs.
+
+mod follow;
+
+pub use follow::{Command, FollowConfig, PathFollower};
+
+use crate::building::Building;
+use crate::frontier::blacklist::Blacklist;
+use crate::frontier::detect::{detect_frontiers_in, Frontier, FrontierConfig};
+use crate::gain::information_gain;
+use crate::geom::{Pose, Vec2};
+use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
+use crate::mapping::distance_field::ObstacleDistance;
+use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
+use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
+use crate::plan::dijkstra::{dijkstra, wall_cost};
+use crate::plan::inflate::{nearest_traversable, traversable};
+use crate::plan::waypoints::waypoints;
+use crate::sim::{SimConfig, Simulator};
+use crate::utility::{best_candidate, CandidateScore};
+
+/// Where the map's poses come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Localization {
+    /// The simulator's true pose (an upper bound on map quality).
+    GroundTruth,
+    /// Dead reckoning with the run's odometry error (drifts).
+    Odometry,
+    /// Odometry corrected by scan-to-map matching (the default).
+    Slam,
+}
+
+impl Localization {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Localization::GroundTruth => "ground-truth",
+            Localization::Odometry => "odometry",
+            Localization::Slam => "slam",
+        }
+    }
+}
+
+/// Why a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EndReason {
+    /// No reachable frontier candidate left: exploration complete.
+    NoFrontiers,
+    /// The simulated time limit was reached first.
+    TimeLimit,
+}
+
+impl EndReason {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            EndReason::NoFrontiers => "no frontiers",
+            EndReason::TimeLimit => "time limit",
+        }
+    }
+}
+
+/// Everything that shapes a run besides the building, the start and the seed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExploreConfig {
+    pub sim: SimConfig,
+    pub localization: Localization,
+    pub map_resolution_m: f64,
+    pub log_odds: LogOddsConfig,
+    pub scan_match: ScanMatchConfig,
+    /// Weight of distance against information gain in the utility (paper: 0.5).
+    pub alpha: f64,
+    /// Frontiers shorter than this are ignored.
+    pub min_frontier_m: f64,
+    /// Re-decide at least this often while driving.
+    pub redecide_period_s: f64,
+    /// Clearance added to the robot radius when planning.
+    pub safety_margin_m: f64,
+    /// Radius around an unreachable or abandoned goal within which candidates are skipped.
+    pub blacklist_radius_m: f64,
+    /// A goal toward which the robot gets no closer for this long is abandoned.
+    pub progress_timeout_s: f64,
+    /// The run stops here if exploration has not finished.
+    pub time_limit_s: f64,
+    /// Drive back to the start after exploring (time counted).
+    pub return_home: bool,
+    /// A map update happens after this much motion, or `map_update_period_s`, whichever first.
+    pub map_update_distance_m: f64,
+    pub map_update_angle_rad: f64,
+    pub map_update_period_s: f64,
+    /// Period of the progress curve.
+    pub progress_period_s: f64,
+    pub follow: FollowConfig,
+}
+
+impl Default for ExploreConfig {
+    fn default() -> Self {
+        Self {
+            sim: SimConfig::default(),
+            localization: Localization::Slam,
+            map_resolution_m: 0.05,
+            log_odds: LogOddsConfig::default(),
+            scan_match: ScanMatchConfig::default(),
+            alpha: 0.5,
+            min_frontier_m: 0.5,
+            redecide_period_s: 10.0,
+            safety_margin_m: 0.05,
+            blacklist_radius_m: 0.5,
+            progress_timeout_s: 20.0,
+            time_limit_s: 4.0 * 3600.0,
+            return_home: false,
+            map_update_distance_m: 0.1,
+            map_update_angle_rad: 0.1,
+            map_update_period_s: 1.0,
+            progress_period_s: 1.0,
+            follow: FollowConfig::default(),
+        }
+    }
+}
+
+/// One point of the exploration curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProgressSample {
+    pub time_s: f64,
+    pub explored_area_m2: f64,
+    pub explored_fraction: f64,
+}
+
+/// One decision of the strategy.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decision {
+    pub time_s: f64,
+    /// The robot's estimated pose when deciding.
+    pub pose: Pose,
+    /// The chosen candidate's world position.
+    pub goal: Vec2,
+    pub candidates: usize,
+    pub gain_m2: f64,
+    pub distance_m: f64,
+}
+
+/// How well the final map matches the building (cells of the map grid).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapQuality {
+    /// Map-free cells that are free in the building.
+    pub free_precision: f64,
+    /// Map-occupied cells within one cell of solid space in the building (doubled walls and
+    /// drift lower this).
+    pub occupied_precision: f64,
+}
+
+/// Everything a run produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunResult {
+    pub seed: u64,
+    pub start: Pose,
+    pub end_reason: EndReason,
+    /// Simulated time at the end of exploration (before any return home).
+    pub exploration_time_s: f64,
+    /// Simulated time at the very end.
+    pub total_time_s: f64,
+    pub explored_area_m2: f64,
+    /// Free area reachable from the start (the denominator of the explored fraction).
+    pub free_area_m2: f64,
+    pub explored_fraction: f64,
+    pub path_length_m: f64,
+    pub decisions: Vec<Decision>,
+    pub blacklisted_goals: usize,
+    pub progress: Vec<ProgressSample>,
+    /// True poses, one per map update.
+    pub trajectory: Vec<Pose>,
+    /// Estimated poses, one per map update.
+    pub estimated_trajectory: Vec<Pose>,
+    pub map: OccupancyGrid,
+    pub map_quality: MapQuality,
+    pub scans: u64,
+    pub scan_matches_accepted: u64,
+}
+
+/// The mutable state of one exploration.
+struct Explorer<'a> {
+    cfg: &'a ExploreConfig,
+    seed: u64,
+    sim: Simulator,
+    map: LogOddsMap,
+    obstacles: ObstacleDistance,
+    /// Reachable free space of the building on the map grid (ground truth for the explored area).
+    truth: Bitmap,
+    truth_cells: usize,
+    /// Map-free cells that are truth-free, kept incrementally.
+    explored_cells: usize,
+    estimate: Pose,
+    last_odometry: Pose,
+    last_update_pose: Pose,
+    last_update_time_s: f64,
+    blacklist: Blacklist,
+    /// The goal reached (and looked at) just before the current decision.
+    last_reached: Option<Vec2>,
+    follower: PathFollower,
+    goal: Option<Goal>,
+    decisions: Vec<Decision>,
+    progress: Vec<ProgressSample>,
+    trajectory: Vec<Pose>,
+    estimated_trajectory: Vec<Pose>,
+    scans: u64,
+    matches_accepted: u64,
+    next_progress_s: f64,
+}
+
+struct Goal {
+    cell: Cell,
+    /// Where the unknown space behind the frontier is: the robot faces it on arrival, so that its
+    /// forward-looking laser sees it.
+    look_at: Vec2,
+    arrived: bool,
+    /// Cells of the frontier it was chosen for.
+    frontier: Vec<Cell>,
+    decided_at_s: f64,
+    best_distance_m: f64,
+    best_distance_at_s: f64,
+}
+
+/// Runs one exploration. `on_progress` sees every progress sample as it is made (for a
+/// progress bar); it must not affect the run.
+pub fn explore(
+    building: &Building,
+    start: Pose,
+    cfg: &ExploreConfig,
+    seed: u64,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+) -> RunResult {
+    let frame = GridFrame::covering(&building.bounds(), cfg.map_resolution_m, 1.0);
+    let truth = building.reachable_free(frame, start.position());
+    let truth_cells = truth.count_true();
+    let cap_cells = (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m)
+        .ceil() as u32
+        + 4)
+    .max(8);
+    let sim = Simulator::new(building, start, &cfg.sim, seed);
+    let ex = Explorer {
+        cfg,
+        seed,
+        last_odometry: sim.odometry(),
+        sim,
+        map: LogOddsMap::new(frame),
+        obstacles: ObstacleDistance::new(frame, cap_cells),
+        truth,
+        truth_cells,
+        explored_cells: 0,
+        estimate: start,
+        last_update_pose: start,
+        last_update_time_s: f64::NEG_INFINITY,
+        blacklist: Blacklist::new(),
+        last_reached: None,
+        follower: PathFollower::default(),
+        goal: None,
+        decisions: Vec::new(),
+        progress: Vec::new(),
+        trajectory: Vec::new(),
+        estimated_trajectory: Vec::new(),
+        scans: 0,
+        matches_accepted: 0,
+        next_progress_s: 0.0,
+    };
+    ex.run(on_progress)
+}
+
+impl Explorer<'_> {
+    fn run(mut self, on_progress: &mut dyn FnMut(&ProgressSample)) -> RunResult {
+        let cfg = self.cfg;
+        let end_reason;
+        loop {
+            self.sense();
+            self.record_progress(on_progress);
+            if self.sim.time_s() >= cfg.time_limit_s {
+                end_reason = EndReason::TimeLimit;
+                break;
+            }
+            if self.needs_decision() && !self.decide() {
+                end_reason = EndReason::NoFrontiers;
+                break;
+            }
+            self.drive();
+        }
+        let exploration_time_s = self.sim.time_s();
+        if cfg.return_home && end_reason == EndReason::NoFrontiers {
+            self.return_home();
+        }
+        self.finish(end_reason, exploration_time_s, on_progress)
+    }
+
+    /// A map update when the robot has moved or turned enough, or the period has passed.
+    fn sense(&mut self) {
+        let cfg = self.cfg;
+        let odo = self.sim.odometry();
+        let delta = self.last_odometry.between(&odo);
+        self.last_odometry = odo;
+        let prior = self.estimate.compose(&delta);
+        self.estimate = prior;
+        let moved = self.last_update_pose.between(&prior);
+        let due = moved.position().norm() >= cfg.map_update_distance_m
+            || moved.theta_rad.abs() >= cfg.map_update_angle_rad
+            || self.sim.time_s() - self.last_update_time_s >= cfg.map_update_period_s;
+        if !due {
+            return;
+        }
+        let scan = self.sim.scan();
+        self.scans += 1;
+        self.estimate = match cfg.localization {
+            Localization::GroundTruth => self.sim.true_pose(),
+            Localization::Odometry => prior,
+            Localization::Slam => {
+                let m = match_scan(&self.obstacles, &prior, &scan, &cfg.scan_match);
+                if m.accepted {
+                    self.matches_accepted += 1;
+                    m.pose
+                } else {
+                    prior
+                }
+            }
+        };
+        // Only cells within range of the sensor can change: recount there.
+        let reach = self.map.frame.cell_from_world(self.estimate.position());
+        let r = (scan.max_range_m / self.map.frame.resolution_m).ceil() as i32 + 2;
+        let before = self.count_explored_near(reach, r);
+        self.map.insert_scan(&self.estimate, &scan, &cfg.log_odds);
+        let flips = self.map.take_occupied_flips();
+        self.obstacles.update(&self.map.occupancy, &flips);
+        let after = self.count_explored_near(reach, r);
+        self.explored_cells = (self.explored_cells + after).saturating_sub(before);
+        self.last_update_pose = self.estimate;
+        self.last_update_time_s = self.sim.time_s();
+        self.trajectory.push(self.sim.true_pose());
+        self.estimated_trajectory.push(self.estimate);
+    }
+
+    /// Map-free, truth-free cells in the square of half-side `r` cells around `c`.
+    fn count_explored_near(&self, c: Cell, r: i32) -> usize {
+        let f = self.map.frame;
+        let x0 = (c.x - r).max(0) as usize;
+        let x1 = ((c.x + r).min(f.width as i32 - 1)).max(-1) as isize;
+        let y0 = (c.y - r).max(0);
+        let y1 = (c.y + r).min(f.height as i32 - 1);
+        if x1 < x0 as isize {
+            return 0;
+        }
+        let x1 = x1 as usize;
+        let mut n = 0;
+        for y in y0..=y1 {
+            let row = y as usize * f.width as usize;
+            let occ = &self.map.occupancy.data[row + x0..=row + x1];
+            let tru = &self.truth.data[row + x0..=row + x1];
+            n += occ.iter().zip(tru).filter(|(s, t)| **t && **s == Occupancy::Free).count();
+        }
+        n
+    }
+
+    fn explored_area_m2(&self) -> f64 {
+        self.explored_cells as f64 * self.map.frame.cell_area_m2()
+    }
+
+    fn explored_fraction(&self) -> f64 {
+        if self.truth_cells == 0 {
+            0.0
+        } else {
+            self.explored_cells as f64 / self.truth_cells as f64
+        }
+    }
+
+    fn record_progress(&mut self, on_progress: &mut dyn FnMut(&ProgressSample)) {
+        if self.sim.time_s() + 1e-9 < self.next_progress_s {
+            return;
+        }
+        let s = ProgressSample {
+            time_s: self.sim.time_s(),
+            explored_area_m2: self.explored_area_m2(),
+            explored_fraction: self.explored_fraction(),
+        };
+        self.progress.push(s);
+        on_progress(&s);
+        self.next_progress_s += self.cfg.progress_period_s;
+    }
+
+    fn needs_decision(&mut self) -> bool {
+        let cfg = self.cfg;
+        let now = self.sim.time_s();
+        let Some(goal) = &mut self.goal else {
+            return true;
+        };
+        if goal.arrived {
+            // Turning toward the frontier; done when facing it.
+            let to = goal.look_at - self.estimate.position();
+            let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
+            if err.abs() > 0.15 && to.norm() > 0.05 && now - goal.best_distance_at_s < 10.0 {
+                return false;
+            }
+            self.last_reached = Some(self.map.frame.world_from_cell(goal.cell));
+            return true;
+        }
+        if now - goal.decided_at_s >= cfg.redecide_period_s {
+            return true;
+        }
+        // The goal's frontier has (mostly) disappeared: nothing left to see there.
+        let still = goal
+            .frontier
+            .iter()
+            .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
+            .count();
+        if still * 5 < goal.frontier.len() {
+            return true;
+        }
+        // No progress toward the goal for too long: abandon it.
+        let d = (self.estimate.position() - self.map.frame.world_from_cell(goal.cell)).norm();
+        if d < goal.best_distance_m - 0.1 {
+            goal.best_distance_m = d;
+            goal.best_distance_at_s = now;
+        } else if now - goal.best_distance_at_s > cfg.progress_timeout_s {
+            let p = self.map.frame.world_from_cell(goal.cell);
+            self.blacklist.add(p, cfg.blacklist_radius_m);
+            self.goal = None;
+            return true;
+        }
+        false
+    }
+
+    fn traversable(&self) -> Bitmap {
+        traversable(
+            &self.map.occupancy,
+            &self.obstacles,
+            self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m,
+        )
+    }
+
+    /// Chooses the next goal. Returns false when no reachable candidate is left.
+    fn decide(&mut self) -> bool {
+        let cfg = self.cfg;
+        let frame = self.map.frame;
+        let Some((lo, hi)) = self.map.known_bounds else {
+            // Nothing seen yet: wait for the first scan.
+            return true;
+        };
+        // A goal just reached and looked at whose frontier is still there cannot be resolved by
+        // going there again: blacklist it.
+        if let Some(p) = self.last_reached.take() {
+            let again = self.goal.as_ref().is_some_and(|g| {
+                g.frontier.iter().filter(|c| is_frontier_cell(&self.map.occupancy, **c)).count() * 2
+                    > g.frontier.len()
+            });
+            if again {
+                self.blacklist.add(p, cfg.blacklist_radius_m);
+            }
+        }
+        let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
+        let frontiers: Vec<Frontier> = detect_frontiers_in(&self.map.occupancy, lo, hi, &fcfg)
+            .into_iter()
+            .filter(|f| !self.blacklist.contains(frame.world_from_cell(f.candidate)))
+            .collect();
+        self.goal = None;
+        self.follower = PathFollower::default();
+        if frontiers.is_empty() {
+            return false;
+        }
+        let trav = self.traversable();
+        let robot = frame.cell_from_world(self.estimate.position());
+        let extra = wall_cost(
+            &self.obstacles,
+            cfg.sim.robot.radius_m + cfg.safety_margin_m,
+            0.3,
+            10,
+        );
+        let field = dijkstra(&trav, robot, Some(&extra));
+        let search = (0.5 / frame.resolution_m).ceil() as i32;
+        let mut goals = Vec::with_capacity(frontiers.len());
+        let mut scores = Vec::with_capacity(frontiers.len());
+        for f in &frontiers {
+            let goal_cell = if trav.get(f.candidate) == Some(&true) {
+                Some(f.candidate)
+            } else {
+                nearest_traversable(&trav, f.candidate, search)
+            };
+            let distance_m = goal_cell.and_then(|c| field.distance_m(c));
+            let gain_m2 = if distance_m.is_some() {
+                information_gain(&self.map.occupancy, f.candidate, cfg.sim.laser.max_range_m)
+            } else {
+                0.0
+            };
+            goals.push(goal_cell);
+            scores.push(CandidateScore { distance_m, gain_m2 });
+        }
+        let Some(best) = best_candidate(&scores, cfg.alpha) else {
+            // Frontiers exist but none is reachable: blacklist them all so the run can end.
+            for f in &frontiers {
+                self.blacklist.add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
+            }
+            return false;
+        };
+        let goal_cell = goals[best].expect("best candidate is reachable");
+        let Some(path) = field.path_to(goal_cell) else {
+            self.blacklist.add(frame.world_from_cell(frontiers[best].candidate), cfg.blacklist_radius_m);
+            return true;
+        };
+        let wps = waypoints(&path, &trav);
+        let now = self.sim.time_s();
+        let dist = (self.estimate.position() - frame.world_from_cell(goal_cell)).norm();
+        self.decisions.push(Decision {
+            time_s: now,
+            pose: self.estimate,
+            goal: frame.world_from_cell(goal_cell),
+            candidates: frontiers.len(),
+            gain_m2: scores[best].gain_m2,
+            distance_m: scores[best].distance_m.unwrap_or(0.0),
+        });
+        self.follower = PathFollower::new(wps);
+        let look_at = unknown_centroid(&self.map.occupancy, &frontiers[best].cells)
+            .unwrap_or_else(|| frame.world_from_cell(frontiers[best].candidate));
+        self.goal = Some(Goal {
+            cell: goal_cell,
+            look_at,
+            arrived: false,
+            frontier: frontiers[best].cells.clone(),
+            decided_at_s: now,
+            best_distance_m: dist,
+            best_distance_at_s: now,
+        });
+        true
+    }
+
+    fn drive(&mut self) {
+        let cfg = self.cfg;
+        if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
+            let to = goal.look_at - self.estimate.position();
+            let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
+            let w = (cfg.follow.heading_gain * err)
+                .clamp(-cfg.sim.robot.max_turn_rate_radps, cfg.sim.robot.max_turn_rate_radps);
+            self.sim.step(0.0, w);
+            return;
+        }
+        match self.follower.command(
+            &self.estimate,
+            &cfg.follow,
+            cfg.sim.robot.max_speed_mps,
+            cfg.sim.robot.max_turn_rate_radps,
+        ) {
+            Command::Drive { v_mps, w_radps } => self.sim.step(v_mps, w_radps),
+            Command::Arrived => {
+                // Goal reached: turn toward the unknown space behind the frontier.
+                if let Some(goal) = &mut self.goal {
+                    goal.arrived = true;
+                    goal.best_distance_at_s = self.sim.time_s();
+                }
+                self.sim.idle();
+            }
+        }
+    }
+
+    fn return_home(&mut self) {
+        let cfg = self.cfg;
+        let frame = self.map.frame;
+        let start = self.trajectory.first().copied().unwrap_or(self.estimate);
+        let trav = self.traversable();
+        let robot = frame.cell_from_world(self.estimate.position());
+        let field = dijkstra(&trav, robot, None);
+        let home = frame.cell_from_world(start.position());
+        let Some(path) = field.path_to(home) else {
+            return;
+        };
+        self.follower = PathFollower::new(waypoints(&path, &trav));
+        while self.sim.time_s() < cfg.time_limit_s {
+            match self.follower.command(
+                &self.estimate,
+                &cfg.follow,
+                cfg.sim.robot.max_speed_mps,
+                cfg.sim.robot.max_turn_rate_radps,
+            ) {
+                Command::Arrived => break,
+                Command::Drive { v_mps, w_radps } => self.sim.step(v_mps, w_radps),
+            }
+            self.sense();
+        }
+    }
+
+    fn finish(
+        mut self,
+        end_reason: EndReason,
+        exploration_time_s: f64,
+        on_progress: &mut dyn FnMut(&ProgressSample),
+    ) -> RunResult {
+        // Always close the curve with the final state.
+        self.next_progress_s = f64::NEG_INFINITY;
+        self.record_progress(on_progress);
+        let map_quality = map_quality(&self.map.occupancy, &self.truth);
+        RunResult {
+            seed: self.seed,
+            start: self.trajectory.first().copied().unwrap_or(self.estimate),
+            end_reason,
+            exploration_time_s,
+            total_time_s: self.sim.time_s(),
+            explored_area_m2: self.explored_area_m2(),
+            free_area_m2: self.truth_cells as f64 * self.map.frame.cell_area_m2(),
+            explored_fraction: self.explored_fraction(),
+            path_length_m: self.sim.path_length_m(),
+            blacklisted_goals: self.blacklist.len(),
+            decisions: self.decisions,
+            progress: self.progress,
+            trajectory: self.trajectory,
+            estimated_trajectory: self.estimated_trajectory,
+            map: self.map.occupancy,
+            map_quality,
+            scans: self.scans,
+            scan_matches_accepted: self.matches_accepted,
+        }
+    }
+}
+
+/// Centre of the unknown cells next to a frontier.
+fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
+    let mut sum = Vec2::zeros();
+    let mut n = 0usize;
+    for c in cells {
+        for nb in c.neighbours4() {
+            if grid.is(nb, Occupancy::Unknown) {
+                sum += grid.frame.world_from_cell(nb);
+                n += 1;
+            }
+        }
+    }
+    (n > 0).then(|| sum / n as f64)
+}
+
+fn is_frontier_cell(grid: &OccupancyGrid, c: Cell) -> bool {
+    grid.is(c, Occupancy::Free) && c.neighbours4().iter().any(|n| grid.is(*n, Occupancy::Unknown))
+}
+
+fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {
+    let mut free = 0usize;
+    let mut free_ok = 0usize;
+    let mut occ = 0usize;
+    let mut occ_ok = 0usize;
+    for (i, s) in map.data.iter().enumerate() {
+        match s {
+            Occupancy::Free => {
+                free += 1;
+                free_ok += truth_free.data[i] as usize;
+            }
+            Occupancy::Occupied => {
+                occ += 1;
+                let c = map.frame.cell_of_index(i);
+                let near_solid = std::iter::once(c)
+                    .chain(c.neighbours8())
+                    .any(|n| truth_free.get(n) != Some(&true));
+                occ_ok += near_solid as usize;
+            }
+            Occupancy::Unknown => {}
+        }
+    }
+    let ratio = |a: usize, b: usize| if b == 0 { 1.0 } else { a as f64 / b as f64 };
+    MapQuality { free_precision: ratio(free_ok, free), occupied_precision: ratio(occ_ok, occ) }
+}
+
+#[cfg(test)]
+pub(crate) mod tests;

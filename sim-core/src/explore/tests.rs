@@ -1,0 +1,82 @@
+use super::*;
+use crate::building::Geometry;
+use crate::geom::Polygon;
+
+/// A corridor (2 m wide) with `n` rooms of 5 x 4 m on each side, 1 m doors, outer walls.
+pub(crate) fn corridor_building(n: usize) -> Building {
+    let len = 5.0 * n as f64;
+    let h = 4.0 + 2.0 + 4.0;
+    let w = |a: (f64, f64), b: (f64, f64)| {
+        Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
+    };
+    let mut solids = vec![
+        w((0.0, 0.0), (len, 0.0)),
+        w((len, 0.0), (len, h)),
+        w((len, h), (0.0, h)),
+        w((0.0, h), (0.0, 0.0)),
+    ];
+    for side in [4.0, 6.0] {
+        for i in 0..n {
+            let x0 = 5.0 * i as f64;
+            // Corridor wall with a door from x0+1 to x0+2.
+            solids.push(w((x0, side), (x0 + 1.0, side)));
+            solids.push(w((x0 + 2.0, side), (x0 + 5.0, side)));
+        }
+    }
+    for i in 1..n {
+        let x = 5.0 * i as f64;
+        solids.push(w((x, 0.0), (x, 4.0)));
+        solids.push(w((x, 6.0), (x, h)));
+    }
+    Building {
+        name: format!("corridor-{n}"),
+        geometry: Geometry::Vector {
+            outline: Polygon::rect(Vec2::new(-0.1, -0.1), Vec2::new(len + 0.1, h + 0.1)),
+            solids,
+        },
+        rooms: vec![],
+        doors: vec![],
+        start: Some(Pose::new(1.0, 5.0, 0.0)),
+    }
+}
+
+fn run(localization: Localization, seed: u64) -> RunResult {
+    let b = corridor_building(4);
+    let cfg = ExploreConfig { localization, ..ExploreConfig::default() };
+    explore(&b, b.start.unwrap(), &cfg, seed, &mut |_| {})
+}
+
+#[test]
+fn explores_a_corridor_building_completely() {
+    for loc in [Localization::GroundTruth, Localization::Slam] {
+        let r = run(loc, 1);
+        assert_eq!(r.end_reason, EndReason::NoFrontiers, "{loc:?}");
+        assert!(r.explored_fraction >= 0.97, "{loc:?}: explored {}", r.explored_fraction);
+        assert!(r.map_quality.occupied_precision > 0.9, "{loc:?}: {:?}", r.map_quality);
+        assert!(r.decisions.len() >= 3);
+        // The curve is monotone in time and ends at the final state.
+        assert!(r.progress.windows(2).all(|w| w[0].time_s <= w[1].time_s));
+        assert_eq!(r.progress.last().unwrap().explored_area_m2, r.explored_area_m2);
+    }
+}
+
+#[test]
+fn same_seed_same_run_and_seeds_differ() {
+    let a = run(Localization::Slam, 5);
+    let b = run(Localization::Slam, 5);
+    assert_eq!(a, b);
+    let c = run(Localization::Slam, 6);
+    assert_ne!(a.trajectory, c.trajectory);
+}
+
+#[test]
+#[ignore = "debug aid"]
+fn debug_decisions() {
+    let b = corridor_building(2);
+    let cfg = ExploreConfig { localization: Localization::GroundTruth, time_limit_s: 20.0, ..ExploreConfig::default() };
+    let r = explore(&b, b.start.unwrap(), &cfg, 1, &mut |_| {});
+    for d in r.decisions.iter().take(5) {
+        eprintln!("{d:?}");
+    }
+    eprintln!("{}", r.trajectory.len());
+}

@@ -1,0 +1,62 @@
+//! Goals the robot could not reach: candidates near them are skipped.
+
+use crate::geom::Vec2;
+
+/// Blacklisted goals, each with a radius, in insertion order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Blacklist {
+    pub entries: Vec<BlacklistEntry>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlacklistEntry {
+    pub goal_m: Vec2,
+    pub radius_m: f64,
+}
+
+impl Blacklist {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn add(&mut self, goal_m: Vec2, radius_m: f64) {
+        self.entries.push(BlacklistEntry {
+            goal_m,
+            radius_m: radius_m.max(0.0),
+        });
+    }
+
+    /// Whether `p` lies within the radius of a blacklisted goal (boundary included).
+    pub fn contains(&self, p: Vec2) -> bool {
+        self.entries
+            .iter()
+            .any(|e| (p - e.goal_m).norm_squared() <= e.radius_m * e.radius_m)
+    }
+
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn candidates_within_the_radius_are_skipped() {
+        let mut b = Blacklist::new();
+        assert!(!b.contains(Vec2::new(0.0, 0.0)));
+        b.add(Vec2::new(1.0, 1.0), 0.5);
+        assert!(b.contains(Vec2::new(1.3, 1.3)));
+        assert!(b.contains(Vec2::new(1.5, 1.0)));
+        assert!(!b.contains(Vec2::new(1.4, 1.4)));
+        b.add(Vec2::new(5.0, 5.0), -1.0); // negative radius: only the goal itself
+        assert!(b.contains(Vec2::new(5.0, 5.0)));
+        assert!(!b.contains(Vec2::new(5.0, 5.01)));
+        assert_eq!(b.len(), 2);
+    }
+}

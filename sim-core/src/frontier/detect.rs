@@ -1,0 +1,309 @@
+//! Frontiers: chains of free cells that touch unknown space, and their middle cells.
+//!
+//! A *frontier cell* is a `Free` cell with at least one `Unknown` **4-neighbour** (cells outside
+//! the grid are not unknown). A *frontier* is an **8-connected** component of frontier cells.
+//! Its candidate location is its middle cell: from any cell, a BFS (8-connected, unit steps)
+//! inside the chain finds the farthest cell `a`; a second BFS from `a` finds the farthest `b` at
+//! depth `L`; the candidate is the cell at depth `L / 2` on the BFS path from `b` back to `a`.
+
+use crate::grid::{Cell, Occupancy, OccupancyGrid};
+use std::collections::VecDeque;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrontierConfig {
+    /// Frontiers with fewer cells are dropped.
+    pub min_cells: usize,
+}
+
+impl Default for FrontierConfig {
+    fn default() -> Self {
+        Self { min_cells: 5 }
+    }
+}
+
+impl FrontierConfig {
+    /// A minimal size given in metres of chain (cells = metres / resolution, at least 1).
+    pub fn with_min_length_m(min_length_m: f64, resolution_m: f64) -> Self {
+        Self {
+            min_cells: ((min_length_m / resolution_m).ceil().max(1.0)) as usize,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Frontier {
+    /// The chain's cells, in row-major order.
+    pub cells: Vec<Cell>,
+    /// The middle cell of the chain.
+    pub candidate: Cell,
+    /// Number of cells.
+    pub size: usize,
+}
+
+/// Detects all frontiers of `grid`, in row-major order of their first cell.
+pub fn detect_frontiers(grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
+    if grid.frame.is_empty() {
+        return Vec::new();
+    }
+    let max = Cell::new(grid.width() as i32 - 1, grid.height() as i32 - 1);
+    detect_frontiers_in(grid, Cell::new(0, 0), max, cfg)
+}
+
+/// Like [`detect_frontiers`], looking only at cells inside the inclusive box `[lo, hi]` (e.g. the
+/// map's known bounds: outside it there is no free cell). The box is clipped to the grid.
+pub fn detect_frontiers_in(
+    grid: &OccupancyGrid,
+    lo: Cell,
+    hi: Cell,
+    cfg: &FrontierConfig,
+) -> Vec<Frontier> {
+    let gw = grid.width() as i32;
+    let gh = grid.height() as i32;
+    if gw == 0 || gh == 0 {
+        return Vec::new();
+    }
+    let x0 = lo.x.clamp(0, gw - 1);
+    let y0 = lo.y.clamp(0, gh - 1);
+    let x1 = hi.x.clamp(0, gw - 1);
+    let y1 = hi.y.clamp(0, gh - 1);
+    if x1 < x0 || y1 < y0 {
+        return Vec::new();
+    }
+    let bw = (x1 - x0 + 1) as usize;
+    let bh = (y1 - y0 + 1) as usize;
+    let data = &grid.data;
+    let gwu = gw as usize;
+    let unknown = |x: i32, y: i32| -> bool {
+        x >= 0
+            && y >= 0
+            && x < gw
+            && y < gh
+            && data[y as usize * gwu + x as usize] == Occupancy::Unknown
+    };
+    // 0 = not a frontier cell, 1 = frontier cell not yet labelled, 2 = labelled.
+    let mut mark = vec![0u8; bw * bh];
+    for by in 0..bh {
+        let y = y0 + by as i32;
+        let row = y as usize * gwu;
+        for bx in 0..bw {
+            let x = x0 + bx as i32;
+            if data[row + x as usize] == Occupancy::Free
+                && (unknown(x + 1, y)
+                    || unknown(x - 1, y)
+                    || unknown(x, y + 1)
+                    || unknown(x, y - 1))
+            {
+                mark[by * bw + bx] = 1;
+            }
+        }
+    }
+    let mut frontiers = Vec::new();
+    let mut queue = VecDeque::new();
+    for start in 0..mark.len() {
+        if mark[start] != 1 {
+            continue;
+        }
+        // Collect the component.
+        let mut comp: Vec<usize> = vec![start];
+        mark[start] = 2;
+        queue.clear();
+        queue.push_back(start);
+        while let Some(i) = queue.pop_front() {
+            let (bx, by) = ((i % bw) as i32, (i / bw) as i32);
+            for (dx, dy) in NEIGHBOURS8 {
+                let (nx, ny) = (bx + dx, by + dy);
+                if nx < 0 || ny < 0 || nx >= bw as i32 || ny >= bh as i32 {
+                    continue;
+                }
+                let j = ny as usize * bw + nx as usize;
+                if mark[j] == 1 {
+                    mark[j] = 2;
+                    comp.push(j);
+                    queue.push_back(j);
+                }
+            }
+        }
+        if comp.len() < cfg.min_cells.max(1) {
+            continue;
+        }
+        comp.sort_unstable();
+        let middle = middle_cell(&comp, bw);
+        let to_cell = |i: usize| Cell::new(x0 + (i % bw) as i32, y0 + (i / bw) as i32);
+        frontiers.push(Frontier {
+            size: comp.len(),
+            candidate: to_cell(middle),
+            cells: comp.into_iter().map(to_cell).collect(),
+        });
+    }
+    frontiers
+}
+
+const NEIGHBOURS8: [(i32, i32); 8] = [
+    (1, 0),
+    (-1, 0),
+    (0, 1),
+    (0, -1),
+    (1, 1),
+    (-1, 1),
+    (1, -1),
+    (-1, -1),
+];
+
+/// The middle of a chain given as sorted box indices (row width `bw`).
+fn middle_cell(comp: &[usize], bw: usize) -> usize {
+    let n = comp.len();
+    let pos = |i: usize| comp.binary_search(&i).ok();
+    // BFS inside the component; returns (depth, parent) per member and the farthest member
+    // (first in BFS order among the deepest).
+    let bfs = |from: usize| -> (Vec<u32>, Vec<u32>, usize) {
+        let mut depth = vec![u32::MAX; n];
+        let mut parent = vec![u32::MAX; n];
+        let mut q = VecDeque::new();
+        depth[from] = 0;
+        q.push_back(from);
+        let mut last = from;
+        while let Some(k) = q.pop_front() {
+            if depth[k] > depth[last] {
+                last = k;
+            }
+            let i = comp[k];
+            let (x, y) = ((i % bw) as i64, (i / bw) as i64);
+            for (dx, dy) in NEIGHBOURS8 {
+                let (nx, ny) = (x + dx as i64, y + dy as i64);
+                if nx < 0 || ny < 0 || nx >= bw as i64 {
+                    continue;
+                }
+                if let Some(m) = pos(ny as usize * bw + nx as usize) {
+                    if depth[m] == u32::MAX {
+                        depth[m] = depth[k] + 1;
+                        parent[m] = k as u32;
+                        q.push_back(m);
+                    }
+                }
+            }
+        }
+        (depth, parent, last)
+    };
+    let (_, _, a) = bfs(0);
+    let (depth, parent, b) = bfs(a);
+    let half = depth[b] / 2;
+    let mut k = b;
+    while depth[k] > depth[b] - half {
+        k = parent[k] as usize;
+    }
+    comp[k]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn grid(s: &str) -> OccupancyGrid {
+        OccupancyGrid::from_ascii(s, 0.1)
+    }
+
+    #[test]
+    fn one_straight_frontier_with_its_middle() {
+        let g = grid(
+            "
+            ?????????
+            .........
+            .........
+            #########",
+        );
+        let f = detect_frontiers(&g, &FrontierConfig { min_cells: 1 });
+        assert_eq!(f.len(), 1);
+        assert_eq!(f[0].size, 9);
+        assert_eq!(f[0].candidate, Cell::new(4, 2));
+        assert!(f[0].cells.iter().all(|c| c.y == 2));
+    }
+
+    #[test]
+    fn separate_chains_min_size_and_order() {
+        let g = grid(
+            "
+            ??##?????
+            ..##.....
+            ..##.....
+            #########",
+        );
+        let all = detect_frontiers(&g, &FrontierConfig { min_cells: 1 });
+        assert_eq!(all.len(), 2);
+        assert_eq!((all[0].size, all[1].size), (2, 5));
+        assert!(all[0].cells[0] < all[1].cells[0]);
+        assert_eq!(all[1].candidate, Cell::new(6, 2));
+        let big = detect_frontiers(&g, &FrontierConfig { min_cells: 3 });
+        assert_eq!(big.len(), 1);
+        assert_eq!(big[0].size, 5);
+        assert_eq!(FrontierConfig::with_min_length_m(0.25, 0.1).min_cells, 3);
+    }
+
+    #[test]
+    fn l_shaped_chain_middle_is_near_the_corner() {
+        // Unknown above and to the right of the free region: the chain runs along the top row
+        // and down the right column (8-connected), 4 + 1 + 4 cells.
+        let g = grid(
+            "
+            ??????
+            .....?
+            .....?
+            .....?
+            .....?
+            #####?",
+        );
+        let f = detect_frontiers(&g, &FrontierConfig { min_cells: 1 });
+        assert_eq!(f.len(), 1);
+        assert_eq!(f[0].size, 8);
+        // 8-connected BFS cuts the corner: (0,4)..(3,4),(4,3)..(4,1) is 6 steps; half is (3,4).
+        assert_eq!(f[0].candidate, Cell::new(3, 4));
+    }
+
+    #[test]
+    fn diagonal_unknown_is_not_enough_and_empty_grid_is_fine() {
+        let g = grid(
+            "
+            ?#
+            #.",
+        );
+        assert!(detect_frontiers(&g, &FrontierConfig { min_cells: 1 }).is_empty());
+        assert!(detect_frontiers(&grid(""), &FrontierConfig::default()).is_empty());
+        let g = grid("..\n?.");
+        let f = detect_frontiers_in(
+            &g,
+            Cell::new(1, 0),
+            Cell::new(5, 5),
+            &FrontierConfig { min_cells: 1 },
+        );
+        assert_eq!(f.len(), 1);
+        assert_eq!(f[0].cells, vec![Cell::new(1, 0)]);
+    }
+
+    proptest! {
+        #[test]
+        fn frontier_cells_are_free_touch_unknown_and_are_disjoint(
+            cells in proptest::collection::vec(0u8..3, 12 * 10)
+        ) {
+            let frame = crate::grid::GridFrame::new(crate::geom::Vec2::zeros(), 0.1, 12, 10);
+            let g = OccupancyGrid {
+                frame,
+                data: cells.iter().map(|v| [Occupancy::Unknown, Occupancy::Free, Occupancy::Occupied][*v as usize]).collect(),
+            };
+            let fs = detect_frontiers(&g, &FrontierConfig { min_cells: 1 });
+            let mut seen = std::collections::BTreeSet::new();
+            for f in &fs {
+                prop_assert!(f.cells.contains(&f.candidate));
+                prop_assert_eq!(f.size, f.cells.len());
+                for c in &f.cells {
+                    prop_assert!(g.is(*c, Occupancy::Free));
+                    prop_assert!(c.neighbours4().iter().any(|n| g.is(*n, Occupancy::Unknown)));
+                    prop_assert!(seen.insert(*c));
+                }
+            }
+            // Every frontier cell belongs to some frontier.
+            let n_frontier = g.iter().filter(|(c, s)| **s == Occupancy::Free
+                && c.neighbours4().iter().any(|n| g.is(*n, Occupancy::Unknown))).count();
+            prop_assert_eq!(n_frontier, seen.len());
+        }
+    }
+}

@@ -1,0 +1,4 @@
+//! Frontier detection and goal blacklisting.
+
+pub mod blacklist;
+pub mod detect;

@@ -1,0 +1,207 @@
+//! Capped Euclidean distance to the nearest `Occupied` cell, kept up to date incrementally.
+//!
+//! Used by the scan matcher (smooth residual with a gradient) and by obstacle inflation for the
+//! planner. Distances are in cells and capped at `cap_cells`: anything farther reads as the cap.
+//! Adding an obstacle stamps a disc of radius `cap_cells`; removing one recomputes the disc from
+//! the obstacles around it. The result always equals the capped exact transform.
+
+use crate::geom::Vec2;
+use crate::grid::{Cell, GridFrame, Occupancy, OccupancyGrid};
+
+/// Capped distance (in cells) from every cell to the nearest occupied cell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObstacleDistance {
+    pub frame: GridFrame,
+    pub cap_cells: u32,
+    /// Row-major, in cells, in `[0, cap_cells]`.
+    pub data: Vec<f32>,
+    /// Offsets `(dx, dy, distance)` of the disc of radius `cap_cells`.
+    disc: Vec<(i32, i32, f32)>,
+}
+
+impl ObstacleDistance {
+    /// An obstacle-free field (every cell at the cap).
+    pub fn new(frame: GridFrame, cap_cells: u32) -> Self {
+        let cap = cap_cells.max(1) as i32;
+        let mut disc = Vec::new();
+        for dy in -cap..=cap {
+            for dx in -cap..=cap {
+                let d = ((dx * dx + dy * dy) as f32).sqrt();
+                if d < cap as f32 {
+                    disc.push((dx, dy, d));
+                }
+            }
+        }
+        Self {
+            frame,
+            cap_cells: cap as u32,
+            data: vec![cap as f32; frame.len()],
+            disc,
+        }
+    }
+
+    /// The field of a whole grid.
+    pub fn from_grid(grid: &OccupancyGrid, cap_cells: u32) -> Self {
+        let mut f = Self::new(grid.frame, cap_cells);
+        for (i, s) in grid.data.iter().enumerate() {
+            if *s == Occupancy::Occupied {
+                f.stamp(grid.frame.cell_of_index(i));
+            }
+        }
+        f
+    }
+
+    fn stamp(&mut self, c: Cell) {
+        let w = self.frame.width as i32;
+        let h = self.frame.height as i32;
+        for &(dx, dy, d) in &self.disc {
+            let (x, y) = (c.x + dx, c.y + dy);
+            if x >= 0 && y >= 0 && x < w && y < h {
+                let v = &mut self.data[(y * w + x) as usize];
+                if d < *v {
+                    *v = d;
+                }
+            }
+        }
+    }
+
+    /// Brings the field up to date after the cells at `flips` (row-major indices into `grid`,
+    /// which must share this frame) became or stopped being occupied.
+    pub fn update(&mut self, grid: &OccupancyGrid, flips: &[u32]) {
+        if grid.frame != self.frame {
+            *self = Self::from_grid(grid, self.cap_cells);
+            return;
+        }
+        let mut removed = Vec::new();
+        for &i in flips {
+            let i = i as usize;
+            if i >= grid.data.len() {
+                continue;
+            }
+            let c = self.frame.cell_of_index(i);
+            if grid.data[i] == Occupancy::Occupied {
+                self.stamp(c);
+            } else {
+                removed.push(c);
+            }
+        }
+        if removed.is_empty() {
+            return;
+        }
+        removed.sort_unstable();
+        removed.dedup();
+        let cap = self.cap_cells as i32;
+        let w = self.frame.width as i32;
+        let h = self.frame.height as i32;
+        for &c in &removed {
+            // Reset the disc around the removed obstacle, then restamp from the obstacles that
+            // can reach it (within twice the cap), limited to that disc.
+            for &(dx, dy, _) in &self.disc {
+                let (x, y) = (c.x + dx, c.y + dy);
+                if x >= 0 && y >= 0 && x < w && y < h {
+                    self.data[(y * w + x) as usize] = cap as f32;
+                }
+            }
+            for oy in (c.y - 2 * cap).max(0)..=(c.y + 2 * cap).min(h - 1) {
+                for ox in (c.x - 2 * cap).max(0)..=(c.x + 2 * cap).min(w - 1) {
+                    if grid.data[(oy * w + ox) as usize] != Occupancy::Occupied {
+                        continue;
+                    }
+                    for &(dx, dy, d) in &self.disc {
+                        let (x, y) = (ox + dx, oy + dy);
+                        let (rx, ry) = (x - c.x, y - c.y);
+                        if rx * rx + ry * ry >= cap * cap || x < 0 || y < 0 || x >= w || y >= h {
+                            continue;
+                        }
+                        let v = &mut self.data[(y * w + x) as usize];
+                        if d < *v {
+                            *v = d;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Distance (cells) of a cell; the cap outside the grid.
+    pub fn get(&self, c: Cell) -> f32 {
+        self.frame
+            .index(c)
+            .map_or(self.cap_cells as f32, |i| self.data[i])
+    }
+
+    /// Bilinearly interpolated distance (cells) at a world point and its gradient (cells per
+    /// metre... i.e. d(distance_cells)/d(world metre)). Cell values sit at cell centres.
+    pub fn sample(&self, p: Vec2) -> (f64, Vec2) {
+        let inv_res = 1.0 / self.frame.resolution_m;
+        let q = (p - self.frame.origin_m) * inv_res - Vec2::new(0.5, 0.5);
+        let (x0, y0) = (q.x.floor(), q.y.floor());
+        let (fx, fy) = (q.x - x0, q.y - y0);
+        let (x0, y0) = (x0 as i32, y0 as i32);
+        let v = |x: i32, y: i32| self.get(Cell::new(x, y)) as f64;
+        let (v00, v10, v01, v11) = (v(x0, y0), v(x0 + 1, y0), v(x0, y0 + 1), v(x0 + 1, y0 + 1));
+        let d = v00 * (1.0 - fx) * (1.0 - fy)
+            + v10 * fx * (1.0 - fy)
+            + v01 * (1.0 - fx) * fy
+            + v11 * fx * fy;
+        let gx = ((v10 - v00) * (1.0 - fy) + (v11 - v01) * fy) * inv_res;
+        let gy = ((v01 - v00) * (1.0 - fx) + (v11 - v10) * fx) * inv_res;
+        (d, Vec2::new(gx, gy))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::distance::distance_to;
+    use crate::grid::Grid;
+    use proptest::prelude::*;
+
+    fn exact(grid: &OccupancyGrid, cap: u32) -> Vec<f32> {
+        let mask = Grid {
+            frame: grid.frame,
+            data: grid
+                .data
+                .iter()
+                .map(|s| *s == Occupancy::Occupied)
+                .collect(),
+        };
+        distance_to(&mask)
+            .data
+            .into_iter()
+            .map(|d| d.min(cap as f32))
+            .collect()
+    }
+
+    proptest! {
+        #[test]
+        fn incremental_equals_exact(ops in proptest::collection::vec((0u32..30, 0u32..20, any::<bool>()), 1..60)) {
+            let frame = GridFrame::new(Vec2::zeros(), 0.1, 30, 20);
+            let mut grid = Grid::filled(frame, Occupancy::Free);
+            let mut field = ObstacleDistance::new(frame, 4);
+            for (x, y, occ) in ops {
+                let c = Cell::new(x as i32, y as i32);
+                let before = grid.is(c, Occupancy::Occupied);
+                grid.set(c, if occ { Occupancy::Occupied } else { Occupancy::Free });
+                if before != occ {
+                    field.update(&grid, &[frame.index(c).unwrap() as u32]);
+                }
+            }
+            let want = exact(&grid, 4);
+            for (i, (a, b)) in field.data.iter().zip(&want).enumerate() {
+                prop_assert!((a - b).abs() < 1e-4, "cell {:?}: {} vs {}", frame.cell_of_index(i), a, b);
+            }
+        }
+    }
+
+    #[test]
+    fn gradient_points_away_from_obstacle() {
+        let frame = GridFrame::new(Vec2::zeros(), 0.1, 20, 20);
+        let mut grid = Grid::filled(frame, Occupancy::Free);
+        grid.set(Cell::new(10, 10), Occupancy::Occupied);
+        let f = ObstacleDistance::from_grid(&grid, 6);
+        let (d, g) = f.sample(Vec2::new(1.33, 1.05));
+        assert!(d > 2.0 && d < 3.0, "{d}");
+        assert!(g.x > 5.0 && g.y.abs() < 3.0, "{g:?}");
+    }
+}

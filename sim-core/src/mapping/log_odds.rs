@@ -1,0 +1,296 @@
+//! Log-odds occupancy mapping with a ternary view kept in sync incrementally.
+//!
+//! Every beam is traced with an exact cell walk ([`walk_segment`]): the cells before the end
+//! get a miss, the end cell a hit (or a miss for a max-range beam, which marks free up to max
+//! range). The ternary state of a cell changes with hysteresis: it becomes `Occupied` when its
+//! log-odds rises above `occupied_above_l`, `Free` when it falls below `free_below_l`, and keeps
+//! its previous state in between (a cell never observed stays `Unknown`).
+
+use crate::geom::{Pose, Vec2};
+use crate::grid::{Cell, Grid, GridFrame, Occupancy, OccupancyGrid};
+use crate::mapping::ray::{grid_from_world, walk_segment};
+use crate::scan::Scan;
+
+/// Increments and thresholds of the log-odds update (natural log of the odds).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogOddsConfig {
+    /// Added to the cell where a beam ends on an obstacle (0.85 ~ p = 0.7).
+    pub hit_l: f32,
+    /// Added to the cells a beam crosses (-0.4 ~ p = 0.4).
+    pub miss_l: f32,
+    /// Lower clamp (-2.0 ~ p = 0.12), so that a cell can become occupied again quickly.
+    pub min_l: f32,
+    /// Upper clamp (3.5 ~ p = 0.97).
+    pub max_l: f32,
+    /// A cell becomes `Occupied` when its log-odds exceeds this (0.5; one hit suffices).
+    pub occupied_above_l: f32,
+    /// A cell becomes `Free` when its log-odds falls below this (-0.3; one miss suffices).
+    pub free_below_l: f32,
+    /// Cells whose centre is closer than this (in cells) to a hit point get no miss from that
+    /// beam (1.0): keeps walls seen at grazing angles from being eroded by their own beams.
+    pub hit_guard_cells: f64,
+}
+
+impl Default for LogOddsConfig {
+    fn default() -> Self {
+        Self {
+            hit_l: 0.85,
+            miss_l: -0.4,
+            min_l: -2.0,
+            max_l: 3.5,
+            occupied_above_l: 0.5,
+            free_below_l: -0.3,
+            hit_guard_cells: 1.0,
+        }
+    }
+}
+
+/// What one [`LogOddsMap::insert_scan`] changed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct InsertStats {
+    /// Cells whose ternary state changed.
+    pub cells_changed: usize,
+    /// Cells that were `Unknown` and became known.
+    pub cells_discovered: usize,
+    /// Beams whose end cell was outside the map frame (their in-frame part was still used).
+    pub beams_clipped: usize,
+}
+
+/// A log-odds occupancy map over a fixed frame, with its ternary view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogOddsMap {
+    pub frame: GridFrame,
+    /// Log-odds per cell, row-major; 0 = never observed (or exactly undecided).
+    pub data: Vec<f32>,
+    /// The ternary view, always in sync with `data`.
+    pub occupancy: OccupancyGrid,
+    /// Indices of cells that became or stopped being `Occupied` since the last
+    /// [`LogOddsMap::take_occupied_flips`] (may repeat a cell); feeds incremental consumers such
+    /// as [`crate::mapping::distance_field::ObstacleDistance`].
+    pub occupied_flips: Vec<u32>,
+    /// Bounding box (inclusive cells) of everything observed so far; `None` before any scan.
+    pub known_bounds: Option<(Cell, Cell)>,
+    /// Total ternary changes since construction.
+    pub total_cells_changed: u64,
+}
+
+impl LogOddsMap {
+    /// An all-unknown map over `frame`.
+    pub fn new(frame: GridFrame) -> Self {
+        Self {
+            frame,
+            data: vec![0.0; frame.len()],
+            occupancy: Grid::filled(frame, Occupancy::Unknown),
+            occupied_flips: Vec::new(),
+            known_bounds: None,
+            total_cells_changed: 0,
+        }
+    }
+
+    /// Integrates one scan taken at `pose` (the sensor sits at the robot's centre).
+    pub fn insert_scan(&mut self, pose: &Pose, scan: &Scan, cfg: &LogOddsConfig) -> InsertStats {
+        let mut stats = InsertStats::default();
+        if self.frame.is_empty() || scan.max_range_m.is_nan() || scan.max_range_m <= 0.0 {
+            return stats;
+        }
+        let start = grid_from_world(&self.frame, pose.position());
+        let w = self.frame.width as i32;
+        let h = self.frame.height as i32;
+        let inv_res = 1.0 / self.frame.resolution_m;
+        let mut bmin = Cell::new(start[0].floor() as i32, start[1].floor() as i32);
+        let mut bmax = bmin;
+        let guard2 = cfg.hit_guard_cells * cfg.hit_guard_cells;
+        for i in 0..scan.ranges_m.len() {
+            let range_m = scan.ranges_m[i];
+            if !range_m.is_finite() {
+                continue;
+            }
+            let hit = scan.is_hit(i);
+            let r_cells = range_m.clamp(0.0, scan.max_range_m) * inv_res;
+            let a = pose.theta_rad + scan.beam_angle_rad(i);
+            let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
+            let end_cell = Cell::new(end[0].floor() as i32, end[1].floor() as i32);
+            bmin = Cell::new(bmin.x.min(end_cell.x), bmin.y.min(end_cell.y));
+            bmax = Cell::new(bmax.x.max(end_cell.x), bmax.y.max(end_cell.y));
+            let mut was_inside = false;
+            let mut clipped = false;
+            walk_segment(start, end, |c| {
+                if c.x < 0 || c.y < 0 || c.x >= w || c.y >= h {
+                    clipped = true;
+                    return !was_inside;
+                }
+                was_inside = true;
+                let idx = c.y as usize * w as usize + c.x as usize;
+                if hit {
+                    if c == end_cell {
+                        self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
+                        return true;
+                    }
+                    let (ddx, ddy) = (c.x as f64 + 0.5 - end[0], c.y as f64 + 0.5 - end[1]);
+                    if ddx * ddx + ddy * ddy < guard2 {
+                        return true;
+                    }
+                }
+                self.update_cell(idx, cfg.miss_l, cfg, &mut stats);
+                true
+            });
+            if clipped {
+                stats.beams_clipped += 1;
+            }
+        }
+        let clamp = |c: Cell| Cell::new(c.x.clamp(0, w - 1), c.y.clamp(0, h - 1));
+        let (bmin, bmax) = (clamp(bmin), clamp(bmax));
+        self.known_bounds = Some(match self.known_bounds {
+            None => (bmin, bmax),
+            Some((lo, hi)) => (
+                Cell::new(lo.x.min(bmin.x), lo.y.min(bmin.y)),
+                Cell::new(hi.x.max(bmax.x), hi.y.max(bmax.y)),
+            ),
+        });
+        self.total_cells_changed += stats.cells_changed as u64;
+        stats
+    }
+
+    #[inline]
+    fn update_cell(
+        &mut self,
+        idx: usize,
+        delta: f32,
+        cfg: &LogOddsConfig,
+        stats: &mut InsertStats,
+    ) {
+        let l = (self.data[idx] + delta).clamp(cfg.min_l, cfg.max_l);
+        self.data[idx] = l;
+        let old = self.occupancy.data[idx];
+        let new = if l > cfg.occupied_above_l {
+            Occupancy::Occupied
+        } else if l < cfg.free_below_l {
+            Occupancy::Free
+        } else {
+            old
+        };
+        if new != old {
+            self.occupancy.data[idx] = new;
+            stats.cells_changed += 1;
+            if old == Occupancy::Unknown {
+                stats.cells_discovered += 1;
+            }
+            if (old == Occupancy::Occupied) != (new == Occupancy::Occupied) {
+                self.occupied_flips.push(idx as u32);
+            }
+        }
+    }
+
+    /// The ternary view (a copy; [`LogOddsMap::occupancy`] is the same, kept up to date).
+    pub fn to_occupancy(&self) -> OccupancyGrid {
+        self.occupancy.clone()
+    }
+
+    /// Returns and clears the list of cells whose `Occupied` status flipped.
+    pub fn take_occupied_flips(&mut self) -> Vec<u32> {
+        std::mem::take(&mut self.occupied_flips)
+    }
+
+    /// Probability of occupancy of a cell (0.5 outside the map).
+    pub fn probability(&self, c: Cell) -> f64 {
+        match self.frame.index(c) {
+            Some(i) => 1.0 / (1.0 + (-(self.data[i] as f64)).exp()),
+            None => 0.5,
+        }
+    }
+
+    /// Log-odds at a world point (0 outside).
+    pub fn log_odds_at(&self, p: Vec2) -> f32 {
+        self.frame
+            .index(self.frame.cell_from_world(p))
+            .map_or(0.0, |i| self.data[i])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_beam(range_m: f64, max_range_m: f64) -> Scan {
+        Scan {
+            angle_min_rad: 0.0,
+            angle_increment_rad: 0.0,
+            max_range_m,
+            ranges_m: vec![range_m],
+        }
+    }
+
+    fn frame() -> GridFrame {
+        GridFrame::new(Vec2::zeros(), 0.1, 40, 10)
+    }
+
+    #[test]
+    fn a_beam_frees_cells_and_marks_the_hit() {
+        let mut m = LogOddsMap::new(frame());
+        let pose = Pose::new(0.05, 0.55, 0.0);
+        let stats = m.insert_scan(&pose, &one_beam(1.0, 3.0), &LogOddsConfig::default());
+        let row = 5;
+        for x in 0..10 {
+            assert!(m.occupancy.is(Cell::new(x, row), Occupancy::Free), "x={x}");
+        }
+        assert!(m.occupancy.is(Cell::new(10, row), Occupancy::Occupied));
+        assert!(m.occupancy.is(Cell::new(11, row), Occupancy::Unknown));
+        assert!(m.occupancy.is(Cell::new(5, row + 1), Occupancy::Unknown));
+        assert_eq!(stats.cells_changed, 11);
+        assert_eq!(stats.cells_discovered, 11);
+        assert_eq!(m.take_occupied_flips(), vec![(row * 40 + 10) as u32]);
+        assert!(m.occupied_flips.is_empty());
+        assert_eq!(m.known_bounds, Some((Cell::new(0, 5), Cell::new(10, 5))));
+        assert!(m.probability(Cell::new(10, row)) > 0.6);
+    }
+
+    #[test]
+    fn max_range_beam_frees_to_max_range_without_hit() {
+        let mut m = LogOddsMap::new(frame());
+        let pose = Pose::new(0.05, 0.55, 0.0);
+        m.insert_scan(&pose, &one_beam(2.0, 2.0), &LogOddsConfig::default());
+        for x in 0..=20 {
+            assert!(m.occupancy.is(Cell::new(x, 5), Occupancy::Free), "x={x}");
+        }
+        assert_eq!(m.occupancy.count(Occupancy::Occupied), 0);
+        assert!(m.occupancy.is(Cell::new(21, 5), Occupancy::Unknown));
+    }
+
+    #[test]
+    fn beams_leaving_the_frame_are_clipped_and_hysteresis_holds() {
+        let mut m = LogOddsMap::new(frame());
+        let cfg = LogOddsConfig::default();
+        let pose = Pose::new(3.95, 0.55, 0.0);
+        let s = m.insert_scan(&pose, &one_beam(2.0, 3.0), &cfg);
+        assert_eq!(s.beams_clipped, 1);
+        assert_eq!(m.occupancy.count(Occupancy::Free), 1);
+        // A cell hit once then crossed once stays occupied (hysteresis); a second miss frees it.
+        let mut m = LogOddsMap::new(frame());
+        let p = Pose::new(0.05, 0.55, 0.0);
+        m.insert_scan(&p, &one_beam(1.0, 3.0), &cfg);
+        m.insert_scan(&p, &one_beam(1.5, 3.0), &cfg);
+        assert!(m.occupancy.is(Cell::new(10, 5), Occupancy::Occupied));
+        m.insert_scan(&p, &one_beam(1.5, 3.0), &cfg);
+        m.insert_scan(&p, &one_beam(1.5, 3.0), &cfg);
+        assert!(m.occupancy.is(Cell::new(10, 5), Occupancy::Free));
+        assert_eq!(m.take_occupied_flips().len(), 3);
+    }
+
+    #[test]
+    fn empty_inputs_do_nothing() {
+        let mut m = LogOddsMap::new(GridFrame::new(Vec2::zeros(), 0.1, 0, 0));
+        let s = m.insert_scan(
+            &Pose::new(0.0, 0.0, 0.0),
+            &one_beam(1.0, 2.0),
+            &LogOddsConfig::default(),
+        );
+        assert_eq!(s, InsertStats::default());
+        let mut m = LogOddsMap::new(frame());
+        let s = m.insert_scan(
+            &Pose::new(1.0, 0.5, 0.0),
+            &one_beam(f64::NAN, 2.0),
+            &LogOddsConfig::default(),
+        );
+        assert_eq!(s.cells_changed, 0);
+    }
+}

@@ -1,0 +1,6 @@
+//! Occupancy mapping from laser scans: log-odds grid, obstacle distance field, scan matching.
+
+pub mod distance_field;
+pub mod log_odds;
+pub mod ray;
+pub mod scan_match;

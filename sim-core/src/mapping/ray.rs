@@ -1,0 +1,130 @@
+//! Exact cell traversal of a segment (Amanatides & Woo), shared by the mapper, the gain
+//! estimate and line-of-sight checks.
+
+use crate::geom::Vec2;
+use crate::grid::{Cell, GridFrame};
+
+/// A point in grid coordinates: cell units, cell `(i, j)` spans `[i, i+1) x [j, j+1)`.
+pub fn grid_from_world(frame: &GridFrame, p: Vec2) -> [f64; 2] {
+    let q = (p - frame.origin_m) / frame.resolution_m;
+    [q.x, q.y]
+}
+
+/// Visits, in order, every cell the segment from `a` to `b` (grid coordinates) passes through,
+/// both end cells included. `visit` returns `false` to stop early. Cells may lie outside any grid;
+/// the caller filters. When the segment passes exactly through a cell corner, the x-neighbour is
+/// visited before the y-neighbour (deterministic, 4-connected walk).
+pub fn walk_segment(a: [f64; 2], b: [f64; 2], mut visit: impl FnMut(Cell) -> bool) {
+    if !(a[0].is_finite() && a[1].is_finite() && b[0].is_finite() && b[1].is_finite()) {
+        return;
+    }
+    let mut cx = a[0].floor() as i32;
+    let mut cy = a[1].floor() as i32;
+    let ex = b[0].floor() as i32;
+    let ey = b[1].floor() as i32;
+    let dx = b[0] - a[0];
+    let dy = b[1] - a[1];
+    let step_x = if dx > 0.0 { 1 } else { -1 };
+    let step_y = if dy > 0.0 { 1 } else { -1 };
+    let t_delta_x = if dx != 0.0 {
+        1.0 / dx.abs()
+    } else {
+        f64::INFINITY
+    };
+    let t_delta_y = if dy != 0.0 {
+        1.0 / dy.abs()
+    } else {
+        f64::INFINITY
+    };
+    let mut t_max_x = if dx > 0.0 {
+        (cx as f64 + 1.0 - a[0]) * t_delta_x
+    } else if dx < 0.0 {
+        (a[0] - cx as f64) * t_delta_x
+    } else {
+        f64::INFINITY
+    };
+    let mut t_max_y = if dy > 0.0 {
+        (cy as f64 + 1.0 - a[1]) * t_delta_y
+    } else if dy < 0.0 {
+        (a[1] - cy as f64) * t_delta_y
+    } else {
+        f64::INFINITY
+    };
+    let n = (ex - cx).unsigned_abs() + (ey - cy).unsigned_abs();
+    if !visit(Cell::new(cx, cy)) {
+        return;
+    }
+    for _ in 0..n {
+        // Step along the axis whose boundary comes first, but never past the end cell on it.
+        let go_x = if cx == ex {
+            false
+        } else if cy == ey {
+            true
+        } else {
+            t_max_x <= t_max_y
+        };
+        if go_x {
+            cx += step_x;
+            t_max_x += t_delta_x;
+        } else {
+            cy += step_y;
+            t_max_y += t_delta_y;
+        }
+        if !visit(Cell::new(cx, cy)) {
+            return;
+        }
+    }
+}
+
+/// Whether every cell on the segment between the centres of `a` and `b` satisfies `clear`.
+pub fn line_of_sight(a: Cell, b: Cell, mut clear: impl FnMut(Cell) -> bool) -> bool {
+    let mut ok = true;
+    walk_segment(
+        [a.x as f64 + 0.5, a.y as f64 + 0.5],
+        [b.x as f64 + 0.5, b.y as f64 + 0.5],
+        |c| {
+            ok = clear(c);
+            ok
+        },
+    );
+    ok
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cells(a: [f64; 2], b: [f64; 2]) -> Vec<(i32, i32)> {
+        let mut v = Vec::new();
+        walk_segment(a, b, |c| {
+            v.push((c.x, c.y));
+            true
+        });
+        v
+    }
+
+    #[test]
+    fn horizontal_and_diagonal_walks() {
+        assert_eq!(
+            cells([0.5, 0.5], [3.2, 0.7]),
+            vec![(0, 0), (1, 0), (2, 0), (3, 0)]
+        );
+        assert_eq!(cells([2.5, 0.5], [0.1, 0.5]), vec![(2, 0), (1, 0), (0, 0)]);
+        let d = cells([0.2, 0.1], [2.9, 1.8]);
+        assert_eq!(d.first(), Some(&(0, 0)));
+        assert_eq!(d.last(), Some(&(2, 1)));
+        // 4-connected: consecutive cells differ in exactly one coordinate by one.
+        for w in d.windows(2) {
+            assert_eq!((w[0].0 - w[1].0).abs() + (w[0].1 - w[1].1).abs(), 1);
+        }
+        assert_eq!(cells([1.5, 1.5], [1.7, 1.2]), vec![(1, 1)]);
+        assert!(cells([f64::NAN, 0.0], [1.0, 1.0]).is_empty());
+    }
+
+    #[test]
+    fn line_of_sight_stops_at_blocker() {
+        let blocked = Cell::new(2, 0);
+        assert!(!line_of_sight(Cell::new(0, 0), Cell::new(4, 0), |c| c != blocked));
+        assert!(line_of_sight(Cell::new(0, 1), Cell::new(4, 1), |c| c != blocked));
+    }
+}

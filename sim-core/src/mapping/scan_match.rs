@@ -1,0 +1,479 @@
+//! Scan-to-map matching: corrects the odometry pose of a scan against the current map.
+//!
+//! Gauss-Newton on the (bilinearly interpolated) distance from each hit point to the nearest
+//! occupied cell ([`ObstacleDistance`]), with a Cauchy robust weight (points on walls not yet in
+//! the map do not drag the pose) and a Gaussian prior toward the odometry pose, which keeps the
+//! estimate put along directions the scan does not constrain (a long featureless corridor).
+//! When the result fits poorly, a small correlative search around the prior picks a better
+//! starting point and Gauss-Newton runs again. A match that still fits poorly, is based on too
+//! few points, or moves the pose too far is rejected: the result is then the prior.
+
+use crate::geom::{wrap_angle, Pose, Vec2};
+use crate::mapping::distance_field::ObstacleDistance;
+use crate::scan::Scan;
+use nalgebra::{Matrix3, Vector3};
+
+/// Parameters of [`match_scan`]; defaults suit a 0.05 m map and a 6 m laser.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScanMatchConfig {
+    pub max_iterations: u32,
+    /// Stop when a step moves less than this (metres, and radians times 1 m).
+    pub convergence_m: f64,
+    /// Standard deviation of a point's distance to the map (measurement + discretisation).
+    pub point_sigma_m: f64,
+    /// Scale of the Cauchy weight: a point this far from the map counts half.
+    pub robust_scale_m: f64,
+    /// Standard deviations of the odometry prior.
+    pub prior_sigma_xy_m: f64,
+    pub prior_sigma_theta_rad: f64,
+    /// A hit point closer than this to an occupied cell is an inlier (for the score).
+    pub inlier_dist_m: f64,
+    /// Minimal fraction of hit points that are inliers for the match to be accepted.
+    pub min_score: f64,
+    /// Minimal number of hit points near the map (closer than the field's cap).
+    pub min_points: usize,
+    /// Largest accepted correction relative to the prior.
+    pub max_correction_m: f64,
+    pub max_correction_rad: f64,
+    /// Run the correlative search when the first result's score is below this.
+    pub search_below_score: f64,
+    /// Half-width and step of the correlative search.
+    pub search_xy_m: f64,
+    pub search_xy_step_m: f64,
+    pub search_theta_rad: f64,
+    pub search_theta_step_rad: f64,
+    /// Use every n-th beam (1 = all).
+    pub beam_stride: usize,
+}
+
+impl Default for ScanMatchConfig {
+    fn default() -> Self {
+        Self {
+            max_iterations: 20,
+            convergence_m: 1e-4,
+            point_sigma_m: 0.03,
+            robust_scale_m: 0.1,
+            prior_sigma_xy_m: 0.05,
+            prior_sigma_theta_rad: 0.05,
+            inlier_dist_m: 0.075,
+            min_score: 0.5,
+            min_points: 20,
+            max_correction_m: 0.5,
+            max_correction_rad: 0.3,
+            search_below_score: 0.8,
+            search_xy_m: 0.15,
+            search_xy_step_m: 0.05,
+            search_theta_rad: 4f64.to_radians(),
+            search_theta_step_rad: 1f64.to_radians(),
+            beam_stride: 1,
+        }
+    }
+}
+
+/// The outcome of [`match_scan`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatchResult {
+    /// The corrected pose, or the prior when the match was rejected.
+    pub pose: Pose,
+    /// Fraction of hit points that are inliers at the matched pose (before rejection).
+    pub score: f64,
+    /// Gauss-Newton iterations run (all passes).
+    pub iterations: u32,
+    /// Whether the correlative search ran.
+    pub searched: bool,
+    pub accepted: bool,
+}
+
+/// Matches `scan` (taken around `prior`) against the obstacle distance field of the map.
+pub fn match_scan(
+    field: &ObstacleDistance,
+    prior: &Pose,
+    scan: &Scan,
+    cfg: &ScanMatchConfig,
+) -> MatchResult {
+    let stride = cfg.beam_stride.max(1);
+    let points: Vec<Vec2> = (0..scan.ranges_m.len())
+        .step_by(stride)
+        .filter(|&i| scan.is_hit(i) && scan.ranges_m[i].is_finite() && scan.ranges_m[i] > 0.0)
+        .map(|i| {
+            let a = scan.beam_angle_rad(i);
+            Vec2::new(a.cos(), a.sin()) * scan.ranges_m[i]
+        })
+        .collect();
+    let rejected = |score, iterations, searched| MatchResult {
+        pose: *prior,
+        score,
+        iterations,
+        searched,
+        accepted: false,
+    };
+    if points.is_empty() || field.frame.is_empty() {
+        return rejected(0.0, 0, false);
+    }
+    let (mut pose, mut iterations) = gauss_newton(field, prior, prior, &points, cfg);
+    let (mut score, mut near) = evaluate(field, &pose, &points, cfg);
+    let mut searched = false;
+    if score < cfg.search_below_score {
+        searched = true;
+        let start = correlative_search(field, prior, &points, cfg);
+        let (p2, it2) = gauss_newton(field, prior, &start, &points, cfg);
+        iterations += it2;
+        let (s2, n2) = evaluate(field, &p2, &points, cfg);
+        if s2 > score {
+            (pose, score, near) = (p2, s2, n2);
+        }
+    }
+    let d = prior.between(&pose);
+    let ok = score >= cfg.min_score
+        && near >= cfg.min_points
+        && d.x_m.hypot(d.y_m) <= cfg.max_correction_m
+        && d.theta_rad.abs() <= cfg.max_correction_rad
+        && pose.x_m.is_finite()
+        && pose.y_m.is_finite()
+        && pose.theta_rad.is_finite();
+    if !ok {
+        return rejected(score, iterations, searched);
+    }
+    MatchResult {
+        pose,
+        score,
+        iterations,
+        searched,
+        accepted: true,
+    }
+}
+
+fn gauss_newton(
+    field: &ObstacleDistance,
+    prior: &Pose,
+    start: &Pose,
+    points: &[Vec2],
+    cfg: &ScanMatchConfig,
+) -> (Pose, u32) {
+    // Levenberg-Marquardt: a step that raises the cost is undone and the damping raised.
+    let mut x = Vector3::new(start.x_m, start.y_m, start.theta_rad);
+    let (mut h, mut g, mut cost) = normal_equations(field, prior, &x, points, cfg);
+    let mut lambda = 1e-4;
+    let mut iterations = 0;
+    while iterations < cfg.max_iterations {
+        iterations += 1;
+        let damped = h + Matrix3::from_diagonal(&h.diagonal()) * lambda;
+        let Some(step) = damped.cholesky().map(|ch| ch.solve(&(-g))) else {
+            break;
+        };
+        if !step.iter().all(|v| v.is_finite()) {
+            break;
+        }
+        let x_new = x + step;
+        let (h_new, g_new, cost_new) = normal_equations(field, prior, &x_new, points, cfg);
+        if cost_new <= cost {
+            (x, h, g, cost) = (x_new, h_new, g_new, cost_new);
+            lambda = (lambda * 0.1).max(1e-6);
+            if step[0].hypot(step[1]) < cfg.convergence_m && step[2].abs() < cfg.convergence_m {
+                break;
+            }
+        } else {
+            lambda *= 10.0;
+            if lambda > 1e4 {
+                break;
+            }
+        }
+    }
+    (Pose::new(x[0], x[1], wrap_angle(x[2])), iterations)
+}
+
+/// Gauss-Newton normal equations `(H, g)` and robust cost at pose `x`, prior included.
+fn normal_equations(
+    field: &ObstacleDistance,
+    prior: &Pose,
+    x: &Vector3<f64>,
+    points: &[Vec2],
+    cfg: &ScanMatchConfig,
+) -> (Matrix3<f64>, Vector3<f64>, f64) {
+    let res = field.frame.resolution_m;
+    let cap_m = field.cap_cells as f64 * res;
+    let inv_var = 1.0 / (cfg.point_sigma_m * cfg.point_sigma_m);
+    let c2 = cfg.robust_scale_m * cfg.robust_scale_m;
+    let prior_info = Vector3::new(
+        1.0 / cfg.prior_sigma_xy_m.powi(2),
+        1.0 / cfg.prior_sigma_xy_m.powi(2),
+        1.0 / cfg.prior_sigma_theta_rad.powi(2),
+    );
+    let mut h = Matrix3::from_diagonal(&prior_info);
+    let e = Vector3::new(
+        x[0] - prior.x_m,
+        x[1] - prior.y_m,
+        wrap_angle(x[2] - prior.theta_rad),
+    );
+    let mut g = prior_info.component_mul(&e);
+    let mut cost = 0.5 * e.dot(&prior_info.component_mul(&e));
+    let (s, c) = x[2].sin_cos();
+    for p in points {
+        let q = Vec2::new(x[0] + c * p.x - s * p.y, x[1] + s * p.x + c * p.y);
+        let (d_cells, grad) = field.sample(q);
+        let r = d_cells * res;
+        // Cauchy cost; points at the cap contribute a constant (no information).
+        cost += 0.5 * inv_var * c2 * (r.min(cap_m) * r.min(cap_m) / c2).ln_1p();
+        if r >= cap_m - 0.5 * res {
+            continue;
+        }
+        let grad = grad * res;
+        let dq_dtheta = Vec2::new(-s * p.x - c * p.y, c * p.x - s * p.y);
+        let j = Vector3::new(grad.x, grad.y, grad.dot(&dq_dtheta));
+        let w = inv_var / (1.0 + r * r / c2);
+        h += j * j.transpose() * w;
+        g += j * (w * r);
+    }
+    (h, g, cost)
+}
+
+/// (inlier fraction, number of points near the map).
+fn evaluate(
+    field: &ObstacleDistance,
+    pose: &Pose,
+    points: &[Vec2],
+    cfg: &ScanMatchConfig,
+) -> (f64, usize) {
+    let res = field.frame.resolution_m;
+    let cap_m = field.cap_cells as f64 * res;
+    let (s, c) = pose.theta_rad.sin_cos();
+    let mut inliers = 0;
+    let mut near = 0;
+    for p in points {
+        let q = Vec2::new(pose.x_m + c * p.x - s * p.y, pose.y_m + s * p.x + c * p.y);
+        let r = field.sample(q).0 * res;
+        if r < cfg.inlier_dist_m {
+            inliers += 1;
+        }
+        if r < cap_m - 0.5 * res {
+            near += 1;
+        }
+    }
+    (inliers as f64 / points.len().max(1) as f64, near)
+}
+
+/// Brute-force search of the pose minimising the summed robust cost on a small lattice.
+fn correlative_search(
+    field: &ObstacleDistance,
+    prior: &Pose,
+    points: &[Vec2],
+    cfg: &ScanMatchConfig,
+) -> Pose {
+    let res = field.frame.resolution_m;
+    let c2 = cfg.robust_scale_m * cfg.robust_scale_m;
+    let nxy = if cfg.search_xy_step_m > 0.0 {
+        (cfg.search_xy_m / cfg.search_xy_step_m).round() as i32
+    } else {
+        0
+    };
+    let nth = if cfg.search_theta_step_rad > 0.0 {
+        (cfg.search_theta_rad / cfg.search_theta_step_rad).round() as i32
+    } else {
+        0
+    };
+    // Subsample to about 60 points: the search only needs a starting point.
+    let stride = (points.len() / 60).max(1);
+    let mut best = (f64::INFINITY, *prior);
+    for it in -nth..=nth {
+        let th = prior.theta_rad + it as f64 * cfg.search_theta_step_rad;
+        let (s, c) = th.sin_cos();
+        let rotated: Vec<Vec2> = points
+            .iter()
+            .step_by(stride)
+            .map(|p| Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y))
+            .collect();
+        for iy in -nxy..=nxy {
+            for ix in -nxy..=nxy {
+                let t = Vec2::new(
+                    prior.x_m + ix as f64 * cfg.search_xy_step_m,
+                    prior.y_m + iy as f64 * cfg.search_xy_step_m,
+                );
+                let cost: f64 = rotated
+                    .iter()
+                    .map(|p| {
+                        let r = field.get(field.frame.cell_from_world(t + p)) as f64 * res;
+                        (r * r / c2).ln_1p()
+                    })
+                    .sum();
+                // Strictly better only: ties keep the earlier (lattice order) pose.
+                if cost < best.0 {
+                    best = (cost, Pose::new(t.x, t.y, wrap_angle(th)));
+                }
+            }
+        }
+    }
+    best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::GridFrame;
+    use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
+
+    /// A world of axis-aligned boxes, ray cast exactly.
+    struct BoxWorld(Vec<[f64; 4]>);
+
+    impl BoxWorld {
+        fn cast(&self, o: Vec2, dir: Vec2, max_range_m: f64) -> f64 {
+            let mut best = max_range_m;
+            for b in &self.0 {
+                let (mut t0, mut t1) = (0.0f64, best);
+                for (lo, hi, oo, d) in [(b[0], b[2], o.x, dir.x), (b[1], b[3], o.y, dir.y)] {
+                    if d.abs() < 1e-12 {
+                        if oo < lo || oo > hi {
+                            t0 = f64::INFINITY;
+                        }
+                        continue;
+                    }
+                    let (a, c) = ((lo - oo) / d, (hi - oo) / d);
+                    t0 = t0.max(a.min(c));
+                    t1 = t1.min(a.max(c));
+                }
+                if t0 <= t1 && t0 < best {
+                    best = t0;
+                }
+            }
+            best
+        }
+
+        fn scan(&self, pose: &Pose) -> Scan {
+            let n = 181;
+            let angle_min_rad = -std::f64::consts::FRAC_PI_2;
+            let inc = std::f64::consts::PI / (n - 1) as f64;
+            let ranges_m = (0..n)
+                .map(|i| {
+                    let a = pose.theta_rad + angle_min_rad + i as f64 * inc;
+                    self.cast(pose.position(), Vec2::new(a.cos(), a.sin()), 6.0)
+                })
+                .collect();
+            Scan {
+                angle_min_rad,
+                angle_increment_rad: inc,
+                max_range_m: 6.0,
+                ranges_m,
+            }
+        }
+    }
+
+    fn wall(x0: f64, y0: f64, x1: f64, y1: f64) -> [f64; 4] {
+        [x0, y0, x1, y1]
+    }
+
+    fn room() -> BoxWorld {
+        BoxWorld(vec![
+            wall(0.0, 0.0, 8.0, 0.1),
+            wall(0.0, 5.9, 8.0, 6.0),
+            wall(0.0, 0.0, 0.1, 6.0),
+            wall(7.9, 0.0, 8.0, 6.0),
+            wall(3.0, 2.0, 3.6, 2.4), // a box
+            wall(5.5, 3.0, 5.6, 5.9), // a partial wall
+        ])
+    }
+
+    fn build_map(world: &BoxWorld, frame: GridFrame, poses: &[Pose]) -> ObstacleDistance {
+        let mut map = LogOddsMap::new(frame);
+        for p in poses {
+            map.insert_scan(p, &world.scan(p), &LogOddsConfig::default());
+        }
+        ObstacleDistance::from_grid(&map.occupancy, 8)
+    }
+
+    #[test]
+    fn recovers_perturbed_pose_in_a_room() {
+        let world = room();
+        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
+        let mapping_poses: Vec<Pose> = (0..8)
+            .map(|k| {
+                Pose::new(
+                    1.5 + 0.6 * k as f64,
+                    1.2 + 0.3 * (k % 3) as f64,
+                    0.8 * k as f64,
+                )
+            })
+            .collect();
+        let field = build_map(&world, frame, &mapping_poses);
+        let truths = [
+            Pose::new(2.0, 1.0, 0.3),
+            Pose::new(4.5, 3.5, 2.0),
+            Pose::new(6.5, 1.5, -2.5),
+            Pose::new(1.2, 4.5, -0.7),
+        ];
+        let offsets = [
+            (0.15, 0.0, 4.0),
+            (-0.1, 0.11, -4.0),
+            (0.0, -0.15, 2.5),
+            (0.1, 0.1, -3.0),
+        ];
+        for truth in &truths {
+            let scan = world.scan(truth);
+            for &(dx, dy, dth) in &offsets {
+                let prior = Pose::new(
+                    truth.x_m + dx,
+                    truth.y_m + dy,
+                    truth.theta_rad + f64::to_radians(dth),
+                );
+                let r = match_scan(&field, &prior, &scan, &ScanMatchConfig::default());
+                let err = truth.between(&r.pose);
+                assert!(r.accepted, "{truth:?} {prior:?} {r:?}");
+                assert!(err.x_m.hypot(err.y_m) < 0.025, "{truth:?} {prior:?} {r:?}");
+                assert!(err.theta_rad.abs() < 0.5f64.to_radians(), "{truth:?} {r:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn corridor_does_not_drift_along_its_axis() {
+        // 40 m long, 2 m wide corridor; the ends are beyond the laser's range.
+        let world = BoxWorld(vec![wall(0.0, 0.0, 40.0, 0.1), wall(0.0, 2.1, 40.0, 2.2)]);
+        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 840, 80);
+        let poses: Vec<Pose> = (0..12)
+            .map(|k| Pose::new(14.0 + k as f64, 1.1, 0.0))
+            .collect();
+        let field = build_map(&world, frame, &poses);
+        let truth = Pose::new(20.0, 1.1, 0.0);
+        let scan = world.scan(&truth);
+        for along in [-0.15, 0.1, 0.15] {
+            let prior = Pose::new(truth.x_m + along, truth.y_m + 0.08, 0.03);
+            let r = match_scan(&field, &prior, &scan, &ScanMatchConfig::default());
+            let err_along = r.pose.x_m - truth.x_m;
+            // Discretisation of the walls can pull by about a quarter of a cell.
+            assert!(err_along.abs() <= along.abs() + 0.015, "{along}: {r:?}");
+            if r.accepted {
+                assert!((r.pose.y_m - truth.y_m).abs() < 0.025, "{r:?}");
+                assert!(r.pose.theta_rad.abs() < 0.5f64.to_radians(), "{r:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_without_map_or_when_the_scan_does_not_fit() {
+        let world = room();
+        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
+        let empty = ObstacleDistance::new(frame, 8);
+        let prior = Pose::new(2.0, 1.0, 0.3);
+        let r = match_scan(
+            &empty,
+            &prior,
+            &world.scan(&prior),
+            &ScanMatchConfig::default(),
+        );
+        assert!(!r.accepted);
+        assert_eq!(r.pose, prior);
+        // A map of a different world.
+        let other = BoxWorld(vec![wall(0.0, 0.0, 0.1, 6.0), wall(1.0, 3.0, 7.0, 3.1)]);
+        let field = build_map(
+            &other,
+            frame,
+            &[Pose::new(4.0, 1.5, 1.57), Pose::new(3.0, 1.0, 3.0)],
+        );
+        let r = match_scan(
+            &field,
+            &prior,
+            &world.scan(&prior),
+            &ScanMatchConfig::default(),
+        );
+        assert!(!r.accepted, "{r:?}");
+        assert_eq!(r.pose, prior);
+    }
+}

@@ -1,0 +1,226 @@
+//! Dijkstra from the robot over 8-connected traversable cells: one cost field answers the
+//! distance to every candidate and gives a path to any of them.
+//!
+//! Costs are integers: 10 per straight step, 14 per diagonal step (so metres are
+//! `cost * resolution / 10`, within 1% of the Euclidean step lengths), plus an optional per-cell
+//! extra cost of entering a cell (e.g. near walls, to keep paths centred). Integer costs allow a
+//! bucket queue (Dial's algorithm): linear time. Diagonal steps may not cut a corner: both
+//! adjacent straight cells must be traversable.
+
+use crate::grid::{Bitmap, Cell, Grid, GridFrame};
+use crate::mapping::distance_field::ObstacleDistance;
+
+const STRAIGHT: u32 = 10;
+const DIAGONAL: u32 = 14;
+const UNREACHED: u32 = u32::MAX;
+const STEPS: [(i32, i32, u32); 8] = [
+    (1, 0, STRAIGHT),
+    (-1, 0, STRAIGHT),
+    (0, 1, STRAIGHT),
+    (0, -1, STRAIGHT),
+    (1, 1, DIAGONAL),
+    (-1, 1, DIAGONAL),
+    (1, -1, DIAGONAL),
+    (-1, -1, DIAGONAL),
+];
+
+/// Costs from the start to every cell, with the step that reached each cell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CostField {
+    pub frame: GridFrame,
+    pub start: Cell,
+    /// Cost units (see module doc); `u32::MAX` = unreachable.
+    pub cost: Vec<u32>,
+    /// Index into the step table of the step that entered the cell (255 = none).
+    parent: Vec<u8>,
+}
+
+impl CostField {
+    /// Cost of reaching `c` in metres (extra costs included), `None` if unreachable.
+    pub fn distance_m(&self, c: Cell) -> Option<f64> {
+        let i = self.frame.index(c)?;
+        (self.cost[i] != UNREACHED)
+            .then(|| self.cost[i] as f64 * self.frame.resolution_m / STRAIGHT as f64)
+    }
+
+    /// Cells from the start to `goal` (both included), `None` if unreachable.
+    pub fn path_to(&self, goal: Cell) -> Option<Vec<Cell>> {
+        let mut i = self.frame.index(goal)?;
+        if self.cost[i] == UNREACHED {
+            return None;
+        }
+        let mut path = vec![goal];
+        let mut c = goal;
+        while self.parent[i] != 255 {
+            let (dx, dy, _) = STEPS[self.parent[i] as usize];
+            c = Cell::new(c.x - dx, c.y - dy);
+            i = self.frame.index(c)?;
+            path.push(c);
+        }
+        path.reverse();
+        Some(path)
+    }
+}
+
+/// Extra cost of entering each cell: `max_extra` at the inflation radius, falling linearly to 0
+/// at `radius_m + band_m` from the nearest obstacle.
+pub fn wall_cost(
+    obstacles: &ObstacleDistance,
+    radius_m: f64,
+    band_m: f64,
+    max_extra: u8,
+) -> Grid<u8> {
+    let res = obstacles.frame.resolution_m;
+    let data = obstacles
+        .data
+        .iter()
+        .map(|&d| {
+            let beyond = (d as f64 * res - radius_m) / band_m.max(1e-9);
+            if beyond >= 1.0 {
+                0
+            } else {
+                (max_extra as f64 * (1.0 - beyond.max(0.0))).round() as u8
+            }
+        })
+        .collect();
+    Grid {
+        frame: obstacles.frame,
+        data,
+    }
+}
+
+/// Dijkstra from `start` over traversable cells. The start cell is always expanded, even if it
+/// is not traversable itself (the robot may stand close to a wall). `extra` must share the frame.
+pub fn dijkstra(trav: &Bitmap, start: Cell, extra: Option<&Grid<u8>>) -> CostField {
+    let frame = trav.frame;
+    let n = frame.len();
+    let mut field = CostField {
+        frame,
+        start,
+        cost: vec![UNREACHED; n],
+        parent: vec![255; n],
+    };
+    let Some(si) = frame.index(start) else {
+        return field;
+    };
+    let extra = extra
+        .filter(|e| e.frame == frame)
+        .map(|e| e.data.as_slice());
+    let max_extra = extra.map_or(0, |e| e.iter().copied().max().unwrap_or(0) as u32);
+    let nb = (DIAGONAL + max_extra + 1) as usize;
+    let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); nb];
+    let w = frame.width as i32;
+    let h = frame.height as i32;
+    let ok = |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && trav.data[(y * w + x) as usize];
+    field.cost[si] = 0;
+    buckets[0].push(si as u32);
+    let mut pending = 1usize;
+    let mut current = 0u32;
+    while pending > 0 {
+        let b = current as usize % nb;
+        while let Some(i) = buckets[b].pop() {
+            pending -= 1;
+            let i = i as usize;
+            if field.cost[i] != current {
+                continue; // stale entry
+            }
+            let (x, y) = ((i % w as usize) as i32, (i / w as usize) as i32);
+            for (k, &(dx, dy, step)) in STEPS.iter().enumerate() {
+                let (nx, ny) = (x + dx, y + dy);
+                if !ok(nx, ny) || (dx != 0 && dy != 0 && !(ok(x + dx, y) && ok(x, y + dy))) {
+                    continue;
+                }
+                let j = (ny * w + nx) as usize;
+                let c = current + step + extra.map_or(0, |e| e[j] as u32);
+                if c < field.cost[j] {
+                    field.cost[j] = c;
+                    field.parent[j] = k as u8;
+                    buckets[c as usize % nb].push(j as u32);
+                    pending += 1;
+                }
+            }
+        }
+        current += 1;
+    }
+    field
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::OccupancyGrid;
+    use crate::plan::inflate::traversable_from_grid;
+
+    fn trav(s: &str) -> Bitmap {
+        traversable_from_grid(&OccupancyGrid::from_ascii(s, 0.1), 0.0)
+    }
+
+    #[test]
+    fn path_goes_around_a_wall() {
+        let t = trav(
+            "
+            .......
+            ...#...
+            ...#...
+            ...#...",
+        );
+        let f = dijkstra(&t, Cell::new(1, 0), None);
+        let goal = Cell::new(5, 0);
+        let path = f.path_to(goal).unwrap();
+        assert_eq!(path.first(), Some(&Cell::new(1, 0)));
+        assert_eq!(path.last(), Some(&goal));
+        assert!(path.iter().all(|c| t.get(*c) == Some(&true)));
+        assert!(
+            path.iter().any(|c| c.y == 3),
+            "must pass above the wall: {path:?}"
+        );
+        let d = f.distance_m(goal).unwrap();
+        assert!(d > 0.6 && d < 1.0, "{d}");
+        for w in path.windows(2) {
+            assert!((w[0].x - w[1].x).abs() <= 1 && (w[0].y - w[1].y).abs() <= 1);
+        }
+    }
+
+    #[test]
+    fn unreachable_goal_gives_none() {
+        let t = trav(
+            "
+            ...#...
+            ...#...",
+        );
+        let f = dijkstra(&t, Cell::new(0, 0), None);
+        assert_eq!(f.path_to(Cell::new(5, 0)), None);
+        assert_eq!(f.distance_m(Cell::new(5, 0)), None);
+        // One diagonal (14) and one straight (10) step at 0.1 m.
+        assert!((f.distance_m(Cell::new(2, 1)).unwrap() - 0.24).abs() < 1e-9);
+        assert_eq!(f.path_to(Cell::new(0, 0)), Some(vec![Cell::new(0, 0)]));
+        // Outside start: nothing reachable, no panic.
+        let f = dijkstra(&t, Cell::new(-3, 0), None);
+        assert_eq!(f.distance_m(Cell::new(0, 0)), None);
+    }
+
+    #[test]
+    fn wall_cost_pushes_paths_to_the_middle() {
+        let g = OccupancyGrid::from_ascii(
+            "
+            ###########
+            ...........
+            ...........
+            ...........
+            ...........
+            ...........
+            ###########",
+            0.1,
+        );
+        let t = traversable_from_grid(&g, 0.0);
+        let obstacles = ObstacleDistance::from_grid(&g, 6);
+        let extra = wall_cost(&obstacles, 0.0, 0.3, 20);
+        let f = dijkstra(&t, Cell::new(0, 1), Some(&extra));
+        let path = f.path_to(Cell::new(10, 1)).unwrap();
+        assert!(path.iter().any(|c| c.y >= 3), "{path:?}");
+        let plain = dijkstra(&t, Cell::new(0, 1), None)
+            .path_to(Cell::new(10, 1))
+            .unwrap();
+        assert!(plain.iter().all(|c| c.y == 1));
+    }
+}

@@ -1,0 +1,212 @@
+//! `floorcast building`: generate, check and draw buildings.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand, ValueEnum};
+use floorcast_render::{building_figure, Color, Figure, Style};
+use serde::Serialize;
+use sim_core::building::StartSource;
+use sim_core::explore::RunResult;
+use sim_core::generate::{generate, BuildingKind, GenerateConfig};
+use sim_core::{Building, Vec2};
+
+
+#[derive(Debug, Subcommand)]
+pub enum BuildingCommand {
+    /// Generate a school or office building with ground-truth rooms, as floorcast TOML.
+    Generate(GenerateArgs),
+    /// Print a building's name, size, free area, rooms, start pose and content hash.
+    Check(CheckArgs),
+    /// Draw a building (walls, rooms, doors, start) as SVG or PNG.
+    Render(RenderArgs),
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum Kind {
+    School,
+    Office,
+}
+
+#[derive(Debug, Args)]
+pub struct GenerateArgs {
+    /// Seed: the same seed and options give the same building.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Target free area in square metres (the result is within 15 %).
+    #[arg(long, value_name = "M2")]
+    area_m2: f64,
+    /// Kind of building: schools have classrooms and halls, offices smaller rooms.
+    #[arg(long, value_enum, default_value = "school")]
+    kind: Kind,
+    /// Add furniture and pillars inside rooms.
+    #[arg(long)]
+    clutter: bool,
+    /// Rotate the whole building by this many degrees (non-axis-aligned walls).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_hyphen_values = true)]
+    rotation_deg: f64,
+    /// Building name (default: the output file's stem).
+    #[arg(long)]
+    name: Option<String>,
+    /// Output TOML file.
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// Building file (floorcast TOML, map_server YAML, Stage .world).
+    file: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Building file (floorcast TOML, map_server YAML, Stage .world).
+    file: PathBuf,
+    /// Output picture: .svg or .png.
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+}
+
+pub fn run(c: BuildingCommand) -> Result<()> {
+    match c {
+        BuildingCommand::Generate(a) => generate_cmd(a),
+        BuildingCommand::Check(a) => check_cmd(a),
+        BuildingCommand::Render(a) => render_cmd(a),
+    }
+}
+
+fn generate_cmd(a: GenerateArgs) -> Result<()> {
+    if !(a.area_m2.is_finite() && (100.0..=20_000.0).contains(&a.area_m2)) {
+        bail!("--area-m2 {}: expected a free area between 100 and 20000 m2", a.area_m2);
+    }
+    if !a.rotation_deg.is_finite() {
+        bail!("--rotation-deg {}: expected a number of degrees", a.rotation_deg);
+    }
+    let name = a.name.clone().unwrap_or_else(|| {
+        a.out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "building".into())
+    });
+    let b = generate(&GenerateConfig {
+        seed: a.seed,
+        area_m2: a.area_m2,
+        kind: match a.kind {
+            Kind::School => BuildingKind::School,
+            Kind::Office => BuildingKind::Office,
+        },
+        clutter: a.clutter,
+        rotation_rad: a.rotation_deg.to_radians(),
+        name,
+    });
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        crate::output::create_dir(dir)?;
+    }
+    floorcast_formats::building_toml::write_building_toml(&b, &a.out)?;
+    println!(
+        "{}: {} rooms, {:.0} m2 free, hash {}",
+        a.out.display(),
+        b.rooms.len(),
+        b.free_area_m2(),
+        b.content_hash()
+    );
+    Ok(())
+}
+
+/// What `building check` reports.
+#[derive(Debug, Serialize)]
+struct CheckReport {
+    file: String,
+    name: String,
+    width_m: f64,
+    height_m: f64,
+    free_area_m2: f64,
+    reachable_free_area_m2: f64,
+    rooms: Option<usize>,
+    doors: Option<usize>,
+    start: [f64; 3],
+    start_source: &'static str,
+    geometry: &'static str,
+    wall_segments: usize,
+    hash: String,
+}
+
+fn check_report(file: &std::path::Path, b: &Building) -> Result<CheckReport> {
+    let bounds = b.bounds();
+    let (start, source) = b
+        .default_start()
+        .with_context(|| format!("{}: the building has no free space", file.display()))?;
+    let frame = b.area_frame();
+    let reachable = b.reachable_free(frame, start.position()).count_true() as f64 * frame.cell_area_m2();
+    Ok(CheckReport {
+        file: file.display().to_string(),
+        name: b.name.clone(),
+        width_m: bounds.width_m(),
+        height_m: bounds.height_m(),
+        free_area_m2: b.free_area_m2(),
+        reachable_free_area_m2: reachable,
+        rooms: (!b.rooms.is_empty()).then_some(b.rooms.len()),
+        doors: (!b.doors.is_empty()).then_some(b.doors.len()),
+        start: [start.x_m, start.y_m, start.theta_rad.to_degrees()],
+        start_source: match source {
+            StartSource::File => "file",
+            StartSource::LargestClearance => "largest clearance (no start in the file)",
+        },
+        geometry: match b.geometry {
+            sim_core::Geometry::Raster { .. } => "raster",
+            sim_core::Geometry::Vector { .. } => "vector",
+        },
+        wall_segments: b.boundary_segments().len(),
+        hash: b.content_hash(),
+    })
+}
+
+fn check_cmd(a: CheckArgs) -> Result<()> {
+    let b = floorcast_formats::read_building(&a.file)?;
+    let r = check_report(&a.file, &b)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+        return Ok(());
+    }
+    println!("file:            {}", r.file);
+    println!("name:            {}", r.name);
+    println!("size:            {:.1} x {:.1} m ({})", r.width_m, r.height_m, r.geometry);
+    println!("free area:       {:.1} m2 ({:.1} m2 reachable from the start)", r.free_area_m2, r.reachable_free_area_m2);
+    match r.rooms {
+        Some(n) => println!("rooms:           {n} ({} doors)", r.doors.unwrap_or(0)),
+        None => println!("rooms:           unknown (no ground truth)"),
+    }
+    println!(
+        "start:           x {:.2} m, y {:.2} m, theta {:.1} deg ({})",
+        r.start[0], r.start[1], r.start[2], r.start_source
+    );
+    println!("wall segments:   {}", r.wall_segments);
+    println!("hash:            {}", r.hash);
+    Ok(())
+}
+
+fn render_cmd(a: RenderArgs) -> Result<()> {
+    let b = floorcast_formats::read_building(&a.file)?;
+    building_figure(&b)
+        .save(&a.out)
+        .with_context(|| format!("cannot write {}", a.out.display()))?;
+    println!("{}", a.out.display());
+    Ok(())
+}
+
+/// The paper-style picture of a run: the final map, the true trajectory, the decisions.
+pub fn exploration_figure(r: &RunResult) -> Figure {
+    let bounds = r.map.frame.bounds();
+    let mut fig = Figure::new(bounds, 20.0);
+    fig.grid(&r.map);
+    let traj: Vec<Vec2> = r.trajectory.iter().map(|p| p.position()).collect();
+    fig.polyline(&traj, &Style::stroke(Color::rgb(30, 90, 220), 1.5));
+    let est: Vec<Vec2> = r.estimated_trajectory.iter().map(|p| p.position()).collect();
+    fig.polyline(&est, &Style::stroke(Color::rgba(220, 120, 30, 160), 1.0).dashed(4.0, 3.0));
+    for d in &r.decisions {
+        fig.circle(d.goal, 0.25, &Style::fill(Color::rgb(220, 30, 30)));
+    }
+    fig.arrow(&r.start, 1.0, &Style::stroke(Color::rgb(0, 150, 0), 3.0));
+    fig
+}

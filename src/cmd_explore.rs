@@ -1,0 +1,159 @@
+//! `floorcast explore`: one exploration run, with its records and picture.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use floorcast_worker::{run_job, Job, Settings, STRATEGIES};
+use sim_core::explore::RunResult;
+
+use crate::output::{create_dir, parse_pose, progress_bar, write_text};
+
+#[derive(Debug, Args)]
+pub struct ExploreArgs {
+    /// Building to explore: floorcast TOML, ROS map_server YAML, or Stage .world.
+    #[arg(long, value_name = "FILE")]
+    building: PathBuf,
+    /// Exploration strategy.
+    #[arg(long, default_value = "baseline", value_parser = clap::builder::PossibleValuesParser::new(STRATEGIES))]
+    strategy: String,
+    /// Seed of the run's randomness (odometry error, laser noise).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output directory (default: results/explore/<building>-<strategy>-<seed>).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Start pose "x,y,theta" in metres and degrees (default: the building's, else the free
+    /// point with the largest clearance).
+    #[arg(long, value_name = "X,Y,THETA", value_parser = parse_pose, allow_hyphen_values = true)]
+    start: Option<sim_core::Pose>,
+    /// Where the map's poses come from.
+    #[arg(long, default_value = "slam", value_parser = ["slam", "odometry", "ground-truth"])]
+    localization: String,
+    /// The utility's weight of distance against information gain.
+    #[arg(long)]
+    alpha: Option<f64>,
+    /// Drive back to the start after exploring.
+    #[arg(long)]
+    return_home: bool,
+    /// Stop the run at this simulated time (seconds).
+    #[arg(long, value_name = "SECONDS")]
+    time_limit_s: Option<f64>,
+    /// Settings file (JSON object of run settings; see README), applied before the flags.
+    #[arg(long, value_name = "FILE")]
+    settings: Option<PathBuf>,
+    /// Picture format of the final map.
+    #[arg(long, default_value = "png", value_parser = ["png", "svg"])]
+    picture: String,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+pub fn run(a: ExploreArgs) -> Result<()> {
+    let building = floorcast_formats::read_building(&a.building)?;
+    let name = a
+        .building
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| building.name.clone());
+    let mut settings = match &a.settings {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read settings file {}", p.display()))?;
+            serde_json::from_str::<Settings>(&text)
+                .with_context(|| format!("{}: invalid settings", p.display()))?
+        }
+        None => Settings::default(),
+    };
+    settings.localization = a.localization.clone();
+    if let Some(alpha) = a.alpha {
+        settings.alpha = alpha;
+    }
+    if let Some(t) = a.time_limit_s {
+        settings.time_limit_s = t;
+    }
+    settings.return_home |= a.return_home;
+    let job = Job {
+        building: &building,
+        building_name: name.clone(),
+        strategy: a.strategy.clone(),
+        seed: a.seed,
+        settings,
+        start: a.start,
+    };
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("results/explore/{name}-{}-{}", a.strategy, a.seed)));
+    create_dir(&out)?;
+
+    let pb = progress_bar(1000, a.quiet, "{spinner} {msg} [{bar:40}] {pos}‰ explored");
+    let output = run_job(&job, &mut |s| {
+        pb.set_position((s.explored_fraction * 1000.0) as u64);
+        pb.set_message(format!("t = {:.0} s", s.time_s));
+    })
+    .with_context(|| format!("{}: cannot explore", a.building.display()))?;
+    pb.finish_and_clear();
+
+    let summary = &output.summary;
+    write_text(
+        &out.join("summary.json"),
+        &(serde_json::to_string_pretty(summary)? + "\n"),
+    )?;
+    write_text(&out.join("progress.csv"), &progress_csv(&output.result))?;
+    write_text(&out.join("decisions.csv"), &decisions_csv(&output.result))?;
+    write_text(&out.join("trajectory.csv"), &trajectory_csv(&output.result))?;
+    floorcast_formats::map_server::write_map(&output.result.map, &out.join("map.yaml"))?;
+    let picture = out.join(format!("final.{}", a.picture));
+    crate::cmd_building::exploration_figure(&output.result)
+        .save(&picture)
+        .with_context(|| format!("cannot write {}", picture.display()))?;
+
+    println!(
+        "{name}: {} after {:.0} s simulated ({:.1} % of {:.0} m2 explored, {} decisions, {:.1} m driven) in {:.2} s wall ({:.0}x real time)",
+        summary.end_reason,
+        summary.exploration_time_s,
+        summary.explored_fraction * 100.0,
+        summary.free_area_m2,
+        summary.decisions,
+        summary.path_length_m,
+        summary.wall_time_s,
+        summary.speedup
+    );
+    println!("results in {}", out.display());
+    Ok(())
+}
+
+fn progress_csv(r: &RunResult) -> String {
+    let mut s = String::from("time_s,explored_area_m2,explored_fraction\n");
+    for p in &r.progress {
+        let _ = writeln!(s, "{:.1},{:.3},{:.5}", p.time_s, p.explored_area_m2, p.explored_fraction);
+    }
+    s
+}
+
+fn decisions_csv(r: &RunResult) -> String {
+    let mut s = String::from("time_s,x_m,y_m,theta_rad,goal_x_m,goal_y_m,candidates,gain_m2,distance_m\n");
+    for d in &r.decisions {
+        let _ = writeln!(
+            s,
+            "{:.1},{:.3},{:.3},{:.4},{:.3},{:.3},{},{:.3},{:.3}",
+            d.time_s, d.pose.x_m, d.pose.y_m, d.pose.theta_rad, d.goal.x, d.goal.y, d.candidates, d.gain_m2, d.distance_m
+        );
+    }
+    s
+}
+
+fn trajectory_csv(r: &RunResult) -> String {
+    let mut s = String::from("x_m,y_m,theta_rad,est_x_m,est_y_m,est_theta_rad\n");
+    for (t, e) in r.trajectory.iter().zip(&r.estimated_trajectory) {
+        let _ = writeln!(
+            s,
+            "{:.3},{:.3},{:.4},{:.3},{:.3},{:.4}",
+            t.x_m, t.y_m, t.theta_rad, e.x_m, e.y_m, e.theta_rad
+        );
+    }
+    s
+}

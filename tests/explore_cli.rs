@@ -1,0 +1,65 @@
+//! `floorcast explore` end to end.
+
+mod common;
+
+use common::*;
+
+fn explore(building: &std::path::Path, seed: u64, out: &std::path::Path) -> serde_json::Value {
+    let o = run(&[
+        "explore", "--building", building.to_str().unwrap(), "--strategy", "baseline", "--seed",
+        &seed.to_string(), "--out", out.to_str().unwrap(), "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn explores_the_small_building_completely_and_reproducibly() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = repo().join("buildings/small.toml");
+    let s1 = explore(&b, 1, &dir.path().join("a"));
+    let s1b = explore(&b, 1, &dir.path().join("b"));
+    let s2 = explore(&b, 2, &dir.path().join("c"));
+    for k in [
+        "building", "building_hash", "strategy", "seed", "exploration_time_s", "explored_area_m2",
+        "free_area_m2", "explored_fraction", "path_length_m", "decisions", "stopped_early",
+        "end_reason", "wall_time_s", "floorcast_version",
+    ] {
+        assert!(s1.get(k).is_some(), "summary lacks {k}");
+    }
+    assert_eq!(s1["end_reason"], "no frontiers");
+    assert!(s1["explored_fraction"].as_f64().unwrap() >= 0.97, "{s1}");
+    // Same seed: same summary but for the wall time.
+    let strip = |v: &serde_json::Value| {
+        let mut v = v.clone();
+        for k in ["wall_time_s", "speedup"] {
+            v.as_object_mut().unwrap().remove(k);
+        }
+        v
+    };
+    assert_eq!(strip(&s1), strip(&s1b));
+    // Another seed: different but close.
+    let t1 = s1["exploration_time_s"].as_f64().unwrap();
+    let t2 = s2["exploration_time_s"].as_f64().unwrap();
+    assert_ne!(t1, t2);
+    assert!((t1 - t2).abs() < 0.5 * t1.max(t2), "{t1} vs {t2}");
+    // The other outputs exist and are usable.
+    let a = dir.path().join("a");
+    let csv = std::fs::read_to_string(a.join("progress.csv")).unwrap();
+    assert!(csv.starts_with("time_s,explored_area_m2,explored_fraction\n"));
+    assert!(csv.lines().count() > 10);
+    let o = run(&["building", "check", a.join("map.yaml").to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(image::open(a.join("final.png")).is_ok());
+}
+
+#[test]
+fn a_start_in_a_wall_is_a_clean_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = repo().join("buildings/small.toml");
+    let o = run(&[
+        "explore", "--building", b.to_str().unwrap(), "--start", "-50,-50,0", "--out",
+        dir.path().to_str().unwrap(), "--quiet",
+    ]);
+    assert_clean_failure(&o, &["small.toml", "free space"]);
+}

@@ -1,0 +1,95 @@
+//! The run record written as `summary.json` and stored by the coordinator. Versioned: readers
+//! check `format` and `version` before trusting the rest.
+
+use serde::{Deserialize, Serialize};
+use sim_core::explore::RunResult;
+
+use crate::{Job, Settings, FLOORCAST_VERSION};
+
+pub const SUMMARY_FORMAT: &str = "floorcast-run-summary";
+pub const SUMMARY_VERSION: u32 = 1;
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSummary {
+    pub format: String,
+    pub version: u32,
+    pub floorcast_version: String,
+    pub building: String,
+    pub building_hash: String,
+    pub strategy: String,
+    pub seed: u64,
+    pub settings: Settings,
+    /// Start pose `[x_m, y_m, theta_rad]` and where it came from.
+    pub start: [f64; 3],
+    pub start_source: String,
+    /// Simulated seconds until exploration ended (before any return home).
+    pub exploration_time_s: f64,
+    /// Simulated seconds until the run ended.
+    pub total_time_s: f64,
+    pub explored_area_m2: f64,
+    /// Free area reachable from the start (the explored fraction's denominator).
+    pub free_area_m2: f64,
+    pub explored_fraction: f64,
+    pub path_length_m: f64,
+    pub decisions: usize,
+    pub stopped_early: bool,
+    pub end_reason: String,
+    pub blacklisted_goals: usize,
+    pub scans: u64,
+    pub scan_matches_accepted: u64,
+    /// Fraction of map-free cells that are free in the building.
+    pub map_free_precision: f64,
+    /// Fraction of map-occupied cells within one cell of a true wall (doubled walls lower it).
+    pub map_occupied_precision: f64,
+    /// Wall-clock seconds the run took (the only field that differs between identical runs).
+    pub wall_time_s: f64,
+    /// Simulated seconds per wall second.
+    pub speedup: f64,
+}
+
+impl RunSummary {
+    pub fn new(job: &Job<'_>, r: &RunResult, start_source: &str, wall_time_s: f64) -> Self {
+        Self {
+            format: SUMMARY_FORMAT.to_string(),
+            version: SUMMARY_VERSION,
+            floorcast_version: FLOORCAST_VERSION.to_string(),
+            building: job.building_name.clone(),
+            building_hash: job.building.content_hash(),
+            strategy: job.strategy.clone(),
+            seed: job.seed,
+            settings: job.settings.clone(),
+            start: [r.start.x_m, r.start.y_m, r.start.theta_rad],
+            start_source: start_source.to_string(),
+            exploration_time_s: r.exploration_time_s,
+            total_time_s: r.total_time_s,
+            explored_area_m2: r.explored_area_m2,
+            free_area_m2: r.free_area_m2,
+            explored_fraction: r.explored_fraction,
+            path_length_m: r.path_length_m,
+            decisions: r.decisions.len(),
+            stopped_early: false,
+            end_reason: r.end_reason.as_str().to_string(),
+            blacklisted_goals: r.blacklisted_goals,
+            scans: r.scans,
+            scan_matches_accepted: r.scan_matches_accepted,
+            map_free_precision: r.map_quality.free_precision,
+            map_occupied_precision: r.map_quality.occupied_precision,
+            wall_time_s,
+            speedup: if wall_time_s > 0.0 { r.total_time_s / wall_time_s } else { 0.0 },
+        }
+    }
+
+    /// Parses and checks format and version.
+    pub fn from_json(text: &str) -> Result<Self, String> {
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+        let format = v.get("format").and_then(|f| f.as_str()).unwrap_or("");
+        let version = v.get("version").and_then(|f| f.as_u64()).unwrap_or(0);
+        if format != SUMMARY_FORMAT || version != SUMMARY_VERSION as u64 {
+            return Err(format!(
+                "not a {SUMMARY_FORMAT} version {SUMMARY_VERSION} record (format '{format}', version {version})"
+            ));
+        }
+        serde_json::from_value(v).map_err(|e| e.to_string())
+    }
+}

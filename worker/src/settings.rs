@@ -1,0 +1,188 @@
+//! The user-facing run settings (robot, laser, odometry, mapping, strategy parameters): what a
+//! grid file's `[settings]` or the command line sets, what every summary records, and what a
+//! job's identity hashes. Converted by hand into `sim-core`'s config and validated on the way.
+
+use serde::{Deserialize, Serialize};
+use sim_core::explore::{ExploreConfig, Localization};
+
+/// Settings as written in files and records. Every field has the documented default.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Settings {
+    /// Robot radius (m).
+    pub robot_radius_m: f64,
+    /// Maximum forward speed (m/s).
+    pub max_speed_mps: f64,
+    /// Maximum turn rate (rad/s).
+    pub max_turn_rate_radps: f64,
+    /// Laser field of view (degrees).
+    pub laser_fov_deg: f64,
+    /// Laser range (m).
+    pub laser_range_m: f64,
+    /// Number of beams per scan.
+    pub laser_beams: usize,
+    /// Scans per second available to the mapper.
+    pub laser_rate_hz: f64,
+    /// Standard deviation of the Gaussian range noise (m).
+    pub laser_noise_sd_m: f64,
+    /// Maximum proportional translation error of odometry (m per m).
+    pub odometry_translation_error: f64,
+    /// Maximum proportional rotation error of odometry (degrees per radian).
+    pub odometry_rotation_error_deg_per_rad: f64,
+    /// "slam" (default), "odometry" or "ground-truth".
+    pub localization: String,
+    /// Occupancy grid cell size (m).
+    pub map_resolution_m: f64,
+    /// Weight of distance in the utility (the paper's alpha).
+    pub alpha: f64,
+    /// Frontiers shorter than this are ignored (m).
+    pub min_frontier_m: f64,
+    /// Re-decide at least this often (s of simulated time).
+    pub redecide_period_s: f64,
+    /// Radius of the blacklist around unreachable goals (m).
+    pub blacklist_radius_m: f64,
+    /// Abandon a goal after this long without progress (s).
+    pub progress_timeout_s: f64,
+    /// Stop a run at this simulated time (s).
+    pub time_limit_s: f64,
+    /// Drive back to the start after exploring.
+    pub return_home: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        let c = ExploreConfig::default();
+        Self {
+            robot_radius_m: c.sim.robot.radius_m,
+            max_speed_mps: c.sim.robot.max_speed_mps,
+            max_turn_rate_radps: c.sim.robot.max_turn_rate_radps,
+            laser_fov_deg: c.sim.laser.fov_rad.to_degrees(),
+            laser_range_m: c.sim.laser.max_range_m,
+            laser_beams: c.sim.laser.beams,
+            laser_rate_hz: c.sim.laser.rate_hz,
+            laser_noise_sd_m: c.sim.laser.range_noise_sd_m,
+            odometry_translation_error: c.sim.odometry.max_translation_error,
+            odometry_rotation_error_deg_per_rad: c.sim.odometry.max_rotation_error.to_degrees(),
+            localization: c.localization.as_str().to_string(),
+            map_resolution_m: c.map_resolution_m,
+            alpha: c.alpha,
+            min_frontier_m: c.min_frontier_m,
+            redecide_period_s: c.redecide_period_s,
+            blacklist_radius_m: c.blacklist_radius_m,
+            progress_timeout_s: c.progress_timeout_s,
+            time_limit_s: c.time_limit_s,
+            return_home: c.return_home,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SettingsError {
+    #[error("settings.{field}: {value} is out of range, expected {expected}")]
+    OutOfRange { field: &'static str, value: String, expected: &'static str },
+    #[error("settings.localization: unknown value '{0}', expected slam, odometry or ground-truth")]
+    Localization(String),
+}
+
+impl Settings {
+    /// Checks every field and builds the simulation config.
+    pub fn to_explore_config(&self) -> Result<ExploreConfig, SettingsError> {
+        fn check(
+            field: &'static str,
+            v: f64,
+            ok: bool,
+            expected: &'static str,
+        ) -> Result<f64, SettingsError> {
+            if v.is_finite() && ok {
+                Ok(v)
+            } else {
+                Err(SettingsError::OutOfRange { field, value: v.to_string(), expected })
+            }
+        }
+        let pos = |field, v: f64| check(field, v, v > 0.0, "a positive number");
+        let nonneg = |field, v: f64| check(field, v, v >= 0.0, "a number >= 0");
+        let mut c = ExploreConfig::default();
+        c.sim.robot.radius_m = pos("robot_radius_m", self.robot_radius_m)?;
+        c.sim.robot.max_speed_mps = pos("max_speed_mps", self.max_speed_mps)?;
+        c.sim.robot.max_turn_rate_radps = pos("max_turn_rate_radps", self.max_turn_rate_radps)?;
+        c.sim.laser.fov_rad = check(
+            "laser_fov_deg",
+            self.laser_fov_deg,
+            self.laser_fov_deg > 0.0 && self.laser_fov_deg <= 360.0,
+            "degrees in (0, 360]",
+        )?
+        .to_radians();
+        c.sim.laser.max_range_m = pos("laser_range_m", self.laser_range_m)?;
+        if !(2..=10_000).contains(&self.laser_beams) {
+            return Err(SettingsError::OutOfRange {
+                field: "laser_beams",
+                value: self.laser_beams.to_string(),
+                expected: "an integer from 2 to 10000",
+            });
+        }
+        c.sim.laser.beams = self.laser_beams;
+        c.sim.laser.rate_hz = pos("laser_rate_hz", self.laser_rate_hz)?;
+        c.sim.laser.range_noise_sd_m = nonneg("laser_noise_sd_m", self.laser_noise_sd_m)?;
+        c.sim.odometry.max_translation_error =
+            nonneg("odometry_translation_error", self.odometry_translation_error)?;
+        c.sim.odometry.max_rotation_error = nonneg(
+            "odometry_rotation_error_deg_per_rad",
+            self.odometry_rotation_error_deg_per_rad,
+        )?
+        .to_radians();
+        c.sim.step_s = 1.0 / c.sim.laser.rate_hz;
+        c.localization = match self.localization.as_str() {
+            "slam" => Localization::Slam,
+            "odometry" => Localization::Odometry,
+            "ground-truth" => Localization::GroundTruth,
+            other => return Err(SettingsError::Localization(other.to_string())),
+        };
+        c.map_resolution_m = check(
+            "map_resolution_m",
+            self.map_resolution_m,
+            self.map_resolution_m >= 0.01 && self.map_resolution_m <= 0.5,
+            "metres in [0.01, 0.5]",
+        )?;
+        c.alpha = check("alpha", self.alpha, (0.0..=1.0).contains(&self.alpha), "a number in [0, 1]")?;
+        c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
+        c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
+        c.blacklist_radius_m = nonneg("blacklist_radius_m", self.blacklist_radius_m)?;
+        c.progress_timeout_s = pos("progress_timeout_s", self.progress_timeout_s)?;
+        c.time_limit_s = pos("time_limit_s", self.time_limit_s)?;
+        c.return_home = self.return_home;
+        Ok(c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_round_trip_to_the_core_defaults() {
+        let c = Settings::default().to_explore_config().unwrap();
+        let d = ExploreConfig::default();
+        assert_eq!(c.sim.robot, d.sim.robot);
+        assert_eq!(c.sim.laser.beams, d.sim.laser.beams);
+        assert!((c.sim.laser.fov_rad - d.sim.laser.fov_rad).abs() < 1e-12);
+        assert_eq!(c.localization, d.localization);
+        assert_eq!(c.alpha, d.alpha);
+    }
+
+    #[test]
+    fn bad_values_name_the_field() {
+        let s = Settings { alpha: 1.5, ..Settings::default() };
+        let e = s.to_explore_config().unwrap_err().to_string();
+        assert!(e.contains("settings.alpha") && e.contains("[0, 1]"), "{e}");
+        let s = Settings { localization: "gps".into(), ..Settings::default() };
+        assert!(s.to_explore_config().unwrap_err().to_string().contains("gps"));
+        let s = Settings { robot_radius_m: f64::NAN, ..Settings::default() };
+        assert!(s.to_explore_config().is_err());
+    }
+
+    #[test]
+    fn unknown_keys_are_rejected() {
+        let e = serde_json::from_str::<Settings>(r#"{"alpah": 0.3}"#).unwrap_err().to_string();
+        assert!(e.contains("alpah"), "{e}");
+    }
+}
