@@ -27,6 +27,26 @@ fn time_ms(grid: &OccupancyGrid, config: &LayoutConfig, runs: usize) -> (Layout,
     (layout, times)
 }
 
+/// A colour per room id: hues spread by the golden ratio, so that neighbours differ.
+fn room_colour(id: u32) -> [u8; 3] {
+    let h = (id as f64 * 0.618_033_988_75).fract() * 6.0;
+    let (s, v) = (0.65, if id % 2 == 0 { 0.95 } else { 0.75 });
+    let c = v * s;
+    let x = c * (1.0 - ((h % 2.0) - 1.0).abs());
+    let (r, g, b) = match h as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = v - c;
+    [r, g, b].map(|k| ((k + m) * 255.0) as u8)
+}
+
+/// The map in grey (free white, occupied black, unknown grey); each room filled in its colour
+/// where observed and hatched where predicted; outlines blue (Full), orange (Partial), red (Open).
 fn draw(grid: &OccupancyGrid, layout: &Layout, path: &std::path::Path) {
     let f = grid.frame;
     let (w, h) = (f.width, f.height);
@@ -39,59 +59,64 @@ fn draw(grid: &OccupancyGrid, layout: &Layout, path: &std::path::Path) {
         };
         img.put_pixel(c.x as u32, h - 1 - c.y as u32, image::Rgb(v));
     }
-    let palette = [
-        [230, 25, 75],
-        [60, 180, 75],
-        [255, 225, 25],
-        [0, 130, 200],
-        [245, 130, 48],
-        [145, 30, 180],
-        [70, 240, 240],
-        [240, 50, 230],
-        [210, 245, 60],
-        [250, 190, 212],
-        [0, 128, 128],
-        [220, 190, 255],
-        [170, 110, 40],
-        [128, 0, 0],
-        [170, 255, 195],
-    ];
     for r in &layout.rooms {
-        let mut m = Bitmap::filled(f, false);
-        fill_polygon(&mut m, &r.polygon, true);
-        let col = palette[r.id as usize % palette.len()];
-        for (i, b) in m.data.iter().enumerate() {
-            if *b {
-                let c = f.cell_of_index(i);
-                let p = img.get_pixel_mut(c.x as u32, h - 1 - c.y as u32);
+        let mut all = Bitmap::filled(f, false);
+        fill_polygon(&mut all, &r.polygon, true);
+        let mut seen = Bitmap::filled(f, false);
+        fill_polygon(&mut seen, &r.observed_polygon, true);
+        let col = room_colour(r.id);
+        for (i, (a, o)) in all.data.iter().zip(&seen.data).enumerate() {
+            let c = f.cell_of_index(i);
+            let (px, py) = (c.x as u32, h - 1 - c.y as u32);
+            let hatch = (px + py) % 8 < 3;
+            if *o || (*a && hatch) {
+                let p = img.get_pixel_mut(px, py);
                 for (v, c) in p.0.iter_mut().zip(col) {
-                    *v = ((*v as u16 + c as u16) / 2) as u8;
+                    *v = ((*v as u16 + 2 * c as u16) / 3) as u8;
                 }
             }
         }
     }
-    let mut plot = |x: f64, y: f64, col: [u8; 3]| {
-        let c = f.cell_from_world(sim_core::Vec2::new(x, y));
-        if f.contains(c) {
-            img.put_pixel(c.x as u32, h - 1 - c.y as u32, image::Rgb(col));
-        }
-    };
     for r in &layout.rooms {
         let col = match r.label {
-            RoomLabel::Full => [0, 0, 255],
-            RoomLabel::Partial => [255, 0, 0],
-            RoomLabel::Open => [255, 0, 255],
+            RoomLabel::Full => [0, 0, 160],
+            RoomLabel::Partial => [255, 140, 0],
+            RoomLabel::Open => [230, 0, 0],
         };
+        let thick = if r.label == RoomLabel::Full { 0 } else { 1 };
         for e in r.polygon.edges() {
             let n = (e.length_m() / (f.resolution_m / 2.0)).ceil() as usize + 1;
             for k in 0..=n {
                 let p = e.a + (e.b - e.a) * (k as f64 / n as f64);
-                plot(p.x, p.y, col);
+                let c = f.cell_from_world(p);
+                for dy in -thick..=thick {
+                    for dx in -thick..=thick {
+                        let q = Cell::new(c.x + dx, c.y + dy);
+                        if f.contains(q) {
+                            img.put_pixel(q.x as u32, h - 1 - q.y as u32, image::Rgb(col));
+                        }
+                    }
+                }
             }
         }
     }
-    let _ = Cell::new(0, 0);
+    if let Some([x, y, cw, ch, k]) = crop() {
+        let sub = image::imageops::crop_imm(&img, x, y, cw, ch).to_image();
+        let big = image::imageops::resize(&sub, cw * k, ch * k, image::imageops::Nearest);
+        big.save(path.with_extension("crop.png")).unwrap();
+    }
     img.save(path).unwrap();
+}
+
+/// `--crop x,y,w,h,zoom`: also save an enlarged crop of each picture (pixels of the picture).
+fn crop() -> Option<[u32; 5]> {
+    let args: Vec<String> = std::env::args().collect();
+    let i = args.iter().position(|a| a == "--crop")?;
+    let v: Vec<u32> = args[i + 1]
+        .split(',')
+        .filter_map(|t| t.parse().ok())
+        .collect();
+    v.try_into().ok()
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -166,7 +191,15 @@ fn main() {
             );
         }
     };
+    let only = args
+        .iter()
+        .position(|a| a == "--only")
+        .map(|i| args[i + 1].clone());
+    let wanted = |name: &str| only.as_ref().is_none_or(|o| name.contains(o.as_str()));
     for yaml in common::all_maps() {
+        if !wanted(&yaml.to_string_lossy()) {
+            continue;
+        }
         let grid = common::load_map(&yaml);
         let name = format!(
             "{}/{}",

@@ -138,6 +138,7 @@ pub fn build(
     grid: &OccupancyGrid,
     bbox: (Cell, Cell),
     wall_lines: &[WallLine],
+    doors: &[Vec<(f64, f64)>],
     near_wall: &Bitmap,
     margin_m: f64,
     trim_m: f64,
@@ -184,7 +185,9 @@ pub fn build(
     // Families: (normal, sorted (offset, tag)).
     let mut families: Vec<(Vec2, Vec<(f64, u32)>)> = Vec::new();
     let corners = [min, Vec2::new(max.x, min.y), max, Vec2::new(min.x, max.y)];
-    for wl in wall_lines {
+    // Door gaps per arrangement line.
+    let mut line_doors: Vec<&[(f64, f64)]> = vec![&[]; 4];
+    for (li, wl) in wall_lines.iter().enumerate() {
         let n = wl.normal();
         let (lo, hi) = corners
             .iter()
@@ -196,6 +199,7 @@ pub fn build(
             continue;
         }
         let tag = lines.len() as u32;
+        line_doors.push(doors.get(li).map_or(&[], |d| d.as_slice()));
         lines.push(ArrLine {
             n,
             c: wl.offset_m,
@@ -370,7 +374,15 @@ pub fn build(
         let wall_fraction = if f1 == NO_FACE {
             1.0
         } else {
-            wall_coverage(near_wall, a, b, trim_m, diag)
+            wall_coverage(
+                near_wall,
+                a,
+                b,
+                lines[tag as usize].n,
+                line_doors[tag as usize],
+                trim_m,
+                diag,
+            )
         };
         edges.push(Edge {
             a,
@@ -391,11 +403,14 @@ pub fn build(
     }
 }
 
-/// Fraction of samples (one per cell length) along `a`-`b` that fall on `near_wall` cells.
+/// Fraction of samples (one per cell length) along `a`-`b` (on the line of normal `n`) that fall
+/// on `near_wall` cells or in one of the line's door gaps.
 fn wall_coverage(
     near_wall: &Bitmap,
     a: Vec2,
     b: Vec2,
+    n: Vec2,
+    doors: &[(f64, f64)],
     trim_m: f64,
     diag: &mut LayoutDiagnostics,
 ) -> f64 {
@@ -406,11 +421,15 @@ fn wall_coverage(
     let trim = (trim_m / len).min(0.5);
     let (a, b) = (a + (b - a) * trim, b - (b - a) * trim);
     let len = (b - a).norm();
+    let u = Vec2::new(n.y, -n.x);
     let n = ((len / f.resolution_m).ceil() as usize).max(1);
     let mut hits = 0;
     for k in 0..n {
         let p = a + (b - a) * ((k as f64 + 0.5) / n as f64);
-        if near_wall.get(f.cell_from_world(p)) == Some(&true) {
+        let t = u.dot(&p);
+        if near_wall.get(f.cell_from_world(p)) == Some(&true)
+            || doors.iter().any(|d| d.0 <= t && t <= d.1)
+        {
             hits += 1;
         }
     }
@@ -448,6 +467,7 @@ mod tests {
             &g,
             (Cell::new(0, 0), Cell::new(9, 9)),
             &lines,
+            &[],
             &near,
             0.0,
             0.0,
@@ -480,6 +500,7 @@ mod tests {
             &g,
             (Cell::new(0, 0), Cell::new(9, 9)),
             &lines,
+            &[],
             &near,
             0.0,
             0.0,

@@ -133,12 +133,20 @@ pub fn wall_evidence(grid: &OccupancyGrid, config: &LayoutConfig) -> WallEvidenc
 /// Occupied cells dilated by a square of half-side `radius` cells (separable, linear time).
 fn dilate_occupied(grid: &OccupancyGrid, radius: usize) -> Bitmap {
     let f = grid.frame;
-    let (w, h) = (f.width as usize, f.height as usize);
     let src: Vec<bool> = grid
         .data
         .iter()
         .map(|s| *s == Occupancy::Occupied)
         .collect();
+    Bitmap {
+        frame: f,
+        data: dilate(&src, f.width as usize, f.height as usize, radius),
+    }
+}
+
+/// A row-major `w` x `h` mask dilated by a square of half-side `radius` cells (cells outside the
+/// mask are false).
+fn dilate(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
     let mut rows = vec![false; w * h];
     let mut line = Vec::new();
     for y in 0..h {
@@ -171,10 +179,34 @@ fn dilate_occupied(grid: &OccupancyGrid, radius: usize) -> Bitmap {
             }
         }
     }
-    Bitmap {
-        frame: f,
-        data: out,
+    out
+}
+
+/// `grid` with its thin unknown regions (no square of side `max_thickness_m` fits in them)
+/// made occupied. Maps made by SLAM from floor plans draw walls as never-observed grey bands
+/// edged by sparse occupied cells: such a band is a wall, not a frontier, while the unknown
+/// space beyond a frontier is wide. Returns the number of cells changed.
+pub fn fill_thin_unknown(grid: &OccupancyGrid, max_thickness_m: f64) -> (OccupancyGrid, usize) {
+    let f = grid.frame;
+    let (w, h) = (f.width as usize, f.height as usize);
+    let mut out = grid.clone();
+    let r = ((max_thickness_m / f.resolution_m - 1.0) / 2.0).ceil();
+    if !(r >= 1.0) || w == 0 || h == 0 {
+        return (out, 0);
     }
+    let r = r as usize;
+    // Opening of the unknown cells: erode (dilate the complement), then dilate.
+    let known: Vec<bool> = grid.data.iter().map(|s| *s != Occupancy::Unknown).collect();
+    let eroded: Vec<bool> = dilate(&known, w, h, r).iter().map(|k| !k).collect();
+    let opened = dilate(&eroded, w, h, r);
+    let mut changed = 0;
+    for (s, o) in out.data.iter_mut().zip(&opened) {
+        if *s == Occupancy::Unknown && !o {
+            *s = Occupancy::Occupied;
+            changed += 1;
+        }
+    }
+    (out, changed)
 }
 
 /// `out[i]` is true when some `src[j]` with `|i - j| <= radius` is.

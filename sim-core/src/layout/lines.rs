@@ -8,6 +8,7 @@ use super::directions::angle_diff_mod_pi;
 use super::evidence::BoundaryCell;
 use super::{LayoutConfig, WallLine};
 use crate::geom::{Segment, Vec2};
+use crate::grid::{Occupancy, OccupancyGrid};
 
 /// Lines of every direction in `normals_rad` (boundary-normal orientations), weights normalised
 /// to the best supported line. Ordered by family, then offset.
@@ -17,7 +18,23 @@ pub fn wall_lines(
     resolution_m: f64,
     config: &LayoutConfig,
 ) -> Vec<WallLine> {
+    wall_lines_and_doors(cells, normals_rad, resolution_m, config).0
+}
+
+/// [`wall_lines`], and per line its door gaps: intervals of the line's coordinate along its
+/// direction (`u . p`, `u = (cos d, sin d)`) where the wall evidence lying on the line stops for
+/// at most [`LayoutConfig::max_door_width_m`] between two runs of at least
+/// [`LayoutConfig::min_door_jamb_m`]. Only evidence parallel to the line counts, so a line
+/// extended across a corridor (whose walls are perpendicular to it) gets no gap there, while a
+/// door in a wall does: the wall continues on both sides of it.
+pub fn wall_lines_and_doors(
+    cells: &[BoundaryCell],
+    normals_rad: &[f64],
+    resolution_m: f64,
+    config: &LayoutConfig,
+) -> (Vec<WallLine>, Vec<Vec<(f64, f64)>>) {
     let mut out = Vec::new();
+    let mut doors = Vec::new();
     for (family, &phi) in normals_rad.iter().enumerate() {
         let direction_rad = (phi - PI / 2.0).rem_euclid(PI);
         let n = Vec2::new(-direction_rad.sin(), direction_rad.cos());
@@ -118,17 +135,18 @@ pub fn wall_lines(
         for (offset_m, support_m) in peaks {
             // Extent along the line of the cells that support it.
             let tol = config.min_line_separation_m / 2.0 + bin_m;
-            let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
-            for (p, o) in pts.iter().zip(&offs) {
-                if (o - offset_m).abs() <= tol {
-                    let t = u.dot(p);
-                    t0 = t0.min(t);
-                    t1 = t1.max(t);
-                }
-            }
-            if !t0.is_finite() {
+            let mut ts: Vec<f64> = pts
+                .iter()
+                .zip(&offs)
+                .filter(|(_, o)| (*o - offset_m).abs() <= tol)
+                .map(|(p, _)| u.dot(p))
+                .collect();
+            if ts.is_empty() {
                 continue;
             }
+            ts.sort_by(f64::total_cmp);
+            let (t0, t1) = (ts[0], ts[ts.len() - 1]);
+            doors.push(door_gaps(&ts, resolution_m, config));
             let foot = n * offset_m;
             out.push(WallLine {
                 direction_rad,
@@ -146,7 +164,60 @@ pub fn wall_lines(
             l.weight = l.support_m / max;
         }
     }
-    out
+    (out, doors)
+}
+
+/// Door gaps along a line from the sorted coordinates `ts` of its evidence cells: runs of
+/// evidence (holes up to a quarter metre are noise) and the short holes between two long runs.
+pub fn door_gaps(ts: &[f64], resolution_m: f64, config: &LayoutConfig) -> Vec<(f64, f64)> {
+    let join_m = (2.5 * resolution_m).max(0.25);
+    let mut runs: Vec<(f64, f64)> = Vec::new();
+    for &t in ts {
+        match runs.last_mut() {
+            Some(r) if t - r.1 <= join_m => r.1 = t,
+            _ => runs.push((t, t)),
+        }
+    }
+    let long = |r: &(f64, f64)| r.1 - r.0 + resolution_m >= config.min_door_jamb_m;
+    runs.windows(2)
+        .filter(|w| {
+            let gap = w[1].0 - w[0].1;
+            gap <= config.max_door_width_m + resolution_m && long(&w[0]) && long(&w[1])
+        })
+        .map(|w| (w[0].1, w[1].0))
+        .collect()
+}
+
+/// Drops the door gaps that are corridor crossings rather than doors: a line extended across a
+/// corridor meets the corridor's walls at the ends of the gap, and those walls run across the
+/// line (along its normal) for a metre or more, while a door's jambs are only a wall thick.
+pub fn drop_crossings(grid: &OccupancyGrid, lines: &[WallLine], doors: &mut [Vec<(f64, f64)>]) {
+    let res = grid.frame.resolution_m;
+    let steps = (1.0 / res).round().max(1.0) as i32;
+    for (line, gaps) in lines.iter().zip(doors.iter_mut()) {
+        let n = line.normal();
+        let u = Vec2::new(n.y, -n.x);
+        let foot = n * line.offset_m;
+        // Fraction of occupied cells on the normal segment of +-1 m at `t` along the line.
+        let across = |t: f64| {
+            let c = foot + u * t;
+            let occ = (-steps..=steps)
+                .filter(|k| {
+                    let p = c + n * (*k as f64 * res);
+                    grid.get(grid.frame.cell_from_world(p)) == Some(&Occupancy::Occupied)
+                })
+                .count();
+            occ as f64 / (2 * steps + 1) as f64
+        };
+        gaps.retain(|&(t0, t1)| {
+            let inside = (0.4f64).min((t1 - t0) / 2.0);
+            let k = ((inside / res).ceil() as usize).max(1);
+            !(0..=k).any(|i| {
+                let d = i as f64 * res;
+                across(t0 + d) >= 0.6 || across(t1 - d) >= 0.6
+            })
+        });
+    }
 }
 
 #[cfg(test)]

@@ -96,6 +96,8 @@ impl WallLine {
 /// Counts of what each stage did (no timing: the core has no clock).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct LayoutDiagnostics {
+    /// Unknown cells in thin bands, taken as wall.
+    pub thin_unknown_cells: usize,
     pub known_cells: usize,
     pub boundary_cells: usize,
     pub directions: usize,
@@ -175,6 +177,14 @@ pub struct LayoutConfig {
     pub phi_lines_weight: f64,
     /// Rooms smaller than this are dropped. Default 1.0 m2.
     pub min_room_area_m2: f64,
+    /// A hole in the evidence along a wall line at most this long, between two runs of wall on
+    /// the line, is a door: the edge across it separates rooms. Default 2.2 m.
+    pub max_door_width_m: f64,
+    /// The wall on each side of a door must run at least this far along the line. Default 0.4 m.
+    pub min_door_jamb_m: f64,
+    /// Unknown regions thinner than this are walls (see [`evidence::fill_thin_unknown`]); 0
+    /// turns it off. Default 0.6 m.
+    pub thin_unknown_wall_m: f64,
 }
 
 impl Default for LayoutConfig {
@@ -198,6 +208,9 @@ impl Default for LayoutConfig {
             phi_concavity_weight: 10.0,
             phi_lines_weight: 5.0,
             min_room_area_m2: 1.0,
+            max_door_width_m: 2.2,
+            min_door_jamb_m: 0.4,
+            thin_unknown_wall_m: 0.6,
         }
     }
 }
@@ -210,6 +223,9 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
     if grid.frame.is_empty() || !(res.is_finite() && res > 0.0) {
         return Layout::default();
     }
+    let (filled, thin_cells) = evidence::fill_thin_unknown(grid, config.thin_unknown_wall_m);
+    diag.thin_unknown_cells = thin_cells;
+    let grid = &filled;
     let evidence = evidence::wall_evidence(grid, config);
     diag.known_cells = evidence.known_cells;
     diag.boundary_cells = evidence.cells.len();
@@ -220,7 +236,8 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
         };
     };
     let dirs = directions::dominant_directions(&evidence.cells, res, config, &mut diag);
-    let lines = lines::wall_lines(&evidence.cells, &dirs, res, config);
+    let (lines, mut doors) = lines::wall_lines_and_doors(&evidence.cells, &dirs, res, config);
+    lines::drop_crossings(grid, &lines, &mut doors);
     diag.lines = lines.len();
     let trim_m = config.wall_tolerance_m + res;
     let margin_m = config.min_line_separation_m;
@@ -228,6 +245,7 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
         grid,
         bbox,
         &lines,
+        &doors,
         &evidence.near_wall,
         margin_m,
         trim_m,
