@@ -9,8 +9,9 @@ mod common;
 use std::time::Instant;
 
 use sim_core::building::fill_polygon;
+use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 use sim_core::layout::synthetic::{
-    corridor_building, corridor_views, observe, rasterise, BuildingSpec,
+    complete_map, corridor_building, corridor_views, explored_map, observe, rasterise, BuildingSpec,
 };
 use sim_core::layout::{evaluate, reconstruct_layout, Layout, LayoutConfig, RoomLabel};
 use sim_core::{Bitmap, Cell, Occupancy, OccupancyGrid};
@@ -246,6 +247,82 @@ fn main() {
             ));
         }
     }
+    // Generated schools and offices, 1000-3500 m2, complete and explored 30-90 %.
+    let mut classes: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut push = |class: String, t: f64| match classes.iter_mut().find(|c| c.0 == class) {
+        Some(c) => c.1.push(t),
+        None => classes.push((class, vec![t])),
+    };
+    let (mut iou_complete, mut iou_pred, mut iou_obs) = (Vec::new(), Vec::new(), Vec::new());
+    for seed in 0..4u64 {
+        for kind in [BuildingKind::School, BuildingKind::Office] {
+            let area_m2 = [1000.0, 2000.0, 3500.0, 1500.0][seed as usize];
+            let rotation_rad = [0.0, 0.35, std::f64::consts::FRAC_PI_4, 0.0][seed as usize];
+            let b = generate(&GenerateConfig {
+                seed,
+                area_m2,
+                kind,
+                rotation_rad,
+                ..GenerateConfig::default()
+            });
+            let full = complete_map(&b, 0.05);
+            for fraction in [0.3, 0.6, 0.9, 1.1] {
+                let grid = if fraction > 1.0 {
+                    full.clone()
+                } else {
+                    explored_map(&b, &full, fraction, 0.4, seed)
+                };
+                if !wanted(&format!("generated {kind:?}")) {
+                    continue;
+                }
+                let (layout, times) = time_ms(&grid, &config, runs);
+                let name =
+                    format!("gen/{kind:?}{seed}_{area_m2}_rot{rotation_rad:.2}_seen{fraction:.1}");
+                report(&name, &grid, &layout, &times);
+                let class = if fraction > 1.0 {
+                    "complete"
+                } else {
+                    "partial"
+                };
+                for t in &times {
+                    push(format!("generated {class}"), *t);
+                }
+                let a = evaluate(&layout, &b.rooms, grid.frame);
+                if fraction > 1.0 {
+                    iou_complete.push(a.matched_room_iou);
+                } else if let (Some(p), Some(o)) = (a.predicted_iou, a.observed_only_iou) {
+                    iou_pred.push(p);
+                    iou_obs.push(o);
+                }
+                acc_lines.push(format!(
+                    "{name:<44} iou {:.3} rooms {}/{} partial {} predicted_iou {} observed_only_iou {}",
+                    a.matched_room_iou,
+                    a.rooms_found,
+                    a.rooms_true,
+                    a.partial_rooms,
+                    a.predicted_iou.map_or("-".into(), |v| format!("{v:.3}")),
+                    a.observed_only_iou.map_or("-".into(), |v| format!("{v:.3}")),
+                ));
+            }
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    println!();
+    for (class, mut t) in classes {
+        let max = t.iter().cloned().fold(0.0, f64::max);
+        println!(
+            "{class:<24} median {:.1} ms max {:.1} ms ({} runs)",
+            median(&mut t),
+            max,
+            t.len()
+        );
+    }
+    println!(
+        "generated: complete matched IoU {:.3}; partial rooms IoU predicted {:.3} vs observed only {:.3}",
+        mean(&iou_complete),
+        mean(&iou_pred),
+        mean(&iou_obs)
+    );
     println!();
     for l in acc_lines {
         println!("{l}");

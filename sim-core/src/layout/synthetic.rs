@@ -166,3 +166,154 @@ pub fn corridor_views(spec: &BuildingSpec, fraction: f64) -> Vec<Vec2> {
     }
     out
 }
+
+/// The complete map of a generated building at `resolution_m`: free where
+/// [`Building::free_mask`] is, occupied elsewhere in the building's bounding box, unknown in a
+/// 1 m margin around it.
+pub fn complete_map(b: &Building, resolution_m: f64) -> OccupancyGrid {
+    let bounds = b.bounds();
+    let frame = GridFrame::covering(&bounds, resolution_m, 1.0);
+    let free = b.free_mask(frame);
+    OccupancyGrid {
+        frame,
+        data: free
+            .data
+            .iter()
+            .enumerate()
+            .map(|(i, f)| {
+                if *f {
+                    Occupancy::Free
+                } else if bounds.contains(frame.world_from_cell(frame.cell_of_index(i))) {
+                    Occupancy::Occupied
+                } else {
+                    Occupancy::Unknown
+                }
+            })
+            .collect(),
+    }
+}
+
+/// Marks what a laser at `p` looking along `heading_rad` with field of view `fov_rad` and range
+/// `range_m` sees of the complete map `full` (rays stop at the first occupied cell).
+pub fn scan_into(
+    full: &OccupancyGrid,
+    out: &mut OccupancyGrid,
+    p: Vec2,
+    heading_rad: f64,
+    fov_rad: f64,
+    range_m: f64,
+) {
+    let f = full.frame;
+    let step = f.resolution_m / 2.0;
+    let rays = ((fov_rad / (0.25f64).to_radians()).ceil() as usize).max(1);
+    for k in 0..=rays {
+        let a = heading_rad - fov_rad / 2.0 + fov_rad * k as f64 / rays as f64;
+        let d = Vec2::new(a.cos(), a.sin());
+        let mut r = 0.0;
+        while r <= range_m {
+            let c = f.cell_from_world(p + d * r);
+            match full.get(c) {
+                Some(Occupancy::Free) => out.set(c, Occupancy::Free),
+                Some(Occupancy::Occupied) => {
+                    out.set(c, Occupancy::Occupied);
+                    break;
+                }
+                _ => break,
+            }
+            r += step;
+        }
+    }
+}
+
+/// A partial map of `b` as an exploring robot would make it: it walks from the start room
+/// through the doors (depth first, corridors before rooms, entering a room with probability
+/// `enter_probability`), and scans every metre with a 6 m laser of 180 to 360 degrees (drawn
+/// per scan) until `fraction` of the free cells of `full` are known. Deterministic in `seed`.
+pub fn explored_map(
+    b: &Building,
+    full: &OccupancyGrid,
+    fraction: f64,
+    enter_probability: f64,
+    seed: u64,
+) -> OccupancyGrid {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut out = OccupancyGrid::filled(full.frame, Occupancy::Unknown);
+    let total_free = full.count(Occupancy::Free).max(1);
+    let centroid = |p: &Polygon| {
+        let n = p.vertices.len().max(1) as f64;
+        p.vertices.iter().fold(Vec2::zeros(), |a, v| a + v) / n
+    };
+    let is_corridor = |id: u32| b.rooms.iter().any(|r| r.id == id && r.kind == "corridor");
+    // Start: the room holding the start pose, else the first corridor, else the first room.
+    let start_room = b
+        .start
+        .as_ref()
+        .and_then(|s| {
+            b.rooms
+                .iter()
+                .find(|r| r.polygon.contains(s.position()))
+                .map(|r| r.id)
+        })
+        .or_else(|| b.rooms.iter().find(|r| r.kind == "corridor").map(|r| r.id))
+        .or_else(|| b.rooms.first().map(|r| r.id));
+    let Some(start_room) = start_room else {
+        return out;
+    };
+    let mut pos = centroid(&b.rooms.iter().find(|r| r.id == start_room).unwrap().polygon);
+    let mut visited = vec![start_room];
+    let mut stack = vec![start_room];
+    let walk =
+        |pos: &mut Vec2, to: Vec2, out: &mut OccupancyGrid, rng: &mut rand_chacha::ChaCha8Rng| {
+            let d = to - *pos;
+            let len = d.norm();
+            let heading = d.y.atan2(d.x);
+            let steps = len.ceil().max(1.0) as usize;
+            for k in 1..=steps {
+                let p = *pos + d * (k as f64 / steps as f64);
+                let fov = rng.random_range(std::f64::consts::PI..=std::f64::consts::TAU);
+                scan_into(full, out, p, heading, fov, 6.0);
+            }
+            *pos = to;
+        };
+    walk(&mut pos.clone(), pos, &mut out, &mut rng);
+    while let Some(&here) = stack.last() {
+        if out.count(Occupancy::Free) as f64 >= fraction * total_free as f64 {
+            break;
+        }
+        // Doors of this room to unvisited rooms, corridors first.
+        let mut next: Vec<(bool, u32, Vec2)> = b
+            .doors
+            .iter()
+            .filter_map(|d| {
+                let [r0, r1] = d.rooms;
+                let other = match (r0, r1) {
+                    (Some(a), Some(o)) if a == here => o,
+                    (Some(o), Some(a)) if a == here => o,
+                    _ => return None,
+                };
+                (!visited.contains(&other)).then(|| (!is_corridor(other), other, (d.a + d.b) / 2.0))
+            })
+            .collect();
+        next.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.cmp(&b.1)));
+        let Some(&(is_room, to, door)) = next.first() else {
+            stack.pop();
+            if let Some(&back) = stack.last() {
+                let c = centroid(&b.rooms.iter().find(|r| r.id == back).unwrap().polygon);
+                walk(&mut pos, c, &mut out, &mut rng);
+            }
+            continue;
+        };
+        visited.push(to);
+        if is_room && !rng.random_bool(enter_probability.clamp(0.0, 1.0)) {
+            // Look through the door from the corridor side only.
+            walk(&mut pos, door, &mut out, &mut rng);
+            continue;
+        }
+        walk(&mut pos, door, &mut out, &mut rng);
+        let c = centroid(&b.rooms.iter().find(|r| r.id == to).unwrap().polygon);
+        walk(&mut pos, c, &mut out, &mut rng);
+        stack.push(to);
+    }
+    out
+}
