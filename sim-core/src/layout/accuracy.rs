@@ -85,10 +85,54 @@ fn iou(inter: usize, a: usize, b: usize) -> f64 {
 
 /// Scores `layout` against `truth` on `frame`.
 pub fn evaluate(layout: &Layout, truth: &[Room], frame: GridFrame) -> Accuracy {
-    let t_lab = rasterise(frame, truth.iter().map(|r| &r.polygon));
+    evaluate_merged(layout, truth, &[], frame)
+}
+
+/// [`evaluate`] with some true rooms scored as one: every pair `(i, j)` of indices into `truth`
+/// in `merge` joins two rooms (for example the straight pieces of one corridor, which a
+/// generator splits where corridors meet without a wall).
+pub fn evaluate_merged(
+    layout: &Layout,
+    truth: &[Room],
+    merge: &[(usize, usize)],
+    frame: GridFrame,
+) -> Accuracy {
+    let mut group: Vec<usize> = (0..truth.len()).collect();
+    fn root(g: &mut [usize], mut x: usize) -> usize {
+        while g[x] != x {
+            g[x] = g[g[x]];
+            x = g[x];
+        }
+        x
+    }
+    for &(a, b) in merge {
+        if a < truth.len() && b < truth.len() {
+            let (ra, rb) = (root(&mut group, a), root(&mut group, b));
+            group[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    // Dense group ids in index order.
+    let mut id = vec![usize::MAX; truth.len()];
+    let mut next = 0u32;
+    let mut dense = vec![0u32; truth.len()];
+    for i in 0..truth.len() {
+        let r = root(&mut group, i);
+        if id[r] == usize::MAX {
+            id[r] = next as usize;
+            next += 1;
+        }
+        dense[i] = id[r] as u32;
+    }
+    let mut t_lab = rasterise(frame, truth.iter().map(|r| &r.polygon));
+    for l in &mut t_lab {
+        if *l != NONE {
+            *l = dense[*l as usize];
+        }
+    }
+    let truth_groups = next as usize;
     let l_lab = rasterise(frame, layout.rooms.iter().map(|r| &r.polygon));
     let o_lab = rasterise(frame, layout.rooms.iter().map(|r| &r.observed_polygon));
-    let nt = truth.len();
+    let nt = truth_groups;
     let nl = layout.rooms.len();
     let t_n = counts(&t_lab, nt);
     let l_n = counts(&l_lab, nl);

@@ -317,3 +317,17 @@ pub fn explored_map(
     }
     out
 }
+
+/// Pairs of indices of corridor rooms of `b` joined by a door: the pieces of one corridor.
+pub fn corridor_pieces(b: &Building) -> Vec<(usize, usize)> {
+    let index = |id: Option<u32>| {
+        let id = id?;
+        b.rooms
+            .iter()
+            .position(|r| r.id == id && r.kind == "corridor")
+    };
+    b.doors
+        .iter()
+        .filter_map(|d| Some((index(d.rooms[0])?, index(d.rooms[1])?)))
+        .collect()
+}
