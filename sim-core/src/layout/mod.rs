@@ -253,6 +253,7 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
     );
     let mut plan = rooms::group_rooms(grid, &arr, config, &mut diag);
     predict::predict_rooms(&arr, &mut plan, config, &mut diag);
+    rooms::adopt_leftovers(grid, &arr, &mut plan, config);
     let rooms = rooms::room_polygons(grid, &arr, &plan, config, &mut diag);
     Layout {
         rooms,

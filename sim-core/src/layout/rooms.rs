@@ -121,6 +121,7 @@ pub fn group_rooms(
         .map(|(f, &fr)| {
             !f.vertices.is_empty()
                 && f.cells > 0
+                && (f.unknown as f64) < config.min_unknown_fraction_candidate * f.cells as f64
                 && (f.free as f64 >= config.min_free_fraction * f.cells as f64
                     || (fr as usize >= min_cells && f.free as f64 * cell_m2 >= 0.25))
         })
@@ -336,4 +337,57 @@ pub fn room_polygons(
         });
     }
     out
+}
+
+/// Faces left out of every room after prediction that still hold observed free space (mostly
+/// unknown faces seen through a door, say) become rooms of their own, joined across open edges;
+/// they are partial.
+pub fn adopt_leftovers(
+    grid: &OccupancyGrid,
+    arr: &Arrangement,
+    plan: &mut RoomPlan,
+    config: &LayoutConfig,
+) {
+    let cell_m2 = grid.frame.cell_area_m2();
+    let nf = arr.faces.len();
+    let left: Vec<bool> = (0..nf)
+        .map(|i| {
+            let f = &arr.faces[i];
+            plan.face_room[i] == NO_ROOM
+                && !f.vertices.is_empty()
+                && f.free as f64 * cell_m2 >= 0.5
+                && f.free as f64 >= 0.1 * f.cells as f64
+        })
+        .collect();
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
+    for e in &arr.edges {
+        let [a, b] = e.faces;
+        if b == NO_FACE || e.wall_fraction >= config.wall_edge_threshold {
+            continue;
+        }
+        if !left[a as usize] || !left[b as usize] {
+            continue;
+        }
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        if ra != rb {
+            let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+            parent[hi as usize] = lo;
+        }
+    }
+    let mut root_room: BTreeMap<u32, u32> = BTreeMap::new();
+    for fi in 0..nf as u32 {
+        if !left[fi as usize] {
+            continue;
+        }
+        let r = find(&mut parent, fi);
+        let id = *root_room.entry(r).or_insert_with(|| {
+            plan.rooms.push(PlanRoom {
+                partial: true,
+                ..PlanRoom::default()
+            });
+            (plan.rooms.len() - 1) as u32
+        });
+        plan.rooms[id as usize].faces.push(fi);
+        plan.face_room[fi as usize] = id;
+    }
 }
