@@ -31,7 +31,7 @@ fn time_ms(grid: &OccupancyGrid, config: &LayoutConfig, runs: usize) -> (Layout,
 /// A colour per room id: hues spread by the golden ratio, so that neighbours differ.
 fn room_colour(id: u32) -> [u8; 3] {
     let h = (id as f64 * 0.618_033_988_75).fract() * 6.0;
-    let (s, v) = (0.65, if id % 2 == 0 { 0.95 } else { 0.75 });
+    let (s, v) = (0.65, if id.is_multiple_of(2) { 0.95 } else { 0.75 });
     let c = v * s;
     let x = c * (1.0 - ((h % 2.0) - 1.0).abs());
     let (r, g, b) = match h as u32 {

@@ -115,13 +115,13 @@ pub fn evaluate_merged(
     let mut id = vec![usize::MAX; truth.len()];
     let mut next = 0u32;
     let mut dense = vec![0u32; truth.len()];
-    for i in 0..truth.len() {
+    for (i, d) in dense.iter_mut().enumerate() {
         let r = root(&mut group, i);
         if id[r] == usize::MAX {
             id[r] = next as usize;
             next += 1;
         }
-        dense[i] = id[r] as u32;
+        *d = id[r] as u32;
     }
     let mut t_lab = rasterise(frame, truth.iter().map(|r| &r.polygon));
     for l in &mut t_lab {

@@ -133,7 +133,9 @@ fn clip(lines: &[ArrLine], poly: &[(u64, u32)], tag: u32, sign: f64) -> Vec<(u64
 }
 
 /// Builds the arrangement of `lines` in the inclusive cell box `bbox`, labels the cells of
-/// `grid`, and measures the wall evidence (`near_wall`) along every edge.
+/// `grid`, and measures the wall evidence (`near_wall`, plus the door gaps of each line in
+/// `doors`) along every edge.
+#[allow(clippy::too_many_arguments)]
 pub fn build(
     grid: &OccupancyGrid,
     bbox: (Cell, Cell),

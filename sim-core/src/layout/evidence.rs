@@ -191,7 +191,7 @@ pub fn fill_thin_unknown(grid: &OccupancyGrid, max_thickness_m: f64) -> (Occupan
     let (w, h) = (f.width as usize, f.height as usize);
     let mut out = grid.clone();
     let r = ((max_thickness_m / f.resolution_m - 1.0) / 2.0).ceil();
-    if !(r >= 1.0) || w == 0 || h == 0 {
+    if r.is_nan() || r < 1.0 || w == 0 || h == 0 {
         return (out, 0);
     }
     let r = r as usize;
