@@ -89,10 +89,7 @@ impl PathFollower {
             let dist_left = (goal - p).norm();
             (max_v * err.cos()).min(max_v * (dist_left / 0.5).clamp(0.3, 1.0))
         };
-        Command::Drive {
-            v_mps: v.max(0.0),
-            w_radps: w,
-        }
+        Command::Drive { v_mps: v.max(0.0), w_radps: w }
     }
 }
 
@@ -132,12 +129,7 @@ mod tests {
     #[test]
     fn turns_in_place_when_facing_away() {
         let mut f = PathFollower::new(vec![Vec2::new(0.0, 0.0), Vec2::new(-2.0, 0.0)]);
-        let c = f.command(
-            &Pose::new(0.0, 0.0, 0.0),
-            &FollowConfig::default(),
-            0.5,
-            1.0,
-        );
+        let c = f.command(&Pose::new(0.0, 0.0, 0.0), &FollowConfig::default(), 0.5, 1.0);
         match c {
             Command::Drive { v_mps, w_radps } => {
                 assert_eq!(v_mps, 0.0);

@@ -236,9 +236,10 @@ pub fn explore(
     let frame = GridFrame::covering(&building.bounds(), cfg.map_resolution_m, 1.0);
     let truth = building.reachable_free(frame, start.position());
     let truth_cells = truth.count_true();
-    let cap_cells =
-        (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
-            .max(8);
+    let cap_cells = (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m)
+        .ceil() as u32
+        + 4)
+    .max(8);
     let sim = Simulator::new(building, start, &cfg.sim, seed);
     let ex = Explorer {
         cfg,
@@ -353,11 +354,7 @@ impl Explorer<'_> {
             let row = y as usize * f.width as usize;
             let occ = &self.map.occupancy.data[row + x0..=row + x1];
             let tru = &self.truth.data[row + x0..=row + x1];
-            n += occ
-                .iter()
-                .zip(tru)
-                .filter(|(s, t)| **t && **s == Occupancy::Free)
-                .count();
+            n += occ.iter().zip(tru).filter(|(s, t)| **t && **s == Occupancy::Free).count();
         }
         n
     }
@@ -450,11 +447,7 @@ impl Explorer<'_> {
         // going there again: blacklist it.
         if let Some(p) = self.last_reached.take() {
             let again = self.goal.as_ref().is_some_and(|g| {
-                g.frontier
-                    .iter()
-                    .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
-                    .count()
-                    * 2
+                g.frontier.iter().filter(|c| is_frontier_cell(&self.map.occupancy, **c)).count() * 2
                     > g.frontier.len()
             });
             if again {
@@ -496,25 +489,18 @@ impl Explorer<'_> {
                 0.0
             };
             goals.push(goal_cell);
-            scores.push(CandidateScore {
-                distance_m,
-                gain_m2,
-            });
+            scores.push(CandidateScore { distance_m, gain_m2 });
         }
         let Some(best) = best_candidate(&scores, cfg.alpha) else {
             // Frontiers exist but none is reachable: blacklist them all so the run can end.
             for f in &frontiers {
-                self.blacklist
-                    .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
+                self.blacklist.add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
             }
             return false;
         };
         let goal_cell = goals[best].expect("best candidate is reachable");
         let Some(path) = field.path_to(goal_cell) else {
-            self.blacklist.add(
-                frame.world_from_cell(frontiers[best].candidate),
-                cfg.blacklist_radius_m,
-            );
+            self.blacklist.add(frame.world_from_cell(frontiers[best].candidate), cfg.blacklist_radius_m);
             return true;
         };
         let wps = waypoints(&path, &trav);
@@ -548,10 +534,8 @@ impl Explorer<'_> {
         if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
             let to = goal.look_at - self.estimate.position();
             let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
-            let w = (cfg.follow.heading_gain * err).clamp(
-                -cfg.sim.robot.max_turn_rate_radps,
-                cfg.sim.robot.max_turn_rate_radps,
-            );
+            let w = (cfg.follow.heading_gain * err)
+                .clamp(-cfg.sim.robot.max_turn_rate_radps, cfg.sim.robot.max_turn_rate_radps);
             self.sim.step(0.0, w);
             return;
         }
@@ -648,10 +632,7 @@ fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
 }
 
 fn is_frontier_cell(grid: &OccupancyGrid, c: Cell) -> bool {
-    grid.is(c, Occupancy::Free)
-        && c.neighbours4()
-            .iter()
-            .any(|n| grid.is(*n, Occupancy::Unknown))
+    grid.is(c, Occupancy::Free) && c.neighbours4().iter().any(|n| grid.is(*n, Occupancy::Unknown))
 }
 
 fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {
@@ -677,10 +658,7 @@ fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {
         }
     }
     let ratio = |a: usize, b: usize| if b == 0 { 1.0 } else { a as f64 / b as f64 };
-    MapQuality {
-        free_precision: ratio(free_ok, free),
-        occupied_precision: ratio(occ_ok, occ),
-    }
+    MapQuality { free_precision: ratio(free_ok, free), occupied_precision: ratio(occ_ok, occ) }
 }
 
 #[cfg(test)]

@@ -42,10 +42,7 @@ pub(crate) fn corridor_building(n: usize) -> Building {
 
 fn run(localization: Localization, seed: u64) -> RunResult {
     let b = corridor_building(4);
-    let cfg = ExploreConfig {
-        localization,
-        ..ExploreConfig::default()
-    };
+    let cfg = ExploreConfig { localization, ..ExploreConfig::default() };
     explore(&b, b.start.unwrap(), &cfg, seed, &mut |_| {})
 }
 
@@ -54,23 +51,12 @@ fn explores_a_corridor_building_completely() {
     for loc in [Localization::GroundTruth, Localization::Slam] {
         let r = run(loc, 1);
         assert_eq!(r.end_reason, EndReason::NoFrontiers, "{loc:?}");
-        assert!(
-            r.explored_fraction >= 0.97,
-            "{loc:?}: explored {}",
-            r.explored_fraction
-        );
-        assert!(
-            r.map_quality.occupied_precision > 0.9,
-            "{loc:?}: {:?}",
-            r.map_quality
-        );
+        assert!(r.explored_fraction >= 0.97, "{loc:?}: explored {}", r.explored_fraction);
+        assert!(r.map_quality.occupied_precision > 0.9, "{loc:?}: {:?}", r.map_quality);
         assert!(r.decisions.len() >= 3);
         // The curve is monotone in time and ends at the final state.
         assert!(r.progress.windows(2).all(|w| w[0].time_s <= w[1].time_s));
-        assert_eq!(
-            r.progress.last().unwrap().explored_area_m2,
-            r.explored_area_m2
-        );
+        assert_eq!(r.progress.last().unwrap().explored_area_m2, r.explored_area_m2);
     }
 }
 
@@ -87,11 +73,7 @@ fn same_seed_same_run_and_seeds_differ() {
 #[ignore = "debug aid"]
 fn debug_decisions() {
     let b = corridor_building(2);
-    let cfg = ExploreConfig {
-        localization: Localization::GroundTruth,
-        time_limit_s: 20.0,
-        ..ExploreConfig::default()
-    };
+    let cfg = ExploreConfig { localization: Localization::GroundTruth, time_limit_s: 20.0, ..ExploreConfig::default() };
     let r = explore(&b, b.start.unwrap(), &cfg, 1, &mut |_| {});
     for d in r.decisions.iter().take(5) {
         eprintln!("{d:?}");
