@@ -13,6 +13,7 @@ pub mod gain;
 pub mod generate;
 pub mod geom;
 pub mod grid;
+pub mod layout;
 pub mod mapping;
 pub mod plan;
 pub mod scan;

@@ -1,0 +1,184 @@
+//! Dominant wall directions: the angles at which the boundary cells' offsets along the normal are
+//! most concentrated (walls are straight, so the right angle stacks a wall's cells into few offset
+//! bins).
+
+use std::f64::consts::PI;
+
+use super::evidence::BoundaryCell;
+use super::{LayoutConfig, LayoutDiagnostics};
+use crate::geom::Vec2;
+
+const BINS: usize = 180;
+
+/// Angular distance modulo pi.
+pub fn angle_diff_mod_pi(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(PI);
+    d.min(PI - d)
+}
+
+/// Sharpness of the offsets of `pts` along the normal at angle `t`: the sum of squared counts of
+/// a linearly binned histogram (a straight wall at that angle stacks its cells into one bin).
+fn sharpness(pts: &[Vec2], t: f64, bin_m: f64, hist: &mut Vec<f64>) -> f64 {
+    let (s, c) = t.sin_cos();
+    let (lo, hi) = pts
+        .iter()
+        .map(|p| (p.x * c + p.y * s) / bin_m)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), o| {
+            (l.min(o), h.max(o))
+        });
+    if !lo.is_finite() {
+        return 0.0;
+    }
+    let n = (hi - lo) as usize + 3;
+    hist.clear();
+    hist.resize(n, 0.0);
+    // Linear binning: the score does not jump when a wall crosses a bin boundary.
+    for p in pts {
+        let x = (p.x * c + p.y * s) / bin_m - lo;
+        let b = x as usize;
+        let fr = x - b as f64;
+        hist[b] += 1.0 - fr;
+        hist[b + 1] += fr;
+    }
+    hist.iter().map(|v| v * v).sum()
+}
+
+/// The dominant boundary-normal orientations in `[0, pi)`, strongest first: peaks of the
+/// sharpness of all boundary cells' offsets over angles (a Radon-like scan, robust to the
+/// staircases of rotated walls, unlike local gradients), each refined to 0.05 degree.
+pub fn dominant_directions(
+    cells: &[BoundaryCell],
+    resolution_m: f64,
+    config: &LayoutConfig,
+    diag: &mut LayoutDiagnostics,
+) -> Vec<f64> {
+    if cells.len() < 8 {
+        return Vec::new();
+    }
+    // Coarse scan on at most ~8000 cells, bins of two cells, 1 degree steps.
+    let stride = (cells.len() / 8000).max(1);
+    let pts: Vec<Vec2> = cells.iter().step_by(stride).map(|c| c.p).collect();
+    let mut hist = Vec::new();
+    let score: Vec<f64> = (0..BINS)
+        .map(|b| {
+            diag.direction_refine_steps += 1;
+            sharpness(
+                &pts,
+                b as f64 * PI / BINS as f64,
+                2.0 * resolution_m,
+                &mut hist,
+            )
+        })
+        .collect();
+    let mut sorted = score.clone();
+    sorted.sort_by(f64::total_cmp);
+    let base = sorted[0];
+    let max = sorted[BINS - 1];
+    if max <= base {
+        return Vec::new();
+    }
+    let mut order: Vec<usize> = (0..BINS).collect();
+    order.sort_by(|&a, &b| score[b].total_cmp(&score[a]).then(a.cmp(&b)));
+    let mut peaks: Vec<f64> = Vec::new();
+    for b in order {
+        if peaks.len() >= config.max_directions
+            || ((score[b] - base) / (max - base)).sqrt() < config.min_direction_fraction
+        {
+            break;
+        }
+        let is_local_max =
+            score[b] >= score[(b + 1) % BINS] && score[b] >= score[(b + BINS - 1) % BINS];
+        let a = b as f64 * PI / BINS as f64;
+        if is_local_max
+            && peaks
+                .iter()
+                .all(|p| angle_diff_mod_pi(*p, a) >= config.min_direction_separation_rad)
+        {
+            peaks.push(a);
+        }
+    }
+    diag.directions = peaks.len();
+    let all: Vec<Vec2> = cells.iter().map(|c| c.p).collect();
+    peaks
+        .into_iter()
+        .map(|a| refine(&all, a, resolution_m, diag))
+        .collect()
+}
+
+/// The angle within one degree of `a` whose offset histogram is sharpest.
+fn refine(pts: &[Vec2], a: f64, resolution_m: f64, diag: &mut LayoutDiagnostics) -> f64 {
+    let mut hist: Vec<f64> = Vec::new();
+    let mut best = (f64::NEG_INFINITY, a);
+    let steps = 40;
+    let span = 1f64.to_radians();
+    for k in 0..=steps {
+        let t = a - span + 2.0 * span * k as f64 / steps as f64;
+        let score = sharpness(pts, t, resolution_m, &mut hist);
+        diag.direction_refine_steps += 1;
+        if score > best.0 {
+            best = (score, t);
+        }
+    }
+    best.1.rem_euclid(PI)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rotated_box_cells(theta: f64) -> Vec<BoundaryCell> {
+        // Points on the sides of a 10 x 6 m rectangle rotated by theta, every 5 cm.
+        let (s, c) = theta.sin_cos();
+        let rot = |x: f64, y: f64| Vec2::new(c * x - s * y, s * x + c * y);
+        let mut out = Vec::new();
+        for i in 0..200 {
+            let t = i as f64 * 0.05;
+            for (p, n) in [
+                (rot(t, 0.0), theta + PI / 2.0),
+                (rot(t, 6.0), theta + PI / 2.0),
+            ] {
+                out.push(BoundaryCell {
+                    p,
+                    normal_rad: n.rem_euclid(PI),
+                });
+            }
+        }
+        for i in 0..120 {
+            let t = i as f64 * 0.05;
+            for p in [rot(0.0, t), rot(10.0, t)] {
+                out.push(BoundaryCell {
+                    p,
+                    normal_rad: theta.rem_euclid(PI),
+                });
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn finds_two_rotated_directions() {
+        let theta = 0.7;
+        let dirs = dominant_directions(
+            &rotated_box_cells(theta),
+            0.05,
+            &LayoutConfig::default(),
+            &mut LayoutDiagnostics::default(),
+        );
+        assert_eq!(dirs.len(), 2, "{dirs:?}");
+        let mut got: Vec<f64> = dirs.iter().map(|d| angle_diff_mod_pi(*d, theta)).collect();
+        got.sort_by(f64::total_cmp);
+        assert!(got[0] < 0.2f64.to_radians(), "{got:?}");
+        assert!((got[1] - PI / 2.0).abs() < 0.2f64.to_radians(), "{got:?}");
+    }
+
+    #[test]
+    fn no_cells_no_directions() {
+        let d = dominant_directions(
+            &[],
+            0.05,
+            &LayoutConfig::default(),
+            &mut LayoutDiagnostics::default(),
+        );
+        assert!(d.is_empty());
+    }
+}
