@@ -24,7 +24,11 @@ fn poses(b: &Building, n: usize) -> Vec<Pose> {
             rng.random_range(bb.min.y..bb.max.y),
         );
         if b.is_free(p) {
-            out.push(Pose::new(p.x, p.y, rng.random_range(-std::f64::consts::PI..std::f64::consts::PI)));
+            out.push(Pose::new(
+                p.x,
+                p.y,
+                rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
+            ));
         }
     }
     out

@@ -46,7 +46,12 @@ pub fn run(a: RunArgs) -> Result<()> {
     let store = Store::open(&plan.results_dir)?;
     if a.summary {
         let results = store.all()?;
-        println!("{} of {} jobs stored in {}", stored_of_plan(&plan, &store)?, plan.jobs.len(), store.path().display());
+        println!(
+            "{} of {} jobs stored in {}",
+            stored_of_plan(&plan, &store)?,
+            plan.jobs.len(),
+            store.path().display()
+        );
         print!("{}", render_text(&table(&results, &plan.labels)));
         return Ok(());
     }
@@ -63,7 +68,11 @@ pub fn run(a: RunArgs) -> Result<()> {
     }
     let workers = a
         .workers
-        .unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))
+        .unwrap_or_else(|| {
+            std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1)
+        })
         .max(1);
     store.record_run(&provenance(
         &a.grid.display().to_string(),
@@ -130,10 +139,15 @@ fn stored_of_plan(plan: &Plan, store: &Store) -> Result<usize> {
 pub fn report(a: ReportArgs) -> Result<()> {
     let store = Store::open_existing(&a.results)?;
     let results = store.all()?;
-    println!("{} results in {}", results.len(), a.results.join(DB_FILE).display());
+    println!(
+        "{} results in {}",
+        results.len(),
+        a.results.join(DB_FILE).display()
+    );
     print!("{}", render_text(&table(&results, &[])));
     if let Some(csv) = &a.csv {
-        write_text(csv, &results_csv(&results)).with_context(|| format!("cannot export to {}", csv.display()))?;
+        write_text(csv, &results_csv(&results))
+            .with_context(|| format!("cannot export to {}", csv.display()))?;
         println!("wrote {}", csv.display());
     }
     Ok(())

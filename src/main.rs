@@ -2,6 +2,7 @@
 
 mod cmd_building;
 mod cmd_explore;
+mod cmd_layout;
 mod cmd_run;
 mod output;
 
@@ -28,6 +29,8 @@ enum Command {
     Building(cmd_building::BuildingCommand),
     /// Run one exploration and write its summary, curve, map and picture.
     Explore(cmd_explore::ExploreArgs),
+    /// Reconstruct the room layout of any occupancy map and predict partially seen rooms.
+    Layout(cmd_layout::LayoutArgs),
     /// Run an experiment grid (buildings x seeds x strategies) on this machine; resumable.
     Run(cmd_run::RunArgs),
     /// Print the table of a results directory and export it as CSV.
@@ -39,6 +42,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Building(c) => cmd_building::run(c),
         Command::Explore(a) => cmd_explore::run(a),
+        Command::Layout(a) => cmd_layout::run(a),
         Command::Run(a) => cmd_run::run(a),
         Command::Report(a) => cmd_run::report(a),
     };

@@ -6,11 +6,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use floorcast_worker::{Settings, FLOORCAST_VERSION, STRATEGIES, SUMMARY_VERSION};
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 use sim_core::Building;
-use floorcast_worker::{Settings, FLOORCAST_VERSION, STRATEGIES, SUMMARY_VERSION};
 
 pub const GRID_FORMAT: &str = "floorcast-grid";
 pub const GRID_VERSION: u32 = 1;
@@ -107,46 +107,87 @@ pub struct Plan {
 #[derive(Debug, thiserror::Error)]
 pub enum GridError {
     #[error("cannot read grid file {path}: {source}")]
-    Read { path: PathBuf, source: std::io::Error },
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: {message}")]
     Syntax { path: PathBuf, message: String },
     #[error("{path}: {field}: {problem}")]
-    Invalid { path: PathBuf, field: String, problem: String },
+    Invalid {
+        path: PathBuf,
+        field: String,
+        problem: String,
+    },
     #[error("{path}: {field}: {source}")]
-    Building { path: PathBuf, field: String, source: floorcast_formats::Error },
+    Building {
+        path: PathBuf,
+        field: String,
+        source: floorcast_formats::Error,
+    },
 }
 
 impl Plan {
     /// Reads, validates and expands a grid file. `results_override` replaces its `results`.
     pub fn load(path: &Path, results_override: Option<&Path>) -> Result<Plan, GridError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| GridError::Read { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| GridError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Self::parse(&text, path, results_override)
     }
 
-    pub fn parse(text: &str, path: &Path, results_override: Option<&Path>) -> Result<Plan, GridError> {
+    pub fn parse(
+        text: &str,
+        path: &Path,
+        results_override: Option<&Path>,
+    ) -> Result<Plan, GridError> {
         let invalid = |field: &str, problem: String| GridError::Invalid {
             path: path.to_path_buf(),
             field: field.to_string(),
             problem,
         };
         // Check the header first, so that a newer file says so instead of failing on a key.
-        let value: toml::Table = toml::from_str(text)
-            .map_err(|e| GridError::Syntax { path: path.to_path_buf(), message: one_line(&e.to_string()) })?;
-        match (value.get("format").and_then(|v| v.as_str()), value.get("version").and_then(|v| v.as_integer())) {
+        let value: toml::Table = toml::from_str(text).map_err(|e| GridError::Syntax {
+            path: path.to_path_buf(),
+            message: one_line(&e.to_string()),
+        })?;
+        match (
+            value.get("format").and_then(|v| v.as_str()),
+            value.get("version").and_then(|v| v.as_integer()),
+        ) {
             (Some(GRID_FORMAT), Some(v)) if v == GRID_VERSION as i64 => {}
             (Some(GRID_FORMAT), v) => {
-                return Err(invalid("version", format!("version {v:?} is not supported, expected {GRID_VERSION}")))
+                return Err(invalid(
+                    "version",
+                    format!("version {v:?} is not supported, expected {GRID_VERSION}"),
+                ))
             }
             (f, _) => {
-                return Err(invalid("format", format!("expected format = \"{GRID_FORMAT}\", found {f:?}")))
+                return Err(invalid(
+                    "format",
+                    format!("expected format = \"{GRID_FORMAT}\", found {f:?}"),
+                ))
             }
         }
-        let file: GridFile = toml::from_str(text)
-            .map_err(|e| GridError::Syntax { path: path.to_path_buf(), message: one_line(&e.to_string()) })?;
+        let file: GridFile = toml::from_str(text).map_err(|e| GridError::Syntax {
+            path: path.to_path_buf(),
+            message: one_line(&e.to_string()),
+        })?;
         let _ = (&file.format, file.version);
-        if file.name.trim().is_empty() || !file.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
-            return Err(invalid("name", format!("'{}' must be non-empty and use only letters, digits, '-', '_', '.'", file.name)));
+        if file.name.trim().is_empty()
+            || !file
+                .name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+        {
+            return Err(invalid(
+                "name",
+                format!(
+                    "'{}' must be non-empty and use only letters, digits, '-', '_', '.'",
+                    file.name
+                ),
+            ));
         }
         let base_dir = path.parent().unwrap_or(Path::new("."));
 
@@ -165,9 +206,16 @@ impl Plan {
                 return Err(invalid(&field, format!("'{pattern}' matches no file (paths are relative to the grid file's folder)")));
             }
             for p in matched {
-                let b = floorcast_formats::read_building(&p)
-                    .map_err(|source| GridError::Building { path: path.to_path_buf(), field: field.clone(), source })?;
-                let name = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                let b =
+                    floorcast_formats::read_building(&p).map_err(|source| GridError::Building {
+                        path: path.to_path_buf(),
+                        field: field.clone(),
+                        source,
+                    })?;
+                let name = p
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
                 buildings.push(PlannedBuilding {
                     name,
                     source: p.display().to_string(),
@@ -179,17 +227,31 @@ impl Plan {
         for (i, g) in file.generated.iter().enumerate() {
             let field = format!("generated[{i}]");
             if !(g.area_m2.is_finite() && (100.0..=20_000.0).contains(&g.area_m2)) {
-                return Err(invalid(&format!("{field}.area_m2"), format!("{} is not a free area in [100, 20000] m2", g.area_m2)));
+                return Err(invalid(
+                    &format!("{field}.area_m2"),
+                    format!("{} is not a free area in [100, 20000] m2", g.area_m2),
+                ));
             }
             let kind = match g.kind.as_str() {
                 "school" => BuildingKind::School,
                 "office" => BuildingKind::Office,
-                k => return Err(invalid(&format!("{field}.kind"), format!("'{k}' is not school or office"))),
+                k => {
+                    return Err(invalid(
+                        &format!("{field}.kind"),
+                        format!("'{k}' is not school or office"),
+                    ))
+                }
             };
             if !g.rotation_deg.is_finite() {
-                return Err(invalid(&format!("{field}.rotation_deg"), "not a number".into()));
+                return Err(invalid(
+                    &format!("{field}.rotation_deg"),
+                    "not a number".into(),
+                ));
             }
-            let name = g.name.clone().unwrap_or_else(|| format!("gen-{}-{}-{}", g.kind, g.area_m2 as u64, g.seed));
+            let name = g
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("gen-{}-{}-{}", g.kind, g.area_m2 as u64, g.seed));
             let b = generate(&GenerateConfig {
                 seed: g.seed,
                 area_m2: g.area_m2,
@@ -209,12 +271,21 @@ impl Plan {
             });
         }
         if buildings.is_empty() {
-            return Err(invalid("buildings", "the grid names no building (give `buildings` or `[[generated]]`)".into()));
+            return Err(invalid(
+                "buildings",
+                "the grid names no building (give `buildings` or `[[generated]]`)".into(),
+            ));
         }
         let mut names = BTreeMap::new();
         for b in &buildings {
             if let Some(prev) = names.insert(b.name.clone(), b.source.clone()) {
-                return Err(invalid("buildings", format!("two buildings are named '{}' ({prev} and {}); rename one", b.name, b.source)));
+                return Err(invalid(
+                    "buildings",
+                    format!(
+                        "two buildings are named '{}' ({prev} and {}); rename one",
+                        b.name, b.source
+                    ),
+                ));
             }
         }
 
@@ -222,9 +293,27 @@ impl Plan {
         let seeds: Vec<u64> = match (&file.seeds, &file.seed_range) {
             (Some(s), None) if !s.is_empty() => s.clone(),
             (None, Some([a, b])) if a <= b => (*a..=*b).collect(),
-            (None, Some(r)) => return Err(invalid("seed_range", format!("[{}, {}] is empty; expected [first, last] with first <= last", r[0], r[1]))),
-            (Some(_), Some(_)) => return Err(invalid("seeds", "give either `seeds` or `seed_range`, not both".into())),
-            _ => return Err(invalid("seeds", "expected `seeds = [1, 2, 3]` or `seed_range = [1, 10]`".into())),
+            (None, Some(r)) => {
+                return Err(invalid(
+                    "seed_range",
+                    format!(
+                        "[{}, {}] is empty; expected [first, last] with first <= last",
+                        r[0], r[1]
+                    ),
+                ))
+            }
+            (Some(_), Some(_)) => {
+                return Err(invalid(
+                    "seeds",
+                    "give either `seeds` or `seed_range`, not both".into(),
+                ))
+            }
+            _ => {
+                return Err(invalid(
+                    "seeds",
+                    "expected `seeds = [1, 2, 3]` or `seed_range = [1, 10]`".into(),
+                ))
+            }
         };
         let mut seen = std::collections::BTreeSet::new();
         for s in &seeds {
@@ -242,24 +331,43 @@ impl Plan {
         for (i, s) in file.strategies.iter().enumerate() {
             let field = format!("strategies[{i}]");
             if !STRATEGIES.contains(&s.name.as_str()) {
-                return Err(invalid(&format!("{field}.name"), format!("unknown strategy '{}' (available: {})", s.name, STRATEGIES.join(", "))));
+                return Err(invalid(
+                    &format!("{field}.name"),
+                    format!(
+                        "unknown strategy '{}' (available: {})",
+                        s.name,
+                        STRATEGIES.join(", ")
+                    ),
+                ));
             }
             let label = s.label.clone().unwrap_or_else(|| s.name.clone());
             if labels.contains(&label) {
-                return Err(invalid(&format!("{field}.label"), format!("label '{label}' is used twice; give each strategy a distinct label")));
+                return Err(invalid(
+                    &format!("{field}.label"),
+                    format!("label '{label}' is used twice; give each strategy a distinct label"),
+                ));
             }
             let mut merged = file.settings.clone();
             for (k, v) in &s.settings {
                 merged.insert(k.clone(), v.clone());
             }
-            let settings: Settings = toml::Value::Table(merged)
-                .try_into()
-                .map_err(|e: toml::de::Error| invalid(&format!("{field}.settings"), one_line(&e.to_string())))?;
+            let settings: Settings =
+                toml::Value::Table(merged)
+                    .try_into()
+                    .map_err(|e: toml::de::Error| {
+                        invalid(&format!("{field}.settings"), one_line(&e.to_string()))
+                    })?;
             settings
                 .to_explore_config()
                 .map_err(|e| invalid(&format!("{field}.settings"), e.to_string()))?;
-            if resolved.iter().any(|(n, st, _): &(String, Settings, String)| n == &s.name && st == &settings) {
-                return Err(invalid(&field, format!("strategy '{label}' repeats another with the same name and settings")));
+            if resolved
+                .iter()
+                .any(|(n, st, _): &(String, Settings, String)| n == &s.name && st == &settings)
+            {
+                return Err(invalid(
+                    &field,
+                    format!("strategy '{label}' repeats another with the same name and settings"),
+                ));
             }
             labels.push(label.clone());
             resolved.push((s.name.clone(), settings, label));
@@ -283,9 +391,20 @@ impl Plan {
         }
         let results_dir = match results_override {
             Some(p) => p.to_path_buf(),
-            None => PathBuf::from(file.results.clone().unwrap_or_else(|| format!("results/{}", file.name))),
+            None => PathBuf::from(
+                file.results
+                    .clone()
+                    .unwrap_or_else(|| format!("results/{}", file.name)),
+            ),
         };
-        Ok(Plan { name: file.name, grid_path: path.to_path_buf(), results_dir, buildings, labels, jobs })
+        Ok(Plan {
+            name: file.name,
+            grid_path: path.to_path_buf(),
+            results_dir,
+            buildings,
+            labels,
+            jobs,
+        })
     }
 }
 
@@ -354,16 +473,43 @@ time_limit_s = 600
     #[test]
     fn errors_name_the_field() {
         let cases = [
-            (GOOD.replace("name = \"baseline\"\n[[strategies]]", "name = \"nope\"\n[[strategies]]"), "strategies[0].name"),
-            (GOOD.replace("seed_range = [1, 3]", "seed_range = [3, 1]"), "seed_range"),
-            (GOOD.replace("alpha = 0.8", "alpha = 2.0"), "strategies[1].settings"),
+            (
+                GOOD.replace(
+                    "name = \"baseline\"\n[[strategies]]",
+                    "name = \"nope\"\n[[strategies]]",
+                ),
+                "strategies[0].name",
+            ),
+            (
+                GOOD.replace("seed_range = [1, 3]", "seed_range = [3, 1]"),
+                "seed_range",
+            ),
+            (
+                GOOD.replace("alpha = 0.8", "alpha = 2.0"),
+                "strategies[1].settings",
+            ),
             (GOOD.replace("alpha = 0.8", "alpah = 0.8"), "alpah"),
-            (GOOD.replace("../buildings/small.toml", "../buildings/nothing*.toml"), "buildings[0]"),
+            (
+                GOOD.replace("../buildings/small.toml", "../buildings/nothing*.toml"),
+                "buildings[0]",
+            ),
             (GOOD.replace("version = 1", "version = 9"), "version"),
-            (GOOD.replace("area_m2 = 500", "area_m2 = -5"), "generated[0].area_m2"),
-            (GOOD.replace("label = \"near\"", "label = \"baseline\""), "strategies[1].label"),
-            (GOOD.replace("seed_range = [1, 3]", "seeds = [1, 1]"), "seeds"),
-            (GOOD.replace("name = \"t\"", "name = \"t\"\nbogus = 1"), "bogus"),
+            (
+                GOOD.replace("area_m2 = 500", "area_m2 = -5"),
+                "generated[0].area_m2",
+            ),
+            (
+                GOOD.replace("label = \"near\"", "label = \"baseline\""),
+                "strategies[1].label",
+            ),
+            (
+                GOOD.replace("seed_range = [1, 3]", "seeds = [1, 1]"),
+                "seeds",
+            ),
+            (
+                GOOD.replace("name = \"t\"", "name = \"t\"\nbogus = 1"),
+                "bogus",
+            ),
         ];
         for (text, needle) in cases {
             let e = parse(&text).unwrap_err().to_string();
@@ -379,6 +525,17 @@ time_limit_s = 600
         assert_eq!(a, job_id("h", "baseline", 1, &s));
         assert_ne!(a, job_id("g", "baseline", 1, &s));
         assert_ne!(a, job_id("h", "baseline", 2, &s));
-        assert_ne!(a, job_id("h", "baseline", 1, &Settings { alpha: 0.4, ..Settings::default() }));
+        assert_ne!(
+            a,
+            job_id(
+                "h",
+                "baseline",
+                1,
+                &Settings {
+                    alpha: 0.4,
+                    ..Settings::default()
+                }
+            )
+        );
     }
 }

@@ -17,7 +17,11 @@ use crate::store::{Store, StoreError, StoredResult};
 /// What the embedded workers send to the coordinator loop.
 enum FromWorker {
     Request(String),
-    Result { worker: String, job: String, result: Box<StoredResult> },
+    Result {
+        worker: String,
+        job: String,
+        result: Box<StoredResult>,
+    },
 }
 
 /// What the coordinator answers a request with.
@@ -56,7 +60,11 @@ pub fn run_local(
     let stored = store.stored_ids()?;
     let ids: Vec<String> = plan.jobs.iter().map(|j| j.id.clone()).collect();
     let mut sched = Scheduler::new(ids, &stored, 7.0 * 24.0 * 3600.0);
-    let jobs: BTreeMap<String, PlannedJob> = plan.jobs.iter().map(|j| (j.id.clone(), j.clone())).collect();
+    let jobs: BTreeMap<String, PlannedJob> = plan
+        .jobs
+        .iter()
+        .map(|j| (j.id.clone(), j.clone()))
+        .collect();
     let resumed = sched.done();
     let mut failed = 0usize;
     let counts = |s: &Scheduler, failed: usize| Counts {
@@ -82,7 +90,9 @@ pub fn run_local(
         let to_coord = to_coord.clone();
         let plan = Arc::clone(&plan);
         let stop = Arc::clone(&stop);
-        handles.push(std::thread::spawn(move || worker_loop(&name, &plan, &to_coord, &rx, &stop)));
+        handles.push(std::thread::spawn(move || {
+            worker_loop(&name, &plan, &to_coord, &rx, &stop)
+        }));
     }
     drop(to_coord);
     let t0 = Instant::now();
@@ -95,7 +105,11 @@ pub fn run_local(
         }
         let event = match from_workers.recv_timeout(Duration::from_millis(100)) {
             Ok(FromWorker::Request(w)) => Event::JobRequested(w),
-            Ok(FromWorker::Result { worker, job, result }) => {
+            Ok(FromWorker::Result {
+                worker,
+                job,
+                result,
+            }) => {
                 pending_results.insert(job.clone(), *result);
                 Event::ResultSubmitted { worker, job }
             }
@@ -163,13 +177,20 @@ fn worker_loop(
     stop: &AtomicBool,
 ) {
     while !stop.load(Ordering::SeqCst) {
-        if to_coord.send(FromWorker::Request(name.to_string())).is_err() {
+        if to_coord
+            .send(FromWorker::Request(name.to_string()))
+            .is_err()
+        {
             return;
         }
         match rx.recv() {
             Ok(ToWorker::Run(job)) => {
                 let result = execute(plan, &job, name);
-                let msg = FromWorker::Result { worker: name.to_string(), job: job.id.clone(), result: Box::new(result) };
+                let msg = FromWorker::Result {
+                    worker: name.to_string(),
+                    job: job.id.clone(),
+                    result: Box::new(result),
+                };
                 if to_coord.send(msg).is_err() {
                     return;
                 }
@@ -215,7 +236,11 @@ pub fn execute(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
             row.summary_json = serde_json::to_string(&out.summary).ok();
             let mut csv = String::from("time_s,explored_area_m2,explored_fraction\n");
             for p in &out.result.progress {
-                let _ = writeln!(csv, "{:.1},{:.3},{:.5}", p.time_s, p.explored_area_m2, p.explored_fraction);
+                let _ = writeln!(
+                    csv,
+                    "{:.1},{:.3},{:.5}",
+                    p.time_s, p.explored_area_m2, p.explored_fraction
+                );
             }
             row.progress_csv = Some(csv);
         }

@@ -14,9 +14,15 @@ pub const DB_FILE: &str = "results.sqlite";
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
     #[error("results store {path}: {source}")]
-    Sql { path: PathBuf, source: rusqlite::Error },
+    Sql {
+        path: PathBuf,
+        source: rusqlite::Error,
+    },
     #[error("cannot create results directory {path}: {source}")]
-    Dir { path: PathBuf, source: std::io::Error },
+    Dir {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("results store {path} has layout version {found}, this floorcast writes version {STORE_VERSION}; use another --results directory")]
     Version { path: PathBuf, found: String },
     #[error("no results store in {0} (expected {DB_FILE}); run `floorcast run GRID` first")]
@@ -66,9 +72,15 @@ pub struct Store {
 impl Store {
     /// Opens (creating if needed) the store in `dir`.
     pub fn open(dir: &Path) -> Result<Store, StoreError> {
-        std::fs::create_dir_all(dir).map_err(|source| StoreError::Dir { path: dir.to_path_buf(), source })?;
+        std::fs::create_dir_all(dir).map_err(|source| StoreError::Dir {
+            path: dir.to_path_buf(),
+            source,
+        })?;
         let path = dir.join(DB_FILE);
-        let conn = Connection::open(&path).map_err(|source| StoreError::Sql { path: path.clone(), source })?;
+        let conn = Connection::open(&path).map_err(|source| StoreError::Sql {
+            path: path.clone(),
+            source,
+        })?;
         let s = Store { path, conn };
         s.init()?;
         Ok(s)
@@ -87,7 +99,10 @@ impl Store {
     }
 
     fn sql<T>(&self, r: rusqlite::Result<T>) -> Result<T, StoreError> {
-        r.map_err(|source| StoreError::Sql { path: self.path.clone(), source })
+        r.map_err(|source| StoreError::Sql {
+            path: self.path.clone(),
+            source,
+        })
     }
 
     fn init(&self) -> Result<(), StoreError> {
@@ -128,7 +143,11 @@ impl Store {
         ))?;
         let found: Option<String> = self.sql(
             self.conn
-                .query_row("SELECT value FROM meta WHERE key = 'store_version'", [], |r| r.get(0))
+                .query_row(
+                    "SELECT value FROM meta WHERE key = 'store_version'",
+                    [],
+                    |r| r.get(0),
+                )
                 .optional(),
         )?;
         match found {
@@ -139,7 +158,12 @@ impl Store {
                 ))?;
             }
             Some(v) if v == STORE_VERSION.to_string() => {}
-            Some(v) => return Err(StoreError::Version { path: self.path.clone(), found: v }),
+            Some(v) => {
+                return Err(StoreError::Version {
+                    path: self.path.clone(),
+                    found: v,
+                })
+            }
         }
         Ok(())
     }
@@ -231,7 +255,8 @@ pub fn provenance(grid: &str, command: &str) -> Provenance {
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
     };
     let git_commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
-    let git_dirty = git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    let git_dirty =
+        git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
     let host = std::fs::read_to_string("/etc/hostname")
         .ok()
         .map(|s| s.trim().to_string())
@@ -296,7 +321,12 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         {
             let s = Store::open(dir.path()).unwrap();
-            s.conn.execute("UPDATE meta SET value = '99' WHERE key = 'store_version'", []).unwrap();
+            s.conn
+                .execute(
+                    "UPDATE meta SET value = '99' WHERE key = 'store_version'",
+                    [],
+                )
+                .unwrap();
         }
         let e = Store::open(dir.path()).unwrap_err().to_string();
         assert!(e.contains("99"), "{e}");

@@ -21,7 +21,11 @@ impl Stat {
     pub fn of(xs: &[f64]) -> Stat {
         let n = xs.len();
         if n == 0 {
-            return Stat { n, mean: f64::NAN, sd: f64::NAN };
+            return Stat {
+                n,
+                mean: f64::NAN,
+                sd: f64::NAN,
+            };
         }
         let mean = xs.iter().sum::<f64>() / n as f64;
         let sd = if n > 1 {
@@ -62,20 +66,29 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
             order.push(r.label.clone());
         }
     }
-    let reference = order.iter().find(|l| l.as_str() == "baseline").or(order.first()).cloned();
+    let reference = order
+        .iter()
+        .find(|l| l.as_str() == "baseline")
+        .or(order.first())
+        .cloned();
     let reference_label = reference.clone();
     let rows_for = |subset: &[&StoredResult]| -> Vec<LabelRow> {
         let mut rows: Vec<LabelRow> = order
             .iter()
             .filter_map(|label| {
-                let mine: Vec<&&StoredResult> = subset.iter().filter(|r| &r.label == label).collect();
+                let mine: Vec<&&StoredResult> =
+                    subset.iter().filter(|r| &r.label == label).collect();
                 if mine.is_empty() {
                     return None;
                 }
                 let summaries: Vec<RunSummary> = mine
                     .iter()
                     .filter(|r| r.status == "ok")
-                    .filter_map(|r| r.summary_json.as_deref().and_then(|s| RunSummary::from_json(s).ok()))
+                    .filter_map(|r| {
+                        r.summary_json
+                            .as_deref()
+                            .and_then(|s| RunSummary::from_json(s).ok())
+                    })
                     .collect();
                 let times: Vec<f64> = summaries.iter().map(|s| s.exploration_time_s).collect();
                 let fracs: Vec<f64> = summaries.iter().map(|s| s.explored_fraction).collect();
@@ -94,7 +107,9 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
             .and_then(|r| rows.iter().find(|row| &row.label == r))
             .map(|row| row.time.mean);
         for row in &mut rows {
-            row.gain_pct = base.filter(|b| b.is_finite() && *b > 0.0).map(|b| (b - row.time.mean) / b * 100.0);
+            row.gain_pct = base
+                .filter(|b| b.is_finite() && *b > 0.0)
+                .map(|b| (b - row.time.mean) / b * 100.0);
         }
         rows
     };
@@ -107,7 +122,11 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
         let subset: Vec<&StoredResult> = results.iter().filter(|r| r.building == b).collect();
         per_building.insert(b.to_string(), rows_for(&subset));
     }
-    Table { reference, overall: rows_for(&all), per_building }
+    Table {
+        reference,
+        overall: rows_for(&all),
+        per_building,
+    }
 }
 
 fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
@@ -132,7 +151,11 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
             gain,
             r.explored_fraction.mean * 100.0,
             r.stopped_early,
-            if r.failed > 0 { format!("  ({} failed)", r.failed) } else { String::new() }
+            if r.failed > 0 {
+                format!("  ({} failed)", r.failed)
+            } else {
+                String::new()
+            }
         );
     }
 }
@@ -140,7 +163,11 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
 /// The table as text.
 pub fn render_text(t: &Table) -> String {
     let mut out = String::new();
-    let _ = writeln!(out, "Exploration time over all runs (mean, standard deviation), gain over {}:", t.reference.as_deref().unwrap_or("-"));
+    let _ = writeln!(
+        out,
+        "Exploration time over all runs (mean, standard deviation), gain over {}:",
+        t.reference.as_deref().unwrap_or("-")
+    );
     fmt_rows(&mut out, &t.overall, t.reference.as_ref());
     if t.per_building.len() > 1 {
         for (b, rows) in &t.per_building {
@@ -157,7 +184,10 @@ pub fn results_csv(results: &[StoredResult]) -> String {
         "job_id,building,building_hash,strategy,label,seed,status,exploration_time_s,explored_area_m2,free_area_m2,explored_fraction,path_length_m,decisions,stopped_early,end_reason,wall_time_s,worker,floorcast_version\n",
     );
     for r in results {
-        let sum = r.summary_json.as_deref().and_then(|j| RunSummary::from_json(j).ok());
+        let sum = r
+            .summary_json
+            .as_deref()
+            .and_then(|j| RunSummary::from_json(j).ok());
         let f = |v: Option<f64>| v.map(|x| format!("{x}")).unwrap_or_default();
         let _ = writeln!(
             s,
@@ -174,8 +204,12 @@ pub fn results_csv(results: &[StoredResult]) -> String {
             f(sum.as_ref().map(|s| s.free_area_m2)),
             f(sum.as_ref().map(|s| s.explored_fraction)),
             f(sum.as_ref().map(|s| s.path_length_m)),
-            sum.as_ref().map(|s| s.decisions.to_string()).unwrap_or_default(),
-            sum.as_ref().map(|s| s.stopped_early.to_string()).unwrap_or_default(),
+            sum.as_ref()
+                .map(|s| s.decisions.to_string())
+                .unwrap_or_default(),
+            sum.as_ref()
+                .map(|s| s.stopped_early.to_string())
+                .unwrap_or_default(),
             csv_field(sum.as_ref().map(|s| s.end_reason.as_str()).unwrap_or("")),
             r.wall_time_s,
             csv_field(&r.worker),

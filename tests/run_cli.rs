@@ -1,0 +1,202 @@
+//! `floorcast run`, `report` and `layout` end to end.
+
+mod common;
+
+use common::*;
+
+fn grid(dir: &std::path::Path, seeds: &str) -> std::path::PathBuf {
+    let small = repo().join("buildings/small.toml");
+    let text = format!(
+        r#"format = "floorcast-grid"
+version = 1
+name = "e2e"
+buildings = ["{}"]
+seeds = {seeds}
+[[strategies]]
+name = "baseline"
+[[strategies]]
+name = "baseline"
+label = "near"
+settings = {{ alpha = 0.8 }}
+[settings]
+time_limit_s = 60
+"#,
+        small.display()
+    );
+    let p = dir.join("grid.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn runs_a_grid_then_resumes_with_nothing_to_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path(), "[1, 2]");
+    let res = dir.path().join("res");
+    let args = [
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "--workers",
+        "2",
+        "-q",
+    ];
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("done: 4 jobs run now"), "{out}");
+    assert!(
+        out.contains("baseline") && out.contains("near") && out.contains("ref"),
+        "{out}"
+    );
+    let o = run(&args);
+    assert!(o.status.success());
+    assert!(
+        stdout(&o).contains("nothing to do: all 4 jobs"),
+        "{}",
+        stdout(&o)
+    );
+    // One more seed: only the new jobs run.
+    let g = grid(dir.path(), "[1, 2, 3]");
+    let o = run(&[
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(
+        stdout(&o).contains("done: 2 jobs run now, 4 stored before"),
+        "{}",
+        stdout(&o)
+    );
+    // Report and CSV: one line per job.
+    let csv = dir.path().join("r.csv");
+    let o = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 1 + 6);
+    assert!(text.starts_with("job_id,building,"));
+}
+
+#[test]
+fn grid_errors_name_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path(), "[1, 1]");
+    assert_clean_failure(
+        &run(&["run", g.to_str().unwrap(), "-q"]),
+        &["grid.toml", "seeds", "twice"],
+    );
+    let o = run(&["report", dir.path().join("nothing").to_str().unwrap()]);
+    assert_clean_failure(&o, &["nothing", "floorcast run"]);
+}
+
+#[test]
+fn interrupted_grid_resumes_without_duplicates() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path(), "[1, 2, 3, 4]");
+    let res = dir.path().join("res");
+    let mut child = floorcast()
+        .args([
+            "run",
+            g.to_str().unwrap(),
+            "--results",
+            res.to_str().unwrap(),
+            "--workers",
+            "1",
+            "-q",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait for the first stored result, then press Ctrl-C.
+    let db = res.join("results.sqlite");
+    let t = std::time::Instant::now();
+    loop {
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        let o = run(&["report", res.to_str().unwrap()]);
+        if o.status.success() && !stdout(&o).starts_with("0 results") {
+            break;
+        }
+        assert!(t.elapsed().as_secs() < 120, "no result stored in time");
+        assert!(child.try_wait().unwrap().is_none() || db.exists());
+    }
+    let _ = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let status = child.wait().unwrap();
+    if status.code() == Some(130) {
+        let o = run(&["report", res.to_str().unwrap()]);
+        assert!(
+            !stdout(&o).starts_with("8 results"),
+            "interrupted before the end"
+        );
+    }
+    let o = run(&[
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = dir.path().join("r.csv");
+    run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut ids: Vec<&str> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert_eq!(ids.len(), 8);
+    ids.sort();
+    ids.dedup();
+    assert_eq!(ids.len(), 8, "every job stored exactly once");
+}
+
+#[test]
+fn layout_of_a_real_map_and_of_a_generated_building_with_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = maps_dir().join("schools/Franch1.yaml");
+    let o = run(&[
+        "layout",
+        "--map",
+        map.to_str().unwrap(),
+        "--out",
+        dir.path().join("f").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("f/layout.json")).unwrap())
+            .unwrap();
+    assert_eq!(j["format"], "floorcast-layout");
+    assert!(j["rooms"].as_array().unwrap().len() >= 5);
+    assert!(image::open(dir.path().join("f/layout.png")).is_ok());
+    let b = repo().join("buildings/paper/paper-01.toml");
+    let o = run(&[
+        "layout",
+        "--map",
+        b.to_str().unwrap(),
+        "--truth",
+        b.to_str().unwrap(),
+        "--out",
+        dir.path().join("p").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let a: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("p/accuracy.json")).unwrap())
+            .unwrap();
+    assert!(a["matched_room_iou"].as_f64().unwrap() >= 0.8, "{a}");
+}
