@@ -14,6 +14,7 @@ pub mod generate;
 pub mod geom;
 pub mod grid;
 pub mod layout;
+pub mod layout_gain;
 pub mod mapping;
 pub mod plan;
 pub mod scan;

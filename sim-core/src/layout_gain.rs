@@ -1,0 +1,153 @@
+//! Information gain informed by the predicted layout: the paper's "with L".
+//!
+//! The layout's room walls (the edges of every room polygon) are drawn into a copy of the map as
+//! obstacles (`M^L`). A candidate `p` then expects to see the unknown cells within laser range
+//! that are visible from `p` in `M^L` and lie inside the predicted layout (free in `M^L`).
+//! Candidates in a room with an *open* frontier (its prediction reaches the known map's box, so
+//! no wall line bounds it) or outside every room keep the baseline gain (unknown counted as free).
+
+use crate::gain::visible_area;
+use crate::grid::{Bitmap, Cell, Grid, GridFrame, Occupancy, OccupancyGrid};
+use crate::layout::{Layout, RoomLabel};
+use crate::mapping::ray::{grid_from_world, walk_segment};
+
+const NO_ROOM: u32 = u32::MAX;
+
+/// The layout rasterised on the map's grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayoutRaster {
+    /// Cells crossed by a layout wall.
+    pub walls: Bitmap,
+    /// Index (into `layout.rooms`) of the room whose polygon holds the cell centre, or none.
+    room: Grid<u32>,
+    /// Per room: its frontier is open.
+    open: Vec<bool>,
+}
+
+impl LayoutRaster {
+    /// Rasterises `layout` on `frame`.
+    pub fn new(layout: &Layout, frame: GridFrame) -> Self {
+        let mut room = Grid::filled(frame, NO_ROOM);
+        let mut mask = Bitmap::filled(frame, false);
+        for (k, r) in layout.rooms.iter().enumerate() {
+            mask.data.iter_mut().for_each(|m| *m = false);
+            crate::building::fill_polygon(&mut mask, &r.polygon, true);
+            for (i, m) in mask.data.iter().enumerate() {
+                if *m {
+                    room.data[i] = k as u32;
+                }
+            }
+        }
+        let mut walls = Bitmap::filled(frame, false);
+        for r in &layout.rooms {
+            for e in r.polygon.edges() {
+                let a = grid_from_world(&frame, e.a);
+                let b = grid_from_world(&frame, e.b);
+                walk_segment(a, b, |c| {
+                    walls.set(c, true);
+                    true
+                });
+            }
+        }
+        let open = layout
+            .rooms
+            .iter()
+            .map(|r| r.label == RoomLabel::Open)
+            .collect();
+        Self { walls, room, open }
+    }
+
+    /// Whether the cell lies in a predicted room.
+    pub fn inside(&self, c: Cell) -> bool {
+        self.room.get(c).is_some_and(|&k| k != NO_ROOM)
+    }
+
+    /// Whether a candidate at `c` must fall back to the baseline gain.
+    pub fn uses_baseline(&self, c: Cell) -> bool {
+        match self.room.get(c) {
+            Some(&k) if k != NO_ROOM => self.open[k as usize],
+            _ => true,
+        }
+    }
+}
+
+/// `I(p)` with the layout, in square metres (see the module doc).
+pub fn layout_information_gain(
+    grid: &OccupancyGrid,
+    raster: &LayoutRaster,
+    p: Cell,
+    range_m: f64,
+) -> f64 {
+    if raster.uses_baseline(p) {
+        return crate::gain::information_gain(grid, p, range_m);
+    }
+    visible_area(
+        &grid.frame,
+        p,
+        range_m,
+        |c| grid.is(c, Occupancy::Occupied) || raster.walls.get(c) == Some(&true),
+        |c| grid.is(c, Occupancy::Unknown) && raster.inside(c),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gain::information_gain;
+    use crate::geom::{Polygon, Vec2};
+    use crate::layout::{LayoutRoom, RoomLabel};
+
+    fn room(id: u32, min: (f64, f64), max: (f64, f64), label: RoomLabel) -> LayoutRoom {
+        let polygon = Polygon::rect(Vec2::new(min.0, min.1), Vec2::new(max.0, max.1));
+        LayoutRoom {
+            id,
+            observed_polygon: polygon.clone(),
+            area_m2: polygon.area_m2(),
+            observed_area_m2: polygon.area_m2(),
+            polygon,
+            label,
+            predicted: true,
+            unknown_area_m2: 0.0,
+        }
+    }
+
+    /// A 2 x 1 m room seen on its left half; unknown to the right and beyond.
+    fn map() -> OccupancyGrid {
+        let mut rows = Vec::new();
+        for y in 0..30 {
+            let mut row = String::new();
+            for x in 0..60 {
+                row.push(if (5..15).contains(&y) && (5..15).contains(&x) {
+                    '.'
+                } else {
+                    '?'
+                });
+            }
+            rows.push(row);
+        }
+        OccupancyGrid::from_ascii(&rows.join("\n"), 0.1)
+    }
+
+    #[test]
+    fn the_layout_bounds_the_gain_and_open_rooms_fall_back() {
+        let g = map();
+        let p = Cell::new(14, 20);
+        let base = information_gain(&g, p, 6.0);
+        // The predicted room ends at x = 2.5 m: only 1 m x 1 m of it is unknown.
+        let layout = Layout {
+            rooms: vec![room(1, (0.5, 1.5), (2.5, 2.5), RoomLabel::Partial)],
+            ..Layout::default()
+        };
+        let r = LayoutRaster::new(&layout, g.frame);
+        let with_l = layout_information_gain(&g, &r, p, 6.0);
+        assert!(with_l > 0.5 && with_l < 1.2, "with L: {with_l}");
+        assert!(base > 10.0 * with_l, "baseline {base} vs {with_l}");
+        // The same room with an open frontier keeps the baseline.
+        let layout = Layout {
+            rooms: vec![room(1, (0.5, 1.5), (2.5, 2.5), RoomLabel::Open)],
+            ..Layout::default()
+        };
+        let r = LayoutRaster::new(&layout, g.frame);
+        assert_eq!(layout_information_gain(&g, &r, p, 6.0), base);
+    }
+}
