@@ -46,10 +46,21 @@ fn main() {
     }
     let mut slam_speedup = 0.0;
     for loc in locs {
-        let cfg = ExploreConfig {
+        let mut cfg = ExploreConfig {
             localization: loc,
             ..ExploreConfig::default()
         };
+        cfg.calibrate_odometry = !has("nocal");
+        for a in &args {
+            if let Some(v) = a.strip_prefix("upd=") {
+                let v: Vec<f64> = v.split(',').filter_map(|x| x.parse().ok()).collect();
+                if let [d, r, t] = v[..] {
+                    cfg.map_update_distance_m = d;
+                    cfg.map_update_angle_rad = r;
+                    cfg.map_update_period_s = t;
+                }
+            }
+        }
         let t0 = Instant::now();
         let r = explore(&building, start, &cfg, seed, &mut |_| {});
         let wall_s = t0.elapsed().as_secs_f64();
@@ -77,6 +88,34 @@ fn main() {
             r.plans,
         );
         if has("trace") {
+            // Wrong occupied cells by their distance to solid space.
+            let truth = building.reachable_free(r.map.frame, start.position());
+            let solid = sim_core::grid::Grid {
+                frame: truth.frame,
+                data: truth.data.iter().map(|f| !f).collect(),
+            };
+            let dist = sim_core::distance::distance_to(&solid);
+            let mut hist = [0usize; 6];
+            for (i, s) in r.map.data.iter().enumerate() {
+                if *s == sim_core::grid::Occupancy::Occupied {
+                    let d = dist.data[i];
+                    let k = if d <= 1.5 {
+                        0
+                    } else if d <= 2.5 {
+                        1
+                    } else if d <= 3.5 {
+                        2
+                    } else if d <= 5.5 {
+                        3
+                    } else if d <= 10.5 {
+                        4
+                    } else {
+                        5
+                    };
+                    hist[k] += 1;
+                }
+            }
+            println!("  occupied cells by distance to solid (<=1.5, 2, 3, 4-5, 6-10, >10 cells): {hist:?}");
             let n = r.trajectory.len();
             for k in (0..n).step_by((n / 60).max(1)) {
                 let (t, e) = (r.trajectory[k], r.estimated_trajectory[k]);

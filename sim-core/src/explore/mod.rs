@@ -6,11 +6,13 @@
 //! blacklisted with a radius; a goal toward which the robot makes no progress for
 //! `progress_timeout_s` is blacklisted too, so a run never hangs.
 
+mod calibration;
 mod follow;
 mod gain_cache;
 
 pub use follow::{Command, FollowConfig, PathFollower};
 
+use self::calibration::OdometryCalibration;
 use self::gain_cache::GainCache;
 use crate::building::Building;
 use crate::frontier::blacklist::Blacklist;
@@ -75,6 +77,8 @@ pub struct ExploreConfig {
     pub map_resolution_m: f64,
     pub log_odds: LogOddsConfig,
     pub scan_match: ScanMatchConfig,
+    /// With SLAM: learn the odometry's proportional error from the scan matches and correct it.
+    pub calibrate_odometry: bool,
     /// Weight of distance against information gain in the utility (paper: 0.5).
     pub alpha: f64,
     /// Frontiers shorter than this are ignored.
@@ -108,6 +112,7 @@ impl Default for ExploreConfig {
             map_resolution_m: 0.05,
             log_odds: LogOddsConfig::default(),
             scan_match: ScanMatchConfig::default(),
+            calibrate_odometry: true,
             alpha: 0.5,
             min_frontier_m: 0.5,
             redecide_period_s: 10.0,
@@ -204,6 +209,9 @@ struct Explorer<'a> {
     known: Bitmap,
     estimate: Pose,
     last_odometry: Pose,
+    /// Odometry reading at the last map update.
+    update_odometry: Pose,
+    calibration: OdometryCalibration,
     last_update_pose: Pose,
     last_update_time_s: f64,
     blacklist: Blacklist,
@@ -255,6 +263,11 @@ pub fn explore(
         cfg,
         seed,
         last_odometry: sim.odometry(),
+        update_odometry: sim.odometry(),
+        calibration: OdometryCalibration::new(
+            cfg.sim.odometry.max_translation_error * 1.5,
+            cfg.sim.odometry.max_rotation_error * 1.5,
+        ),
         sim,
         map: LogOddsMap::new(frame),
         obstacles: ObstacleDistance::new(frame, cap_cells),
@@ -309,9 +322,14 @@ impl Explorer<'_> {
     /// A map update when the robot has moved or turned enough, or the period has passed.
     fn sense(&mut self) {
         let cfg = self.cfg;
-        let odo = self.sim.odometry();
-        let delta = self.last_odometry.between(&odo);
-        self.last_odometry = odo;
+        let odo_pose = self.sim.odometry();
+        let raw = self.last_odometry.between(&odo_pose);
+        self.last_odometry = odo_pose;
+        let delta = if cfg.localization == Localization::Slam && cfg.calibrate_odometry {
+            self.calibration.apply(&raw)
+        } else {
+            raw
+        };
         let prior = self.estimate.compose(&delta);
         self.estimate = prior;
         let moved = self.last_update_pose.between(&prior);
@@ -353,6 +371,10 @@ impl Explorer<'_> {
                 let m = match_scan(&self.obstacles, &prior, &scan, &mc);
                 if m.accepted {
                     self.matches_accepted += 1;
+                    self.calibration.observe(
+                        &self.update_odometry.between(&odo_pose),
+                        &self.last_update_pose.between(&m.pose),
+                    );
                     m.pose
                 } else {
                     prior
@@ -376,6 +398,7 @@ impl Explorer<'_> {
             }
         }
         self.last_update_pose = self.estimate;
+        self.update_odometry = odo_pose;
         self.last_update_time_s = self.sim.time_s();
         self.trajectory.push(self.sim.true_pose());
         self.estimated_trajectory.push(self.estimate);

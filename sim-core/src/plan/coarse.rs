@@ -1,9 +1,11 @@
 //! A coarse planning grid: `factor` x `factor` map cells per planning cell, so that path searches
 //! over a large building touch a fraction of the cells.
 //!
-//! A planning cell is passable when every map cell it covers is traversable (conservative: a
-//! path through passable cells keeps the clearance of the fine map), and its extra cost is the
-//! largest of theirs.
+//! A planning cell is passable when any map cell it covers is traversable, so the coarse grid
+//! connects whatever the map connects (a conservative "all cells" rule closes narrow doors and
+//! the gaps between diverging laser beams); a path through it keeps the clearance of the map
+//! up to half a planning cell (the inflation's safety margin covers that). Its extra cost is the
+//! largest of its traversable cells'.
 
 use crate::grid::{Cell, GridFrame};
 use crate::plan::inflate::nearest_by;
@@ -74,19 +76,18 @@ pub fn coarse_costs(
     for cy in cy0..=cy1 {
         for cx in cx0..=cx1 {
             let mut worst = 0u32;
-            let mut all = true;
-            'cells: for dy in 0..fi {
+            let mut any = false;
+            for dy in 0..fi {
                 let row = (cy * fi + dy) as usize * fw;
                 for dx in 0..fi {
                     let i = row + (cx * fi + dx) as usize;
-                    if !traversable(i) {
-                        all = false;
-                        break 'cells;
+                    if traversable(i) {
+                        any = true;
+                        worst = worst.max(extra(i));
                     }
-                    worst = worst.max(extra(i));
                 }
             }
-            if all {
+            if any {
                 cost[cy as usize * frame.width as usize + cx as usize] = 1 + worst.min(254) as u8;
             }
         }
@@ -104,24 +105,34 @@ mod tests {
     use crate::geom::Vec2;
 
     #[test]
-    fn a_planning_cell_is_passable_only_when_all_its_cells_are() {
+    fn a_planning_cell_is_passable_when_any_of_its_cells_is() {
         let fine = GridFrame::new(Vec2::zeros(), 0.05, 8, 4);
-        // Fine cell (5, 1) is blocked; extra cost 3 at fine cell (0, 0).
-        let blocked = fine.index(Cell::new(5, 1)).unwrap();
-        let costly = fine.index(Cell::new(0, 0)).unwrap();
+        let idx = |x, y| fine.index(Cell::new(x, y)).unwrap();
+        // Coarse (2, 0) has no traversable cell; coarse (3, 1) one, with extra cost 3.
+        let blocked = [
+            idx(4, 0),
+            idx(5, 0),
+            idx(4, 1),
+            idx(5, 1),
+            idx(6, 2),
+            idx(7, 2),
+            idx(6, 3),
+        ];
+        let costly = idx(7, 3);
         let c = coarse_costs(
             fine,
             2,
             Cell::new(0, 0),
             Cell::new(7, 3),
-            |i| i != blocked,
+            |i| !blocked.contains(&i),
             |i| if i == costly { 3 } else { 0 },
         );
         assert_eq!((c.frame.width, c.frame.height), (4, 2));
         assert_eq!(c.frame.resolution_m, 0.1);
-        assert_eq!(c.cost, vec![4, 1, 0, 1, 1, 1, 1, 1]);
+        assert_eq!(c.cost, vec![1, 1, 0, 1, 1, 1, 1, 4]);
         assert_eq!(c.coarse_of(Cell::new(5, 1)), Cell::new(2, 0));
         assert!(!c.passable(Cell::new(2, 0)) && c.passable(Cell::new(3, 1)));
+        assert_eq!(c.passable_near(Cell::new(4, 0), 1), Some(Cell::new(1, 0)));
         // Outside the bounds everything is blocked.
         let c = coarse_costs(fine, 2, Cell::new(0, 0), Cell::new(1, 1), |_| true, |_| 0);
         assert_eq!(c.cost, vec![1, 0, 0, 0, 0, 0, 0, 0]);
