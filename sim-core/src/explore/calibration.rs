@@ -43,6 +43,11 @@ impl OdometryCalibration {
         }
     }
 
+    /// Whether each axis has enough evidence to be corrected.
+    pub(crate) fn calibrated(&self) -> [bool; 3] {
+        [0, 1, 2].map(|k| self.sxx[k] >= self.min_evidence[k])
+    }
+
     /// The scale of each axis (1 until there is enough evidence).
     pub(crate) fn scale(&self) -> [f64; 3] {
         let mut s = [1.0; 3];
@@ -76,6 +81,7 @@ mod tests {
         // Not enough evidence yet: identity.
         c.observe(&Pose::new(0.1, 0.0, 0.1), &Pose::new(0.1, 0.0, 0.097));
         assert_eq!(c.scale(), [1.0; 3]);
+        assert_eq!(c.calibrated(), [false; 3]);
         for k in 0..400 {
             // Matched heading is 3 % less than odometry, with noise of both signs.
             let noise = if k % 2 == 0 { 0.001 } else { -0.001 };
@@ -88,6 +94,7 @@ mod tests {
         assert!((s[2] - 0.97).abs() < 1e-3, "{s:?}");
         assert!((s[0] - 1.002).abs() < 1e-4, "{s:?}");
         assert_eq!(s[1], 1.0);
+        assert_eq!(c.calibrated(), [true, false, true]);
         let p = c.apply(&Pose::new(1.0, 0.0, 1.0));
         assert!((p.theta_rad - 0.97).abs() < 1e-3);
         // A wild estimate is clamped to the plausible range.

@@ -346,26 +346,44 @@ impl Explorer<'_> {
             Localization::Odometry => prior,
             Localization::Slam => {
                 // Trust odometry in proportion to the motion since the last match: its error is
-                // proportional (at most ~1 % and 2 deg/rad), so only small corrections are
-                // plausible and large ones are mismatches (e.g. along a featureless corridor).
-                // A prior as tight as the odometry's error matters: each match is made against a
-                // map built from the previous few scans, so a matcher noisier than odometry
-                // makes the estimate random-walk away (0.3 m after 15 m, doubled walls).
+                // proportional (at most ~1 % and 2 deg/rad, and much less once calibrated), so
+                // only small corrections are plausible and large ones are mismatches (e.g. along
+                // a featureless corridor). A prior as tight as the odometry's error matters: each
+                // match is made against a map built from the previous few scans, so a matcher
+                // noisier than odometry makes the estimate random-walk (0.3 m after 15 m, bent
+                // maps and doubled walls). Driving straight does not change the odometry's
+                // heading at all, so the heading is then nearly fixed.
                 let d = moved.position().norm();
                 let a = moved.theta_rad.abs();
                 let base = &cfg.scan_match;
                 let odo = &cfg.sim.odometry;
+                let calibrated = self.calibration.calibrated();
+                let (k_xy, k_theta) = if cfg.calibrate_odometry {
+                    (
+                        if calibrated[0] {
+                            0.005
+                        } else {
+                            odo.max_translation_error
+                        },
+                        if calibrated[2] {
+                            0.01
+                        } else {
+                            odo.max_rotation_error
+                        },
+                    )
+                } else {
+                    (odo.max_translation_error, odo.max_rotation_error)
+                };
                 let mc = ScanMatchConfig {
-                    prior_sigma_xy_m: base
-                        .prior_sigma_xy_m
-                        .min(0.002 + odo.max_translation_error * d),
-                    prior_sigma_theta_rad: base
-                        .prior_sigma_theta_rad
-                        .min(0.002 + odo.max_rotation_error * a),
+                    prior_sigma_xy_m: base.prior_sigma_xy_m.min(0.001 + k_xy * d),
+                    prior_sigma_theta_rad: base.prior_sigma_theta_rad.min(0.001 + k_theta * a),
                     max_correction_m: base.max_correction_m.min(0.05 + 0.1 * d),
-                    max_correction_rad: base.max_correction_rad.min(0.02 + 0.1 * a),
+                    max_correction_rad: base.max_correction_rad.min(0.005 + 0.05 * a),
                     search_xy_m: base.search_xy_m.min(0.05),
                     search_theta_rad: base.search_theta_rad.min(1.5f64.to_radians()),
+                    // Few points near the map (facing unknown space) constrain the heading
+                    // poorly: odometry is better then.
+                    min_points: base.min_points.max(80),
                     ..*base
                 };
                 let m = match_scan(&self.obstacles, &prior, &scan, &mc);

@@ -82,4 +82,3 @@ fn same_seed_same_run_and_seeds_differ() {
     let c = run(Localization::Slam, 6);
     assert_ne!(a.trajectory, c.trajectory);
 }
-
