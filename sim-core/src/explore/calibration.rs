@@ -29,7 +29,7 @@ impl OdometryCalibration {
             sxy: [0.0; 3],
             sxx: [0.0; 3],
             max_correction: [max_translation, max_translation, max_rotation],
-            min_evidence: [1.0, 1.0, 2.0],
+            min_evidence: [1.0, 1.0, 0.3],
         }
     }
 
