@@ -1,0 +1,107 @@
+//! Information gains of frontier candidates, reused between decisions while the map around a
+//! candidate has not changed.
+//!
+//! The map is divided into square blocks; every ternary change of a cell stamps its block with
+//! the current map-update number. A gain computed at update `k` for cell `p` stays valid while
+//! no block within the laser range of `p` has a later stamp (the gain only depends on cells
+//! within range).
+
+use std::collections::BTreeMap;
+
+use crate::grid::{Cell, GridFrame};
+
+/// Side of a block in cells.
+const BLOCK_CELLS: i32 = 32;
+
+#[derive(Debug, Clone)]
+pub(crate) struct GainCache {
+    frame: GridFrame,
+    blocks_w: i32,
+    blocks_h: i32,
+    /// Map update that last changed each block.
+    stamps: Vec<u64>,
+    /// Candidate cell -> (gain, update at which it was computed).
+    gains: BTreeMap<(i32, i32), (f64, u64)>,
+}
+
+impl GainCache {
+    pub(crate) fn new(frame: GridFrame) -> Self {
+        let blocks_w = (frame.width as i32 + BLOCK_CELLS - 1) / BLOCK_CELLS;
+        let blocks_h = (frame.height as i32 + BLOCK_CELLS - 1) / BLOCK_CELLS;
+        Self {
+            frame,
+            blocks_w,
+            blocks_h,
+            stamps: vec![0; (blocks_w.max(0) * blocks_h.max(0)) as usize],
+            gains: BTreeMap::new(),
+        }
+    }
+
+    /// Records that the cell with row-major index `i` changed at update `now`.
+    pub(crate) fn touch(&mut self, i: u32, now: u64) {
+        let w = self.frame.width as usize;
+        if w == 0 {
+            return;
+        }
+        let (x, y) = ((i as usize % w) as i32, (i as usize / w) as i32);
+        let b = (y / BLOCK_CELLS) * self.blocks_w + x / BLOCK_CELLS;
+        if let Some(s) = self.stamps.get_mut(b as usize) {
+            *s = now;
+        }
+    }
+
+    /// The gain of `p`, computed by `compute` unless a still valid one is cached.
+    pub(crate) fn gain(
+        &mut self,
+        p: Cell,
+        range_m: f64,
+        now: u64,
+        compute: impl FnOnce() -> f64,
+    ) -> f64 {
+        if let Some(&(g, at)) = self.gains.get(&(p.x, p.y)) {
+            if self.last_change_near(p, range_m) <= at {
+                return g;
+            }
+        }
+        let g = compute();
+        self.gains.insert((p.x, p.y), (g, now));
+        g
+    }
+
+    fn last_change_near(&self, p: Cell, range_m: f64) -> u64 {
+        let r = (range_m / self.frame.resolution_m).ceil() as i32 + 1;
+        let bx0 = ((p.x - r) / BLOCK_CELLS).max(0);
+        let by0 = ((p.y - r) / BLOCK_CELLS).max(0);
+        let bx1 = ((p.x + r) / BLOCK_CELLS).min(self.blocks_w - 1);
+        let by1 = ((p.y + r) / BLOCK_CELLS).min(self.blocks_h - 1);
+        let mut last = 0;
+        for by in by0..=by1 {
+            for bx in bx0..=bx1 {
+                last = last.max(self.stamps[(by * self.blocks_w + bx) as usize]);
+            }
+        }
+        last
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Vec2;
+
+    #[test]
+    fn reuses_until_a_change_within_range() {
+        let frame = GridFrame::new(Vec2::zeros(), 0.05, 400, 100);
+        let mut cache = GainCache::new(frame);
+        let p = Cell::new(20, 20);
+        assert_eq!(cache.gain(p, 1.0, 1, || 5.0), 5.0);
+        assert_eq!(cache.gain(p, 1.0, 2, || 7.0), 5.0);
+        // A change far away (x = 300 cells = 15 m) keeps the cached value.
+        cache.touch(frame.index(Cell::new(300, 20)).unwrap() as u32, 3);
+        assert_eq!(cache.gain(p, 1.0, 3, || 7.0), 5.0);
+        // A change within range invalidates it.
+        cache.touch(frame.index(Cell::new(30, 25)).unwrap() as u32, 4);
+        assert_eq!(cache.gain(p, 1.0, 4, || 7.0), 7.0);
+        assert_eq!(cache.gain(p, 1.0, 5, || 9.0), 7.0);
+    }
+}

@@ -1,0 +1,140 @@
+//! A coarse planning grid: `factor` x `factor` map cells per planning cell, so that path searches
+//! over a large building touch a fraction of the cells.
+//!
+//! A planning cell is passable when any map cell it covers is traversable, so the coarse grid
+//! connects whatever the map connects (a conservative "all cells" rule closes narrow doors and
+//! the gaps between diverging laser beams); a path through it keeps the clearance of the map
+//! up to half a planning cell (the inflation's safety margin covers that). Its extra cost is the
+//! largest of its traversable cells'.
+
+use crate::grid::{Cell, GridFrame};
+use crate::plan::inflate::nearest_by;
+
+/// Per planning cell: 0 = blocked, otherwise 1 + the extra cost of entering it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoarseCosts {
+    pub frame: GridFrame,
+    pub factor: u32,
+    pub cost: Vec<u8>,
+}
+
+impl CoarseCosts {
+    pub fn passable(&self, c: Cell) -> bool {
+        self.frame.index(c).is_some_and(|i| self.cost[i] > 0)
+    }
+
+    /// The planning cell covering map cell `c`.
+    pub fn coarse_of(&self, c: Cell) -> Cell {
+        let f = self.factor as i32;
+        Cell::new(c.x.div_euclid(f), c.y.div_euclid(f))
+    }
+
+    /// The planning cell of map cell `c` if passable, else the nearest passable one within
+    /// `radius_cells` planning cells.
+    pub fn passable_near(&self, c: Cell, radius_cells: i32) -> Option<Cell> {
+        let cc = self.coarse_of(c);
+        if self.passable(cc) {
+            Some(cc)
+        } else {
+            nearest_by(cc, radius_cells, |n| self.passable(n))
+        }
+    }
+}
+
+/// Builds the planning grid of a map grid `fine`, looking only at map cells within `lo..=hi`
+/// (inclusive; everything else is blocked). `traversable` and `extra` take row-major map
+/// indices; `extra` is clamped to 254.
+pub fn coarse_costs(
+    fine: GridFrame,
+    factor: u32,
+    lo: Cell,
+    hi: Cell,
+    traversable: impl Fn(usize) -> bool,
+    extra: impl Fn(usize) -> u32,
+) -> CoarseCosts {
+    let f = factor.max(1);
+    let frame = GridFrame::new(
+        fine.origin_m,
+        fine.resolution_m * f as f64,
+        fine.width / f,
+        fine.height / f,
+    );
+    let mut cost = vec![0u8; frame.len()];
+    if frame.is_empty() {
+        return CoarseCosts {
+            frame,
+            factor: f,
+            cost,
+        };
+    }
+    let fi = f as i32;
+    let cx0 = (lo.x.div_euclid(fi)).clamp(0, frame.width as i32 - 1);
+    let cy0 = (lo.y.div_euclid(fi)).clamp(0, frame.height as i32 - 1);
+    let cx1 = (hi.x.div_euclid(fi)).clamp(0, frame.width as i32 - 1);
+    let cy1 = (hi.y.div_euclid(fi)).clamp(0, frame.height as i32 - 1);
+    let fw = fine.width as usize;
+    for cy in cy0..=cy1 {
+        for cx in cx0..=cx1 {
+            let mut worst = 0u32;
+            let mut any = false;
+            for dy in 0..fi {
+                let row = (cy * fi + dy) as usize * fw;
+                for dx in 0..fi {
+                    let i = row + (cx * fi + dx) as usize;
+                    if traversable(i) {
+                        any = true;
+                        worst = worst.max(extra(i));
+                    }
+                }
+            }
+            if any {
+                cost[cy as usize * frame.width as usize + cx as usize] = 1 + worst.min(254) as u8;
+            }
+        }
+    }
+    CoarseCosts {
+        frame,
+        factor: f,
+        cost,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Vec2;
+
+    #[test]
+    fn a_planning_cell_is_passable_when_any_of_its_cells_is() {
+        let fine = GridFrame::new(Vec2::zeros(), 0.05, 8, 4);
+        let idx = |x, y| fine.index(Cell::new(x, y)).unwrap();
+        // Coarse (2, 0) has no traversable cell; coarse (3, 1) one, with extra cost 3.
+        let blocked = [
+            idx(4, 0),
+            idx(5, 0),
+            idx(4, 1),
+            idx(5, 1),
+            idx(6, 2),
+            idx(7, 2),
+            idx(6, 3),
+        ];
+        let costly = idx(7, 3);
+        let c = coarse_costs(
+            fine,
+            2,
+            Cell::new(0, 0),
+            Cell::new(7, 3),
+            |i| !blocked.contains(&i),
+            |i| if i == costly { 3 } else { 0 },
+        );
+        assert_eq!((c.frame.width, c.frame.height), (4, 2));
+        assert_eq!(c.frame.resolution_m, 0.1);
+        assert_eq!(c.cost, vec![1, 1, 0, 1, 1, 1, 1, 4]);
+        assert_eq!(c.coarse_of(Cell::new(5, 1)), Cell::new(2, 0));
+        assert!(!c.passable(Cell::new(2, 0)) && c.passable(Cell::new(3, 1)));
+        assert_eq!(c.passable_near(Cell::new(4, 0), 1), Some(Cell::new(1, 0)));
+        // Outside the bounds everything is blocked.
+        let c = coarse_costs(fine, 2, Cell::new(0, 0), Cell::new(1, 1), |_| true, |_| 0);
+        assert_eq!(c.cost, vec![1, 0, 0, 0, 0, 0, 0, 0]);
+    }
+}
