@@ -39,7 +39,7 @@ pub enum JobError {
     NoStart(String),
     #[error("start pose ({x:.2}, {y:.2}) is not in free space of building {name}")]
     StartInWall { name: String, x: f64, y: f64 },
-    #[error("unknown strategy '{0}' (available: baseline)")]
+    #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch)")]
     UnknownStrategy(String),
     #[error(transparent)]
     Settings(#[from] SettingsError),
@@ -53,7 +53,7 @@ pub struct JobOutput {
 }
 
 /// The strategies this version implements.
-pub const STRATEGIES: &[&str] = &["baseline"];
+pub const STRATEGIES: &[&str] = sim_core::explore::Strategy::NAMES;
 
 /// Runs one job to completion. `on_progress` sees the exploration curve as it grows.
 pub fn run_job(
@@ -63,7 +63,7 @@ pub fn run_job(
     if !STRATEGIES.contains(&job.strategy.as_str()) {
         return Err(JobError::UnknownStrategy(job.strategy.clone()));
     }
-    let config = job.settings.to_explore_config()?;
+    let config = job.settings.to_explore_config_for(&job.strategy)?;
     let (start, source) = match job.start {
         Some(p) => (p, "command line"),
         None => match job.building.default_start() {

@@ -33,7 +33,15 @@ pub struct RunSummary {
     pub explored_fraction: f64,
     pub path_length_m: f64,
     pub decisions: usize,
+    /// Ended by the strategy's early-stopping rule (`explored_fraction` is then the fraction at
+    /// the stop).
     pub stopped_early: bool,
+    /// Reachable free area the map had not observed at the end (m2).
+    pub unexplored_free_m2: f64,
+    /// Ground-truth rooms the robot never entered (`null` without ground truth).
+    pub rooms_never_entered: Option<usize>,
+    /// Layouts reconstructed during the run (layout strategies).
+    pub layouts_computed: u64,
     pub end_reason: String,
     pub blacklisted_goals: usize,
     pub scans: u64,
@@ -68,7 +76,10 @@ impl RunSummary {
             explored_fraction: r.explored_fraction,
             path_length_m: r.path_length_m,
             decisions: r.decisions.len(),
-            stopped_early: false,
+            stopped_early: r.stopped_early,
+            unexplored_free_m2: (r.free_area_m2 - r.explored_area_m2).max(0.0),
+            rooms_never_entered: r.rooms_never_entered,
+            layouts_computed: r.layouts_computed,
             end_reason: r.end_reason.as_str().to_string(),
             blacklisted_goals: r.blacklisted_goals,
             scans: r.scans,

@@ -3,7 +3,7 @@
 //! job's identity hashes. Converted by hand into `sim-core`'s config and validated on the way.
 
 use serde::{Deserialize, Serialize};
-use sim_core::explore::{ExploreConfig, Localization};
+use sim_core::explore::{EarlyStop, ExploreConfig, Localization, Strategy};
 
 /// Settings as written in files and records. Every field has the documented default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -47,6 +47,12 @@ pub struct Settings {
     pub time_limit_s: f64,
     /// Drive back to the start after exploring.
     pub return_home: bool,
+    /// `layout-es`: stop when the summed gain of all candidates is below this (m2; paper: 1).
+    pub es_threshold_m2: f64,
+    /// `layout-aes`: drop candidates whose gain is below this (m2); stop when none is left.
+    pub aes_min_gain_m2: f64,
+    /// Layout strategies: rebuild the layout when the known area grew by this much (m2).
+    pub layout_update_m2: f64,
 }
 
 impl Default for Settings {
@@ -72,6 +78,9 @@ impl Default for Settings {
             progress_timeout_s: c.progress_timeout_s,
             time_limit_s: c.time_limit_s,
             return_home: c.return_home,
+            es_threshold_m2: 1.0,
+            aes_min_gain_m2: 2.0,
+            layout_update_m2: c.strategy.layout_update_m2,
         }
     }
 }
@@ -86,9 +95,29 @@ pub enum SettingsError {
     },
     #[error("settings.localization: unknown value '{0}', expected slam, odometry or ground-truth")]
     Localization(String),
+    #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch)")]
+    Strategy(String),
 }
 
 impl Settings {
+    /// The simulation config for strategy `name` (see [`sim_core::explore::Strategy::by_name`]),
+    /// with this file's thresholds.
+    pub fn to_explore_config_for(&self, name: &str) -> Result<ExploreConfig, SettingsError> {
+        let mut c = self.to_explore_config()?;
+        let mut st =
+            Strategy::by_name(name).ok_or_else(|| SettingsError::Strategy(name.to_string()))?;
+        st.layout_update_m2 = c.strategy.layout_update_m2;
+        st.early_stop = match st.early_stop {
+            EarlyStop::TotalGainBelow(_) => EarlyStop::TotalGainBelow(self.es_threshold_m2),
+            EarlyStop::DropCandidatesBelow(_) => {
+                EarlyStop::DropCandidatesBelow(self.aes_min_gain_m2)
+            }
+            EarlyStop::Never => EarlyStop::Never,
+        };
+        c.strategy = st;
+        Ok(c)
+    }
+
     /// Checks every field and builds the simulation config.
     pub fn to_explore_config(&self) -> Result<ExploreConfig, SettingsError> {
         fn check(
@@ -165,6 +194,9 @@ impl Settings {
         c.progress_timeout_s = pos("progress_timeout_s", self.progress_timeout_s)?;
         c.time_limit_s = pos("time_limit_s", self.time_limit_s)?;
         c.return_home = self.return_home;
+        nonneg("es_threshold_m2", self.es_threshold_m2)?;
+        nonneg("aes_min_gain_m2", self.aes_min_gain_m2)?;
+        c.strategy.layout_update_m2 = pos("layout_update_m2", self.layout_update_m2)?;
         Ok(c)
     }
 }

@@ -50,6 +50,11 @@ impl GainCache {
         }
     }
 
+    /// Forgets every cached gain (e.g. when the layout they depend on changed).
+    pub(crate) fn clear(&mut self) {
+        self.gains.clear();
+    }
+
     /// The gain of `p`, computed by `compute` unless a still valid one is cached.
     pub(crate) fn gain(
         &mut self,

@@ -9,8 +9,10 @@
 mod calibration;
 mod follow;
 mod gain_cache;
+pub mod strategy;
 
 pub use follow::{Command, FollowConfig, PathFollower};
+pub use strategy::{EarlyStop, GainModel, Strategy};
 
 use self::calibration::OdometryCalibration;
 use self::gain_cache::GainCache;
@@ -20,6 +22,8 @@ use crate::frontier::detect::{detect_frontiers_in, Frontier, FrontierConfig};
 use crate::gain::information_gain;
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
+use crate::layout::reconstruct_layout;
+use crate::layout_gain::{layout_information_gain, LayoutRaster};
 use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
@@ -58,6 +62,8 @@ pub enum EndReason {
     NoFrontiers,
     /// The simulated time limit was reached first.
     TimeLimit,
+    /// The strategy's early-stopping rule ended exploration with frontiers left.
+    EarlyStop,
 }
 
 impl EndReason {
@@ -65,6 +71,7 @@ impl EndReason {
         match self {
             EndReason::NoFrontiers => "no frontiers",
             EndReason::TimeLimit => "time limit",
+            EndReason::EarlyStop => "early stop",
         }
     }
 }
@@ -73,6 +80,10 @@ impl EndReason {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExploreConfig {
     pub sim: SimConfig,
+    /// How candidates are scored and when to stop early.
+    pub strategy: Strategy,
+    /// Parameters of the layout reconstruction (for layout-informed strategies).
+    pub layout: crate::layout::LayoutConfig,
     pub localization: Localization,
     pub map_resolution_m: f64,
     pub log_odds: LogOddsConfig,
@@ -113,6 +124,8 @@ impl Default for ExploreConfig {
             log_odds: LogOddsConfig::default(),
             scan_match: ScanMatchConfig::default(),
             calibrate_odometry: true,
+            strategy: Strategy::baseline(),
+            layout: crate::layout::LayoutConfig::default(),
             alpha: 0.5,
             min_frontier_m: 0.5,
             redecide_period_s: 10.0,
@@ -166,6 +179,12 @@ pub struct MapQuality {
 pub struct RunResult {
     pub seed: u64,
     pub start: Pose,
+    /// Ended by the strategy's early-stopping rule.
+    pub stopped_early: bool,
+    /// Layouts reconstructed during the run.
+    pub layouts_computed: u64,
+    /// Ground-truth rooms the robot never entered (when the building has rooms).
+    pub rooms_never_entered: Option<usize>,
     pub end_reason: EndReason,
     /// Simulated time at the end of exploration (before any return home).
     pub exploration_time_s: f64,
@@ -228,6 +247,24 @@ struct Explorer<'a> {
     plans: u64,
     gains: GainCache,
     next_progress_s: f64,
+    /// Cells of the map that are known (free or occupied), counted from the map's own changes.
+    known_cells: usize,
+    layout: Option<LayoutState>,
+    layouts_computed: u64,
+    /// For the switch strategy: the layout has been judged reliable.
+    layout_trusted: bool,
+    stopped_early: bool,
+    start: Pose,
+    /// Ground-truth room polygons (for the "rooms never entered" report only).
+    rooms: Vec<crate::geom::Polygon>,
+}
+
+/// The last layout and what is needed to judge it.
+struct LayoutState {
+    raster: LayoutRaster,
+    known_cells_at: usize,
+    /// Cells unknown when the layout was made that it predicted inside a room.
+    predicted_unknown: Vec<u32>,
 }
 
 struct Goal {
@@ -291,6 +328,13 @@ pub fn explore(
         plans: 0,
         gains: GainCache::new(frame),
         next_progress_s: 0.0,
+        known_cells: 0,
+        layout: None,
+        layouts_computed: 0,
+        layout_trusted: false,
+        stopped_early: false,
+        start,
+        rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
     };
     ex.run(on_progress)
 }
@@ -307,13 +351,17 @@ impl Explorer<'_> {
                 break;
             }
             if self.needs_decision() && !self.decide() {
-                end_reason = EndReason::NoFrontiers;
+                end_reason = if self.stopped_early {
+                    EndReason::EarlyStop
+                } else {
+                    EndReason::NoFrontiers
+                };
                 break;
             }
             self.drive();
         }
         let exploration_time_s = self.sim.time_s();
-        if cfg.return_home && end_reason == EndReason::NoFrontiers {
+        if cfg.return_home && end_reason != EndReason::TimeLimit {
             self.return_home();
         }
         self.finish(end_reason, exploration_time_s, on_progress)
@@ -399,7 +447,8 @@ impl Explorer<'_> {
                 }
             }
         };
-        self.map.insert_scan(&self.estimate, &scan, &cfg.log_odds);
+        let stats = self.map.insert_scan(&self.estimate, &scan, &cfg.log_odds);
+        self.known_cells += stats.cells_discovered;
         let flips = self.map.take_occupied_flips();
         self.obstacles.update(&self.map.occupancy, &flips);
         let free_changes = self.map.take_free_changes();
@@ -558,6 +607,65 @@ impl Explorer<'_> {
         Plan { coarse, field }
     }
 
+    /// Recomputes the layout when the strategy uses it and the map has grown enough since the
+    /// last one. Returns whether gains should use the layout now.
+    fn refresh_layout(&mut self) -> bool {
+        let st = &self.cfg.strategy;
+        if !st.uses_layout() {
+            return false;
+        }
+        let cell_area = self.map.frame.cell_area_m2();
+        let grown_m2 = self.layout.as_ref().map_or(f64::INFINITY, |l| {
+            (self.known_cells.saturating_sub(l.known_cells_at)) as f64 * cell_area
+        });
+        if grown_m2 >= st.layout_update_m2 {
+            let grid = &self.map.occupancy;
+            // Judge the previous layout by what was revealed since (for the switch strategy).
+            if let Some(prev) = &self.layout {
+                let (mut known, mut free) = (0usize, 0usize);
+                for &i in &prev.predicted_unknown {
+                    match grid.data[i as usize] {
+                        Occupancy::Free => {
+                            known += 1;
+                            free += 1;
+                        }
+                        Occupancy::Occupied => known += 1,
+                        Occupancy::Unknown => {}
+                    }
+                }
+                if known as f64 * cell_area >= st.switch_min_area_m2
+                    && free as f64 >= st.switch_agreement * known as f64
+                {
+                    self.layout_trusted = true;
+                }
+            }
+            let layout = reconstruct_layout(grid, &self.cfg.layout);
+            let raster = LayoutRaster::new(&layout, self.map.frame);
+            let predicted_unknown = grid
+                .data
+                .iter()
+                .enumerate()
+                .filter(|(i, s)| {
+                    **s == Occupancy::Unknown && raster.inside(self.map.frame.cell_of_index(*i))
+                })
+                .map(|(i, _)| i as u32)
+                .collect();
+            self.layout = Some(LayoutState {
+                raster,
+                known_cells_at: self.known_cells,
+                predicted_unknown,
+            });
+            self.layouts_computed += 1;
+            // Cached gains were computed with the previous layout.
+            self.gains.clear();
+        }
+        match st.gain {
+            GainModel::Baseline => false,
+            GainModel::Layout => true,
+            GainModel::Switch => self.layout_trusted,
+        }
+    }
+
     /// Chooses the next goal. Returns false when no reachable candidate is left.
     fn decide(&mut self) -> bool {
         let cfg = self.cfg;
@@ -605,6 +713,7 @@ impl Explorer<'_> {
                 })
                 .collect()
         };
+        let use_layout = self.refresh_layout();
         let targets: Vec<Cell> = goals.iter().flatten().copied().collect();
         self.plans += 1;
         let plan = self.plan(&targets);
@@ -613,9 +722,14 @@ impl Explorer<'_> {
             let distance_m = goal_cell.and_then(|c| plan.distance_m(c));
             let gain_m2 = if distance_m.is_some() {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
-                self.gains.gain(f.candidate, range_m, self.scans, || {
-                    information_gain(grid, f.candidate, range_m)
-                })
+                match (&self.layout, use_layout) {
+                    (Some(l), true) => self.gains.gain(f.candidate, range_m, self.scans, || {
+                        layout_information_gain(grid, &l.raster, f.candidate, range_m)
+                    }),
+                    _ => self.gains.gain(f.candidate, range_m, self.scans, || {
+                        information_gain(grid, f.candidate, range_m)
+                    }),
+                }
             } else {
                 0.0
             };
@@ -623,6 +737,21 @@ impl Explorer<'_> {
                 distance_m,
                 gain_m2,
             });
+        }
+        // Early stopping on the reachable candidates' gains.
+        let reachable: Vec<usize> = (0..scores.len())
+            .filter(|&i| scores[i].distance_m.is_some())
+            .collect();
+        let gains: Vec<f64> = reachable.iter().map(|&i| scores[i].gain_m2).collect();
+        let (keep, stop) = strategy::early_stop(cfg.strategy.early_stop, &gains);
+        if stop {
+            self.stopped_early = true;
+            return false;
+        }
+        for (k, &i) in keep.iter().zip(&reachable) {
+            if !k {
+                scores[i].distance_m = None;
+            }
         }
         let Some(best) = best_candidate(&scores, cfg.alpha) else {
             // Frontiers exist but none is reachable: blacklist them all so the run can end.
@@ -730,7 +859,15 @@ impl Explorer<'_> {
         let map_quality = map_quality(&self.map.occupancy, &self.truth);
         RunResult {
             seed: self.seed,
-            start: self.trajectory.first().copied().unwrap_or(self.estimate),
+            start: self.start,
+            stopped_early: end_reason == EndReason::EarlyStop,
+            layouts_computed: self.layouts_computed,
+            rooms_never_entered: (!self.rooms.is_empty()).then(|| {
+                self.rooms
+                    .iter()
+                    .filter(|r| !self.trajectory.iter().any(|p| r.contains(p.position())))
+                    .count()
+            }),
             end_reason,
             exploration_time_s,
             total_time_s: self.sim.time_s(),

@@ -82,3 +82,25 @@ fn same_seed_same_run_and_seeds_differ() {
     let c = run(Localization::Slam, 6);
     assert_ne!(a.trajectory, c.trajectory);
 }
+
+#[test]
+fn layout_strategies_run_and_are_reproducible() {
+    let b = corridor_building(4);
+    for name in ["layout", "layout-es", "layout-aes", "layout-switch"] {
+        let cfg = ExploreConfig {
+            strategy: Strategy::by_name(name).unwrap(),
+            ..ExploreConfig::default()
+        };
+        let r = explore(&b, b.start.unwrap(), &cfg, 3, &mut |_| {});
+        assert!(r.layouts_computed > 0, "{name}");
+        assert_ne!(r.end_reason, EndReason::TimeLimit, "{name}");
+        assert_eq!(r.stopped_early, r.end_reason == EndReason::EarlyStop);
+        assert!(
+            r.explored_fraction >= 0.9,
+            "{name}: {}",
+            r.explored_fraction
+        );
+        let again = explore(&b, b.start.unwrap(), &cfg, 3, &mut |_| {});
+        assert_eq!(r, again, "{name} is deterministic");
+    }
+}

@@ -1,0 +1,147 @@
+//! Exploration strategies: how the information gain `I(p)` of a candidate is estimated and when
+//! exploration may stop before the last frontier is visited.
+
+/// How `I(p)` is estimated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GainModel {
+    /// Unknown cells within laser range visible from `p`, unknown counted as free ("no L").
+    Baseline,
+    /// The layout's walls bound the visible unknown area ("with L"); rooms with an open frontier
+    /// fall back to the baseline.
+    Layout,
+    /// Baseline until the layout is judged reliable (its predictions agree with what later scans
+    /// revealed), layout afterwards: the dynamic switch of the paper's conclusion.
+    Switch,
+}
+
+/// When to stop early.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EarlyStop {
+    /// Explore until no frontier is left.
+    Never,
+    /// The paper's ES: stop when the sum of `I(p)` over all candidates is below the threshold (m2).
+    TotalGainBelow(f64),
+    /// The more aggressive ES of the paper's discussion: candidates whose `I(p)` is below the
+    /// threshold (m2) are dropped; stop when none is left.
+    DropCandidatesBelow(f64),
+}
+
+/// A strategy: a gain model and an early-stopping rule, plus how often the layout is rebuilt.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Strategy {
+    pub gain: GainModel,
+    pub early_stop: EarlyStop,
+    /// The layout is recomputed at a decision when the known area changed by at least this much
+    /// since the last layout (m2), so it follows the map without being rebuilt at every step.
+    pub layout_update_m2: f64,
+    /// For [`GainModel::Switch`]: the layout is trusted once this fraction of the cells it
+    /// predicted inside rooms, and that were observed since, turned out free...
+    pub switch_agreement: f64,
+    /// ...measured over at least this many square metres.
+    pub switch_min_area_m2: f64,
+}
+
+impl Strategy {
+    pub fn baseline() -> Self {
+        Self {
+            gain: GainModel::Baseline,
+            early_stop: EarlyStop::Never,
+            layout_update_m2: 20.0,
+            switch_agreement: 0.9,
+            switch_min_area_m2: 5.0,
+        }
+    }
+
+    /// The strategies by name: `baseline`, `layout`, `layout-es` (ES threshold 1 m2, as the
+    /// paper), `layout-aes` (aggressive ES, 2 m2 per candidate), `layout-switch`.
+    pub fn by_name(name: &str) -> Option<Self> {
+        let b = Self::baseline();
+        Some(match name {
+            "baseline" => b,
+            "layout" => Self {
+                gain: GainModel::Layout,
+                ..b
+            },
+            "layout-es" => Self {
+                gain: GainModel::Layout,
+                early_stop: EarlyStop::TotalGainBelow(1.0),
+                ..b
+            },
+            "layout-aes" => Self {
+                gain: GainModel::Layout,
+                early_stop: EarlyStop::DropCandidatesBelow(2.0),
+                ..b
+            },
+            "layout-switch" => Self {
+                gain: GainModel::Switch,
+                ..b
+            },
+            _ => return None,
+        })
+    }
+
+    /// Names accepted by [`Strategy::by_name`].
+    pub const NAMES: &'static [&'static str] = &[
+        "baseline",
+        "layout",
+        "layout-es",
+        "layout-aes",
+        "layout-switch",
+    ];
+
+    /// Whether this strategy needs the layout at all.
+    pub fn uses_layout(&self) -> bool {
+        self.gain != GainModel::Baseline
+    }
+}
+
+/// Applies the early-stopping rule to the candidates' gains: returns which candidates stay and
+/// whether exploration should stop now.
+pub fn early_stop(rule: EarlyStop, gains_m2: &[f64]) -> (Vec<bool>, bool) {
+    match rule {
+        EarlyStop::Never => (vec![true; gains_m2.len()], false),
+        EarlyStop::TotalGainBelow(t) => {
+            let total: f64 = gains_m2.iter().sum();
+            (
+                vec![true; gains_m2.len()],
+                !gains_m2.is_empty() && total < t,
+            )
+        }
+        EarlyStop::DropCandidatesBelow(t) => {
+            let keep: Vec<bool> = gains_m2.iter().map(|g| *g >= t).collect();
+            let stop = !gains_m2.is_empty() && !keep.iter().any(|k| *k);
+            (keep, stop)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_resolve() {
+        for n in Strategy::NAMES {
+            assert!(Strategy::by_name(n).is_some(), "{n}");
+        }
+        assert!(Strategy::by_name("nope").is_none());
+        assert!(!Strategy::by_name("baseline").unwrap().uses_layout());
+        assert!(Strategy::by_name("layout-es").unwrap().uses_layout());
+    }
+
+    #[test]
+    fn early_stop_rules() {
+        assert_eq!(
+            early_stop(EarlyStop::Never, &[0.0, 0.1]),
+            (vec![true, true], false)
+        );
+        assert!(early_stop(EarlyStop::TotalGainBelow(1.0), &[0.3, 0.5]).1);
+        assert!(!early_stop(EarlyStop::TotalGainBelow(1.0), &[0.3, 0.8]).1);
+        assert!(!early_stop(EarlyStop::TotalGainBelow(1.0), &[]).1);
+        assert_eq!(
+            early_stop(EarlyStop::DropCandidatesBelow(2.0), &[1.0, 3.0]),
+            (vec![false, true], false)
+        );
+        assert!(early_stop(EarlyStop::DropCandidatesBelow(2.0), &[1.0, 1.5]).1);
+    }
+}
