@@ -85,7 +85,13 @@ pub fn layout_information_gain(
         &grid.frame,
         p,
         range_m,
-        |c| grid.is(c, Occupancy::Occupied) || raster.walls.get(c) == Some(&true),
+        // A candidate lies on the frontier, often right on the edge of its room's polygon: the
+        // layout walls touching its own cell must not hide everything from it.
+        |c| {
+            grid.is(c, Occupancy::Occupied)
+                || (raster.walls.get(c) == Some(&true)
+                    && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
+        },
         |c| grid.is(c, Occupancy::Unknown) && raster.inside(c),
     )
 }
@@ -142,6 +148,9 @@ mod tests {
         let with_l = layout_information_gain(&g, &r, p, 6.0);
         assert!(with_l > 0.5 && with_l < 1.2, "with L: {with_l}");
         assert!(base > 10.0 * with_l, "baseline {base} vs {with_l}");
+        // A candidate on the room's own wall line still sees into the room.
+        let on_edge = layout_information_gain(&g, &r, Cell::new(5, 20), 6.0);
+        assert!(on_edge > 0.5 && on_edge < 1.2, "on the edge: {on_edge}");
         // The same room with an open frontier keeps the baseline.
         let layout = Layout {
             rooms: vec![room(1, (0.5, 1.5), (2.5, 2.5), RoomLabel::Open)],
