@@ -27,11 +27,13 @@ pub fn angle_diff_mod_pi(a: f64, b: f64) -> f64 {
 
 /// Sharpness of the offsets of `pts` along the normal at angle `t`: the sum of squared counts of
 /// a linearly binned histogram (a straight wall at that angle stacks its cells into one bin).
+/// Bins start at the lowest offset, so that the outermost wall's cells fall on a bin boundary.
 fn sharpness(pts: &[Vec2], t: f64, bin_m: f64, hist: &mut Vec<f64>) -> f64 {
     let (s, c) = t.sin_cos();
+    let (cb, sb) = (c / bin_m, s / bin_m);
     let (lo, hi) = pts
         .iter()
-        .map(|p| (p.x * c + p.y * s) / bin_m)
+        .map(|p| p.x * cb + p.y * sb)
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), o| {
             (l.min(o), h.max(o))
         });
@@ -43,7 +45,7 @@ fn sharpness(pts: &[Vec2], t: f64, bin_m: f64, hist: &mut Vec<f64>) -> f64 {
     hist.resize(n, 0.0);
     // Linear binning: the score does not jump when a wall crosses a bin boundary.
     for p in pts {
-        let x = (p.x * c + p.y * s) / bin_m - lo;
+        let x = p.x * cb + p.y * sb - lo;
         let b = x as usize;
         let fr = x - b as f64;
         hist[b] += 1.0 - fr;
@@ -64,8 +66,8 @@ pub fn dominant_directions(
     if cells.len() < 8 {
         return Vec::new();
     }
-    // Coarse scan on at most ~8000 cells, bins of two cells, 1 degree steps.
-    let stride = (cells.len() / 8000).max(1);
+    // Coarse scan on at most ~COARSE_POINTS cells, bins of two cells, 1 degree steps.
+    let stride = cells.len().div_ceil(COARSE_POINTS).max(1);
     let pts: Vec<Vec2> = cells.iter().step_by(stride).map(|c| c.p).collect();
     let mut hist = Vec::new();
     let score: Vec<f64> = (0..BINS)
@@ -134,27 +136,39 @@ pub fn dominant_directions(
         .map(|(a, _)| *a)
         .collect();
     diag.directions = peaks.len();
-    let all: Vec<Vec2> = cells.iter().map(|c| c.p).collect();
+    // Refinement on at most ~REFINE_POINTS cells spread over the whole map (a stride keeps every
+    // wall represented).
+    let stride = cells.len().div_ceil(REFINE_POINTS).max(1);
+    let all: Vec<Vec2> = cells.iter().step_by(stride).map(|c| c.p).collect();
     peaks
         .into_iter()
         .map(|a| refine(&all, a, resolution_m, diag))
         .collect()
 }
 
-/// The angle within one degree of `a` whose offset histogram is sharpest.
+/// Cells used to refine a direction.
+const REFINE_POINTS: usize = 20_000;
+/// Cells used to find the directions.
+const COARSE_POINTS: usize = 5_000;
+
+/// The angle within one degree of `a` whose offset histogram is sharpest: 0.2 degree steps,
+/// then 0.05 degree steps around the best.
 fn refine(pts: &[Vec2], a: f64, resolution_m: f64, diag: &mut LayoutDiagnostics) -> f64 {
     let mut hist: Vec<f64> = Vec::new();
     let mut best = (f64::NEG_INFINITY, a);
-    let steps = 40;
-    let span = 1f64.to_radians();
-    for k in 0..=steps {
-        let t = a - span + 2.0 * span * k as f64 / steps as f64;
-        let score = sharpness(pts, t, resolution_m, &mut hist);
-        diag.direction_refine_steps += 1;
-        if score > best.0 {
-            best = (score, t);
+    let mut scan = |centre: f64, step_deg: f64, steps: i32, best: &mut (f64, f64)| {
+        for k in -steps..=steps {
+            let t = centre + (k as f64 * step_deg).to_radians();
+            let score = sharpness(pts, t, resolution_m, &mut hist);
+            diag.direction_refine_steps += 1;
+            if score > best.0 {
+                *best = (score, t);
+            }
         }
-    }
+    };
+    scan(a, 0.2, 5, &mut best);
+    let coarse = best.1;
+    scan(coarse, 0.05, 3, &mut best);
     best.1.rem_euclid(PI)
 }
 
