@@ -24,6 +24,10 @@ use sim_core::layout::synthetic::{
 use sim_core::layout::{evaluate, reconstruct_layout, Layout, LayoutConfig, RoomLabel};
 use sim_core::{Bitmap, Cell, Occupancy, OccupancyGrid};
 
+/// A class name, its layout times, and per map (optimised stage, reference stage, layout
+/// median), all in ms.
+type ClassTimes = (String, Vec<f64>, Vec<(f64, f64, f64)>);
+
 /// Median times (ms) of the optimised and the reference thin-unknown fill on `grid`.
 fn stage_ms(grid: &OccupancyGrid, config: &LayoutConfig, runs: usize) -> (f64, f64) {
     let mut fast = Vec::new();
@@ -170,7 +174,7 @@ fn main() {
     }
     let config = LayoutConfig::default();
     // Per class: layout times, and per map (optimised stage, reference stage, layout median).
-    let mut classes: Vec<(String, Vec<f64>, Vec<(f64, f64, f64)>)> = Vec::new();
+    let mut classes: Vec<ClassTimes> = Vec::new();
     let mut all_median = Vec::new();
     let mut all_max: f64 = 0.0;
     println!(
