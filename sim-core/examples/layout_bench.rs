@@ -1,6 +1,13 @@
 //! Times `reconstruct_layout` on every real map in the shared folder and on synthetic complete
 //! and partial buildings, prints accuracy on the synthetic ones, and optionally draws the layouts.
 //!
+//! Per map class it prints the median and maximum time of `reconstruct_layout`, and a ratio
+//! against a baseline measured in the same run on the same maps: the stage that was the costliest
+//! before optimisation (the thin-unknown fill, two dilations of the whole grid) in its reference
+//! form (`fill_thin_unknown_reference`: per-cell dilation of the whole grid) against the
+//! optimised stage (`fill_thin_unknown`: vectorised dilation of the known window only), and the
+//! whole layout with the reference stage swapped in (`layout + reference - optimised`).
+//!
 //! `cargo run -p sim-core --release --example layout_bench [-- --png /tmp/layouts] [--runs N]`
 
 #[path = "../tests/common/mod.rs"]
@@ -10,11 +17,32 @@ use std::time::Instant;
 
 use sim_core::building::fill_polygon;
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
+use sim_core::layout::evidence::{fill_thin_unknown, fill_thin_unknown_reference};
 use sim_core::layout::synthetic::{
     complete_map, corridor_building, corridor_views, explored_map, observe, rasterise, BuildingSpec,
 };
 use sim_core::layout::{evaluate, reconstruct_layout, Layout, LayoutConfig, RoomLabel};
 use sim_core::{Bitmap, Cell, Occupancy, OccupancyGrid};
+
+/// A class name, its layout times, and per map (optimised stage, reference stage, layout
+/// median), all in ms.
+type ClassTimes = (String, Vec<f64>, Vec<(f64, f64, f64)>);
+
+/// Median times (ms) of the optimised and the reference thin-unknown fill on `grid`.
+fn stage_ms(grid: &OccupancyGrid, config: &LayoutConfig, runs: usize) -> (f64, f64) {
+    let mut fast = Vec::new();
+    let mut reference = Vec::new();
+    for _ in 0..runs {
+        let t = Instant::now();
+        let a = fill_thin_unknown(grid, config.thin_unknown_wall_m);
+        fast.push(t.elapsed().as_secs_f64() * 1000.0);
+        let t = Instant::now();
+        let b = fill_thin_unknown_reference(grid, config.thin_unknown_wall_m);
+        reference.push(t.elapsed().as_secs_f64() * 1000.0);
+        assert_eq!(a.1, b.1, "the optimised fill differs from the reference");
+    }
+    (median(&mut fast), median(&mut reference))
+}
 
 fn time_ms(grid: &OccupancyGrid, config: &LayoutConfig, runs: usize) -> (Layout, Vec<f64>) {
     let mut times = Vec::new();
@@ -145,53 +173,66 @@ fn main() {
         std::fs::create_dir_all(d).unwrap();
     }
     let config = LayoutConfig::default();
+    // Per class: layout times, and per map (optimised stage, reference stage, layout median).
+    let mut classes: Vec<ClassTimes> = Vec::new();
     let mut all_median = Vec::new();
     let mut all_max: f64 = 0.0;
     println!(
         "{:<44} {:>8} {:>8} {:>5} {:>5} {:>5} {:>5} {:>5} {:>8} {:>8}",
         "map", "Mcells", "known_m2", "dirs", "lines", "rooms", "part", "open", "med_ms", "max_ms"
     );
-    let mut report = |name: &str, grid: &OccupancyGrid, layout: &Layout, times: &[f64]| {
-        let known = (grid.count(Occupancy::Free) + grid.count(Occupancy::Occupied)) as f64
-            * grid.frame.cell_area_m2();
-        let part = layout
-            .rooms
-            .iter()
-            .filter(|r| r.label == RoomLabel::Partial)
-            .count();
-        let open = layout
-            .rooms
-            .iter()
-            .filter(|r| r.label == RoomLabel::Open)
-            .count();
-        let med = times[times.len() / 2];
-        let max = times[times.len() - 1];
-        all_median.push(med);
-        all_max = all_max.max(max);
-        println!(
-            "{:<44} {:>8.2} {:>8.0} {:>5} {:>5} {:>5} {:>5} {:>5} {:>8.1} {:>8.1}",
-            name,
-            grid.frame.len() as f64 / 1e6,
-            known,
-            layout.diagnostics.directions,
-            layout.lines.len(),
-            layout.rooms.len(),
-            part,
-            open,
-            med,
-            max
-        );
-        if verbose {
-            println!("    {:?}", layout.diagnostics);
-        }
-        if let Some(d) = &png {
-            draw(
-                grid,
-                layout,
-                &d.join(format!("{}.png", name.replace('/', "_"))),
+    let mut report =
+        |class: &str, name: &str, grid: &OccupancyGrid, layout: &Layout, times: &[f64]| {
+            let known = (grid.count(Occupancy::Free) + grid.count(Occupancy::Occupied)) as f64
+                * grid.frame.cell_area_m2();
+            let part = layout
+                .rooms
+                .iter()
+                .filter(|r| r.label == RoomLabel::Partial)
+                .count();
+            let open = layout
+                .rooms
+                .iter()
+                .filter(|r| r.label == RoomLabel::Open)
+                .count();
+            let med = times[times.len() / 2];
+            let max = times[times.len() - 1];
+            let stage = stage_ms(grid, &config, runs);
+            let i = match classes.iter().position(|c| c.0 == class) {
+                Some(i) => i,
+                None => {
+                    classes.push((class.to_string(), Vec::new(), Vec::new()));
+                    classes.len() - 1
+                }
+            };
+            classes[i].1.extend_from_slice(times);
+            classes[i].2.push((stage.0, stage.1, med));
+            all_median.push(med);
+            all_max = all_max.max(max);
+            println!(
+                "{:<44} {:>8.2} {:>8.0} {:>5} {:>5} {:>5} {:>5} {:>5} {:>8.1} {:>8.1}",
+                name,
+                grid.frame.len() as f64 / 1e6,
+                known,
+                layout.diagnostics.directions,
+                layout.lines.len(),
+                layout.rooms.len(),
+                part,
+                open,
+                med,
+                max
             );
-        }
-    };
+            if verbose {
+                println!("    {:?}", layout.diagnostics);
+            }
+            if let Some(d) = &png {
+                draw(
+                    grid,
+                    layout,
+                    &d.join(format!("{}.png", name.replace('/', "_"))),
+                );
+            }
+        };
     let only = args
         .iter()
         .position(|a| a == "--only")
@@ -212,7 +253,12 @@ fn main() {
             yaml.file_stem().unwrap().to_string_lossy()
         );
         let (layout, times) = time_ms(&grid, &config, runs);
-        report(&name, &grid, &layout, &times);
+        let class = if name.starts_with("partial") {
+            "real rotated 0.10 m (partial/)"
+        } else {
+            "real other"
+        };
+        report(class, &name, &grid, &layout, &times);
     }
     // Synthetic: a 1100 m2 corridor building, complete and partial, axis-aligned and rotated.
     let mut acc_lines = Vec::new();
@@ -233,7 +279,7 @@ fn main() {
             };
             let (layout, times) = time_ms(&grid, &config, runs);
             let name = format!("synthetic/rot{rotation_rad:.2}_seen{fraction:.1}");
-            report(&name, &grid, &layout, &times);
+            report("synthetic corridor", &name, &grid, &layout, &times);
             let a = evaluate(&layout, &b.rooms, grid.frame);
             acc_lines.push(format!(
                 "{name:<34} iou {:.3} pixel {:.3} rooms {}/{} partial {} predicted_iou {} observed_only_iou {}",
@@ -248,11 +294,6 @@ fn main() {
         }
     }
     // Generated schools and offices, 1000-3500 m2, complete and explored 30-90 %.
-    let mut classes: Vec<(String, Vec<f64>)> = Vec::new();
-    let mut push = |class: String, t: f64| match classes.iter_mut().find(|c| c.0 == class) {
-        Some(c) => c.1.push(t),
-        None => classes.push((class, vec![t])),
-    };
     let (mut iou_complete, mut iou_pred, mut iou_obs) = (Vec::new(), Vec::new(), Vec::new());
     for seed in 0..4u64 {
         for kind in [BuildingKind::School, BuildingKind::Office] {
@@ -278,15 +319,12 @@ fn main() {
                 let (layout, times) = time_ms(&grid, &config, runs);
                 let name =
                     format!("gen/{kind:?}{seed}_{area_m2}_rot{rotation_rad:.2}_seen{fraction:.1}");
-                report(&name, &grid, &layout, &times);
                 let class = if fraction > 1.0 {
-                    "complete"
+                    "generated complete 0.05 m"
                 } else {
-                    "partial"
+                    "generated partial 0.05 m"
                 };
-                for t in &times {
-                    push(format!("generated {class}"), *t);
-                }
+                report(class, &name, &grid, &layout, &times);
                 let a = evaluate(&layout, &b.rooms, grid.frame);
                 if fraction > 1.0 {
                     iou_complete.push(a.matched_room_iou);
@@ -308,13 +346,44 @@ fn main() {
     }
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     println!();
-    for (class, mut t) in classes {
+    println!(
+        "baseline: thin-unknown fill (the costliest stage before optimisation), reference = \
+         per-cell dilation of the whole grid, optimised = vectorised dilation of the known window"
+    );
+    println!(
+        "{:<32} {:>8} {:>8} {:>6} | {:>9} {:>9} {:>7} | {:>12} {:>7}",
+        "class",
+        "med_ms",
+        "max_ms",
+        "runs",
+        "stage_ref",
+        "stage_opt",
+        "ratio",
+        "layout_w_ref",
+        "ratio"
+    );
+    for (class, mut t, stages) in classes {
         let max = t.iter().cloned().fold(0.0, f64::max);
+        let mut opt: Vec<f64> = stages.iter().map(|s| s.0).collect();
+        let mut reference: Vec<f64> = stages.iter().map(|s| s.1).collect();
+        let mut with_ref: Vec<f64> = stages.iter().map(|s| s.2 + s.1 - s.0).collect();
+        let mut layout: Vec<f64> = stages.iter().map(|s| s.2).collect();
+        let (o, r, wr, l) = (
+            median(&mut opt),
+            median(&mut reference),
+            median(&mut with_ref),
+            median(&mut layout),
+        );
         println!(
-            "{class:<24} median {:.1} ms max {:.1} ms ({} runs)",
+            "{class:<32} {:>8.1} {:>8.1} {:>6} | {:>9.1} {:>9.1} {:>6.1}x | {:>12.1} {:>6.2}x",
             median(&mut t),
             max,
-            t.len()
+            t.len(),
+            r,
+            o,
+            r / o.max(1e-9),
+            wr,
+            wr / l.max(1e-9)
         );
     }
     println!(

@@ -9,6 +9,15 @@ use super::{LayoutConfig, LayoutDiagnostics};
 use crate::geom::Vec2;
 
 const BINS: usize = 180;
+/// A direction this close to perpendicular to a kept one is its partner.
+const PERPENDICULAR_TOLERANCE_RAD: f64 = 0.06;
+/// Directions that are not the partner of a kept one need this many times
+/// [`LayoutConfig::min_direction_fraction`].
+const OBLIQUE_FACTOR: f64 = 3.0;
+/// Boundary cells whose local normal is this close to a direction support it locally.
+const LOCAL_TOLERANCE_RAD: f64 = 0.14;
+/// A direction needs at least this fraction of the locally supporting cells of the best one.
+const MIN_LOCAL_FRACTION: f64 = 0.12;
 
 /// Angular distance modulo pi.
 pub fn angle_diff_mod_pi(a: f64, b: f64) -> f64 {
@@ -18,11 +27,13 @@ pub fn angle_diff_mod_pi(a: f64, b: f64) -> f64 {
 
 /// Sharpness of the offsets of `pts` along the normal at angle `t`: the sum of squared counts of
 /// a linearly binned histogram (a straight wall at that angle stacks its cells into one bin).
+/// Bins start at the lowest offset, so that the outermost wall's cells fall on a bin boundary.
 fn sharpness(pts: &[Vec2], t: f64, bin_m: f64, hist: &mut Vec<f64>) -> f64 {
     let (s, c) = t.sin_cos();
+    let (cb, sb) = (c / bin_m, s / bin_m);
     let (lo, hi) = pts
         .iter()
-        .map(|p| (p.x * c + p.y * s) / bin_m)
+        .map(|p| p.x * cb + p.y * sb)
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), o| {
             (l.min(o), h.max(o))
         });
@@ -34,7 +45,7 @@ fn sharpness(pts: &[Vec2], t: f64, bin_m: f64, hist: &mut Vec<f64>) -> f64 {
     hist.resize(n, 0.0);
     // Linear binning: the score does not jump when a wall crosses a bin boundary.
     for p in pts {
-        let x = (p.x * c + p.y * s) / bin_m - lo;
+        let x = p.x * cb + p.y * sb - lo;
         let b = x as usize;
         let fr = x - b as f64;
         hist[b] += 1.0 - fr;
@@ -55,8 +66,8 @@ pub fn dominant_directions(
     if cells.len() < 8 {
         return Vec::new();
     }
-    // Coarse scan on at most ~8000 cells, bins of two cells, 1 degree steps.
-    let stride = (cells.len() / 8000).max(1);
+    // Coarse scan on at most ~COARSE_POINTS cells, bins of two cells, 1 degree steps.
+    let stride = cells.len().div_ceil(COARSE_POINTS).max(1);
     let pts: Vec<Vec2> = cells.iter().step_by(stride).map(|c| c.p).collect();
     let mut hist = Vec::new();
     let score: Vec<f64> = (0..BINS)
@@ -81,14 +92,24 @@ pub fn dominant_directions(
     order.sort_by(|&a, &b| score[b].total_cmp(&score[a]).then(a.cmp(&b)));
     let mut peaks: Vec<f64> = Vec::new();
     for b in order {
-        if peaks.len() >= config.max_directions
-            || ((score[b] - base) / (max - base)).sqrt() < config.min_direction_fraction
-        {
+        let strength = ((score[b] - base) / (max - base)).sqrt();
+        if peaks.len() >= config.max_directions || strength < config.min_direction_fraction {
             break;
+        }
+        // The perpendicular of a kept direction is expected; any other direction must be
+        // clearly stronger than the lattice aliases of the kept ones.
+        let a = b as f64 * PI / BINS as f64;
+        let perpendicular = peaks
+            .iter()
+            .any(|p| (angle_diff_mod_pi(*p, a) - PI / 2.0).abs() <= PERPENDICULAR_TOLERANCE_RAD);
+        if !peaks.is_empty()
+            && !perpendicular
+            && strength < OBLIQUE_FACTOR * config.min_direction_fraction
+        {
+            continue;
         }
         let is_local_max =
             score[b] >= score[(b + 1) % BINS] && score[b] >= score[(b + BINS - 1) % BINS];
-        let a = b as f64 * PI / BINS as f64;
         if is_local_max
             && peaks
                 .iter()
@@ -97,28 +118,57 @@ pub fn dominant_directions(
             peaks.push(a);
         }
     }
+    // Lattice aliasing: the cells of axis-aligned walls also stack at rational angles (atan 1/5,
+    // atan 1/4...), where no wall runs. A real direction is also the local orientation of many
+    // boundary cells; keep the peaks holding a good fraction of the best one's cells.
+    let local = |a: f64| {
+        cells
+            .iter()
+            .filter(|c| angle_diff_mod_pi(c.normal_rad, a) <= LOCAL_TOLERANCE_RAD)
+            .count()
+    };
+    let counts: Vec<usize> = peaks.iter().map(|a| local(*a)).collect();
+    let best = counts.iter().copied().max().unwrap_or(0);
+    let peaks: Vec<f64> = peaks
+        .iter()
+        .zip(&counts)
+        .filter(|(_, n)| **n > 0 && **n as f64 >= MIN_LOCAL_FRACTION * best as f64)
+        .map(|(a, _)| *a)
+        .collect();
     diag.directions = peaks.len();
-    let all: Vec<Vec2> = cells.iter().map(|c| c.p).collect();
+    // Refinement on at most ~REFINE_POINTS cells spread over the whole map (a stride keeps every
+    // wall represented).
+    let stride = cells.len().div_ceil(REFINE_POINTS).max(1);
+    let all: Vec<Vec2> = cells.iter().step_by(stride).map(|c| c.p).collect();
     peaks
         .into_iter()
         .map(|a| refine(&all, a, resolution_m, diag))
         .collect()
 }
 
-/// The angle within one degree of `a` whose offset histogram is sharpest.
+/// Cells used to refine a direction.
+const REFINE_POINTS: usize = 20_000;
+/// Cells used to find the directions.
+const COARSE_POINTS: usize = 5_000;
+
+/// The angle within one degree of `a` whose offset histogram is sharpest: 0.2 degree steps,
+/// then 0.05 degree steps around the best.
 fn refine(pts: &[Vec2], a: f64, resolution_m: f64, diag: &mut LayoutDiagnostics) -> f64 {
     let mut hist: Vec<f64> = Vec::new();
     let mut best = (f64::NEG_INFINITY, a);
-    let steps = 40;
-    let span = 1f64.to_radians();
-    for k in 0..=steps {
-        let t = a - span + 2.0 * span * k as f64 / steps as f64;
-        let score = sharpness(pts, t, resolution_m, &mut hist);
-        diag.direction_refine_steps += 1;
-        if score > best.0 {
-            best = (score, t);
+    let mut scan = |centre: f64, step_deg: f64, steps: i32, best: &mut (f64, f64)| {
+        for k in -steps..=steps {
+            let t = centre + (k as f64 * step_deg).to_radians();
+            let score = sharpness(pts, t, resolution_m, &mut hist);
+            diag.direction_refine_steps += 1;
+            if score > best.0 {
+                *best = (score, t);
+            }
         }
-    }
+    };
+    scan(a, 0.2, 5, &mut best);
+    let coarse = best.1;
+    scan(coarse, 0.05, 3, &mut best);
     best.1.rem_euclid(PI)
 }
 
@@ -169,6 +219,27 @@ mod tests {
         got.sort_by(f64::total_cmp);
         assert!(got[0] < 0.2f64.to_radians(), "{got:?}");
         assert!((got[1] - PI / 2.0).abs() < 0.2f64.to_radians(), "{got:?}");
+    }
+
+    #[test]
+    fn grid_aliases_of_manhattan_walls_are_not_directions() {
+        // The cells of axis-aligned walls also stack at atan(1/5), atan(1/4)...: only the two
+        // real directions may come out, at 0.05 and at 0.10 m.
+        use super::super::evidence::wall_evidence;
+        use super::super::synthetic::{corridor_building, rasterise, BuildingSpec};
+        let b = corridor_building(&BuildingSpec::default());
+        for res in [0.05, 0.1] {
+            let g = rasterise(&b, res);
+            let config = LayoutConfig::default();
+            let e = wall_evidence(&g, &config);
+            let dirs =
+                dominant_directions(&e.cells, res, &config, &mut LayoutDiagnostics::default());
+            assert_eq!(dirs.len(), 2, "{res}: {dirs:?}");
+            for d in dirs {
+                let off = angle_diff_mod_pi(d, 0.0).min(angle_diff_mod_pi(d, PI / 2.0));
+                assert!(off < 0.5f64.to_radians(), "{res}: {d}");
+            }
+        }
     }
 
     #[test]

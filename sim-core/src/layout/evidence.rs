@@ -29,29 +29,7 @@ pub struct WallEvidence {
 pub fn wall_evidence(grid: &OccupancyGrid, config: &LayoutConfig) -> WallEvidence {
     let f = grid.frame;
     let (w, h) = (f.width as usize, f.height as usize);
-    let mut known_cells = 0usize;
-    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0usize, 0usize);
-    for y in 0..h {
-        let row = &grid.data[y * w..(y + 1) * w];
-        let first = row.iter().position(|s| *s != Occupancy::Unknown);
-        if let Some(fx) = first {
-            let lx = row
-                .iter()
-                .rposition(|s| *s != Occupancy::Unknown)
-                .unwrap_or(fx);
-            known_cells += row.iter().filter(|s| **s != Occupancy::Unknown).count();
-            x0 = x0.min(fx);
-            x1 = x1.max(lx);
-            y0 = y0.min(y);
-            y1 = y1.max(y);
-        }
-    }
-    let known_box = (known_cells > 0).then(|| {
-        (
-            Cell::new(x0 as i32, y0 as i32),
-            Cell::new(x1 as i32, y1 as i32),
-        )
-    });
+    let (known_box, known_cells) = known_box(grid);
     let at = |x: isize, y: isize| -> Occupancy {
         if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
             Occupancy::Unknown
@@ -61,8 +39,11 @@ pub fn wall_evidence(grid: &OccupancyGrid, config: &LayoutConfig) -> WallEvidenc
     };
     let is_free = |x: usize, y: usize| grid.data[y * w + x] == Occupancy::Free;
     let mut cells = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
+    let (bx0, by0, bx1, by1) = known_box.map_or((1, 1, 0, 0), |(a, b)| {
+        (a.x as usize, a.y as usize, b.x as usize, b.y as usize)
+    });
+    for y in by0..=by1 {
+        for x in bx0..=bx1 {
             if grid.data[y * w + x] != Occupancy::Occupied {
                 continue;
             }
@@ -121,7 +102,7 @@ pub fn wall_evidence(grid: &OccupancyGrid, config: &LayoutConfig) -> WallEvidenc
         }
     }
     let radius = (config.wall_tolerance_m / f.resolution_m).round().max(0.0) as usize;
-    let near_wall = dilate_occupied(grid, radius);
+    let near_wall = dilate_occupied(grid, known_box, radius);
     WallEvidence {
         cells,
         near_wall,
@@ -130,30 +111,166 @@ pub fn wall_evidence(grid: &OccupancyGrid, config: &LayoutConfig) -> WallEvidenc
     }
 }
 
-/// Occupied cells dilated by a square of half-side `radius` cells (separable, linear time).
-fn dilate_occupied(grid: &OccupancyGrid, radius: usize) -> Bitmap {
-    let f = grid.frame;
-    let src: Vec<bool> = grid
-        .data
-        .iter()
-        .map(|s| *s == Occupancy::Occupied)
-        .collect();
-    Bitmap {
-        frame: f,
-        data: dilate(&src, f.width as usize, f.height as usize, radius),
+/// The inclusive cell box of the known (free or occupied) cells and their number.
+pub fn known_box(grid: &OccupancyGrid) -> (Option<(Cell, Cell)>, usize) {
+    let w = grid.frame.width as usize;
+    let mut known_cells = 0usize;
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0usize, 0usize);
+    if w == 0 {
+        return (None, 0);
     }
+    for (y, row) in grid.data.chunks_exact(w).enumerate() {
+        let Some(fx) = row.iter().position(|s| *s != Occupancy::Unknown) else {
+            continue;
+        };
+        let lx = row
+            .iter()
+            .rposition(|s| *s != Occupancy::Unknown)
+            .unwrap_or(fx);
+        known_cells += row[fx..=lx]
+            .iter()
+            .filter(|s| **s != Occupancy::Unknown)
+            .count();
+        x0 = x0.min(fx);
+        x1 = x1.max(lx);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    let b = (known_cells > 0).then(|| {
+        (
+            Cell::new(x0 as i32, y0 as i32),
+            Cell::new(x1 as i32, y1 as i32),
+        )
+    });
+    (b, known_cells)
+}
+
+/// A window of the grid: the box grown by `margin` cells, clamped to the grid, as
+/// `(x0, y0, width, height)`.
+fn window(grid: &OccupancyGrid, bbox: (Cell, Cell), margin: usize) -> (usize, usize, usize, usize) {
+    let m = margin as i64;
+    let (w, h) = (grid.frame.width as i64, grid.frame.height as i64);
+    let x0 = (bbox.0.x as i64 - m).max(0);
+    let y0 = (bbox.0.y as i64 - m).max(0);
+    let x1 = (bbox.1.x as i64 + m).min(w - 1);
+    let y1 = (bbox.1.y as i64 + m).min(h - 1);
+    (
+        x0 as usize,
+        y0 as usize,
+        (x1 - x0 + 1).max(0) as usize,
+        (y1 - y0 + 1).max(0) as usize,
+    )
+}
+
+/// The cells of `grid` in the window, mapped by `pred`, row-major.
+fn window_mask(
+    grid: &OccupancyGrid,
+    (x0, y0, ww, wh): (usize, usize, usize, usize),
+    pred: impl Fn(Occupancy) -> bool,
+) -> Vec<bool> {
+    let w = grid.frame.width as usize;
+    let mut out = Vec::with_capacity(ww * wh);
+    for y in y0..y0 + wh {
+        out.extend(
+            grid.data[y * w + x0..y * w + x0 + ww]
+                .iter()
+                .map(|s| pred(*s)),
+        );
+    }
+    out
+}
+
+/// Occupied cells dilated by a square of half-side `radius` cells. Occupied cells are known, so
+/// only the known box (grown by the radius) is computed.
+fn dilate_occupied(grid: &OccupancyGrid, bbox: Option<(Cell, Cell)>, radius: usize) -> Bitmap {
+    let f = grid.frame;
+    let mut out = Bitmap::filled(f, false);
+    let Some(bbox) = bbox else {
+        return out;
+    };
+    let win = window(grid, bbox, radius);
+    let (x0, y0, ww, wh) = win;
+    let src = window_mask(grid, win, |s| s == Occupancy::Occupied);
+    let d = dilate(&src, ww, wh, radius);
+    let w = f.width as usize;
+    for (y, row) in d.chunks_exact(ww.max(1)).enumerate() {
+        out.data[(y0 + y) * w + x0..(y0 + y) * w + x0 + ww].copy_from_slice(row);
+    }
+    out
 }
 
 /// A row-major `w` x `h` mask dilated by a square of half-side `radius` cells (cells outside the
-/// mask are false).
-fn dilate(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
+/// mask are false). Separable; each axis is a few passes of shifted ORs over whole slices
+/// (radii 1, 2, 4...: a dilation by `R` followed by one by `{-s, 0, s}`, `s <= R + 1`, is one
+/// by `R + s`, also where the mask's edge clips it), which the compiler vectorises.
+pub fn dilate(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
+    let mut a = src.to_vec();
+    if radius == 0 || w == 0 || h == 0 {
+        return a;
+    }
+    let mut b = vec![false; a.len()];
+    // Rows.
+    let mut r = 0;
+    while r < radius {
+        let s = (r + 1).min(radius - r);
+        if s < w {
+            for (ra, rb) in a.chunks_exact(w).zip(b.chunks_exact_mut(w)) {
+                rb.copy_from_slice(ra);
+                or_shifted(rb, ra, s);
+            }
+            std::mem::swap(&mut a, &mut b);
+        } else {
+            for ra in a.chunks_exact_mut(w) {
+                let any = ra.iter().any(|v| *v);
+                ra.fill(any);
+            }
+        }
+        r += s;
+    }
+    // Columns: the same on the whole array with a shift of `s` rows.
+    let mut r = 0;
+    while r < radius {
+        let s = (r + 1).min(radius - r);
+        if s < h {
+            b.copy_from_slice(&a);
+            or_shifted(&mut b, &a, s * w);
+            std::mem::swap(&mut a, &mut b);
+        } else {
+            let mut any = vec![false; w];
+            for ra in a.chunks_exact(w) {
+                for (x, v) in any.iter_mut().zip(ra) {
+                    *x |= *v;
+                }
+            }
+            for ra in a.chunks_exact_mut(w) {
+                ra.copy_from_slice(&any);
+            }
+        }
+        r += s;
+    }
+    a
+}
+
+/// `dst[i] |= src[i - s] | src[i + s]` where those exist (`s < len`).
+fn or_shifted(dst: &mut [bool], src: &[bool], s: usize) {
+    let n = src.len();
+    for (d, v) in dst[s..].iter_mut().zip(&src[..n - s]) {
+        *d |= *v;
+    }
+    for (d, v) in dst[..n - s].iter_mut().zip(&src[s..]) {
+        *d |= *v;
+    }
+}
+
+/// The reference dilation (per cell, the last true cell before and after in each row, then in
+/// each column, over the whole mask): what [`dilate`] replaced; kept to check and benchmark it.
+pub fn dilate_reference(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
     let mut rows = vec![false; w * h];
     let mut line = Vec::new();
     for y in 0..h {
         dilate_1d(&src[y * w..(y + 1) * w], radius, &mut line);
         rows[y * w..(y + 1) * w].copy_from_slice(&line);
     }
-    // Columns, row-major: the row of the last true cell above and below, per column.
     let mut out = rows.clone();
     let mut last = vec![usize::MAX; w];
     for y in 0..h {
@@ -182,23 +299,67 @@ fn dilate(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
     out
 }
 
+/// The cell radius of the opening of [`fill_thin_unknown`]; `None` when it is off.
+fn thin_radius(grid: &OccupancyGrid, max_thickness_m: f64) -> Option<usize> {
+    let r = ((max_thickness_m / grid.frame.resolution_m - 1.0) / 2.0).ceil();
+    (!r.is_nan() && r >= 1.0 && !grid.frame.is_empty()).then_some(r as usize)
+}
+
 /// `grid` with its thin unknown regions (no square of side `max_thickness_m` fits in them)
 /// made occupied. Maps made by SLAM from floor plans draw walls as never-observed grey bands
 /// edged by sparse occupied cells: such a band is a wall, not a frontier, while the unknown
 /// space beyond a frontier is wide. Returns the number of cells changed.
+///
+/// Only the known box grown by twice the radius is computed: farther unknown cells are more
+/// than the radius from any known cell, so the opening keeps them, and cannot reach back to
+/// the cells within the radius of the known ones.
 pub fn fill_thin_unknown(grid: &OccupancyGrid, max_thickness_m: f64) -> (OccupancyGrid, usize) {
+    let mut out = grid.clone();
+    let Some(r) = thin_radius(grid, max_thickness_m) else {
+        return (out, 0);
+    };
+    let (Some(bbox), _) = known_box(grid) else {
+        return (out, 0);
+    };
+    let win = window(grid, bbox, 2 * r + 2);
+    let (x0, y0, ww, wh) = win;
+    // Opening of the unknown cells: erode (dilate the complement), then dilate.
+    let known = window_mask(grid, win, |s| s != Occupancy::Unknown);
+    let mut eroded = dilate(&known, ww, wh, r);
+    eroded.iter_mut().for_each(|k| *k = !*k);
+    let opened = dilate(&eroded, ww, wh, r);
+    let w = grid.frame.width as usize;
+    let mut changed = 0;
+    for (y, row) in opened.chunks_exact(ww).enumerate() {
+        let start = (y0 + y) * w + x0;
+        for (s, o) in out.data[start..start + ww].iter_mut().zip(row) {
+            if *s == Occupancy::Unknown && !o {
+                *s = Occupancy::Occupied;
+                changed += 1;
+            }
+        }
+    }
+    (out, changed)
+}
+
+/// [`fill_thin_unknown`] as it was first written, on the whole grid with
+/// [`dilate_reference`]: the baseline of the layout benchmark.
+pub fn fill_thin_unknown_reference(
+    grid: &OccupancyGrid,
+    max_thickness_m: f64,
+) -> (OccupancyGrid, usize) {
     let f = grid.frame;
     let (w, h) = (f.width as usize, f.height as usize);
     let mut out = grid.clone();
-    let r = ((max_thickness_m / f.resolution_m - 1.0) / 2.0).ceil();
-    if r.is_nan() || r < 1.0 || w == 0 || h == 0 {
+    let Some(r) = thin_radius(grid, max_thickness_m) else {
         return (out, 0);
-    }
-    let r = r as usize;
-    // Opening of the unknown cells: erode (dilate the complement), then dilate.
+    };
     let known: Vec<bool> = grid.data.iter().map(|s| *s != Occupancy::Unknown).collect();
-    let eroded: Vec<bool> = dilate(&known, w, h, r).iter().map(|k| !k).collect();
-    let opened = dilate(&eroded, w, h, r);
+    let eroded: Vec<bool> = dilate_reference(&known, w, h, r)
+        .iter()
+        .map(|k| !k)
+        .collect();
+    let opened = dilate_reference(&eroded, w, h, r);
     let mut changed = 0;
     for (s, o) in out.data.iter_mut().zip(&opened) {
         if *s == Occupancy::Unknown && !o {
@@ -273,6 +434,48 @@ mod tests {
         assert_eq!(e.known_box, Some((Cell::new(0, 0), Cell::new(9, 5))));
         // Tolerance 0.15 m = 1 cell here: the walls and the ring of cells inside them.
         assert_eq!(e.near_wall.count_true(), 48);
+    }
+
+    #[test]
+    fn fast_dilation_matches_the_reference() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for (w, h) in [(1, 1), (7, 3), (40, 33), (5, 60)] {
+            let src: Vec<bool> = (0..w * h).map(|_| rng.random_bool(0.03)).collect();
+            for radius in [0, 1, 2, 3, 4, 6, 7, 13, 80] {
+                assert_eq!(
+                    dilate(&src, w, h, radius),
+                    dilate_reference(&src, w, h, radius),
+                    "{w}x{h} r {radius}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn windowed_thin_fill_matches_the_whole_grid() {
+        // A room with a grey wall band and a wide unknown region, inside a larger grid.
+        let mut text = String::new();
+        for y in 0..40 {
+            for x in 0..50 {
+                let outside = !(5..25).contains(&y) || !(5..30).contains(&x);
+                let c = if outside || x == 15 || x == 16 {
+                    '?'
+                } else if y == 5 || y == 24 || x == 5 || x == 29 {
+                    '#'
+                } else {
+                    '.'
+                };
+                text.push(c);
+            }
+            text.push('\n');
+        }
+        let g = OccupancyGrid::from_ascii(&text, 0.1);
+        let (a, na) = fill_thin_unknown(&g, 0.6);
+        let (b, nb) = fill_thin_unknown_reference(&g, 0.6);
+        assert_eq!(na, nb);
+        assert!(na >= 2 * 18, "{na}");
+        assert_eq!(a, b);
     }
 
     #[test]

@@ -40,27 +40,36 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
     x
 }
 
-/// Frontier cells of `grid` grouped in 8-connected clusters of at least `min_cells` cells.
+/// Frontier cells of `grid` grouped in 8-connected clusters of at least `min_cells` cells (grid
+/// indices, sorted per cluster). Only the box of the known cells is scanned.
 pub fn frontier_clusters(grid: &OccupancyGrid, min_cells: usize) -> Vec<Vec<usize>> {
     let f = grid.frame;
     let (w, h) = (f.width as usize, f.height as usize);
+    let (Some((b0, b1)), _) = super::evidence::known_box(grid) else {
+        return Vec::new();
+    };
+    let (x0, y0) = (b0.x as usize, b0.y as usize);
+    let (bw, bh) = ((b1.x - b0.x + 1) as usize, (b1.y - b0.y + 1) as usize);
     let unknown = |x: usize, y: usize| grid.data[y * w + x] == Occupancy::Unknown;
-    let mut is_frontier = vec![false; w * h];
-    for y in 0..h {
-        for x in 0..w {
+    // Frontier flags in box coordinates.
+    let mut is_frontier = vec![false; bw * bh];
+    for by in 0..bh {
+        let y = y0 + by;
+        for bx in 0..bw {
+            let x = x0 + bx;
             if grid.data[y * w + x] == Occupancy::Free
                 && ((x > 0 && unknown(x - 1, y))
                     || (x + 1 < w && unknown(x + 1, y))
                     || (y > 0 && unknown(x, y - 1))
                     || (y + 1 < h && unknown(x, y + 1)))
             {
-                is_frontier[y * w + x] = true;
+                is_frontier[by * bw + bx] = true;
             }
         }
     }
     let mut clusters = Vec::new();
     let mut stack = Vec::new();
-    for start in 0..w * h {
+    for start in 0..bw * bh {
         if !is_frontier[start] {
             continue;
         }
@@ -68,15 +77,15 @@ pub fn frontier_clusters(grid: &OccupancyGrid, min_cells: usize) -> Vec<Vec<usiz
         stack.push(start);
         let mut cluster = Vec::new();
         while let Some(i) = stack.pop() {
-            cluster.push(i);
-            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            let (bx, by) = ((i % bw) as isize, (i / bw) as isize);
+            cluster.push((y0 + by as usize) * w + x0 + bx as usize);
             for dy in -1..=1 {
                 for dx in -1..=1 {
-                    let (nx, ny) = (x + dx, y + dy);
-                    if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                    let (nx, ny) = (bx + dx, by + dy);
+                    if nx < 0 || ny < 0 || nx >= bw as isize || ny >= bh as isize {
                         continue;
                     }
-                    let j = ny as usize * w + nx as usize;
+                    let j = ny as usize * bw + nx as usize;
                     if is_frontier[j] {
                         is_frontier[j] = false;
                         stack.push(j);
