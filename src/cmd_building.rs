@@ -117,7 +117,7 @@ fn generate_cmd(a: GenerateArgs) -> Result<()> {
         crate::output::create_dir(dir)?;
     }
     floorcast_formats::building_toml::write_building_toml(&b, &a.out)?;
-    println!(
+    say!(
         "{}: {} rooms, {:.0} m2 free, hash {}",
         a.out.display(),
         b.rooms.len(),
@@ -180,29 +180,35 @@ fn check_cmd(a: CheckArgs) -> Result<()> {
     let b = floorcast_formats::read_building(&a.file)?;
     let r = check_report(&a.file, &b)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&r)?);
+        say!("{}", serde_json::to_string_pretty(&r)?);
         return Ok(());
     }
-    println!("file:            {}", r.file);
-    println!("name:            {}", r.name);
-    println!(
+    say!("file:            {}", r.file);
+    say!("name:            {}", r.name);
+    say!(
         "size:            {:.1} x {:.1} m ({})",
-        r.width_m, r.height_m, r.geometry
+        r.width_m,
+        r.height_m,
+        r.geometry
     );
-    println!(
+    say!(
         "free area:       {:.1} m2 ({:.1} m2 reachable from the start)",
-        r.free_area_m2, r.reachable_free_area_m2
+        r.free_area_m2,
+        r.reachable_free_area_m2
     );
     match r.rooms {
-        Some(n) => println!("rooms:           {n} ({} doors)", r.doors.unwrap_or(0)),
-        None => println!("rooms:           unknown (no ground truth)"),
+        Some(n) => say!("rooms:           {n} ({} doors)", r.doors.unwrap_or(0)),
+        None => say!("rooms:           unknown (no ground truth)"),
     }
-    println!(
+    say!(
         "start:           x {:.2} m, y {:.2} m, theta {:.1} deg ({})",
-        r.start[0], r.start[1], r.start[2], r.start_source
+        r.start[0],
+        r.start[1],
+        r.start[2],
+        r.start_source
     );
-    println!("wall segments:   {}", r.wall_segments);
-    println!("hash:            {}", r.hash);
+    say!("wall segments:   {}", r.wall_segments);
+    say!("hash:            {}", r.hash);
     Ok(())
 }
 
@@ -211,7 +217,7 @@ fn render_cmd(a: RenderArgs) -> Result<()> {
     building_figure(&b)
         .save(&a.out)
         .with_context(|| format!("cannot write {}", a.out.display()))?;
-    println!("{}", a.out.display());
+    say!("{}", a.out.display());
     Ok(())
 }
 

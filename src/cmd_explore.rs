@@ -110,7 +110,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .save(&picture)
         .with_context(|| format!("cannot write {}", picture.display()))?;
 
-    println!(
+    say!(
         "{name}: {} after {:.0} s simulated ({:.1} % of {:.0} m2 explored, {} decisions, {:.1} m driven) in {:.2} s wall ({:.0}x real time)",
         summary.end_reason,
         summary.exploration_time_s,
@@ -121,7 +121,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         summary.wall_time_s,
         summary.speedup
     );
-    println!("results in {}", out.display());
+    say!("results in {}", out.display());
     Ok(())
 }
 

@@ -170,7 +170,7 @@ pub fn run(a: LayoutArgs) -> Result<()> {
         .iter()
         .filter(|r| r.label == RoomLabel::Open)
         .count();
-    println!(
+    say!(
         "{}: {} rooms ({} full, {} partial, {} open), {} wall lines, in {:.0} ms",
         a.map.display(),
         layout.rooms.len(),
@@ -210,12 +210,15 @@ pub fn run(a: LayoutArgs) -> Result<()> {
             &out.join("accuracy.json"),
             &(serde_json::to_string_pretty(&f)? + "\n"),
         )?;
-        println!(
+        say!(
             "accuracy: matched room IoU {:.3}, pixel accuracy {:.3}, {} rooms found for {} true",
-            f.matched_room_iou, f.pixel_accuracy, f.rooms_found, f.rooms_true
+            f.matched_room_iou,
+            f.pixel_accuracy,
+            f.rooms_found,
+            f.rooms_true
         );
     }
-    println!("results in {}", out.display());
+    say!("results in {}", out.display());
     Ok(())
 }
 

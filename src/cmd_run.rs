@@ -46,24 +46,24 @@ pub fn run(a: RunArgs) -> Result<()> {
     let store = Store::open(&plan.results_dir)?;
     if a.summary {
         let results = store.all()?;
-        println!(
+        say!(
             "{} of {} jobs stored in {}",
             stored_of_plan(&plan, &store)?,
             plan.jobs.len(),
             store.path().display()
         );
-        print!("{}", render_text(&table(&results, &plan.labels)));
+        say_raw!("{}", render_text(&table(&results, &plan.labels)));
         return Ok(());
     }
     let before = stored_of_plan(&plan, &store)?;
     if before == plan.jobs.len() {
-        println!(
+        say!(
             "nothing to do: all {} jobs of grid '{}' are already stored in {}",
             plan.jobs.len(),
             plan.name,
             store.path().display()
         );
-        print!("{}", render_text(&table(&store.all()?, &plan.labels)));
+        say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
         return Ok(());
     }
     let workers = a
@@ -78,7 +78,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         &a.grid.display().to_string(),
         &std::env::args().collect::<Vec<_>>().join(" "),
     ))?;
-    println!(
+    say!(
         "grid '{}': {} jobs ({} buildings x seeds x {} strategies), {} already stored, {} workers",
         plan.name,
         plan.jobs.len(),
@@ -109,14 +109,14 @@ pub fn run(a: RunArgs) -> Result<()> {
     pb.finish_and_clear();
     match outcome {
         Outcome::Complete => {
-            println!(
+            say!(
                 "done: {} jobs run now, {} stored before, {} failed; results in {}",
                 counts.done - counts.resumed,
                 counts.resumed,
                 counts.failed,
                 store.path().display()
             );
-            print!("{}", render_text(&table(&store.all()?, &plan.labels)));
+            say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
             Ok(())
         }
         Outcome::Interrupted => {
@@ -139,16 +139,16 @@ fn stored_of_plan(plan: &Plan, store: &Store) -> Result<usize> {
 pub fn report(a: ReportArgs) -> Result<()> {
     let store = Store::open_existing(&a.results)?;
     let results = store.all()?;
-    println!(
+    say!(
         "{} results in {}",
         results.len(),
         a.results.join(DB_FILE).display()
     );
-    print!("{}", render_text(&table(&results, &[])));
+    say_raw!("{}", render_text(&table(&results, &[])));
     if let Some(csv) = &a.csv {
         write_text(csv, &results_csv(&results))
             .with_context(|| format!("cannot export to {}", csv.display()))?;
-        println!("wrote {}", csv.display());
+        say!("wrote {}", csv.display());
     }
     Ok(())
 }

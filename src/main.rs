@@ -1,10 +1,11 @@
 //! `floorcast`: simulate robot exploration of buildings, fast, and compare strategies.
 
+#[macro_use]
+mod output;
 mod cmd_building;
 mod cmd_explore;
 mod cmd_layout;
 mod cmd_run;
-mod output;
 
 use std::process::ExitCode;
 

@@ -47,3 +47,30 @@ pub fn parse_pose(s: &str) -> Result<sim_core::Pose, String> {
     }
     Ok(sim_core::Pose::new(v[0], v[1], v[2].to_radians()))
 }
+
+/// Writes one line to stdout. A closed pipe (`floorcast ... | head`) ends the program quietly
+/// instead of panicking as `println!` does.
+pub fn say_fmt(args: std::fmt::Arguments<'_>, newline: bool) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let r = if newline {
+        writeln!(out, "{args}")
+    } else {
+        write!(out, "{args}")
+    };
+    if let Err(e) = r.and_then(|_| out.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+    }
+}
+
+/// `println!` that survives a closed pipe.
+macro_rules! say {
+    ($($t:tt)*) => { crate::output::say_fmt(format_args!($($t)*), true) };
+}
+
+/// `print!` that survives a closed pipe.
+macro_rules! say_raw {
+    ($($t:tt)*) => { crate::output::say_fmt(format_args!($($t)*), false) };
+}

@@ -205,3 +205,18 @@ fn bad_inputs_fail_cleanly() {
         &["what.txt"],
     );
 }
+
+#[test]
+fn a_closed_stdout_pipe_is_not_a_panic() {
+    let b = repo().join("buildings/small.toml");
+    let mut child = floorcast()
+        .args(["building", "check", b.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{:?}", out.status);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+}
