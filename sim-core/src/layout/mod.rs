@@ -230,10 +230,12 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
     if grid.frame.is_empty() || !(res.is_finite() && res > 0.0) {
         return Layout::default();
     }
-    let (filled, thin_cells) = evidence::fill_thin_unknown(grid, config.thin_unknown_wall_m);
+    let (known_box, known_cells) = evidence::known_box(grid);
+    let (filled, thin_cells, known_box) =
+        evidence::fill_thin_unknown_in(grid, config.thin_unknown_wall_m, known_box);
     diag.thin_unknown_cells = thin_cells;
     let grid = &filled;
-    let evidence = evidence::wall_evidence(grid, config);
+    let evidence = evidence::wall_evidence_in(grid, config, (known_box, known_cells + thin_cells));
     diag.known_cells = evidence.known_cells;
     diag.boundary_cells = evidence.cells.len();
     let Some(bbox) = evidence.known_box else {
