@@ -3,6 +3,9 @@
 
 mod common;
 
+use sim_core::layout::evidence::{
+    fill_thin_unknown, fill_thin_unknown_in, fill_thin_unknown_reference, known_box,
+};
 use sim_core::layout::{reconstruct_layout, LayoutConfig};
 
 #[test]
@@ -24,5 +27,21 @@ fn every_real_map_gives_a_layout() {
         for r in &layout.rooms {
             assert!(r.area_m2 > 0.0 && r.area_m2.is_finite(), "{name}: {r:?}");
         }
+    }
+}
+
+/// The windowed thin-unknown fill gives the same grid as the whole-grid reference on every real
+/// map, and reports the known box of its result.
+#[test]
+fn windowed_thin_fill_matches_the_reference_on_real_maps() {
+    for yaml in common::all_maps() {
+        let grid = common::load_map(&yaml);
+        let t = LayoutConfig::default().thin_unknown_wall_m;
+        let (a, na) = fill_thin_unknown(&grid, t);
+        let (b, nb) = fill_thin_unknown_reference(&grid, t);
+        assert_eq!(na, nb, "{yaml:?}");
+        assert!(a == b, "{yaml:?}");
+        let (_, _, bbox) = fill_thin_unknown_in(&grid, t, known_box(&grid).0);
+        assert_eq!(bbox, known_box(&a).0, "{yaml:?}");
     }
 }

@@ -27,9 +27,18 @@ pub struct WallEvidence {
 
 /// Extracts the wall evidence of `grid`.
 pub fn wall_evidence(grid: &OccupancyGrid, config: &LayoutConfig) -> WallEvidence {
+    wall_evidence_in(grid, config, known_box(grid))
+}
+
+/// [`wall_evidence`] with the known box and the number of known cells of `grid` given (from
+/// [`known_box`]).
+pub fn wall_evidence_in(
+    grid: &OccupancyGrid,
+    config: &LayoutConfig,
+    (known_box, known_cells): (Option<(Cell, Cell)>, usize),
+) -> WallEvidence {
     let f = grid.frame;
     let (w, h) = (f.width as usize, f.height as usize);
-    let (known_box, known_cells) = known_box(grid);
     let at = |x: isize, y: isize| -> Occupancy {
         if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
             Occupancy::Unknown
@@ -314,13 +323,26 @@ fn thin_radius(grid: &OccupancyGrid, max_thickness_m: f64) -> Option<usize> {
 /// than the radius from any known cell, so the opening keeps them, and cannot reach back to
 /// the cells within the radius of the known ones.
 pub fn fill_thin_unknown(grid: &OccupancyGrid, max_thickness_m: f64) -> (OccupancyGrid, usize) {
+    let (out, changed, _) = fill_thin_unknown_in(grid, max_thickness_m, known_box(grid).0);
+    (out, changed)
+}
+
+/// [`fill_thin_unknown`] with the known box of `grid` given (from [`known_box`]); also returns
+/// the known box of the result (filled cells can lie outside the first one, in a thin band
+/// between it and the edge of the grid).
+pub fn fill_thin_unknown_in(
+    grid: &OccupancyGrid,
+    max_thickness_m: f64,
+    known_box: Option<(Cell, Cell)>,
+) -> (OccupancyGrid, usize, Option<(Cell, Cell)>) {
     let mut out = grid.clone();
     let Some(r) = thin_radius(grid, max_thickness_m) else {
-        return (out, 0);
+        return (out, 0, known_box);
     };
-    let (Some(bbox), _) = known_box(grid) else {
-        return (out, 0);
+    let Some(bbox) = known_box else {
+        return (out, 0, None);
     };
+    let (mut b0, mut b1) = bbox;
     let win = window(grid, bbox, 2 * r + 2);
     let (x0, y0, ww, wh) = win;
     // Opening of the unknown cells: erode (dilate the complement), then dilate.
@@ -338,8 +360,16 @@ pub fn fill_thin_unknown(grid: &OccupancyGrid, max_thickness_m: f64) -> (Occupan
                 changed += 1;
             }
         }
+        if let (Some(first), Some(last)) =
+            (row.iter().position(|o| !o), row.iter().rposition(|o| !o))
+        {
+            // Cells not in the opening are known now (or were).
+            let yy = (y0 + y) as i32;
+            b0 = Cell::new(b0.x.min((x0 + first) as i32), b0.y.min(yy));
+            b1 = Cell::new(b1.x.max((x0 + last) as i32), b1.y.max(yy));
+        }
     }
-    (out, changed)
+    (out, changed, Some((b0, b1)))
 }
 
 /// [`fill_thin_unknown`] as it was first written, on the whole grid with

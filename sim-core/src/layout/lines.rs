@@ -189,32 +189,45 @@ pub fn door_gaps(ts: &[f64], resolution_m: f64, config: &LayoutConfig) -> Vec<(f
 }
 
 /// Drops the door gaps that are corridor crossings rather than doors: a line extended across a
-/// corridor meets the corridor's walls at the ends of the gap, and those walls run across the
-/// line (along its normal) for a metre or more, while a door's jambs are only a wall thick.
+/// corridor (or along a corridor past a side corridor, a T junction) meets walls at the ends of
+/// the gap that run away from the line, along its normal, on one side or both, far beyond the
+/// line's own wall; a door's jambs are only as deep as that wall, however thick it is drawn.
 pub fn drop_crossings(grid: &OccupancyGrid, lines: &[WallLine], doors: &mut [Vec<(f64, f64)>]) {
     let res = grid.frame.resolution_m;
-    let steps = (1.0 / res).round().max(1.0) as i32;
+    let reach = (1.5 / res).round().max(1.0) as i32;
+    let slack = (0.2 / res).round().max(1.0) as i32;
     for (line, gaps) in lines.iter().zip(doors.iter_mut()) {
         let n = line.normal();
         let u = Vec2::new(n.y, -n.x);
         let foot = n * line.offset_m;
-        // Fraction of occupied cells on the normal segment of +-1 m at `t` along the line.
-        let across = |t: f64| {
-            let c = foot + u * t;
-            let occ = (-steps..=steps)
-                .filter(|k| {
-                    let p = c + n * (*k as f64 * res);
-                    grid.get(grid.frame.cell_from_world(p)) == Some(&Occupancy::Occupied)
-                })
-                .count();
-            occ as f64 / (2 * steps + 1) as f64
+        let occupied = |t: f64, k: i32| {
+            let p = foot + u * t + n * (k as f64 * res);
+            grid.get(grid.frame.cell_from_world(p)) == Some(&Occupancy::Occupied)
         };
+        // Depth in metres of the occupied cells at `t` running from the line towards `side`
+        // (the run must start within `slack` cells of the line).
+        let depth = |t: f64, side: i32| {
+            let Some(k0) = (-slack..=slack).find(|&k| occupied(t, k * side)) else {
+                return 0.0;
+            };
+            let mut k = k0;
+            while k < reach && occupied(t, (k + 1) * side) {
+                k += 1;
+            }
+            (k.max(0) + 1) as f64 * res
+        };
+        let probe = (0.3f64).max(2.0 * res);
         gaps.retain(|&(t0, t1)| {
             let inside = (0.4f64).min((t1 - t0) / 2.0);
-            let k = ((inside / res).ceil() as usize).max(1);
-            !(0..=k).any(|i| {
-                let d = i as f64 * res;
-                across(t0 + d) >= 0.6 || across(t1 - d) >= 0.6
+            let steps = ((inside / res).ceil() as usize).max(1);
+            ![1, -1].iter().any(|&side| {
+                // The line's own wall beside the gap, on this side.
+                let own = depth(t0 - probe, side).max(depth(t1 + probe, side));
+                (0..=steps).any(|i| {
+                    let d = i as f64 * res;
+                    let run = depth(t0 + d, side).max(depth(t1 - d, side));
+                    run >= 0.8 && run >= own + 0.6
+                })
             })
         });
     }
@@ -251,5 +264,42 @@ mod tests {
         assert_eq!(lines[0].weight, 1.0);
         assert!((lines[1].weight - 0.25).abs() < 0.05);
         assert!((lines[0].extent.length_m() - 4.95).abs() < 1e-6);
+    }
+
+    /// The gaps of the horizontal line on the top face of the bottom wall (y index 2 from the
+    /// bottom, cell centres 0.25 m), after `drop_crossings`.
+    fn gaps_after_crossings(text: &str) -> Vec<(f64, f64)> {
+        let g = OccupancyGrid::from_ascii(text, 0.1);
+        let line = WallLine {
+            direction_rad: 0.0,
+            offset_m: 0.25,
+            weight: 1.0,
+            support_m: 1.0,
+            extent: Segment::new(Vec2::new(0.0, 0.25), Vec2::new(3.0, 0.25)),
+            family: 0,
+        };
+        // A gap between x = 1.05 and x = 1.95 m (columns 10..19).
+        let mut doors = vec![vec![(1.05, 1.95)]];
+        drop_crossings(&g, &[line], &mut doors);
+        doors.pop().unwrap()
+    }
+
+    #[test]
+    fn thick_wall_door_is_kept_and_junction_is_dropped() {
+        // A door in a 0.3 m thick wall: its jambs are as deep as the wall.
+        let door = format!(
+            "{}{}",
+            "..............................\n".repeat(12),
+            "##########.........###########\n".repeat(3)
+        );
+        assert_eq!(gaps_after_crossings(&door).len(), 1);
+        // A side corridor leaving the wall: its walls run 1.2 m up from the gap's ends.
+        let junction = format!(
+            "{}{}{}",
+            "..............................\n".repeat(3),
+            ".........#.........#..........\n".repeat(9),
+            "##########.........###########\n".repeat(3)
+        );
+        assert!(gaps_after_crossings(&junction).is_empty());
     }
 }

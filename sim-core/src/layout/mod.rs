@@ -178,7 +178,10 @@ pub struct LayoutConfig {
     /// Rooms smaller than this are dropped. Default 1.0 m2.
     pub min_room_area_m2: f64,
     /// A hole in the evidence along a wall line at most this long, between two runs of wall on
-    /// the line, is a door: the edge across it separates rooms. Default 2.2 m.
+    /// the line, is a door: the edge across it separates rooms (unless walls at its ends run far
+    /// across the line: a corridor crossing or junction, see [`lines::drop_crossings`]).
+    /// Default 4.0 m: wide enough for the double doors and open fronts of classrooms seen in
+    /// real school maps.
     pub max_door_width_m: f64,
     /// The wall on each side of a door must run at least this far along the line. Default 0.4 m.
     pub min_door_jamb_m: f64,
@@ -208,12 +211,16 @@ impl Default for LayoutConfig {
             phi_concavity_weight: 10.0,
             phi_lines_weight: 5.0,
             min_room_area_m2: 1.0,
-            max_door_width_m: 2.2,
+            max_door_width_m: 4.0,
             min_door_jamb_m: 0.4,
             thin_unknown_wall_m: 0.6,
         }
     }
 }
+
+/// A direction is kept when its best line has at least this weight (relative to the best line of
+/// all directions).
+const MIN_FAMILY_BEST_LINE_WEIGHT: f64 = 0.3;
 
 /// Reconstructs the layout of `grid` and predicts the shape of its partially observed rooms.
 /// Never panics: an empty, unknown or wall-less grid gives a layout without rooms.
@@ -223,10 +230,12 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
     if grid.frame.is_empty() || !(res.is_finite() && res > 0.0) {
         return Layout::default();
     }
-    let (filled, thin_cells) = evidence::fill_thin_unknown(grid, config.thin_unknown_wall_m);
+    let (known_box, known_cells) = evidence::known_box(grid);
+    let (filled, thin_cells, known_box) =
+        evidence::fill_thin_unknown_in(grid, config.thin_unknown_wall_m, known_box);
     diag.thin_unknown_cells = thin_cells;
     let grid = &filled;
-    let evidence = evidence::wall_evidence(grid, config);
+    let evidence = evidence::wall_evidence_in(grid, config, (known_box, known_cells + thin_cells));
     diag.known_cells = evidence.known_cells;
     diag.boundary_cells = evidence.cells.len();
     let Some(bbox) = evidence.known_box else {
@@ -236,7 +245,29 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
         };
     };
     let dirs = directions::dominant_directions(&evidence.cells, res, config, &mut diag);
-    let (lines, mut doors) = lines::wall_lines_and_doors(&evidence.cells, &dirs, res, config);
+    let (mut lines, mut doors) = lines::wall_lines_and_doors(&evidence.cells, &dirs, res, config);
+    // A direction whose best line is weak is an alias of the grid lattice (the boundary cells of
+    // real walls, oriented like another direction, are not its own) unless it is perpendicular to
+    // another direction: drop it and give its cells back to the others.
+    let kept: Vec<f64> = dirs
+        .iter()
+        .enumerate()
+        .filter(|(k, d)| {
+            let partner = dirs.iter().any(|o| {
+                (directions::angle_diff_mod_pi(*o, **d) - std::f64::consts::FRAC_PI_2).abs() <= 0.06
+            });
+            partner
+                || lines
+                    .iter()
+                    .filter(|l| l.family == *k as u32)
+                    .any(|l| l.weight >= MIN_FAMILY_BEST_LINE_WEIGHT)
+        })
+        .map(|(_, d)| *d)
+        .collect();
+    if kept.len() < dirs.len() {
+        diag.directions = kept.len();
+        (lines, doors) = lines::wall_lines_and_doors(&evidence.cells, &kept, res, config);
+    }
     lines::drop_crossings(grid, &lines, &mut doors);
     diag.lines = lines.len();
     let trim_m = config.wall_tolerance_m + res;
