@@ -46,6 +46,10 @@ pub struct ExploreArgs {
     /// Picture format of the final map.
     #[arg(long, default_value = "png", value_parser = ["png", "svg"])]
     picture: String,
+    /// Also draw the layout of the map at 20, 40, 60, 80 and 90 % explored
+    /// (layout-20.png ... layout-90.png), like the paper's Fig. 3.
+    #[arg(long)]
+    layout_snapshots: bool,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -82,6 +86,11 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         seed: a.seed,
         settings,
         start: a.start,
+        snapshot_fractions: if a.layout_snapshots {
+            vec![0.2, 0.4, 0.6, 0.8, 0.9]
+        } else {
+            Vec::new()
+        },
     };
     let out = a.out.clone().unwrap_or_else(|| {
         PathBuf::from(format!("results/explore/{name}-{}-{}", a.strategy, a.seed))
@@ -110,6 +119,16 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .save(&picture)
         .with_context(|| format!("cannot write {}", picture.display()))?;
 
+    for snap in &output.result.snapshots {
+        let layout = sim_core::layout::reconstruct_layout(
+            &snap.map,
+            &sim_core::layout::LayoutConfig::default(),
+        );
+        let p = out.join(format!("layout-{:.0}.{}", snap.fraction * 100.0, a.picture));
+        crate::cmd_layout::layout_figure(&snap.map, &layout)
+            .save(&p)
+            .with_context(|| format!("cannot write {}", p.display()))?;
+    }
     say!(
         "{name}: {} after {:.0} s simulated ({:.1} % of {:.0} m2 explored, {} decisions, {:.1} m driven) in {:.2} s wall ({:.0}x real time)",
         summary.end_reason,

@@ -93,3 +93,27 @@ fn a_start_in_a_wall_is_a_clean_error() {
     ]);
     assert_clean_failure(&o, &["small.toml", "free space"]);
 }
+
+#[test]
+fn layout_snapshots_draw_the_paper_sequence() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = repo().join("buildings/small.toml");
+    let o = run(&[
+        "explore",
+        "--building",
+        b.to_str().unwrap(),
+        "--seed",
+        "1",
+        "--strategy",
+        "layout",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--layout-snapshots",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for pct in [20, 40, 60, 80, 90] {
+        let p = dir.path().join(format!("layout-{pct}.png"));
+        assert!(image::open(&p).is_ok(), "{} missing", p.display());
+    }
+}

@@ -211,6 +211,7 @@ pub fn execute(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
         seed: job.seed,
         settings: job.settings.clone(),
         start: None,
+        snapshot_fractions: Vec::new(),
     };
     let t = Instant::now();
     let outcome = run_job(&spec, &mut |_| {});

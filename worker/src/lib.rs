@@ -31,6 +31,8 @@ pub struct Job<'a> {
     pub settings: Settings,
     /// Overrides the building's start pose.
     pub start: Option<Pose>,
+    /// Explored fractions at which to keep a copy of the map (see `ExploreConfig`).
+    pub snapshot_fractions: Vec<f64>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -63,7 +65,8 @@ pub fn run_job(
     if !STRATEGIES.contains(&job.strategy.as_str()) {
         return Err(JobError::UnknownStrategy(job.strategy.clone()));
     }
-    let config = job.settings.to_explore_config_for(&job.strategy)?;
+    let mut config = job.settings.to_explore_config_for(&job.strategy)?;
+    config.snapshot_fractions = job.snapshot_fractions.clone();
     let (start, source) = match job.start {
         Some(p) => (p, "command line"),
         None => match job.building.default_start() {

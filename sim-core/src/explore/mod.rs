@@ -113,6 +113,9 @@ pub struct ExploreConfig {
     /// Period of the progress curve.
     pub progress_period_s: f64,
     pub follow: FollowConfig,
+    /// Keep a copy of the map when the explored fraction first reaches each of these values
+    /// (ascending), e.g. to draw the layout at 20, 40, 60, 80 and 90 % as the paper's Fig. 3.
+    pub snapshot_fractions: Vec<f64>,
 }
 
 impl Default for ExploreConfig {
@@ -139,6 +142,7 @@ impl Default for ExploreConfig {
             map_update_period_s: 1.0,
             progress_period_s: 1.0,
             follow: FollowConfig::default(),
+            snapshot_fractions: Vec::new(),
         }
     }
 }
@@ -149,6 +153,14 @@ pub struct ProgressSample {
     pub time_s: f64,
     pub explored_area_m2: f64,
     pub explored_fraction: f64,
+}
+
+/// The map when the explored fraction first reached `fraction`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapSnapshot {
+    pub fraction: f64,
+    pub time_s: f64,
+    pub map: OccupancyGrid,
 }
 
 /// One decision of the strategy.
@@ -208,6 +220,8 @@ pub struct RunResult {
     pub scan_matches_accepted: u64,
     /// Path searches (Dijkstra runs) made while deciding.
     pub plans: u64,
+    /// Maps kept at the configured explored fractions.
+    pub snapshots: Vec<MapSnapshot>,
 }
 
 /// The mutable state of one exploration.
@@ -255,6 +269,7 @@ struct Explorer<'a> {
     layout_trusted: bool,
     stopped_early: bool,
     start: Pose,
+    snapshots: Vec<MapSnapshot>,
     /// Ground-truth room polygons (for the "rooms never entered" report only).
     rooms: Vec<crate::geom::Polygon>,
 }
@@ -334,6 +349,7 @@ pub fn explore(
         layout_trusted: false,
         stopped_early: false,
         start,
+        snapshots: Vec::new(),
         rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
     };
     ex.run(on_progress)
@@ -494,6 +510,16 @@ impl Explorer<'_> {
         };
         self.progress.push(s);
         on_progress(&s);
+        while let Some(&f) = self.cfg.snapshot_fractions.get(self.snapshots.len()) {
+            if s.explored_fraction + 1e-12 < f {
+                break;
+            }
+            self.snapshots.push(MapSnapshot {
+                fraction: f,
+                time_s: s.time_s,
+                map: self.map.occupancy.clone(),
+            });
+        }
         self.next_progress_s += self.cfg.progress_period_s;
     }
 
@@ -885,6 +911,7 @@ impl Explorer<'_> {
             scans: self.scans,
             scan_matches_accepted: self.matches_accepted,
             plans: self.plans,
+            snapshots: self.snapshots,
         }
     }
 }
