@@ -317,7 +317,13 @@ fn raster_boundary(solid: &Bitmap) -> Vec<Segment> {
 
 /// Sets every cell whose centre lies inside `poly` (even-odd rule) to `value`.
 pub fn fill_polygon(mask: &mut Bitmap, poly: &Polygon, value: bool) {
-    let f = mask.frame;
+    let frame = mask.frame;
+    for_cells_in_polygon(frame, poly, |i| mask.data[i] = value);
+}
+
+/// Calls `visit` with the row-major index of every cell of `f` whose centre lies inside `poly`
+/// (even-odd rule), touching only the polygon's rows.
+pub fn for_cells_in_polygon(f: GridFrame, poly: &Polygon, mut visit: impl FnMut(usize)) {
     let n = poly.vertices.len();
     if n < 3 || f.is_empty() {
         return;
@@ -346,7 +352,7 @@ pub fn fill_polygon(mask: &mut Bitmap, poly: &Polygon, value: bool) {
             let cx1 = cx1.min(f.width as i64 - 1);
             let row = cy as usize * f.width as usize;
             for cx in cx0..=cx1 {
-                mask.data[row + cx as usize] = value;
+                visit(row + cx as usize);
             }
         }
     }

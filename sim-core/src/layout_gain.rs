@@ -28,15 +28,8 @@ impl LayoutRaster {
     /// Rasterises `layout` on `frame`.
     pub fn new(layout: &Layout, frame: GridFrame) -> Self {
         let mut room = Grid::filled(frame, NO_ROOM);
-        let mut mask = Bitmap::filled(frame, false);
         for (k, r) in layout.rooms.iter().enumerate() {
-            mask.data.iter_mut().for_each(|m| *m = false);
-            crate::building::fill_polygon(&mut mask, &r.polygon, true);
-            for (i, m) in mask.data.iter().enumerate() {
-                if *m {
-                    room.data[i] = k as u32;
-                }
-            }
+            crate::building::for_cells_in_polygon(frame, &r.polygon, |i| room.data[i] = k as u32);
         }
         let mut walls = Bitmap::filled(frame, false);
         for r in &layout.rooms {
