@@ -5,18 +5,29 @@ mod common;
 use common::*;
 
 fn explore(building: &std::path::Path, seed: u64, out: &std::path::Path) -> serde_json::Value {
-    let o = run(&[
+    explore_with(building, seed, out, &["--strategy", "baseline"])
+}
+
+/// Runs one exploration with extra arguments; returns its summary.
+fn explore_with(
+    building: &std::path::Path,
+    seed: u64,
+    out: &std::path::Path,
+    extra: &[&str],
+) -> serde_json::Value {
+    let seed = seed.to_string();
+    let mut args = vec![
         "explore",
         "--building",
         building.to_str().unwrap(),
-        "--strategy",
-        "baseline",
         "--seed",
-        &seed.to_string(),
+        &seed,
         "--out",
         out.to_str().unwrap(),
         "--quiet",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let o = run(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
 }
@@ -98,20 +109,13 @@ fn a_start_in_a_wall_is_a_clean_error() {
 fn layout_snapshots_draw_the_paper_sequence() {
     let dir = tempfile::tempdir().unwrap();
     let b = repo().join("buildings/small.toml");
-    let o = run(&[
-        "explore",
-        "--building",
-        b.to_str().unwrap(),
-        "--seed",
-        "1",
-        "--strategy",
-        "layout",
-        "--out",
-        dir.path().to_str().unwrap(),
-        "--layout-snapshots",
-        "--quiet",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let s = explore_with(
+        &b,
+        1,
+        dir.path(),
+        &["--strategy", "layout", "--layout-snapshots"],
+    );
+    assert_eq!(s["strategy"], "layout");
     for pct in [20, 40, 60, 80, 90] {
         let p = dir.path().join(format!("layout-{pct}.png"));
         assert!(image::open(&p).is_ok(), "{} missing", p.display());
