@@ -8,19 +8,48 @@ use std::sync::Arc;
 use anyhow::{Context, Result};
 use clap::Args;
 use floorcast_coordinator::grid::Plan;
-use floorcast_coordinator::local::{run_local, Outcome};
+use floorcast_coordinator::net::NetConfig;
+use floorcast_coordinator::run::{run_plan, Outcome, RunOptions};
 use floorcast_coordinator::store::{provenance, Store, DB_FILE};
 use floorcast_coordinator::table::{render_text, results_csv, table};
 
 use crate::output::{progress_bar, write_text};
 
+/// Network options shared by `run` and `worker`.
+#[derive(Debug, Args)]
+pub struct NetArgs {
+    /// A zenoh configuration file (JSON5 or YAML) for TLS, mutual TLS, user/password or a
+    /// router deployment (see README, "Remote workers"). Endpoints given with --listen /
+    /// --connect are added to it.
+    #[arg(long, value_name = "FILE")]
+    pub zenoh_config: Option<PathBuf>,
+    /// Name separating grids that share one zenoh router; coordinator and workers must agree.
+    #[arg(long, value_name = "NAME", default_value = "default")]
+    pub campaign: String,
+}
+
 #[derive(Debug, Args)]
 pub struct RunArgs {
     /// Grid file (TOML): buildings, seeds, strategies, settings; see README.
     grid: PathBuf,
-    /// Worker threads on this machine (default: one per core).
+    /// Worker threads on this machine (default: one per core; 0 with --listen/--connect lets
+    /// only remote workers run jobs).
     #[arg(long, value_name = "N")]
     workers: Option<usize>,
+    /// Also accept remote workers (`floorcast worker --connect ...`) on this zenoh endpoint,
+    /// e.g. tcp/0.0.0.0:7447 (repeatable). Without --listen/--connect nothing opens a port.
+    #[arg(long, value_name = "ENDPOINT")]
+    listen: Vec<String>,
+    /// Reach remote workers through this zenoh endpoint instead, e.g. a router at
+    /// tcp/router:7447 (repeatable).
+    #[arg(long, value_name = "ENDPOINT")]
+    connect: Vec<String>,
+    #[command(flatten)]
+    net: NetArgs,
+    /// Lease of a remote job in seconds: a worker renews it while it runs the job; a job whose
+    /// lease runs out (a hung worker) goes back to the queue.
+    #[arg(long, value_name = "S", default_value_t = 60.0)]
+    lease_s: f64,
     /// Where results go (overrides the grid's `results`).
     #[arg(long, value_name = "DIR")]
     results: Option<PathBuf>,
@@ -66,20 +95,37 @@ pub fn run(a: RunArgs) -> Result<()> {
         say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
         return Ok(());
     }
-    let workers = a
-        .workers
-        .unwrap_or_else(|| {
-            std::thread::available_parallelism()
-                .map(|n| n.get())
-                .unwrap_or(1)
-        })
-        .max(1);
+    let networked = !a.listen.is_empty() || !a.connect.is_empty() || a.net.zenoh_config.is_some();
+    let workers = a.workers.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
+    if workers == 0 && !networked {
+        anyhow::bail!(
+            "--workers 0 runs nothing on this machine; add --listen ENDPOINT so that remote workers can join, or give --workers N"
+        );
+    }
+    if !(a.lease_s.is_finite() && a.lease_s >= 1.0) {
+        anyhow::bail!("--lease-s must be at least 1 second, got {}", a.lease_s);
+    }
+    let opts = RunOptions {
+        workers,
+        net: networked.then(|| NetConfig {
+            listen: a.listen.clone(),
+            connect: a.connect.clone(),
+            zenoh_config: a.net.zenoh_config.clone(),
+            campaign: a.net.campaign.clone(),
+        }),
+        lease_s: a.lease_s,
+        ..RunOptions::default()
+    };
     store.record_run(&provenance(
         &a.grid.display().to_string(),
         &std::env::args().collect::<Vec<_>>().join(" "),
     ))?;
     say!(
-        "grid '{}': {} jobs ({} buildings x seeds x {} strategies), {} already stored, {} workers",
+        "grid '{}': {} jobs ({} buildings x seeds x {} strategies), {} already stored, {} local workers",
         plan.name,
         plan.jobs.len(),
         plan.buildings.len(),
@@ -102,10 +148,32 @@ pub fn run(a: RunArgs) -> Result<()> {
         a.quiet,
         "{spinner} [{elapsed_precise}] [{bar:40}] {pos}/{len} jobs {msg} (eta {eta})",
     );
-    let (outcome, counts) = run_local(&plan, &store, workers, &interrupt, &mut |c| {
-        pb.set_position(c.done as u64);
-        pb.set_message(format!("{} running, {} failed", c.running, c.failed));
-    })?;
+    let log_pb = pb.clone();
+    let (outcome, counts) = run_plan(
+        &plan,
+        &store,
+        &opts,
+        &interrupt,
+        &mut |c| {
+            pb.set_position(c.done as u64);
+            let remote = if opts.net.is_some() {
+                format!(", {} remote workers", c.remote_workers)
+            } else {
+                String::new()
+            };
+            pb.set_message(format!(
+                "{} running, {} failed{remote}",
+                c.running, c.failed
+            ));
+        },
+        &mut |line| {
+            if log_pb.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                log_pb.println(line);
+            }
+        },
+    )?;
     pb.finish_and_clear();
     match outcome {
         Outcome::Complete => {

@@ -6,6 +6,7 @@ mod cmd_building;
 mod cmd_explore;
 mod cmd_layout;
 mod cmd_run;
+mod cmd_worker;
 
 use std::process::ExitCode;
 
@@ -32,8 +33,11 @@ enum Command {
     Explore(cmd_explore::ExploreArgs),
     /// Reconstruct the room layout of any occupancy map and predict partially seen rooms.
     Layout(cmd_layout::LayoutArgs),
-    /// Run an experiment grid (buildings x seeds x strategies) on this machine; resumable.
+    /// Run an experiment grid (buildings x seeds x strategies) on this machine and, with
+    /// --listen, on remote workers; resumable.
     Run(cmd_run::RunArgs),
+    /// Join a grid run elsewhere (`floorcast run GRID --listen ...`): take jobs, return results.
+    Worker(cmd_worker::WorkerArgs),
     /// Print the table of a results directory and export it as CSV.
     Report(cmd_run::ReportArgs),
 }
@@ -45,6 +49,7 @@ fn main() -> ExitCode {
         Command::Explore(a) => cmd_explore::run(a),
         Command::Layout(a) => cmd_layout::run(a),
         Command::Run(a) => cmd_run::run(a),
+        Command::Worker(a) => cmd_worker::run(a),
         Command::Report(a) => cmd_run::report(a),
     };
     match result {

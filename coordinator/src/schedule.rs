@@ -24,6 +24,11 @@ pub enum Event {
         worker: WorkerId,
         job: JobId,
     },
+    /// A worker still runs a job: extend its lease.
+    LeaseRenewed {
+        worker: WorkerId,
+        job: JobId,
+    },
     /// Time passes (check leases).
     Tick,
 }
@@ -53,6 +58,14 @@ pub enum Action {
         worker: WorkerId,
         reason: RequeueReason,
     },
+    /// The lease of `job` now runs until `deadline_s`.
+    Renewed {
+        worker: WorkerId,
+        job: JobId,
+        deadline_s: f64,
+    },
+    /// `job` is not leased to `worker` (requeued meanwhile, or already stored).
+    NotLeased { worker: WorkerId, job: JobId },
     /// Every job is stored.
     Finished,
 }
@@ -121,6 +134,10 @@ impl Scheduler {
     pub fn workers(&self) -> impl Iterator<Item = &WorkerId> {
         self.workers.iter()
     }
+    /// The running jobs and who runs them.
+    pub fn leases(&self) -> impl Iterator<Item = (&JobId, &WorkerId)> {
+        self.leased.iter().map(|(j, l)| (j, &l.worker))
+    }
 
     /// Feeds one event at time `now_s`; returns what to do, in order.
     pub fn handle(&mut self, event: Event, now_s: f64) -> Vec<Action> {
@@ -168,6 +185,20 @@ impl Scheduler {
                     self.pending.retain(|j| j != &job);
                     self.done.insert(job.clone());
                     out.push(Action::Store { worker, job });
+                }
+            }
+            Event::LeaseRenewed { worker, job } => {
+                self.expire(now_s, &mut out);
+                match self.leased.get_mut(&job) {
+                    Some(l) if l.worker == worker => {
+                        l.deadline_s = now_s + self.lease_s;
+                        out.push(Action::Renewed {
+                            worker,
+                            job,
+                            deadline_s: l.deadline_s,
+                        });
+                    }
+                    _ => out.push(Action::NotLeased { worker, job }),
                 }
             }
             Event::Tick => self.expire(now_s, &mut out),
@@ -308,6 +339,38 @@ mod tests {
     }
 
     #[test]
+    fn renewals_keep_a_lease_alive_only_for_its_holder() {
+        let mut s = Scheduler::new(ids(1), &BTreeSet::new(), 10.0);
+        s.handle(Event::JobRequested("w1".into()), 0.0);
+        let renew = |s: &mut Scheduler, w: &str, now| {
+            s.handle(
+                Event::LeaseRenewed {
+                    worker: w.into(),
+                    job: "job000".into(),
+                },
+                now,
+            )
+        };
+        assert!(
+            matches!(&renew(&mut s, "w1", 8.0)[..], [Action::Renewed { deadline_s, .. }] if *deadline_s == 18.0)
+        );
+        assert!(
+            s.handle(Event::Tick, 15.0).is_empty(),
+            "renewed lease holds"
+        );
+        assert!(matches!(
+            &renew(&mut s, "w2", 16.0)[..],
+            [Action::NotLeased { .. }]
+        ));
+        // Not renewed in time: requeued, and a late renewal is refused.
+        let a = renew(&mut s, "w1", 30.0);
+        assert!(
+            matches!(&a[..], [Action::Requeued { .. }, Action::NotLeased { .. }]),
+            "{a:?}"
+        );
+    }
+
+    #[test]
     fn resumes_from_stored_results() {
         let done: BTreeSet<JobId> = ["job000".to_string()].into();
         let mut s = Scheduler::new(ids(2), &done, 10.0);
@@ -321,6 +384,7 @@ mod tests {
         Request(u8),
         Submit(u8),
         Leave(u8),
+        Renew(u8),
         Tick(u8),
     }
 
@@ -329,6 +393,7 @@ mod tests {
             4 => (0u8..4).prop_map(Step::Request),
             4 => (0u8..4).prop_map(Step::Submit),
             1 => (0u8..4).prop_map(Step::Leave),
+            2 => (0u8..4).prop_map(Step::Renew),
             1 => (0u8..30).prop_map(Step::Tick),
         ]
     }
@@ -364,6 +429,11 @@ mod tests {
                         }
                     }
                     Step::Leave(w) => apply(&mut s, Event::WorkerLeft(format!("w{w}")), now, &mut held),
+                    Step::Renew(w) => {
+                        if let Some(job) = held.get(&w).and_then(|v| v.last()).cloned() {
+                            apply(&mut s, Event::LeaseRenewed { worker: format!("w{w}"), job }, now, &mut held);
+                        }
+                    }
                     Step::Tick(dt) => { now += dt as f64; apply(&mut s, Event::Tick, now, &mut held) }
                 }
             }

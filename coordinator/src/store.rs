@@ -29,8 +29,9 @@ pub enum StoreError {
     Missing(PathBuf),
 }
 
-/// One stored job.
-#[derive(Debug, Clone, PartialEq)]
+/// One stored job (also what a remote worker submits).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StoredResult {
     pub job_id: String,
     pub grid: String,
@@ -171,11 +172,36 @@ impl Store {
     /// Stores a result unless one for the same job exists. Returns whether it was inserted.
     /// The row is committed (durable) when this returns.
     pub fn insert(&self, r: &StoredResult) -> Result<bool, StoreError> {
+        Ok(self.insert_many(std::slice::from_ref(r))? == 1)
+    }
+
+    /// Stores results (skipping jobs already stored) in one transaction, so that a burst of
+    /// results costs one disk sync. Every row is committed when this returns; returns how many
+    /// were inserted.
+    pub fn insert_many(&self, rows: &[StoredResult]) -> Result<usize, StoreError> {
+        if rows.is_empty() {
+            return Ok(0);
+        }
         let now = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| d.as_secs_f64())
             .unwrap_or(0.0);
-        let n = self.sql(self.conn.execute(
+        let tx = self.sql(self.conn.unchecked_transaction())?;
+        let mut inserted = 0;
+        for r in rows {
+            inserted += self.insert_row(&tx, r, now)?;
+        }
+        self.sql(tx.commit())?;
+        Ok(inserted)
+    }
+
+    fn insert_row(
+        &self,
+        conn: &Connection,
+        r: &StoredResult,
+        now: f64,
+    ) -> Result<usize, StoreError> {
+        self.sql(conn.execute(
             "INSERT OR IGNORE INTO results (job_id, grid, building, building_hash, strategy, label, seed,
                 settings_json, status, error, summary_json, progress_csv, worker, wall_time_s,
                 floorcast_version, stored_unix_s)
@@ -185,8 +211,7 @@ impl Store {
                 r.settings_json, r.status, r.error, r.summary_json, r.progress_csv, r.worker,
                 r.wall_time_s, r.floorcast_version, now
             ],
-        ))?;
-        Ok(n == 1)
+        ))
     }
 
     /// Ids of every stored job.
@@ -243,6 +268,16 @@ impl Store {
     }
 }
 
+/// This machine's name (or "unknown").
+pub fn host_name() -> String {
+    std::fs::read_to_string("/etc/hostname")
+        .ok()
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "unknown".into())
+}
+
 /// Provenance of this process: git commit and dirty flag of the current directory's repository
 /// (or "unknown"), compiler, host, version.
 pub fn provenance(grid: &str, command: &str) -> Provenance {
@@ -257,12 +292,7 @@ pub fn provenance(grid: &str, command: &str) -> Provenance {
     let git_commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
     let git_dirty =
         git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
-    let host = std::fs::read_to_string("/etc/hostname")
-        .ok()
-        .map(|s| s.trim().to_string())
-        .filter(|s| !s.is_empty())
-        .or_else(|| std::env::var("HOSTNAME").ok())
-        .unwrap_or_else(|| "unknown".into());
+    let host = host_name();
     Provenance {
         grid: grid.to_string(),
         command: command.to_string(),
@@ -310,9 +340,10 @@ mod tests {
             assert!(s.insert(&row("a")).unwrap());
             assert!(!s.insert(&row("a")).unwrap(), "duplicate is ignored");
             assert!(s.insert(&row("b")).unwrap());
+            assert_eq!(s.insert_many(&[row("b"), row("c"), row("d")]).unwrap(), 2);
         }
         let s = Store::open(dir.path()).unwrap();
-        assert_eq!(s.stored_ids().unwrap().len(), 2);
+        assert_eq!(s.stored_ids().unwrap().len(), 4);
         assert_eq!(s.all().unwrap()[0], row("a"));
     }
 

@@ -1,0 +1,535 @@
+//! Runs a plan: the coordinator loop around the [`Scheduler`], fed by embedded worker threads
+//! (in-process channels, no network, no port) and, with a [`NetConfig`], by remote workers
+//! through `net.rs`. Both kinds of worker send the same [`Inbox`] messages, so local and
+//! distributed runs share one code path.
+//!
+//! Results are stored as they arrive: the loop takes every message waiting, commits the results
+//! among them in one SQLite transaction, and only then acknowledges them (a killed coordinator
+//! loses nothing it acknowledged; a burst of results costs one disk sync).
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use floorcast_worker::{run_job, Job};
+use tokio::sync::oneshot;
+
+use crate::grid::{Plan, PlannedJob};
+use crate::net::{self, NetConfig, NetError};
+use crate::schedule::{Action, Event, RequeueReason, Scheduler};
+use crate::store::{Store, StoreError, StoredResult};
+use crate::wire::{check_result, RenewReply, SubmitReply, WireJob};
+
+/// What workers (embedded threads or the network bridge) tell the coordinator loop.
+#[derive(Debug)]
+pub(crate) enum Inbox {
+    /// A worker asks for a job.
+    Request {
+        worker: String,
+        reply: oneshot::Sender<Answer>,
+    },
+    /// A worker returns a result.
+    Submit {
+        worker: String,
+        result: Box<StoredResult>,
+        reply: oneshot::Sender<SubmitReply>,
+    },
+    /// A worker still runs `job`.
+    Renew {
+        worker: String,
+        job: String,
+        reply: oneshot::Sender<RenewReply>,
+    },
+    Joined(String),
+    Left(String),
+    /// Something to show the user (a refused worker, a dropped message).
+    Log(String),
+}
+
+/// The coordinator's answer to a request.
+#[derive(Debug)]
+pub(crate) enum Answer {
+    Run(Box<PlannedJob>),
+    Wait,
+    Done,
+}
+
+/// Counts for a progress display.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Counts {
+    pub total: usize,
+    pub done: usize,
+    pub running: usize,
+    pub failed: usize,
+    /// Stored before this run started.
+    pub resumed: usize,
+    /// Remote workers connected now.
+    pub remote_workers: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    Complete,
+    Interrupted,
+}
+
+/// Runs one planned job on an embedded worker (default: [`execute`]).
+pub type LocalExecutor = dyn Fn(&Plan, &PlannedJob, &str) -> StoredResult + Send + Sync;
+
+/// How to run a plan.
+#[derive(Clone)]
+pub struct RunOptions {
+    /// Embedded worker threads (0 is allowed only with `net`).
+    pub workers: usize,
+    /// Accept remote workers through zenoh.
+    pub net: Option<NetConfig>,
+    /// Lease of a remote job; a worker renews it while it runs the job.
+    pub lease_s: f64,
+    /// After the last result, keep answering "done" this long so remote workers leave cleanly.
+    pub linger_s: f64,
+    /// What embedded workers run (benchmarks replace it with a trivial job).
+    pub executor: Option<Arc<LocalExecutor>>,
+}
+
+impl std::fmt::Debug for RunOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RunOptions")
+            .field("workers", &self.workers)
+            .field("net", &self.net)
+            .field("lease_s", &self.lease_s)
+            .field("linger_s", &self.linger_s)
+            .field("executor", &self.executor.as_ref().map(|_| "custom"))
+            .finish()
+    }
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            workers: 1,
+            net: None,
+            lease_s: 60.0,
+            linger_s: 2.0,
+            executor: None,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    #[error(transparent)]
+    Net(#[from] NetError),
+    #[error("no workers: --workers 0 needs --listen or --connect so that remote workers can join")]
+    NoWorkers,
+}
+
+/// Prefix of embedded workers' ids.
+const LOCAL: &str = "local-";
+
+/// Runs every job of `plan` not yet in `store`. `interrupt` stops the run (jobs already stored
+/// stay stored; running ones are abandoned and run again next time). `on_log` receives lines
+/// for the user (workers joining or refused, requeued jobs, dropped messages).
+pub fn run_plan(
+    plan: &Plan,
+    store: &Store,
+    opts: &RunOptions,
+    interrupt: &AtomicBool,
+    on_progress: &mut dyn FnMut(Counts),
+    on_log: &mut dyn FnMut(&str),
+) -> Result<(Outcome, Counts), RunError> {
+    if opts.workers == 0 && opts.net.is_none() {
+        return Err(RunError::NoWorkers);
+    }
+    let stored = store.stored_ids()?;
+    let ids: Vec<String> = plan.jobs.iter().map(|j| j.id.clone()).collect();
+    let mut sched = Scheduler::new(ids, &stored, opts.lease_s);
+    let jobs: BTreeMap<String, PlannedJob> = plan
+        .jobs
+        .iter()
+        .map(|j| (j.id.clone(), j.clone()))
+        .collect();
+    let resumed = sched.done();
+    let mut failed = 0usize;
+    let mut remote: BTreeSet<String> = BTreeSet::new();
+    let counts = |s: &Scheduler, failed: usize, remote: usize| Counts {
+        total: s.total(),
+        done: s.done(),
+        running: s.running(),
+        failed,
+        resumed,
+        remote_workers: remote,
+    };
+    on_progress(counts(&sched, failed, 0));
+    if sched.is_finished() {
+        return Ok((Outcome::Complete, counts(&sched, failed, 0)));
+    }
+    let plan = Arc::new(plan.clone());
+    let (inbox_tx, inbox) = mpsc::channel::<Inbox>();
+    let listener = match &opts.net {
+        Some(cfg) => Some(net::serve(
+            cfg,
+            Arc::clone(&plan),
+            opts.lease_s,
+            inbox_tx.clone(),
+        )?),
+        None => None,
+    };
+    if let Some(l) = &listener {
+        on_log(&format!("accepting remote workers: {}", l.describe()));
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut handles = Vec::new();
+    for w in 0..opts.workers {
+        let name = format!("{LOCAL}{w}");
+        let tx = inbox_tx.clone();
+        let plan = Arc::clone(&plan);
+        let stop = Arc::clone(&stop);
+        let exec: Arc<LocalExecutor> = opts.executor.clone().unwrap_or_else(|| Arc::new(execute));
+        handles.push(std::thread::spawn(move || {
+            local_worker(&name, &plan, &tx, &stop, &*exec)
+        }));
+    }
+    drop(inbox_tx);
+    let t0 = Instant::now();
+    let mut outcome = Outcome::Complete;
+    let mut finished_at: Option<Instant> = None;
+    let mut last_renewal = 0.0f64;
+    loop {
+        if interrupt.load(Ordering::SeqCst) {
+            outcome = Outcome::Interrupted;
+            break;
+        }
+        if let Some(t) = finished_at {
+            // Remote workers get "done" when they ask; stop once they left or after the linger.
+            if remote.is_empty() || t.elapsed().as_secs_f64() >= opts.linger_s {
+                break;
+            }
+        }
+        let mut batch = Vec::new();
+        match inbox.recv_timeout(Duration::from_millis(100)) {
+            Ok(m) => batch.push(m),
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+        }
+        while batch.len() < 512 {
+            match inbox.try_recv() {
+                Ok(m) => batch.push(m),
+                Err(_) => break,
+            }
+        }
+        let now = t0.elapsed().as_secs_f64();
+        let mut events: Vec<Action> = Vec::new();
+        // Embedded workers cannot die alone (they are threads of this process): keep their
+        // leases alive.
+        if now - last_renewal >= opts.lease_s / 4.0 {
+            last_renewal = now;
+            let local: Vec<(String, String)> = sched
+                .leases()
+                .filter(|(_, w)| w.starts_with(LOCAL))
+                .map(|(j, w)| (j.clone(), w.clone()))
+                .collect();
+            for (job, worker) in local {
+                events.extend(sched.handle(Event::LeaseRenewed { worker, job }, now));
+            }
+        }
+        events.extend(sched.handle(Event::Tick, now));
+        let mut to_store: Vec<StoredResult> = Vec::new();
+        let mut acks: Vec<(oneshot::Sender<SubmitReply>, SubmitReply)> = Vec::new();
+        for msg in batch {
+            match msg {
+                Inbox::Request { worker, reply } => {
+                    for a in sched.handle(Event::JobRequested(worker), now) {
+                        let answer = match a {
+                            Action::Lease { job, .. } => match jobs.get(&job) {
+                                Some(j) => Answer::Run(Box::new(j.clone())),
+                                None => Answer::Wait,
+                            },
+                            Action::Wait { .. } => Answer::Wait,
+                            Action::Done { .. } => Answer::Done,
+                            other => {
+                                events.push(other);
+                                continue;
+                            }
+                        };
+                        let _ = reply.send(answer);
+                        break;
+                    }
+                }
+                Inbox::Submit {
+                    worker,
+                    result,
+                    reply,
+                } => {
+                    let job_id = result.job_id.clone();
+                    let verdict = match jobs.get(&job_id) {
+                        Some(j) => check_result(&result, &expected_row(&plan, j, "")),
+                        None => Ok(()), // the scheduler rejects unknown jobs
+                    };
+                    if let Err(reason) = verdict {
+                        on_log(&format!(
+                            "rejected result of job {job_id} from {worker}: {reason}"
+                        ));
+                        let _ = reply.send(SubmitReply::Rejected { reason });
+                        continue;
+                    }
+                    let actions = sched.handle(
+                        Event::ResultSubmitted {
+                            worker: worker.clone(),
+                            job: job_id.clone(),
+                        },
+                        now,
+                    );
+                    let mut reply = Some(reply);
+                    for a in actions {
+                        match a {
+                            Action::Store { .. } => {
+                                if result.status != "ok" {
+                                    failed += 1;
+                                    on_log(&format!(
+                                        "job {} ({} {} seed {}) failed on {worker}: {}",
+                                        job_id,
+                                        result.building,
+                                        result.label,
+                                        result.seed,
+                                        result.error.as_deref().unwrap_or("")
+                                    ));
+                                }
+                                to_store.push((*result).clone());
+                                if let Some(r) = reply.take() {
+                                    acks.push((r, SubmitReply::Stored));
+                                }
+                            }
+                            Action::AckDuplicate { .. } => {
+                                if let Some(r) = reply.take() {
+                                    acks.push((r, SubmitReply::Duplicate));
+                                }
+                            }
+                            Action::RejectUnknown { .. } => {
+                                let reason =
+                                    format!("job {job_id} is not part of grid '{}'", plan.name);
+                                on_log(&format!("rejected result from {worker}: {reason}"));
+                                if let Some(r) = reply.take() {
+                                    let _ = r.send(SubmitReply::Rejected { reason });
+                                }
+                            }
+                            other => events.push(other),
+                        }
+                    }
+                }
+                Inbox::Renew { worker, job, reply } => {
+                    for a in sched.handle(Event::LeaseRenewed { worker, job }, now) {
+                        match a {
+                            Action::Renewed { .. } => {
+                                let _ = reply.send(RenewReply::Renewed);
+                                break;
+                            }
+                            Action::NotLeased { .. } => {
+                                let _ = reply.send(RenewReply::NotLeased);
+                                break;
+                            }
+                            other => events.push(other),
+                        }
+                    }
+                }
+                Inbox::Joined(w) => {
+                    if remote.insert(w.clone()) {
+                        on_log(&format!("worker {w} joined"));
+                    }
+                    events.extend(sched.handle(Event::WorkerJoined(w), now));
+                }
+                Inbox::Left(w) => {
+                    if remote.remove(&w) {
+                        on_log(&format!("worker {w} left"));
+                    }
+                    events.extend(sched.handle(Event::WorkerLeft(w), now));
+                }
+                Inbox::Log(line) => on_log(&line),
+            }
+        }
+        // Durable first, acknowledged second.
+        store.insert_many(&to_store)?;
+        for (r, a) in acks {
+            let _ = r.send(a);
+        }
+        for a in events {
+            match a {
+                Action::Requeued {
+                    job,
+                    worker,
+                    reason,
+                } => on_log(&format!(
+                    "job {job} back in the queue: {}",
+                    match reason {
+                        RequeueReason::WorkerLeft => format!("worker {worker} left"),
+                        RequeueReason::LeaseExpired => format!("lease of {worker} expired"),
+                    }
+                )),
+                Action::Finished => finished_at = Some(Instant::now()),
+                _ => {}
+            }
+        }
+        if sched.is_finished() && finished_at.is_none() {
+            finished_at = Some(Instant::now());
+        }
+        on_progress(counts(&sched, failed, remote.len()));
+    }
+    stop.store(true, Ordering::SeqCst);
+    if let Some(l) = listener {
+        l.close();
+    }
+    if outcome == Outcome::Complete {
+        drop(inbox);
+        for h in handles {
+            let _ = h.join();
+        }
+    }
+    // On interruption, running simulations are abandoned (the process exits); their jobs are
+    // not stored and run again next time.
+    Ok((outcome, counts(&sched, failed, remote.len())))
+}
+
+fn local_worker(
+    name: &str,
+    plan: &Plan,
+    inbox: &mpsc::Sender<Inbox>,
+    stop: &AtomicBool,
+    exec: &LocalExecutor,
+) {
+    while !stop.load(Ordering::SeqCst) {
+        let (tx, rx) = oneshot::channel();
+        let request = Inbox::Request {
+            worker: name.to_string(),
+            reply: tx,
+        };
+        if inbox.send(request).is_err() {
+            return;
+        }
+        match rx.blocking_recv() {
+            Ok(Answer::Run(job)) => {
+                let result = exec(plan, &job, name);
+                let (tx, rx) = oneshot::channel();
+                let submit = Inbox::Submit {
+                    worker: name.to_string(),
+                    result: Box::new(result),
+                    reply: tx,
+                };
+                if inbox.send(submit).is_err() || rx.blocking_recv().is_err() {
+                    return;
+                }
+            }
+            Ok(Answer::Wait) => std::thread::sleep(Duration::from_millis(50)),
+            Ok(Answer::Done) | Err(_) => return,
+        }
+    }
+}
+
+/// The store row a planned job produces, before it ran (identity fields only).
+pub(crate) fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
+    let b = &plan.buildings[job.building];
+    StoredResult {
+        job_id: job.id.clone(),
+        grid: plan.name.clone(),
+        building: b.name.clone(),
+        building_hash: b.hash.clone(),
+        strategy: job.strategy.clone(),
+        label: job.label.clone(),
+        seed: job.seed,
+        settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
+        status: "ok".into(),
+        error: None,
+        summary_json: None,
+        progress_csv: None,
+        worker: worker.to_string(),
+        wall_time_s: 0.0,
+        floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
+    }
+}
+
+/// Runs one planned job and turns its outcome (success or a job error) into a store row.
+pub fn execute(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
+    let b = &plan.buildings[job.building];
+    execute_job(
+        expected_row(plan, job, worker),
+        &Job {
+            building: &b.building,
+            building_name: b.name.clone(),
+            strategy: job.strategy.clone(),
+            seed: job.seed,
+            settings: job.settings.clone(),
+            start: None,
+            snapshot_fractions: Vec::new(),
+        },
+    )
+}
+
+/// Runs a job received from the network (see `net.rs`): rebuilds its building, checks the
+/// building's hash, runs it. A damaged building gives a `failed` row naming the problem.
+pub fn execute_wire(job: &WireJob, worker: &str) -> StoredResult {
+    let mut row = StoredResult {
+        job_id: job.job_id.clone(),
+        grid: job.grid.clone(),
+        building: job.building_name.clone(),
+        building_hash: job.building_hash.clone(),
+        strategy: job.strategy.clone(),
+        label: job.label.clone(),
+        seed: job.seed,
+        settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
+        status: "ok".into(),
+        error: None,
+        summary_json: None,
+        progress_csv: None,
+        worker: worker.to_string(),
+        wall_time_s: 0.0,
+        floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
+    };
+    match job.building.to_building(&job.building_hash) {
+        Ok(building) => execute_job(
+            row,
+            &Job {
+                building: &building,
+                building_name: job.building_name.clone(),
+                strategy: job.strategy.clone(),
+                seed: job.seed,
+                settings: job.settings.clone(),
+                start: None,
+                snapshot_fractions: Vec::new(),
+            },
+        ),
+        Err(e) => {
+            row.status = "failed".into();
+            row.error = Some(e);
+            row
+        }
+    }
+}
+
+/// Runs `spec` and fills the outcome into `row` (which carries the job's identity).
+pub(crate) fn execute_job(mut row: StoredResult, spec: &Job<'_>) -> StoredResult {
+    let t = Instant::now();
+    let outcome = run_job(spec, &mut |_| {});
+    row.wall_time_s = t.elapsed().as_secs_f64();
+    match outcome {
+        Ok(out) => {
+            row.summary_json = serde_json::to_string(&out.summary).ok();
+            let mut csv = String::from("time_s,explored_area_m2,explored_fraction\n");
+            for p in &out.result.progress {
+                let _ = writeln!(
+                    csv,
+                    "{:.1},{:.3},{:.5}",
+                    p.time_s, p.explored_area_m2, p.explored_fraction
+                );
+            }
+            row.progress_csv = Some(csv);
+        }
+        Err(e) => {
+            row.status = "failed".into();
+            row.error = Some(e.to_string());
+        }
+    }
+    row
+}

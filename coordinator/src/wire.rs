@@ -1,0 +1,519 @@
+//! The messages coordinator and remote workers exchange, as versioned, validated types.
+//!
+//! Every message is a JSON object `{"format": "floorcast-wire", "version": 1, "kind": …, "body":
+//! …}`. [`decode`] checks the envelope before it trusts the body, so a foreign or malformed
+//! message becomes a [`WireError`] that names what was wrong (and is logged and dropped by the
+//! transport), never a panic. Nothing here knows zenoh: `net.rs` moves these bytes.
+//!
+//! Buildings travel inside jobs ([`WireBuilding`]), so a worker needs no files; floats cross
+//! bit-exactly (serde_json's `float_roundtrip`), and the worker checks the building's content
+//! hash before it runs anything.
+
+use base64::Engine as _;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use sim_core::{Bitmap, Building, Door, Geometry, GridFrame, Polygon, Pose, Room, Vec2};
+
+use crate::store::StoredResult;
+use floorcast_worker::{RunSummary, Settings, FLOORCAST_VERSION, SUMMARY_VERSION};
+
+/// The value of every message's `format` key.
+pub const WIRE_FORMAT: &str = "floorcast-wire";
+/// The protocol version this build speaks.
+pub const WIRE_VERSION: u32 = 1;
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum WireError {
+    #[error("not a floorcast message: {0}")]
+    NotFloorcast(String),
+    #[error(
+        "floorcast wire protocol version {found}, this floorcast speaks version {WIRE_VERSION}"
+    )]
+    Version { found: u64 },
+    #[error("expected a '{expected}' message, got '{found}'")]
+    Kind { expected: String, found: String },
+    #[error("malformed '{kind}' message: {message}")]
+    Body { kind: String, message: String },
+}
+
+/// A message type and its `kind` tag.
+pub trait Message: Serialize + DeserializeOwned {
+    const KIND: &'static str;
+}
+
+#[derive(Serialize)]
+struct EnvelopeOut<'a, T> {
+    format: &'static str,
+    version: u32,
+    kind: &'static str,
+    body: &'a T,
+}
+
+/// Encodes a message with its envelope.
+pub fn encode<T: Message>(msg: &T) -> Vec<u8> {
+    serde_json::to_vec(&EnvelopeOut {
+        format: WIRE_FORMAT,
+        version: WIRE_VERSION,
+        kind: T::KIND,
+        body: msg,
+    })
+    .expect("wire messages serialise")
+}
+
+/// Decodes and validates a message of type `T`.
+pub fn decode<T: Message>(bytes: &[u8]) -> Result<T, WireError> {
+    let v: serde_json::Value = serde_json::from_slice(bytes)
+        .map_err(|e| WireError::NotFloorcast(format!("not JSON ({e}; {} bytes)", bytes.len())))?;
+    let Some(obj) = v.as_object() else {
+        return Err(WireError::NotFloorcast("not a JSON object".into()));
+    };
+    match obj.get("format").and_then(|f| f.as_str()) {
+        Some(WIRE_FORMAT) => {}
+        other => {
+            return Err(WireError::NotFloorcast(format!(
+                "format is {other:?}, expected \"{WIRE_FORMAT}\""
+            )))
+        }
+    }
+    match obj.get("version").and_then(|f| f.as_u64()) {
+        Some(v) if v == WIRE_VERSION as u64 => {}
+        Some(found) => return Err(WireError::Version { found }),
+        None => return Err(WireError::NotFloorcast("no numeric 'version'".into())),
+    }
+    let kind = obj.get("kind").and_then(|k| k.as_str()).unwrap_or("");
+    if kind != T::KIND {
+        return Err(WireError::Kind {
+            expected: T::KIND.into(),
+            found: kind.into(),
+        });
+    }
+    let body = obj.get("body").cloned().unwrap_or(serde_json::Value::Null);
+    serde_json::from_value(body).map_err(|e| WireError::Body {
+        kind: T::KIND.into(),
+        message: e.to_string(),
+    })
+}
+
+/// A worker asks for a job (`ctl/next`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Hello {
+    pub worker: String,
+    pub host: String,
+    pub floorcast_version: String,
+    /// The run-summary format the worker writes ([`SUMMARY_VERSION`]).
+    pub result_format: u32,
+}
+impl Message for Hello {
+    const KIND: &'static str = "hello";
+}
+
+impl Hello {
+    pub fn this_build(worker: &str, host: &str) -> Self {
+        Self {
+            worker: worker.into(),
+            host: host.into(),
+            floorcast_version: FLOORCAST_VERSION.into(),
+            result_format: SUMMARY_VERSION,
+        }
+    }
+
+    /// Whether this coordinator can take results from the worker: the same floorcast version
+    /// and result format (job ids and summaries depend on both).
+    pub fn compatible(&self) -> Result<(), String> {
+        if self.floorcast_version != FLOORCAST_VERSION || self.result_format != SUMMARY_VERSION {
+            return Err(format!(
+                "worker '{}' runs floorcast {} (result format {}), the coordinator floorcast {} (result format {}); install the same floorcast version on every machine",
+                self.worker, self.floorcast_version, self.result_format, FLOORCAST_VERSION, SUMMARY_VERSION
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The coordinator's answer to [`Hello`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[allow(clippy::large_enum_variant)]
+pub enum NextReply {
+    /// Run this job; renew the lease before `lease_s` seconds pass.
+    Job { job: WireJob, lease_s: f64 },
+    /// Nothing to hand out now (all jobs leased); ask again after `retry_ms`.
+    Wait { retry_ms: u64 },
+    /// The grid is complete: leave.
+    Done,
+    /// This worker cannot take part (e.g. another floorcast version).
+    Refused { reason: String },
+}
+impl Message for NextReply {
+    const KIND: &'static str = "next-reply";
+}
+
+/// One job, with everything needed to run it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WireJob {
+    pub job_id: String,
+    pub grid: String,
+    pub building_name: String,
+    pub building_hash: String,
+    pub building: WireBuilding,
+    pub strategy: String,
+    pub label: String,
+    pub seed: u64,
+    pub settings: Settings,
+}
+
+/// A worker returns a result (`ctl/submit/<job_id>`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Submission {
+    pub worker: String,
+    pub result: StoredResult,
+}
+impl Message for Submission {
+    const KIND: &'static str = "submission";
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SubmitReply {
+    /// Stored durably: the worker may forget it.
+    Stored,
+    /// This job was already stored (by this worker earlier or by another): forget it.
+    Duplicate,
+    /// Not a result this grid accepts; do not send it again.
+    Rejected { reason: String },
+}
+impl Message for SubmitReply {
+    const KIND: &'static str = "submit-reply";
+}
+
+/// A worker renews its lease on a running job (`ctl/renew/<job_id>`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Renewal {
+    pub worker: String,
+}
+impl Message for Renewal {
+    const KIND: &'static str = "renewal";
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum RenewReply {
+    Renewed,
+    /// The job is no longer leased to this worker (it was requeued or is stored).
+    NotLeased,
+}
+impl Message for RenewReply {
+    const KIND: &'static str = "renew-reply";
+}
+
+/// Checks that a submitted result is the result of the planned job it claims to be.
+pub fn check_result(result: &StoredResult, expected: &StoredResult) -> Result<(), String> {
+    let same = |what: &str, a: &str, b: &str| {
+        if a == b {
+            Ok(())
+        } else {
+            Err(format!("{what} is '{a}', the grid expects '{b}'"))
+        }
+    };
+    same("job_id", &result.job_id, &expected.job_id)?;
+    same(
+        "building_hash",
+        &result.building_hash,
+        &expected.building_hash,
+    )?;
+    same("strategy", &result.strategy, &expected.strategy)?;
+    same(
+        "floorcast_version",
+        &result.floorcast_version,
+        &expected.floorcast_version,
+    )?;
+    if result.seed != expected.seed {
+        return Err(format!(
+            "seed is {}, the grid expects {}",
+            result.seed, expected.seed
+        ));
+    }
+    if result.settings_json != expected.settings_json {
+        return Err("settings differ from the grid's".into());
+    }
+    match result.status.as_str() {
+        "ok" => {
+            let summary = result
+                .summary_json
+                .as_deref()
+                .ok_or("status 'ok' without a summary")?;
+            RunSummary::from_json(summary).map_err(|e| format!("summary: {e}"))?;
+        }
+        "failed" => {
+            if result.error.as_deref().unwrap_or("").is_empty() {
+                return Err("status 'failed' without an error message".into());
+            }
+        }
+        other => return Err(format!("status is '{other}', expected 'ok' or 'failed'")),
+    }
+    if !result.wall_time_s.is_finite() || result.wall_time_s < 0.0 {
+        return Err(format!("wall_time_s is {}", result.wall_time_s));
+    }
+    Ok(())
+}
+
+/// A building as it travels inside a job: exact, with rooms, doors and start.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WireBuilding {
+    pub name: String,
+    pub geometry: WireGeometry,
+    pub rooms: Vec<WireRoom>,
+    pub doors: Vec<WireDoor>,
+    /// `[x_m, y_m, theta_rad]`.
+    pub start: Option<[f64; 3]>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum WireGeometry {
+    Raster {
+        origin_m: [f64; 2],
+        resolution_m: f64,
+        width: u32,
+        height: u32,
+        /// Solid cells, one bit each in row-major order (bit `i % 8` of byte `i / 8`), base64.
+        solid_bits: String,
+    },
+    Vector {
+        outline: Vec<[f64; 2]>,
+        solids: Vec<Vec<[f64; 2]>>,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WireRoom {
+    pub id: u32,
+    pub kind: String,
+    pub polygon: Vec<[f64; 2]>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WireDoor {
+    pub a: [f64; 2],
+    pub b: [f64; 2],
+    pub rooms: [Option<u32>; 2],
+}
+
+fn pts(p: &Polygon) -> Vec<[f64; 2]> {
+    p.vertices.iter().map(|v| [v.x, v.y]).collect()
+}
+fn poly(v: &[[f64; 2]]) -> Polygon {
+    Polygon {
+        vertices: v.iter().map(|p| Vec2::new(p[0], p[1])).collect(),
+    }
+}
+
+impl WireBuilding {
+    pub fn from_building(b: &Building) -> Self {
+        let geometry = match &b.geometry {
+            Geometry::Raster { solid } => {
+                let mut bits = vec![0u8; solid.data.len().div_ceil(8)];
+                for (i, &s) in solid.data.iter().enumerate() {
+                    bits[i / 8] |= (s as u8) << (i % 8);
+                }
+                WireGeometry::Raster {
+                    origin_m: [solid.frame.origin_m.x, solid.frame.origin_m.y],
+                    resolution_m: solid.frame.resolution_m,
+                    width: solid.frame.width,
+                    height: solid.frame.height,
+                    solid_bits: base64::engine::general_purpose::STANDARD.encode(bits),
+                }
+            }
+            Geometry::Vector { outline, solids } => WireGeometry::Vector {
+                outline: pts(outline),
+                solids: solids.iter().map(pts).collect(),
+            },
+        };
+        Self {
+            name: b.name.clone(),
+            geometry,
+            rooms: b
+                .rooms
+                .iter()
+                .map(|r| WireRoom {
+                    id: r.id,
+                    kind: r.kind.clone(),
+                    polygon: pts(&r.polygon),
+                })
+                .collect(),
+            doors: b
+                .doors
+                .iter()
+                .map(|d| WireDoor {
+                    a: [d.a.x, d.a.y],
+                    b: [d.b.x, d.b.y],
+                    rooms: d.rooms,
+                })
+                .collect(),
+            start: b.start.map(|p| [p.x_m, p.y_m, p.theta_rad]),
+        }
+    }
+
+    /// Rebuilds the building and checks it against `expected_hash`.
+    pub fn to_building(&self, expected_hash: &str) -> Result<Building, String> {
+        let geometry = match &self.geometry {
+            WireGeometry::Raster {
+                origin_m,
+                resolution_m,
+                width,
+                height,
+                solid_bits,
+            } => {
+                let n = *width as usize * *height as usize;
+                if !(resolution_m.is_finite() && *resolution_m > 0.0) || n == 0 {
+                    return Err(format!(
+                        "raster {width}x{height} at {resolution_m} m per cell"
+                    ));
+                }
+                let bits = base64::engine::general_purpose::STANDARD
+                    .decode(solid_bits)
+                    .map_err(|e| format!("solid_bits: {e}"))?;
+                if bits.len() != n.div_ceil(8) {
+                    return Err(format!(
+                        "solid_bits holds {} bytes, a {width}x{height} raster needs {}",
+                        bits.len(),
+                        n.div_ceil(8)
+                    ));
+                }
+                let frame = GridFrame::new(
+                    Vec2::new(origin_m[0], origin_m[1]),
+                    *resolution_m,
+                    *width,
+                    *height,
+                );
+                let data = (0..n).map(|i| bits[i / 8] >> (i % 8) & 1 == 1).collect();
+                Geometry::Raster {
+                    solid: Bitmap { frame, data },
+                }
+            }
+            WireGeometry::Vector { outline, solids } => Geometry::Vector {
+                outline: poly(outline),
+                solids: solids.iter().map(|s| poly(s)).collect(),
+            },
+        };
+        let b = Building {
+            name: self.name.clone(),
+            geometry,
+            rooms: self
+                .rooms
+                .iter()
+                .map(|r| Room {
+                    id: r.id,
+                    kind: r.kind.clone(),
+                    polygon: poly(&r.polygon),
+                })
+                .collect(),
+            doors: self
+                .doors
+                .iter()
+                .map(|d| Door {
+                    a: Vec2::new(d.a[0], d.a[1]),
+                    b: Vec2::new(d.b[0], d.b[1]),
+                    rooms: d.rooms,
+                })
+                .collect(),
+            start: self.start.map(|s| Pose::new(s[0], s[1], s[2])),
+        };
+        let hash = b.content_hash();
+        if hash != expected_hash {
+            return Err(format!(
+                "building '{}' arrived with content hash {hash}, the job says {expected_hash}",
+                self.name
+            ));
+        }
+        Ok(b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_round_trip_and_foreign_ones_are_refused() {
+        let h = Hello::this_build("w1", "host");
+        assert_eq!(decode::<Hello>(&encode(&h)).unwrap(), h);
+        assert!(h.compatible().is_ok());
+        let r = NextReply::Wait { retry_ms: 50 };
+        assert_eq!(decode::<NextReply>(&encode(&r)).unwrap(), r);
+
+        assert!(matches!(
+            decode::<Hello>(b"garbage"),
+            Err(WireError::NotFloorcast(_))
+        ));
+        assert!(matches!(
+            decode::<Hello>(br#"{"format":"other","version":1}"#),
+            Err(WireError::NotFloorcast(_))
+        ));
+        assert_eq!(
+            decode::<Hello>(br#"{"format":"floorcast-wire","version":99,"kind":"hello"}"#),
+            Err(WireError::Version { found: 99 })
+        );
+        assert!(matches!(
+            decode::<Hello>(&encode(&r)),
+            Err(WireError::Kind { .. })
+        ));
+        let extra = br#"{"format":"floorcast-wire","version":1,"kind":"hello","body":{"worker":"w","host":"h","floorcast_version":"x","result_format":1,"evil":true}}"#;
+        assert!(matches!(
+            decode::<Hello>(extra),
+            Err(WireError::Body { .. })
+        ));
+    }
+
+    #[test]
+    fn another_version_is_incompatible() {
+        let mut h = Hello::this_build("w1", "host");
+        h.floorcast_version = "0.0.0-other".into();
+        let e = h.compatible().unwrap_err();
+        assert!(e.contains("0.0.0-other") && e.contains("same floorcast version"));
+    }
+
+    #[test]
+    fn buildings_cross_bit_exactly() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../buildings/small.toml"
+        ))
+        .unwrap();
+        let b = floorcast_formats::building_toml::parse_building_toml(
+            &text,
+            std::path::Path::new("small.toml"),
+        )
+        .unwrap();
+        let hash = b.content_hash();
+        let wire = WireBuilding::from_building(&b);
+        let back: WireBuilding =
+            serde_json::from_slice(&serde_json::to_vec(&wire).unwrap()).unwrap();
+        assert_eq!(back.to_building(&hash).unwrap(), b);
+        assert!(back.to_building("0000").is_err());
+
+        // A raster building (odd size so the last byte is partial).
+        let frame = GridFrame::new(Vec2::new(-1.234_567_891, 0.1), 0.05, 13, 7);
+        let data = (0..13 * 7).map(|i| i % 3 == 0).collect();
+        let r = Building {
+            name: "r".into(),
+            geometry: Geometry::Raster {
+                solid: Bitmap { frame, data },
+            },
+            rooms: vec![],
+            doors: vec![],
+            start: Some(Pose::new(0.1, 0.2, 0.3)),
+        };
+        let wire = WireBuilding::from_building(&r);
+        let back: WireBuilding =
+            serde_json::from_slice(&serde_json::to_vec(&wire).unwrap()).unwrap();
+        assert_eq!(back.to_building(&r.content_hash()).unwrap(), r);
+    }
+}

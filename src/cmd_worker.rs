@@ -1,0 +1,93 @@
+//! `floorcast worker`: joins a grid run by `floorcast run GRID --listen ...` on another machine
+//! (or through a zenoh router), runs jobs, returns results, leaves when the grid is done.
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use clap::Args;
+use floorcast_coordinator::net::{run_worker, NetConfig, WorkerEvent, WorkerOptions};
+use floorcast_coordinator::run::execute_wire;
+
+use crate::cmd_run::NetArgs;
+
+#[derive(Debug, Args)]
+pub struct WorkerArgs {
+    /// The coordinator's (or a zenoh router's) endpoint, e.g. tcp/192.168.1.10:7447
+    /// (repeatable). May be omitted when --zenoh-config lists the endpoints.
+    #[arg(long, value_name = "ENDPOINT")]
+    connect: Vec<String>,
+    /// Jobs to run at once (default: one per core).
+    #[arg(long, value_name = "N")]
+    jobs: Option<usize>,
+    /// Give up when no coordinator has answered for this many seconds (0: wait forever).
+    /// The worker also waits this long for a coordinator that restarts.
+    #[arg(long, value_name = "S", default_value_t = 300.0)]
+    wait_s: f64,
+    /// This worker's name in the coordinator's log and the results (default: host, process id
+    /// and zenoh id).
+    #[arg(long, value_name = "NAME")]
+    name: Option<String>,
+    #[command(flatten)]
+    net: NetArgs,
+    /// Print only errors and the final line.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+pub fn run(a: WorkerArgs) -> Result<()> {
+    if a.connect.is_empty() && a.net.zenoh_config.is_none() {
+        anyhow::bail!(
+            "no coordinator to join: give --connect tcp/HOST:7447 (the endpoint of `floorcast run GRID --listen ...`) or a --zenoh-config that lists it"
+        );
+    }
+    if !(a.wait_s.is_finite() && a.wait_s >= 0.0) {
+        anyhow::bail!("--wait-s must be 0 or more seconds, got {}", a.wait_s);
+    }
+    let jobs = a.jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
+    if jobs == 0 {
+        anyhow::bail!("--jobs must be at least 1");
+    }
+    let opts = WorkerOptions {
+        net: NetConfig {
+            listen: Vec::new(),
+            connect: a.connect.clone(),
+            zenoh_config: a.net.zenoh_config.clone(),
+            campaign: a.net.campaign.clone(),
+        },
+        jobs,
+        wait_s: a.wait_s,
+        name: a.name.clone(),
+    };
+    let quiet = a.quiet;
+    let events = Arc::new(move |e: WorkerEvent| {
+        if quiet {
+            return;
+        }
+        match e {
+            WorkerEvent::Joined { worker } => {
+                eprintln!("worker {worker}: connected, taking jobs ({jobs} at once)")
+            }
+            WorkerEvent::Started { job, what } => eprintln!("job {job}: {what}"),
+            WorkerEvent::Finished {
+                job,
+                status,
+                wall_time_s,
+                reply,
+            } => eprintln!("job {job}: {status} in {wall_time_s:.1} s, {reply}"),
+            WorkerEvent::Note(n) => eprintln!("note: {n}"),
+        }
+    });
+    let report = run_worker(&opts, Arc::new(execute_wire), events)?;
+    say!(
+        "grid complete: this worker ran {} jobs ({} stored, {} duplicates, {} rejected)",
+        report.jobs_run,
+        report.stored,
+        report.duplicates,
+        report.rejected
+    );
+    Ok(())
+}
