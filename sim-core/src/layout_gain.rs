@@ -100,6 +100,7 @@ mod tests {
         let polygon = Polygon::rect(Vec2::new(min.0, min.1), Vec2::new(max.0, max.1));
         LayoutRoom {
             id,
+            open_edges: vec![false; polygon.vertices.len()],
             observed_polygon: polygon.clone(),
             area_m2: polygon.area_m2(),
             observed_area_m2: polygon.area_m2(),
