@@ -23,7 +23,7 @@ use crate::gain::information_gain;
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
 use crate::layout::reconstruct_layout;
-use crate::layout_gain::{layout_information_gain, LayoutRaster};
+use crate::layout_gain::{gap_closed_information_gain, layout_information_gain, LayoutRaster};
 use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
@@ -260,6 +260,8 @@ struct Explorer<'a> {
     matches_accepted: u64,
     plans: u64,
     gains: GainCache,
+    /// The paper's room-bounded `I(p)` of candidates, for early stopping.
+    room_gains: GainCache,
     next_progress_s: f64,
     /// Cells of the map that are known (free or occupied), counted from the map's own changes.
     known_cells: usize,
@@ -342,6 +344,7 @@ pub fn explore(
         matches_accepted: 0,
         plans: 0,
         gains: GainCache::new(frame),
+        room_gains: GainCache::new(frame),
         next_progress_s: 0.0,
         known_cells: 0,
         layout: None,
@@ -666,7 +669,7 @@ impl Explorer<'_> {
                 }
             }
             let layout = reconstruct_layout(grid, &self.cfg.layout);
-            let raster = LayoutRaster::new(&layout, self.map.frame);
+            let raster = LayoutRaster::new(&layout, grid, st.max_wall_gap_m);
             let predicted_unknown = grid
                 .data
                 .iter()
@@ -684,6 +687,7 @@ impl Explorer<'_> {
             self.layouts_computed += 1;
             // Cached gains were computed with the previous layout.
             self.gains.clear();
+            self.room_gains.clear();
         }
         match st.gain {
             GainModel::Baseline => false,
@@ -750,7 +754,7 @@ impl Explorer<'_> {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
                 match (&self.layout, use_layout) {
                     (Some(l), true) => self.gains.gain(f.candidate, range_m, self.scans, || {
-                        layout_information_gain(grid, &l.raster, f.candidate, range_m)
+                        gap_closed_information_gain(grid, &l.raster, f.candidate, range_m)
                     }),
                     _ => self.gains.gain(f.candidate, range_m, self.scans, || {
                         information_gain(grid, f.candidate, range_m)
@@ -768,7 +772,23 @@ impl Explorer<'_> {
         let reachable: Vec<usize> = (0..scores.len())
             .filter(|&i| scores[i].distance_m.is_some())
             .collect();
-        let gains: Vec<f64> = reachable.iter().map(|&i| scores[i].gain_m2).collect();
+        // The rule judges the paper's I(p) when the layout is in use: what is left to see inside
+        // the predicted rooms.
+        let gains: Vec<f64> = match (&self.layout, use_layout) {
+            (Some(l), true) if cfg.strategy.early_stop != EarlyStop::Never => {
+                let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
+                reachable
+                    .iter()
+                    .map(|&i| {
+                        let p = frontiers[i].candidate;
+                        self.room_gains.gain(p, range_m, self.scans, || {
+                            layout_information_gain(grid, &l.raster, p, range_m)
+                        })
+                    })
+                    .collect()
+            }
+            _ => reachable.iter().map(|&i| scores[i].gain_m2).collect(),
+        };
         let (keep, stop) = strategy::early_stop(cfg.strategy.early_stop, &gains);
         if stop {
             self.stopped_early = true;
