@@ -267,6 +267,9 @@ struct Explorer<'a> {
     known_cells: usize,
     layout: Option<LayoutState>,
     layouts_computed: u64,
+    /// Where the robot has stayed (within `STILL_RADIUS_M`) since `still_since_s`.
+    still_at: Vec2,
+    still_since_s: f64,
     /// For the switch strategy: the layout has been judged reliable.
     layout_trusted: bool,
     stopped_early: bool,
@@ -349,6 +352,8 @@ pub fn explore(
         known_cells: 0,
         layout: None,
         layouts_computed: 0,
+        still_at: start.position(),
+        still_since_s: 0.0,
         layout_trusted: false,
         stopped_early: false,
         start,
@@ -532,6 +537,22 @@ impl Explorer<'_> {
         let Some(goal) = &mut self.goal else {
             return true;
         };
+        // Whatever the goals, a robot that has not moved for long is stuck (e.g. alternating
+        // between goals it cannot approach, each new one restarting the progress timeout):
+        // abandon the current goal.
+        let position = self.estimate.position();
+        if (position - self.still_at).norm() > STILL_RADIUS_M {
+            self.still_at = position;
+            self.still_since_s = now;
+        } else if now - self.still_since_s > STILL_FACTOR * cfg.progress_timeout_s {
+            self.blacklist.add(
+                self.map.frame.world_from_cell(goal.cell),
+                cfg.blacklist_radius_m,
+            );
+            self.goal = None;
+            self.still_since_s = now;
+            return true;
+        }
         if goal.arrived {
             // Turning toward the frontier; done when facing it.
             let to = goal.look_at - self.estimate.position();
@@ -935,6 +956,11 @@ impl Explorer<'_> {
         }
     }
 }
+
+/// A robot that stays within this radius...
+const STILL_RADIUS_M: f64 = 0.5;
+/// ...for this many progress timeouts is stuck.
+const STILL_FACTOR: f64 = 3.0;
 
 /// Map cells per side of a planning cell (0.05 m map: 0.1 m planning grid).
 const PLAN_FACTOR: u32 = 2;
