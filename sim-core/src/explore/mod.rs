@@ -195,6 +195,8 @@ pub struct RunResult {
     pub stopped_early: bool,
     /// Layouts reconstructed during the run.
     pub layouts_computed: u64,
+    /// Layout compute time charged to simulated time (s; 0 unless charged).
+    pub layout_compute_s: f64,
     /// Ground-truth rooms the robot never entered (when the building has rooms).
     pub rooms_never_entered: Option<usize>,
     pub end_reason: EndReason,
@@ -267,6 +269,11 @@ struct Explorer<'a> {
     known_cells: usize,
     layout: Option<LayoutState>,
     layouts_computed: u64,
+    layout_cost: Option<LayoutCost<'a>>,
+    /// Charged layout compute time the robot still has to wait for (s).
+    compute_debt_s: f64,
+    /// Layout compute time charged so far (s).
+    layout_compute_s: f64,
     /// Where the robot has stayed (within `STILL_RADIUS_M`) since `still_since_s`.
     still_at: Vec2,
     still_since_s: f64,
@@ -301,13 +308,33 @@ struct Goal {
 }
 
 /// Runs one exploration. `on_progress` sees every progress sample as it is made (for a
-/// progress bar); it must not affect the run.
+/// progress bar); it must not affect the run. Layouts are computed "in the background" (no delay
+/// to the robot), as in the paper; see [`explore_charged`] to charge their cost.
 pub fn explore(
     building: &Building,
     start: Pose,
     cfg: &ExploreConfig,
     seed: u64,
     on_progress: &mut dyn FnMut(&ProgressSample),
+) -> RunResult {
+    explore_charged(building, start, cfg, seed, on_progress, None)
+}
+
+/// A caller's measure of the layout's compute cost: it is given the computation, must run it
+/// once, and returns the seconds to charge (e.g. the wall time it took).
+pub type LayoutCost<'a> = &'a mut dyn FnMut(&mut dyn FnMut()) -> f64;
+
+/// [`explore`], with the cost of every layout computation charged to simulated time when
+/// `layout_cost` is given: the robot stands still (sensing) for the seconds it returns, right
+/// after the decision that needed the layout. The core has no clock, so the caller measures;
+/// a run charged with measured wall time depends on the machine and is no longer reproducible.
+pub fn explore_charged<'a>(
+    building: &Building,
+    start: Pose,
+    cfg: &'a ExploreConfig,
+    seed: u64,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+    layout_cost: Option<LayoutCost<'a>>,
 ) -> RunResult {
     let frame = GridFrame::covering(&building.bounds(), cfg.map_resolution_m, 1.0);
     let truth = building.reachable_free(frame, start.position());
@@ -354,6 +381,9 @@ pub fn explore(
         layouts_computed: 0,
         still_at: start.position(),
         still_since_s: 0.0,
+        layout_cost,
+        compute_debt_s: 0.0,
+        layout_compute_s: 0.0,
         layout_trusted: false,
         stopped_early: false,
         start,
@@ -382,6 +412,7 @@ impl Explorer<'_> {
                 };
                 break;
             }
+            self.wait_for_compute(on_progress);
             self.drive();
         }
         let exploration_time_s = self.sim.time_s();
@@ -389,6 +420,18 @@ impl Explorer<'_> {
             self.return_home();
         }
         self.finish(end_reason, exploration_time_s, on_progress)
+    }
+
+    /// Stands still, sensing, while charged layout compute time is due.
+    fn wait_for_compute(&mut self, on_progress: &mut dyn FnMut(&ProgressSample)) {
+        while self.compute_debt_s > 0.0 && self.sim.time_s() < self.cfg.time_limit_s {
+            let t0 = self.sim.time_s();
+            self.sim.idle();
+            self.compute_debt_s -= self.sim.time_s() - t0;
+            self.sense();
+            self.record_progress(on_progress);
+        }
+        self.compute_debt_s = 0.0;
     }
 
     /// A map update when the robot has moved or turned enough, or the period has passed.
@@ -689,7 +732,17 @@ impl Explorer<'_> {
                     self.layout_trusted = true;
                 }
             }
-            let layout = reconstruct_layout(grid, &self.cfg.layout);
+            let mut made = None;
+            let layout_cfg = &self.cfg.layout;
+            let charged_s = match self.layout_cost.as_mut() {
+                Some(cost) => cost(&mut || made = Some(reconstruct_layout(grid, layout_cfg))),
+                None => 0.0,
+            };
+            let layout = made.unwrap_or_else(|| reconstruct_layout(grid, layout_cfg));
+            if charged_s.is_finite() && charged_s > 0.0 {
+                self.compute_debt_s += charged_s;
+                self.layout_compute_s += charged_s;
+            }
             let raster = LayoutRaster::new(&layout, grid, st.max_wall_gap_m);
             let predicted_unknown = grid
                 .data
@@ -929,6 +982,7 @@ impl Explorer<'_> {
             start: self.start,
             stopped_early: end_reason == EndReason::EarlyStop,
             layouts_computed: self.layouts_computed,
+            layout_compute_s: self.layout_compute_s,
             rooms_never_entered: (!self.rooms.is_empty()).then(|| {
                 self.rooms
                     .iter()
