@@ -221,6 +221,57 @@ mod tests {
         OccupancyGrid::from_ascii(&rows.join("\n"), 0.1)
     }
 
+    /// 4 x 1 m of free space (rows 0-9) under an observed wall (row 10) with a gap of unknown
+    /// cells `gap` long in its middle, unknown beyond: the top text line is the top row.
+    fn gapped_wall(gap: usize) -> OccupancyGrid {
+        let mut rows = vec!["?".repeat(40); 19];
+        let x0 = 20 - gap / 2;
+        let wall: String = (0..40)
+            .map(|x| {
+                if (x0..x0 + gap).contains(&x) {
+                    '?'
+                } else {
+                    '#'
+                }
+            })
+            .collect();
+        rows.push(wall);
+        rows.extend(vec![".".repeat(40); 10]);
+        OccupancyGrid::from_ascii(&rows.join("\n"), 0.1)
+    }
+
+    #[test]
+    fn wall_lines_close_short_gaps_in_observed_walls_only() {
+        // The layout's room: the free space, its top edge on the wall's row.
+        let layout = Layout {
+            rooms: vec![room(1, (0.0, 0.0), (4.0, 1.05), RoomLabel::Partial)],
+            ..Layout::default()
+        };
+        let p = Cell::new(20, 7);
+        // A 0.4 m gap: the wall line closes it, nothing unknown is left to see from below.
+        let g = gapped_wall(4);
+        let r = LayoutRaster::new(&layout, &g, 1.0);
+        let base = information_gain(&g, p, 6.0);
+        assert!(base > 1.0, "baseline sees through the gap: {base}");
+        // The cells touching the wall's ends count as observed wall already (8-neighbourhood):
+        // the two in the middle are drawn, which leaves only diagonal slivers to see through.
+        assert_eq!(r.gap_walls.count_true(), 2);
+        let closed = gap_closed_information_gain(&g, &r, p, 6.0);
+        assert!(closed < 0.5 * base, "closed: {closed} vs {base}");
+        // The same wall with a 1.4 m opening (a door, not a gap): left open.
+        let g = gapped_wall(14);
+        let r = LayoutRaster::new(&layout, &g, 1.0);
+        assert_eq!(r.gap_walls.count_true(), 0);
+        assert_eq!(
+            gap_closed_information_gain(&g, &r, p, 6.0),
+            information_gain(&g, p, 6.0)
+        );
+        // No gap closing at all when the maximum gap is zero.
+        let g = gapped_wall(4);
+        let r = LayoutRaster::new(&layout, &g, 0.0);
+        assert_eq!(gap_closed_information_gain(&g, &r, p, 6.0), base);
+    }
+
     #[test]
     fn the_layout_bounds_the_gain_and_open_rooms_fall_back() {
         let g = map();
