@@ -89,7 +89,7 @@ pub fn run_job(
         work();
         t.elapsed().as_secs_f64()
     };
-    let cost: Option<&mut dyn FnMut(&mut dyn FnMut()) -> f64> = if job.settings.charge_compute {
+    let cost: Option<sim_core::explore::LayoutCost<'_>> = if job.settings.charge_compute {
         Some(&mut timed)
     } else {
         None
