@@ -50,6 +50,10 @@ pub struct ExploreArgs {
     /// (layout-20.png ... layout-90.png), like the paper's Fig. 3.
     #[arg(long)]
     layout_snapshots: bool,
+    /// Add the measured compute time of every layout to simulated time (the robot waits for
+    /// it); the run then depends on the machine.
+    #[arg(long)]
+    charge_compute: bool,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -79,6 +83,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         settings.time_limit_s = t;
     }
     settings.return_home |= a.return_home;
+    settings.charge_compute |= a.charge_compute;
     let job = Job {
         building: &building,
         building_name: name.clone(),

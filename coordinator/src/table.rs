@@ -1,6 +1,7 @@
 //! The grid's version of the paper's Table 1, computed from stored results: per strategy label
 //! the mean and standard deviation of exploration time over all runs, and the gain over the
-//! baseline in per cent; the same per building; and a CSV export.
+//! baseline in per cent with its spread (paired by building and seed: the mean of the per-pair
+//! gains and a 95 % confidence interval); the same per building; and a CSV export.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -47,6 +48,64 @@ pub struct LabelRow {
     pub failed: usize,
     /// Gain of mean time over the reference label, per cent (positive = faster).
     pub gain_pct: Option<f64>,
+    /// Gain over the reference paired by (building, seed); `None` without common pairs.
+    pub paired: Option<PairedGain>,
+}
+
+/// Per-pair gains `(t_ref - t) / t_ref` in per cent, over the runs of a label and of the
+/// reference with the same building and seed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairedGain {
+    pub pairs: usize,
+    pub mean_pct: f64,
+    pub sd_pct: f64,
+    /// Half-width of the 95 % confidence interval of the mean (Student's t); NaN for one pair.
+    pub ci95_pct: f64,
+}
+
+impl PairedGain {
+    /// From per-pair gains in per cent.
+    pub fn of(gains_pct: &[f64]) -> Option<PairedGain> {
+        let s = Stat::of(gains_pct);
+        (s.n > 0).then(|| PairedGain {
+            pairs: s.n,
+            mean_pct: s.mean,
+            sd_pct: s.sd,
+            ci95_pct: if s.n > 1 {
+                t95(s.n - 1) * s.sd / (s.n as f64).sqrt()
+            } else {
+                f64::NAN
+            },
+        })
+    }
+}
+
+/// Two-sided 95 % quantile of Student's t with `df` degrees of freedom.
+fn t95(df: usize) -> f64 {
+    const T: [f64; 30] = [
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+        2.052, 2.048, 2.045, 2.042,
+    ];
+    match df {
+        0 => f64::NAN,
+        1..=30 => T[df - 1],
+        31..=60 => 2.000,
+        61..=120 => 1.980,
+        _ => 1.960,
+    }
+}
+
+/// Exploration time of the successful runs of `label` in `subset`, by (building, seed).
+fn times_by_pair(subset: &[&StoredResult], label: &str) -> BTreeMap<(String, u64), f64> {
+    subset
+        .iter()
+        .filter(|r| r.label == label && r.status == "ok")
+        .filter_map(|r| {
+            let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
+            Some(((r.building.clone(), r.seed), s.exploration_time_s))
+        })
+        .collect()
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -99,6 +158,7 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
                     stopped_early: summaries.iter().filter(|s| s.stopped_early).count(),
                     failed: mine.len() - summaries.len(),
                     gain_pct: None,
+                    paired: None,
                 })
             })
             .collect();
@@ -106,10 +166,22 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
             .as_ref()
             .and_then(|r| rows.iter().find(|row| &row.label == r))
             .map(|row| row.time.mean);
+        let reference_times = reference_label
+            .as_deref()
+            .map(|r| times_by_pair(subset, r))
+            .unwrap_or_default();
         for row in &mut rows {
             row.gain_pct = base
                 .filter(|b| b.is_finite() && *b > 0.0)
                 .map(|b| (b - row.time.mean) / b * 100.0);
+            let gains: Vec<f64> = times_by_pair(subset, &row.label)
+                .iter()
+                .filter_map(|(k, t)| {
+                    let b = *reference_times.get(k)?;
+                    (b > 0.0).then(|| (b - t) / b * 100.0)
+                })
+                .collect();
+            row.paired = PairedGain::of(&gains);
         }
         rows
     };
@@ -132,23 +204,33 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
 fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
     let _ = writeln!(
         out,
-        "  {:<16} {:>5} {:>10} {:>9} {:>9} {:>10} {:>6}",
-        "strategy", "runs", "time (s)", "sd (s)", "gain", "explored", "ES"
+        "  {:<16} {:>5} {:>10} {:>9} {:>9} {:>22} {:>10} {:>6}",
+        "strategy", "runs", "time (s)", "sd (s)", "gain", "paired gain (95% CI)", "explored", "ES"
     );
     for r in rows {
-        let gain = match (r.gain_pct, reference) {
-            (_, Some(reference)) if &r.label == reference => "ref".to_string(),
-            (Some(g), _) => format!("{g:+.1} %"),
-            _ => "-".into(),
+        let is_reference = reference.is_some_and(|reference| &r.label == reference);
+        let gain = match r.gain_pct {
+            _ if is_reference => "ref".to_string(),
+            Some(g) => format!("{g:+.1} %"),
+            None => "-".into(),
+        };
+        let paired = match r.paired {
+            _ if is_reference => String::new(),
+            Some(p) if p.ci95_pct.is_finite() => {
+                format!("{:+.1} ± {:.1} % (n={})", p.mean_pct, p.ci95_pct, p.pairs)
+            }
+            Some(p) => format!("{:+.1} % (n={})", p.mean_pct, p.pairs),
+            None => "-".into(),
         };
         let _ = writeln!(
             out,
-            "  {:<16} {:>5} {:>10.0} {:>9.0} {:>9} {:>9.1}% {:>6}{}",
+            "  {:<16} {:>5} {:>10.0} {:>9.0} {:>9} {:>22} {:>9.1}% {:>6}{}",
             r.label,
             r.time.n,
             r.time.mean,
             r.time.sd,
             gain,
+            paired,
             r.explored_fraction.mean * 100.0,
             r.stopped_early,
             if r.failed > 0 {
@@ -238,6 +320,81 @@ mod tests {
         assert!((s.sd - 2.138).abs() < 1e-3);
         assert!(Stat::of(&[]).mean.is_nan());
         assert_eq!(Stat::of(&[3.0]).sd, 0.0);
+    }
+
+    fn stored(building: &str, label: &str, seed: u64, time_s: f64) -> StoredResult {
+        // A real summary (small.toml, layout, seed 1) with the time replaced.
+        let template: &str = concat!(
+            r#"{"format":"floorcast-run-summary","version":1,"floorcast_version":"0.1.0","build"#,
+            r#"ing":"small","building_hash":"bd6183b04c0805da57279aa53b7844c1","strategy":"layo"#,
+            r#"ut","seed":1,"settings":{"robot_radius_m":0.2,"max_speed_mps":0.5,"max_turn_rate"#,
+            r#"_radps":1.0,"laser_fov_deg":180.0,"laser_range_m":6.0,"laser_beams":181,"laser_r"#,
+            r#"ate_hz":10.0,"laser_noise_sd_m":0.01,"odometry_translation_error":0.01,"odometry"#,
+            r#"_rotation_error_deg_per_rad":2.0,"localization":"slam","map_resolution_m":0.05,""#,
+            r#"alpha":0.5,"min_frontier_m":0.5,"redecide_period_s":10.0,"blacklist_radius_m":0."#,
+            r#"5,"progress_timeout_s":20.0,"time_limit_s":14400.0,"return_home":false,"es_thres"#,
+            r#"hold_m2":1.0,"aes_min_gain_m2":2.0,"layout_update_m2":20.0},"start":[1.199999999"#,
+            r#"9999993,9.81368055441612,0.0],"start_source":"building file","exploration_time_s"#,
+            r#"":606.2000000000693,"total_time_s":606.2000000000693,"explored_area_m2":407.9825"#,
+            r#"000000001,"free_area_m2":408.2100000000001,"explored_fraction":0.999442688812131"#,
+            r#","path_length_m":265.2573756983305,"decisions":166,"stopped_early":false,"unexpl"#,
+            r#"ored_free_m2":0.22750000000002046,"rooms_never_entered":0,"layouts_computed":17,"#,
+            r#""end_reason":"no frontiers","blacklisted_goals":0,"scans":3341,"scan_matches_acc"#,
+            r#"epted":3220,"map_free_precision":0.9946381028273507,"map_occupied_precision":0.8"#,
+            r#"890061565523307,"wall_time_s":11.839814543,"speedup":51.200126302524744}"#,
+        );
+        let mut summary: serde_json::Value = serde_json::from_str(template).unwrap();
+        summary["exploration_time_s"] = serde_json::json!(time_s);
+        StoredResult {
+            job_id: format!("{building}-{label}-{seed}"),
+            grid: "g".into(),
+            building: building.into(),
+            building_hash: "h".into(),
+            strategy: label.into(),
+            label: label.into(),
+            seed,
+            settings_json: "{}".into(),
+            status: "ok".into(),
+            error: None,
+            summary_json: Some(summary.to_string()),
+            progress_csv: None,
+            worker: "w".into(),
+            wall_time_s: 1.0,
+            floorcast_version: "0".into(),
+        }
+    }
+
+    #[test]
+    fn paired_gain_per_building_with_a_confidence_interval() {
+        // Building a: layout 10 % faster on every seed; building b: 20 % faster on seed 1,
+        // 0 % on seed 2, and seed 3 has no baseline run to pair with.
+        let mut results = Vec::new();
+        for (seed, t) in [(1, 100.0), (2, 200.0), (3, 300.0)] {
+            results.push(stored("a", "baseline", seed, t));
+            results.push(stored("a", "layout", seed, t * 0.9));
+        }
+        results.push(stored("b", "baseline", 1, 100.0));
+        results.push(stored("b", "layout", 1, 80.0));
+        results.push(stored("b", "baseline", 2, 100.0));
+        results.push(stored("b", "layout", 2, 100.0));
+        results.push(stored("b", "layout", 3, 50.0));
+        let t = table(&results, &["baseline".into(), "layout".into()]);
+        let a = &t.per_building["a"][1];
+        let p = a.paired.unwrap();
+        assert_eq!(p.pairs, 3);
+        assert!((p.mean_pct - 10.0).abs() < 1e-9, "{p:?}");
+        assert!(p.sd_pct.abs() < 1e-9 && p.ci95_pct.abs() < 1e-9);
+        let b = t.per_building["b"][1].paired.unwrap();
+        assert_eq!(b.pairs, 2);
+        assert!((b.mean_pct - 10.0).abs() < 1e-9);
+        // sd of {20, 0} = 14.142; t(1) = 12.706; half-width = 12.706 * 14.142 / sqrt(2).
+        assert!((b.ci95_pct - 127.06).abs() < 0.01, "{b:?}");
+        // Overall: 5 pairs across both buildings.
+        assert_eq!(t.overall[1].paired.unwrap().pairs, 5);
+        assert!(t.overall[0].paired.is_some_and(|p| p.mean_pct == 0.0));
+        let text = render_text(&t);
+        assert!(text.contains("+10.0 ± 0.0 % (n=3)"), "{text}");
+        assert!(text.contains("b:"), "{text}");
     }
 
     #[test]

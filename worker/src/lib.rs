@@ -11,7 +11,7 @@ pub mod settings;
 use std::time::Instant;
 
 use sim_core::building::StartSource;
-use sim_core::explore::{explore, ProgressSample, RunResult};
+use sim_core::explore::{explore_charged, ProgressSample, RunResult};
 use sim_core::{Building, Pose};
 
 pub use record::{RunSummary, SUMMARY_FORMAT, SUMMARY_VERSION};
@@ -83,7 +83,18 @@ pub fn run_job(
         });
     }
     let t0 = Instant::now();
-    let result = explore(job.building, start, &config, job.seed, on_progress);
+    // With charge_compute, each layout costs the wall time it took (the robot waits for it).
+    let mut timed = |work: &mut dyn FnMut()| {
+        let t = Instant::now();
+        work();
+        t.elapsed().as_secs_f64()
+    };
+    let cost: Option<sim_core::explore::LayoutCost<'_>> = if job.settings.charge_compute {
+        Some(&mut timed)
+    } else {
+        None
+    };
+    let result = explore_charged(job.building, start, &config, job.seed, on_progress, cost);
     let wall_time_s = t0.elapsed().as_secs_f64();
     let summary = RunSummary::new(job, &result, source, wall_time_s);
     Ok(JobOutput { summary, result })

@@ -42,6 +42,12 @@ pub struct RunSummary {
     pub rooms_never_entered: Option<usize>,
     /// Layouts reconstructed during the run (layout strategies).
     pub layouts_computed: u64,
+    /// Layout compute time added to simulated time (s; 0 unless `settings.charge_compute`).
+    #[serde(default)]
+    pub layout_compute_s: f64,
+    /// Whether compute time was charged (then the times depend on the machine).
+    #[serde(default)]
+    pub charge_compute: bool,
     pub end_reason: String,
     pub blacklisted_goals: usize,
     pub scans: u64,
@@ -80,6 +86,8 @@ impl RunSummary {
             unexplored_free_m2: (r.free_area_m2 - r.explored_area_m2).max(0.0),
             rooms_never_entered: r.rooms_never_entered,
             layouts_computed: r.layouts_computed,
+            layout_compute_s: r.layout_compute_s,
+            charge_compute: job.settings.charge_compute,
             end_reason: r.end_reason.as_str().to_string(),
             blacklisted_goals: r.blacklisted_goals,
             scans: r.scans,

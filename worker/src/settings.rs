@@ -53,6 +53,11 @@ pub struct Settings {
     pub aes_min_gain_m2: f64,
     /// Layout strategies: rebuild the layout when the known area grew by this much (m2).
     pub layout_update_m2: f64,
+    /// Layout strategies: the layout's wall lines close gaps in observed walls up to this long (m).
+    pub max_wall_gap_m: f64,
+    /// Add the measured wall time of every layout computation to simulated time (the robot
+    /// waits for it). The result then depends on the machine: not reproducible.
+    pub charge_compute: bool,
 }
 
 impl Default for Settings {
@@ -81,6 +86,8 @@ impl Default for Settings {
             es_threshold_m2: 1.0,
             aes_min_gain_m2: 2.0,
             layout_update_m2: c.strategy.layout_update_m2,
+            max_wall_gap_m: c.strategy.max_wall_gap_m,
+            charge_compute: false,
         }
     }
 }
@@ -107,6 +114,7 @@ impl Settings {
         let mut st =
             Strategy::by_name(name).ok_or_else(|| SettingsError::Strategy(name.to_string()))?;
         st.layout_update_m2 = c.strategy.layout_update_m2;
+        st.max_wall_gap_m = c.strategy.max_wall_gap_m;
         st.early_stop = match st.early_stop {
             EarlyStop::TotalGainBelow(_) => EarlyStop::TotalGainBelow(self.es_threshold_m2),
             EarlyStop::DropCandidatesBelow(_) => {
@@ -197,6 +205,7 @@ impl Settings {
         nonneg("es_threshold_m2", self.es_threshold_m2)?;
         nonneg("aes_min_gain_m2", self.aes_min_gain_m2)?;
         c.strategy.layout_update_m2 = pos("layout_update_m2", self.layout_update_m2)?;
+        c.strategy.max_wall_gap_m = nonneg("max_wall_gap_m", self.max_wall_gap_m)?;
         Ok(c)
     }
 }

@@ -23,7 +23,7 @@ use crate::gain::information_gain;
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
 use crate::layout::reconstruct_layout;
-use crate::layout_gain::{layout_information_gain, LayoutRaster};
+use crate::layout_gain::{gap_closed_information_gain, layout_information_gain, LayoutRaster};
 use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
@@ -195,6 +195,8 @@ pub struct RunResult {
     pub stopped_early: bool,
     /// Layouts reconstructed during the run.
     pub layouts_computed: u64,
+    /// Layout compute time charged to simulated time (s; 0 unless charged).
+    pub layout_compute_s: f64,
     /// Ground-truth rooms the robot never entered (when the building has rooms).
     pub rooms_never_entered: Option<usize>,
     pub end_reason: EndReason,
@@ -260,11 +262,21 @@ struct Explorer<'a> {
     matches_accepted: u64,
     plans: u64,
     gains: GainCache,
+    /// The paper's room-bounded `I(p)` of candidates, for early stopping.
+    room_gains: GainCache,
     next_progress_s: f64,
     /// Cells of the map that are known (free or occupied), counted from the map's own changes.
     known_cells: usize,
     layout: Option<LayoutState>,
     layouts_computed: u64,
+    layout_cost: Option<LayoutCost<'a>>,
+    /// Charged layout compute time the robot still has to wait for (s).
+    compute_debt_s: f64,
+    /// Layout compute time charged so far (s).
+    layout_compute_s: f64,
+    /// Where the robot has stayed (within `STILL_RADIUS_M`) since `still_since_s`.
+    still_at: Vec2,
+    still_since_s: f64,
     /// For the switch strategy: the layout has been judged reliable.
     layout_trusted: bool,
     stopped_early: bool,
@@ -296,13 +308,33 @@ struct Goal {
 }
 
 /// Runs one exploration. `on_progress` sees every progress sample as it is made (for a
-/// progress bar); it must not affect the run.
+/// progress bar); it must not affect the run. Layouts are computed "in the background" (no delay
+/// to the robot), as in the paper; see [`explore_charged`] to charge their cost.
 pub fn explore(
     building: &Building,
     start: Pose,
     cfg: &ExploreConfig,
     seed: u64,
     on_progress: &mut dyn FnMut(&ProgressSample),
+) -> RunResult {
+    explore_charged(building, start, cfg, seed, on_progress, None)
+}
+
+/// A caller's measure of the layout's compute cost: it is given the computation, must run it
+/// once, and returns the seconds to charge (e.g. the wall time it took).
+pub type LayoutCost<'a> = &'a mut dyn FnMut(&mut dyn FnMut()) -> f64;
+
+/// [`explore`], with the cost of every layout computation charged to simulated time when
+/// `layout_cost` is given: the robot stands still (sensing) for the seconds it returns, right
+/// after the decision that needed the layout. The core has no clock, so the caller measures;
+/// a run charged with measured wall time depends on the machine and is no longer reproducible.
+pub fn explore_charged<'a>(
+    building: &Building,
+    start: Pose,
+    cfg: &'a ExploreConfig,
+    seed: u64,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+    layout_cost: Option<LayoutCost<'a>>,
 ) -> RunResult {
     let frame = GridFrame::covering(&building.bounds(), cfg.map_resolution_m, 1.0);
     let truth = building.reachable_free(frame, start.position());
@@ -342,10 +374,16 @@ pub fn explore(
         matches_accepted: 0,
         plans: 0,
         gains: GainCache::new(frame),
+        room_gains: GainCache::new(frame),
         next_progress_s: 0.0,
         known_cells: 0,
         layout: None,
         layouts_computed: 0,
+        still_at: start.position(),
+        still_since_s: 0.0,
+        layout_cost,
+        compute_debt_s: 0.0,
+        layout_compute_s: 0.0,
         layout_trusted: false,
         stopped_early: false,
         start,
@@ -374,6 +412,7 @@ impl Explorer<'_> {
                 };
                 break;
             }
+            self.wait_for_compute(on_progress);
             self.drive();
         }
         let exploration_time_s = self.sim.time_s();
@@ -381,6 +420,18 @@ impl Explorer<'_> {
             self.return_home();
         }
         self.finish(end_reason, exploration_time_s, on_progress)
+    }
+
+    /// Stands still, sensing, while charged layout compute time is due.
+    fn wait_for_compute(&mut self, on_progress: &mut dyn FnMut(&ProgressSample)) {
+        while self.compute_debt_s > 0.0 && self.sim.time_s() < self.cfg.time_limit_s {
+            let t0 = self.sim.time_s();
+            self.sim.idle();
+            self.compute_debt_s -= self.sim.time_s() - t0;
+            self.sense();
+            self.record_progress(on_progress);
+        }
+        self.compute_debt_s = 0.0;
     }
 
     /// A map update when the robot has moved or turned enough, or the period has passed.
@@ -529,6 +580,22 @@ impl Explorer<'_> {
         let Some(goal) = &mut self.goal else {
             return true;
         };
+        // Whatever the goals, a robot that has not moved for long is stuck (e.g. alternating
+        // between goals it cannot approach, each new one restarting the progress timeout):
+        // abandon the current goal.
+        let position = self.estimate.position();
+        if (position - self.still_at).norm() > STILL_RADIUS_M {
+            self.still_at = position;
+            self.still_since_s = now;
+        } else if now - self.still_since_s > STILL_FACTOR * cfg.progress_timeout_s {
+            self.blacklist.add(
+                self.map.frame.world_from_cell(goal.cell),
+                cfg.blacklist_radius_m,
+            );
+            self.goal = None;
+            self.still_since_s = now;
+            return true;
+        }
         if goal.arrived {
             // Turning toward the frontier; done when facing it.
             let to = goal.look_at - self.estimate.position();
@@ -665,8 +732,18 @@ impl Explorer<'_> {
                     self.layout_trusted = true;
                 }
             }
-            let layout = reconstruct_layout(grid, &self.cfg.layout);
-            let raster = LayoutRaster::new(&layout, self.map.frame);
+            let mut made = None;
+            let layout_cfg = &self.cfg.layout;
+            let charged_s = match self.layout_cost.as_mut() {
+                Some(cost) => cost(&mut || made = Some(reconstruct_layout(grid, layout_cfg))),
+                None => 0.0,
+            };
+            let layout = made.unwrap_or_else(|| reconstruct_layout(grid, layout_cfg));
+            if charged_s.is_finite() && charged_s > 0.0 {
+                self.compute_debt_s += charged_s;
+                self.layout_compute_s += charged_s;
+            }
+            let raster = LayoutRaster::new(&layout, grid, st.max_wall_gap_m);
             let predicted_unknown = grid
                 .data
                 .iter()
@@ -684,6 +761,7 @@ impl Explorer<'_> {
             self.layouts_computed += 1;
             // Cached gains were computed with the previous layout.
             self.gains.clear();
+            self.room_gains.clear();
         }
         match st.gain {
             GainModel::Baseline => false,
@@ -750,7 +828,7 @@ impl Explorer<'_> {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
                 match (&self.layout, use_layout) {
                     (Some(l), true) => self.gains.gain(f.candidate, range_m, self.scans, || {
-                        layout_information_gain(grid, &l.raster, f.candidate, range_m)
+                        gap_closed_information_gain(grid, &l.raster, f.candidate, range_m)
                     }),
                     _ => self.gains.gain(f.candidate, range_m, self.scans, || {
                         information_gain(grid, f.candidate, range_m)
@@ -768,7 +846,23 @@ impl Explorer<'_> {
         let reachable: Vec<usize> = (0..scores.len())
             .filter(|&i| scores[i].distance_m.is_some())
             .collect();
-        let gains: Vec<f64> = reachable.iter().map(|&i| scores[i].gain_m2).collect();
+        // The rule judges the paper's I(p) when the layout is in use: what is left to see inside
+        // the predicted rooms.
+        let gains: Vec<f64> = match (&self.layout, use_layout) {
+            (Some(l), true) if cfg.strategy.early_stop != EarlyStop::Never => {
+                let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
+                reachable
+                    .iter()
+                    .map(|&i| {
+                        let p = frontiers[i].candidate;
+                        self.room_gains.gain(p, range_m, self.scans, || {
+                            layout_information_gain(grid, &l.raster, p, range_m)
+                        })
+                    })
+                    .collect()
+            }
+            _ => reachable.iter().map(|&i| scores[i].gain_m2).collect(),
+        };
         let (keep, stop) = strategy::early_stop(cfg.strategy.early_stop, &gains);
         if stop {
             self.stopped_early = true;
@@ -888,6 +982,7 @@ impl Explorer<'_> {
             start: self.start,
             stopped_early: end_reason == EndReason::EarlyStop,
             layouts_computed: self.layouts_computed,
+            layout_compute_s: self.layout_compute_s,
             rooms_never_entered: (!self.rooms.is_empty()).then(|| {
                 self.rooms
                     .iter()
@@ -915,6 +1010,11 @@ impl Explorer<'_> {
         }
     }
 }
+
+/// A robot that stays within this radius...
+const STILL_RADIUS_M: f64 = 0.5;
+/// ...for this many progress timeouts is stuck.
+const STILL_FACTOR: f64 = 3.0;
 
 /// Map cells per side of a planning cell (0.05 m map: 0.1 m planning grid).
 const PLAN_FACTOR: u32 = 2;

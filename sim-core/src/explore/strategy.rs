@@ -6,8 +6,11 @@
 pub enum GainModel {
     /// Unknown cells within laser range visible from `p`, unknown counted as free ("no L").
     Baseline,
-    /// The layout's walls bound the visible unknown area ("with L"); rooms with an open frontier
-    /// fall back to the baseline.
+    /// "With L": candidates are ranked by the baseline gain through the map with the layout's
+    /// wall lines closing short gaps in observed walls; early stopping judges the paper's `I(p)`
+    /// (the unknown area inside the predicted rooms visible in `M^L`; rooms with an open frontier
+    /// fall back to the baseline). See `layout_gain` for why the ranking does not use the
+    /// predicted room shapes.
     Layout,
     /// Baseline until the layout is judged reliable (its predictions agree with what later scans
     /// revealed), layout afterwards: the dynamic switch of the paper's conclusion.
@@ -39,6 +42,8 @@ pub struct Strategy {
     pub switch_agreement: f64,
     /// ...measured over at least this many square metres.
     pub switch_min_area_m2: f64,
+    /// Layout walls close gaps of unknown cells up to this long in an observed wall.
+    pub max_wall_gap_m: f64,
 }
 
 impl Strategy {
@@ -49,6 +54,7 @@ impl Strategy {
             layout_update_m2: 20.0,
             switch_agreement: 0.9,
             switch_min_area_m2: 5.0,
+            max_wall_gap_m: 1.0,
         }
     }
 

@@ -104,3 +104,63 @@ fn layout_strategies_run_and_are_reproducible() {
         assert_eq!(r, again, "{name} is deterministic");
     }
 }
+
+#[test]
+fn layout_es_stops_early_with_the_building_nearly_explored() {
+    let b = corridor_building(4);
+    let cfg = ExploreConfig {
+        strategy: Strategy::by_name("layout-es").unwrap(),
+        ..ExploreConfig::default()
+    };
+    let runs: Vec<RunResult> = (1..=3)
+        .map(|seed| explore(&b, b.start.unwrap(), &cfg, seed, &mut |_| {}))
+        .collect();
+    let early: Vec<&RunResult> = runs.iter().filter(|r| r.stopped_early).collect();
+    assert!(!early.is_empty(), "layout-es never stopped early");
+    for r in early {
+        assert_eq!(r.end_reason, EndReason::EarlyStop);
+        assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
+    }
+}
+
+#[test]
+fn charged_layout_compute_delays_the_robot() {
+    let b = corridor_building(3);
+    let cfg = ExploreConfig {
+        strategy: Strategy::by_name("layout").unwrap(),
+        ..ExploreConfig::default()
+    };
+    let free = explore(&b, b.start.unwrap(), &cfg, 2, &mut |_| {});
+    assert_eq!(free.layout_compute_s, 0.0);
+    // A hook that charges nothing changes nothing.
+    let mut calls = 0;
+    let mut nothing = |work: &mut dyn FnMut()| {
+        calls += 1;
+        work();
+        0.0
+    };
+    let same = explore_charged(
+        &b,
+        b.start.unwrap(),
+        &cfg,
+        2,
+        &mut |_| {},
+        Some(&mut nothing),
+    );
+    assert_eq!(same, free);
+    assert_eq!(calls as u64, free.layouts_computed);
+    // Five seconds per layout: the charged time is recorded and the robot waits for it.
+    let mut five = |work: &mut dyn FnMut()| {
+        work();
+        5.0
+    };
+    let slow = explore_charged(&b, b.start.unwrap(), &cfg, 2, &mut |_| {}, Some(&mut five));
+    assert!(slow.layouts_computed > 0);
+    assert_eq!(slow.layout_compute_s, 5.0 * slow.layouts_computed as f64);
+    assert!(
+        slow.exploration_time_s > free.exploration_time_s,
+        "{} vs {}",
+        slow.exploration_time_s,
+        free.exploration_time_s
+    );
+}

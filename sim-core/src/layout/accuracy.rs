@@ -214,6 +214,7 @@ mod tests {
         let lr = |id: u32, r: &Room, observed: Polygon, label| LayoutRoom {
             id,
             polygon: r.polygon.clone(),
+            open_edges: vec![false; r.polygon.vertices.len()],
             observed_polygon: observed,
             label,
             predicted: true,

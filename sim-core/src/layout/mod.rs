@@ -58,6 +58,9 @@ pub struct LayoutRoom {
     pub id: u32,
     /// The room's shape, prediction included, in world metres (counter-clockwise).
     pub polygon: Polygon,
+    /// Per edge of `polygon` (edge `i` runs from vertex `i` to vertex `i + 1`): the edge lies on
+    /// the border of the known map's box, so no wall line supports it (an open frontier's side).
+    pub open_edges: Vec<bool>,
     /// The shape of the observed part only (the faces it had before prediction).
     pub observed_polygon: Polygon,
     pub label: RoomLabel,

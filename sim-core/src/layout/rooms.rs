@@ -337,6 +337,7 @@ pub fn room_polygons(
         out.push(LayoutRoom {
             id: out.len() as u32,
             observed_area_m2: observed_polygon.area_m2(),
+            open_edges: tags.iter().map(|t| arr.is_border(*t)).collect(),
             polygon,
             observed_polygon,
             label,

@@ -288,12 +288,19 @@ fn prediction_improves_partial_rooms() {
             let (lo, hi) = (lo - Vec2::new(m, m), hi + Vec2::new(m, m));
             let on = |a: f64, b: f64| (a - b).abs() < 1e-6;
             for r in &l.rooms {
-                let on_box = r.polygon.edges().any(|e| {
-                    (on(e.a.x, lo.x) && on(e.b.x, lo.x))
-                        || (on(e.a.x, hi.x) && on(e.b.x, hi.x))
-                        || (on(e.a.y, lo.y) && on(e.b.y, lo.y))
-                        || (on(e.a.y, hi.y) && on(e.b.y, hi.y))
-                });
+                let edge_on_box: Vec<bool> = r
+                    .polygon
+                    .edges()
+                    .map(|e| {
+                        (on(e.a.x, lo.x) && on(e.b.x, lo.x))
+                            || (on(e.a.x, hi.x) && on(e.b.x, hi.x))
+                            || (on(e.a.y, lo.y) && on(e.b.y, lo.y))
+                            || (on(e.a.y, hi.y) && on(e.b.y, hi.y))
+                    })
+                    .collect();
+                // The room reports exactly its edges on the box as open.
+                assert_eq!(r.open_edges, edge_on_box, "{r:?}");
+                let on_box = edge_on_box.iter().any(|b| *b);
                 match r.label {
                     RoomLabel::Open => {
                         open_rooms += 1;
