@@ -46,9 +46,9 @@ fn main() {
 
     println!("grid benchmark: {trivial} trivial jobs, then a real grid of {seeds} explorations");
     // 1. Trivial jobs: in-process channels (baseline), then zenoh with 8 worker processes.
-    let plan = plan(dir.path(), "trivial-local", trivial, 1);
+    let plan = make_plan(dir.path(), "trivial-local", trivial, 1);
     let local = timed_run(&plan, 8, None, 0);
-    let plan = plan(dir.path(), "trivial-net", trivial, 1);
+    let plan = make_plan(dir.path(), "trivial-net", trivial, 1);
     let net = timed_run(&plan, 0, Some("trivial"), 8);
     let (local_rate, net_rate) = (trivial as f64 / local, trivial as f64 / net);
     println!(
@@ -66,9 +66,9 @@ fn main() {
         return;
     }
     // 2. A real grid with 1 and 2 worker processes.
-    let p1 = plan(dir.path(), "real-1", seeds, 600);
+    let p1 = make_plan(dir.path(), "real-1", seeds, 600);
     let t1 = timed_run(&p1, 0, Some("real"), 1);
-    let p2 = plan(dir.path(), "real-2", seeds, 600);
+    let p2 = make_plan(dir.path(), "real-2", seeds, 600);
     let t2 = timed_run(&p2, 0, Some("real"), 2);
     let eff = t1 / (2.0 * t2);
     println!(
@@ -81,7 +81,7 @@ fn main() {
     );
 }
 
-fn plan(dir: &Path, name: &str, seeds: usize, time_limit_s: u64) -> Plan {
+fn make_plan(dir: &Path, name: &str, seeds: usize, time_limit_s: u64) -> Plan {
     let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("buildings/small.toml");
     let text = format!(
         "format = \"floorcast-grid\"\nversion = 1\nname = \"{name}\"\nbuildings = [\"{}\"]\nseed_range = [1, {seeds}]\n[[strategies]]\nname = \"baseline\"\n[settings]\ntime_limit_s = {time_limit_s}\n",
