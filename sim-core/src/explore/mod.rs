@@ -450,7 +450,7 @@ impl Explorer<'_> {
                     min_points: base.min_points.max(80),
                     ..*base
                 };
-                let m = match_scan(&self.obstacles, &prior, &scan, &mc);
+                let m = match_scan(&self.obstacles, &self.map, &prior, &scan, &mc);
                 if m.accepted {
                     self.matches_accepted += 1;
                     self.calibration.observe(
