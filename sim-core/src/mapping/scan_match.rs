@@ -265,40 +265,59 @@ fn normal_equations(
     (h, g, cost)
 }
 
-/// Signed distance from `q` to the surface near it and its gradient (unit): to the line through
-/// the two nearest mean hit points of occupied cells around `q`'s cell (to the point when there
-/// is only one). `None` when no occupied cell with hits is next to `q`'s cell.
+/// Signed distance from `q` to the surface near it and its gradient (unit). The mean hit points
+/// of the occupied cells around `q`'s cell (3 x 3) are fitted with a line (principal axis); when
+/// they lie on one, the distance is to that line, otherwise (a corner, a single point) to the
+/// nearest of them. `None` when no occupied cell with hits is next to `q`'s cell.
 fn surface_residual(map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
     let c0 = map.frame.cell_from_world(q);
-    let mut best: [(f64, Vec2); 2] = [(f64::INFINITY, Vec2::zeros()); 2];
+    let mut pts = [Vec2::zeros(); 9];
+    let mut n = 0;
     for dy in -1..=1 {
         for dx in -1..=1 {
-            let Some(a) = map.surface_point(Cell::new(c0.x + dx, c0.y + dy)) else {
-                continue;
-            };
-            let d2 = (a - q).norm_squared();
-            if d2 < best[0].0 {
-                best[1] = best[0];
-                best[0] = (d2, a);
-            } else if d2 < best[1].0 {
-                best[1] = (d2, a);
+            if let Some(a) = map.surface_point(Cell::new(c0.x + dx, c0.y + dy)) {
+                pts[n] = a;
+                n += 1;
             }
         }
     }
-    if !best[0].0.is_finite() {
+    if n == 0 {
         return None;
     }
-    let a = best[0].1;
+    let pts = &pts[..n];
     let res = map.frame.resolution_m;
-    if best[1].0.is_finite() {
-        let t = best[1].1 - a;
-        let len = t.norm();
-        if len > 0.3 * res {
-            let n = Vec2::new(-t.y, t.x) / len;
-            let r = n.dot(&(q - a));
-            return Some(if r < 0.0 { (-r, -n) } else { (r, n) });
+    if n >= 2 {
+        let mean = pts.iter().fold(Vec2::zeros(), |s, p| s + p) / n as f64;
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for p in pts {
+            let d = p - mean;
+            sxx += d.x * d.x;
+            sxy += d.x * d.y;
+            syy += d.y * d.y;
+        }
+        let (sxx, sxy, syy) = (sxx / n as f64, sxy / n as f64, syy / n as f64);
+        let half_tr = 0.5 * (sxx + syy);
+        let disc = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
+        let (l_max, l_min) = (half_tr + disc, half_tr - disc);
+        // A line: spread along it (at least ~a third of a cell), almost none across.
+        if l_max >= (0.15 * res).powi(2) && l_min <= (0.3 * res).powi(2) {
+            // Eigenvector of the larger eigenvalue is the line's direction.
+            let t = if sxy.abs() > 1e-15 {
+                Vec2::new(l_max - syy, sxy)
+            } else if sxx >= syy {
+                Vec2::new(1.0, 0.0)
+            } else {
+                Vec2::new(0.0, 1.0)
+            };
+            let nrm = Vec2::new(-t.y, t.x) / t.norm();
+            let r = nrm.dot(&(q - mean));
+            return Some(if r < 0.0 { (-r, -nrm) } else { (r, nrm) });
         }
     }
+    let a = pts
+        .iter()
+        .copied()
+        .min_by(|a, b| (a - q).norm_squared().total_cmp(&(b - q).norm_squared()))?;
     let d = q - a;
     let r = d.norm();
     Some(if r > 1e-9 {
