@@ -377,4 +377,67 @@ mod tests {
         );
         assert_eq!(s.cells_changed, 0);
     }
+
+    /// Two beams `inc_deg` apart, symmetric about the x axis, hitting the wall x = 2 m.
+    fn two_beams(inc_deg: f64) -> Scan {
+        let inc = inc_deg.to_radians();
+        Scan {
+            angle_min_rad: -inc / 2.0,
+            angle_increment_rad: inc,
+            max_range_m: 6.0,
+            ranges_m: vec![2.0 / (inc / 2.0).cos(); 2],
+        }
+    }
+
+    #[test]
+    fn close_hits_are_joined_far_ones_are_not() {
+        let frame = GridFrame::new(Vec2::new(-0.5, -1.0), 0.05, 80, 40);
+        let pose = Pose::new(0.0, 0.0, 0.0);
+        let cfg = LogOddsConfig::default();
+        // The wall is the line x = 2 m: cell column 50 (x in [2.0, 2.05)).
+        let col = frame.cell_from_world(Vec2::new(2.01, 0.0)).x;
+        let occupied_in_col = |m: &LogOddsMap| {
+            (0..40)
+                .filter(|&y| m.occupancy.is(Cell::new(col, y), Occupancy::Occupied))
+                .count()
+        };
+        let mut near = LogOddsMap::new(frame);
+        near.insert_scan(&pose, &two_beams(2.0), &cfg);
+        // 0.07 m apart: two adjacent end cells, nothing between.
+        assert_eq!(occupied_in_col(&near), 2);
+        assert_eq!(near.occupancy.count(Occupancy::Occupied), 2);
+        // 0.35 m apart: not one surface.
+        let mut far = LogOddsMap::new(frame);
+        far.insert_scan(&pose, &two_beams(10.0), &cfg);
+        assert_eq!(far.occupancy.count(Occupancy::Occupied), 2);
+        let mut off = LogOddsMap::new(frame);
+        off.insert_scan(
+            &pose,
+            &two_beams(5.0),
+            &LogOddsConfig {
+                hit_gap_fill_m: 0.0,
+                ..cfg
+            },
+        );
+        assert_eq!(off.occupancy.count(Occupancy::Occupied), 2);
+        let mut filled = LogOddsMap::new(frame);
+        filled.insert_scan(&pose, &two_beams(5.0), &cfg);
+        // 0.175 m apart: the cells between are joined, on the wall's column.
+        assert!(
+            occupied_in_col(&filled) >= 4,
+            "{}",
+            occupied_in_col(&filled)
+        );
+        assert_eq!(
+            filled.occupancy.count(Occupancy::Occupied),
+            occupied_in_col(&filled)
+        );
+        // Every occupied cell knows where the surface is: on the line x = 2 m.
+        for y in 0..40 {
+            if let Some(p) = filled.surface_point(Cell::new(col, y)) {
+                assert!((p.x - 2.0).abs() < 1e-4, "{p:?}");
+            }
+        }
+        assert!(filled.surface_point(Cell::new(col - 3, 20)).is_none());
+    }
 }
