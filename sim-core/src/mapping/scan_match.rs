@@ -592,10 +592,10 @@ mod tests {
         for offset_m in [0.0, 0.013, 0.025, 0.037] {
             let origin = Vec2::new(-1.0 + offset_m, -1.0 + offset_m);
             let frame = GridFrame::new(origin, 0.05, 200, 160);
-            let p0 = Pose::new(4.0, 1.2, 1.5708);
+            let p0 = Pose::new(4.0, 1.2, std::f64::consts::FRAC_PI_2);
             let (field, map) = build_map(&world, frame, &[p0]);
             for k in 1..4 {
-                let truth = Pose::new(4.0, 1.2, 1.5708 - 0.1 * k as f64);
+                let truth = Pose::new(4.0, 1.2, std::f64::consts::FRAC_PI_2 - 0.1 * k as f64);
                 let cfg = ScanMatchConfig {
                     prior_sigma_xy_m: 0.001,
                     prior_sigma_theta_rad: 0.0045,
