@@ -135,7 +135,7 @@ fn main() {
     for (k, (p, s)) in poses.iter().zip(&scans).enumerate() {
         let d = [(0.05, -0.03, 1.0), (-0.04, 0.05, -1.5), (0.1, 0.0, 3.0)][k % 3];
         let prior = Pose::new(p.x_m + d.0, p.y_m + d.1, p.theta_rad + f64::to_radians(d.2));
-        let r = match_scan(&field, &prior, s, &mcfg);
+        let r = match_scan(&field, &m2, &prior, s, &mcfg);
         accepted += r.accepted as usize;
         searched += r.searched as usize;
         let e = p.between(&r.pose);
@@ -152,7 +152,7 @@ fn main() {
     let prior = poses[10];
     let t = Instant::now();
     for _ in 0..100 {
-        std::hint::black_box(match_scan(&field, &prior, &scans[10], &mcfg));
+        std::hint::black_box(match_scan(&field, &m2, &prior, &scans[10], &mcfg));
     }
     println!("  match_scan, exact prior:     {:8.1} us", us(t, 100));
 

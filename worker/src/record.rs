@@ -56,6 +56,10 @@ pub struct RunSummary {
     pub map_free_precision: f64,
     /// Fraction of map-occupied cells within one cell of a true wall (doubled walls lower it).
     pub map_occupied_precision: f64,
+    /// The same after the best small rotation (about the start) and translation of the whole
+    /// map: separates a map turned as a whole from doubled or bent walls.
+    #[serde(default)]
+    pub map_occupied_precision_aligned: f64,
     /// Wall-clock seconds the run took (the only field that differs between identical runs).
     pub wall_time_s: f64,
     /// Simulated seconds per wall second.
@@ -94,6 +98,7 @@ impl RunSummary {
             scan_matches_accepted: r.scan_matches_accepted,
             map_free_precision: r.map_quality.free_precision,
             map_occupied_precision: r.map_quality.occupied_precision,
+            map_occupied_precision_aligned: r.map_quality.occupied_precision_aligned,
             wall_time_s,
             speedup: if wall_time_s > 0.0 {
                 r.total_time_s / wall_time_s

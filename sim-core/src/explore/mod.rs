@@ -184,6 +184,10 @@ pub struct MapQuality {
     /// Map-occupied cells within one cell of solid space in the building (doubled walls and
     /// drift lower this).
     pub occupied_precision: f64,
+    /// The same after the best small rigid motion of the map (rotation about the start):
+    /// a map that is consistent but turned as a whole by an early heading error scores high
+    /// here, a doubled or bent one does not.
+    pub occupied_precision_aligned: f64,
 }
 
 /// Everything a run produced.
@@ -501,7 +505,7 @@ impl Explorer<'_> {
                     min_points: base.min_points.max(80),
                     ..*base
                 };
-                let m = match_scan(&self.obstacles, &prior, &scan, &mc);
+                let m = match_scan(&self.obstacles, &self.map, &prior, &scan, &mc);
                 if m.accepted {
                     self.matches_accepted += 1;
                     self.calibration.observe(
@@ -976,7 +980,15 @@ impl Explorer<'_> {
         // Always close the curve with the final state.
         self.next_progress_s = f64::NEG_INFINITY;
         self.record_progress(on_progress);
-        let map_quality = map_quality(&self.map.occupancy, &self.truth);
+        let mut map_quality = map_quality(&self.map.occupancy, &self.truth);
+        map_quality.occupied_precision_aligned =
+            crate::mapping::alignment::aligned_occupied_precision(
+                &self.map.occupancy,
+                &self.truth,
+                self.start.position(),
+                &Default::default(),
+            )
+            .0;
         RunResult {
             seed: self.seed,
             start: self.start,
@@ -1094,6 +1106,7 @@ fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {
     MapQuality {
         free_precision: ratio(free_ok, free),
         occupied_precision: ratio(occ_ok, occ),
+        occupied_precision_aligned: ratio(occ_ok, occ),
     }
 }
 

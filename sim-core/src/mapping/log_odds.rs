@@ -5,6 +5,11 @@
 //! range). The ternary state of a cell changes with hysteresis: it becomes `Occupied` when its
 //! log-odds rises above `occupied_above_l`, `Free` when it falls below `free_below_l`, and keeps
 //! its previous state in between (a cell never observed stays `Unknown`).
+//!
+//! Consecutive hits closer than `hit_gap_fill_m` lie on one surface: the cells between them get
+//! a hit too. A wall seen from afar is otherwise a dotted line of cells (1 degree between beams
+//! is 9 cm at 5 m), and a scan matched against dots slides along the wall toward them: a small
+//! rotation per scan that bends the map.
 
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Cell, Grid, GridFrame, Occupancy, OccupancyGrid};
@@ -29,6 +34,9 @@ pub struct LogOddsConfig {
     /// Cells whose centre is closer than this (in cells) to a hit point get no miss from that
     /// beam (1.0): keeps walls seen at grazing angles from being eroded by their own beams.
     pub hit_guard_cells: f64,
+    /// Consecutive hit points closer than this are joined by hits on the cells between them
+    /// (0 = off).
+    pub hit_gap_fill_m: f64,
 }
 
 impl Default for LogOddsConfig {
@@ -41,6 +49,7 @@ impl Default for LogOddsConfig {
             occupied_above_l: 0.5,
             free_below_l: -0.3,
             hit_guard_cells: 1.0,
+            hit_gap_fill_m: 0.2,
         }
     }
 }
@@ -75,6 +84,11 @@ pub struct LogOddsMap {
     pub known_bounds: Option<(Cell, Cell)>,
     /// Total ternary changes since construction.
     pub total_cells_changed: u64,
+    /// Per cell, the mean of the hit points that fell in it (grid coordinates, cell units;
+    /// NaN where none), with their count: where in the cell the surface is, for sub-cell scan
+    /// matching.
+    pub surface: Vec<[f32; 2]>,
+    pub surface_hits: Vec<u16>,
 }
 
 impl LogOddsMap {
@@ -88,6 +102,8 @@ impl LogOddsMap {
             free_changes: Vec::new(),
             known_bounds: None,
             total_cells_changed: 0,
+            surface: vec![[f32::NAN; 2]; frame.len()],
+            surface_hits: vec![0; frame.len()],
         }
     }
 
@@ -104,6 +120,9 @@ impl LogOddsMap {
         let mut bmin = Cell::new(start[0].floor() as i32, start[1].floor() as i32);
         let mut bmax = bmin;
         let guard2 = cfg.hit_guard_cells * cfg.hit_guard_cells;
+        let fill2 = (cfg.hit_gap_fill_m * inv_res).powi(2);
+        // The previous beam's end (grid coordinates) when it was a hit.
+        let mut prev_hit: Option<[f64; 2]> = None;
         for i in 0..scan.ranges_m.len() {
             let range_m = scan.ranges_m[i];
             if !range_m.is_finite() {
@@ -128,6 +147,7 @@ impl LogOddsMap {
                 if hit {
                     if c == end_cell {
                         self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
+                        self.add_surface(idx, end);
                         return true;
                     }
                     let (ddx, ddy) = (c.x as f64 + 0.5 - end[0], c.y as f64 + 0.5 - end[1]);
@@ -141,6 +161,33 @@ impl LogOddsMap {
             if clipped {
                 stats.beams_clipped += 1;
             }
+            if let (true, Some(p)) = (hit && cfg.hit_gap_fill_m > 0.0, prev_hit) {
+                let (dx, dy) = (end[0] - p[0], end[1] - p[1]);
+                if dx * dx + dy * dy <= fill2 {
+                    let p_cell = Cell::new(p[0].floor() as i32, p[1].floor() as i32);
+                    let len2 = (dx * dx + dy * dy).max(1e-12);
+                    walk_segment(p, end, |c| {
+                        if c != p_cell
+                            && c != end_cell
+                            && c.x >= 0
+                            && c.y >= 0
+                            && c.x < w
+                            && c.y < h
+                        {
+                            let idx = c.y as usize * w as usize + c.x as usize;
+                            self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
+                            // The surface point: the segment's point nearest the cell centre.
+                            let t = (((c.x as f64 + 0.5 - p[0]) * dx
+                                + (c.y as f64 + 0.5 - p[1]) * dy)
+                                / len2)
+                                .clamp(0.0, 1.0);
+                            self.add_surface(idx, [p[0] + t * dx, p[1] + t * dy]);
+                        }
+                        true
+                    });
+                }
+            }
+            prev_hit = hit.then_some(end);
         }
         let clamp = |c: Cell| Cell::new(c.x.clamp(0, w - 1), c.y.clamp(0, h - 1));
         let (bmin, bmax) = (clamp(bmin), clamp(bmax));
@@ -153,6 +200,31 @@ impl LogOddsMap {
         });
         self.total_cells_changed += stats.cells_changed as u64;
         stats
+    }
+
+    /// Adds a surface point (grid coordinates) to the running mean of cell `idx`.
+    #[inline]
+    fn add_surface(&mut self, idx: usize, q: [f64; 2]) {
+        let n = self.surface_hits[idx];
+        let s = &mut self.surface[idx];
+        if n == 0 {
+            *s = [q[0] as f32, q[1] as f32];
+        } else {
+            let k = 1.0 / (n as f32 + 1.0);
+            s[0] += (q[0] as f32 - s[0]) * k;
+            s[1] += (q[1] as f32 - s[1]) * k;
+        }
+        self.surface_hits[idx] = n.saturating_add(1).min(1000);
+    }
+
+    /// The mean surface point of an occupied cell with hits, in world coordinates.
+    pub fn surface_point(&self, c: Cell) -> Option<Vec2> {
+        let i = self.frame.index(c)?;
+        if self.occupancy.data[i] != Occupancy::Occupied || self.surface_hits[i] == 0 {
+            return None;
+        }
+        let s = self.surface[i];
+        Some(self.frame.origin_m + Vec2::new(s[0] as f64, s[1] as f64) * self.frame.resolution_m)
     }
 
     #[inline]
@@ -304,5 +376,68 @@ mod tests {
             &LogOddsConfig::default(),
         );
         assert_eq!(s.cells_changed, 0);
+    }
+
+    /// Two beams `inc_deg` apart, symmetric about the x axis, hitting the wall x = 2 m.
+    fn two_beams(inc_deg: f64) -> Scan {
+        let inc = inc_deg.to_radians();
+        Scan {
+            angle_min_rad: -inc / 2.0,
+            angle_increment_rad: inc,
+            max_range_m: 6.0,
+            ranges_m: vec![2.0 / (inc / 2.0).cos(); 2],
+        }
+    }
+
+    #[test]
+    fn close_hits_are_joined_far_ones_are_not() {
+        let frame = GridFrame::new(Vec2::new(-0.5, -1.0), 0.05, 80, 40);
+        let pose = Pose::new(0.0, 0.0, 0.0);
+        let cfg = LogOddsConfig::default();
+        // The wall is the line x = 2 m: cell column 50 (x in [2.0, 2.05)).
+        let col = frame.cell_from_world(Vec2::new(2.01, 0.0)).x;
+        let occupied_in_col = |m: &LogOddsMap| {
+            (0..40)
+                .filter(|&y| m.occupancy.is(Cell::new(col, y), Occupancy::Occupied))
+                .count()
+        };
+        let mut near = LogOddsMap::new(frame);
+        near.insert_scan(&pose, &two_beams(2.0), &cfg);
+        // 0.07 m apart: two adjacent end cells, nothing between.
+        assert_eq!(occupied_in_col(&near), 2);
+        assert_eq!(near.occupancy.count(Occupancy::Occupied), 2);
+        // 0.35 m apart: not one surface.
+        let mut far = LogOddsMap::new(frame);
+        far.insert_scan(&pose, &two_beams(10.0), &cfg);
+        assert_eq!(far.occupancy.count(Occupancy::Occupied), 2);
+        let mut off = LogOddsMap::new(frame);
+        off.insert_scan(
+            &pose,
+            &two_beams(5.0),
+            &LogOddsConfig {
+                hit_gap_fill_m: 0.0,
+                ..cfg
+            },
+        );
+        assert_eq!(off.occupancy.count(Occupancy::Occupied), 2);
+        let mut filled = LogOddsMap::new(frame);
+        filled.insert_scan(&pose, &two_beams(5.0), &cfg);
+        // 0.175 m apart: the cells between are joined, on the wall's column.
+        assert!(
+            occupied_in_col(&filled) >= 4,
+            "{}",
+            occupied_in_col(&filled)
+        );
+        assert_eq!(
+            filled.occupancy.count(Occupancy::Occupied),
+            occupied_in_col(&filled)
+        );
+        // Every occupied cell knows where the surface is: on the line x = 2 m.
+        for y in 0..40 {
+            if let Some(p) = filled.surface_point(Cell::new(col, y)) {
+                assert!((p.x - 2.0).abs() < 1e-4, "{p:?}");
+            }
+        }
+        assert!(filled.surface_point(Cell::new(col - 3, 20)).is_none());
     }
 }

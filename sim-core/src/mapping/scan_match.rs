@@ -1,15 +1,25 @@
 //! Scan-to-map matching: corrects the odometry pose of a scan against the current map.
 //!
-//! Gauss-Newton on the (bilinearly interpolated) distance from each hit point to the nearest
-//! occupied cell ([`ObstacleDistance`]), with a Cauchy robust weight (points on walls not yet in
+//! Gauss-Newton on the distance from each hit point to the map's surface: near the surface, to
+//! the line through the two nearest mean hit points of occupied cells ([`LogOddsMap::surface`],
+//! sub-cell: distances to cell centres are biased by up to half a cell differently on every
+//! wall, and the compromise is a rotation), farther away the bilinearly interpolated distance
+//! to the nearest occupied cell ([`ObstacleDistance`]), with a Cauchy robust weight (points on walls not yet in
 //! the map do not drag the pose) and a Gaussian prior toward the odometry pose, which keeps the
 //! estimate put along directions the scan does not constrain (a long featureless corridor).
 //! When the result fits poorly, a small correlative search around the prior picks a better
 //! starting point and Gauss-Newton runs again. A match that still fits poorly, is based on too
 //! few points, or moves the pose too far is rejected: the result is then the prior.
+//!
+//! Only hit points whose last stretch of ray (at the prior pose) crosses space the map has
+//! observed take part. A hit in never-observed space, e.g. the continuation of a wall past the
+//! end of the part already mapped (seen while turning), would otherwise be pulled toward the
+//! mapped end: a small bias per scan that, while turning in place, rotates the whole map.
 
 use crate::geom::{wrap_angle, Pose, Vec2};
+use crate::grid::{Cell, Occupancy};
 use crate::mapping::distance_field::ObstacleDistance;
+use crate::mapping::log_odds::LogOddsMap;
 use crate::scan::Scan;
 use nalgebra::{Matrix3, Vector3};
 
@@ -44,6 +54,9 @@ pub struct ScanMatchConfig {
     pub search_theta_step_rad: f64,
     /// Use every n-th beam (1 = all).
     pub beam_stride: usize,
+    /// A hit point takes part only if the map has observed (free or occupied) some cell on the
+    /// last this-many metres of its ray, end included, at the prior pose. 0 keeps every point.
+    pub observed_before_hit_m: f64,
 }
 
 impl Default for ScanMatchConfig {
@@ -66,6 +79,7 @@ impl Default for ScanMatchConfig {
             search_theta_rad: 4f64.to_radians(),
             search_theta_step_rad: 1f64.to_radians(),
             beam_stride: 1,
+            observed_before_hit_m: 0.15,
         }
     }
 }
@@ -84,14 +98,31 @@ pub struct MatchResult {
     pub accepted: bool,
 }
 
-/// Matches `scan` (taken around `prior`) against the obstacle distance field of the map.
+/// Matches `scan` (taken around `prior`) against `map` and the obstacle distance field of its
+/// occupancy (`field`, kept by the caller).
 pub fn match_scan(
     field: &ObstacleDistance,
+    map: &LogOddsMap,
     prior: &Pose,
     scan: &Scan,
     cfg: &ScanMatchConfig,
 ) -> MatchResult {
     let stride = cfg.beam_stride.max(1);
+    let grid = &map.occupancy;
+    let (s, c) = prior.theta_rad.sin_cos();
+    let res = grid.frame.resolution_m;
+    let front_steps = (cfg.observed_before_hit_m / res.max(1e-9)).ceil().max(0.0) as usize;
+    let observed = |p: Vec2| {
+        if cfg.observed_before_hit_m <= 0.0 {
+            return true;
+        }
+        let q = prior.position() + Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
+        let back = Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y) / p.norm().max(1e-9) * res;
+        (0..=front_steps).any(|k| {
+            let cell = grid.frame.cell_from_world(q - back * k as f64);
+            grid.get(cell).is_some_and(|o| *o != Occupancy::Unknown)
+        })
+    };
     let points: Vec<Vec2> = (0..scan.ranges_m.len())
         .step_by(stride)
         .filter(|&i| scan.is_hit(i) && scan.ranges_m[i].is_finite() && scan.ranges_m[i] > 0.0)
@@ -99,6 +130,7 @@ pub fn match_scan(
             let a = scan.beam_angle_rad(i);
             Vec2::new(a.cos(), a.sin()) * scan.ranges_m[i]
         })
+        .filter(|p| observed(*p))
         .collect();
     let rejected = |score, iterations, searched| MatchResult {
         pose: *prior,
@@ -110,13 +142,13 @@ pub fn match_scan(
     if points.is_empty() || field.frame.is_empty() {
         return rejected(0.0, 0, false);
     }
-    let (mut pose, mut iterations) = gauss_newton(field, prior, prior, &points, cfg);
+    let (mut pose, mut iterations) = gauss_newton(field, map, prior, prior, &points, cfg);
     let (mut score, mut near) = evaluate(field, &pose, &points, cfg);
     let mut searched = false;
     if score < cfg.search_below_score {
         searched = true;
         let start = correlative_search(field, prior, &points, cfg);
-        let (p2, it2) = gauss_newton(field, prior, &start, &points, cfg);
+        let (p2, it2) = gauss_newton(field, map, prior, &start, &points, cfg);
         iterations += it2;
         let (s2, n2) = evaluate(field, &p2, &points, cfg);
         if s2 > score {
@@ -145,6 +177,7 @@ pub fn match_scan(
 
 fn gauss_newton(
     field: &ObstacleDistance,
+    map: &LogOddsMap,
     prior: &Pose,
     start: &Pose,
     points: &[Vec2],
@@ -152,7 +185,7 @@ fn gauss_newton(
 ) -> (Pose, u32) {
     // Levenberg-Marquardt: a step that raises the cost is undone and the damping raised.
     let mut x = Vector3::new(start.x_m, start.y_m, start.theta_rad);
-    let (mut h, mut g, mut cost) = normal_equations(field, prior, &x, points, cfg);
+    let (mut h, mut g, mut cost) = normal_equations(field, map, prior, &x, points, cfg);
     let mut lambda = 1e-4;
     let mut iterations = 0;
     while iterations < cfg.max_iterations {
@@ -165,7 +198,7 @@ fn gauss_newton(
             break;
         }
         let x_new = x + step;
-        let (h_new, g_new, cost_new) = normal_equations(field, prior, &x_new, points, cfg);
+        let (h_new, g_new, cost_new) = normal_equations(field, map, prior, &x_new, points, cfg);
         if cost_new <= cost {
             (x, h, g, cost) = (x_new, h_new, g_new, cost_new);
             lambda = (lambda * 0.1).max(1e-6);
@@ -185,6 +218,7 @@ fn gauss_newton(
 /// Gauss-Newton normal equations `(H, g)` and robust cost at pose `x`, prior included.
 fn normal_equations(
     field: &ObstacleDistance,
+    map: &LogOddsMap,
     prior: &Pose,
     x: &Vector3<f64>,
     points: &[Vec2],
@@ -210,14 +244,18 @@ fn normal_equations(
     let (s, c) = x[2].sin_cos();
     for p in points {
         let q = Vec2::new(x[0] + c * p.x - s * p.y, x[1] + s * p.x + c * p.y);
-        let (d_cells, grad) = field.sample(q);
-        let r = d_cells * res;
+        let (r, grad) = match surface_residual(map, q) {
+            Some(v) => v,
+            None => {
+                let (d_cells, grad) = field.sample(q);
+                (d_cells * res, grad * res)
+            }
+        };
         // Cauchy cost; points at the cap contribute a constant (no information).
         cost += 0.5 * inv_var * c2 * (r.min(cap_m) * r.min(cap_m) / c2).ln_1p();
-        if r >= cap_m - 0.5 * res {
+        if r.abs() >= cap_m - 0.5 * res {
             continue;
         }
-        let grad = grad * res;
         let dq_dtheta = Vec2::new(-s * p.x - c * p.y, c * p.x - s * p.y);
         let j = Vector3::new(grad.x, grad.y, grad.dot(&dq_dtheta));
         let w = inv_var / (1.0 + r * r / c2);
@@ -225,6 +263,68 @@ fn normal_equations(
         g += j * (w * r);
     }
     (h, g, cost)
+}
+
+/// Signed distance from `q` to the surface near it and its gradient (unit). The mean hit points
+/// of the occupied cells around `q`'s cell (3 x 3) are fitted with a line (principal axis); when
+/// they lie on one, the distance is to that line, otherwise (a corner, a single point) to the
+/// nearest of them. `None` when no occupied cell with hits is next to `q`'s cell.
+fn surface_residual(map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
+    let c0 = map.frame.cell_from_world(q);
+    let mut pts = [Vec2::zeros(); 9];
+    let mut n = 0;
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            if let Some(a) = map.surface_point(Cell::new(c0.x + dx, c0.y + dy)) {
+                pts[n] = a;
+                n += 1;
+            }
+        }
+    }
+    if n == 0 {
+        return None;
+    }
+    let pts = &pts[..n];
+    let res = map.frame.resolution_m;
+    if n >= 2 {
+        let mean = pts.iter().fold(Vec2::zeros(), |s, p| s + p) / n as f64;
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for p in pts {
+            let d = p - mean;
+            sxx += d.x * d.x;
+            sxy += d.x * d.y;
+            syy += d.y * d.y;
+        }
+        let (sxx, sxy, syy) = (sxx / n as f64, sxy / n as f64, syy / n as f64);
+        let half_tr = 0.5 * (sxx + syy);
+        let disc = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
+        let (l_max, l_min) = (half_tr + disc, half_tr - disc);
+        // A line: spread along it (at least ~a third of a cell), almost none across.
+        if l_max >= (0.15 * res).powi(2) && l_min <= (0.3 * res).powi(2) {
+            // Eigenvector of the larger eigenvalue is the line's direction.
+            let t = if sxy.abs() > 1e-15 {
+                Vec2::new(l_max - syy, sxy)
+            } else if sxx >= syy {
+                Vec2::new(1.0, 0.0)
+            } else {
+                Vec2::new(0.0, 1.0)
+            };
+            let nrm = Vec2::new(-t.y, t.x) / t.norm();
+            let r = nrm.dot(&(q - mean));
+            return Some(if r < 0.0 { (-r, -nrm) } else { (r, nrm) });
+        }
+    }
+    let a = pts
+        .iter()
+        .copied()
+        .min_by(|a, b| (a - q).norm_squared().total_cmp(&(b - q).norm_squared()))?;
+    let d = q - a;
+    let r = d.norm();
+    Some(if r > 1e-9 {
+        (r, d / r)
+    } else {
+        (0.0, Vec2::zeros())
+    })
 }
 
 /// (inlier fraction, number of points near the map).
@@ -371,12 +471,16 @@ mod tests {
         ])
     }
 
-    fn build_map(world: &BoxWorld, frame: GridFrame, poses: &[Pose]) -> ObstacleDistance {
+    fn build_map(
+        world: &BoxWorld,
+        frame: GridFrame,
+        poses: &[Pose],
+    ) -> (ObstacleDistance, LogOddsMap) {
         let mut map = LogOddsMap::new(frame);
         for p in poses {
             map.insert_scan(p, &world.scan(p), &LogOddsConfig::default());
         }
-        ObstacleDistance::from_grid(&map.occupancy, 8)
+        (ObstacleDistance::from_grid(&map.occupancy, 8), map)
     }
 
     #[test]
@@ -392,7 +496,7 @@ mod tests {
                 )
             })
             .collect();
-        let field = build_map(&world, frame, &mapping_poses);
+        let (field, grid) = build_map(&world, frame, &mapping_poses);
         let truths = [
             Pose::new(2.0, 1.0, 0.3),
             Pose::new(4.5, 3.5, 2.0),
@@ -413,7 +517,7 @@ mod tests {
                     truth.y_m + dy,
                     truth.theta_rad + f64::to_radians(dth),
                 );
-                let r = match_scan(&field, &prior, &scan, &ScanMatchConfig::default());
+                let r = match_scan(&field, &grid, &prior, &scan, &ScanMatchConfig::default());
                 let err = truth.between(&r.pose);
                 assert!(r.accepted, "{truth:?} {prior:?} {r:?}");
                 assert!(err.x_m.hypot(err.y_m) < 0.025, "{truth:?} {prior:?} {r:?}");
@@ -430,12 +534,12 @@ mod tests {
         let poses: Vec<Pose> = (0..12)
             .map(|k| Pose::new(14.0 + k as f64, 1.1, 0.0))
             .collect();
-        let field = build_map(&world, frame, &poses);
+        let (field, grid) = build_map(&world, frame, &poses);
         let truth = Pose::new(20.0, 1.1, 0.0);
         let scan = world.scan(&truth);
         for along in [-0.15, 0.1, 0.15] {
             let prior = Pose::new(truth.x_m + along, truth.y_m + 0.08, 0.03);
-            let r = match_scan(&field, &prior, &scan, &ScanMatchConfig::default());
+            let r = match_scan(&field, &grid, &prior, &scan, &ScanMatchConfig::default());
             let err_along = r.pose.x_m - truth.x_m;
             // Discretisation of the walls can pull by about a quarter of a cell.
             assert!(err_along.abs() <= along.abs() + 0.015, "{along}: {r:?}");
@@ -454,6 +558,7 @@ mod tests {
         let prior = Pose::new(2.0, 1.0, 0.3);
         let r = match_scan(
             &empty,
+            &LogOddsMap::new(frame),
             &prior,
             &world.scan(&prior),
             &ScanMatchConfig::default(),
@@ -462,18 +567,45 @@ mod tests {
         assert_eq!(r.pose, prior);
         // A map of a different world.
         let other = BoxWorld(vec![wall(0.0, 0.0, 0.1, 6.0), wall(1.0, 3.0, 7.0, 3.1)]);
-        let field = build_map(
+        let (field, grid) = build_map(
             &other,
             frame,
             &[Pose::new(4.0, 1.5, 1.57), Pose::new(3.0, 1.0, 3.0)],
         );
         let r = match_scan(
             &field,
+            &grid,
             &prior,
             &world.scan(&prior),
             &ScanMatchConfig::default(),
         );
         assert!(!r.accepted, "{r:?}");
         assert_eq!(r.pose, prior);
+    }
+
+    /// Turning in place against a map of one scan, with an exact prior: the match must stay put
+    /// whatever the wall surfaces' offset inside their cells (cell-centre distances pulled by
+    /// 0.2-0.6 degrees per scan, which rotated whole maps).
+    #[test]
+    fn turning_in_place_has_no_rotation_bias() {
+        let world = room();
+        for offset_m in [0.0, 0.013, 0.025, 0.037] {
+            let origin = Vec2::new(-1.0 + offset_m, -1.0 + offset_m);
+            let frame = GridFrame::new(origin, 0.05, 200, 160);
+            let p0 = Pose::new(4.0, 1.2, std::f64::consts::FRAC_PI_2);
+            let (field, map) = build_map(&world, frame, &[p0]);
+            for k in 1..4 {
+                let truth = Pose::new(4.0, 1.2, std::f64::consts::FRAC_PI_2 - 0.1 * k as f64);
+                let cfg = ScanMatchConfig {
+                    prior_sigma_xy_m: 0.001,
+                    prior_sigma_theta_rad: 0.0045,
+                    ..Default::default()
+                };
+                let r = match_scan(&field, &map, &truth, &world.scan(&truth), &cfg);
+                let err = wrap_angle(r.pose.theta_rad - truth.theta_rad);
+                assert!(r.accepted, "{offset_m} {k}: {r:?}");
+                assert!(err.abs() < 0.1f64.to_radians(), "{offset_m} {k}: {r:?}");
+            }
+        }
     }
 }
