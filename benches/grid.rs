@@ -22,9 +22,10 @@ use std::time::Instant;
 
 use floorcast_coordinator::grid::{Plan, PlannedJob};
 use floorcast_coordinator::net::{run_worker, NetConfig, WorkerOptions};
-use floorcast_coordinator::run::{execute_wire, run_plan, RunOptions};
+use floorcast_coordinator::run::{execute_wire, failed_wire_row, run_plan, RunOptions};
 use floorcast_coordinator::store::{Store, StoredResult};
 use floorcast_coordinator::wire::WireJob;
+use sim_core::Building;
 
 const ROLE: &str = "FLOORCAST_BENCH_WORKER";
 
@@ -178,22 +179,8 @@ fn worker_process(role: &str) {
         panic!("bad {ROLE}: {role}");
     };
     let exec: Arc<floorcast_coordinator::net::Executor> = if kind == "trivial" {
-        Arc::new(|job: &WireJob, worker: &str| StoredResult {
-            job_id: job.job_id.clone(),
-            grid: job.grid.clone(),
-            building: job.building_name.clone(),
-            building_hash: job.building_hash.clone(),
-            strategy: job.strategy.clone(),
-            label: job.label.clone(),
-            seed: job.seed,
-            settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
-            status: "failed".into(),
-            error: Some("trivial benchmark job".into()),
-            summary_json: None,
-            progress_csv: None,
-            worker: worker.into(),
-            wall_time_s: 0.0,
-            floorcast_version: floorcast_worker::FLOORCAST_VERSION.into(),
+        Arc::new(|job: &WireJob, _: &Building, worker: &str| {
+            failed_wire_row(job, worker, "trivial benchmark job".into())
         })
     } else {
         Arc::new(execute_wire)

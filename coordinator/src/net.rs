@@ -8,6 +8,7 @@
 //! | `ctl/next` | coordinator (queryable) | a worker `get`s one job: [`Hello`] -> [`NextReply`] |
 //! | `ctl/submit/<job_id>` | coordinator (queryable) | a worker returns a result: [`Submission`] -> [`SubmitReply`] |
 //! | `ctl/renew/<job_id>` | coordinator (queryable) | a worker extends its lease: [`Renewal`] -> [`RenewReply`] |
+//! | `ctl/building/<hash>` | coordinator (queryable) | a worker fetches a building once: [`BuildingRequest`] -> [`WireBuilding`] |
 //! | `workers/<worker_id>` | each worker (liveliness token) | the coordinator requeues the jobs of a worker whose token disappears |
 //! | `coordinator` | coordinator (liveliness token) | for observers |
 //!
@@ -23,6 +24,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
+use sim_core::Building;
 use tokio::sync::oneshot;
 use zenoh::query::{ConsolidationMode, Query, QueryTarget};
 use zenoh::sample::SampleKind;
@@ -32,8 +34,8 @@ use crate::grid::Plan;
 use crate::run::{Answer, Inbox};
 use crate::store::StoredResult;
 use crate::wire::{
-    decode, encode, Hello, Message, NextReply, RenewReply, Renewal, Submission, SubmitReply,
-    WireBuilding, WireJob,
+    decode, encode, BuildingRequest, Hello, Message, NextReply, RenewReply, Renewal, Submission,
+    SubmitReply, WireBuilding, WireJob,
 };
 
 /// Where and how to reach the other side.
@@ -197,7 +199,8 @@ impl Listener {
 /// Context shared by the coordinator's query handlers.
 struct Ctx {
     plan: Arc<Plan>,
-    buildings: Vec<WireBuilding>,
+    /// Encoded [`WireBuilding`] messages by content hash.
+    buildings: std::collections::BTreeMap<String, Vec<u8>>,
     lease_s: f64,
     inbox: mpsc::Sender<Inbox>,
 }
@@ -222,7 +225,12 @@ pub(crate) fn serve(
     let buildings = plan
         .buildings
         .iter()
-        .map(|b| WireBuilding::from_building(&b.building))
+        .map(|b| {
+            (
+                b.hash.clone(),
+                encode(&WireBuilding::from_building(&b.building)),
+            )
+        })
         .collect();
     let ctx = Arc::new(Ctx {
         plan,
@@ -244,6 +252,10 @@ pub(crate) fn serve(
             .map_err(zerr)?;
         let renew = session
             .declare_queryable(key(&c, "ctl/renew/*"))
+            .await
+            .map_err(zerr)?;
+        let building = session
+            .declare_queryable(key(&c, "ctl/building/*"))
             .await
             .map_err(zerr)?;
         let live = session
@@ -273,6 +285,12 @@ pub(crate) fn serve(
         tokio::spawn(async move {
             while let Ok(q) = renew.recv_async().await {
                 tokio::spawn(on_renew(Arc::clone(&x), q));
+            }
+        });
+        let x = Arc::clone(&ctx);
+        tokio::spawn(async move {
+            while let Ok(q) = building.recv_async().await {
+                tokio::spawn(on_building(Arc::clone(&x), q));
             }
         });
         let x = Arc::clone(&ctx);
@@ -368,7 +386,6 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
                     grid: ctx.plan.name.clone(),
                     building_name: b.name.clone(),
                     building_hash: b.hash.clone(),
-                    building: ctx.buildings[job.building].clone(),
                     strategy: job.strategy.clone(),
                     label: job.label.clone(),
                     seed: job.seed,
@@ -404,6 +421,22 @@ async fn on_submit(ctx: Arc<Ctx>, q: Query) {
     });
     if let (Ok(()), Ok(a)) = (sent, rx.await) {
         reply(&q, &a).await;
+    }
+}
+
+async fn on_building(ctx: Arc<Ctx>, q: Query) {
+    let hash = last_chunk(q.key_expr().as_str()).to_string();
+    if let Err(e) = decode::<BuildingRequest>(&payload(&q)) {
+        return refuse(&ctx, &q, "not a building request", e.to_string()).await;
+    }
+    match ctx.buildings.get(&hash) {
+        Some(bytes) => {
+            let _ = q.reply(q.key_expr().clone(), bytes.clone()).await;
+        }
+        None => {
+            let why = format!("no building with hash {hash} in grid '{}'", ctx.plan.name);
+            refuse(&ctx, &q, "unknown building", why).await
+        }
     }
 }
 
@@ -467,8 +500,8 @@ pub struct WorkerReport {
     pub rejected: usize,
 }
 
-/// Runs `job` (on a blocking thread) and returns its store row.
-pub type Executor = dyn Fn(&WireJob, &str) -> StoredResult + Send + Sync;
+/// Runs `job` in `building` as worker `worker` (on a blocking thread) and returns its store row.
+pub type Executor = dyn Fn(&WireJob, &Building, &str) -> StoredResult + Send + Sync;
 /// Receives the worker's events (from the network threads).
 pub type EventSink = dyn Fn(WorkerEvent) + Send + Sync;
 
@@ -516,6 +549,7 @@ pub fn run_worker(
             wait_s: opts.wait_s,
             endpoints: opts.net.connect.join(", "),
             last_contact: std::sync::Mutex::new(Instant::now()),
+            buildings: tokio::sync::Mutex::new(std::collections::BTreeMap::new()),
             joined: AtomicBool::new(false),
             run: AtomicUsize::new(0),
             stored: AtomicUsize::new(0),
@@ -560,6 +594,8 @@ struct Slots {
     wait_s: f64,
     endpoints: String,
     last_contact: std::sync::Mutex<Instant>,
+    /// Buildings fetched so far, by content hash (checked).
+    buildings: tokio::sync::Mutex<std::collections::BTreeMap<String, Arc<Building>>>,
     joined: AtomicBool,
     run: AtomicUsize,
     stored: AtomicUsize,
@@ -668,6 +704,38 @@ async fn slot(x: Arc<Slots>) -> Result<(), NetError> {
     }
 }
 
+/// The building with content hash `hash`, fetched from the coordinator on first use (retried
+/// while the coordinator is away). `Ok(Err(_))`: the coordinator has no such building or sent a
+/// damaged one.
+async fn building(x: &Arc<Slots>, hash: &str) -> Result<Result<Arc<Building>, String>, NetError> {
+    let mut cache = x.buildings.lock().await;
+    if let Some(b) = cache.get(hash) {
+        return Ok(Ok(Arc::clone(b)));
+    }
+    let k = key(&x.campaign, &format!("ctl/building/{hash}"));
+    let body = encode(&BuildingRequest {
+        worker: x.hello.worker.clone(),
+    });
+    let mut backoff_ms = 100u64;
+    loop {
+        match ask::<WireBuilding>(&x.session, &k, body.clone(), Duration::from_secs(30)).await {
+            Ok(Some(w)) => {
+                x.contact();
+                return Ok(w.to_building(hash).map(|b| {
+                    let b = Arc::new(b);
+                    cache.insert(hash.to_string(), Arc::clone(&b));
+                    b
+                }));
+            }
+            Ok(None) => {}
+            Err(e) => return Ok(Err(e)),
+        }
+        x.check_silence()?;
+        tokio::time::sleep(Duration::from_millis(backoff_ms)).await;
+        backoff_ms = (backoff_ms * 2).min(2000);
+    }
+}
+
 async fn run_one(x: &Arc<Slots>, job: WireJob, lease_s: f64) -> Result<(), NetError> {
     let id = job.job_id.clone();
     (x.events)(WorkerEvent::Started {
@@ -699,9 +767,12 @@ async fn run_one(x: &Arc<Slots>, job: WireJob, lease_s: f64) -> Result<(), NetEr
     };
     let exec = Arc::clone(&x.exec);
     let worker = x.hello.worker.clone();
-    let result = tokio::task::spawn_blocking(move || exec(&job, &worker))
-        .await
-        .map_err(zerr)?;
+    let result = match building(x, &job.building_hash).await? {
+        Ok(b) => tokio::task::spawn_blocking(move || exec(&job, &b, &worker))
+            .await
+            .map_err(zerr)?,
+        Err(e) => crate::run::failed_wire_row(&job, &worker, e),
+    };
     renewer.abort();
     x.run.fetch_add(1, Ordering::SeqCst);
     let status = result.status.clone();
@@ -857,6 +928,10 @@ mod tests {
                     encode(&Renewal { worker: "x".into() }),
                 ),
                 ("ctl/renew/nope".to_string(), b"{}".to_vec()),
+                (
+                    "ctl/building/nope".to_string(),
+                    encode(&BuildingRequest { worker: "x".into() }),
+                ),
             ] {
                 let r = ask::<SubmitReply>(&s, &k(&key_rest), body, Duration::from_secs(5)).await;
                 assert!(r.is_err(), "{key_rest}: {r:?}");

@@ -15,6 +15,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use floorcast_worker::{run_job, Job};
+use sim_core::Building;
 use tokio::sync::oneshot;
 
 use crate::grid::{Plan, PlannedJob};
@@ -467,10 +468,9 @@ pub fn execute(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
     )
 }
 
-/// Runs a job received from the network (see `net.rs`): rebuilds its building, checks the
-/// building's hash, runs it. A damaged building gives a `failed` row naming the problem.
-pub fn execute_wire(job: &WireJob, worker: &str) -> StoredResult {
-    let mut row = StoredResult {
+/// The store row of a job received from the network, before it ran (identity fields only).
+pub fn wire_row(job: &WireJob, worker: &str) -> StoredResult {
+    StoredResult {
         job_id: job.job_id.clone(),
         grid: job.grid.clone(),
         building: job.building_name.clone(),
@@ -486,26 +486,33 @@ pub fn execute_wire(job: &WireJob, worker: &str) -> StoredResult {
         worker: worker.to_string(),
         wall_time_s: 0.0,
         floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
-    };
-    match job.building.to_building(&job.building_hash) {
-        Ok(building) => execute_job(
-            row,
-            &Job {
-                building: &building,
-                building_name: job.building_name.clone(),
-                strategy: job.strategy.clone(),
-                seed: job.seed,
-                settings: job.settings.clone(),
-                start: None,
-                snapshot_fractions: Vec::new(),
-            },
-        ),
-        Err(e) => {
-            row.status = "failed".into();
-            row.error = Some(e);
-            row
-        }
     }
+}
+
+/// A `failed` row for a network job that could not run (e.g. its building arrived damaged).
+pub fn failed_wire_row(job: &WireJob, worker: &str, error: String) -> StoredResult {
+    StoredResult {
+        status: "failed".into(),
+        error: Some(error),
+        ..wire_row(job, worker)
+    }
+}
+
+/// Runs a job received from the network (see `net.rs`) in its building (already checked
+/// against the job's building hash).
+pub fn execute_wire(job: &WireJob, building: &Building, worker: &str) -> StoredResult {
+    execute_job(
+        wire_row(job, worker),
+        &Job {
+            building,
+            building_name: job.building_name.clone(),
+            strategy: job.strategy.clone(),
+            seed: job.seed,
+            settings: job.settings.clone(),
+            start: None,
+            snapshot_fractions: Vec::new(),
+        },
+    )
 }
 
 /// Runs `spec` and fills the outcome into `row` (which carries the job's identity).

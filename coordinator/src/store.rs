@@ -108,7 +108,10 @@ impl Store {
 
     fn init(&self) -> Result<(), StoreError> {
         self.sql(self.conn.pragma_update(None, "journal_mode", "WAL"))?;
-        self.sql(self.conn.pragma_update(None, "synchronous", "FULL"))?;
+        // WAL + NORMAL: a committed transaction survives the process being killed at any moment
+        // (what acknowledgements promise); only a power cut can lose the last ones. FULL would
+        // add a disk sync per commit (measured: 1.4k -> 0.7k results/s through zenoh).
+        self.sql(self.conn.pragma_update(None, "synchronous", "NORMAL"))?;
         self.sql(self.conn.busy_timeout(std::time::Duration::from_secs(10)))?;
         self.sql(self.conn.execute_batch(
             "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);

@@ -5,7 +5,8 @@
 //! message becomes a [`WireError`] that names what was wrong (and is logged and dropped by the
 //! transport), never a panic. Nothing here knows zenoh: `net.rs` moves these bytes.
 //!
-//! Buildings travel inside jobs ([`WireBuilding`]), so a worker needs no files; floats cross
+//! A job names its building by content hash; a worker fetches each building once
+//! ([`BuildingRequest`] -> [`WireBuilding`]) and keeps it, so it needs no files. Floats cross
 //! bit-exactly (serde_json's `float_roundtrip`), and the worker checks the building's content
 //! hash before it runs anything.
 
@@ -134,7 +135,6 @@ impl Hello {
 /// The coordinator's answer to [`Hello`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-#[allow(clippy::large_enum_variant)]
 pub enum NextReply {
     /// Run this job; renew the lease before `lease_s` seconds pass.
     Job { job: WireJob, lease_s: f64 },
@@ -149,7 +149,7 @@ impl Message for NextReply {
     const KIND: &'static str = "next-reply";
 }
 
-/// One job, with everything needed to run it.
+/// One job, with everything needed to run it (the building by its content hash).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WireJob {
@@ -157,7 +157,6 @@ pub struct WireJob {
     pub grid: String,
     pub building_name: String,
     pub building_hash: String,
-    pub building: WireBuilding,
     pub strategy: String,
     pub label: String,
     pub seed: u64,
@@ -187,6 +186,21 @@ pub enum SubmitReply {
 }
 impl Message for SubmitReply {
     const KIND: &'static str = "submit-reply";
+}
+
+/// A worker asks for a building it does not have (`ctl/building/<hash>`); the reply is the
+/// [`WireBuilding`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BuildingRequest {
+    pub worker: String,
+}
+impl Message for BuildingRequest {
+    const KIND: &'static str = "building-request";
+}
+
+impl Message for WireBuilding {
+    const KIND: &'static str = "building";
 }
 
 /// A worker renews its lease on a running job (`ctl/renew/<job_id>`).

@@ -41,7 +41,7 @@ pub enum JobError {
     NoStart(String),
     #[error("start pose ({x:.2}, {y:.2}) is not in free space of building {name}")]
     StartInWall { name: String, x: f64, y: f64 },
-    #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch)")]
+    #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch, layout-gaps, layout-gaps-es)")]
     UnknownStrategy(String),
     #[error(transparent)]
     Settings(#[from] SettingsError),

@@ -102,7 +102,7 @@ pub enum SettingsError {
     },
     #[error("settings.localization: unknown value '{0}', expected slam, odometry or ground-truth")]
     Localization(String),
-    #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch)")]
+    #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch, layout-gaps, layout-gaps-es)")]
     Strategy(String),
 }
 

@@ -831,6 +831,11 @@ impl Explorer<'_> {
             let gain_m2 = if distance_m.is_some() {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
                 match (&self.layout, use_layout) {
+                    (Some(l), true) if cfg.strategy.rank_by_predicted_rooms => {
+                        self.room_gains.gain(f.candidate, range_m, self.scans, || {
+                            layout_information_gain(grid, &l.raster, f.candidate, range_m)
+                        })
+                    }
                     (Some(l), true) => self.gains.gain(f.candidate, range_m, self.scans, || {
                         gap_closed_information_gain(grid, &l.raster, f.candidate, range_m)
                     }),

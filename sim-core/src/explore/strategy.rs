@@ -44,6 +44,10 @@ pub struct Strategy {
     pub switch_min_area_m2: f64,
     /// Layout walls close gaps of unknown cells up to this long in an observed wall.
     pub max_wall_gap_m: f64,
+    /// With a layout gain model: rank candidates by the paper's `I(p)` (unknown area inside the
+    /// predicted rooms visible in `M^L`; open rooms use the baseline) rather than by the baseline
+    /// gain through the map whose short wall gaps the layout closes (`layout-gaps`).
+    pub rank_by_predicted_rooms: bool,
 }
 
 impl Strategy {
@@ -55,31 +59,43 @@ impl Strategy {
             switch_agreement: 0.9,
             switch_min_area_m2: 5.0,
             max_wall_gap_m: 1.0,
+            rank_by_predicted_rooms: false,
         }
     }
 
-    /// The strategies by name: `baseline`, `layout`, `layout-es` (ES threshold 1 m2, as the
-    /// paper), `layout-aes` (aggressive ES, 2 m2 per candidate), `layout-switch`.
+    /// The strategies by name: `baseline`; the paper's `layout` and `layout-es` (ES threshold
+    /// 1 m2); `layout-aes` (aggressive ES, 2 m2 per candidate) and `layout-switch` (dynamic
+    /// switch) from its discussion; `layout-gaps` and `layout-gaps-es`, which rank candidates by
+    /// the baseline gain through the map with short wall gaps closed by the layout's walls.
     pub fn by_name(name: &str) -> Option<Self> {
         let b = Self::baseline();
+        let paper = Self {
+            gain: GainModel::Layout,
+            rank_by_predicted_rooms: true,
+            ..b.clone()
+        };
         Some(match name {
             "baseline" => b,
-            "layout" => Self {
-                gain: GainModel::Layout,
-                ..b
-            },
+            "layout" => paper,
             "layout-es" => Self {
-                gain: GainModel::Layout,
                 early_stop: EarlyStop::TotalGainBelow(1.0),
-                ..b
+                ..paper
             },
             "layout-aes" => Self {
-                gain: GainModel::Layout,
                 early_stop: EarlyStop::DropCandidatesBelow(2.0),
-                ..b
+                ..paper
             },
             "layout-switch" => Self {
                 gain: GainModel::Switch,
+                ..paper
+            },
+            "layout-gaps" => Self {
+                gain: GainModel::Layout,
+                ..b
+            },
+            "layout-gaps-es" => Self {
+                gain: GainModel::Layout,
+                early_stop: EarlyStop::TotalGainBelow(1.0),
                 ..b
             },
             _ => return None,
@@ -93,6 +109,8 @@ impl Strategy {
         "layout-es",
         "layout-aes",
         "layout-switch",
+        "layout-gaps",
+        "layout-gaps-es",
     ];
 
     /// Whether this strategy needs the layout at all.
