@@ -381,7 +381,7 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
         Answer::Run(job) => {
             let b = &ctx.plan.buildings[job.building];
             NextReply::Job {
-                job: WireJob {
+                job: Box::new(WireJob {
                     job_id: job.id.clone(),
                     grid: ctx.plan.name.clone(),
                     building_name: b.name.clone(),
@@ -390,7 +390,7 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
                     label: job.label.clone(),
                     seed: job.seed,
                     settings: job.settings.clone(),
-                },
+                }),
                 lease_s: ctx.lease_s,
             }
         }
@@ -682,7 +682,7 @@ async fn slot(x: Arc<Slots>) -> Result<(), NetError> {
             Ok(Some(NextReply::Job { job, lease_s })) => {
                 x.contact();
                 backoff_ms = 100;
-                run_one(&x, job, lease_s).await?;
+                run_one(&x, *job, lease_s).await?;
             }
             Ok(Some(NextReply::Wait { retry_ms })) => {
                 x.contact();

@@ -137,7 +137,7 @@ impl Hello {
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum NextReply {
     /// Run this job; renew the lease before `lease_s` seconds pass.
-    Job { job: WireJob, lease_s: f64 },
+    Job { job: Box<WireJob>, lease_s: f64 },
     /// Nothing to hand out now (all jobs leased); ask again after `retry_ms`.
     Wait { retry_ms: u64 },
     /// The grid is complete: leave.
