@@ -318,3 +318,60 @@ fn a_worker_with_wrong_credentials_gets_no_jobs() {
     let rows = assert_each_job_once(&res);
     assert!(rows.iter().all(|(_, w)| w == "member"));
 }
+
+#[test]
+fn garbage_on_the_job_keys_changes_nothing() {
+    use floorcast_coordinator::net::raw_exchange;
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path());
+    let res = dir.path().join("res");
+    let port = free_port();
+    let c = coordinator(&g, &res, port, &[]);
+    let ep = format!("tcp/127.0.0.1:{port}");
+    // Wait for the coordinator: it answers garbage with an error reply.
+    let t0 = Instant::now();
+    loop {
+        let r = raw_exchange(&ep, "default", "ctl/next", b"garbage").unwrap_or_default();
+        if !r.is_empty() {
+            assert!(r.iter().all(|x| x.is_err()), "{r:?}");
+            break;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "coordinator never answered"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let fake_job = "0123456789abcdef0123456789abcdef";
+    for (key, body) in [
+        ("ctl/next", &b"\x00\x01\x02"[..]),
+        (
+            "ctl/next",
+            br#"{"format":"floorcast-wire","version":1,"kind":"hello","body":{}}"#,
+        ),
+        (
+            "ctl/next",
+            br#"{"format":"floorcast-wire","version":99,"kind":"hello"}"#,
+        ),
+        (
+            &format!("ctl/submit/{fake_job}"),
+            br#"{"format":"floorcast-wire"}"#,
+        ),
+        (&format!("ctl/renew/{fake_job}"), b"[1,2,3]"),
+        ("ctl/building/nothing", b"{}"),
+    ] {
+        let r = raw_exchange(&ep, "default", key, body).unwrap();
+        assert!(
+            !r.is_empty() && r.iter().all(|x| x.is_err()),
+            "{key}: {r:?}"
+        );
+    }
+    let w = worker(port, "w1", &[]);
+    let (okw, outw) = w.finish(Duration::from_secs(240));
+    let (okc, outc) = c.finish(Duration::from_secs(60));
+    assert!(okw, "{outw}");
+    assert!(okc, "{outc}");
+    assert!(outc.contains("dropped a message"), "{outc}");
+    let rows = assert_each_job_once(&res);
+    assert!(rows.iter().all(|(_, w)| w == "w1"));
+}

@@ -820,6 +820,49 @@ async fn run_one(x: &Arc<Slots>, job: WireJob, lease_s: f64) -> Result<(), NetEr
     Ok(())
 }
 
+/// Sends raw bytes as a query on `floorcast/v1/<campaign>/<key_rest>` through `connect` and
+/// returns the replies (`Err` for error replies), and puts raw bytes on the same key. For tests
+/// and diagnostics: what a foreign or broken program could send.
+pub fn raw_exchange(
+    connect: &str,
+    campaign: &str,
+    key_rest: &str,
+    body: &[u8],
+) -> Result<Vec<Result<Vec<u8>, String>>, NetError> {
+    let cfg = NetConfig {
+        connect: vec![connect.to_string()],
+        campaign: campaign.to_string(),
+        ..NetConfig::default()
+    };
+    let config = zenoh_config(&cfg)?;
+    let rt = runtime()?;
+    let k = key(campaign, key_rest);
+    let out = rt.block_on(async {
+        let s = zenoh::open(config)
+            .await
+            .map_err(|e| NetError::Open(e.to_string()))?;
+        s.put(&k, body.to_vec()).await.map_err(zerr)?;
+        let replies = s
+            .get(&k)
+            .payload(body.to_vec())
+            .consolidation(ConsolidationMode::None)
+            .timeout(Duration::from_secs(5))
+            .await
+            .map_err(zerr)?;
+        let mut out = Vec::new();
+        while let Ok(r) = replies.recv_async().await {
+            out.push(match r.result() {
+                Ok(sample) => Ok(sample.payload().to_bytes().into_owned()),
+                Err(e) => Err(String::from_utf8_lossy(&e.payload().to_bytes()).into_owned()),
+            });
+        }
+        let _ = tokio::time::timeout(Duration::from_secs(3), s.close()).await;
+        Ok::<_, NetError>(out)
+    });
+    rt.shutdown_timeout(Duration::from_secs(1));
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use std::path::Path;
