@@ -355,14 +355,13 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
         Ok(h) => h,
         Err(e) => return refuse(&ctx, &q, "not a job request", e.to_string()).await,
     };
-    if !valid_chunk(&hello.worker) {
-        return refuse(
-            &ctx,
-            &q,
-            "bad worker id",
-            format!("'{}' is not a valid worker id", hello.worker),
-        )
-        .await;
+    if !valid_chunk(&hello.worker) || hello.worker.starts_with(crate::run::LOCAL) {
+        let why = format!(
+            "'{}' is not a valid remote worker id (letters, digits, '-', '_', '.'; not starting with '{}')",
+            hello.worker,
+            crate::run::LOCAL
+        );
+        return refuse(&ctx, &q, "bad worker id", why).await;
     }
     if let Err(reason) = hello.compatible() {
         ctx.log(format!("refused worker {}: {reason}", hello.worker));
@@ -512,10 +511,13 @@ pub fn run_worker(
     events: Arc<EventSink>,
 ) -> Result<WorkerReport, NetError> {
     if let Some(n) = &opts.name {
-        if !valid_chunk(n) {
+        if !valid_chunk(n) || n.starts_with(crate::run::LOCAL) {
             return Err(NetError::Option {
                 what: "--name".into(),
-                message: format!("'{n}' is not a name of letters, digits, '-', '_' or '.'"),
+                message: format!(
+                    "'{n}' is not a name of letters, digits, '-', '_' or '.' (not starting with '{}')",
+                    crate::run::LOCAL
+                ),
             });
         }
     }

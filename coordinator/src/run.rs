@@ -129,8 +129,9 @@ pub enum RunError {
     NoWorkers,
 }
 
-/// Prefix of embedded workers' ids.
-const LOCAL: &str = "local-";
+/// Prefix of embedded workers' ids (refused for remote workers: embedded workers' leases are
+/// renewed by the coordinator itself).
+pub(crate) const LOCAL: &str = "local-";
 
 /// Runs every job of `plan` not yet in `store`. `interrupt` stops the run (jobs already stored
 /// stay stored; running ones are abandoned and run again next time). `on_log` receives lines
