@@ -22,7 +22,9 @@ use std::time::Instant;
 
 use floorcast_coordinator::grid::{Plan, PlannedJob};
 use floorcast_coordinator::net::{run_worker, NetConfig, WorkerOptions};
-use floorcast_coordinator::run::{execute_wire, failed_wire_row, run_plan, RunOptions};
+use floorcast_coordinator::run::{
+    execute_wire, expected_row, failed_wire_row, run_plan, RunOptions,
+};
 use floorcast_coordinator::store::{Store, StoredResult};
 use floorcast_coordinator::wire::WireJob;
 use sim_core::Building;
@@ -92,23 +94,10 @@ fn make_plan(dir: &Path, name: &str, seeds: usize, time_limit_s: u64) -> Plan {
 }
 
 fn trivial_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
-    let b = &plan.buildings[job.building];
     StoredResult {
-        job_id: job.id.clone(),
-        grid: plan.name.clone(),
-        building: b.name.clone(),
-        building_hash: b.hash.clone(),
-        strategy: job.strategy.clone(),
-        label: job.label.clone(),
-        seed: job.seed,
-        settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
         status: "failed".into(),
         error: Some("trivial benchmark job".into()),
-        summary_json: None,
-        progress_csv: None,
-        worker: worker.into(),
-        wall_time_s: 0.0,
-        floorcast_version: floorcast_worker::FLOORCAST_VERSION.into(),
+        ..expected_row(plan, job, worker)
     }
 }
 

@@ -377,22 +377,10 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
         _ => return, // the coordinator is shutting down
     };
     let msg = match answer {
-        Answer::Run(job) => {
-            let b = &ctx.plan.buildings[job.building];
-            NextReply::Job {
-                job: Box::new(WireJob {
-                    job_id: job.id.clone(),
-                    grid: ctx.plan.name.clone(),
-                    building_name: b.name.clone(),
-                    building_hash: b.hash.clone(),
-                    strategy: job.strategy.clone(),
-                    label: job.label.clone(),
-                    seed: job.seed,
-                    settings: job.settings.clone(),
-                }),
-                lease_s: ctx.lease_s,
-            }
-        }
+        Answer::Run(job) => NextReply::Job {
+            job: Box::new(crate::run::wire_job(&ctx.plan, &job)),
+            lease_s: ctx.lease_s,
+        },
         Answer::Wait => NextReply::Wait { retry_ms: 200 },
         Answer::Done => NextReply::Done,
     };

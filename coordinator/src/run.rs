@@ -430,26 +430,24 @@ fn local_worker(
     }
 }
 
-/// The store row a planned job produces, before it ran (identity fields only).
-pub(crate) fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
+/// A planned job as it is handed to a remote worker.
+pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
     let b = &plan.buildings[job.building];
-    StoredResult {
+    WireJob {
         job_id: job.id.clone(),
         grid: plan.name.clone(),
-        building: b.name.clone(),
+        building_name: b.name.clone(),
         building_hash: b.hash.clone(),
         strategy: job.strategy.clone(),
         label: job.label.clone(),
         seed: job.seed,
-        settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
-        status: "ok".into(),
-        error: None,
-        summary_json: None,
-        progress_csv: None,
-        worker: worker.to_string(),
-        wall_time_s: 0.0,
-        floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
+        settings: job.settings.clone(),
     }
+}
+
+/// The store row a planned job produces, before it ran (identity fields only).
+pub fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
+    wire_row(&wire_job(plan, job), worker)
 }
 
 /// Runs one planned job and turns its outcome (success or a job error) into a store row.
