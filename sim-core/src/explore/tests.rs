@@ -86,14 +86,9 @@ fn same_seed_same_run_and_seeds_differ() {
 #[test]
 fn layout_strategies_run_and_are_reproducible() {
     let b = corridor_building(4);
-    for name in [
-        "layout",
-        "layout-es",
-        "layout-aes",
-        "layout-switch",
-        "layout-gaps",
-        "layout-gaps-es",
-    ] {
+    let layout_strategies = Strategy::NAMES.iter().filter(|n| **n != "baseline");
+    assert_eq!(layout_strategies.clone().count(), 6);
+    for &name in layout_strategies {
         let cfg = ExploreConfig {
             strategy: Strategy::by_name(name).unwrap(),
             ..ExploreConfig::default()
