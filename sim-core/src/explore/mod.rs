@@ -18,7 +18,7 @@ use self::calibration::OdometryCalibration;
 use self::gain_cache::GainCache;
 use crate::building::Building;
 use crate::frontier::blacklist::Blacklist;
-use crate::frontier::detect::{detect_frontiers_in, Frontier, FrontierConfig};
+use crate::frontier::detect::{Frontier, FrontierConfig, FrontierTracker};
 use crate::gain::information_gain;
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
@@ -27,7 +27,7 @@ use crate::layout_gain::{gap_closed_information_gain, layout_information_gain, L
 use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
-use crate::plan::coarse::{coarse_costs, CoarseCosts};
+use crate::plan::coarse::CoarseCosts;
 use crate::plan::dijkstra::{dijkstra_by, CostField};
 use crate::plan::inflate::{nearest_by, Traversability};
 use crate::plan::waypoints::waypoints_by;
@@ -288,6 +288,13 @@ struct Explorer<'a> {
     snapshots: Vec<MapSnapshot>,
     /// Ground-truth room polygons (for the "rooms never entered" report only).
     rooms: Vec<crate::geom::Polygon>,
+    /// The map's frontier cells, updated with each map update.
+    frontiers: FrontierTracker,
+    /// The planning grid, brought up to date before each plan from the planning cells whose
+    /// map cells changed (occupancy or obstacle distance) since the last one.
+    coarse: CoarseCosts,
+    coarse_dirty: Vec<u32>,
+    coarse_dirty_mark: Vec<bool>,
 }
 
 /// The last layout and what is needed to judge it.
@@ -393,6 +400,10 @@ pub fn explore_charged<'a>(
         start,
         snapshots: Vec::new(),
         rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
+        frontiers: FrontierTracker::default(),
+        coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
+        coarse_dirty: Vec::new(),
+        coarse_dirty_mark: Vec::new(),
     };
     ex.run(on_progress)
 }
@@ -526,6 +537,14 @@ impl Explorer<'_> {
         for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
             self.gains.touch(i, self.scans);
         }
+        self.frontiers.update(
+            &self.map.occupancy,
+            flips
+                .iter()
+                .chain(free_changes.iter().map(|(i, _)| i))
+                .copied(),
+        );
+        self.mark_planning_cells(&flips, &free_changes);
         // A cell never goes back to unknown, and every change from unknown is in one of the
         // two lists.
         for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
@@ -636,6 +655,38 @@ impl Explorer<'_> {
         false
     }
 
+    /// Marks the planning cells that a map update may have changed: those of cells whose state
+    /// changed and, around cells that became or stopped being occupied, those within the reach
+    /// of the obstacle distance field (which decides traversability and the wall cost).
+    fn mark_planning_cells(&mut self, flips: &[u32], free_changes: &[(u32, bool)]) {
+        let frame = self.map.frame;
+        if self.coarse_dirty_mark.len() != self.coarse.cost.len() {
+            self.coarse_dirty_mark = vec![false; self.coarse.cost.len()];
+        }
+        let f = self.coarse.factor as i32;
+        let (cw, ch) = (self.coarse.frame.width as i32, self.coarse.frame.height as i32);
+        let mut mark = |x0: i32, y0: i32, x1: i32, y1: i32| {
+            for cy in y0.div_euclid(f).max(0)..=y1.div_euclid(f).min(ch - 1) {
+                for cx in x0.div_euclid(f).max(0)..=x1.div_euclid(f).min(cw - 1) {
+                    let i = (cy * cw + cx) as usize;
+                    if !self.coarse_dirty_mark[i] {
+                        self.coarse_dirty_mark[i] = true;
+                        self.coarse_dirty.push(i as u32);
+                    }
+                }
+            }
+        };
+        let reach = self.obstacles.cap_cells as i32 + 1;
+        for &i in flips {
+            let c = frame.cell_of_index(i as usize);
+            mark(c.x - reach, c.y - reach, c.x + reach, c.y + reach);
+        }
+        for &(i, _) in free_changes {
+            let c = frame.cell_of_index(i as usize);
+            mark(c.x, c.y, c.x, c.y);
+        }
+    }
+
     fn traversability(&self) -> Traversability<'_> {
         Traversability::new(
             &self.map.occupancy,
@@ -648,10 +699,14 @@ impl Explorer<'_> {
     /// keep to the middle of corridors and doors) on the coarse planning grid, stopping once
     /// every target (map cells) is settled. A robot closer to a wall than the inflation radius
     /// starts from the nearest passable cell (it then first drives out).
-    fn plan(&self, targets: &[Cell]) -> Plan {
+    fn plan(&mut self, targets: &[Cell]) -> Plan {
         const WALL_BAND_M: f64 = 0.3;
         const MAX_EXTRA: u32 = 10;
-        let trav = self.traversability();
+        let trav = Traversability::new(
+            &self.map.occupancy,
+            &self.obstacles,
+            self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m,
+        );
         let res = self.map.frame.resolution_m;
         let radius_m = self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m;
         let obstacles = &self.obstacles.data;
@@ -670,18 +725,17 @@ impl Explorer<'_> {
             })
             .collect();
         let last = table.len() - 1;
-        let (lo, hi) = self
-            .map
-            .known_bounds
-            .unwrap_or((Cell::new(0, 0), Cell::new(-1, -1)));
-        let coarse = coarse_costs(
+        self.coarse.recompute(
             self.map.frame,
-            PLAN_FACTOR,
-            lo,
-            hi,
+            &self.coarse_dirty,
             |i| trav.at_index(i),
             |j| table[((obstacles[j] * STEPS_PER_CELL) as usize).min(last)],
         );
+        for &i in &self.coarse_dirty {
+            self.coarse_dirty_mark[i as usize] = false;
+        }
+        self.coarse_dirty.clear();
+        let coarse = self.coarse.clone();
         let robot = coarse.coarse_of(self.map.frame.cell_from_world(self.estimate.position()));
         let r = ((2.0 * radius_m) / coarse.frame.resolution_m).ceil() as i32 + 1;
         let start = if coarse.passable(robot) {
@@ -778,10 +832,10 @@ impl Explorer<'_> {
     fn decide(&mut self) -> bool {
         let cfg = self.cfg;
         let frame = self.map.frame;
-        let Some((lo, hi)) = self.map.known_bounds else {
+        if self.map.known_bounds.is_none() {
             // Nothing seen yet: wait for the first scan.
             return true;
-        };
+        }
         // A goal just reached and looked at whose frontier is still there cannot be resolved by
         // going there again: blacklist it.
         if let Some(p) = self.last_reached.take() {
@@ -798,7 +852,9 @@ impl Explorer<'_> {
             }
         }
         let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
-        let frontiers: Vec<Frontier> = detect_frontiers_in(&self.map.occupancy, lo, hi, &fcfg)
+        let frontiers: Vec<Frontier> = self
+            .frontiers
+            .detect(&self.map.occupancy, &fcfg)
             .into_iter()
             .filter(|f| !self.blacklist.contains(frame.world_from_cell(f.candidate)))
             .collect();

@@ -138,6 +138,128 @@ pub fn detect_frontiers_in(
     frontiers
 }
 
+/// Frontier cells kept up to date as the map changes, so that detecting the frontiers of a
+/// decision touches only the frontier cells instead of the whole map. Gives exactly the result
+/// of [`detect_frontiers`] on the same grid.
+#[derive(Debug, Clone, Default)]
+pub struct FrontierTracker {
+    /// Per cell: whether it is a frontier cell.
+    is_frontier: Vec<bool>,
+    /// Every frontier cell, possibly with cells that stopped being one and repeats (pruned at
+    /// each detection).
+    cells: Vec<u32>,
+    /// Scratch labels for the component search (all false between calls).
+    labelled: Vec<bool>,
+}
+
+impl FrontierTracker {
+    /// A tracker of `grid`'s frontier cells, from a full scan of the grid.
+    pub fn new(grid: &OccupancyGrid) -> Self {
+        let n = grid.data.len();
+        let mut t = Self {
+            is_frontier: vec![false; n],
+            cells: Vec::new(),
+            labelled: vec![false; n],
+        };
+        t.update(grid, 0..n as u32);
+        t
+    }
+
+    /// Brings the frontier cells up to date after the cells at `changed` (row-major indices of
+    /// `grid`, in any order, repeats allowed) changed state. A grid of another size starts over.
+    pub fn update(&mut self, grid: &OccupancyGrid, changed: impl IntoIterator<Item = u32>) {
+        if grid.data.len() != self.is_frontier.len() {
+            *self = Self::new(grid);
+            return;
+        }
+        let w = grid.width() as i64;
+        let h = grid.height() as i64;
+        for i in changed {
+            let (x, y) = ((i as i64) % w.max(1), (i as i64) / w.max(1));
+            for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)] {
+                let (nx, ny) = (x + dx, y + dy);
+                if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                    continue;
+                }
+                let j = (ny * w + nx) as usize;
+                let now = is_frontier_cell_at(grid, nx as i32, ny as i32);
+                if now && !self.is_frontier[j] {
+                    self.cells.push(j as u32);
+                }
+                self.is_frontier[j] = now;
+            }
+        }
+    }
+
+    /// The frontiers of `grid` (which must be the grid of the last update), as
+    /// [`detect_frontiers`] finds them.
+    pub fn detect(&mut self, grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
+        let is_frontier = &self.is_frontier;
+        self.cells.retain(|&i| is_frontier[i as usize]);
+        self.cells.sort_unstable();
+        self.cells.dedup();
+        let w = grid.width() as i64;
+        let h = grid.height() as i64;
+        let mut frontiers = Vec::new();
+        let mut queue = VecDeque::new();
+        for k in 0..self.cells.len() {
+            let start = self.cells[k] as usize;
+            if self.labelled[start] {
+                continue;
+            }
+            let mut comp: Vec<usize> = vec![start];
+            self.labelled[start] = true;
+            queue.clear();
+            queue.push_back(start);
+            while let Some(i) = queue.pop_front() {
+                let (x, y) = ((i as i64) % w, (i as i64) / w);
+                for (dx, dy) in NEIGHBOURS8 {
+                    let (nx, ny) = (x + dx as i64, y + dy as i64);
+                    if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                        continue;
+                    }
+                    let j = (ny * w + nx) as usize;
+                    if self.is_frontier[j] && !self.labelled[j] {
+                        self.labelled[j] = true;
+                        comp.push(j);
+                        queue.push_back(j);
+                    }
+                }
+            }
+            if comp.len() < cfg.min_cells.max(1) {
+                continue;
+            }
+            comp.sort_unstable();
+            let middle = middle_cell(&comp, w as usize);
+            let to_cell = |i: usize| grid.frame.cell_of_index(i);
+            frontiers.push(Frontier {
+                size: comp.len(),
+                candidate: to_cell(middle),
+                cells: comp.into_iter().map(to_cell).collect(),
+            });
+        }
+        for &i in &self.cells {
+            self.labelled[i as usize] = false;
+        }
+        frontiers
+    }
+}
+
+/// Whether the cell `(x, y)` (inside the grid) is free with an unknown 4-neighbour.
+fn is_frontier_cell_at(grid: &OccupancyGrid, x: i32, y: i32) -> bool {
+    let w = grid.width() as i32;
+    let h = grid.height() as i32;
+    let unknown = |x: i32, y: i32| {
+        x >= 0
+            && y >= 0
+            && x < w
+            && y < h
+            && grid.data[(y * w + x) as usize] == Occupancy::Unknown
+    };
+    grid.data[(y * w + x) as usize] == Occupancy::Free
+        && (unknown(x + 1, y) || unknown(x - 1, y) || unknown(x, y + 1) || unknown(x, y - 1))
+}
+
 const NEIGHBOURS8: [(i32, i32); 8] = [
     (1, 0),
     (-1, 0),
@@ -304,6 +426,37 @@ mod tests {
             let n_frontier = g.iter().filter(|(c, s)| **s == Occupancy::Free
                 && c.neighbours4().iter().any(|n| g.is(*n, Occupancy::Unknown))).count();
             prop_assert_eq!(n_frontier, seen.len());
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn tracker_equals_full_detection(
+            w in 1usize..14,
+            h in 1usize..14,
+            init in proptest::collection::vec(0u8..3, 196),
+            edits in proptest::collection::vec((0usize..196, 0u8..3), 0..40),
+            min_cells in 1usize..4,
+        ) {
+            let state = |k: u8| match k { 0 => Occupancy::Unknown, 1 => Occupancy::Free, _ => Occupancy::Occupied };
+            let mut g = OccupancyGrid::filled(crate::grid::GridFrame::new(crate::geom::Vec2::zeros(), 0.1, w as u32, h as u32), Occupancy::Unknown);
+            for (i, s) in g.data.iter_mut().enumerate() {
+                *s = state(init[i]);
+            }
+            let cfg = FrontierConfig { min_cells };
+            let mut t = FrontierTracker::new(&g);
+            prop_assert_eq!(t.detect(&g, &cfg), detect_frontiers(&g, &cfg));
+            for chunk in edits.chunks(5) {
+                let mut changed = Vec::new();
+                for &(i, k) in chunk {
+                    let i = i % (w * h);
+                    g.data[i] = state(k);
+                    changed.push(i as u32);
+                }
+                t.update(&g, changed);
+                prop_assert_eq!(t.detect(&g, &cfg), detect_frontiers(&g, &cfg));
+            }
         }
     }
 }

@@ -52,50 +52,91 @@ pub fn coarse_costs(
     traversable: impl Fn(usize) -> bool,
     extra: impl Fn(usize) -> u32,
 ) -> CoarseCosts {
-    let f = factor.max(1);
-    let frame = GridFrame::new(
-        fine.origin_m,
-        fine.resolution_m * f as f64,
-        fine.width / f,
-        fine.height / f,
-    );
-    let mut cost = vec![0u8; frame.len()];
-    if frame.is_empty() {
-        return CoarseCosts {
-            frame,
-            factor: f,
-            cost,
-        };
+    let mut c = CoarseCosts::blocked(fine, factor);
+    if c.frame.is_empty() {
+        return c;
     }
-    let fi = f as i32;
-    let cx0 = (lo.x.div_euclid(fi)).clamp(0, frame.width as i32 - 1);
-    let cy0 = (lo.y.div_euclid(fi)).clamp(0, frame.height as i32 - 1);
-    let cx1 = (hi.x.div_euclid(fi)).clamp(0, frame.width as i32 - 1);
-    let cy1 = (hi.y.div_euclid(fi)).clamp(0, frame.height as i32 - 1);
-    let fw = fine.width as usize;
+    let fi = c.factor as i32;
+    let cx0 = (lo.x.div_euclid(fi)).clamp(0, c.frame.width as i32 - 1);
+    let cy0 = (lo.y.div_euclid(fi)).clamp(0, c.frame.height as i32 - 1);
+    let cx1 = (hi.x.div_euclid(fi)).clamp(0, c.frame.width as i32 - 1);
+    let cy1 = (hi.y.div_euclid(fi)).clamp(0, c.frame.height as i32 - 1);
     for cy in cy0..=cy1 {
         for cx in cx0..=cx1 {
-            let mut worst = 0u32;
-            let mut any = false;
-            for dy in 0..fi {
-                let row = (cy * fi + dy) as usize * fw;
-                for dx in 0..fi {
-                    let i = row + (cx * fi + dx) as usize;
-                    if traversable(i) {
-                        any = true;
-                        worst = worst.max(extra(i));
-                    }
-                }
+            let i = cy as usize * c.frame.width as usize + cx as usize;
+            c.cost[i] = cell_cost(fine, c.factor, cx, cy, &traversable, &extra);
+        }
+    }
+    c
+}
+
+impl CoarseCosts {
+    /// The planning grid of a map grid `fine` with every planning cell blocked.
+    pub fn blocked(fine: GridFrame, factor: u32) -> Self {
+        let f = factor.max(1);
+        let frame = GridFrame::new(
+            fine.origin_m,
+            fine.resolution_m * f as f64,
+            fine.width / f,
+            fine.height / f,
+        );
+        Self {
+            frame,
+            factor: f,
+            cost: vec![0; frame.len()],
+        }
+    }
+
+    /// Recomputes the planning cells at `cells` (row-major indices of this grid; out-of-range
+    /// ones are ignored) from the map, as [`coarse_costs`] computes them. Updating every
+    /// planning cell whose map cells changed keeps the grid equal to a full rebuild.
+    pub fn recompute(
+        &mut self,
+        fine: GridFrame,
+        cells: &[u32],
+        traversable: impl Fn(usize) -> bool,
+        extra: impl Fn(usize) -> u32,
+    ) {
+        let w = self.frame.width as usize;
+        for &i in cells {
+            let i = i as usize;
+            if i >= self.cost.len() {
+                continue;
             }
-            if any {
-                cost[cy as usize * frame.width as usize + cx as usize] = 1 + worst.min(254) as u8;
+            let (cx, cy) = ((i % w) as i32, (i / w) as i32);
+            self.cost[i] = cell_cost(fine, self.factor, cx, cy, &traversable, &extra);
+        }
+    }
+}
+
+/// The cost of one planning cell: 0 if none of its map cells is traversable, else 1 + the
+/// largest extra cost of its traversable cells (clamped to 254).
+fn cell_cost(
+    fine: GridFrame,
+    factor: u32,
+    cx: i32,
+    cy: i32,
+    traversable: &impl Fn(usize) -> bool,
+    extra: &impl Fn(usize) -> u32,
+) -> u8 {
+    let fi = factor as i32;
+    let fw = fine.width as usize;
+    let mut worst = 0u32;
+    let mut any = false;
+    for dy in 0..fi {
+        let row = (cy * fi + dy) as usize * fw;
+        for dx in 0..fi {
+            let i = row + (cx * fi + dx) as usize;
+            if traversable(i) {
+                any = true;
+                worst = worst.max(extra(i));
             }
         }
     }
-    CoarseCosts {
-        frame,
-        factor: f,
-        cost,
+    if any {
+        1 + worst.min(254) as u8
+    } else {
+        0
     }
 }
 
@@ -136,5 +177,9 @@ mod tests {
         // Outside the bounds everything is blocked.
         let c = coarse_costs(fine, 2, Cell::new(0, 0), Cell::new(1, 1), |_| true, |_| 0);
         assert_eq!(c.cost, vec![1, 0, 0, 0, 0, 0, 0, 0]);
+        // Recomputing some cells from another map changes exactly those.
+        let mut d = c.clone();
+        d.recompute(fine, &[1, 7, 99], |i| i == costly, |_| 5);
+        assert_eq!(d.cost, vec![1, 0, 0, 0, 0, 0, 0, 6]);
     }
 }

@@ -128,20 +128,26 @@ pub fn dijkstra_by(
     let Some(si) = frame.index(start) else {
         return field;
     };
-    let mut target_idx: Vec<u32> = targets
-        .iter()
-        .filter_map(|c| frame.index(*c))
-        .map(|i| i as u32)
-        .collect();
-    target_idx.sort_unstable();
-    target_idx.dedup();
-    let mut targets_left = target_idx.len();
+    // Targets still to settle, marked per cell.
+    let mut is_target = vec![false; if targets.is_empty() { 0 } else { n }];
+    let mut targets_left = 0usize;
+    for i in targets.iter().filter_map(|c| frame.index(*c)) {
+        if !is_target[i] {
+            is_target[i] = true;
+            targets_left += 1;
+        }
+    }
     let nb = (DIAGONAL + max_extra + 1) as usize;
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); nb];
     let w = frame.width as i32;
     let h = frame.height as i32;
+    let wu = frame.width as usize;
     let ok =
         |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && traversable((y * w + x) as usize);
+    // Index offsets of the steps (valid away from the border).
+    let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * wu as isize + dx as isize);
+    // For each diagonal step, the two straight steps it must not cut between.
+    const SIDES: [(usize, usize); 4] = [(0, 2), (1, 2), (0, 3), (1, 3)];
     field.cost[si] = 0;
     buckets[0].push(si as u32);
     let mut pending = 1usize;
@@ -154,19 +160,27 @@ pub fn dijkstra_by(
             if field.cost[i] != current {
                 continue; // stale entry
             }
-            if !target_idx.is_empty() && target_idx.binary_search(&(i as u32)).is_ok() {
+            if targets_left > 0 && is_target[i] {
                 targets_left -= 1;
                 if targets_left == 0 {
                     return field;
                 }
             }
-            let (x, y) = ((i % w as usize) as i32, (i / w as usize) as i32);
-            for (k, &(dx, dy, step)) in STEPS.iter().enumerate() {
-                let (nx, ny) = (x + dx, y + dy);
-                if !ok(nx, ny) || (dx != 0 && dy != 0 && !(ok(x + dx, y) && ok(x, y + dy))) {
+            let (x, y) = ((i % wu) as i32, (i / wu) as i32);
+            let interior = x > 0 && y > 0 && x < w - 1 && y < h - 1;
+            let mut pass = [false; 8];
+            for (k, p) in pass.iter_mut().enumerate() {
+                *p = if interior {
+                    traversable((i as isize + offsets[k]) as usize)
+                } else {
+                    ok(x + STEPS[k].0, y + STEPS[k].1)
+                };
+            }
+            for (k, &(_, _, step)) in STEPS.iter().enumerate() {
+                if !pass[k] || (k >= 4 && !(pass[SIDES[k - 4].0] && pass[SIDES[k - 4].1])) {
                     continue;
                 }
-                let j = (ny * w + nx) as usize;
+                let j = (i as isize + offsets[k]) as usize;
                 let c = current + step + extra(j).min(max_extra);
                 if c < field.cost[j] {
                     field.cost[j] = c;
