@@ -56,7 +56,7 @@ impl LayoutRaster {
         let open = layout
             .rooms
             .iter()
-            .map(|r| r.label == RoomLabel::Open)
+            .map(|r| r.label == RoomLabel::Open || crosses_frontier(r, grid, max_wall_gap_m))
             .collect();
         let gap_walls = gap_walls(layout, grid, max_wall_gap_m);
         Self {
@@ -79,6 +79,74 @@ impl LayoutRaster {
             _ => true,
         }
     }
+}
+
+/// Whether one of the room's edges (off the box) runs through the map for more than `max_gap_m`
+/// with no observed wall near it and a frontier within `FRONTIER_REACH_M` all along that
+/// stretch: the wall line there was extended from elsewhere across space the robot is still
+/// seeing into (e.g. a corridor cut near the end of the laser's reach by another room's wall
+/// line), so the room's frontier is open, as if the edge were on the box. An unseen stretch of
+/// wall next to the corner of a frontier (a room seen through its side) keeps the room closed.
+fn crosses_frontier(
+    room: &crate::layout::LayoutRoom,
+    grid: &OccupancyGrid,
+    max_gap_m: f64,
+) -> bool {
+    const FRONTIER_REACH_M: f64 = 0.5;
+    let frame = grid.frame;
+    let max_gap = if max_gap_m.is_finite() && max_gap_m > 0.0 {
+        (max_gap_m / frame.resolution_m).ceil() as usize
+    } else {
+        0
+    };
+    let reach = (FRONTIER_REACH_M / frame.resolution_m).ceil() as i32;
+    let near_occupied = |c: Cell| {
+        grid.is(c, Occupancy::Occupied)
+            || c.neighbours8()
+                .iter()
+                .any(|n| grid.is(*n, Occupancy::Occupied))
+    };
+    let frontier = |c: Cell| {
+        grid.is(c, Occupancy::Free)
+            && c.neighbours4()
+                .iter()
+                .any(|n| grid.is(*n, Occupancy::Unknown))
+    };
+    let frontier_near = |c: Cell| {
+        (-reach..=reach).any(|dy| {
+            (-reach..=reach).any(|dx| {
+                dx * dx + dy * dy <= reach * reach && frontier(Cell::new(c.x + dx, c.y + dy))
+            })
+        })
+    };
+    let mut cells = Vec::new();
+    for (k, e) in room.polygon.edges().enumerate() {
+        if room.open_edges.get(k) == Some(&true) {
+            continue;
+        }
+        cells.clear();
+        walk_segment(
+            grid_from_world(&frame, e.a),
+            grid_from_world(&frame, e.b),
+            |c| {
+                cells.push(c);
+                true
+            },
+        );
+        // Length of the current stretch of cells with no wall near and a frontier near.
+        let mut run = 0usize;
+        for c in &cells {
+            if near_occupied(*c) || !frontier_near(*c) {
+                run = 0;
+                continue;
+            }
+            run += 1;
+            if run > max_gap {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 /// `I(p)` with the layout, in square metres (see the module doc).
@@ -204,7 +272,8 @@ mod tests {
         }
     }
 
-    /// A 2 x 1 m room seen on its left half; unknown to the right and beyond.
+    /// A 2 x 1 m room seen on its left half, its walls observed there; unknown to the right and
+    /// beyond.
     fn map() -> OccupancyGrid {
         let mut rows = Vec::new();
         for y in 0..30 {
@@ -212,6 +281,8 @@ mod tests {
             for x in 0..60 {
                 row.push(if (5..15).contains(&y) && (5..15).contains(&x) {
                     '.'
+                } else if (4..=15).contains(&y) && (4..=15).contains(&x) && (y == 4 || y == 15 || x == 4) {
+                    '#'
                 } else {
                     '?'
                 });
@@ -219,6 +290,46 @@ mod tests {
             rows.push(row);
         }
         OccupancyGrid::from_ascii(&rows.join("\n"), 0.1)
+    }
+
+    /// A corridor 2 m wide (walls observed) seen for 3 m from its left end, unknown beyond.
+    fn corridor() -> OccupancyGrid {
+        let mut rows = vec!["?".repeat(60); 5];
+        rows.push(format!("{}{}", "#".repeat(31), "?".repeat(29)));
+        rows.extend(vec![format!("#{}{}", ".".repeat(30), "?".repeat(29)); 20]);
+        rows.push(format!("{}{}", "#".repeat(31), "?".repeat(29)));
+        rows.extend(vec!["?".repeat(60); 5]);
+        OccupancyGrid::from_ascii(&rows.join("\n"), 0.1)
+    }
+
+    #[test]
+    fn a_room_cut_across_a_frontier_is_open() {
+        let g = corridor();
+        // The corridor's room ends 0.1 m past the end of what was seen, at a wall line extended
+        // from elsewhere: the edge crosses the frontier (2 m with no wall) and the room is open.
+        let cut = Layout {
+            rooms: vec![room(1, (0.05, 0.5), (3.2, 2.6), RoomLabel::Partial)],
+            ..Layout::default()
+        };
+        let p = Cell::new(30, 15);
+        let r = LayoutRaster::new(&cut, &g, 1.0);
+        assert!(r.uses_baseline(p));
+        assert_eq!(
+            layout_information_gain(&g, &r, p, 6.0),
+            information_gain(&g, p, 6.0)
+        );
+        // Predicted 3 m further on, the edge is far from the frontier: a closed prediction.
+        let long = Layout {
+            rooms: vec![room(1, (0.05, 0.5), (6.2, 2.6), RoomLabel::Partial)],
+            ..Layout::default()
+        };
+        let r = LayoutRaster::new(&long, &g, 1.0);
+        assert!(!r.uses_baseline(p));
+        let with_l = layout_information_gain(&g, &r, p, 6.0);
+        assert!(with_l > 4.0 && with_l < 6.5, "with L: {with_l}");
+        // A crossing no longer than the gaps walls may close (here 2.5 m) keeps it closed.
+        let r = LayoutRaster::new(&cut, &g, 2.5);
+        assert!(!r.uses_baseline(p));
     }
 
     /// 4 x 1 m of free space (rows 0-9) under an observed wall (row 10) with a gap of unknown

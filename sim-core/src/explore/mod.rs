@@ -107,6 +107,10 @@ pub struct ExploreConfig {
     /// Drive back to the start after exploring (time counted).
     pub return_home: bool,
     /// A map update happens after this much motion, or `map_update_period_s`, whichever first.
+    /// 0.25 m / 0.25 rad (Hector SLAM's defaults are 0.4 m / 0.9 rad, GMapping's 1 m / 0.5 rad):
+    /// on the 2000 m2 bench building, updating every 0.1 m / 0.1 rad instead took 1.45x the
+    /// time and gave no better maps (each match is made against a map built from the last few
+    /// scans, so more frequent matching adds noise faster than it removes drift).
     pub map_update_distance_m: f64,
     pub map_update_angle_rad: f64,
     pub map_update_period_s: f64,
@@ -137,8 +141,8 @@ impl Default for ExploreConfig {
             progress_timeout_s: 20.0,
             time_limit_s: 4.0 * 3600.0,
             return_home: false,
-            map_update_distance_m: 0.1,
-            map_update_angle_rad: 0.1,
+            map_update_distance_m: 0.25,
+            map_update_angle_rad: 0.25,
             map_update_period_s: 1.0,
             progress_period_s: 1.0,
             follow: FollowConfig::default(),

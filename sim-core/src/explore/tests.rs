@@ -151,18 +151,27 @@ fn charged_layout_compute_delays_the_robot() {
     );
     assert_eq!(same, free);
     assert_eq!(calls as u64, free.layouts_computed);
-    // Five seconds per layout: the charged time is recorded and the robot waits for it.
-    let mut five = |work: &mut dyn FnMut()| {
+    // 100 s per layout: the charged time is recorded and the robot waits for all of it (the
+    // waits alone then outlast the whole uncharged run; a small charge may even shorten a run,
+    // as any change of timing changes the decisions).
+    let mut hundred = |work: &mut dyn FnMut()| {
         work();
-        5.0
+        100.0
     };
-    let slow = explore_charged(&b, b.start.unwrap(), &cfg, 2, &mut |_| {}, Some(&mut five));
+    let slow = explore_charged(&b, b.start.unwrap(), &cfg, 2, &mut |_| {}, Some(&mut hundred));
     assert!(slow.layouts_computed > 0);
-    assert_eq!(slow.layout_compute_s, 5.0 * slow.layouts_computed as f64);
+    assert_eq!(slow.layout_compute_s, 100.0 * slow.layouts_computed as f64);
     assert!(
-        slow.exploration_time_s > free.exploration_time_s,
+        slow.layout_compute_s > free.exploration_time_s,
+        "{} layouts charged {} s, uncharged run {} s",
+        slow.layouts_computed,
+        slow.layout_compute_s,
+        free.exploration_time_s
+    );
+    assert!(
+        slow.exploration_time_s >= slow.layout_compute_s,
         "{} vs {}",
         slow.exploration_time_s,
-        free.exploration_time_s
+        slow.layout_compute_s
     );
 }
