@@ -68,6 +68,14 @@ pub struct ReportArgs {
     /// Also write one line per job as CSV (for pandas, R, spreadsheets).
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
+    /// Also draw charts into this directory: gains.png (the paired gain over baseline per
+    /// building with its 95 % confidence interval) and progress-<building>.png (the mean
+    /// explored fraction over time per strategy).
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
+    /// Picture format of the charts.
+    #[arg(long, default_value = "png", value_parser = ["png", "svg"])]
+    picture: String,
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
@@ -218,5 +226,82 @@ pub fn report(a: ReportArgs) -> Result<()> {
             .with_context(|| format!("cannot export to {}", csv.display()))?;
         say!("wrote {}", csv.display());
     }
+    if let Some(dir) = &a.plots {
+        let n = write_plots(&results, dir, &a.picture)?;
+        say!("wrote {n} charts to {}", dir.display());
+    }
     Ok(())
+}
+
+/// The charts of `report --plots`; returns how many were written.
+fn write_plots(
+    results: &[floorcast_coordinator::store::StoredResult],
+    dir: &std::path::Path,
+    ext: &str,
+) -> Result<usize> {
+    use floorcast_render::chart::{series_color, Interval, IntervalChart, LineChart, Series};
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create the chart directory {}", dir.display()))?;
+    let t = table(results, &[]);
+    let reference = t.reference.clone().unwrap_or_default();
+    // One colour per strategy label in every chart.
+    let order: Vec<String> = t.overall.iter().map(|r| r.label.clone()).collect();
+    let color = |l: &str| series_color(order.iter().position(|o| o == l).unwrap_or(0));
+    let labels: Vec<String> = order.iter().filter(|l| **l != reference).cloned().collect();
+    let interval = |rows: &[floorcast_coordinator::table::LabelRow], label: &str| {
+        let p = rows.iter().find(|r| r.label == label)?.paired?;
+        Some(Interval {
+            mean: p.mean_pct,
+            lo: p.mean_pct - p.ci95_pct,
+            hi: p.mean_pct + p.ci95_pct,
+        })
+    };
+    let mut categories: Vec<String> = t.per_building.keys().cloned().collect();
+    categories.push("all".into());
+    let gains = IntervalChart {
+        title: format!("Exploration time gain over {reference} (paired by seed, 95 % CI)"),
+        y_label: "gain (%)".into(),
+        series: labels
+            .iter()
+            .map(|l| {
+                let mut v: Vec<Option<Interval>> = t
+                    .per_building
+                    .values()
+                    .map(|rows| interval(rows, l))
+                    .collect();
+                v.push(interval(&t.overall, l));
+                (l.clone(), color(l), v)
+            })
+            .collect(),
+        categories,
+    };
+    let mut written = 0;
+    let path = dir.join(format!("gains.{ext}"));
+    gains.figure().save(&path)?;
+    written += 1;
+    for building in t.per_building.keys() {
+        let curves = floorcast_coordinator::table::mean_progress(results, building, &order, 400);
+        if curves.is_empty() {
+            continue;
+        }
+        let chart = LineChart {
+            title: format!("{building}: mean explored fraction"),
+            x_label: "simulated time (s)".into(),
+            y_label: "explored".into(),
+            y_range: Some((0.0, 1.0)),
+            series: curves
+                .into_iter()
+                .map(|(label, points)| Series {
+                    color: color(&label),
+                    label,
+                    points,
+                })
+                .collect(),
+        };
+        chart
+            .figure()
+            .save(dir.join(format!("progress-{building}.{ext}")))?;
+        written += 1;
+    }
+    Ok(written)
 }

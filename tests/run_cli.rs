@@ -83,6 +83,30 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 1 + 6);
     assert!(text.starts_with("job_id,building,"));
+    // Charts: the gains and one progress chart per building, as SVG text naming the strategies.
+    let plots = dir.path().join("plots");
+    let o = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--plots",
+        plots.to_str().unwrap(),
+        "--picture",
+        "svg",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut names: Vec<String> = std::fs::read_dir(&plots)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["gains.svg", "progress-small.svg"], "{names:?}");
+    let progress = std::fs::read_to_string(plots.join("progress-small.svg")).unwrap();
+    assert!(
+        progress.contains(">baseline<") && progress.contains(">near<"),
+        "{progress}"
+    );
+    let gains = std::fs::read_to_string(plots.join("gains.svg")).unwrap();
+    assert!(gains.contains(">near<") && !gains.contains(">baseline<"));
 }
 
 #[test]

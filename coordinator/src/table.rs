@@ -260,6 +260,74 @@ pub fn render_text(t: &Table) -> String {
     out
 }
 
+/// The mean explored fraction over time of each label's successful runs of `building`, on
+/// `samples` evenly spaced times from 0 to the end of the longest run (a run that has ended
+/// keeps its final fraction). Labels in `order` first, as in [`table`].
+pub fn mean_progress(
+    results: &[StoredResult],
+    building: &str,
+    order: &[String],
+    samples: usize,
+) -> Vec<(String, Vec<(f64, f64)>)> {
+    let mut curves: BTreeMap<&str, Vec<Vec<(f64, f64)>>> = BTreeMap::new();
+    for r in results
+        .iter()
+        .filter(|r| r.building == building && r.status == "ok")
+    {
+        let Some(csv) = r.progress_csv.as_deref() else {
+            continue;
+        };
+        let curve: Vec<(f64, f64)> = csv
+            .lines()
+            .skip(1)
+            .filter_map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                Some((f.first()?.parse().ok()?, f.get(2)?.parse().ok()?))
+            })
+            .collect();
+        if !curve.is_empty() {
+            curves.entry(r.label.as_str()).or_default().push(curve);
+        }
+    }
+    let end = curves
+        .values()
+        .flatten()
+        .filter_map(|c| c.last().map(|p| p.0))
+        .fold(0.0f64, f64::max);
+    let samples = samples.max(2);
+    let mut labels: Vec<&str> = order
+        .iter()
+        .map(String::as_str)
+        .filter(|l| curves.contains_key(l))
+        .collect();
+    for l in curves.keys() {
+        if !labels.contains(l) {
+            labels.push(l);
+        }
+    }
+    labels
+        .into_iter()
+        .map(|label| {
+            let runs = &curves[label];
+            let points = (0..samples)
+                .map(|k| {
+                    let t = end * k as f64 / (samples - 1) as f64;
+                    let sum: f64 = runs
+                        .iter()
+                        .map(|c| {
+                            // The last sample at or before t (curves start at t = 0).
+                            let i = c.partition_point(|p| p.0 <= t);
+                            c[i.saturating_sub(1)].1
+                        })
+                        .sum();
+                    (t, sum / runs.len() as f64)
+                })
+                .collect();
+            (label.to_string(), points)
+        })
+        .collect()
+}
+
 /// One line per stored job, for pandas or R.
 pub fn results_csv(results: &[StoredResult]) -> String {
     let mut s = String::from(
@@ -395,6 +463,33 @@ mod tests {
         let text = render_text(&t);
         assert!(text.contains("+10.0 ± 0.0 % (n=3)"), "{text}");
         assert!(text.contains("b:"), "{text}");
+    }
+
+    #[test]
+    fn mean_progress_holds_the_final_fraction_of_runs_that_ended() {
+        let mut a = stored("b1", "baseline", 1, 4.0);
+        a.progress_csv =
+            Some("time_s,explored_area_m2,explored_fraction\n0,0,0\n2,5,0.5\n4,10,1\n".into());
+        let mut b = stored("b1", "baseline", 2, 2.0);
+        b.progress_csv =
+            Some("time_s,explored_area_m2,explored_fraction\n0,0,0.2\n2,8,0.8\n".into());
+        let mut c = stored("b1", "layout", 1, 2.0);
+        c.progress_csv = Some("time_s,explored_area_m2,explored_fraction\n0,0,0\n2,1,1\n".into());
+        let other = stored("b2", "baseline", 1, 1.0);
+        let curves = mean_progress(&[c, a, b, other], "b1", &["baseline".into()], 3);
+        let labels: Vec<&str> = curves.iter().map(|(l, _)| l.as_str()).collect();
+        assert_eq!(labels, ["baseline", "layout"]);
+        // t = 0, 2, 4: baseline (0 + 0.2) / 2, (0.5 + 0.8) / 2, (1 + 0.8) / 2.
+        let base: Vec<(f64, f64)> = curves[0].1.clone();
+        let want = [(0.0, 0.1), (2.0, 0.65), (4.0, 0.9)];
+        for (got, want) in base.iter().zip(want) {
+            assert!(
+                (got.0 - want.0).abs() < 1e-12 && (got.1 - want.1).abs() < 1e-12,
+                "{base:?}"
+            );
+        }
+        assert_eq!(curves[1].1[2], (4.0, 1.0));
+        assert!(mean_progress(&[], "b1", &[], 10).is_empty());
     }
 
     #[test]

@@ -7,6 +7,7 @@
 //! 5x7 pixel font. This crate does no simulation; files are written only by [`Figure::save`].
 
 mod building;
+pub mod chart;
 mod font;
 mod png;
 mod svg;

@@ -281,7 +281,10 @@ mod tests {
             for x in 0..60 {
                 row.push(if (5..15).contains(&y) && (5..15).contains(&x) {
                     '.'
-                } else if (4..=15).contains(&y) && (4..=15).contains(&x) && (y == 4 || y == 15 || x == 4) {
+                } else if (4..=15).contains(&y)
+                    && (4..=15).contains(&x)
+                    && (y == 4 || y == 15 || x == 4)
+                {
                     '#'
                 } else {
                     '?'

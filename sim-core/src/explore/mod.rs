@@ -668,7 +668,10 @@ impl Explorer<'_> {
             self.coarse_dirty_mark = vec![false; self.coarse.cost.len()];
         }
         let f = self.coarse.factor as i32;
-        let (cw, ch) = (self.coarse.frame.width as i32, self.coarse.frame.height as i32);
+        let (cw, ch) = (
+            self.coarse.frame.width as i32,
+            self.coarse.frame.height as i32,
+        );
         let mut mark = |x0: i32, y0: i32, x1: i32, y1: i32| {
             for cy in y0.div_euclid(f).max(0)..=y1.div_euclid(f).min(ch - 1) {
                 for cx in x0.div_euclid(f).max(0)..=x1.div_euclid(f).min(cw - 1) {

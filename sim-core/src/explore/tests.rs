@@ -158,7 +158,14 @@ fn charged_layout_compute_delays_the_robot() {
         work();
         100.0
     };
-    let slow = explore_charged(&b, b.start.unwrap(), &cfg, 2, &mut |_| {}, Some(&mut hundred));
+    let slow = explore_charged(
+        &b,
+        b.start.unwrap(),
+        &cfg,
+        2,
+        &mut |_| {},
+        Some(&mut hundred),
+    );
     assert!(slow.layouts_computed > 0);
     assert_eq!(slow.layout_compute_s, 100.0 * slow.layouts_computed as f64);
     assert!(

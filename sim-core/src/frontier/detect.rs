@@ -250,11 +250,7 @@ fn is_frontier_cell_at(grid: &OccupancyGrid, x: i32, y: i32) -> bool {
     let w = grid.width() as i32;
     let h = grid.height() as i32;
     let unknown = |x: i32, y: i32| {
-        x >= 0
-            && y >= 0
-            && x < w
-            && y < h
-            && grid.data[(y * w + x) as usize] == Occupancy::Unknown
+        x >= 0 && y >= 0 && x < w && y < h && grid.data[(y * w + x) as usize] == Occupancy::Unknown
     };
     grid.data[(y * w + x) as usize] == Occupancy::Free
         && (unknown(x + 1, y) || unknown(x - 1, y) || unknown(x, y + 1) || unknown(x, y - 1))
