@@ -150,6 +150,8 @@ pub struct FrontierTracker {
     cells: Vec<u32>,
     /// Scratch labels for the component search (all false between calls).
     labelled: Vec<bool>,
+    /// Scratch: position of a cell in the component being measured (`u32::MAX` between calls).
+    slot: Vec<u32>,
 }
 
 impl FrontierTracker {
@@ -160,6 +162,7 @@ impl FrontierTracker {
             is_frontier: vec![false; n],
             cells: Vec::new(),
             labelled: vec![false; n],
+            slot: vec![u32::MAX; n],
         };
         t.update(grid, 0..n as u32);
         t
@@ -230,7 +233,16 @@ impl FrontierTracker {
                 continue;
             }
             comp.sort_unstable();
-            let middle = middle_cell(&comp, w as usize);
+            for (k, &i) in comp.iter().enumerate() {
+                self.slot[i] = k as u32;
+            }
+            let slot = &self.slot;
+            let middle = middle_cell_by(&comp, w as usize, |i| {
+                slot.get(i).filter(|k| **k != u32::MAX).map(|k| *k as usize)
+            });
+            for &i in &comp {
+                self.slot[i] = u32::MAX;
+            }
             let to_cell = |i: usize| grid.frame.cell_of_index(i);
             frontiers.push(Frontier {
                 size: comp.len(),
@@ -269,8 +281,12 @@ const NEIGHBOURS8: [(i32, i32); 8] = [
 
 /// The middle of a chain given as sorted box indices (row width `bw`).
 fn middle_cell(comp: &[usize], bw: usize) -> usize {
+    middle_cell_by(comp, bw, |i| comp.binary_search(&i).ok())
+}
+
+/// [`middle_cell`] with `pos` giving the position in `comp` of a cell index (`None` if absent).
+fn middle_cell_by(comp: &[usize], bw: usize, pos: impl Fn(usize) -> Option<usize>) -> usize {
     let n = comp.len();
-    let pos = |i: usize| comp.binary_search(&i).ok();
     // BFS inside the component; returns (depth, parent) per member and the farthest member
     // (first in BFS order among the deepest).
     let bfs = |from: usize| -> (Vec<u32>, Vec<u32>, usize) {
