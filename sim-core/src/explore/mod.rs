@@ -310,7 +310,12 @@ struct LayoutState {
 }
 
 struct Goal {
+    /// Where the robot drives: the candidate, or the nearest traversable cell to it.
     cell: Cell,
+    /// The frontier's candidate (its middle cell). Blacklisting applies to candidates, so it
+    /// is recorded here: the goal cell may lie farther from it than the blacklist radius, and
+    /// blacklisting the goal cell would then leave the candidate to be chosen again forever.
+    candidate: Cell,
     /// Where the unknown space behind the frontier is: the robot faces it on arrival, so that its
     /// forward-looking laser sees it.
     look_at: Vec2,
@@ -616,7 +621,7 @@ impl Explorer<'_> {
             self.still_since_s = now;
         } else if now - self.still_since_s > STILL_FACTOR * cfg.progress_timeout_s {
             self.blacklist.add(
-                self.map.frame.world_from_cell(goal.cell),
+                self.map.frame.world_from_cell(goal.candidate),
                 cfg.blacklist_radius_m,
             );
             self.goal = None;
@@ -630,7 +635,7 @@ impl Explorer<'_> {
             if err.abs() > 0.15 && to.norm() > 0.05 && now - goal.best_distance_at_s < 10.0 {
                 return false;
             }
-            self.last_reached = Some(self.map.frame.world_from_cell(goal.cell));
+            self.last_reached = Some(self.map.frame.world_from_cell(goal.candidate));
             return true;
         }
         if now - goal.decided_at_s >= cfg.redecide_period_s {
@@ -651,7 +656,7 @@ impl Explorer<'_> {
             goal.best_distance_m = d;
             goal.best_distance_at_s = now;
         } else if now - goal.best_distance_at_s > cfg.progress_timeout_s {
-            let p = self.map.frame.world_from_cell(goal.cell);
+            let p = self.map.frame.world_from_cell(goal.candidate);
             self.blacklist.add(p, cfg.blacklist_radius_m);
             self.goal = None;
             return true;
@@ -976,6 +981,7 @@ impl Explorer<'_> {
             .unwrap_or_else(|| frame.world_from_cell(frontiers[best].candidate));
         self.goal = Some(Goal {
             cell: goal_cell,
+            candidate: frontiers[best].candidate,
             look_at,
             arrived: false,
             frontier: frontiers[best].cells.clone(),
