@@ -235,7 +235,13 @@ impl IntervalChart {
         let m = self.series.len().max(1) as f64;
         for (c, name) in self.categories.iter().enumerate() {
             let p = map(c as f64 + 0.5, y0);
-            fig.text(Vec2::new(p.x, -0.3), 12.0, Color::BLACK, name);
+            // Many categories: every other label one line lower, so that they do not overlap.
+            let y = if self.categories.len() > 6 && c % 2 == 1 {
+                -0.6
+            } else {
+                -0.3
+            };
+            fig.text(Vec2::new(p.x, y), 12.0, Color::BLACK, name);
             for (k, (_, color, values)) in self.series.iter().enumerate() {
                 let Some(Some(i)) = values.get(c) else {
                     continue;
