@@ -109,8 +109,8 @@ pub struct ExploreConfig {
     /// A map update happens after this much motion, or `map_update_period_s`, whichever first.
     /// 0.25 m / 0.25 rad (Hector SLAM's defaults are 0.4 m / 0.9 rad, GMapping's 1 m / 0.5 rad):
     /// on the 2000 m2 bench building, updating every 0.1 m / 0.1 rad instead took 1.45x the
-    /// time and gave no better maps (each match is made against a map built from the last few
-    /// scans, so more frequent matching adds noise faster than it removes drift).
+    /// time and gave no better maps; on real school maps it explored more on 8 of 10 runs
+    /// (mean 95.9 % vs 93.7 %), so the choice is a trade-off to revisit.
     pub map_update_distance_m: f64,
     pub map_update_angle_rad: f64,
     pub map_update_period_s: f64,
