@@ -14,6 +14,7 @@
 //! shapes of rooms seen through a door are often cut short by the wall lines of other rooms), so
 //! the explorer orders candidates by this gain and keeps the paper's `I(p)` for early stopping.
 
+use crate::frontier::detect::is_frontier_cell;
 use crate::gain::visible_area;
 use crate::grid::{Bitmap, Cell, Grid, Occupancy, OccupancyGrid};
 use crate::layout::{Layout, RoomLabel};
@@ -100,25 +101,44 @@ fn crosses_frontier(
         0
     };
     let reach = (FRONTIER_REACH_M / frame.resolution_m).ceil() as i32;
-    let near_occupied = |c: Cell| {
-        grid.is(c, Occupancy::Occupied)
-            || c.neighbours8()
-                .iter()
-                .any(|n| grid.is(*n, Occupancy::Occupied))
-    };
-    let frontier = |c: Cell| {
-        grid.is(c, Occupancy::Free)
-            && c.neighbours4()
-                .iter()
-                .any(|n| grid.is(*n, Occupancy::Unknown))
-    };
     let frontier_near = |c: Cell| {
         (-reach..=reach).any(|dy| {
             (-reach..=reach).any(|dx| {
-                dx * dx + dy * dy <= reach * reach && frontier(Cell::new(c.x + dx, c.y + dy))
+                dx * dx + dy * dy <= reach * reach
+                    && is_frontier_cell(grid, Cell::new(c.x + dx, c.y + dy))
             })
         })
     };
+    let mut crosses = false;
+    for_closed_edge_cells(room, frame, |cells| {
+        // Length of the current stretch of cells with no wall near and a frontier near.
+        let mut run = 0usize;
+        for c in cells {
+            if near_occupied(grid, *c) || !frontier_near(*c) {
+                run = 0;
+                continue;
+            }
+            run += 1;
+            crosses |= run > max_gap;
+        }
+    });
+    crosses
+}
+
+/// Whether `c` or one of its 8-neighbours is occupied (an observed wall at `c`).
+fn near_occupied(grid: &OccupancyGrid, c: Cell) -> bool {
+    grid.is(c, Occupancy::Occupied)
+        || c.neighbours8()
+            .iter()
+            .any(|n| grid.is(*n, Occupancy::Occupied))
+}
+
+/// Calls `f` with the cells of each edge of `room` that is not on the known map's box.
+fn for_closed_edge_cells(
+    room: &crate::layout::LayoutRoom,
+    frame: crate::grid::GridFrame,
+    mut f: impl FnMut(&[Cell]),
+) {
     let mut cells = Vec::new();
     for (k, e) in room.polygon.edges().enumerate() {
         if room.open_edges.get(k) == Some(&true) {
@@ -133,20 +153,8 @@ fn crosses_frontier(
                 true
             },
         );
-        // Length of the current stretch of cells with no wall near and a frontier near.
-        let mut run = 0usize;
-        for c in &cells {
-            if near_occupied(*c) || !frontier_near(*c) {
-                run = 0;
-                continue;
-            }
-            run += 1;
-            if run > max_gap {
-                return true;
-            }
-        }
+        f(&cells);
     }
-    false
 }
 
 /// `I(p)` with the layout, in square metres (see the module doc).
@@ -184,28 +192,9 @@ fn gap_walls(layout: &Layout, grid: &OccupancyGrid, max_gap_m: f64) -> Bitmap {
         return out;
     }
     let max_gap = (max_gap_m / frame.resolution_m).ceil() as usize;
-    let near_occupied = |c: Cell| {
-        grid.is(c, Occupancy::Occupied)
-            || c.neighbours8()
-                .iter()
-                .any(|n| grid.is(*n, Occupancy::Occupied))
-    };
-    let mut cells = Vec::new();
     for r in &layout.rooms {
-        for (k, e) in r.polygon.edges().enumerate() {
-            if r.open_edges.get(k) == Some(&true) {
-                continue;
-            }
-            cells.clear();
-            walk_segment(
-                grid_from_world(&frame, e.a),
-                grid_from_world(&frame, e.b),
-                |c| {
-                    cells.push(c);
-                    true
-                },
-            );
-            let occupied: Vec<bool> = cells.iter().map(|c| near_occupied(*c)).collect();
+        for_closed_edge_cells(r, frame, |cells| {
+            let occupied: Vec<bool> = cells.iter().map(|c| near_occupied(grid, *c)).collect();
             let mut i = 0;
             while i < cells.len() {
                 if occupied[i] {
@@ -225,7 +214,7 @@ fn gap_walls(layout: &Layout, grid: &OccupancyGrid, max_gap_m: f64) -> Bitmap {
                 }
                 i = j;
             }
-        }
+        });
     }
     out
 }

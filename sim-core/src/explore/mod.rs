@@ -18,7 +18,7 @@ use self::calibration::OdometryCalibration;
 use self::gain_cache::GainCache;
 use crate::building::Building;
 use crate::frontier::blacklist::Blacklist;
-use crate::frontier::detect::{Frontier, FrontierConfig, FrontierTracker};
+use crate::frontier::detect::{is_frontier_cell, Frontier, FrontierConfig, FrontierTracker};
 use crate::gain::information_gain;
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
@@ -412,7 +412,7 @@ pub fn explore_charged<'a>(
         frontiers: FrontierTracker::default(),
         coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
         coarse_dirty: Vec::new(),
-        coarse_dirty_mark: Vec::new(),
+        coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).cost.len()],
     };
     ex.run(on_progress)
 }
@@ -669,9 +669,6 @@ impl Explorer<'_> {
     /// of the obstacle distance field (which decides traversability and the wall cost).
     fn mark_planning_cells(&mut self, flips: &[u32], free_changes: &[(u32, bool)]) {
         let frame = self.map.frame;
-        if self.coarse_dirty_mark.len() != self.coarse.cost.len() {
-            self.coarse_dirty_mark = vec![false; self.coarse.cost.len()];
-        }
         let f = self.coarse.factor as i32;
         let (cw, ch) = (
             self.coarse.frame.width as i32,
@@ -714,13 +711,11 @@ impl Explorer<'_> {
     fn plan(&mut self, targets: &[Cell]) -> Plan {
         const WALL_BAND_M: f64 = 0.3;
         const MAX_EXTRA: u32 = 10;
-        let trav = Traversability::new(
-            &self.map.occupancy,
-            &self.obstacles,
-            self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m,
-        );
-        let res = self.map.frame.resolution_m;
         let radius_m = self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m;
+        // Not `self.traversability()`: the planning grid below is updated while this borrows
+        // only the map and the obstacle field.
+        let trav = Traversability::new(&self.map.occupancy, &self.obstacles, radius_m);
+        let res = self.map.frame.resolution_m;
         let obstacles = &self.obstacles.data;
         // The extra cost by obstacle distance, tabulated in steps of 1/8 cell (the field is
         // capped, so the table is small) instead of evaluated per cell.
@@ -1145,13 +1140,6 @@ fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
         }
     }
     (n > 0).then(|| sum / n as f64)
-}
-
-fn is_frontier_cell(grid: &OccupancyGrid, c: Cell) -> bool {
-    grid.is(c, Occupancy::Free)
-        && c.neighbours4()
-            .iter()
-            .any(|n| grid.is(*n, Occupancy::Unknown))
 }
 
 fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {

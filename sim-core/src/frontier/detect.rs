@@ -185,7 +185,7 @@ impl FrontierTracker {
                     continue;
                 }
                 let j = (ny * w + nx) as usize;
-                let now = is_frontier_cell_at(grid, nx as i32, ny as i32);
+                let now = is_frontier_cell(grid, Cell::new(nx as i32, ny as i32));
                 if now && !self.is_frontier[j] {
                     self.cells.push(j as u32);
                 }
@@ -257,15 +257,13 @@ impl FrontierTracker {
     }
 }
 
-/// Whether the cell `(x, y)` (inside the grid) is free with an unknown 4-neighbour.
-fn is_frontier_cell_at(grid: &OccupancyGrid, x: i32, y: i32) -> bool {
-    let w = grid.width() as i32;
-    let h = grid.height() as i32;
-    let unknown = |x: i32, y: i32| {
-        x >= 0 && y >= 0 && x < w && y < h && grid.data[(y * w + x) as usize] == Occupancy::Unknown
-    };
-    grid.data[(y * w + x) as usize] == Occupancy::Free
-        && (unknown(x + 1, y) || unknown(x - 1, y) || unknown(x, y + 1) || unknown(x, y - 1))
+/// Whether `c` is a frontier cell: free, with an unknown 4-neighbour (outside the grid is not
+/// unknown).
+pub fn is_frontier_cell(grid: &OccupancyGrid, c: Cell) -> bool {
+    grid.is(c, Occupancy::Free)
+        && c.neighbours4()
+            .iter()
+            .any(|n| grid.is(*n, Occupancy::Unknown))
 }
 
 const NEIGHBOURS8: [(i32, i32); 8] = [
