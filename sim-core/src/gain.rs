@@ -24,32 +24,162 @@ pub fn visible_area(
         return 0.0;
     }
     let r_cells = range_m / frame.resolution_m;
-    let half = r_cells.ceil() as i32 + 1;
-    let side = (2 * half + 1) as usize;
-    let mut seen = vec![false; side * side];
-    let n_rays = ((std::f64::consts::TAU * r_cells).ceil() as usize).max(8);
-    let start = [p.x as f64 + 0.5, p.y as f64 + 0.5];
-    let r2 = r_cells * r_cells;
-    let mut count = 0usize;
-    for k in 0..n_rays {
-        let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
-        let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
-        walk_segment(start, end, |c| {
-            if !frame.contains(c) || blocks(c) {
-                return false;
+    if !r_cells.is_finite() || r_cells > MAX_FAN_CELLS {
+        return 0.0;
+    }
+    let count = FAN.with(|cache| match cache.try_borrow_mut() {
+        Ok(mut cache) => {
+            if cache.as_ref().is_none_or(|f| f.r_cells != r_cells) {
+                *cache = Some(RayFan::new(r_cells));
             }
-            let (dx, dy) = (c.x - p.x, c.y - p.y);
-            let s = &mut seen[(dy + half) as usize * side + (dx + half) as usize];
-            if !*s {
-                *s = true;
-                if ((dx * dx + dy * dy) as f64) <= r2 && counts(c) {
-                    count += 1;
+            let fan = cache.as_mut().expect("just set");
+            fan.count(frame, p, &blocks, &counts)
+        }
+        // Only reachable if a predicate itself computes a visible area.
+        Err(_) => RayFan::new(r_cells).count(frame, p, &blocks, &counts),
+    });
+    count as f64 * frame.cell_area_m2()
+}
+
+/// Ranges beyond this many cells are refused (the fan's offsets are `i16`).
+const MAX_FAN_CELLS: f64 = 10_000.0;
+
+thread_local! {
+    /// The fan of the last range used (a run uses one laser range), with its stamp buffer.
+    static FAN: std::cell::RefCell<Option<RayFan>> = const { std::cell::RefCell::new(None) };
+}
+
+/// One cell of the fan: its offset from the centre, whether its centre is within range, and the
+/// index just past its subtree.
+#[derive(Debug, Clone, Copy)]
+struct FanNode {
+    dx: i16,
+    dy: i16,
+    in_range: bool,
+    end: u32,
+}
+
+/// The rays of [`visible_area`] relative to the centre cell, as a prefix tree flattened in
+/// preorder: rays share their first cells, so a shared cell is tested once, and a blocking cell
+/// skips its whole subtree (every ray through it stops there). The cells visited are exactly
+/// those of walking every ray separately.
+#[derive(Debug, Clone)]
+struct RayFan {
+    r_cells: f64,
+    half: i32,
+    nodes: Vec<FanNode>,
+    /// Per cell of the `(2 half + 1)^2` square: the call that last counted it.
+    stamps: Vec<u32>,
+    call: u32,
+}
+
+impl RayFan {
+    fn new(r_cells: f64) -> Self {
+        let half = r_cells.ceil() as i32 + 1;
+        // One ray per cell of arc at full range, so every cell at range is crossed by a ray.
+        let n_rays = ((std::f64::consts::TAU * r_cells).ceil() as usize).max(8);
+        let start = [0.5, 0.5];
+        // Trie: per node its offset and children.
+        let mut offset: Vec<(i16, i16)> = vec![(0, 0)];
+        let mut children: Vec<Vec<u32>> = vec![Vec::new()];
+        for k in 0..n_rays {
+            let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
+            let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
+            let mut node = 0usize;
+            let mut first = true;
+            walk_segment(start, end, |c| {
+                if first {
+                    first = false; // the centre: the root
+                    return true;
+                }
+                let o = (c.x as i16, c.y as i16);
+                node = match children[node].iter().find(|&&ch| offset[ch as usize] == o) {
+                    Some(&ch) => ch as usize,
+                    None => {
+                        let id = offset.len();
+                        offset.push(o);
+                        children.push(Vec::new());
+                        children[node].push(id as u32);
+                        id
+                    }
+                };
+                true
+            });
+        }
+        // Flatten in preorder.
+        let r2 = r_cells * r_cells;
+        let mut nodes = Vec::with_capacity(offset.len());
+        let mut stack: Vec<(u32, bool)> = vec![(0, false)];
+        let mut open: Vec<usize> = Vec::new();
+        while let Some((id, done)) = stack.pop() {
+            if done {
+                let at = open.pop().expect("opened before closed");
+                let len = nodes.len() as u32;
+                let n: &mut FanNode = &mut nodes[at];
+                n.end = len;
+                continue;
+            }
+            let (dx, dy) = offset[id as usize];
+            let d2 = (dx as i32 * dx as i32 + dy as i32 * dy as i32) as f64;
+            open.push(nodes.len());
+            nodes.push(FanNode {
+                dx,
+                dy,
+                in_range: d2 <= r2,
+                end: 0,
+            });
+            stack.push((id, true));
+            for &ch in children[id as usize].iter().rev() {
+                stack.push((ch, false));
+            }
+        }
+        let side = (2 * half + 1) as usize;
+        Self {
+            r_cells,
+            half,
+            nodes,
+            stamps: vec![0; side * side],
+            call: 0,
+        }
+    }
+
+    /// Cells visible from `p` (not blocked, in range) that satisfy `counts`, each once.
+    fn count(
+        &mut self,
+        frame: &GridFrame,
+        p: Cell,
+        blocks: &impl Fn(Cell) -> bool,
+        counts: &impl Fn(Cell) -> bool,
+    ) -> usize {
+        self.call = self.call.wrapping_add(1);
+        if self.call == 0 {
+            self.stamps.fill(0);
+            self.call = 1;
+        }
+        let side = (2 * self.half + 1) as usize;
+        let mut count = 0usize;
+        let mut i = 0usize;
+        while i < self.nodes.len() {
+            let n = self.nodes[i];
+            let c = Cell::new(p.x + n.dx as i32, p.y + n.dy as i32);
+            if !frame.contains(c) || blocks(c) {
+                i = n.end as usize;
+                continue;
+            }
+            if n.in_range {
+                let s = &mut self.stamps[(n.dy as i32 + self.half) as usize * side
+                    + (n.dx as i32 + self.half) as usize];
+                if *s != self.call {
+                    *s = self.call;
+                    if counts(c) {
+                        count += 1;
+                    }
                 }
             }
-            true
-        });
+            i += 1;
+        }
+        count
     }
-    count as f64 * frame.cell_area_m2()
 }
 
 /// The baseline `I(p)`: unknown area visible from `p` through the map, unknown treated as free,
@@ -67,6 +197,73 @@ pub fn information_gain(grid: &OccupancyGrid, p: Cell, range_m: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    /// The definition the fan implements: every ray walked on its own from the centre of `p`.
+    fn visible_area_by_rays(
+        frame: &GridFrame,
+        p: Cell,
+        range_m: f64,
+        blocks: impl Fn(Cell) -> bool,
+        counts: impl Fn(Cell) -> bool,
+    ) -> f64 {
+        if !frame.contains(p) || blocks(p) {
+            return 0.0;
+        }
+        let r_cells = range_m / frame.resolution_m;
+        let n_rays = ((std::f64::consts::TAU * r_cells).ceil() as usize).max(8);
+        let mut seen = std::collections::HashSet::new();
+        let mut count = 0usize;
+        for k in 0..n_rays {
+            let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
+            let end = [0.5 + a.cos() * r_cells, 0.5 + a.sin() * r_cells];
+            walk_segment([0.5, 0.5], end, |o| {
+                let c = Cell::new(p.x + o.x, p.y + o.y);
+                if !frame.contains(c) || blocks(c) {
+                    return false;
+                }
+                if seen.insert(c)
+                    && ((o.x * o.x + o.y * o.y) as f64) <= r_cells * r_cells
+                    && counts(c)
+                {
+                    count += 1;
+                }
+                true
+            });
+        }
+        count as f64 * frame.cell_area_m2()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn fan_equals_walking_every_ray(
+            cells in proptest::collection::vec(0u8..10, 40 * 30),
+            px in 0i32..40, py in 0i32..30, range in 0.5f64..3.0,
+        ) {
+            // 0-1 occupied, 2-5 unknown, rest free, at 0.1 m.
+            let text: String = cells
+                .chunks(40)
+                .map(|row| {
+                    row.iter()
+                        .map(|&v| match v { 0..=1 => '#', 2..=5 => '?', _ => '.' })
+                        .chain(std::iter::once('\n'))
+                        .collect::<String>()
+                })
+                .collect();
+            let g = OccupancyGrid::from_ascii(&text, 0.1);
+            let p = Cell::new(px, py);
+            let fast = information_gain(&g, p, range);
+            let slow = visible_area_by_rays(
+                &g.frame,
+                p,
+                range,
+                |c| g.is(c, Occupancy::Occupied),
+                |c| g.is(c, Occupancy::Unknown),
+            );
+            prop_assert_eq!(fast, slow);
+        }
+    }
 
     #[test]
     fn unknown_behind_a_frontier_counts_and_a_wall_blocks() {

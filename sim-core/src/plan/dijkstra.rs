@@ -29,23 +29,31 @@ const STEPS: [(i32, i32, u32); 8] = [
 pub struct CostField {
     pub frame: GridFrame,
     pub start: Cell,
-    /// Cost units (see module doc); `u32::MAX` = unreachable.
-    pub cost: Vec<u32>,
-    /// Index into the step table of the step that entered the cell (255 = none).
+    /// Cost units (see module doc) per cell of the frame padded by one cell on every side
+    /// (row-major, `frame.width + 2` wide); `u32::MAX` = unreachable.
+    cost: Vec<u32>,
+    /// Index into the step table of the step that entered the cell (255 = none), padded alike.
     parent: Vec<u8>,
 }
 
 impl CostField {
+    /// Index of `c` in the padded arrays, `None` outside the frame.
+    fn padded_index(&self, c: Cell) -> Option<usize> {
+        self.frame
+            .contains(c)
+            .then(|| (c.y as usize + 1) * (self.frame.width as usize + 2) + c.x as usize + 1)
+    }
+
     /// Cost of reaching `c` in metres (extra costs included), `None` if unreachable.
     pub fn distance_m(&self, c: Cell) -> Option<f64> {
-        let i = self.frame.index(c)?;
+        let i = self.padded_index(c)?;
         (self.cost[i] != UNREACHED)
             .then(|| self.cost[i] as f64 * self.frame.resolution_m / STRAIGHT as f64)
     }
 
     /// Cells from the start to `goal` (both included), `None` if unreachable.
     pub fn path_to(&self, goal: Cell) -> Option<Vec<Cell>> {
-        let mut i = self.frame.index(goal)?;
+        let mut i = self.padded_index(goal)?;
         if self.cost[i] == UNREACHED {
             return None;
         }
@@ -54,7 +62,7 @@ impl CostField {
         while self.parent[i] != 255 {
             let (dx, dy, _) = STEPS[self.parent[i] as usize];
             c = Cell::new(c.x - dx, c.y - dy);
-            i = self.frame.index(c)?;
+            i = self.padded_index(c)?;
             path.push(c);
         }
         path.reverse();
@@ -118,20 +126,38 @@ pub fn dijkstra_by(
     max_extra: u32,
     targets: &[Cell],
 ) -> CostField {
-    let n = frame.len();
+    // Everything runs on the frame padded by one blocked cell on every side, so that a cell's
+    // neighbours are fixed index offsets with no bounds test.
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let pw = w + 2;
+    let np = pw * (h + 2);
     let mut field = CostField {
         frame,
         start,
-        cost: vec![UNREACHED; n],
-        parent: vec![255; n],
+        cost: vec![UNREACHED; np],
+        parent: vec![255; np],
     };
-    let Some(si) = frame.index(start) else {
+    if !frame.contains(start) {
         return field;
-    };
+    }
+    let max_extra = max_extra.min(u16::MAX as u32 - 2);
+    // Per padded cell: 0 = blocked, else 1 + the extra cost of entering it.
+    let mut enter = vec![0u16; np];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if traversable(i) {
+                enter[(y + 1) * pw + x + 1] = 1 + extra(i).min(max_extra) as u16;
+            }
+        }
+    }
+    let pad = |c: Cell| (c.y as usize + 1) * pw + c.x as usize + 1;
+    let si = pad(start);
     // Targets still to settle, marked per cell.
-    let mut is_target = vec![false; if targets.is_empty() { 0 } else { n }];
+    let mut is_target = vec![false; if targets.is_empty() { 0 } else { np }];
     let mut targets_left = 0usize;
-    for i in targets.iter().filter_map(|c| frame.index(*c)) {
+    for c in targets.iter().filter(|c| frame.contains(**c)) {
+        let i = pad(*c);
         if !is_target[i] {
             is_target[i] = true;
             targets_left += 1;
@@ -139,13 +165,7 @@ pub fn dijkstra_by(
     }
     let nb = (DIAGONAL + max_extra + 1) as usize;
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); nb];
-    let w = frame.width as i32;
-    let h = frame.height as i32;
-    let wu = frame.width as usize;
-    let ok =
-        |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && traversable((y * w + x) as usize);
-    // Index offsets of the steps (valid away from the border).
-    let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * wu as isize + dx as isize);
+    let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * pw as isize + dx as isize);
     // For each diagonal step, the two straight steps it must not cut between.
     const SIDES: [(usize, usize); 4] = [(0, 2), (1, 2), (0, 3), (1, 3)];
     field.cost[si] = 0;
@@ -166,22 +186,16 @@ pub fn dijkstra_by(
                     return field;
                 }
             }
-            let (x, y) = ((i % wu) as i32, (i / wu) as i32);
-            let interior = x > 0 && y > 0 && x < w - 1 && y < h - 1;
-            let mut pass = [false; 8];
-            for (k, p) in pass.iter_mut().enumerate() {
-                *p = if interior {
-                    traversable((i as isize + offsets[k]) as usize)
-                } else {
-                    ok(x + STEPS[k].0, y + STEPS[k].1)
-                };
-            }
+            // Every expanded cell is inside the frame, so its neighbours are in the padding.
+            let pass: [u16; 8] = offsets.map(|o| enter[(i as isize + o) as usize]);
             for (k, &(_, _, step)) in STEPS.iter().enumerate() {
-                if !pass[k] || (k >= 4 && !(pass[SIDES[k - 4].0] && pass[SIDES[k - 4].1])) {
+                if pass[k] == 0
+                    || (k >= 4 && (pass[SIDES[k - 4].0] == 0 || pass[SIDES[k - 4].1] == 0))
+                {
                     continue;
                 }
                 let j = (i as isize + offsets[k]) as usize;
-                let c = current + step + extra(j).min(max_extra);
+                let c = current + step + pass[k] as u32 - 1;
                 if c < field.cost[j] {
                     field.cost[j] = c;
                     field.parent[j] = k as u8;
@@ -203,6 +217,65 @@ mod tests {
 
     fn trav(s: &str) -> Bitmap {
         traversable_from_grid(&OccupancyGrid::from_ascii(s, 0.1), 0.0)
+    }
+
+    /// Costs by a textbook Dijkstra (binary heap, explicit bounds tests).
+    fn reference_costs(trav: &[bool], extra: &[u8], w: i32, h: i32, s: (i32, i32)) -> Vec<u32> {
+        use std::cmp::Reverse;
+        let mut cost = vec![UNREACHED; (w * h) as usize];
+        let mut heap = std::collections::BinaryHeap::new();
+        cost[(s.1 * w + s.0) as usize] = 0;
+        heap.push(Reverse((0u32, s.0, s.1)));
+        let ok = |x: i32, y: i32| x >= 0 && y >= 0 && x < w && y < h && trav[(y * w + x) as usize];
+        while let Some(Reverse((c, x, y))) = heap.pop() {
+            if c != cost[(y * w + x) as usize] {
+                continue;
+            }
+            for &(dx, dy, step) in &STEPS {
+                if !ok(x + dx, y + dy) || (dx != 0 && dy != 0 && !(ok(x + dx, y) && ok(x, y + dy)))
+                {
+                    continue;
+                }
+                let j = ((y + dy) * w + x + dx) as usize;
+                let n = c + step + extra[j] as u32;
+                if n < cost[j] {
+                    cost[j] = n;
+                    heap.push(Reverse((n, x + dx, y + dy)));
+                }
+            }
+        }
+        cost
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn costs_equal_a_textbook_dijkstra(
+            cells in proptest::collection::vec((proptest::bool::weighted(0.75), 0u8..6), 23 * 17),
+            sx in 0i32..23, sy in 0i32..17,
+        ) {
+            let (w, h) = (23, 17);
+            let trav: Vec<bool> = cells.iter().map(|c| c.0).collect();
+            let extra: Vec<u8> = cells.iter().map(|c| c.1).collect();
+            let frame = GridFrame::new(crate::geom::Vec2::zeros(), 0.1, w as u32, h as u32);
+            let f = dijkstra_by(frame, Cell::new(sx, sy), |i| trav[i], |j| extra[j] as u32, 5, &[]);
+            let reference = reference_costs(&trav, &extra, w, h, (sx, sy));
+            for y in 0..h {
+                for x in 0..w {
+                    let c = Cell::new(x, y);
+                    let want = reference[(y * w + x) as usize];
+                    let got = f.distance_m(c);
+                    proptest::prop_assert_eq!(
+                        got,
+                        (want != UNREACHED).then(|| want as f64 * 0.1 / STRAIGHT as f64)
+                    );
+                    // Every path runs from the start through traversable steps to the cell.
+                    if let Some(path) = f.path_to(c) {
+                        proptest::prop_assert_eq!(path[0], Cell::new(sx, sy));
+                        proptest::prop_assert_eq!(*path.last().unwrap(), c);
+                    }
+                }
+            }
+        }
     }
 
     #[test]
