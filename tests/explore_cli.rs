@@ -133,6 +133,12 @@ fn explores_real_school_maps_completely() {
         ("Sabadell1", 2),
         ("Franch1", 1),
         ("Franch1", 2),
+        ("autoSales", 1),
+        ("autoSales", 2),
+        ("ClassForAction", 1),
+        // Starts in open space: the heading drifts by ~3 degrees before the laser sees a wall,
+        // so the whole map is turned; the explored area credits what the sensor observed.
+        ("modern-office-floor-plan-1", 2),
     ] {
         let map = maps_dir().join(format!("schools/{name}.yaml"));
         let s = explore(&map, seed, &dir.path().join(format!("{name}-{seed}")));

@@ -247,9 +247,16 @@ struct Explorer<'a> {
     /// Truth-free cells observed, kept incrementally. Observed means free or occupied in the
     /// map: a cell whose centre is free but which a wall surface crosses is rightly mapped
     /// occupied, and the boundary rows of every room would otherwise cap the fraction near 97 %.
+    /// A map cell is credited to the building cell it was observed at: the map is drawn at the
+    /// estimated pose, so a heading error made early (e.g. turning where the laser sees no wall)
+    /// rotates everything mapped after it, and comparing map and building cell by cell would
+    /// count a consistent but rotated map as unexplored far from the start. See
+    /// [`Explorer::credit_explored`].
     explored_cells: usize,
-    /// Cells observed (free or occupied) so far.
+    /// Map cells observed (free or occupied) so far.
     known: Bitmap,
+    /// Building cells credited as observed (world frame).
+    explored: Bitmap,
     estimate: Pose,
     last_odometry: Pose,
     /// Odometry reading at the last map update.
@@ -379,6 +386,7 @@ pub fn explore_charged<'a>(
         truth_cells,
         explored_cells: 0,
         known: Bitmap::filled(frame, false),
+        explored: Bitmap::filled(frame, false),
         estimate: start,
         last_update_pose: start,
         last_update_time_s: f64::NEG_INFINITY,
@@ -556,11 +564,12 @@ impl Explorer<'_> {
         self.mark_planning_cells(&flips, &free_changes);
         // A cell never goes back to unknown, and every change from unknown is in one of the
         // two lists.
+        let map_to_world = MapToWorld::new(&self.estimate, &self.sim.true_pose());
         for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
             let i = i as usize;
             if !self.known.data[i] && self.map.occupancy.data[i] != Occupancy::Unknown {
                 self.known.data[i] = true;
-                self.explored_cells += self.truth.data[i] as usize;
+                self.credit_explored(i, &map_to_world);
             }
         }
         self.last_update_pose = self.estimate;
@@ -568,6 +577,18 @@ impl Explorer<'_> {
         self.last_update_time_s = self.sim.time_s();
         self.trajectory.push(self.sim.true_pose());
         self.estimated_trajectory.push(self.estimate);
+    }
+
+    /// Credits the building cells observed through map cell `i`, just observed from the current
+    /// scan (see [`MapToWorld::building_cells_of`]).
+    fn credit_explored(&mut self, i: usize, map_to_world: &MapToWorld) {
+        let frame = self.map.frame;
+        for j in map_to_world.building_cells_of(&frame, frame.cell_of_index(i)) {
+            if !self.explored.data[j] {
+                self.explored.data[j] = true;
+                self.explored_cells += self.truth.data[j] as usize;
+            }
+        }
     }
 
     fn explored_area_m2(&self) -> f64 {
@@ -1050,11 +1071,23 @@ impl Explorer<'_> {
         self.next_progress_s = f64::NEG_INFINITY;
         self.record_progress(on_progress);
         let mut map_quality = map_quality(&self.map.occupancy, &self.truth);
+        // The map as a whole may sit rotated about the start (a heading error made before any
+        // wall was in view); the best fit of the estimated trajectory onto the true one undoes
+        // that, and the search around it takes out what remains of a rigid misplacement, so
+        // that only inconsistencies (doubled or bent walls) lower the score.
+        let positions = |t: &[Pose]| t.iter().map(|p| p.position()).collect::<Vec<_>>();
+        let prior = crate::mapping::alignment::fit_rigid(
+            &positions(&self.estimated_trajectory),
+            &positions(&self.trajectory),
+        );
         map_quality.occupied_precision_aligned =
             crate::mapping::alignment::aligned_occupied_precision(
                 &self.map.occupancy,
                 &self.truth,
-                self.start.position(),
+                &prior,
+                prior
+                    .compose(&Pose::new(self.start.x_m, self.start.y_m, 0.0))
+                    .position(),
                 &Default::default(),
             )
             .0;
@@ -1140,6 +1173,44 @@ fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
         }
     }
     (n > 0).then(|| sum / n as f64)
+}
+
+/// The rigid motion taking a point of the map (drawn at the estimated pose) to where the sensor
+/// observed it in the building (the true pose): `true ∘ estimate⁻¹`.
+struct MapToWorld {
+    motion: Pose,
+    inverse: Pose,
+}
+
+impl MapToWorld {
+    fn new(estimate: &Pose, truth: &Pose) -> Self {
+        let origin = Pose::new(0.0, 0.0, 0.0);
+        Self {
+            motion: truth.compose(&estimate.between(&origin)),
+            inverse: estimate.compose(&truth.between(&origin)),
+        }
+    }
+
+    fn forward(&self, p: Vec2) -> Vec2 {
+        self.motion.compose(&Pose::new(p.x, p.y, 0.0)).position()
+    }
+
+    fn backward(&self, p: Vec2) -> Vec2 {
+        self.inverse.compose(&Pose::new(p.x, p.y, 0.0)).position()
+    }
+
+    /// Indices of the building cells (same frame) observed through map cell `c`: those whose
+    /// centres, brought into the map frame, fall in `c`. With ground-truth poses that is `c`
+    /// itself; under a rotation every building cell still belongs to exactly one map cell
+    /// (mapping cell centres forward instead would leave lines of holes).
+    fn building_cells_of(&self, frame: &GridFrame, c: Cell) -> Vec<usize> {
+        let w = frame.cell_from_world(self.forward(frame.world_from_cell(c)));
+        std::iter::once(w)
+            .chain(w.neighbours8())
+            .filter(|n| frame.cell_from_world(self.backward(frame.world_from_cell(*n))) == c)
+            .filter_map(|n| frame.index(n))
+            .collect()
+    }
 }
 
 fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {

@@ -182,3 +182,37 @@ fn charged_layout_compute_delays_the_robot() {
         slow.layout_compute_s
     );
 }
+
+#[test]
+fn every_building_cell_is_credited_to_exactly_one_map_cell() {
+    let frame = GridFrame::new(Vec2::new(-5.0, -5.0), 0.05, 200, 200);
+    // The map drawn 5 degrees and a few centimetres off the truth; and exactly on it.
+    let estimate = Pose::new(0.31, -0.12, 0.4);
+    let truth = Pose::new(0.35, -0.1, 0.4 + 5f64.to_radians());
+    for (estimate, truth) in [(estimate, truth), (truth, truth)] {
+        let m = MapToWorld::new(&estimate, &truth);
+        let mut credited = vec![0u32; frame.len()];
+        for i in 0..frame.len() {
+            let c = frame.cell_of_index(i);
+            let cells = m.building_cells_of(&frame, c);
+            if estimate == truth {
+                assert_eq!(cells, vec![i]);
+            }
+            for j in cells {
+                credited[j] += 1;
+            }
+        }
+        // Away from the border (where the rotated map leaves the frame), no hole, no double.
+        for y in 20..180 {
+            for x in 20..180 {
+                let j = frame.index(Cell::new(x, y)).unwrap();
+                assert_eq!(credited[j], 1, "cell ({x}, {y})");
+            }
+        }
+        // The credit follows the pose error: a map cell at the estimated robot position is
+        // credited where the robot truly is.
+        let c = frame.cell_from_world(estimate.position());
+        let w = frame.cell_of_index(m.building_cells_of(&frame, c)[0]);
+        assert!((frame.world_from_cell(w) - truth.position()).norm() < 0.1);
+    }
+}

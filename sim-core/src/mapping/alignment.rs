@@ -29,12 +29,16 @@ impl Default for AlignmentConfig {
 }
 
 /// Fraction of the map's occupied cells within one cell of solid space (not `truth_free`) after
-/// the best rigid motion in the search range (rotation about `pivot`), and that motion
-/// (`x_m, y_m` translation, `theta_rad` rotation). The identity is one of the candidates, so the
-/// result is never below the raw overlap. A map without occupied cells scores 1.
+/// the best rigid motion: the map is first moved by `prior` (a map-to-world motion, e.g.
+/// [`fit_rigid`] of the estimated trajectory onto the true one; the identity for none), then by
+/// the best small motion in the search range (rotation about `pivot`, in the world frame).
+/// Returns that fraction and the small motion (`x_m, y_m` translation, `theta_rad` rotation).
+/// The raw overlap (no motion at all) is one of the candidates, so the result is never below it.
+/// A map without occupied cells scores 1.
 pub fn aligned_occupied_precision(
     map: &OccupancyGrid,
     truth_free: &Bitmap,
+    prior: &Pose,
     pivot: Vec2,
     cfg: &AlignmentConfig,
 ) -> (f64, Pose) {
@@ -48,16 +52,28 @@ pub fn aligned_occupied_precision(
                 .any(|n| truth_free.get(n) != Some(&true))
         })
         .collect();
-    let occupied: Vec<Vec2> = map
+    let cells: Vec<Vec2> = map
         .data
         .iter()
         .enumerate()
         .filter(|(_, s)| **s == Occupancy::Occupied)
-        .map(|(i, _)| frame.world_from_cell(frame.cell_of_index(i)) - pivot)
+        .map(|(i, _)| frame.world_from_cell(frame.cell_of_index(i)))
         .collect();
-    if occupied.is_empty() {
+    if cells.is_empty() {
         return (1.0, Pose::new(0.0, 0.0, 0.0));
     }
+    let raw = cells
+        .iter()
+        .filter(|q| {
+            frame
+                .index(frame.cell_from_world(**q))
+                .is_none_or(|i| near_solid[i])
+        })
+        .count();
+    let occupied: Vec<Vec2> = cells
+        .iter()
+        .map(|p| prior.compose(&Pose::new(p.x, p.y, 0.0)).position() - pivot)
+        .collect();
     let hits = |pose: &Pose, stride: usize| -> usize {
         let (s, c) = pose.theta_rad.sin_cos();
         let t = pivot + Vec2::new(pose.x_m, pose.y_m);
@@ -108,6 +124,10 @@ pub fn aligned_occupied_precision(
     });
     let identity = Pose::new(0.0, 0.0, 0.0);
     let mut best = (hits(&identity, 1), identity);
+    if raw > best.0 {
+        // Only with a prior: the map as it is overlaps better than the prior moves it.
+        best = (raw, identity);
+    }
     for &(_, ir, iy, ix) in scored.iter().take(8) {
         let pose = Pose::new(
             ix as f64 * cfg.translation_step_m,
@@ -122,10 +142,74 @@ pub fn aligned_occupied_precision(
     (best.0 as f64 / occupied.len() as f64, best.1)
 }
 
+/// The rigid motion `m` minimising the summed squared distances `|m(from[k]) - to[k]|`
+/// (least squares in closed form, Kabsch/Umeyama in 2-D); the identity without points.
+pub fn fit_rigid(from: &[Vec2], to: &[Vec2]) -> Pose {
+    let n = from.len().min(to.len());
+    if n == 0 {
+        return Pose::new(0.0, 0.0, 0.0);
+    }
+    let mean = |v: &[Vec2]| v[..n].iter().fold(Vec2::zeros(), |a, p| a + p) / n as f64;
+    let (cf, ct) = (mean(from), mean(to));
+    // The rotation maximising sum(to' . R from'): angle atan2(sum cross, sum dot).
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for (a, b) in from[..n].iter().zip(&to[..n]) {
+        let (a, b) = (a - cf, b - ct);
+        dot += a.x * b.x + a.y * b.y;
+        cross += a.x * b.y - a.y * b.x;
+    }
+    let theta = if dot == 0.0 && cross == 0.0 {
+        0.0
+    } else {
+        cross.atan2(dot)
+    };
+    let (s, c) = theta.sin_cos();
+    let t = ct - Vec2::new(c * cf.x - s * cf.y, s * cf.x + c * cf.y);
+    Pose::new(t.x, t.y, theta)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::grid::{Grid, GridFrame};
+
+    const ID: Pose = Pose::new(0.0, 0.0, 0.0);
+
+    #[test]
+    fn fit_rigid_recovers_a_motion() {
+        let m = Pose::new(1.5, -0.7, 0.3);
+        let from: Vec<Vec2> = (0..20)
+            .map(|k| Vec2::new((k as f64 * 0.7).sin() * 5.0, k as f64 * 0.4))
+            .collect();
+        let to: Vec<Vec2> = from
+            .iter()
+            .map(|p| m.compose(&Pose::new(p.x, p.y, 0.0)).position())
+            .collect();
+        let f = fit_rigid(&from, &to);
+        assert!((f.x_m - m.x_m).abs() < 1e-9 && (f.y_m - m.y_m).abs() < 1e-9);
+        assert!((f.theta_rad - m.theta_rad).abs() < 1e-9, "{f:?}");
+        assert_eq!(fit_rigid(&[], &[]), ID);
+        let one = fit_rigid(&[Vec2::new(1.0, 1.0)], &[Vec2::new(2.0, 3.0)]);
+        assert_eq!(one, Pose::new(1.0, 2.0, 0.0));
+    }
+
+    #[test]
+    fn a_prior_aligns_a_map_rotated_beyond_the_search() {
+        let pivot = Vec2::new(1.0, 1.0);
+        let (_, truth) = room_map(ID, pivot);
+        // 5 degrees about the pivot: far outside the default search.
+        let motion = Pose::new(0.0, 0.0, 5f64.to_radians());
+        let (rotated, _) = room_map(motion, pivot);
+        let (raw, _) =
+            aligned_occupied_precision(&rotated, &truth, &ID, pivot, &Default::default());
+        assert!(raw < 0.8, "{raw}");
+        // The map-to-world motion that undoes it: rotate by -5 degrees about the pivot.
+        let back = Pose::new(pivot.x, pivot.y, -motion.theta_rad)
+            .compose(&Pose::new(-pivot.x, -pivot.y, 0.0));
+        let (p, _) =
+            aligned_occupied_precision(&rotated, &truth, &back, pivot, &Default::default());
+        assert!(p > 0.97, "{p}");
+    }
 
     /// A 6 m x 4 m room (free inside), its walls drawn into a map after a rigid motion.
     fn room_map(motion: Pose, pivot: Vec2) -> (OccupancyGrid, Bitmap) {
@@ -160,7 +244,8 @@ mod tests {
     fn a_rotated_map_aligns_and_a_right_one_stays() {
         let pivot = Vec2::new(1.0, 1.0);
         let (right, truth) = room_map(Pose::new(0.0, 0.0, 0.0), pivot);
-        let (p, motion) = aligned_occupied_precision(&right, &truth, pivot, &Default::default());
+        let (p, motion) =
+            aligned_occupied_precision(&right, &truth, &ID, pivot, &Default::default());
         assert!(p > 0.99, "{p}");
         assert_eq!(motion, Pose::new(0.0, 0.0, 0.0));
         let (rotated, _) = room_map(Pose::new(0.1, -0.05, 0.8f64.to_radians()), pivot);
@@ -169,8 +254,9 @@ mod tests {
             max_translation_m: 0.0,
             ..Default::default()
         };
-        let (raw, _) = aligned_occupied_precision(&rotated, &truth, pivot, &none);
-        let (p, motion) = aligned_occupied_precision(&rotated, &truth, pivot, &Default::default());
+        let (raw, _) = aligned_occupied_precision(&rotated, &truth, &ID, pivot, &none);
+        let (p, motion) =
+            aligned_occupied_precision(&rotated, &truth, &ID, pivot, &Default::default());
         assert!(raw < 0.8, "{raw}");
         assert!(p > 0.97, "{p} {motion:?}");
         assert!(motion.theta_rad < 0.0 && motion.x_m < 0.0, "{motion:?}");
@@ -182,12 +268,12 @@ mod tests {
                 doubled.data[i] = Occupancy::Occupied;
             }
         }
-        let (p, _) = aligned_occupied_precision(&doubled, &truth, pivot, &Default::default());
+        let (p, _) = aligned_occupied_precision(&doubled, &truth, &ID, pivot, &Default::default());
         assert!(p < 0.85, "{p}");
         // Nothing mapped.
         let empty = Grid::filled(right.frame, Occupancy::Unknown);
         assert_eq!(
-            aligned_occupied_precision(&empty, &truth, pivot, &Default::default()).0,
+            aligned_occupied_precision(&empty, &truth, &ID, pivot, &Default::default()).0,
             1.0
         );
     }
