@@ -328,10 +328,22 @@ pub fn mean_progress(
         .collect()
 }
 
-/// One line per stored job, for pandas or R.
+/// The first simulated time at which a stored progress curve reaches `fraction` explored.
+pub fn time_to_fraction(progress_csv: &str, fraction: f64) -> Option<f64> {
+    progress_csv.lines().skip(1).find_map(|line| {
+        let mut it = line.split(',');
+        let t: f64 = it.next()?.trim().parse().ok()?;
+        let f: f64 = it.nth(1)?.trim().parse().ok()?;
+        (f >= fraction).then_some(t)
+    })
+}
+
+/// One line per stored job, for pandas or R. `time_to_90_s` is the simulated time at which the
+/// run had explored 90 % (the paper's point from which layout knowledge pays off), empty if it
+/// never did.
 pub fn results_csv(results: &[StoredResult]) -> String {
     let mut s = String::from(
-        "job_id,building,building_hash,strategy,label,seed,status,exploration_time_s,explored_area_m2,free_area_m2,explored_fraction,path_length_m,decisions,stopped_early,end_reason,wall_time_s,worker,floorcast_version\n",
+        "job_id,building,building_hash,strategy,label,seed,status,exploration_time_s,explored_area_m2,free_area_m2,explored_fraction,time_to_90_s,path_length_m,decisions,stopped_early,end_reason,wall_time_s,worker,floorcast_version\n",
     );
     for r in results {
         let sum = r
@@ -341,7 +353,7 @@ pub fn results_csv(results: &[StoredResult]) -> String {
         let f = |v: Option<f64>| v.map(|x| format!("{x}")).unwrap_or_default();
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.job_id,
             csv_field(&r.building),
             r.building_hash,
@@ -353,6 +365,9 @@ pub fn results_csv(results: &[StoredResult]) -> String {
             f(sum.as_ref().map(|s| s.explored_area_m2)),
             f(sum.as_ref().map(|s| s.free_area_m2)),
             f(sum.as_ref().map(|s| s.explored_fraction)),
+            f(r.progress_csv
+                .as_deref()
+                .and_then(|p| time_to_fraction(p, 0.9))),
             f(sum.as_ref().map(|s| s.path_length_m)),
             sum.as_ref()
                 .map(|s| s.decisions.to_string())
@@ -463,6 +478,23 @@ mod tests {
         let text = render_text(&t);
         assert!(text.contains("+10.0 ± 0.0 % (n=3)"), "{text}");
         assert!(text.contains("b:"), "{text}");
+    }
+
+    #[test]
+    fn time_to_a_fraction_is_the_first_sample_reaching_it() {
+        let p = "time_s,explored_area_m2,explored_fraction\n0,0,0\n2,5,0.5\n4,9,0.9\n6,10,1\n";
+        assert_eq!(time_to_fraction(p, 0.9), Some(4.0));
+        assert_eq!(time_to_fraction(p, 0.4), Some(2.0));
+        assert_eq!(time_to_fraction(p, 1.1), None);
+        assert_eq!(time_to_fraction("time_s\nnot,a,number\n", 0.5), None);
+        let mut r = stored("b", "baseline", 1, 6.0);
+        r.progress_csv = Some(p.into());
+        let csv = results_csv(&[r]);
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+        let k = header.iter().position(|h| *h == "time_to_90_s").unwrap();
+        assert_eq!(row[k], "4");
+        assert_eq!(header.len(), row.len());
     }
 
     #[test]

@@ -247,10 +247,10 @@ struct Explorer<'a> {
     /// Truth-free cells observed, kept incrementally. Observed means free or occupied in the
     /// map: a cell whose centre is free but which a wall surface crosses is rightly mapped
     /// occupied, and the boundary rows of every room would otherwise cap the fraction near 97 %.
-    /// A map cell is credited to the building cell it was observed at: the map is drawn at the
-    /// estimated pose, so a heading error made early (e.g. turning where the laser sees no wall)
-    /// rotates everything mapped after it, and comparing map and building cell by cell would
-    /// count a consistent but rotated map as unexplored far from the start. See
+    /// Building cells are credited through the map cells they were observed in: the map is drawn
+    /// at the estimated pose, so a heading error made early (e.g. turning where the laser sees no
+    /// wall) rotates everything mapped after it, and comparing map and building cell by cell
+    /// would count a consistent but rotated map as unexplored far from the start. See
     /// [`Explorer::credit_explored`].
     explored_cells: usize,
     /// Map cells observed (free or occupied) so far.
@@ -580,11 +580,17 @@ impl Explorer<'_> {
     }
 
     /// Credits the building cells observed through map cell `i`, just observed from the current
-    /// scan (see [`MapToWorld::building_cells_of`]).
+    /// scan: the building cells near where the sensor saw it whose centres, brought into the map
+    /// frame by the current pose error, fall in a known map cell. With ground-truth poses that is
+    /// exactly the known cells. Under a rotation every building cell still corresponds to one map
+    /// cell (mapping cell centres forward instead would leave lines of holes), and testing every
+    /// known map cell rather than only `i` credits the cells that a pose error jittering by a
+    /// cell between updates would otherwise skip.
     fn credit_explored(&mut self, i: usize, map_to_world: &MapToWorld) {
+        const REACH: i32 = 2;
         let frame = self.map.frame;
-        for j in map_to_world.building_cells_of(&frame, frame.cell_of_index(i)) {
-            if !self.explored.data[j] {
+        for (j, m) in map_to_world.cells_near(&frame, frame.cell_of_index(i), REACH) {
+            if !self.explored.data[j] && m.is_some_and(|k| self.known.data[k]) {
                 self.explored.data[j] = true;
                 self.explored_cells += self.truth.data[j] as usize;
             }
@@ -1199,17 +1205,22 @@ impl MapToWorld {
         self.inverse.compose(&Pose::new(p.x, p.y, 0.0)).position()
     }
 
-    /// Indices of the building cells (same frame) observed through map cell `c`: those whose
-    /// centres, brought into the map frame, fall in `c`. With ground-truth poses that is `c`
-    /// itself; under a rotation every building cell still belongs to exactly one map cell
-    /// (mapping cell centres forward instead would leave lines of holes).
-    fn building_cells_of(&self, frame: &GridFrame, c: Cell) -> Vec<usize> {
+    /// The building cells (indices, same frame) within `reach` cells of where map cell `c` lies
+    /// in the building, each with the map cell its centre falls in under this motion (`None`
+    /// off the frame).
+    fn cells_near(&self, frame: &GridFrame, c: Cell, reach: i32) -> Vec<(usize, Option<usize>)> {
         let w = frame.cell_from_world(self.forward(frame.world_from_cell(c)));
-        std::iter::once(w)
-            .chain(w.neighbours8())
-            .filter(|n| frame.cell_from_world(self.backward(frame.world_from_cell(*n))) == c)
-            .filter_map(|n| frame.index(n))
-            .collect()
+        let mut out = Vec::with_capacity(((2 * reach + 1) * (2 * reach + 1)) as usize);
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                let n = Cell::new(w.x + dx, w.y + dy);
+                if let Some(j) = frame.index(n) {
+                    let m = frame.cell_from_world(self.backward(frame.world_from_cell(n)));
+                    out.push((j, frame.index(m)));
+                }
+            }
+        }
+        out
     }
 }
 

@@ -187,7 +187,8 @@ pub fn dijkstra_by(
                 }
             }
             // Every expanded cell is inside the frame, so its neighbours are in the padding.
-            let pass: [u16; 8] = offsets.map(|o| enter[(i as isize + o) as usize]);
+            let at = |k: usize| enter[(i as isize + offsets[k]) as usize];
+            let pass: [u16; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
             for (k, &(_, _, step)) in STEPS.iter().enumerate() {
                 if pass[k] == 0
                     || (k >= 4 && (pass[SIDES[k - 4].0] == 0 || pass[SIDES[k - 4].1] == 0))
