@@ -1208,19 +1208,20 @@ impl MapToWorld {
     /// The building cells (indices, same frame) within `reach` cells of where map cell `c` lies
     /// in the building, each with the map cell its centre falls in under this motion (`None`
     /// off the frame).
-    fn cells_near(&self, frame: &GridFrame, c: Cell, reach: i32) -> Vec<(usize, Option<usize>)> {
+    fn cells_near<'a>(
+        &'a self,
+        frame: &'a GridFrame,
+        c: Cell,
+        reach: i32,
+    ) -> impl Iterator<Item = (usize, Option<usize>)> + 'a {
         let w = frame.cell_from_world(self.forward(frame.world_from_cell(c)));
-        let mut out = Vec::with_capacity(((2 * reach + 1) * (2 * reach + 1)) as usize);
-        for dy in -reach..=reach {
-            for dx in -reach..=reach {
-                let n = Cell::new(w.x + dx, w.y + dy);
-                if let Some(j) = frame.index(n) {
-                    let m = frame.cell_from_world(self.backward(frame.world_from_cell(n)));
-                    out.push((j, frame.index(m)));
-                }
-            }
-        }
-        out
+        (-reach..=reach)
+            .flat_map(move |dy| (-reach..=reach).map(move |dx| Cell::new(w.x + dx, w.y + dy)))
+            .filter_map(move |n| {
+                let j = frame.index(n)?;
+                let m = frame.cell_from_world(self.backward(frame.world_from_cell(n)));
+                Some((j, frame.index(m)))
+            })
     }
 }
 

@@ -197,7 +197,6 @@ fn every_building_cell_is_credited_to_exactly_one_map_cell() {
             // The building cells that map back into `c` itself.
             let cells: Vec<usize> = m
                 .cells_near(&frame, c, 1)
-                .into_iter()
                 .filter(|(_, k)| *k == Some(i))
                 .map(|(j, _)| j)
                 .collect();
@@ -221,7 +220,6 @@ fn every_building_cell_is_credited_to_exactly_one_map_cell() {
         let i = frame.index(c).unwrap();
         let j = m
             .cells_near(&frame, c, 1)
-            .into_iter()
             .find(|(_, k)| *k == Some(i))
             .unwrap()
             .0;
