@@ -184,6 +184,17 @@ pub fn group_rooms(
             }
         }
     }
+    // ... or holding a frontier's worth of frontier cells in all, however they are split among
+    // clusters (a long cluster running along several faces may leave under the fraction in each).
+    let mut room_frontier = vec![0usize; rooms.len()];
+    for (fi, &n) in face_frontier.iter().enumerate() {
+        if face_room[fi] != NO_ROOM {
+            room_frontier[face_room[fi] as usize] += n as usize;
+        }
+    }
+    for (room, &n) in rooms.iter_mut().zip(&room_frontier) {
+        room.partial |= n >= min_cells;
+    }
     diag.partial_rooms = rooms.iter().filter(|r| r.partial).count();
     let candidate = arr
         .faces
