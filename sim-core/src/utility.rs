@@ -49,6 +49,26 @@ pub fn utilities(candidates: &[CandidateScore], alpha: f64) -> Vec<Option<f64>> 
         .collect()
 }
 
+/// The candidates with every gain raised to at least `floor_m2` (an option, not the paper's
+/// utility). Near the end of an exploration every candidate is a small residual frontier (a
+/// corner, a strip along a wall), and `i(p) = I(p) / Imax` turns a difference between 0.1 and
+/// 2.5 m2, both within the error of the estimate, into a reason to cross the building, only to
+/// come back later for what was left behind. With a floor, gains below it count as equal and
+/// distance decides among them; large gains still dominate.
+pub fn with_gain_floor(candidates: &[CandidateScore], floor_m2: f64) -> Vec<CandidateScore> {
+    candidates
+        .iter()
+        .map(|c| CandidateScore {
+            gain_m2: if floor_m2 > 0.0 {
+                c.gain_m2.max(floor_m2)
+            } else {
+                c.gain_m2
+            },
+            ..*c
+        })
+        .collect()
+}
+
 /// Index of the reachable candidate of highest utility; ties go to the lowest index.
 pub fn best_candidate(candidates: &[CandidateScore], alpha: f64) -> Option<usize> {
     let mut best: Option<(usize, f64)> = None;
@@ -95,5 +115,23 @@ mod tests {
             best_candidate(&[c(Some(1.0), f64::NAN), c(Some(1.0), 2.0)], 0.0),
             Some(1)
         );
+    }
+
+    #[test]
+    fn a_gain_floor_lets_distance_decide_among_small_gains() {
+        // The end of an exploration: a residual corner next to the robot, another across the
+        // building with a larger but still small gain.
+        let cands = [c(Some(5.0), 0.1), c(Some(80.0), 2.5), c(None, 50.0)];
+        assert_eq!(best_candidate(&cands, 0.5), Some(1));
+        let floored = with_gain_floor(&cands, 2.0);
+        assert_eq!(floored[0].gain_m2, 2.0);
+        assert_eq!(floored[1].gain_m2, 2.5);
+        assert_eq!(floored[0].distance_m, Some(5.0));
+        assert_eq!(best_candidate(&floored, 0.5), Some(0));
+        // A large gain still wins over a near small one.
+        let cands = [c(Some(5.0), 0.1), c(Some(30.0), 40.0)];
+        assert_eq!(best_candidate(&with_gain_floor(&cands, 2.0), 0.5), Some(1));
+        // No floor: unchanged.
+        assert_eq!(with_gain_floor(&cands, 0.0), cands.to_vec());
     }
 }

@@ -35,6 +35,10 @@ pub struct Settings {
     pub map_resolution_m: f64,
     /// Weight of distance in the utility (the paper's alpha).
     pub alpha: f64,
+    /// In the utility, a candidate's gain counts as at least this much (m2); 0 = the paper's
+    /// utility. Not in the paper: it keeps the robot from crossing the building for one small
+    /// residual frontier while leaving another behind (see the README).
+    pub gain_floor_m2: f64,
     /// Frontiers shorter than this are ignored (m).
     pub min_frontier_m: f64,
     /// Re-decide at least this often (s of simulated time).
@@ -77,6 +81,7 @@ impl Default for Settings {
             localization: c.localization.as_str().to_string(),
             map_resolution_m: c.map_resolution_m,
             alpha: c.alpha,
+            gain_floor_m2: c.gain_floor_m2,
             min_frontier_m: c.min_frontier_m,
             redecide_period_s: c.redecide_period_s,
             blacklist_radius_m: c.blacklist_radius_m,
@@ -196,6 +201,7 @@ impl Settings {
             (0.0..=1.0).contains(&self.alpha),
             "a number in [0, 1]",
         )?;
+        c.gain_floor_m2 = nonneg("gain_floor_m2", self.gain_floor_m2)?;
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
         c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
         c.blacklist_radius_m = nonneg("blacklist_radius_m", self.blacklist_radius_m)?;

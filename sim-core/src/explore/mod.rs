@@ -32,7 +32,7 @@ use crate::plan::dijkstra::{dijkstra_by, CostField};
 use crate::plan::inflate::{nearest_by, Traversability};
 use crate::plan::waypoints::waypoints_by;
 use crate::sim::{SimConfig, Simulator};
-use crate::utility::{best_candidate, CandidateScore};
+use crate::utility::{best_candidate, with_gain_floor, CandidateScore};
 
 /// Where the map's poses come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -92,6 +92,9 @@ pub struct ExploreConfig {
     pub calibrate_odometry: bool,
     /// Weight of distance against information gain in the utility (paper: 0.5).
     pub alpha: f64,
+    /// In the utility, a candidate's gain counts as at least this much (m2); 0 = the paper's
+    /// utility. See [`crate::utility::with_gain_floor`].
+    pub gain_floor_m2: f64,
     /// Frontiers shorter than this are ignored.
     pub min_frontier_m: f64,
     /// Re-decide at least this often while driving.
@@ -134,6 +137,7 @@ impl Default for ExploreConfig {
             strategy: Strategy::baseline(),
             layout: crate::layout::LayoutConfig::default(),
             alpha: 0.5,
+            gain_floor_m2: 0.0,
             min_frontier_m: 0.5,
             redecide_period_s: 10.0,
             safety_margin_m: 0.05,
@@ -972,7 +976,8 @@ impl Explorer<'_> {
                 scores[i].distance_m = None;
             }
         }
-        let Some(best) = best_candidate(&scores, cfg.alpha) else {
+        let Some(best) = best_candidate(&with_gain_floor(&scores, cfg.gain_floor_m2), cfg.alpha)
+        else {
             // Frontiers exist but none is reachable: blacklist them all so the run can end.
             for f in &frontiers {
                 self.blacklist
