@@ -277,14 +277,7 @@ pub fn mean_progress(
         let Some(csv) = r.progress_csv.as_deref() else {
             continue;
         };
-        let curve: Vec<(f64, f64)> = csv
-            .lines()
-            .skip(1)
-            .filter_map(|l| {
-                let f: Vec<&str> = l.split(',').collect();
-                Some((f.first()?.parse().ok()?, f.get(2)?.parse().ok()?))
-            })
-            .collect();
+        let curve: Vec<(f64, f64)> = progress_curve(csv).collect();
         if !curve.is_empty() {
             curves.entry(r.label.as_str()).or_default().push(curve);
         }
@@ -328,14 +321,20 @@ pub fn mean_progress(
         .collect()
 }
 
-/// The first simulated time at which a stored progress curve reaches `fraction` explored.
-pub fn time_to_fraction(progress_csv: &str, fraction: f64) -> Option<f64> {
-    progress_csv.lines().skip(1).find_map(|line| {
+/// The `(time_s, explored_fraction)` samples of a stored `progress.csv`
+/// (`time_s,explored_area_m2,explored_fraction`); unreadable lines are skipped.
+fn progress_curve(progress_csv: &str) -> impl Iterator<Item = (f64, f64)> + '_ {
+    progress_csv.lines().skip(1).filter_map(|line| {
         let mut it = line.split(',');
         let t: f64 = it.next()?.trim().parse().ok()?;
         let f: f64 = it.nth(1)?.trim().parse().ok()?;
-        (f >= fraction).then_some(t)
+        Some((t, f))
     })
+}
+
+/// The first simulated time at which a stored progress curve reaches `fraction` explored.
+pub fn time_to_fraction(progress_csv: &str, fraction: f64) -> Option<f64> {
+    progress_curve(progress_csv).find_map(|(t, f)| (f >= fraction).then_some(t))
 }
 
 /// One line per stored job, for pandas or R. `time_to_90_s` is the simulated time at which the
