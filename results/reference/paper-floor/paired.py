@@ -17,7 +17,10 @@ floor = load("results/reference/paper-floor/results.csv")
 
 def paired(ref, other):
     d = [100 * (ref[k] - other[k]) / ref[k] for k in ref if k in other]
-    ci = 2.045 * statistics.stdev(d) / math.sqrt(len(d))  # Student t, 29 degrees of freedom
+    # 2.045: Student's t for 29 degrees of freedom, as in `floorcast report` (coordinator/src/
+    # table.rs, t95); these grids pair exactly 10 buildings x 3 seeds.
+    assert len(d) == 30, "expected 30 pairs, found %d" % len(d)
+    ci = 2.045 * statistics.stdev(d) / math.sqrt(len(d))
     return statistics.mean(d), ci, len(d)
 
 
