@@ -20,7 +20,23 @@ pub fn visible_area(
     blocks: impl Fn(Cell) -> bool,
     counts: impl Fn(Cell) -> bool,
 ) -> f64 {
-    if !frame.contains(p) || range_m.is_nan() || range_m <= 0.0 || blocks(p) {
+    visible_area_indexed(frame, p, range_m, |c, _| blocks(c), |c, _| counts(c))
+}
+
+/// [`visible_area`] with predicates that are also given the cell's row-major index in `frame`
+/// (so that they can read a grid without a bounds test on the cell).
+pub fn visible_area_indexed(
+    frame: &GridFrame,
+    p: Cell,
+    range_m: f64,
+    blocks: impl Fn(Cell, usize) -> bool,
+    counts: impl Fn(Cell, usize) -> bool,
+) -> f64 {
+    if !frame.contains(p) || range_m.is_nan() || range_m <= 0.0 {
+        return 0.0;
+    }
+    let pi = p.y as usize * frame.width as usize + p.x as usize;
+    if blocks(p, pi) {
         return 0.0;
     }
     let r_cells = range_m / frame.resolution_m;
@@ -49,14 +65,15 @@ thread_local! {
     static FAN: std::cell::RefCell<Option<RayFan>> = const { std::cell::RefCell::new(None) };
 }
 
-/// One cell of the fan: its offset from the centre, whether its centre is within range, and the
-/// index just past its subtree.
+/// One cell of the fan: its offset from the centre, whether its centre is within range, the
+/// index just past its subtree, and its index in the stamp square.
 #[derive(Debug, Clone, Copy)]
 struct FanNode {
     dx: i16,
     dy: i16,
     in_range: bool,
     end: u32,
+    stamp: u32,
 }
 
 /// The rays of [`visible_area`] relative to the centre cell, as a prefix tree flattened in
@@ -71,6 +88,9 @@ struct RayFan {
     /// Per cell of the `(2 half + 1)^2` square: the call that last counted it.
     stamps: Vec<u32>,
     call: u32,
+    /// Per node, its row-major index offset in a frame `offsets_width` cells wide.
+    offsets: Vec<isize>,
+    offsets_width: u32,
 }
 
 impl RayFan {
@@ -122,11 +142,13 @@ impl RayFan {
             let (dx, dy) = offset[id as usize];
             let d2 = (dx as i32 * dx as i32 + dy as i32 * dy as i32) as f64;
             open.push(nodes.len());
+            let side = 2 * half + 1;
             nodes.push(FanNode {
                 dx,
                 dy,
                 in_range: d2 <= r2,
                 end: 0,
+                stamp: ((dy as i32 + half) * side + dx as i32 + half) as u32,
             });
             stack.push((id, true));
             for &ch in children[id as usize].iter().rev() {
@@ -140,6 +162,8 @@ impl RayFan {
             nodes,
             stamps: vec![0; side * side],
             call: 0,
+            offsets: Vec::new(),
+            offsets_width: 0,
         }
     }
 
@@ -148,30 +172,50 @@ impl RayFan {
         &mut self,
         frame: &GridFrame,
         p: Cell,
-        blocks: &impl Fn(Cell) -> bool,
-        counts: &impl Fn(Cell) -> bool,
+        blocks: &impl Fn(Cell, usize) -> bool,
+        counts: &impl Fn(Cell, usize) -> bool,
     ) -> usize {
         self.call = self.call.wrapping_add(1);
         if self.call == 0 {
             self.stamps.fill(0);
             self.call = 1;
         }
-        let side = (2 * self.half + 1) as usize;
+        let w = frame.width as i32;
+        if self.offsets_width != frame.width || self.offsets.is_empty() {
+            self.offsets = self
+                .nodes
+                .iter()
+                .map(|n| n.dy as isize * w as isize + n.dx as isize)
+                .collect();
+            self.offsets_width = frame.width;
+        }
+        // When the whole square around `p` lies in the frame, a node's index is a fixed offset
+        // from `p`'s and no node needs a bounds test.
+        let h = self.half;
+        let inside = p.x - h >= 0 && p.y - h >= 0 && p.x + h < w && p.y + h < frame.height as i32;
+        let base = p.y as isize * w as isize + p.x as isize;
         let mut count = 0usize;
         let mut i = 0usize;
         while i < self.nodes.len() {
             let n = self.nodes[i];
             let c = Cell::new(p.x + n.dx as i32, p.y + n.dy as i32);
-            if !frame.contains(c) || blocks(c) {
+            let idx = if inside {
+                (base + self.offsets[i]) as usize
+            } else if frame.contains(c) {
+                c.y as usize * w as usize + c.x as usize
+            } else {
+                i = n.end as usize;
+                continue;
+            };
+            if blocks(c, idx) {
                 i = n.end as usize;
                 continue;
             }
             if n.in_range {
-                let s = &mut self.stamps[(n.dy as i32 + self.half) as usize * side
-                    + (n.dx as i32 + self.half) as usize];
+                let s = &mut self.stamps[n.stamp as usize];
                 if *s != self.call {
                     *s = self.call;
-                    if counts(c) {
+                    if counts(c, idx) {
                         count += 1;
                     }
                 }
@@ -185,12 +229,12 @@ impl RayFan {
 /// The baseline `I(p)`: unknown area visible from `p` through the map, unknown treated as free,
 /// occupied cells blocking.
 pub fn information_gain(grid: &OccupancyGrid, p: Cell, range_m: f64) -> f64 {
-    visible_area(
+    visible_area_indexed(
         &grid.frame,
         p,
         range_m,
-        |c| grid.is(c, Occupancy::Occupied),
-        |c| grid.is(c, Occupancy::Unknown),
+        |_, i| grid.data[i] == Occupancy::Occupied,
+        |_, i| grid.data[i] == Occupancy::Unknown,
     )
 }
 

@@ -15,7 +15,7 @@
 //! the explorer orders candidates by this gain and keeps the paper's `I(p)` for early stopping.
 
 use crate::frontier::detect::is_frontier_cell;
-use crate::gain::visible_area;
+use crate::gain::visible_area_indexed;
 use crate::grid::{Bitmap, Cell, Grid, Occupancy, OccupancyGrid};
 use crate::layout::{Layout, RoomLabel};
 use crate::mapping::ray::{grid_from_world, walk_segment};
@@ -167,18 +167,18 @@ pub fn layout_information_gain(
     if raster.uses_baseline(p) {
         return crate::gain::information_gain(grid, p, range_m);
     }
-    visible_area(
+    visible_area_indexed(
         &grid.frame,
         p,
         range_m,
         // A candidate lies on the frontier, often right on the edge of its room's polygon: the
         // layout walls touching its own cell must not hide everything from it.
-        |c| {
-            grid.is(c, Occupancy::Occupied)
+        |c, i| {
+            grid.data[i] == Occupancy::Occupied
                 || (raster.walls.get(c) == Some(&true)
                     && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
         },
-        |c| grid.is(c, Occupancy::Unknown) && raster.inside(c),
+        |c, i| grid.data[i] == Occupancy::Unknown && raster.inside(c),
     )
 }
 
@@ -226,16 +226,16 @@ pub fn gap_closed_information_gain(
     p: Cell,
     range_m: f64,
 ) -> f64 {
-    visible_area(
+    visible_area_indexed(
         &grid.frame,
         p,
         range_m,
-        |c| {
-            grid.is(c, Occupancy::Occupied)
+        |c, i| {
+            grid.data[i] == Occupancy::Occupied
                 || (raster.gap_walls.get(c) == Some(&true)
                     && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
         },
-        |c| grid.is(c, Occupancy::Unknown),
+        |_, i| grid.data[i] == Occupancy::Unknown,
     )
 }
 

@@ -28,7 +28,7 @@ use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
 use crate::plan::coarse::CoarseCosts;
-use crate::plan::dijkstra::{dijkstra_by, CostField};
+use crate::plan::dijkstra::{dijkstra_padded, CostField};
 use crate::plan::inflate::{nearest_by, Traversability};
 use crate::plan::waypoints::waypoints_by;
 use crate::sim::{SimConfig, Simulator};
@@ -424,7 +424,7 @@ pub fn explore_charged<'a>(
         frontiers: FrontierTracker::default(),
         coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
         coarse_dirty: Vec::new(),
-        coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).cost.len()],
+        coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
     };
     ex.run(on_progress)
 }
@@ -593,8 +593,16 @@ impl Explorer<'_> {
     fn credit_explored(&mut self, i: usize, map_to_world: &MapToWorld) {
         const REACH: i32 = 2;
         let frame = self.map.frame;
-        for (j, m) in map_to_world.cells_near(&frame, frame.cell_of_index(i), REACH) {
-            if !self.explored.data[j] && m.is_some_and(|k| self.known.data[k]) {
+        let w = map_to_world.building_cell_of(&frame, frame.cell_of_index(i));
+        for n in (-REACH..=REACH).flat_map(|dy| (-REACH..=REACH).map(move |dx| (dx, dy))) {
+            let n = Cell::new(w.x + n.0, w.y + n.1);
+            let Some(j) = frame.index(n) else { continue };
+            // Most neighbours are credited already: test that before transforming back.
+            if !self.explored.data[j]
+                && map_to_world
+                    .map_index_of(&frame, n)
+                    .is_some_and(|k| self.known.data[k])
+            {
                 self.explored.data[j] = true;
                 self.explored_cells += self.truth.data[j] as usize;
             }
@@ -785,11 +793,10 @@ impl Explorer<'_> {
             .iter()
             .filter_map(|c| coarse.passable_near(*c, TARGET_SEARCH_CELLS))
             .collect();
-        let field = dijkstra_by(
+        let field = dijkstra_padded(
             coarse.frame,
             start,
-            |i| coarse.cost[i] > 0,
-            |j| coarse.cost[j].saturating_sub(1) as u32,
+            coarse.padded(),
             MAX_EXTRA,
             &coarse_targets,
         );
@@ -1191,42 +1198,62 @@ fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
 struct MapToWorld {
     motion: Pose,
     inverse: Pose,
+    /// `sin_cos` of the two motions' angles, computed once: the arithmetic is then exactly
+    /// `Pose::compose`'s.
+    motion_sc: (f64, f64),
+    inverse_sc: (f64, f64),
 }
 
 impl MapToWorld {
     fn new(estimate: &Pose, truth: &Pose) -> Self {
         let origin = Pose::new(0.0, 0.0, 0.0);
+        let motion = truth.compose(&estimate.between(&origin));
+        let inverse = estimate.compose(&truth.between(&origin));
         Self {
-            motion: truth.compose(&estimate.between(&origin)),
-            inverse: estimate.compose(&truth.between(&origin)),
+            motion_sc: motion.theta_rad.sin_cos(),
+            inverse_sc: inverse.theta_rad.sin_cos(),
+            motion,
+            inverse,
         }
     }
 
+    /// `pose.compose(p)`'s position, with `(s, c)` = `pose.theta_rad.sin_cos()`.
+    fn apply(pose: &Pose, (s, c): (f64, f64), p: Vec2) -> Vec2 {
+        Vec2::new(pose.x_m + c * p.x - s * p.y, pose.y_m + s * p.x + c * p.y)
+    }
+
     fn forward(&self, p: Vec2) -> Vec2 {
-        self.motion.compose(&Pose::new(p.x, p.y, 0.0)).position()
+        Self::apply(&self.motion, self.motion_sc, p)
     }
 
     fn backward(&self, p: Vec2) -> Vec2 {
-        self.inverse.compose(&Pose::new(p.x, p.y, 0.0)).position()
+        Self::apply(&self.inverse, self.inverse_sc, p)
     }
 
     /// The building cells (indices, same frame) within `reach` cells of where map cell `c` lies
     /// in the building, each with the map cell its centre falls in under this motion (`None`
     /// off the frame).
+    #[cfg(test)]
     fn cells_near<'a>(
         &'a self,
         frame: &'a GridFrame,
         c: Cell,
         reach: i32,
     ) -> impl Iterator<Item = (usize, Option<usize>)> + 'a {
-        let w = frame.cell_from_world(self.forward(frame.world_from_cell(c)));
+        let w = self.building_cell_of(frame, c);
         (-reach..=reach)
             .flat_map(move |dy| (-reach..=reach).map(move |dx| Cell::new(w.x + dx, w.y + dy)))
-            .filter_map(move |n| {
-                let j = frame.index(n)?;
-                let m = frame.cell_from_world(self.backward(frame.world_from_cell(n)));
-                Some((j, frame.index(m)))
-            })
+            .filter_map(move |n| Some((frame.index(n)?, self.map_index_of(frame, n))))
+    }
+
+    /// The building cell where map cell `c` lies.
+    fn building_cell_of(&self, frame: &GridFrame, c: Cell) -> Cell {
+        frame.cell_from_world(self.forward(frame.world_from_cell(c)))
+    }
+
+    /// The map cell (index) the centre of building cell `n` falls in, `None` off the frame.
+    fn map_index_of(&self, frame: &GridFrame, n: Cell) -> Option<usize> {
+        frame.index(frame.cell_from_world(self.backward(frame.world_from_cell(n))))
     }
 }
 

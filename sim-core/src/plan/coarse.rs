@@ -11,16 +11,47 @@ use crate::grid::{Cell, GridFrame};
 use crate::plan::inflate::nearest_by;
 
 /// Per planning cell: 0 = blocked, otherwise 1 + the extra cost of entering it.
+///
+/// Stored on the frame padded by one blocked cell on every side (`frame.width + 2` wide), the
+/// layout [`dijkstra_padded`](crate::plan::dijkstra::dijkstra_padded) searches directly, so a
+/// path search copies nothing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CoarseCosts {
     pub frame: GridFrame,
     pub factor: u32,
-    pub cost: Vec<u8>,
+    padded: Vec<u8>,
 }
 
 impl CoarseCosts {
     pub fn passable(&self, c: Cell) -> bool {
-        self.frame.index(c).is_some_and(|i| self.cost[i] > 0)
+        self.frame.contains(c) && self.padded[self.padded_index(c)] > 0
+    }
+
+    /// The cost grid on the padded frame (see the type's doc).
+    pub fn padded(&self) -> &[u8] {
+        &self.padded
+    }
+
+    /// The costs row-major over `frame` (unpadded).
+    pub fn costs(&self) -> Vec<u8> {
+        let (w, h) = (self.frame.width as i32, self.frame.height as i32);
+        (0..h)
+            .flat_map(|y| (0..w).map(move |x| Cell::new(x, y)))
+            .map(|c| self.padded[self.padded_index(c)])
+            .collect()
+    }
+
+    /// Number of planning cells.
+    pub fn len(&self) -> usize {
+        self.frame.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.frame.is_empty()
+    }
+
+    fn padded_index(&self, c: Cell) -> usize {
+        (c.y as usize + 1) * (self.frame.width as usize + 2) + c.x as usize + 1
     }
 
     /// The planning cell covering map cell `c`.
@@ -63,8 +94,8 @@ pub fn coarse_costs(
     let cy1 = (hi.y.div_euclid(fi)).clamp(0, c.frame.height as i32 - 1);
     for cy in cy0..=cy1 {
         for cx in cx0..=cx1 {
-            let i = cy as usize * c.frame.width as usize + cx as usize;
-            c.cost[i] = cell_cost(fine, c.factor, cx, cy, &traversable, &extra);
+            let i = c.padded_index(Cell::new(cx, cy));
+            c.padded[i] = cell_cost(fine, c.factor, cx, cy, &traversable, &extra);
         }
     }
     c
@@ -83,7 +114,7 @@ impl CoarseCosts {
         Self {
             frame,
             factor: f,
-            cost: vec![0; frame.len()],
+            padded: vec![0; (frame.width as usize + 2) * (frame.height as usize + 2)],
         }
     }
 
@@ -100,11 +131,12 @@ impl CoarseCosts {
         let w = self.frame.width as usize;
         for &i in cells {
             let i = i as usize;
-            if i >= self.cost.len() {
+            if i >= self.frame.len() {
                 continue;
             }
             let (cx, cy) = ((i % w) as i32, (i / w) as i32);
-            self.cost[i] = cell_cost(fine, self.factor, cx, cy, &traversable, &extra);
+            let p = self.padded_index(Cell::new(cx, cy));
+            self.padded[p] = cell_cost(fine, self.factor, cx, cy, &traversable, &extra);
         }
     }
 }
@@ -170,16 +202,53 @@ mod tests {
         );
         assert_eq!((c.frame.width, c.frame.height), (4, 2));
         assert_eq!(c.frame.resolution_m, 0.1);
-        assert_eq!(c.cost, vec![1, 1, 0, 1, 1, 1, 1, 4]);
+        assert_eq!(c.costs(), vec![1, 1, 0, 1, 1, 1, 1, 4]);
         assert_eq!(c.coarse_of(Cell::new(5, 1)), Cell::new(2, 0));
         assert!(!c.passable(Cell::new(2, 0)) && c.passable(Cell::new(3, 1)));
         assert_eq!(c.passable_near(Cell::new(4, 0), 1), Some(Cell::new(1, 0)));
         // Outside the bounds everything is blocked.
         let c = coarse_costs(fine, 2, Cell::new(0, 0), Cell::new(1, 1), |_| true, |_| 0);
-        assert_eq!(c.cost, vec![1, 0, 0, 0, 0, 0, 0, 0]);
+        assert_eq!(c.costs(), vec![1, 0, 0, 0, 0, 0, 0, 0]);
         // Recomputing some cells from another map changes exactly those.
         let mut d = c.clone();
         d.recompute(fine, &[1, 7, 99], |i| i == costly, |_| 5);
-        assert_eq!(d.cost, vec![1, 0, 0, 0, 0, 0, 0, 6]);
+        assert_eq!(d.costs(), vec![1, 0, 0, 0, 0, 0, 0, 6]);
+    }
+
+    #[test]
+    fn searching_the_padded_grid_equals_searching_its_costs() {
+        use crate::plan::dijkstra::{dijkstra_by, dijkstra_padded};
+        let fine = GridFrame::new(Vec2::zeros(), 0.05, 40, 30);
+        // A wall with a door, and extra costs near it.
+        let blocked = |i: usize| {
+            let (x, y) = (i % 40, i / 40);
+            x == 20 && !(12..16).contains(&y)
+        };
+        let extra = |i: usize| {
+            let x = (i % 40) as i32;
+            (4 - (x - 20).abs()).max(0) as u32
+        };
+        let c = coarse_costs(
+            fine,
+            2,
+            Cell::new(0, 0),
+            Cell::new(39, 29),
+            |i| !blocked(i),
+            extra,
+        );
+        let costs = c.costs();
+        let start = Cell::new(2, 3);
+        let targets = [Cell::new(17, 12), Cell::new(15, 1)];
+        let direct = dijkstra_padded(c.frame, start, c.padded(), 4, &targets);
+        let by = dijkstra_by(
+            c.frame,
+            start,
+            |i| costs[i] > 0,
+            |i| costs[i].saturating_sub(1) as u32,
+            4,
+            &targets,
+        );
+        assert_eq!(direct, by);
+        assert!(direct.distance_m(Cell::new(17, 12)).is_some());
     }
 }

@@ -130,7 +130,36 @@ pub fn dijkstra_by(
     // neighbours are fixed index offsets with no bounds test.
     let (w, h) = (frame.width as usize, frame.height as usize);
     let pw = w + 2;
+    let max_extra = max_extra.min(u16::MAX as u32 - 2);
+    // Per padded cell: 0 = blocked, else 1 + the extra cost of entering it.
+    let mut enter = vec![0u16; pw * (h + 2)];
+    if frame.contains(start) {
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                if traversable(i) {
+                    enter[(y + 1) * pw + x + 1] = 1 + extra(i).min(max_extra) as u16;
+                }
+            }
+        }
+    }
+    dijkstra_padded(frame, start, &enter, max_extra, targets)
+}
+
+/// [`dijkstra_by`] on a grid given as it searches it: `enter` covers `frame` padded by one
+/// cell on every side (row-major, `frame.width + 2` wide; the padding must be 0), with 0 for a
+/// blocked cell and otherwise 1 + the extra cost of entering the cell, at most `max_extra`.
+pub fn dijkstra_padded<T: Copy + Into<u32>>(
+    frame: GridFrame,
+    start: Cell,
+    enter: &[T],
+    max_extra: u32,
+    targets: &[Cell],
+) -> CostField {
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let pw = w + 2;
     let np = pw * (h + 2);
+    assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
     let mut field = CostField {
         frame,
         start,
@@ -139,17 +168,6 @@ pub fn dijkstra_by(
     };
     if !frame.contains(start) {
         return field;
-    }
-    let max_extra = max_extra.min(u16::MAX as u32 - 2);
-    // Per padded cell: 0 = blocked, else 1 + the extra cost of entering it.
-    let mut enter = vec![0u16; np];
-    for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            if traversable(i) {
-                enter[(y + 1) * pw + x + 1] = 1 + extra(i).min(max_extra) as u16;
-            }
-        }
     }
     let pad = |c: Cell| (c.y as usize + 1) * pw + c.x as usize + 1;
     let si = pad(start);
@@ -187,8 +205,13 @@ pub fn dijkstra_by(
                 }
             }
             // Every expanded cell is inside the frame, so its neighbours are in the padding.
-            let at = |k: usize| enter[(i as isize + offsets[k]) as usize];
-            let pass: [u16; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
+            // (Clamped, so that a grid breaking the `max_extra` promise cannot overrun the
+            // bucket ring.)
+            let at = |k: usize| -> u32 {
+                let e: u32 = enter[(i as isize + offsets[k]) as usize].into();
+                e.min(max_extra + 1)
+            };
+            let pass: [u32; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
             for (k, &(_, _, step)) in STEPS.iter().enumerate() {
                 if pass[k] == 0
                     || (k >= 4 && (pass[SIDES[k - 4].0] == 0 || pass[SIDES[k - 4].1] == 0))
@@ -196,11 +219,16 @@ pub fn dijkstra_by(
                     continue;
                 }
                 let j = (i as isize + offsets[k]) as usize;
-                let c = current + step + pass[k] as u32 - 1;
+                let c = current + step + pass[k] - 1;
                 if c < field.cost[j] {
                     field.cost[j] = c;
                     field.parent[j] = k as u8;
-                    buckets[c as usize % nb].push(j as u32);
+                    // `c % nb` without a division: `current <= c < current + nb`.
+                    let mut bj = b + (c - current) as usize;
+                    if bj >= nb {
+                        bj -= nb;
+                    }
+                    buckets[bj].push(j as u32);
                     pending += 1;
                 }
             }
