@@ -29,11 +29,21 @@ const STEPS: [(i32, i32, u32); 8] = [
 pub struct CostField {
     pub frame: GridFrame,
     pub start: Cell,
-    /// Cost units (see module doc) per cell of the frame padded by one cell on every side
-    /// (row-major, `frame.width + 2` wide); `u32::MAX` = unreachable.
-    cost: Vec<u32>,
-    /// Index into the step table of the step that entered the cell (255 = none), padded alike.
-    parent: Vec<u8>,
+    /// Per cell of the frame padded by one cell on every side (row-major, `frame.width + 2`
+    /// wide). One array of small records rather than one array per field: a search touches a
+    /// cell's cost, entry cost and parent together, and the wavefront visits cells far apart.
+    nodes: Vec<Node>,
+}
+
+/// The search state of one cell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Node {
+    /// Cost units (see module doc) from the start; `u32::MAX` = unreachable.
+    cost: u32,
+    /// 0 = blocked, else 1 + the extra cost of entering the cell.
+    enter: u16,
+    /// Index into the step table of the step that entered the cell (255 = none).
+    parent: u8,
 }
 
 impl CostField {
@@ -47,20 +57,20 @@ impl CostField {
     /// Cost of reaching `c` in metres (extra costs included), `None` if unreachable.
     pub fn distance_m(&self, c: Cell) -> Option<f64> {
         let i = self.padded_index(c)?;
-        (self.cost[i] != UNREACHED)
-            .then(|| self.cost[i] as f64 * self.frame.resolution_m / STRAIGHT as f64)
+        let cost = self.nodes[i].cost;
+        (cost != UNREACHED).then(|| cost as f64 * self.frame.resolution_m / STRAIGHT as f64)
     }
 
     /// Cells from the start to `goal` (both included), `None` if unreachable.
     pub fn path_to(&self, goal: Cell) -> Option<Vec<Cell>> {
         let mut i = self.padded_index(goal)?;
-        if self.cost[i] == UNREACHED {
+        if self.nodes[i].cost == UNREACHED {
             return None;
         }
         let mut path = vec![goal];
         let mut c = goal;
-        while self.parent[i] != 255 {
-            let (dx, dy, _) = STEPS[self.parent[i] as usize];
+        while self.nodes[i].parent != 255 {
+            let (dx, dy, _) = STEPS[self.nodes[i].parent as usize];
             c = Cell::new(c.x - dx, c.y - dy);
             i = self.padded_index(c)?;
             path.push(c);
@@ -160,14 +170,22 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
     let pw = w + 2;
     let np = pw * (h + 2);
     assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
+    let unreached = Node {
+        cost: UNREACHED,
+        enter: 0,
+        parent: 255,
+    };
     let mut field = CostField {
         frame,
         start,
-        cost: vec![UNREACHED; np],
-        parent: vec![255; np],
+        nodes: vec![unreached; np],
     };
     if !frame.contains(start) {
         return field;
+    }
+    // (Clamped, so that a grid breaking the `max_extra` promise cannot overrun the bucket ring.)
+    for (n, &e) in field.nodes.iter_mut().zip(enter) {
+        n.enter = Into::<u32>::into(e).min(max_extra + 1) as u16;
     }
     let pad = |c: Cell| (c.y as usize + 1) * pw + c.x as usize + 1;
     let si = pad(start);
@@ -184,18 +202,17 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
     let nb = (DIAGONAL + max_extra + 1) as usize;
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); nb];
     let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * pw as isize + dx as isize);
-    // For each diagonal step, the two straight steps it must not cut between.
-    const SIDES: [(usize, usize); 4] = [(0, 2), (1, 2), (0, 3), (1, 3)];
-    field.cost[si] = 0;
+    field.nodes[si].cost = 0;
     buckets[0].push(si as u32);
     let mut pending = 1usize;
     let mut current = 0u32;
+    let nodes = &mut field.nodes;
     while pending > 0 {
         let b = current as usize % nb;
         while let Some(i) = buckets[b].pop() {
             pending -= 1;
             let i = i as usize;
-            if field.cost[i] != current {
+            if nodes[i].cost != current {
                 continue; // stale entry
             }
             if targets_left > 0 && is_target[i] {
@@ -205,32 +222,45 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
                 }
             }
             // Every expanded cell is inside the frame, so its neighbours are in the padding.
-            // (Clamped, so that a grid breaking the `max_extra` promise cannot overrun the
-            // bucket ring.)
-            let at = |k: usize| -> u32 {
-                let e: u32 = enter[(i as isize + offsets[k]) as usize].into();
-                e.min(max_extra + 1)
-            };
+            let at = |k: usize| -> u32 { nodes[(i as isize + offsets[k]) as usize].enter as u32 };
             let pass: [u32; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
+            // Which steps are allowed (a diagonal may not cut a corner) and improve their cell,
+            // found for all eight before any is applied (they are distinct cells), as a bit mask:
+            // fewer unpredictable branches than testing and applying one step at a time.
+            let ok = [
+                pass[0] != 0,
+                pass[1] != 0,
+                pass[2] != 0,
+                pass[3] != 0,
+                (pass[4] != 0) & (pass[0] != 0) & (pass[2] != 0),
+                (pass[5] != 0) & (pass[1] != 0) & (pass[2] != 0),
+                (pass[6] != 0) & (pass[0] != 0) & (pass[3] != 0),
+                (pass[7] != 0) & (pass[1] != 0) & (pass[3] != 0),
+            ];
+            let mut improved = 0u32;
+            let mut costs = [0u32; 8];
             for (k, &(_, _, step)) in STEPS.iter().enumerate() {
-                if pass[k] == 0
-                    || (k >= 4 && (pass[SIDES[k - 4].0] == 0 || pass[SIDES[k - 4].1] == 0))
-                {
-                    continue;
-                }
                 let j = (i as isize + offsets[k]) as usize;
-                let c = current + step + pass[k] - 1;
-                if c < field.cost[j] {
-                    field.cost[j] = c;
-                    field.parent[j] = k as u8;
-                    // `c % nb` without a division: `current <= c < current + nb`.
-                    let mut bj = b + (c - current) as usize;
-                    if bj >= nb {
-                        bj -= nb;
-                    }
-                    buckets[bj].push(j as u32);
-                    pending += 1;
+                // (With `pass[k] == 0` this is one below the step, and unused.)
+                let c = (current + step + pass[k]).wrapping_sub(1);
+                costs[k] = c;
+                improved |= ((ok[k] & (c < nodes[j].cost)) as u32) << k;
+            }
+            while improved != 0 {
+                let k = improved.trailing_zeros() as usize;
+                improved &= improved - 1;
+                let j = (i as isize + offsets[k]) as usize;
+                let c = costs[k];
+                let n = &mut nodes[j];
+                n.cost = c;
+                n.parent = k as u8;
+                // `c % nb` without a division: `current <= c < current + nb`.
+                let mut bj = b + (c - current) as usize;
+                if bj >= nb {
+                    bj -= nb;
                 }
+                buckets[bj].push(j as u32);
+                pending += 1;
             }
         }
         current += 1;
