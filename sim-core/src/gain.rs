@@ -3,7 +3,7 @@
 //! Visibility is approximated by casting rays **over 360 degrees** (the robot can turn on the
 //! spot) from the centre of `p`'s cell with an exact cell walk, so densely (one ray per cell of
 //! arc at full range) that every cell at range is crossed by a ray. A ray stops at the first
-//! blocking cell or at the range; a cell counts (once: a stamp buffer over the disc) when its
+//! blocking cell or at the range; a cell counts (once: a bit set over the disc) when its
 //! centre is within range.
 //! The same core serves the layout variant, which passes other `blocks` / `counts` predicates.
 
@@ -61,12 +61,12 @@ pub fn visible_area_indexed(
 const MAX_FAN_CELLS: f64 = 10_000.0;
 
 thread_local! {
-    /// The fan of the last range used (a run uses one laser range), with its stamp buffer.
+    /// The fan of the last range used (a run uses one laser range), with its bit set of counted cells.
     static FAN: std::cell::RefCell<Option<RayFan>> = const { std::cell::RefCell::new(None) };
 }
 
 /// One cell of the fan: its offset from the centre, whether its centre is within range, the
-/// index just past its subtree, and its index in the stamp square.
+/// index just past its subtree, and its index in the square of the bit set.
 #[derive(Debug, Clone, Copy)]
 struct FanNode {
     dx: i16,
@@ -85,11 +85,11 @@ struct RayFan {
     r_cells: f64,
     half: i32,
     nodes: Vec<FanNode>,
-    /// Per cell of the `(2 half + 1)^2` square: the call that last counted it.
-    stamps: Vec<u32>,
-    call: u32,
+    /// One bit per cell of the `(2 half + 1)^2` square: counted in this call (small enough to
+    /// stay in the L1 cache and to clear per call).
+    seen: Vec<u64>,
     /// Per node, its row-major index offset in a frame `offsets_width` cells wide.
-    offsets: Vec<isize>,
+    offsets: Vec<i32>,
     offsets_width: u32,
 }
 
@@ -160,8 +160,7 @@ impl RayFan {
             r_cells,
             half,
             nodes,
-            stamps: vec![0; side * side],
-            call: 0,
+            seen: vec![0; (side * side).div_ceil(64)],
             offsets: Vec::new(),
             offsets_width: 0,
         }
@@ -175,17 +174,13 @@ impl RayFan {
         blocks: &impl Fn(Cell, usize) -> bool,
         counts: &impl Fn(Cell, usize) -> bool,
     ) -> usize {
-        self.call = self.call.wrapping_add(1);
-        if self.call == 0 {
-            self.stamps.fill(0);
-            self.call = 1;
-        }
+        self.seen.fill(0);
         let w = frame.width as i32;
         if self.offsets_width != frame.width || self.offsets.is_empty() {
             self.offsets = self
                 .nodes
                 .iter()
-                .map(|n| n.dy as isize * w as isize + n.dx as isize)
+                .map(|n| n.dy as i32 * w + n.dx as i32)
                 .collect();
             self.offsets_width = frame.width;
         }
@@ -200,7 +195,7 @@ impl RayFan {
             let n = self.nodes[i];
             let c = Cell::new(p.x + n.dx as i32, p.y + n.dy as i32);
             let idx = if inside {
-                (base + self.offsets[i]) as usize
+                (base + self.offsets[i] as isize) as usize
             } else if frame.contains(c) {
                 c.y as usize * w as usize + c.x as usize
             } else {
@@ -212,9 +207,9 @@ impl RayFan {
                 continue;
             }
             if n.in_range {
-                let s = &mut self.stamps[n.stamp as usize];
-                if *s != self.call {
-                    *s = self.call;
+                let (word, bit) = (n.stamp as usize / 64, 1u64 << (n.stamp % 64));
+                if self.seen[word] & bit == 0 {
+                    self.seen[word] |= bit;
                     if counts(c, idx) {
                         count += 1;
                     }

@@ -120,6 +120,11 @@ impl LogOddsMap {
         let mut bmin = Cell::new(start[0].floor() as i32, start[1].floor() as i32);
         let mut bmax = bmin;
         let guard2 = cfg.hit_guard_cells * cfg.hit_guard_cells;
+        let guard_cells = if cfg.hit_guard_cells.is_finite() {
+            cfg.hit_guard_cells.max(0.0).ceil().min(i32::MAX as f64) as i32
+        } else {
+            i32::MAX
+        };
         let fill2 = (cfg.hit_gap_fill_m * inv_res).powi(2);
         // The previous beam's end (grid coordinates) when it was a hit.
         let mut prev_hit: Option<[f64; 2]> = None;
@@ -150,8 +155,12 @@ impl LogOddsMap {
                         self.add_surface(idx, end);
                         return true;
                     }
+                    // (A cell more than `guard_cells` cells from the end cell on either axis
+                    // is farther than the guard from the end point: no need for the distance.)
+                    let near = (c.x - end_cell.x).abs() <= guard_cells
+                        && (c.y - end_cell.y).abs() <= guard_cells;
                     let (ddx, ddy) = (c.x as f64 + 0.5 - end[0], c.y as f64 + 0.5 - end[1]);
-                    if ddx * ddx + ddy * ddy < guard2 {
+                    if near && ddx * ddx + ddy * ddy < guard2 {
                         return true;
                     }
                 }
@@ -227,7 +236,7 @@ impl LogOddsMap {
         Some(self.frame.origin_m + Vec2::new(s[0] as f64, s[1] as f64) * self.frame.resolution_m)
     }
 
-    #[inline]
+    #[inline(always)]
     fn update_cell(
         &mut self,
         idx: usize,
@@ -235,7 +244,26 @@ impl LogOddsMap {
         cfg: &LogOddsConfig,
         stats: &mut InsertStats,
     ) {
-        let l = (self.data[idx] + delta).clamp(cfg.min_l, cfg.max_l);
+        let before = self.data[idx];
+        // Most cells a beam crosses are free already, at the lower clamp: a miss changes nothing
+        // (the log-odds stays clamped and the ternary view, in sync, stays `Free`).
+        if delta <= 0.0 && before <= cfg.min_l {
+            return;
+        }
+        self.change_cell(idx, before, delta, cfg, stats);
+    }
+
+    /// [`Self::update_cell`] when the update may change something.
+    #[inline(never)]
+    fn change_cell(
+        &mut self,
+        idx: usize,
+        before: f32,
+        delta: f32,
+        cfg: &LogOddsConfig,
+        stats: &mut InsertStats,
+    ) {
+        let l = (before + delta).clamp(cfg.min_l, cfg.max_l);
         self.data[idx] = l;
         let old = self.occupancy.data[idx];
         let new = if l > cfg.occupied_above_l {
