@@ -17,6 +17,11 @@ pub struct ObstacleDistance {
     pub data: Vec<f32>,
     /// Offsets `(dx, dy, distance)` of the disc of radius `cap_cells`.
     disc: Vec<(i32, i32, f32)>,
+    /// The same disc by rows: `(dy, first dx, distances)`, for stamping a row at a time.
+    disc_rows: Vec<(i32, i32, Vec<f32>)>,
+    /// For `ry` in `-cap..=cap` (index `ry + cap`): the largest `r` with `r^2 + ry^2 < cap^2`
+    /// (-1 if none).
+    half_widths: Vec<i32>,
 }
 
 impl ObstacleDistance {
@@ -32,11 +37,28 @@ impl ObstacleDistance {
                 }
             }
         }
+        let mut disc_rows: Vec<(i32, i32, Vec<f32>)> = Vec::new();
+        for &(dx, dy, d) in &disc {
+            match disc_rows.last_mut() {
+                Some(row) if row.0 == dy => row.2.push(d),
+                _ => disc_rows.push((dy, dx, vec![d])),
+            }
+        }
+        let half_widths = (-cap..=cap)
+            .map(|ry| {
+                (0..=cap)
+                    .take_while(|r| r * r + ry * ry < cap * cap)
+                    .last()
+                    .unwrap_or(-1)
+            })
+            .collect();
         Self {
             frame,
             cap_cells: cap as u32,
             data: vec![cap as f32; frame.len()],
             disc,
+            disc_rows,
+            half_widths,
         }
     }
 
@@ -54,13 +76,19 @@ impl ObstacleDistance {
     fn stamp(&mut self, c: Cell) {
         let w = self.frame.width as i32;
         let h = self.frame.height as i32;
-        for &(dx, dy, d) in &self.disc {
-            let (x, y) = (c.x + dx, c.y + dy);
-            if x >= 0 && y >= 0 && x < w && y < h {
-                let v = &mut self.data[(y * w + x) as usize];
-                if d < *v {
-                    *v = d;
-                }
+        // Row by row over the part of the disc inside the frame (a loop the compiler vectorises).
+        for (dy, dx0, ds) in &self.disc_rows {
+            let y = c.y + dy;
+            let x0 = c.x + dx0;
+            let (x_from, x_to) = (x0.max(0), (x0 + ds.len() as i32).min(w));
+            if y < 0 || y >= h || x_from >= x_to {
+                continue;
+            }
+            let row = (y * w) as usize;
+            let dst = &mut self.data[row + x_from as usize..row + x_to as usize];
+            let src = &ds[(x_from - x0) as usize..(x_to - x0) as usize];
+            for (v, &d) in dst.iter_mut().zip(src) {
+                *v = if d < *v { d } else { *v };
             }
         }
     }
@@ -107,15 +135,26 @@ impl ObstacleDistance {
                     if grid.data[(oy * w + ox) as usize] != Occupancy::Occupied {
                         continue;
                     }
-                    for &(dx, dy, d) in &self.disc {
-                        let (x, y) = (ox + dx, oy + dy);
-                        let (rx, ry) = (x - c.x, y - c.y);
-                        if rx * rx + ry * ry >= cap * cap || x < 0 || y < 0 || x >= w || y >= h {
+                    // Each row of the obstacle's disc, cut to the reset disc (cells with
+                    // `rx^2 + ry^2 < cap^2` around `c`) and to the frame.
+                    for (dy, dx0, ds) in &self.disc_rows {
+                        let y = oy + dy;
+                        let ry = y - c.y;
+                        if y < 0 || y >= h || ry.abs() >= cap {
                             continue;
                         }
-                        let v = &mut self.data[(y * w + x) as usize];
-                        if d < *v {
-                            *v = d;
+                        let half = self.half_widths[(ry + cap) as usize];
+                        let x0 = ox + dx0;
+                        let x_from = x0.max(c.x - half).max(0);
+                        let x_to = (x0 + ds.len() as i32).min(c.x + half + 1).min(w);
+                        if x_from >= x_to {
+                            continue;
+                        }
+                        let row = (y * w) as usize;
+                        let dst = &mut self.data[row + x_from as usize..row + x_to as usize];
+                        let src = &ds[(x_from - x0) as usize..(x_to - x0) as usize];
+                        for (v, &d) in dst.iter_mut().zip(src) {
+                            *v = if d < *v { d } else { *v };
                         }
                     }
                 }
