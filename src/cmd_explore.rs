@@ -37,6 +37,10 @@ pub struct ExploreArgs {
     /// Drive back to the start after exploring.
     #[arg(long)]
     return_home: bool,
+    /// When a frontier's middle cell cannot be reached, aim at the reachable part of the
+    /// frontier nearest to it instead of passing the frontier over (not the paper's rule).
+    #[arg(long)]
+    candidate_from_reachable_part: bool,
     /// Stop the run at this simulated time (seconds).
     #[arg(long, value_name = "SECONDS")]
     time_limit_s: Option<f64>,
@@ -83,6 +87,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         settings.time_limit_s = t;
     }
     settings.return_home |= a.return_home;
+    settings.candidate_from_reachable_part |= a.candidate_from_reachable_part;
     settings.charge_compute |= a.charge_compute;
     let job = Job {
         building: &building,

@@ -139,6 +139,11 @@ fn explores_real_school_maps_completely() {
         // Starts in open space: the heading drifts by ~3 degrees before the laser sees a wall,
         // so the whole map is turned; the explored area credits what the sensor observed.
         ("modern-office-floor-plan-1", 2),
+        // The last room is seen from the corridor through its door at a slant: the frontier
+        // runs from the door up a strip too narrow to drive, so its middle cell cannot be
+        // reached. The run used to end there (85 % explored); the frontier's reachable end
+        // is now the last resort before ending.
+        ("Lamuniere1", 1),
     ] {
         let map = maps_dir().join(format!("schools/{name}.yaml"));
         let s = explore(&map, seed, &dir.path().join(format!("{name}-{seed}")));

@@ -41,6 +41,12 @@ pub struct Settings {
     pub gain_floor_m2: f64,
     /// Frontiers shorter than this are ignored (m).
     pub min_frontier_m: f64,
+    /// When a frontier's candidate (its middle cell, or a traversable cell within 0.5 m) cannot
+    /// be reached, aim at the reachable cell of the frontier nearest to it instead of passing
+    /// the frontier over. Not in the paper (false = its rule). Written only when true, so that
+    /// the records and job identities of runs without it are those of earlier versions.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub candidate_from_reachable_part: bool,
     /// Re-decide at least this often (s of simulated time).
     pub redecide_period_s: f64,
     /// Radius of the blacklist around unreachable goals (m).
@@ -83,6 +89,7 @@ impl Default for Settings {
             alpha: c.alpha,
             gain_floor_m2: c.gain_floor_m2,
             min_frontier_m: c.min_frontier_m,
+            candidate_from_reachable_part: c.candidate_from_reachable_part,
             redecide_period_s: c.redecide_period_s,
             blacklist_radius_m: c.blacklist_radius_m,
             progress_timeout_s: c.progress_timeout_s,
@@ -203,6 +210,7 @@ impl Settings {
         )?;
         c.gain_floor_m2 = nonneg("gain_floor_m2", self.gain_floor_m2)?;
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
+        c.candidate_from_reachable_part = self.candidate_from_reachable_part;
         c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
         c.blacklist_radius_m = nonneg("blacklist_radius_m", self.blacklist_radius_m)?;
         c.progress_timeout_s = pos("progress_timeout_s", self.progress_timeout_s)?;
@@ -253,6 +261,31 @@ mod tests {
             ..Settings::default()
         };
         assert!(s.to_explore_config().is_err());
+    }
+
+    #[test]
+    fn the_reachable_part_rule_is_recorded_only_when_on() {
+        let off = serde_json::to_value(Settings::default()).unwrap();
+        assert!(off.get("candidate_from_reachable_part").is_none(), "{off}");
+        let on = Settings {
+            candidate_from_reachable_part: true,
+            ..Settings::default()
+        };
+        let v = serde_json::to_value(&on).unwrap();
+        assert_eq!(v["candidate_from_reachable_part"], true);
+        let back: Settings = serde_json::from_value(v).unwrap();
+        assert_eq!(back, on);
+        assert!(
+            back.to_explore_config()
+                .unwrap()
+                .candidate_from_reachable_part
+        );
+        assert!(
+            !Settings::default()
+                .to_explore_config()
+                .unwrap()
+                .candidate_from_reachable_part
+        );
     }
 
     #[test]

@@ -97,6 +97,12 @@ pub struct ExploreConfig {
     pub gain_floor_m2: f64,
     /// Frontiers shorter than this are ignored.
     pub min_frontier_m: f64,
+    /// When a frontier's candidate (its middle cell, or a traversable cell within 0.5 m of it)
+    /// cannot be reached, use the reachable traversable cell of the frontier nearest to it
+    /// instead of passing the frontier over (false = the paper's rule). A frontier seen through
+    /// a door at a slant reaches into the room along a strip too narrow to drive, so its middle
+    /// can lie where the robot cannot go while its other end is at the door.
+    pub candidate_from_reachable_part: bool,
     /// Re-decide at least this often while driving.
     pub redecide_period_s: f64,
     /// Clearance added to the robot radius when planning.
@@ -139,6 +145,7 @@ impl Default for ExploreConfig {
             alpha: 0.5,
             gain_floor_m2: 0.0,
             min_frontier_m: 0.5,
+            candidate_from_reachable_part: false,
             redecide_period_s: 10.0,
             safety_margin_m: 0.05,
             blacklist_radius_m: 0.5,
@@ -873,61 +880,68 @@ impl Explorer<'_> {
         }
     }
 
-    /// Chooses the next goal. Returns false when no reachable candidate is left.
-    fn decide(&mut self) -> bool {
-        let cfg = self.cfg;
-        let frame = self.map.frame;
-        if self.map.known_bounds.is_none() {
-            // Nothing seen yet: wait for the first scan.
-            return true;
+    /// Moves the candidate of every frontier whose goal is unreachable in `plan` to the
+    /// reachable traversable cell of the frontier nearest to it (the first in row-major order
+    /// among equals), if there is one. Returns the plan to score with: a full search when
+    /// `plan`, which stops once its targets are settled, may not cover the new goals.
+    fn reachable_candidates(
+        &mut self,
+        frontiers: &mut [Frontier],
+        goals: &mut [Option<Cell>],
+        plan: Plan,
+    ) -> Plan {
+        let reachable =
+            |plan: &Plan, g: &Option<Cell>| g.and_then(|c| plan.distance_m(c)).is_some();
+        let moved: Vec<usize> = (0..frontiers.len())
+            .filter(|&k| !reachable(&plan, &goals[k]))
+            .collect();
+        if moved.is_empty() {
+            return plan;
         }
-        // A goal just reached and looked at whose frontier is still there cannot be resolved by
-        // going there again: blacklist it.
-        if let Some(p) = self.last_reached.take() {
-            let again = self.goal.as_ref().is_some_and(|g| {
-                g.frontier
-                    .iter()
-                    .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
-                    .count()
-                    * 2
-                    > g.frontier.len()
-            });
-            if again {
-                self.blacklist.add(p, cfg.blacklist_radius_m);
+        // A search without targets, or that missed one, ran to the end; else search everything.
+        let complete = goals.iter().all(|g| g.is_none())
+            || goals.iter().any(|g| g.is_some() && !reachable(&plan, g));
+        let plan = if complete { plan } else { self.plan(&[]) };
+        let trav = self.traversability();
+        let frame = self.map.frame;
+        for k in moved {
+            let f = &mut frontiers[k];
+            let from = f.candidate;
+            let d2 = |c: &Cell| {
+                let (dx, dy) = ((c.x - from.x) as i64, (c.y - from.y) as i64);
+                dx * dx + dy * dy
+            };
+            // (Not where a goal was given up: the robot would come back for ever.)
+            let best = f
+                .cells
+                .iter()
+                .filter(|c| {
+                    trav.at(**c)
+                        && plan.distance_m(**c).is_some()
+                        && !self.blacklist.contains(frame.world_from_cell(**c))
+                })
+                .min_by_key(|c| d2(c));
+            if let Some(&c) = best {
+                f.candidate = c;
+                goals[k] = Some(c);
             }
         }
-        let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
-        let frontiers: Vec<Frontier> = self
-            .frontiers
-            .detect(&self.map.occupancy, &fcfg)
-            .into_iter()
-            .filter(|f| !self.blacklist.contains(frame.world_from_cell(f.candidate)))
-            .collect();
-        self.goal = None;
-        self.follower = PathFollower::default();
-        if frontiers.is_empty() {
-            return false;
-        }
-        let search = (0.5 / frame.resolution_m).ceil() as i32;
-        let goals: Vec<Option<Cell>> = {
-            let trav = self.traversability();
-            frontiers
-                .iter()
-                .map(|f| {
-                    if trav.at(f.candidate) {
-                        Some(f.candidate)
-                    } else {
-                        nearest_by(f.candidate, search, |c| trav.at(c))
-                    }
-                })
-                .collect()
-        };
-        let use_layout = self.refresh_layout();
-        let targets: Vec<Cell> = goals.iter().flatten().copied().collect();
-        self.plans += 1;
-        let plan = self.plan(&targets);
+        plan
+    }
+
+    /// Scores every frontier for the utility: path distance to its goal in `plan` (`None` if
+    /// unreachable or dropped by the strategy's early-stop rule) and information gain. `None`
+    /// when the early-stop rule ends the exploration.
+    fn score(
+        &mut self,
+        frontiers: &[Frontier],
+        goals: &[Option<Cell>],
+        plan: &Plan,
+        use_layout: bool,
+    ) -> Option<Vec<CandidateScore>> {
+        let cfg = self.cfg;
         let mut scores = Vec::with_capacity(frontiers.len());
-        for (f, goal_cell) in frontiers.iter().zip(&goals) {
+        for (f, goal_cell) in frontiers.iter().zip(goals) {
             let distance_m = goal_cell.and_then(|c| plan.distance_m(c));
             let gain_m2 = if distance_m.is_some() {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
@@ -975,22 +989,97 @@ impl Explorer<'_> {
         };
         let (keep, stop) = strategy::early_stop(cfg.strategy.early_stop, &gains);
         if stop {
-            self.stopped_early = true;
-            return false;
+            return None;
         }
         for (k, &i) in keep.iter().zip(&reachable) {
             if !k {
                 scores[i].distance_m = None;
             }
         }
-        let Some(best) = best_candidate(&with_gain_floor(&scores, cfg.gain_floor_m2), cfg.alpha)
-        else {
-            // Frontiers exist but none is reachable: blacklist them all so the run can end.
-            for f in &frontiers {
-                self.blacklist
-                    .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
+        Some(scores)
+    }
+
+    /// Chooses the next goal. Returns false when no reachable candidate is left.
+    fn decide(&mut self) -> bool {
+        let cfg = self.cfg;
+        let frame = self.map.frame;
+        if self.map.known_bounds.is_none() {
+            // Nothing seen yet: wait for the first scan.
+            return true;
+        }
+        // A goal just reached and looked at whose frontier is still there cannot be resolved by
+        // going there again: blacklist it.
+        if let Some(p) = self.last_reached.take() {
+            let again = self.goal.as_ref().is_some_and(|g| {
+                g.frontier
+                    .iter()
+                    .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
+                    .count()
+                    * 2
+                    > g.frontier.len()
+            });
+            if again {
+                self.blacklist.add(p, cfg.blacklist_radius_m);
             }
+        }
+        let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
+        let mut frontiers: Vec<Frontier> = self
+            .frontiers
+            .detect(&self.map.occupancy, &fcfg)
+            .into_iter()
+            .filter(|f| !self.blacklist.contains(frame.world_from_cell(f.candidate)))
+            .collect();
+        self.goal = None;
+        self.follower = PathFollower::default();
+        if frontiers.is_empty() {
             return false;
+        }
+        let search = (0.5 / frame.resolution_m).ceil() as i32;
+        let mut goals: Vec<Option<Cell>> = {
+            let trav = self.traversability();
+            frontiers
+                .iter()
+                .map(|f| {
+                    if trav.at(f.candidate) {
+                        Some(f.candidate)
+                    } else {
+                        nearest_by(f.candidate, search, |c| trav.at(c))
+                    }
+                })
+                .collect()
+        };
+        let use_layout = self.refresh_layout();
+        let targets: Vec<Cell> = goals.iter().flatten().copied().collect();
+        self.plans += 1;
+        let mut plan = self.plan(&targets);
+        // The frontiers' own middle cells first (the paper's rule), unless the settings ask
+        // for the reachable part of every frontier from the start; as a last resort, before
+        // ending the run with frontiers left, their reachable parts: exploration does not end
+        // while a frontier can be reached.
+        let mut moved_to_reachable = cfg.candidate_from_reachable_part;
+        if moved_to_reachable {
+            plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
+        }
+        let (scores, best) = loop {
+            let Some(scores) = self.score(&frontiers, &goals, &plan, use_layout) else {
+                self.stopped_early = true;
+                return false;
+            };
+            match best_candidate(&with_gain_floor(&scores, cfg.gain_floor_m2), cfg.alpha) {
+                Some(best) => break (scores, best),
+                None if !moved_to_reachable => {
+                    moved_to_reachable = true;
+                    plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
+                }
+                None => {
+                    // Frontiers exist but none is reachable: blacklist them all so the run can end.
+                    for f in &frontiers {
+                        self.blacklist
+                            .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
+                    }
+                    return false;
+                }
+            }
         };
         let goal_cell = goals[best].expect("best candidate is reachable");
         let Some(wps) = plan.waypoints_to(goal_cell) else {
