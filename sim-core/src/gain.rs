@@ -61,7 +61,7 @@ pub fn visible_area_indexed(
 const MAX_FAN_CELLS: f64 = 10_000.0;
 
 thread_local! {
-    /// The fan of the last range used (a run uses one laser range), with its bit set of counted cells.
+    /// The fan of the last range used (a run uses one laser range), with its bit set.
     static FAN: std::cell::RefCell<Option<RayFan>> = const { std::cell::RefCell::new(None) };
 }
 
@@ -73,7 +73,7 @@ struct FanNode {
     dy: i16,
     in_range: bool,
     end: u32,
-    stamp: u32,
+    bit: u32,
 }
 
 /// The rays of [`visible_area`] relative to the centre cell, as a prefix tree flattened in
@@ -148,7 +148,7 @@ impl RayFan {
                 dy,
                 in_range: d2 <= r2,
                 end: 0,
-                stamp: ((dy as i32 + half) * side + dx as i32 + half) as u32,
+                bit: ((dy as i32 + half) * side + dx as i32 + half) as u32,
             });
             stack.push((id, true));
             for &ch in children[id as usize].iter().rev() {
@@ -207,7 +207,7 @@ impl RayFan {
                 continue;
             }
             if n.in_range {
-                let (word, bit) = (n.stamp as usize / 64, 1u64 << (n.stamp % 64));
+                let (word, bit) = (n.bit as usize / 64, 1u64 << (n.bit % 64));
                 if self.seen[word] & bit == 0 {
                     self.seen[word] |= bit;
                     if counts(c, idx) {

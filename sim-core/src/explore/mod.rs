@@ -898,10 +898,13 @@ impl Explorer<'_> {
         if moved.is_empty() {
             return plan;
         }
-        // A search without targets, or that missed one, ran to the end; else search everything.
-        let complete = goals.iter().all(|g| g.is_none())
-            || goals.iter().any(|g| g.is_some() && !reachable(&plan, g));
-        let plan = if complete { plan } else { self.plan(&[]) };
+        // The new goals need distances that are final: search everything if the search stopped
+        // at its targets.
+        let plan = if plan.field.is_complete() {
+            plan
+        } else {
+            self.plan(&[])
+        };
         let trav = self.traversability();
         let frame = self.map.frame;
         for k in moved {

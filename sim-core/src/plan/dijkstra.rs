@@ -33,6 +33,8 @@ pub struct CostField {
     /// wide). One array of small records rather than one array per field: a search touches a
     /// cell's cost, entry cost and parent together, and the wavefront visits cells far apart.
     nodes: Vec<Node>,
+    /// Whether the search settled every reachable cell (it did not stop at its targets).
+    complete: bool,
 }
 
 /// The search state of one cell.
@@ -47,6 +49,12 @@ struct Node {
 }
 
 impl CostField {
+    /// Whether every reachable cell is settled: `distance_m` is then final for every cell,
+    /// not only for the search's targets.
+    pub fn is_complete(&self) -> bool {
+        self.complete
+    }
+
     /// Index of `c` in the padded arrays, `None` outside the frame.
     fn padded_index(&self, c: Cell) -> Option<usize> {
         self.frame
@@ -170,6 +178,7 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
     let pw = w + 2;
     let np = pw * (h + 2);
     assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
+    let max_extra = max_extra.min(u16::MAX as u32 - 2);
     let unreached = Node {
         cost: UNREACHED,
         enter: 0,
@@ -179,6 +188,7 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
         frame,
         start,
         nodes: vec![unreached; np],
+        complete: true,
     };
     if !frame.contains(start) {
         return field;
@@ -218,6 +228,7 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
             if targets_left > 0 && is_target[i] {
                 targets_left -= 1;
                 if targets_left == 0 {
+                    field.complete = false;
                     return field;
                 }
             }
