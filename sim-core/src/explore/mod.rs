@@ -600,10 +600,7 @@ impl Explorer<'_> {
     fn credit_explored(&mut self, i: usize, map_to_world: &MapToWorld) {
         const REACH: i32 = 2;
         let frame = self.map.frame;
-        let w = map_to_world.building_cell_of(&frame, frame.cell_of_index(i));
-        for n in (-REACH..=REACH).flat_map(|dy| (-REACH..=REACH).map(move |dx| (dx, dy))) {
-            let n = Cell::new(w.x + n.0, w.y + n.1);
-            let Some(j) = frame.index(n) else { continue };
+        for (j, n) in map_to_world.cells_near(&frame, frame.cell_of_index(i), REACH) {
             // Most neighbours are credited already: test that before transforming back.
             if !self.explored.data[j]
                 && map_to_world
@@ -890,10 +887,8 @@ impl Explorer<'_> {
         goals: &mut [Option<Cell>],
         plan: Plan,
     ) -> Plan {
-        let reachable =
-            |plan: &Plan, g: &Option<Cell>| g.and_then(|c| plan.distance_m(c)).is_some();
         let moved: Vec<usize> = (0..frontiers.len())
-            .filter(|&k| !reachable(&plan, &goals[k]))
+            .filter(|&k| goals[k].and_then(|c| plan.distance_m(c)).is_none())
             .collect();
         if moved.is_empty() {
             return plan;
@@ -1322,20 +1317,18 @@ impl MapToWorld {
         Self::apply(&self.inverse, self.inverse_sc, p)
     }
 
-    /// The building cells (indices, same frame) within `reach` cells of where map cell `c` lies
-    /// in the building, each with the map cell its centre falls in under this motion (`None`
-    /// off the frame).
-    #[cfg(test)]
+    /// The building cells (index, cell; same frame) within `reach` cells of where map cell `c`
+    /// lies in the building. [`Self::map_index_of`] gives the map cell each corresponds to.
     fn cells_near<'a>(
         &'a self,
         frame: &'a GridFrame,
         c: Cell,
         reach: i32,
-    ) -> impl Iterator<Item = (usize, Option<usize>)> + 'a {
+    ) -> impl Iterator<Item = (usize, Cell)> + 'a {
         let w = self.building_cell_of(frame, c);
         (-reach..=reach)
             .flat_map(move |dy| (-reach..=reach).map(move |dx| Cell::new(w.x + dx, w.y + dy)))
-            .filter_map(move |n| Some((frame.index(n)?, self.map_index_of(frame, n))))
+            .filter_map(move |n| Some((frame.index(n)?, n)))
     }
 
     /// The building cell where map cell `c` lies.

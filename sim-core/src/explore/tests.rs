@@ -197,7 +197,7 @@ fn every_building_cell_is_credited_to_exactly_one_map_cell() {
             // The building cells that map back into `c` itself.
             let cells: Vec<usize> = m
                 .cells_near(&frame, c, 1)
-                .filter(|(_, k)| *k == Some(i))
+                .filter(|(_, n)| m.map_index_of(&frame, *n) == Some(i))
                 .map(|(j, _)| j)
                 .collect();
             if estimate == truth {
@@ -220,7 +220,7 @@ fn every_building_cell_is_credited_to_exactly_one_map_cell() {
         let i = frame.index(c).unwrap();
         let j = m
             .cells_near(&frame, c, 1)
-            .find(|(_, k)| *k == Some(i))
+            .find(|(_, n)| m.map_index_of(&frame, *n) == Some(i))
             .unwrap()
             .0;
         let w = frame.cell_of_index(j);

@@ -15,12 +15,11 @@ pub struct ObstacleDistance {
     pub cap_cells: u32,
     /// Row-major, in cells, in `[0, cap_cells]`.
     pub data: Vec<f32>,
-    /// Offsets `(dx, dy, distance)` of the disc of radius `cap_cells`.
-    disc: Vec<(i32, i32, f32)>,
-    /// The same disc by rows: `(dy, first dx, distances)`, for stamping a row at a time.
+    /// The disc of radius `cap_cells` (cells with `dx^2 + dy^2 < cap^2`) by rows:
+    /// `(dy, first dx, distances)`, for stamping a row at a time.
     disc_rows: Vec<(i32, i32, Vec<f32>)>,
-    /// For `ry` in `-cap..=cap` (index `ry + cap`): the largest `r` with `r^2 + ry^2 < cap^2`
-    /// (-1 if none).
+    /// For `ry` in `-cap..=cap` (index `ry + cap`): the disc's half width in that row, the
+    /// largest `r` with `r^2 + ry^2 < cap^2` (-1 if none).
     half_widths: Vec<i32>,
 }
 
@@ -28,23 +27,7 @@ impl ObstacleDistance {
     /// An obstacle-free field (every cell at the cap).
     pub fn new(frame: GridFrame, cap_cells: u32) -> Self {
         let cap = cap_cells.max(1) as i32;
-        let mut disc = Vec::new();
-        for dy in -cap..=cap {
-            for dx in -cap..=cap {
-                let d = ((dx * dx + dy * dy) as f32).sqrt();
-                if d < cap as f32 {
-                    disc.push((dx, dy, d));
-                }
-            }
-        }
-        let mut disc_rows: Vec<(i32, i32, Vec<f32>)> = Vec::new();
-        for &(dx, dy, d) in &disc {
-            match disc_rows.last_mut() {
-                Some(row) if row.0 == dy => row.2.push(d),
-                _ => disc_rows.push((dy, dx, vec![d])),
-            }
-        }
-        let half_widths = (-cap..=cap)
+        let half_widths: Vec<i32> = (-cap..=cap)
             .map(|ry| {
                 (0..=cap)
                     .take_while(|r| r * r + ry * ry < cap * cap)
@@ -52,11 +35,20 @@ impl ObstacleDistance {
                     .unwrap_or(-1)
             })
             .collect();
+        let disc_rows = (-cap..=cap)
+            .zip(&half_widths)
+            .filter(|(_, &hw)| hw >= 0)
+            .map(|(dy, &hw)| {
+                let d = (-hw..=hw)
+                    .map(|dx| ((dx * dx + dy * dy) as f32).sqrt())
+                    .collect();
+                (dy, -hw, d)
+            })
+            .collect();
         Self {
             frame,
             cap_cells: cap as u32,
             data: vec![cap as f32; frame.len()],
-            disc,
             disc_rows,
             half_widths,
         }
@@ -75,22 +67,7 @@ impl ObstacleDistance {
 
     fn stamp(&mut self, c: Cell) {
         let w = self.frame.width as i32;
-        let h = self.frame.height as i32;
-        // Row by row over the part of the disc inside the frame (a loop the compiler vectorises).
-        for (dy, dx0, ds) in &self.disc_rows {
-            let y = c.y + dy;
-            let x0 = c.x + dx0;
-            let (x_from, x_to) = (x0.max(0), (x0 + ds.len() as i32).min(w));
-            if y < 0 || y >= h || x_from >= x_to {
-                continue;
-            }
-            let row = (y * w) as usize;
-            let dst = &mut self.data[row + x_from as usize..row + x_to as usize];
-            let src = &ds[(x_from - x0) as usize..(x_to - x0) as usize];
-            for (v, &d) in dst.iter_mut().zip(src) {
-                *v = if d < *v { d } else { *v };
-            }
-        }
+        stamp_rows(&mut self.data, w, &self.disc_rows, c, |_| (0, w));
     }
 
     /// Brings the field up to date after the cells at `flips` (row-major indices into `grid`,
@@ -124,10 +101,13 @@ impl ObstacleDistance {
         for &c in &removed {
             // Reset the disc around the removed obstacle, then restamp from the obstacles that
             // can reach it (within twice the cap), limited to that disc.
-            for &(dx, dy, _) in &self.disc {
-                let (x, y) = (c.x + dx, c.y + dy);
-                if x >= 0 && y >= 0 && x < w && y < h {
-                    self.data[(y * w + x) as usize] = cap as f32;
+            for (dy, dx0, ds) in &self.disc_rows {
+                let y = c.y + dy;
+                let x0 = c.x + dx0;
+                let (x_from, x_to) = (x0.max(0), (x0 + ds.len() as i32).min(w));
+                if y >= 0 && y < h && x_from < x_to {
+                    let row = (y * w) as usize;
+                    self.data[row + x_from as usize..row + x_to as usize].fill(cap as f32);
                 }
             }
             for oy in (c.y - 2 * cap).max(0)..=(c.y + 2 * cap).min(h - 1) {
@@ -135,28 +115,15 @@ impl ObstacleDistance {
                     if grid.data[(oy * w + ox) as usize] != Occupancy::Occupied {
                         continue;
                     }
-                    // Each row of the obstacle's disc, cut to the reset disc (cells with
-                    // `rx^2 + ry^2 < cap^2` around `c`) and to the frame.
-                    for (dy, dx0, ds) in &self.disc_rows {
-                        let y = oy + dy;
-                        let ry = y - c.y;
-                        if y < 0 || y >= h || ry.abs() >= cap {
-                            continue;
+                    // The obstacle's disc, cut to the reset disc (cells with
+                    // `rx^2 + ry^2 < cap^2` around `c`).
+                    let half_widths = &self.half_widths;
+                    stamp_rows(&mut self.data, w, &self.disc_rows, Cell::new(ox, oy), |y| {
+                        match half_widths.get((y - c.y + cap) as usize) {
+                            Some(&half) => (c.x - half, c.x + half + 1),
+                            None => (0, 0),
                         }
-                        let half = self.half_widths[(ry + cap) as usize];
-                        let x0 = ox + dx0;
-                        let x_from = x0.max(c.x - half).max(0);
-                        let x_to = (x0 + ds.len() as i32).min(c.x + half + 1).min(w);
-                        if x_from >= x_to {
-                            continue;
-                        }
-                        let row = (y * w) as usize;
-                        let dst = &mut self.data[row + x_from as usize..row + x_to as usize];
-                        let src = &ds[(x_from - x0) as usize..(x_to - x0) as usize];
-                        for (v, &d) in dst.iter_mut().zip(src) {
-                            *v = if d < *v { d } else { *v };
-                        }
-                    }
+                    });
                 }
             }
         }
@@ -186,6 +153,37 @@ impl ObstacleDistance {
         let gx = ((v10 - v00) * (1.0 - fy) + (v11 - v01) * fy) * inv_res;
         let gy = ((v01 - v00) * (1.0 - fx) + (v11 - v10) * fx) * inv_res;
         (d, Vec2::new(gx, gy))
+    }
+}
+
+/// Lowers `data` (a grid `w` cells wide) to the distances of the disc `rows` centred at `o`,
+/// in each row `y` only for `x` in `bounds(y)` (half-open) and inside the grid. Row by row: a
+/// loop the compiler vectorises.
+fn stamp_rows(
+    data: &mut [f32],
+    w: i32,
+    rows: &[(i32, i32, Vec<f32>)],
+    o: Cell,
+    bounds: impl Fn(i32) -> (i32, i32),
+) {
+    let h = data.len() as i32 / w.max(1);
+    for (dy, dx0, ds) in rows {
+        let y = o.y + dy;
+        if y < 0 || y >= h {
+            continue;
+        }
+        let (lo, hi) = bounds(y);
+        let x0 = o.x + dx0;
+        let (x_from, x_to) = (x0.max(lo).max(0), (x0 + ds.len() as i32).min(hi).min(w));
+        if x_from >= x_to {
+            continue;
+        }
+        let row = (y * w) as usize;
+        let dst = &mut data[row + x_from as usize..row + x_to as usize];
+        let src = &ds[(x_from - x0) as usize..(x_to - x0) as usize];
+        for (v, &d) in dst.iter_mut().zip(src) {
+            *v = if d < *v { d } else { *v };
+        }
     }
 }
 

@@ -33,6 +33,7 @@ impl CoarseCosts {
     }
 
     /// The costs row-major over `frame` (unpadded).
+    #[cfg(test)]
     pub fn costs(&self) -> Vec<u8> {
         let (w, h) = (self.frame.width as i32, self.frame.height as i32);
         (0..h)
