@@ -34,6 +34,11 @@ pub struct ExploreArgs {
     /// The utility's weight of distance against information gain.
     #[arg(long)]
     alpha: Option<f64>,
+    /// What the utility's distance D(p) measures: the planned path's length, or the straight
+    /// line from the robot to the candidate as the paper defines it (default: path, or the
+    /// settings file's).
+    #[arg(long, value_parser = ["path", "euclidean"])]
+    utility_distance: Option<String>,
     /// Drive back to the start after exploring.
     #[arg(long)]
     return_home: bool,
@@ -85,6 +90,9 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     }
     if let Some(t) = a.time_limit_s {
         settings.time_limit_s = t;
+    }
+    if let Some(d) = &a.utility_distance {
+        settings.utility_distance = d.clone();
     }
     settings.return_home |= a.return_home;
     settings.candidate_from_reachable_part |= a.candidate_from_reachable_part;

@@ -4,10 +4,40 @@
 //! `d(p) = (Dmax - D(p)) / Dmax` and `i(p) = I(p) / Imax`, maxima over the reachable candidates.
 //! When `Dmax = 0` every `d(p)` is 1 (all equally close); when `Imax = 0` every `i(p)` is 0.
 
+/// What the distance `D(p)` of the utility measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum UtilityDistance {
+    /// The length of the planned path from the robot to the candidate (floorcast's default: a
+    /// candidate behind a wall is as far as the way around it).
+    #[default]
+    Path,
+    /// The straight-line distance from the robot to the candidate, as the paper defines
+    /// `D(p, p_R)`. Candidates must still be reachable to be chosen.
+    Euclidean,
+}
+
+impl UtilityDistance {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Path => "path",
+            Self::Euclidean => "euclidean",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "path" => Some(Self::Path),
+            "euclidean" => Some(Self::Euclidean),
+            _ => None,
+        }
+    }
+}
+
 /// What the utility needs to know about one candidate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CandidateScore {
-    /// Path distance from the robot (m); `None` = unreachable (never chosen).
+    /// Distance from the robot (m; see [`UtilityDistance`]); `None` = unreachable (never
+    /// chosen).
     pub distance_m: Option<f64>,
     /// Expected information gain `I(p)` (m2).
     pub gain_m2: f64,

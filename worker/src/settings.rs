@@ -3,7 +3,7 @@
 //! job's identity hashes. Converted by hand into `sim-core`'s config and validated on the way.
 
 use serde::{Deserialize, Serialize};
-use sim_core::explore::{EarlyStop, ExploreConfig, Localization, Strategy};
+use sim_core::explore::{EarlyStop, ExploreConfig, Localization, Strategy, UtilityDistance};
 
 /// Settings as written in files and records. Every field has the documented default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -39,6 +39,12 @@ pub struct Settings {
     /// utility. Not in the paper: it keeps the robot from crossing the building for one small
     /// residual frontier while leaving another behind (see the README).
     pub gain_floor_m2: f64,
+    /// What the utility's distance `D(p)` measures: "path" (default: the planned path's length)
+    /// or "euclidean" (the straight line from the robot to the candidate, as the paper defines
+    /// it). Written only when not "path", so that the records and job identities of runs with
+    /// the default are those of earlier versions.
+    #[serde(skip_serializing_if = "is_path")]
+    pub utility_distance: String,
     /// Frontiers shorter than this are ignored (m).
     pub min_frontier_m: f64,
     /// When a frontier's candidate (its middle cell, or a traversable cell within 0.5 m) cannot
@@ -70,6 +76,10 @@ pub struct Settings {
     pub charge_compute: bool,
 }
 
+fn is_path(s: &str) -> bool {
+    s == UtilityDistance::Path.as_str()
+}
+
 impl Default for Settings {
     fn default() -> Self {
         let c = ExploreConfig::default();
@@ -88,6 +98,7 @@ impl Default for Settings {
             map_resolution_m: c.map_resolution_m,
             alpha: c.alpha,
             gain_floor_m2: c.gain_floor_m2,
+            utility_distance: c.utility_distance.as_str().to_string(),
             min_frontier_m: c.min_frontier_m,
             candidate_from_reachable_part: c.candidate_from_reachable_part,
             redecide_period_s: c.redecide_period_s,
@@ -114,6 +125,8 @@ pub enum SettingsError {
     },
     #[error("settings.localization: unknown value '{0}', expected slam, odometry or ground-truth")]
     Localization(String),
+    #[error("settings.utility_distance: unknown value '{0}', expected path or euclidean")]
+    UtilityDistance(String),
     #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch, layout-gaps, layout-gaps-es)")]
     Strategy(String),
 }
@@ -209,6 +222,8 @@ impl Settings {
             "a number in [0, 1]",
         )?;
         c.gain_floor_m2 = nonneg("gain_floor_m2", self.gain_floor_m2)?;
+        c.utility_distance = UtilityDistance::from_name(&self.utility_distance)
+            .ok_or_else(|| SettingsError::UtilityDistance(self.utility_distance.clone()))?;
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
         c.candidate_from_reachable_part = self.candidate_from_reachable_part;
         c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
@@ -285,6 +300,33 @@ mod tests {
                 .to_explore_config()
                 .unwrap()
                 .candidate_from_reachable_part
+        );
+    }
+
+    #[test]
+    fn the_utility_distance_is_recorded_only_when_not_the_default() {
+        let off = serde_json::to_value(Settings::default()).unwrap();
+        assert!(off.get("utility_distance").is_none(), "{off}");
+        let on = Settings {
+            utility_distance: "euclidean".into(),
+            ..Settings::default()
+        };
+        let v = serde_json::to_value(&on).unwrap();
+        assert_eq!(v["utility_distance"], "euclidean");
+        let back: Settings = serde_json::from_value(v).unwrap();
+        assert_eq!(back, on);
+        assert_eq!(
+            back.to_explore_config().unwrap().utility_distance,
+            UtilityDistance::Euclidean
+        );
+        let bad = Settings {
+            utility_distance: "manhattan".into(),
+            ..Settings::default()
+        };
+        let e = bad.to_explore_config().unwrap_err().to_string();
+        assert!(
+            e.contains("settings.utility_distance") && e.contains("manhattan"),
+            "{e}"
         );
     }
 

@@ -227,3 +227,38 @@ fn every_building_cell_is_credited_to_exactly_one_map_cell() {
         assert!((frame.world_from_cell(w) - truth.position()).norm() < 0.1);
     }
 }
+
+#[test]
+fn the_euclidean_utility_distance_is_the_straight_line_to_the_candidate() {
+    let b = corridor_building(4);
+    let run = |d: UtilityDistance| {
+        let cfg = ExploreConfig {
+            localization: Localization::GroundTruth,
+            utility_distance: d,
+            ..ExploreConfig::default()
+        };
+        explore(&b, b.start.unwrap(), &cfg, 1, &mut |_| {})
+    };
+    let (path, straight) = (run(UtilityDistance::Path), run(UtilityDistance::Euclidean));
+    for r in [&path, &straight] {
+        assert_eq!(r.end_reason, EndReason::NoFrontiers);
+        assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
+    }
+    // The goal is the candidate or a traversable cell within 0.5 m of it.
+    let slack = 0.5 + 0.05;
+    let mut behind_walls = 0;
+    for d in &path.decisions {
+        let line = (d.goal - d.pose.position()).norm();
+        // A path is no shorter than the straight line (up to the start cell and the goal's
+        // offset from its candidate).
+        assert!(d.distance_m >= line - 2.0 * slack, "{d:?}");
+        behind_walls += usize::from(d.distance_m > line + 2.0);
+    }
+    for d in &straight.decisions {
+        let line = (d.goal - d.pose.position()).norm();
+        assert!((d.distance_m - line).abs() <= slack, "{d:?}");
+    }
+    // Rooms off a corridor: some candidates are much nearer in a straight line than by path.
+    assert!(behind_walls > 0);
+    assert_ne!(path.decisions.len(), 0);
+}
