@@ -59,16 +59,6 @@ impl PathFollower {
         &self.waypoints[self.next.min(self.waypoints.len())..]
     }
 
-    /// Length of the rest of the path for a robot at `p`: to the next waypoint, then along
-    /// the remaining ones (0 for an empty path).
-    pub fn remaining_length_m(&self, p: Vec2) -> f64 {
-        let rest = self.remaining();
-        let Some(first) = rest.first() else {
-            return 0.0;
-        };
-        (first - p).norm() + rest.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>()
-    }
-
     pub fn goal(&self) -> Option<Vec2> {
         self.waypoints.last().copied()
     }
@@ -137,22 +127,6 @@ mod tests {
             }
         }
         panic!("did not arrive; at {pose:?}");
-    }
-
-    #[test]
-    fn remaining_length_follows_the_path() {
-        let f = PathFollower::new(vec![
-            Vec2::new(0.0, 0.0),
-            Vec2::new(3.0, 0.0),
-            Vec2::new(3.0, 4.0),
-        ]);
-        assert!((f.remaining_length_m(Vec2::new(0.0, 0.0)) - 7.0).abs() < 1e-12);
-        // Off the path: the way back to the next waypoint counts.
-        assert!((f.remaining_length_m(Vec2::new(0.0, 1.0)) - 8.0).abs() < 1e-12);
-        assert_eq!(
-            PathFollower::default().remaining_length_m(Vec2::zeros()),
-            0.0
-        );
     }
 
     #[test]

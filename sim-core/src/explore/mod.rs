@@ -308,8 +308,6 @@ struct Explorer<'a> {
     /// Where the robot has stayed (within `STILL_RADIUS_M`) since `still_since_s`.
     still_at: Vec2,
     still_since_s: f64,
-    /// Interrupted pursuits, oldest first.
-    pursuits: Vec<Pursuit>,
     /// For the switch strategy: the layout has been judged reliable.
     layout_trusted: bool,
     stopped_early: bool,
@@ -335,6 +333,8 @@ struct LayoutState {
 }
 
 struct Goal {
+    /// Where the robot drives: the candidate, or the nearest traversable cell to it.
+    cell: Cell,
     /// The frontier's candidate (its middle cell). Blacklisting applies to candidates, so it
     /// is recorded here: the goal cell may lie farther from it than the blacklist radius, and
     /// blacklisting the goal cell would then leave the candidate to be chosen again forever.
@@ -346,36 +346,9 @@ struct Goal {
     /// Cells of the frontier it was chosen for.
     frontier: Vec<Cell>,
     decided_at_s: f64,
-    /// Shortest remaining path length to the goal so far (carried over from an earlier pursuit
-    /// of the same candidate, see [`Pursuit`]), and when it was reached (moved back by the time
-    /// already spent without progress).
     best_distance_m: f64,
     best_distance_at_s: f64,
 }
-
-/// What is left of an interrupted pursuit of a candidate: a re-decision that chooses the same
-/// candidate again resumes its progress timeout instead of restarting it. Without this, the
-/// periodic re-decision (`redecide_period_s`, shorter than `progress_timeout_s`) restarted the
-/// timeout before it could expire, and a robot alternating between goals whose paths lead
-/// away from each other (e.g. with straight-line distances in the utility, two candidates
-/// behind walls, each nearer in a straight line once the robot heads for the other) shuttled
-/// between them until the time limit.
-#[derive(Debug, Clone, Copy)]
-struct Pursuit {
-    candidate: Cell,
-    best_distance_m: f64,
-    stalled_s: f64,
-    /// Known map cells when it was interrupted: a pursuit resumed after the map grew by
-    /// `PURSUIT_RESET_M2` starts afresh (the robot was doing something useful meanwhile).
-    known_cells: usize,
-}
-
-/// Interrupted pursuits remembered (the most recent ones).
-const MAX_PURSUITS: usize = 16;
-/// New map area that ends the memory of an interrupted pursuit (m2).
-const PURSUIT_RESET_M2: f64 = 1.0;
-/// A candidate within this distance of an interrupted pursuit's resumes it (m).
-const PURSUIT_MATCH_M: f64 = 0.5;
 
 /// Runs one exploration. `on_progress` sees every progress sample as it is made (for a
 /// progress bar); it must not affect the run. Layouts are computed "in the background" (no delay
@@ -452,7 +425,6 @@ pub fn explore_charged<'a>(
         layouts_computed: 0,
         still_at: start.position(),
         still_since_s: 0.0,
-        pursuits: Vec::new(),
         layout_cost,
         compute_debt_s: 0.0,
         layout_compute_s: 0.0,
@@ -726,9 +698,8 @@ impl Explorer<'_> {
         if still * 5 < goal.frontier.len() {
             return true;
         }
-        // No progress toward the goal for too long (along the path, so that a way around a
-        // wall counts as progress): abandon it.
-        let d = self.follower.remaining_length_m(self.estimate.position());
+        // No progress toward the goal for too long: abandon it.
+        let d = (self.estimate.position() - self.map.frame.world_from_cell(goal.cell)).norm();
         if d < goal.best_distance_m - 0.1 {
             goal.best_distance_m = d;
             goal.best_distance_at_s = now;
@@ -1070,9 +1041,7 @@ impl Explorer<'_> {
             .into_iter()
             .filter(|f| !self.blacklist.contains(frame.world_from_cell(f.candidate)))
             .collect();
-        if let Some(g) = self.goal.take() {
-            self.interrupt(g);
-        }
+        self.goal = None;
         self.follower = PathFollower::default();
         if frontiers.is_empty() {
             return false;
@@ -1133,6 +1102,7 @@ impl Explorer<'_> {
             return true;
         };
         let now = self.sim.time_s();
+        let dist = (self.estimate.position() - frame.world_from_cell(goal_cell)).norm();
         self.decisions.push(Decision {
             time_s: now,
             pose: self.estimate,
@@ -1142,57 +1112,19 @@ impl Explorer<'_> {
             distance_m: scores[best].distance_m.unwrap_or(0.0),
         });
         self.follower = PathFollower::new(wps);
-        let (best_distance_m, stalled_s) = self.resume(frontiers[best].candidate).unwrap_or((
-            self.follower.remaining_length_m(self.estimate.position()),
-            0.0,
-        ));
         let look_at = unknown_centroid(&self.map.occupancy, &frontiers[best].cells)
             .unwrap_or_else(|| frame.world_from_cell(frontiers[best].candidate));
         self.goal = Some(Goal {
+            cell: goal_cell,
             candidate: frontiers[best].candidate,
             look_at,
             arrived: false,
             frontier: frontiers[best].cells.clone(),
             decided_at_s: now,
-            best_distance_m,
-            best_distance_at_s: now - stalled_s,
+            best_distance_m: dist,
+            best_distance_at_s: now,
         });
         true
-    }
-
-    /// Remembers the progress of a goal left unreached by a re-decision (see [`Pursuit`]).
-    fn interrupt(&mut self, g: Goal) {
-        let frame = self.map.frame;
-        let at = frame.world_from_cell(g.candidate);
-        let near =
-            |p: &Pursuit| (frame.world_from_cell(p.candidate) - at).norm() <= PURSUIT_MATCH_M;
-        self.pursuits.retain(|p| !near(p));
-        if g.arrived {
-            return;
-        }
-        if self.pursuits.len() == MAX_PURSUITS {
-            self.pursuits.remove(0);
-        }
-        self.pursuits.push(Pursuit {
-            candidate: g.candidate,
-            best_distance_m: g.best_distance_m,
-            stalled_s: (self.sim.time_s() - g.best_distance_at_s).max(0.0),
-            known_cells: self.known_cells,
-        });
-    }
-
-    /// The best remaining path length and the time without progress of an interrupted pursuit
-    /// of (a candidate near) `candidate`, unless the map has grown since.
-    fn resume(&mut self, candidate: Cell) -> Option<(f64, f64)> {
-        let frame = self.map.frame;
-        let at = frame.world_from_cell(candidate);
-        let k = self
-            .pursuits
-            .iter()
-            .rposition(|p| (frame.world_from_cell(p.candidate) - at).norm() <= PURSUIT_MATCH_M)?;
-        let p = self.pursuits.remove(k);
-        let grown_m2 = self.known_cells.saturating_sub(p.known_cells) as f64 * frame.cell_area_m2();
-        (grown_m2 < PURSUIT_RESET_M2).then_some((p.best_distance_m, p.stalled_s))
     }
 
     fn drive(&mut self) {
