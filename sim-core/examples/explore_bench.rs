@@ -52,6 +52,9 @@ fn main() {
         };
         cfg.calibrate_odometry = !has("nocal");
         for a in &args {
+            if let Some(v) = a.strip_prefix("redecide=").and_then(|v| v.parse().ok()) {
+                cfg.redecide_period_s = v;
+            }
             if let Some(v) = a.strip_prefix("upd=") {
                 let v: Vec<f64> = v.split(',').filter_map(|x| x.parse().ok()).collect();
                 if let [d, r, t] = v[..] {

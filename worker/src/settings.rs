@@ -53,8 +53,11 @@ pub struct Settings {
     /// the records and job identities of runs without it are those of earlier versions.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub candidate_from_reachable_part: bool,
-    /// Re-decide at least this often (s of simulated time).
+    /// Re-decide this often while driving to a goal (s of simulated time)...
     pub redecide_period_s: f64,
+    /// ...once the map has grown by at least this much since the last decision (m2; 0 = at
+    /// every period).
+    pub redecide_min_growth_m2: f64,
     /// Radius of the blacklist around unreachable goals (m).
     pub blacklist_radius_m: f64,
     /// Abandon a goal after this long without progress (s).
@@ -102,6 +105,7 @@ impl Default for Settings {
             min_frontier_m: c.min_frontier_m,
             candidate_from_reachable_part: c.candidate_from_reachable_part,
             redecide_period_s: c.redecide_period_s,
+            redecide_min_growth_m2: c.redecide_min_growth_m2,
             blacklist_radius_m: c.blacklist_radius_m,
             progress_timeout_s: c.progress_timeout_s,
             time_limit_s: c.time_limit_s,
@@ -227,6 +231,7 @@ impl Settings {
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
         c.candidate_from_reachable_part = self.candidate_from_reachable_part;
         c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
+        c.redecide_min_growth_m2 = nonneg("redecide_min_growth_m2", self.redecide_min_growth_m2)?;
         c.blacklist_radius_m = nonneg("blacklist_radius_m", self.blacklist_radius_m)?;
         c.progress_timeout_s = pos("progress_timeout_s", self.progress_timeout_s)?;
         c.time_limit_s = pos("time_limit_s", self.time_limit_s)?;

@@ -32,6 +32,8 @@ pub struct PathFollower {
     waypoints: Vec<Vec2>,
     /// Index of the first waypoint not yet passed.
     next: usize,
+    /// Where the path starts, if known.
+    start: Option<Vec2>,
 }
 
 /// What the follower asks of the robot.
@@ -43,7 +45,20 @@ pub enum Command {
 
 impl PathFollower {
     pub fn new(waypoints: Vec<Vec2>) -> Self {
-        Self { waypoints, next: 0 }
+        Self {
+            waypoints,
+            next: 0,
+            start: None,
+        }
+    }
+
+    /// A path from `start` (where the robot stands) through `waypoints`.
+    pub fn from(start: Vec2, waypoints: Vec<Vec2>) -> Self {
+        Self {
+            waypoints,
+            next: 0,
+            start: Some(start),
+        }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -55,8 +70,29 @@ impl PathFollower {
     }
 
     /// Remaining waypoints, from the next one.
+    /// The start of the segment being followed (the waypoint passed last, or the start given to
+    /// [`PathFollower::from`]) and the waypoints left.
+    pub fn current_segment(&self) -> Option<(Vec2, &[Vec2])> {
+        let rest = self.remaining();
+        let from = match self.next {
+            0 => self.start?,
+            k => *self.waypoints.get(k - 1)?,
+        };
+        (!rest.is_empty()).then_some((from, rest))
+    }
+
     pub fn remaining(&self) -> &[Vec2] {
         &self.waypoints[self.next.min(self.waypoints.len())..]
+    }
+
+    /// Length (m) of the path left from `p`: to the waypoint being approached, then along the
+    /// rest (0 for an empty path).
+    pub fn remaining_length_m(&self, p: Vec2) -> f64 {
+        let rest = self.remaining();
+        let Some(first) = rest.first() else {
+            return 0.0;
+        };
+        (first - p).norm() + rest.windows(2).map(|w| (w[1] - w[0]).norm()).sum::<f64>()
     }
 
     pub fn goal(&self) -> Option<Vec2> {
@@ -127,6 +163,30 @@ mod tests {
             }
         }
         panic!("did not arrive; at {pose:?}");
+    }
+
+    #[test]
+    fn the_path_left_is_measured_from_the_robot_along_the_waypoints() {
+        let wps = vec![Vec2::new(3.0, 0.0), Vec2::new(3.0, 4.0)];
+        let mut f = PathFollower::from(Vec2::new(0.0, 0.0), wps.clone());
+        // 3 m to the first waypoint, 4 m on.
+        assert!((f.remaining_length_m(Vec2::new(0.0, 0.0)) - 7.0).abs() < 1e-12);
+        assert_eq!(f.current_segment(), Some((Vec2::new(0.0, 0.0), &wps[..])));
+        // Past the first waypoint (within the lookahead), on the second segment.
+        let _ = f.command(
+            &Pose::new(2.9, 0.0, 0.0),
+            &FollowConfig::default(),
+            0.5,
+            1.0,
+        );
+        assert_eq!(f.current_segment(), Some((wps[0], &wps[1..])));
+        assert!((f.remaining_length_m(Vec2::new(3.0, 1.0)) - 3.0).abs() < 1e-12);
+        // Without a known start the first segment has none; an empty path has nothing left.
+        assert_eq!(PathFollower::new(wps).current_segment(), None);
+        assert_eq!(
+            PathFollower::default().remaining_length_m(Vec2::zeros()),
+            0.0
+        );
     }
 
     #[test]

@@ -3,15 +3,15 @@
 //!
 //! The map is divided into square blocks; every ternary change of a cell stamps its block with
 //! the current map-update number. A gain computed at update `k` for cell `p` stays valid while
-//! no block within the laser range of `p` has a later stamp (the gain only depends on cells
-//! within range).
+//! no block that comes within the laser range of `p` (plus two cells, for the cells a ray crosses
+//! at its very end) has a later stamp: the gain only depends on cells within range.
 
 use std::collections::BTreeMap;
 
 use crate::grid::{Cell, GridFrame};
 
 /// Side of a block in cells.
-const BLOCK_CELLS: i32 = 32;
+const BLOCK_CELLS: i32 = 16;
 
 #[derive(Debug, Clone)]
 pub(crate) struct GainCache {
@@ -74,15 +74,25 @@ impl GainCache {
     }
 
     fn last_change_near(&self, p: Cell, range_m: f64) -> u64 {
-        let r = (range_m / self.frame.resolution_m).ceil() as i32 + 1;
-        let bx0 = ((p.x - r) / BLOCK_CELLS).max(0);
-        let by0 = ((p.y - r) / BLOCK_CELLS).max(0);
-        let bx1 = ((p.x + r) / BLOCK_CELLS).min(self.blocks_w - 1);
-        let by1 = ((p.y + r) / BLOCK_CELLS).min(self.blocks_h - 1);
+        let r = (range_m / self.frame.resolution_m).ceil() as i32 + 2;
+        let bx0 = (p.x - r).div_euclid(BLOCK_CELLS).max(0);
+        let by0 = (p.y - r).div_euclid(BLOCK_CELLS).max(0);
+        let bx1 = (p.x + r).div_euclid(BLOCK_CELLS).min(self.blocks_w - 1);
+        let by1 = (p.y + r).div_euclid(BLOCK_CELLS).min(self.blocks_h - 1);
+        // Distance (cells) from `p` to the nearest cell of the block range `lo..lo + BLOCK`.
+        let gap = |v: i32, b: i32| {
+            let lo = b * BLOCK_CELLS;
+            (lo - v).max(v - (lo + BLOCK_CELLS - 1)).max(0) as i64
+        };
+        let r2 = r as i64 * r as i64;
         let mut last = 0;
         for by in by0..=by1 {
+            let gy = gap(p.y, by);
             for bx in bx0..=bx1 {
-                last = last.max(self.stamps[(by * self.blocks_w + bx) as usize]);
+                let gx = gap(p.x, bx);
+                if gx * gx + gy * gy <= r2 {
+                    last = last.max(self.stamps[(by * self.blocks_w + bx) as usize]);
+                }
             }
         }
         last
@@ -108,5 +118,21 @@ mod tests {
         cache.touch(frame.index(Cell::new(30, 25)).unwrap() as u32, 4);
         assert_eq!(cache.gain(p, 1.0, 4, || 7.0), 7.0);
         assert_eq!(cache.gain(p, 1.0, 5, || 9.0), 7.0);
+    }
+
+    #[test]
+    fn a_change_in_the_corner_of_the_square_around_the_range_keeps_the_gain() {
+        let frame = GridFrame::new(Vec2::zeros(), 0.05, 100, 100);
+        let mut cache = GainCache::new(frame);
+        // Range 2 m = 40 cells (42 with the margin) around (8, 8).
+        let p = Cell::new(8, 8);
+        assert_eq!(cache.gain(p, 2.0, 1, || 5.0), 5.0);
+        // (49, 49) is 58 cells away, in the block (48..64)^2 that a square around the range
+        // covers but the range does not reach.
+        cache.touch(frame.index(Cell::new(49, 49)).unwrap() as u32, 2);
+        assert_eq!(cache.gain(p, 2.0, 2, || 7.0), 5.0);
+        // (48, 8), in the same row of blocks, is 40 cells away: within range.
+        cache.touch(frame.index(Cell::new(48, 8)).unwrap() as u32, 3);
+        assert_eq!(cache.gain(p, 2.0, 3, || 7.0), 7.0);
     }
 }

@@ -6,12 +6,17 @@ use crate::geom::Vec2;
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Blacklist {
     pub entries: Vec<BlacklistEntry>,
+    /// Entries ever added (forgiven ones included).
+    added: usize,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BlacklistEntry {
     pub goal_m: Vec2,
     pub radius_m: f64,
+    /// Given up (no progress, or standing still) rather than found unreachable: may be
+    /// forgiven.
+    pub given_up: bool,
 }
 
 impl Blacklist {
@@ -19,11 +24,35 @@ impl Blacklist {
         Self::default()
     }
 
+    /// Blacklists a goal that cannot be reached.
     pub fn add(&mut self, goal_m: Vec2, radius_m: f64) {
+        self.push(goal_m, radius_m, false);
+    }
+
+    /// Blacklists a goal given up (no progress toward it); [`Blacklist::forgive`] lifts it.
+    pub fn give_up(&mut self, goal_m: Vec2, radius_m: f64) {
+        self.push(goal_m, radius_m, true);
+    }
+
+    fn push(&mut self, goal_m: Vec2, radius_m: f64, given_up: bool) {
         self.entries.push(BlacklistEntry {
             goal_m,
             radius_m: radius_m.max(0.0),
+            given_up,
         });
+        self.added += 1;
+    }
+
+    /// Removes the goals given up; returns how many.
+    pub fn forgive(&mut self) -> usize {
+        let before = self.entries.len();
+        self.entries.retain(|e| !e.given_up);
+        before - self.entries.len()
+    }
+
+    /// Entries ever added, forgiven ones included.
+    pub fn added(&self) -> usize {
+        self.added
     }
 
     /// Whether `p` lies within the radius of a blacklisted goal (boundary included).
@@ -58,5 +87,19 @@ mod tests {
         assert!(b.contains(Vec2::new(5.0, 5.0)));
         assert!(!b.contains(Vec2::new(5.0, 5.01)));
         assert_eq!(b.len(), 2);
+    }
+
+    #[test]
+    fn only_goals_given_up_are_forgiven() {
+        let mut b = Blacklist::new();
+        b.add(Vec2::new(0.0, 0.0), 0.5);
+        b.give_up(Vec2::new(3.0, 0.0), 0.5);
+        b.give_up(Vec2::new(6.0, 0.0), 0.5);
+        assert!(b.contains(Vec2::new(3.0, 0.0)));
+        assert_eq!(b.forgive(), 2);
+        assert!(!b.contains(Vec2::new(3.0, 0.0)) && !b.contains(Vec2::new(6.0, 0.0)));
+        assert!(b.contains(Vec2::new(0.0, 0.0)));
+        assert_eq!((b.len(), b.added()), (1, 3));
+        assert_eq!(b.forgive(), 0);
     }
 }

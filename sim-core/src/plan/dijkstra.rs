@@ -279,6 +279,175 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
     field
 }
 
+/// The cheapest path from `start` to `goal` on a grid given as [`dijkstra_padded`] takes it,
+/// found by A* (octile distance as the heuristic, consistent with the step costs, so the cost
+/// is the one Dijkstra finds; among paths of equal cost it may pick another). Its buffers are
+/// kept between searches and only the cells a search touched are reset, so a short path costs
+/// little however large the grid. An unreachable goal costs a search of everything reachable.
+#[derive(Debug, Clone, Default)]
+pub struct AStar {
+    /// Per padded cell: cost units from the start (`u32::MAX` = not reached) and the step that
+    /// entered the cell.
+    cost: Vec<u32>,
+    parent: Vec<u8>,
+    touched: Vec<u32>,
+    buckets: Vec<Vec<u32>>,
+}
+
+impl AStar {
+    /// The path (start and goal included) and its cost in metres (extra costs included), or
+    /// `None` when `goal` cannot be reached.
+    pub fn path<T: Copy + Into<u32>>(
+        &mut self,
+        frame: GridFrame,
+        start: Cell,
+        enter: &[T],
+        max_extra: u32,
+        goal: Cell,
+    ) -> Option<(Vec<Cell>, f64)> {
+        self.path_within(frame, start, enter, max_extra, goal, |_| true)
+    }
+
+    /// [`AStar::path`] through the cells for which `allowed` holds only (the start excepted),
+    /// e.g. a corridor around a path found on a coarser grid.
+    pub fn path_within<T: Copy + Into<u32>>(
+        &mut self,
+        frame: GridFrame,
+        start: Cell,
+        enter: &[T],
+        max_extra: u32,
+        goal: Cell,
+        allowed: impl Fn(Cell) -> bool,
+    ) -> Option<(Vec<Cell>, f64)> {
+        let (w, h) = (frame.width as usize, frame.height as usize);
+        let pw = w + 2;
+        let np = pw * (h + 2);
+        assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
+        if !frame.contains(start) || !frame.contains(goal) {
+            return None;
+        }
+        let max_extra = max_extra.min(u16::MAX as u32 - 2);
+        if self.cost.len() != np {
+            self.cost = vec![UNREACHED; np];
+            self.parent = vec![255; np];
+            self.touched.clear();
+        }
+        // Keys are `cost + heuristic`; a step raises the key by at most two diagonal steps and
+        // the extra cost.
+        let nb = (2 * DIAGONAL + max_extra + 1) as usize;
+        self.buckets.resize_with(nb, Vec::new);
+        let found = self.search(pw, enter, max_extra, nb, start, goal, allowed);
+        let result = found.map(|cost| {
+            let mut path = vec![goal];
+            let mut c = goal;
+            let mut i = (c.y as usize + 1) * pw + c.x as usize + 1;
+            while self.parent[i] != 255 {
+                let (dx, dy, _) = STEPS[self.parent[i] as usize];
+                c = Cell::new(c.x - dx, c.y - dy);
+                i = (c.y as usize + 1) * pw + c.x as usize + 1;
+                path.push(c);
+            }
+            path.reverse();
+            (path, cost as f64 * frame.resolution_m / STRAIGHT as f64)
+        });
+        for &i in &self.touched {
+            self.cost[i as usize] = UNREACHED;
+            self.parent[i as usize] = 255;
+        }
+        self.touched.clear();
+        for b in &mut self.buckets {
+            b.clear();
+        }
+        result
+    }
+
+    /// The search itself: the goal's cost, `None` if unreachable.
+    #[allow(clippy::too_many_arguments)]
+    fn search<T: Copy + Into<u32>>(
+        &mut self,
+        pw: usize,
+        enter: &[T],
+        max_extra: u32,
+        nb: usize,
+        start: Cell,
+        goal: Cell,
+        allowed: impl Fn(Cell) -> bool,
+    ) -> Option<u32> {
+        let pad = |c: Cell| (c.y as usize + 1) * pw + c.x as usize + 1;
+        let (si, gi) = (pad(start), pad(goal));
+        // Octile distance to the goal in cost units: a lower bound of every path's cost, and
+        // consistent (it falls by at most a step's cost per step).
+        let heuristic = |i: usize| -> u32 {
+            let (x, y) = ((i % pw) as i64 - 1, (i / pw) as i64 - 1);
+            let (dx, dy) = (
+                (x - goal.x as i64).unsigned_abs() as u32,
+                (y - goal.y as i64).unsigned_abs() as u32,
+            );
+            STRAIGHT * dx.max(dy) + (DIAGONAL - STRAIGHT) * dx.min(dy)
+        };
+        let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * pw as isize + dx as isize);
+        let pass_of = |j: usize| {
+            let cell = Cell::new((j % pw) as i32 - 1, (j / pw) as i32 - 1);
+            if allowed(cell) {
+                Into::<u32>::into(enter[j]).min(max_extra + 1)
+            } else {
+                0
+            }
+        };
+        self.cost[si] = 0;
+        self.touched.push(si as u32);
+        let mut current = heuristic(si);
+        self.buckets[current as usize % nb].push(si as u32);
+        let mut pending = 1usize;
+        while pending > 0 {
+            let b = current as usize % nb;
+            while let Some(i) = self.buckets[b].pop() {
+                pending -= 1;
+                let i = i as usize;
+                let g = self.cost[i];
+                if g.wrapping_add(heuristic(i)) != current {
+                    continue; // stale entry
+                }
+                if i == gi {
+                    return Some(g);
+                }
+                // Every expanded cell is inside the frame (the start, or entered through a
+                // passable cell), so its neighbours are in the padding at worst.
+                let at = |k: usize| pass_of((i as isize + offsets[k]) as usize);
+                let pass: [u32; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
+                let ok = [
+                    pass[0] != 0,
+                    pass[1] != 0,
+                    pass[2] != 0,
+                    pass[3] != 0,
+                    (pass[4] != 0) & (pass[0] != 0) & (pass[2] != 0),
+                    (pass[5] != 0) & (pass[1] != 0) & (pass[2] != 0),
+                    (pass[6] != 0) & (pass[0] != 0) & (pass[3] != 0),
+                    (pass[7] != 0) & (pass[1] != 0) & (pass[3] != 0),
+                ];
+                for (k, &(_, _, step)) in STEPS.iter().enumerate() {
+                    if !ok[k] {
+                        continue;
+                    }
+                    let j = (i as isize + offsets[k]) as usize;
+                    let c = g + step + pass[k] - 1;
+                    if c < self.cost[j] {
+                        if self.cost[j] == UNREACHED {
+                            self.touched.push(j as u32);
+                        }
+                        self.cost[j] = c;
+                        self.parent[j] = k as u8;
+                        self.buckets[(c + heuristic(j)) as usize % nb].push(j as u32);
+                        pending += 1;
+                    }
+                }
+            }
+            current += 1;
+        }
+        None
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -344,6 +513,44 @@ mod tests {
                         proptest::prop_assert_eq!(*path.last().unwrap(), c);
                     }
                 }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn a_star_finds_the_cost_dijkstra_finds(
+            cells in proptest::collection::vec((proptest::bool::weighted(0.7), 0u8..6), 23 * 17),
+            sx in 0i32..23, sy in 0i32..17, gx in 0i32..23, gy in 0i32..17,
+        ) {
+            let (w, h) = (23usize, 17usize);
+            let frame = GridFrame::new(crate::geom::Vec2::zeros(), 0.1, w as u32, h as u32);
+            let mut padded = vec![0u8; (w + 2) * (h + 2)];
+            for (i, c) in cells.iter().enumerate() {
+                if c.0 {
+                    padded[(i / w + 1) * (w + 2) + i % w + 1] = 1 + c.1;
+                }
+            }
+            let (start, goal) = (Cell::new(sx, sy), Cell::new(gx, gy));
+            let d = dijkstra_padded(frame, start, &padded, 5, &[]);
+            // One search object for two searches: the second must not see the first's state.
+            let mut astar = AStar::default();
+            let _ = astar.path(frame, goal, &padded, 5, start);
+            let a = astar.path(frame, start, &padded, 5, goal);
+            proptest::prop_assert_eq!(a.as_ref().map(|a| a.1), d.distance_m(goal));
+            if let Some((path, distance_m)) = a {
+                proptest::prop_assert_eq!(path[0], start);
+                proptest::prop_assert_eq!(*path.last().unwrap(), goal);
+                // The path's own cost is the one reported: steps and entry costs add up.
+                let mut cost = 0u32;
+                for s in path.windows(2) {
+                    let (dx, dy) = (s[1].x - s[0].x, s[1].y - s[0].y);
+                    proptest::prop_assert!(dx.abs() <= 1 && dy.abs() <= 1);
+                    let entry = padded[(s[1].y as usize + 1) * (w + 2) + s[1].x as usize + 1] as u32;
+                    proptest::prop_assert!(entry > 0, "the path enters a blocked cell");
+                    cost += if dx != 0 && dy != 0 { DIAGONAL } else { STRAIGHT } + entry - 1;
+                }
+                proptest::prop_assert_eq!(cost as f64 * 0.1 / STRAIGHT as f64, distance_m);
             }
         }
     }
