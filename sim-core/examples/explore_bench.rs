@@ -4,7 +4,9 @@
 //! prints, per run, the simulated time, the wall time, the speed-up (simulated seconds per wall
 //! second), exploration quality, and the pose error of the SLAM estimate. The baseline in the same
 //! run is real time (speed-up 1) and the same exploration with the odometry-only localization
-//! (no scan matching), which isolates the cost of the matcher.
+//! (no scan matching), which isolates the cost of the matcher (with `baseline`). Settings to
+//! try: `upd=D,R,T` (map update after D m, R rad or T s) and `redecide=S` (the re-decision
+//! period).
 
 use std::time::Instant;
 

@@ -2,9 +2,13 @@
 //! candidates with the paper's utility, drive, until no candidate is left.
 //!
 //! Decisions are re-taken when the goal is reached, when the goal's frontier has (mostly)
-//! disappeared, when the path is blocked, and after `redecide_period_s`. Unreachable goals are
-//! blacklisted with a radius; a goal toward which the robot makes no progress for
-//! `progress_timeout_s` is blacklisted too, so a run never hangs.
+//! disappeared, and after `redecide_period_s` once the map has grown by
+//! `redecide_min_growth_m2`; a path the map shows blocked is planned again to the same goal.
+//! Unreachable goals are blacklisted with a radius; a goal along whose path the robot makes no
+//! progress for `progress_timeout_s` (or near which it stands still for three times that) is
+//! given up, blacklisted until the run would otherwise end: those goals then get another chance
+//! (once per square metre of new map), so a run never hangs and a moment of bad luck does not
+//! end it early.
 
 mod calibration;
 mod follow;
