@@ -79,8 +79,13 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         Some(p) => {
             let text = std::fs::read_to_string(p)
                 .with_context(|| format!("cannot read settings file {}", p.display()))?;
-            serde_json::from_str::<Settings>(&text)
-                .with_context(|| format!("{}: invalid settings", p.display()))?
+            serde_json::from_str::<Settings>(&text).with_context(|| {
+                format!(
+                    "{}: invalid settings (expected a JSON object such as {{\"alpha\": 1.0}}; \
+                         the names are those of a grid's [settings], see the README)",
+                    p.display()
+                )
+            })?
         }
         None => Settings::default(),
     };

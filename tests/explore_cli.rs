@@ -191,3 +191,29 @@ fn alternating_goals_do_not_hold_the_robot_forever() {
     );
     assert_eq!(s["settings"]["utility_distance"], "euclidean", "{s}");
 }
+
+/// A settings file in another format is refused with the file's name and what is expected.
+#[test]
+fn a_settings_file_that_is_not_json_is_refused_with_what_is_expected() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = dir.path().join("settings.toml");
+    std::fs::write(&settings, "alpha = 1.0\n").unwrap();
+    let b = repo().join("buildings/small.toml");
+    let o = run(&[
+        "explore",
+        "--building",
+        b.to_str().unwrap(),
+        "--settings",
+        settings.to_str().unwrap(),
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("settings.toml") && e.contains("JSON object"),
+        "{e}"
+    );
+    assert!(!dir.path().join("out/summary.json").exists());
+}
