@@ -338,8 +338,6 @@ struct Explorer<'a> {
     far: CoarseCosts,
     /// Whether a cell became or stopped being occupied since the path was last checked.
     walls_changed: bool,
-    /// Paths planned again because the map showed them blocked.
-    replans: u64,
     /// `known_cells` when goals given up were last given another chance (see `forgive`).
     forgiven_at: Option<usize>,
     /// The path search on `coarse`, and per cell of `far` whether it is in the corridor the
@@ -466,7 +464,6 @@ pub fn explore_charged<'a>(
         coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
         far: CoarseCosts::blocked(frame, DISTANCE_FACTOR),
         walls_changed: false,
-        replans: 0,
         forgiven_at: None,
         astar: AStar::default(),
         corridor: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
@@ -765,7 +762,6 @@ impl Explorer<'_> {
             if let Some(goal) = &mut self.goal {
                 goal.best_distance_m = d;
             }
-            self.replans += 1;
         }
         false
     }

@@ -24,6 +24,23 @@ const STEPS: [(i32, i32, u32); 8] = [
     (-1, -1, DIAGONAL),
 ];
 
+/// Which of the eight steps (in `STEPS` order) may be taken, given each neighbour's entry
+/// cost (0 = blocked): a straight step into a passable cell, a diagonal one only when both
+/// straight cells beside it are passable too (no cutting corners).
+#[inline(always)]
+fn allowed_steps(pass: &[u32; 8]) -> [bool; 8] {
+    [
+        pass[0] != 0,
+        pass[1] != 0,
+        pass[2] != 0,
+        pass[3] != 0,
+        (pass[4] != 0) & (pass[0] != 0) & (pass[2] != 0),
+        (pass[5] != 0) & (pass[1] != 0) & (pass[2] != 0),
+        (pass[6] != 0) & (pass[0] != 0) & (pass[3] != 0),
+        (pass[7] != 0) & (pass[1] != 0) & (pass[3] != 0),
+    ]
+}
+
 /// Costs from the start to every cell, with the step that reached each cell.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CostField {
@@ -238,16 +255,7 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
             // Which steps are allowed (a diagonal may not cut a corner) and improve their cell,
             // found for all eight before any is applied (they are distinct cells), as a bit mask:
             // fewer unpredictable branches than testing and applying one step at a time.
-            let ok = [
-                pass[0] != 0,
-                pass[1] != 0,
-                pass[2] != 0,
-                pass[3] != 0,
-                (pass[4] != 0) & (pass[0] != 0) & (pass[2] != 0),
-                (pass[5] != 0) & (pass[1] != 0) & (pass[2] != 0),
-                (pass[6] != 0) & (pass[0] != 0) & (pass[3] != 0),
-                (pass[7] != 0) & (pass[1] != 0) & (pass[3] != 0),
-            ];
+            let ok = allowed_steps(&pass);
             let mut improved = 0u32;
             let mut costs = [0u32; 8];
             for (k, &(_, _, step)) in STEPS.iter().enumerate() {
@@ -415,16 +423,7 @@ impl AStar {
                 // passable cell), so its neighbours are in the padding at worst.
                 let at = |k: usize| pass_of((i as isize + offsets[k]) as usize);
                 let pass: [u32; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
-                let ok = [
-                    pass[0] != 0,
-                    pass[1] != 0,
-                    pass[2] != 0,
-                    pass[3] != 0,
-                    (pass[4] != 0) & (pass[0] != 0) & (pass[2] != 0),
-                    (pass[5] != 0) & (pass[1] != 0) & (pass[2] != 0),
-                    (pass[6] != 0) & (pass[0] != 0) & (pass[3] != 0),
-                    (pass[7] != 0) & (pass[1] != 0) & (pass[3] != 0),
-                ];
+                let ok = allowed_steps(&pass);
                 for (k, &(_, _, step)) in STEPS.iter().enumerate() {
                     if !ok[k] {
                         continue;
