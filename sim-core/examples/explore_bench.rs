@@ -24,6 +24,42 @@ fn pose_errors(r: &RunResult) -> (f64, f64) {
     (max_xy, max_th.to_degrees())
 }
 
+/// FNV-1a over the bits of everything a run produced.
+fn fingerprint(r: &RunResult) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |v: u64| {
+        for b in v.to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for p in r.trajectory.iter().chain(&r.estimated_trajectory) {
+        [p.x_m, p.y_m, p.theta_rad].iter().for_each(|v| eat(v.to_bits()));
+    }
+    for d in &r.decisions {
+        let (g, p) = (d.goal, d.pose);
+        [d.time_s, p.x_m, p.y_m, p.theta_rad, g.x, g.y, d.gain_m2, d.distance_m]
+            .iter()
+            .for_each(|v| eat(v.to_bits()));
+        eat(d.candidates as u64);
+    }
+    for s in &r.progress {
+        [s.time_s, s.explored_area_m2].iter().for_each(|v| eat(v.to_bits()));
+    }
+    for c in &r.map.data {
+        eat(*c as u64);
+    }
+    [
+        r.explored_fraction,
+        r.path_length_m,
+        r.map_quality.occupied_precision,
+        r.map_quality.occupied_precision_aligned,
+        r.map_quality.free_precision,
+    ]
+    .iter()
+    .for_each(|v| eat(v.to_bits()));
+    h
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let seed: u64 = args.first().and_then(|s| s.parse().ok()).unwrap_or(1);
@@ -92,6 +128,9 @@ fn main() {
             r.scans,
             r.plans,
         );
+        // A fingerprint of the run (every pose, decision, progress sample and map cell), so
+        // that a change meant to be only faster can be checked to leave the run bit-identical.
+        println!("  fingerprint {:016x}", fingerprint(&r));
         if has("trace") {
             // Wrong occupied cells by their distance to solid space.
             let truth = building.reachable_free(r.map.frame, start.position());

@@ -44,6 +44,30 @@ impl Pose {
     }
 }
 
+/// `x.floor()`, bit for bit (signed zeros, infinities and NaN included), without a call:
+/// without SSE4.1 the standard library's `floor` is an out-of-line software routine, and cell
+/// lookups (`floor(x) as i32`) are in every hot loop of the kernel.
+#[inline(always)]
+pub fn floor_f64(x: f64) -> f64 {
+    // 2^52: from there on every f64 is an integer (and NaN fails the test).
+    if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64; // truncated toward zero, exact in this range
+        if t > x {
+            t - 1.0
+        } else {
+            t.copysign(x)
+        }
+    } else {
+        x
+    }
+}
+
+/// `x.floor() as i32`, bit for bit (saturating, NaN to 0), without a call (see [`floor_f64`]).
+#[inline(always)]
+pub fn floor_i32(x: f64) -> i32 {
+    floor_f64(x) as i32
+}
+
 /// Wraps an angle to (-pi, pi].
 pub fn wrap_angle(a: f64) -> f64 {
     let mut a = a % std::f64::consts::TAU;
@@ -202,6 +226,45 @@ impl Polygon {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fast_floor_is_floor_bit_for_bit() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1.5,
+            2.999_999_999_999_999_6,
+            -2.000_000_000_000_000_4,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            4_503_599_627_370_495.5,
+            -4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            2_147_483_647.5,
+            -2_147_483_648.5,
+            -2_147_483_649.0,
+        ];
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..100_000 {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            let bits = state >> 12;
+            let scale = [1e-3, 1.0, 1e3, 1e9, 1e17][(state % 5) as usize];
+            xs.push((bits as f64 / (1u64 << 52) as f64 - 0.5) * scale);
+        }
+        for x in xs {
+            assert_eq!(floor_f64(x).to_bits(), x.floor().to_bits(), "{x:e}");
+            assert_eq!(floor_i32(x), x.floor() as i32, "{x:e}");
+        }
+    }
 
     #[test]
     fn pose_between_inverts_compose() {

@@ -4,7 +4,7 @@
 //! `origin`. Rows grow with world `y` (so an image's top row is the grid's last row). Storage is
 //! row-major: index `y * width + x`.
 
-use crate::geom::{Aabb, Vec2};
+use crate::geom::{floor_i32, Aabb, Vec2};
 
 /// A grid cell. Signed so that neighbours of border cells can be formed and then rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -100,7 +100,7 @@ impl GridFrame {
     /// The cell containing a world point (may be outside the grid).
     pub fn cell_from_world(&self, p: Vec2) -> Cell {
         let q = (p - self.origin_m) / self.resolution_m;
-        Cell::new(q.x.floor() as i32, q.y.floor() as i32)
+        Cell::new(floor_i32(q.x), floor_i32(q.y))
     }
     /// World position of a cell's centre.
     pub fn world_from_cell(&self, c: Cell) -> Vec2 {

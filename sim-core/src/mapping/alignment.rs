@@ -74,20 +74,29 @@ pub fn aligned_occupied_precision(
         .iter()
         .map(|p| prior.compose(&Pose::new(p.x, p.y, 0.0)).position() - pivot)
         .collect();
-    let hits = |pose: &Pose, stride: usize| -> usize {
-        let (s, c) = pose.theta_rad.sin_cos();
-        let t = pivot + Vec2::new(pose.x_m, pose.y_m);
+    // The points rotated by `theta_rad` (about the pivot), every `stride`-th.
+    let rotated = |theta_rad: f64, stride: usize| -> Vec<Vec2> {
+        let (s, c) = theta_rad.sin_cos();
         occupied
             .iter()
             .step_by(stride)
-            .filter(|p| {
-                let q = t + Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
+            .map(|p| Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y))
+            .collect()
+    };
+    // How many of the rotated points, translated by `(x_m, y_m)` (and back from the pivot),
+    // fall within one cell of solid space.
+    let count = |rotated: &[Vec2], x_m: f64, y_m: f64| -> usize {
+        let t = pivot + Vec2::new(x_m, y_m);
+        rotated
+            .iter()
+            .filter(|r| {
                 frame
-                    .index(frame.cell_from_world(q))
+                    .index(frame.cell_from_world(t + **r))
                     .is_none_or(|i| near_solid[i])
             })
             .count()
     };
+    let hits = |pose: &Pose| count(&rotated(pose.theta_rad, 1), pose.x_m, pose.y_m);
     let steps = |max: f64, step: f64| {
         if step > 0.0 && max > 0.0 {
             (max / step).round() as i32
@@ -101,14 +110,15 @@ pub fn aligned_occupied_precision(
     let stride = (occupied.len() / 4000).max(1);
     let mut scored: Vec<(usize, i32, i32, i32)> = Vec::new();
     for ir in -nr..=nr {
+        // Rotated once per angle, translated per lattice point.
+        let r = rotated(ir as f64 * cfg.rotation_step_rad, stride);
         for iy in -nt..=nt {
             for ix in -nt..=nt {
-                let pose = Pose::new(
+                let (x_m, y_m) = (
                     ix as f64 * cfg.translation_step_m,
                     iy as f64 * cfg.translation_step_m,
-                    ir as f64 * cfg.rotation_step_rad,
                 );
-                scored.push((hits(&pose, stride), ir, iy, ix));
+                scored.push((count(&r, x_m, y_m), ir, iy, ix));
             }
         }
     }
@@ -123,7 +133,7 @@ pub fn aligned_occupied_precision(
         )
     });
     let identity = Pose::new(0.0, 0.0, 0.0);
-    let mut best = (hits(&identity, 1), identity);
+    let mut best = (hits(&identity), identity);
     if raw > best.0 {
         // Only with a prior: the map as it is overlaps better than the prior moves it.
         best = (raw, identity);
@@ -134,7 +144,7 @@ pub fn aligned_occupied_precision(
             iy as f64 * cfg.translation_step_m,
             ir as f64 * cfg.rotation_step_rad,
         );
-        let h = hits(&pose, 1);
+        let h = hits(&pose);
         if h > best.0 {
             best = (h, pose);
         }

@@ -5,7 +5,7 @@
 //! Adding an obstacle stamps a disc of radius `cap_cells`; removing one recomputes the disc from
 //! the obstacles around it. The result always equals the capped exact transform.
 
-use crate::geom::Vec2;
+use crate::geom::{floor_f64, Vec2};
 use crate::grid::{Cell, GridFrame, Occupancy, OccupancyGrid};
 
 /// Capped distance (in cells) from every cell to the nearest occupied cell.
@@ -141,7 +141,7 @@ impl ObstacleDistance {
     pub fn sample(&self, p: Vec2) -> (f64, Vec2) {
         let inv_res = 1.0 / self.frame.resolution_m;
         let q = (p - self.frame.origin_m) * inv_res - Vec2::new(0.5, 0.5);
-        let (x0, y0) = (q.x.floor(), q.y.floor());
+        let (x0, y0) = (floor_f64(q.x), floor_f64(q.y));
         let (fx, fy) = (q.x - x0, q.y - y0);
         let (x0, y0) = (x0 as i32, y0 as i32);
         let v = |x: i32, y: i32| self.get(Cell::new(x, y)) as f64;

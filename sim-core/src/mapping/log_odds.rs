@@ -11,7 +11,7 @@
 //! is 9 cm at 5 m), and a scan matched against dots slides along the wall toward them: a small
 //! rotation per scan that bends the map.
 
-use crate::geom::{Pose, Vec2};
+use crate::geom::{floor_i32, Pose, Vec2};
 use crate::grid::{Cell, Grid, GridFrame, Occupancy, OccupancyGrid};
 use crate::mapping::ray::{grid_from_world, walk_segment};
 use crate::scan::Scan;
@@ -117,7 +117,7 @@ impl LogOddsMap {
         let w = self.frame.width as i32;
         let h = self.frame.height as i32;
         let inv_res = 1.0 / self.frame.resolution_m;
-        let mut bmin = Cell::new(start[0].floor() as i32, start[1].floor() as i32);
+        let mut bmin = Cell::new(floor_i32(start[0]), floor_i32(start[1]));
         let mut bmax = bmin;
         let guard2 = cfg.hit_guard_cells * cfg.hit_guard_cells;
         let guard_cells = if cfg.hit_guard_cells.is_finite() {
@@ -137,7 +137,7 @@ impl LogOddsMap {
             let r_cells = range_m.clamp(0.0, scan.max_range_m) * inv_res;
             let a = pose.theta_rad + scan.beam_angle_rad(i);
             let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
-            let end_cell = Cell::new(end[0].floor() as i32, end[1].floor() as i32);
+            let end_cell = Cell::new(floor_i32(end[0]), floor_i32(end[1]));
             bmin = Cell::new(bmin.x.min(end_cell.x), bmin.y.min(end_cell.y));
             bmax = Cell::new(bmax.x.max(end_cell.x), bmax.y.max(end_cell.y));
             let mut was_inside = false;
@@ -173,7 +173,7 @@ impl LogOddsMap {
             if let (true, Some(p)) = (hit && cfg.hit_gap_fill_m > 0.0, prev_hit) {
                 let (dx, dy) = (end[0] - p[0], end[1] - p[1]);
                 if dx * dx + dy * dy <= fill2 {
-                    let p_cell = Cell::new(p[0].floor() as i32, p[1].floor() as i32);
+                    let p_cell = Cell::new(floor_i32(p[0]), floor_i32(p[1]));
                     let len2 = (dx * dx + dy * dy).max(1e-12);
                     walk_segment(p, end, |c| {
                         if c != p_cell

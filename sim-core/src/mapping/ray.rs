@@ -1,7 +1,7 @@
 //! Exact cell traversal of a segment (Amanatides & Woo), shared by the mapper, the gain
 //! estimate and line-of-sight checks.
 
-use crate::geom::Vec2;
+use crate::geom::{floor_i32, Vec2};
 use crate::grid::{Cell, GridFrame};
 
 /// A point in grid coordinates: cell units, cell `(i, j)` spans `[i, i+1) x [j, j+1)`.
@@ -18,10 +18,10 @@ pub fn walk_segment(a: [f64; 2], b: [f64; 2], mut visit: impl FnMut(Cell) -> boo
     if !(a[0].is_finite() && a[1].is_finite() && b[0].is_finite() && b[1].is_finite()) {
         return;
     }
-    let mut cx = a[0].floor() as i32;
-    let mut cy = a[1].floor() as i32;
-    let ex = b[0].floor() as i32;
-    let ey = b[1].floor() as i32;
+    let mut cx = floor_i32(a[0]);
+    let mut cy = floor_i32(a[1]);
+    let ex = floor_i32(b[0]);
+    let ey = floor_i32(b[1]);
     let dx = b[0] - a[0];
     let dy = b[1] - a[1];
     let step_x = if dx > 0.0 { 1 } else { -1 };
