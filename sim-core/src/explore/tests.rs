@@ -271,3 +271,25 @@ fn the_euclidean_utility_distance_is_the_straight_line_to_the_candidate() {
     assert!(behind_walls > 0);
     assert!(straight_through_walls > 0);
 }
+
+/// Goals given up for want of progress are forgiven before the run ends: with a progress
+/// timeout shorter than the turn in place that starts most paths, the robot gives up goal after
+/// goal, and the run must still explore the building and end with "no frontiers" (without the
+/// forgiveness it ends with the rooms behind the goals given up unexplored).
+#[test]
+fn goals_given_up_get_another_chance_before_the_run_ends() {
+    let b = corridor_building(3);
+    let cfg = ExploreConfig {
+        localization: Localization::GroundTruth,
+        progress_timeout_s: 1.0,
+        ..ExploreConfig::default()
+    };
+    let r = explore(&b, b.start.unwrap(), &cfg, 1, &mut |_| {});
+    assert!(
+        r.blacklisted_goals >= 3,
+        "goals given up: {}",
+        r.blacklisted_goals
+    );
+    assert_eq!(r.end_reason, EndReason::NoFrontiers);
+    assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
+}
