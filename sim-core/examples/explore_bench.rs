@@ -33,17 +33,30 @@ fn fingerprint(r: &RunResult) -> u64 {
         }
     };
     for p in r.trajectory.iter().chain(&r.estimated_trajectory) {
-        [p.x_m, p.y_m, p.theta_rad].iter().for_each(|v| eat(v.to_bits()));
+        [p.x_m, p.y_m, p.theta_rad]
+            .iter()
+            .for_each(|v| eat(v.to_bits()));
     }
     for d in &r.decisions {
         let (g, p) = (d.goal, d.pose);
-        [d.time_s, p.x_m, p.y_m, p.theta_rad, g.x, g.y, d.gain_m2, d.distance_m]
-            .iter()
-            .for_each(|v| eat(v.to_bits()));
+        [
+            d.time_s,
+            p.x_m,
+            p.y_m,
+            p.theta_rad,
+            g.x,
+            g.y,
+            d.gain_m2,
+            d.distance_m,
+        ]
+        .iter()
+        .for_each(|v| eat(v.to_bits()));
         eat(d.candidates as u64);
     }
     for s in &r.progress {
-        [s.time_s, s.explored_area_m2].iter().for_each(|v| eat(v.to_bits()));
+        [s.time_s, s.explored_area_m2]
+            .iter()
+            .for_each(|v| eat(v.to_bits()));
     }
     for c in &r.map.data {
         eat(*c as u64);

@@ -255,7 +255,9 @@ mod tests {
         ];
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         for _ in 0..100_000 {
-            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
             let bits = state >> 12;
             let scale = [1e-3, 1.0, 1e3, 1e9, 1e17][(state % 5) as usize];
             xs.push((bits as f64 / (1u64 << 52) as f64 - 0.5) * scale);
