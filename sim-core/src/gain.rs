@@ -12,7 +12,7 @@ use crate::mapping::ray::walk_segment;
 
 /// Area (m2) of the cells within `range_m` of cell `p` that are visible from `p` (no blocking
 /// cell on the way, the blocking cell itself excluded) and satisfy `counts`. Cells outside the
-/// frame block.
+/// frame block. Both predicates must be pure: they may be asked about a cell more than once.
 pub fn visible_area(
     frame: &GridFrame,
     p: Cell,
@@ -74,6 +74,8 @@ struct FanNode {
     in_range: bool,
     end: u32,
     bit: u32,
+    /// Row-major index offset in a frame `RayFan::offsets_width` cells wide.
+    offset: i32,
 }
 
 /// The rays of [`visible_area`] relative to the centre cell, as a prefix tree flattened in
@@ -88,9 +90,8 @@ struct RayFan {
     /// One bit per cell of the `(2 half + 1)^2` square: counted in this call (small enough to
     /// stay in the L1 cache and to clear per call).
     seen: Vec<u64>,
-    /// Per node, its row-major index offset in a frame `offsets_width` cells wide.
-    offsets: Vec<i32>,
-    offsets_width: u32,
+    /// The frame width the nodes' `offset`s are for (none yet).
+    offsets_width: Option<u32>,
 }
 
 impl RayFan {
@@ -149,6 +150,7 @@ impl RayFan {
                 in_range: d2 <= r2,
                 end: 0,
                 bit: ((dy as i32 + half) * side + dx as i32 + half) as u32,
+                offset: 0,
             });
             stack.push((id, true));
             for &ch in children[id as usize].iter().rev() {
@@ -161,8 +163,7 @@ impl RayFan {
             half,
             nodes,
             seen: vec![0; (side * side).div_ceil(64)],
-            offsets: Vec::new(),
-            offsets_width: 0,
+            offsets_width: None,
         }
     }
 
@@ -176,13 +177,11 @@ impl RayFan {
     ) -> usize {
         self.seen.fill(0);
         let w = frame.width as i32;
-        if self.offsets_width != frame.width || self.offsets.is_empty() {
-            self.offsets = self
-                .nodes
-                .iter()
-                .map(|n| n.dy as i32 * w + n.dx as i32)
-                .collect();
-            self.offsets_width = frame.width;
+        if self.offsets_width != Some(frame.width) {
+            for n in &mut self.nodes {
+                n.offset = n.dy as i32 * w + n.dx as i32;
+            }
+            self.offsets_width = Some(frame.width);
         }
         // When the whole square around `p` lies in the frame, a node's index is a fixed offset
         // from `p`'s and no node needs a bounds test.
@@ -195,7 +194,7 @@ impl RayFan {
             let n = self.nodes[i];
             let c = Cell::new(p.x + n.dx as i32, p.y + n.dy as i32);
             let idx = if inside {
-                (base + self.offsets[i] as isize) as usize
+                (base + n.offset as isize) as usize
             } else if frame.contains(c) {
                 c.y as usize * w as usize + c.x as usize
             } else {
@@ -207,13 +206,15 @@ impl RayFan {
                 continue;
             }
             if n.in_range {
+                // Without branches: whether a cell was seen by an earlier ray, and whether it
+                // counts, are both close to coin flips (cells are crossed by about two rays;
+                // unknown and known cells meet along frontiers), so branches on them are
+                // mispredicted often. `counts` is a pure predicate: evaluating it for a cell
+                // already seen changes nothing.
                 let (word, bit) = (n.bit as usize / 64, 1u64 << (n.bit % 64));
-                if self.seen[word] & bit == 0 {
-                    self.seen[word] |= bit;
-                    if counts(c, idx) {
-                        count += 1;
-                    }
-                }
+                let fresh = self.seen[word] & bit == 0;
+                self.seen[word] |= bit;
+                count += (fresh & counts(c, idx)) as usize;
             }
             i += 1;
         }

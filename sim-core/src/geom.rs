@@ -65,7 +65,9 @@ pub fn floor_f64(x: f64) -> f64 {
 /// `x.floor() as i32`, bit for bit (saturating, NaN to 0), without a call (see [`floor_f64`]).
 #[inline(always)]
 pub fn floor_i32(x: f64) -> i32 {
-    floor_f64(x) as i32
+    // Truncated toward zero (saturating, NaN to 0), then one less where that rounded up.
+    let t = x as i32;
+    t.saturating_sub(((t as f64) > x) as i32)
 }
 
 /// Wraps an angle to (-pi, pi].

@@ -152,6 +152,10 @@ pub struct FrontierTracker {
     labelled: Vec<bool>,
     /// Scratch: position of a cell in the component being measured (`u32::MAX` between calls).
     slot: Vec<u32>,
+    /// The frontiers of the last detection (sorted cell indices, middle cell) by their first
+    /// cell: most frontiers are unchanged between two decisions, and their middle cells (two
+    /// searches through the frontier) are taken from here. Looked up only, never iterated.
+    middles: std::collections::HashMap<usize, (Vec<usize>, usize)>,
 }
 
 impl FrontierTracker {
@@ -163,6 +167,7 @@ impl FrontierTracker {
             cells: Vec::new(),
             labelled: vec![false; n],
             slot: vec![u32::MAX; n],
+            middles: Default::default(),
         };
         t.update(grid, 0..n as u32);
         t
@@ -205,6 +210,7 @@ impl FrontierTracker {
         let h = grid.height() as i64;
         let mut frontiers = Vec::new();
         let mut queue = VecDeque::new();
+        let mut middles = std::collections::HashMap::new();
         for k in 0..self.cells.len() {
             let start = self.cells[k] as usize;
             if self.labelled[start] {
@@ -233,26 +239,34 @@ impl FrontierTracker {
                 continue;
             }
             comp.sort_unstable();
-            for (k, &i) in comp.iter().enumerate() {
-                self.slot[i] = k as u32;
-            }
-            let slot = &self.slot;
-            let middle = middle_cell_by(&comp, w as usize, |i| {
-                slot.get(i).filter(|k| **k != u32::MAX).map(|k| *k as usize)
-            });
-            for &i in &comp {
-                self.slot[i] = u32::MAX;
-            }
+            let middle = match self.middles.get(&comp[0]) {
+                Some((cells, middle)) if *cells == comp => *middle,
+                _ => {
+                    for (k, &i) in comp.iter().enumerate() {
+                        self.slot[i] = k as u32;
+                    }
+                    let slot = &self.slot;
+                    let middle = middle_cell_by(&comp, w as usize, |i| {
+                        slot.get(i).filter(|k| **k != u32::MAX).map(|k| *k as usize)
+                    });
+                    for &i in &comp {
+                        self.slot[i] = u32::MAX;
+                    }
+                    middle
+                }
+            };
             let to_cell = |i: usize| grid.frame.cell_of_index(i);
             frontiers.push(Frontier {
                 size: comp.len(),
                 candidate: to_cell(middle),
-                cells: comp.into_iter().map(to_cell).collect(),
+                cells: comp.iter().map(|&i| to_cell(i)).collect(),
             });
+            middles.insert(comp[0], (comp, middle));
         }
         for &i in &self.cells {
             self.labelled[i as usize] = false;
         }
+        self.middles = middles;
         frontiers
     }
 }

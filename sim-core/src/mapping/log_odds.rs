@@ -13,7 +13,7 @@
 
 use crate::geom::{floor_i32, Pose, Vec2};
 use crate::grid::{Cell, Grid, GridFrame, Occupancy, OccupancyGrid};
-use crate::mapping::ray::{grid_from_world, walk_segment};
+use crate::mapping::ray::{grid_from_world, walk_segment, SegmentCells};
 use crate::scan::Scan;
 
 /// Increments and thresholds of the log-odds update (natural log of the odds).
@@ -142,10 +142,15 @@ impl LogOddsMap {
             bmax = Cell::new(bmax.x.max(end_cell.x), bmax.y.max(end_cell.y));
             let mut was_inside = false;
             let mut clipped = false;
-            walk_segment(start, end, |c| {
+            // (A loop, not `walk_segment`'s closure: this body runs for every cell of every
+            // beam and stays inlined here.)
+            for c in SegmentCells::new(start, end) {
                 if c.x < 0 || c.y < 0 || c.x >= w || c.y >= h {
                     clipped = true;
-                    return !was_inside;
+                    if was_inside {
+                        break;
+                    }
+                    continue;
                 }
                 was_inside = true;
                 let idx = c.y as usize * w as usize + c.x as usize;
@@ -153,7 +158,7 @@ impl LogOddsMap {
                     if c == end_cell {
                         self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
                         self.add_surface(idx, end);
-                        return true;
+                        continue;
                     }
                     // (A cell more than `guard_cells` cells from the end cell on either axis
                     // is farther than the guard from the end point: no need for the distance.)
@@ -161,12 +166,11 @@ impl LogOddsMap {
                         && (c.y - end_cell.y).abs() <= guard_cells;
                     let (ddx, ddy) = (c.x as f64 + 0.5 - end[0], c.y as f64 + 0.5 - end[1]);
                     if near && ddx * ddx + ddy * ddy < guard2 {
-                        return true;
+                        continue;
                     }
                 }
                 self.update_cell(idx, cfg.miss_l, cfg, &mut stats);
-                true
-            });
+            }
             if clipped {
                 stats.beams_clipped += 1;
             }

@@ -15,64 +15,119 @@ pub fn grid_from_world(frame: &GridFrame, p: Vec2) -> [f64; 2] {
 /// the caller filters. When the segment passes exactly through a cell corner, the x-neighbour is
 /// visited before the y-neighbour (deterministic, 4-connected walk).
 pub fn walk_segment(a: [f64; 2], b: [f64; 2], mut visit: impl FnMut(Cell) -> bool) {
-    if !(a[0].is_finite() && a[1].is_finite() && b[0].is_finite() && b[1].is_finite()) {
-        return;
-    }
-    let mut cx = floor_i32(a[0]);
-    let mut cy = floor_i32(a[1]);
-    let ex = floor_i32(b[0]);
-    let ey = floor_i32(b[1]);
-    let dx = b[0] - a[0];
-    let dy = b[1] - a[1];
-    let step_x = if dx > 0.0 { 1 } else { -1 };
-    let step_y = if dy > 0.0 { 1 } else { -1 };
-    let t_delta_x = if dx != 0.0 {
-        1.0 / dx.abs()
-    } else {
-        f64::INFINITY
-    };
-    let t_delta_y = if dy != 0.0 {
-        1.0 / dy.abs()
-    } else {
-        f64::INFINITY
-    };
-    let mut t_max_x = if dx > 0.0 {
-        (cx as f64 + 1.0 - a[0]) * t_delta_x
-    } else if dx < 0.0 {
-        (a[0] - cx as f64) * t_delta_x
-    } else {
-        f64::INFINITY
-    };
-    let mut t_max_y = if dy > 0.0 {
-        (cy as f64 + 1.0 - a[1]) * t_delta_y
-    } else if dy < 0.0 {
-        (a[1] - cy as f64) * t_delta_y
-    } else {
-        f64::INFINITY
-    };
-    let n = (ex - cx).unsigned_abs() + (ey - cy).unsigned_abs();
-    if !visit(Cell::new(cx, cy)) {
-        return;
-    }
-    for _ in 0..n {
-        // Step along the axis whose boundary comes first, but never past the end cell on it.
-        let go_x = if cx == ex {
-            false
-        } else if cy == ey {
-            true
-        } else {
-            t_max_x <= t_max_y
-        };
-        if go_x {
-            cx += step_x;
-            t_max_x += t_delta_x;
-        } else {
-            cy += step_y;
-            t_max_y += t_delta_y;
-        }
-        if !visit(Cell::new(cx, cy)) {
+    for c in SegmentCells::new(a, b) {
+        if !visit(c) {
             return;
         }
+    }
+}
+
+/// The cells of [`walk_segment`] as an iterator: a loop over it keeps its body in the caller
+/// (a closure per cell is a call per cell when the compiler declines to inline it, as in the
+/// map update's hot loop). None for a segment with a non-finite end.
+#[derive(Debug, Clone)]
+pub struct SegmentCells {
+    cx: i32,
+    cy: i32,
+    ex: i32,
+    ey: i32,
+    step_x: i32,
+    step_y: i32,
+    t_delta_x: f64,
+    t_delta_y: f64,
+    t_max_x: f64,
+    t_max_y: f64,
+    /// Steps left after the first cell.
+    left: u32,
+    /// The first cell is still to be returned.
+    first: bool,
+}
+
+impl SegmentCells {
+    pub fn new(a: [f64; 2], b: [f64; 2]) -> Self {
+        let finite = a[0].is_finite() && a[1].is_finite() && b[0].is_finite() && b[1].is_finite();
+        let cx = floor_i32(a[0]);
+        let cy = floor_i32(a[1]);
+        let ex = floor_i32(b[0]);
+        let ey = floor_i32(b[1]);
+        let dx = b[0] - a[0];
+        let dy = b[1] - a[1];
+        let step_x = if dx > 0.0 { 1 } else { -1 };
+        let step_y = if dy > 0.0 { 1 } else { -1 };
+        let t_delta_x = if dx != 0.0 {
+            1.0 / dx.abs()
+        } else {
+            f64::INFINITY
+        };
+        let t_delta_y = if dy != 0.0 {
+            1.0 / dy.abs()
+        } else {
+            f64::INFINITY
+        };
+        let t_max_x = if dx > 0.0 {
+            (cx as f64 + 1.0 - a[0]) * t_delta_x
+        } else if dx < 0.0 {
+            (a[0] - cx as f64) * t_delta_x
+        } else {
+            f64::INFINITY
+        };
+        let t_max_y = if dy > 0.0 {
+            (cy as f64 + 1.0 - a[1]) * t_delta_y
+        } else if dy < 0.0 {
+            (a[1] - cy as f64) * t_delta_y
+        } else {
+            f64::INFINITY
+        };
+        Self {
+            cx,
+            cy,
+            ex,
+            ey,
+            step_x,
+            step_y,
+            t_delta_x,
+            t_delta_y,
+            t_max_x,
+            t_max_y,
+            left: if finite {
+                ex.abs_diff(cx).saturating_add(ey.abs_diff(cy))
+            } else {
+                0
+            },
+            first: finite,
+        }
+    }
+}
+
+impl Iterator for SegmentCells {
+    type Item = Cell;
+
+    #[inline]
+    fn next(&mut self) -> Option<Cell> {
+        if self.first {
+            self.first = false;
+            return Some(Cell::new(self.cx, self.cy));
+        }
+        if self.left == 0 {
+            return None;
+        }
+        self.left -= 1;
+        // Step along the axis whose boundary comes first, but never past the end cell on it.
+        let go_x = if self.cx == self.ex {
+            false
+        } else if self.cy == self.ey {
+            true
+        } else {
+            self.t_max_x <= self.t_max_y
+        };
+        if go_x {
+            self.cx += self.step_x;
+            self.t_max_x += self.t_delta_x;
+        } else {
+            self.cy += self.step_y;
+            self.t_max_y += self.t_delta_y;
+        }
+        Some(Cell::new(self.cx, self.cy))
     }
 }
 
