@@ -50,34 +50,8 @@ impl SegmentCells {
         let cy = floor_i32(a[1]);
         let ex = floor_i32(b[0]);
         let ey = floor_i32(b[1]);
-        let dx = b[0] - a[0];
-        let dy = b[1] - a[1];
-        let step_x = if dx > 0.0 { 1 } else { -1 };
-        let step_y = if dy > 0.0 { 1 } else { -1 };
-        let t_delta_x = if dx != 0.0 {
-            1.0 / dx.abs()
-        } else {
-            f64::INFINITY
-        };
-        let t_delta_y = if dy != 0.0 {
-            1.0 / dy.abs()
-        } else {
-            f64::INFINITY
-        };
-        let t_max_x = if dx > 0.0 {
-            (cx as f64 + 1.0 - a[0]) * t_delta_x
-        } else if dx < 0.0 {
-            (a[0] - cx as f64) * t_delta_x
-        } else {
-            f64::INFINITY
-        };
-        let t_max_y = if dy > 0.0 {
-            (cy as f64 + 1.0 - a[1]) * t_delta_y
-        } else if dy < 0.0 {
-            (a[1] - cy as f64) * t_delta_y
-        } else {
-            f64::INFINITY
-        };
+        let (step_x, t_delta_x, t_max_x) = axis(a[0], b[0], cx);
+        let (step_y, t_delta_y, t_max_y) = axis(a[1], b[1], cy);
         Self {
             cx,
             cy,
@@ -97,6 +71,26 @@ impl SegmentCells {
             first: finite,
         }
     }
+}
+
+/// Along one axis, from `a` (in cell `c`) to `b`: the step (+1 or -1), the segment parameter
+/// per cell, and the parameter at the first cell boundary (infinite with no extent).
+fn axis(a: f64, b: f64, c: i32) -> (i32, f64, f64) {
+    let d = b - a;
+    let step = if d > 0.0 { 1 } else { -1 };
+    let t_delta = if d != 0.0 {
+        1.0 / d.abs()
+    } else {
+        f64::INFINITY
+    };
+    let t_max = if d > 0.0 {
+        (c as f64 + 1.0 - a) * t_delta
+    } else if d < 0.0 {
+        (a - c as f64) * t_delta
+    } else {
+        f64::INFINITY
+    };
+    (step, t_delta, t_max)
 }
 
 impl Iterator for SegmentCells {
