@@ -10,6 +10,8 @@
 
 use std::time::Instant;
 
+use sha2::{Digest, Sha256};
+
 use sim_core::explore::{explore, ExploreConfig, Localization, RunResult};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 
@@ -24,22 +26,16 @@ fn pose_errors(r: &RunResult) -> (f64, f64) {
     (max_xy, max_th.to_degrees())
 }
 
-/// FNV-1a over the bits of everything a run produced.
-fn fingerprint(r: &RunResult) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    let mut eat = |v: u64| {
-        for b in v.to_le_bytes() {
-            h = (h ^ b as u64).wrapping_mul(0x0100_0000_01b3);
-        }
-    };
+/// SHA-256 (its first 8 bytes, in hex) over the bits of everything a run produced.
+fn fingerprint(r: &RunResult) -> String {
+    let mut h = Sha256::new();
+    let mut eat = |vs: &[f64]| vs.iter().for_each(|v| h.update(v.to_le_bytes()));
     for p in r.trajectory.iter().chain(&r.estimated_trajectory) {
-        [p.x_m, p.y_m, p.theta_rad]
-            .iter()
-            .for_each(|v| eat(v.to_bits()));
+        eat(&[p.x_m, p.y_m, p.theta_rad]);
     }
     for d in &r.decisions {
         let (g, p) = (d.goal, d.pose);
-        [
+        eat(&[
             d.time_s,
             p.x_m,
             p.y_m,
@@ -48,29 +44,24 @@ fn fingerprint(r: &RunResult) -> u64 {
             g.y,
             d.gain_m2,
             d.distance_m,
-        ]
-        .iter()
-        .for_each(|v| eat(v.to_bits()));
-        eat(d.candidates as u64);
+        ]);
+        eat(&[d.candidates as f64]);
     }
     for s in &r.progress {
-        [s.time_s, s.explored_area_m2]
-            .iter()
-            .for_each(|v| eat(v.to_bits()));
+        eat(&[s.time_s, s.explored_area_m2]);
     }
-    for c in &r.map.data {
-        eat(*c as u64);
-    }
-    [
+    eat(&[
         r.explored_fraction,
         r.path_length_m,
         r.map_quality.occupied_precision,
         r.map_quality.occupied_precision_aligned,
         r.map_quality.free_precision,
-    ]
-    .iter()
-    .for_each(|v| eat(v.to_bits()));
-    h
+    ]);
+    h.update(r.map.data.iter().map(|c| *c as u8).collect::<Vec<u8>>());
+    h.finalize()[..8]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 fn main() {
@@ -143,7 +134,7 @@ fn main() {
         );
         // A fingerprint of the run (every pose, decision, progress sample and map cell), so
         // that a change meant to be only faster can be checked to leave the run bit-identical.
-        println!("  fingerprint {:016x}", fingerprint(&r));
+        println!("  fingerprint {}", fingerprint(&r));
         if has("trace") {
             // Wrong occupied cells by their distance to solid space.
             let truth = building.reachable_free(r.map.frame, start.position());

@@ -24,7 +24,7 @@ pub fn walk_segment(a: [f64; 2], b: [f64; 2], mut visit: impl FnMut(Cell) -> boo
 
 /// The cells of [`walk_segment`] as an iterator: a loop over it keeps its body in the caller
 /// (a closure per cell is a call per cell when the compiler declines to inline it, as in the
-/// map update's hot loop). None for a segment with a non-finite end.
+/// map update's hot loop). A segment with a non-finite end has no cells.
 #[derive(Debug, Clone)]
 pub struct SegmentCells {
     cx: i32,
