@@ -33,6 +33,12 @@ pub struct Settings {
     pub localization: String,
     /// Occupancy grid cell size (m).
     pub map_resolution_m: f64,
+    /// The map is updated (and the scan matched) after this much motion (m)...
+    pub map_update_distance_m: f64,
+    /// ...or this much turning (rad)...
+    pub map_update_angle_rad: f64,
+    /// ...or this much simulated time (s), whichever comes first.
+    pub map_update_period_s: f64,
     /// Weight of distance in the utility (the paper's alpha).
     pub alpha: f64,
     /// In the utility, a candidate's gain counts as at least this much (m2); 0 = the paper's
@@ -99,6 +105,9 @@ impl Default for Settings {
             odometry_rotation_error_deg_per_rad: c.sim.odometry.max_rotation_error.to_degrees(),
             localization: c.localization.as_str().to_string(),
             map_resolution_m: c.map_resolution_m,
+            map_update_distance_m: c.map_update_distance_m,
+            map_update_angle_rad: c.map_update_angle_rad,
+            map_update_period_s: c.map_update_period_s,
             alpha: c.alpha,
             gain_floor_m2: c.gain_floor_m2,
             utility_distance: c.utility_distance.as_str().to_string(),
@@ -219,6 +228,9 @@ impl Settings {
             self.map_resolution_m >= 0.01 && self.map_resolution_m <= 0.5,
             "metres in [0.01, 0.5]",
         )?;
+        c.map_update_distance_m = pos("map_update_distance_m", self.map_update_distance_m)?;
+        c.map_update_angle_rad = pos("map_update_angle_rad", self.map_update_angle_rad)?;
+        c.map_update_period_s = pos("map_update_period_s", self.map_update_period_s)?;
         c.alpha = check(
             "alpha",
             self.alpha,

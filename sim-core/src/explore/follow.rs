@@ -99,6 +99,35 @@ impl PathFollower {
         self.waypoints.last().copied()
     }
 
+    /// Start of the segment being followed (the robot itself before the first waypoint when
+    /// the path has no known start).
+    fn segment_start(&self, p: Vec2) -> Vec2 {
+        match self.next {
+            0 => self.start.unwrap_or(p),
+            k => self.waypoints[k - 1],
+        }
+    }
+
+    /// The point `lookahead_m` along the path from the robot's projection on the segment being
+    /// followed. Aiming at a point on the path, rather than at the next waypoint once within
+    /// reach of the one before, cuts corners by little: a robot that turned early toward the
+    /// waypoint after a corner could run into the wall end at the corner and push against it.
+    fn carrot(&self, p: Vec2, lookahead_m: f64) -> Vec2 {
+        let k = self.next.min(self.waypoints.len() - 1);
+        let (from, to) = (self.segment_start(p), self.waypoints[k]);
+        let mut at = from + (to - from) * projection(p, from, to);
+        let mut left = lookahead_m;
+        for &w in &self.waypoints[k..] {
+            let seg = (w - at).norm();
+            if seg >= left {
+                return at + (w - at) * (left / seg);
+            }
+            left -= seg;
+            at = w;
+        }
+        at
+    }
+
     /// The command for the robot at `pose`, with speed limits.
     pub fn command(&mut self, pose: &Pose, cfg: &FollowConfig, max_v: f64, max_w: f64) -> Command {
         let Some(goal) = self.goal() else {
@@ -108,13 +137,16 @@ impl PathFollower {
         if (goal - p).norm() <= cfg.goal_tolerance_m {
             return Command::Arrived;
         }
-        // Skip waypoints already within the look-ahead distance.
-        while self.next + 1 < self.waypoints.len()
-            && (self.waypoints[self.next] - p).norm() < cfg.lookahead_m
-        {
-            self.next += 1;
+        // Move on to the next segment once past the end of this one (or close to its end).
+        while self.next + 1 < self.waypoints.len() {
+            let (from, to) = (self.segment_start(p), self.waypoints[self.next]);
+            if (to - p).norm() < cfg.lookahead_m / 2.0 || projection(p, from, to) >= 1.0 {
+                self.next += 1;
+            } else {
+                break;
+            }
         }
-        let target = self.waypoints[self.next.min(self.waypoints.len() - 1)];
+        let target = self.carrot(p, cfg.lookahead_m);
         let to = target - p;
         let err = wrap_angle(to.y.atan2(to.x) - pose.theta_rad);
         let w = (cfg.heading_gain * err).clamp(-max_w, max_w);
@@ -129,6 +161,17 @@ impl PathFollower {
             v_mps: v.max(0.0),
             w_radps: w,
         }
+    }
+}
+
+/// Where the projection of `p` falls on the segment `a`-`b`, as a fraction of it in [0, 1].
+fn projection(p: Vec2, a: Vec2, b: Vec2) -> f64 {
+    let d = b - a;
+    let len2 = d.norm_squared();
+    if len2 > 0.0 {
+        ((p - a).dot(&d) / len2).clamp(0.0, 1.0)
+    } else {
+        1.0
     }
 }
 
@@ -205,5 +248,39 @@ mod tests {
             }
             Command::Arrived => panic!("not arrived"),
         }
+    }
+
+    #[test]
+    fn does_not_cut_a_corner_next_to_the_robot() {
+        // The robot stands 0.33 m east of a corner of its path, facing north: the path goes
+        // west to the corner, then north. Aiming at the waypoint after the corner (the old rule,
+        // once within the look-ahead of the corner) would drive it north, into the end of the
+        // wall that the path goes around; it must first turn west.
+        let p = Vec2::new(0.33, 0.0);
+        let mut f = PathFollower::from(p, vec![Vec2::new(0.0, 0.0), Vec2::new(0.0, 3.0)]);
+        let c = f.command(
+            &Pose::new(p.x, p.y, std::f64::consts::FRAC_PI_2),
+            &FollowConfig::default(),
+            0.5,
+            1.0,
+        );
+        match c {
+            Command::Drive { v_mps, w_radps } => {
+                assert_eq!(v_mps, 0.0, "drives on toward the wall");
+                assert!(w_radps > 0.5, "turns left, toward the corner: {w_radps}");
+            }
+            Command::Arrived => panic!("not arrived"),
+        }
+        // Near the corner it aims up the second segment.
+        let c = f.command(
+            &Pose::new(0.02, 0.0, std::f64::consts::FRAC_PI_2),
+            &FollowConfig::default(),
+            0.5,
+            1.0,
+        );
+        assert!(
+            matches!(c, Command::Drive { v_mps, .. } if v_mps > 0.0),
+            "{c:?}"
+        );
     }
 }
