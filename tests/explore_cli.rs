@@ -144,6 +144,10 @@ fn explores_real_school_maps_completely() {
         // reached. The run used to end there (85 % explored); the frontier's reachable end
         // is now the last resort before ending.
         ("Lamuniere1", 1),
+        // The robot used to aim at the waypoint after a corner once within reach of the
+        // corner, run into the end of the wall the path went around, and push against it until
+        // every goal was given up (96.5 % explored, "no frontiers"); it now aims along the path.
+        ("Sabadell3", 2),
     ] {
         let map = maps_dir().join(format!("schools/{name}.yaml"));
         let s = explore(&map, seed, &dir.path().join(format!("{name}-{seed}")));
@@ -167,6 +171,31 @@ fn explores_real_school_maps_completely() {
         assert!(f >= 0.97, "{strategy}: explored {f}");
         assert_ne!(s["end_reason"], "time limit", "{strategy}");
     }
+}
+
+/// With map updates every 0.5 m / 0.25 rad, Lamuniere1 (seed 2) used to end at 86 % explored:
+/// the map showed the passage the robot had come in by narrower than the robot plus its safety
+/// margin, so no frontier could be reached. Planning without the margin is now the last resort.
+#[test]
+fn a_passage_narrower_than_the_safety_margin_does_not_end_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = dir.path().join("settings.json");
+    std::fs::write(
+        &settings,
+        r#"{"map_update_distance_m": 0.5, "map_update_angle_rad": 0.25}"#,
+    )
+    .unwrap();
+    let map = maps_dir().join("schools/Lamuniere1.yaml");
+    let s = explore_with(
+        &map,
+        2,
+        &dir.path().join("run"),
+        &["--settings", settings.to_str().unwrap()],
+    );
+    assert_eq!(s["settings"]["map_update_distance_m"], 0.5, "{s}");
+    assert_eq!(s["end_reason"], "no frontiers", "{s}");
+    let f = s["explored_fraction"].as_f64().unwrap();
+    assert!(f >= 0.97, "explored {f}");
 }
 
 /// With the paper's straight-line distance in the utility, the robot on paper-03 (seed 1) used

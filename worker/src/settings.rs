@@ -293,6 +293,17 @@ mod tests {
             ..Settings::default()
         };
         assert!(s.to_explore_config().is_err());
+        let s = Settings {
+            map_update_angle_rad: 0.0,
+            ..Settings::default()
+        };
+        let e = s.to_explore_config().unwrap_err().to_string();
+        assert!(e.contains("settings.map_update_angle_rad"), "{e}");
+        let s = Settings {
+            map_update_distance_m: 0.5,
+            ..Settings::default()
+        };
+        assert_eq!(s.to_explore_config().unwrap().map_update_distance_m, 0.5);
     }
 
     #[test]

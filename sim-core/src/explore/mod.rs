@@ -336,6 +336,8 @@ struct Explorer<'a> {
     coarse: CoarseCosts,
     coarse_dirty: Vec<u32>,
     coarse_dirty_mark: Vec<bool>,
+    /// Paths are planned without the safety margin (see `decide`'s last resort).
+    relaxed_planning: bool,
     /// The coarser grid the candidates' distances are searched on, updated with `coarse`.
     far: CoarseCosts,
     /// Whether a cell became or stopped being occupied since the path was last checked.
@@ -464,6 +466,7 @@ pub fn explore_charged<'a>(
         coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
         coarse_dirty: Vec::new(),
         coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
+        relaxed_planning: false,
         far: CoarseCosts::blocked(frame, DISTANCE_FACTOR),
         walls_changed: false,
         forgiven_at: None,
@@ -778,8 +781,29 @@ impl Explorer<'_> {
         self.waypoints_to(&plan, c)
     }
 
+    /// How far from obstacles the robot's centre must stay on planned paths: its radius and
+    /// the safety margin, or its radius alone while planning is relaxed.
     fn inflation_m(&self) -> f64 {
-        self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m
+        if self.relaxed_planning {
+            self.cfg.sim.robot.radius_m
+        } else {
+            self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m
+        }
+    }
+
+    /// Plans with or without the safety margin from now on (every planning cell is recomputed
+    /// when this changes).
+    fn set_relaxed_planning(&mut self, on: bool) {
+        if self.relaxed_planning == on {
+            return;
+        }
+        self.relaxed_planning = on;
+        for (i, m) in self.coarse_dirty_mark.iter_mut().enumerate() {
+            if !*m {
+                *m = true;
+                self.coarse_dirty.push(i as u32);
+            }
+        }
     }
 
     /// Marks the planning cells that a map update may have changed: those of cells whose state
@@ -815,11 +839,7 @@ impl Explorer<'_> {
     }
 
     fn traversability(&self) -> Traversability<'_> {
-        Traversability::new(
-            &self.map.occupancy,
-            &self.obstacles,
-            self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m,
-        )
+        Traversability::new(&self.map.occupancy, &self.obstacles, self.inflation_m())
     }
 
     /// Path costs from the robot (metres, plus a penalty for passing close to walls, so paths
@@ -852,7 +872,7 @@ impl Explorer<'_> {
             return;
         }
         const WALL_BAND_M: f64 = 0.3;
-        let radius_m = self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m;
+        let radius_m = self.inflation_m();
         // Not `self.traversability()`: the planning grid below is updated while this borrows
         // only the map and the obstacle field.
         let trav = Traversability::new(&self.map.occupancy, &self.obstacles, radius_m);
@@ -1198,6 +1218,12 @@ impl Explorer<'_> {
 
     /// Chooses the next goal. Returns false when no reachable candidate is left.
     fn decide(&mut self) -> bool {
+        // A relaxed plan (see below) holds for one decision.
+        self.set_relaxed_planning(false);
+        self.decide_planned()
+    }
+
+    fn decide_planned(&mut self) -> bool {
         let cfg = self.cfg;
         let frame = self.map.frame;
         if self.map.known_bounds.is_none() {
@@ -1283,6 +1309,15 @@ impl Explorer<'_> {
                 None if !moved_to_reachable => {
                     moved_to_reachable = true;
                     plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
+                }
+                // Frontiers exist but none can be reached with the safety margin: try without
+                // it. Where the map shows a passage (often the one the robot came in by) a little
+                // narrower than the robot's diameter plus twice the margin, the robot would
+                // otherwise end the run with frontiers it can reach (Lamuniere1, seed 2, with
+                // updates every 0.5 m / 0.25 rad: 86 % explored).
+                None if !self.relaxed_planning => {
+                    self.set_relaxed_planning(true);
+                    return self.decide_planned();
                 }
                 None => {
                     // Frontiers exist but none is reachable: blacklist them all so the run can end.
