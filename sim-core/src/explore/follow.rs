@@ -74,11 +74,15 @@ impl PathFollower {
     /// [`PathFollower::from`]) and the waypoints left.
     pub fn current_segment(&self) -> Option<(Vec2, &[Vec2])> {
         let rest = self.remaining();
-        let from = match self.next {
-            0 => self.start?,
-            k => *self.waypoints.get(k - 1)?,
-        };
-        (!rest.is_empty()).then_some((from, rest))
+        (!rest.is_empty()).then_some((self.passed()?, rest))
+    }
+
+    /// The waypoint passed last, or the start given to [`PathFollower::from`] before the first.
+    fn passed(&self) -> Option<Vec2> {
+        match self.next {
+            0 => self.start,
+            k => self.waypoints.get(k - 1).copied(),
+        }
     }
 
     pub fn remaining(&self) -> &[Vec2] {
@@ -102,10 +106,7 @@ impl PathFollower {
     /// Start of the segment being followed (the robot itself before the first waypoint when
     /// the path has no known start).
     fn segment_start(&self, p: Vec2) -> Vec2 {
-        match self.next {
-            0 => self.start.unwrap_or(p),
-            k => self.waypoints[k - 1],
-        }
+        self.passed().unwrap_or(p)
     }
 
     /// The point `lookahead_m` along the path from the robot's projection on the segment being

@@ -135,8 +135,7 @@ pub struct ExploreConfig {
     /// on the 2000 m2 bench building, updating every 0.1 m / 0.1 rad instead took 1.45x the
     /// time and gave no better maps. Every 0.5 m / 0.5 rad was 1.4x faster on the 22 school-map
     /// runs (11 maps x seeds 1-2, `baseline`) and explored as much, but drew worse maps (aligned
-    /// wall precision 0.906 against 0.937 on average, lower on 17 of 22 runs); 0.5 m / 0.25 rad
-    /// ended one run at 86 % explored.
+    /// wall precision 0.906 against 0.937 on average, lower on 17 of 22 runs).
     pub map_update_distance_m: f64,
     pub map_update_angle_rad: f64,
     pub map_update_period_s: f64,
