@@ -106,6 +106,23 @@ fn a_start_in_a_wall_is_a_clean_error() {
 }
 
 #[test]
+fn the_true_layout_oracle_on_a_map_without_rooms_is_a_clean_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = maps_dir().join("schools/Sabadell1.yaml");
+    let o = run(&[
+        "explore",
+        "--building",
+        map.to_str().unwrap(),
+        "--strategy",
+        "layout-truth",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_clean_failure(&o, &["Sabadell1", "layout-truth", "ground-truth rooms"]);
+}
+
+#[test]
 fn layout_snapshots_draw_the_paper_sequence() {
     let dir = tempfile::tempdir().unwrap();
     let b = repo().join("buildings/small.toml");

@@ -38,6 +38,36 @@ pub struct LayoutRaster {
 impl LayoutRaster {
     /// Rasterises `layout` on the frame of `grid`; walls close gaps of up to `max_wall_gap_m`.
     pub fn new(layout: &Layout, grid: &OccupancyGrid, max_wall_gap_m: f64) -> Self {
+        let (walls, room) = Self::rasterise(layout, grid);
+        let open = layout
+            .rooms
+            .iter()
+            .map(|r| r.label == RoomLabel::Open || crosses_frontier(r, grid, max_wall_gap_m))
+            .collect();
+        let gap_walls = gap_walls(layout, grid, max_wall_gap_m);
+        Self {
+            walls,
+            room,
+            open,
+            gap_walls,
+        }
+    }
+
+    /// Rasterises a layout known to be complete and exact (the building's true rooms): no room
+    /// has an open frontier, so every candidate inside a room uses the room-bounded gain; no
+    /// gap walls.
+    pub fn exact(layout: &Layout, grid: &OccupancyGrid) -> Self {
+        let (walls, room) = Self::rasterise(layout, grid);
+        Self {
+            walls,
+            room,
+            open: vec![false; layout.rooms.len()],
+            gap_walls: Bitmap::filled(grid.frame, false),
+        }
+    }
+
+    /// The cells crossed by room edges, and the room holding each cell centre.
+    fn rasterise(layout: &Layout, grid: &OccupancyGrid) -> (Bitmap, Grid<u32>) {
         let frame = grid.frame;
         let mut room = Grid::filled(frame, NO_ROOM);
         for (k, r) in layout.rooms.iter().enumerate() {
@@ -54,18 +84,7 @@ impl LayoutRaster {
                 });
             }
         }
-        let open = layout
-            .rooms
-            .iter()
-            .map(|r| r.label == RoomLabel::Open || crosses_frontier(r, grid, max_wall_gap_m))
-            .collect();
-        let gap_walls = gap_walls(layout, grid, max_wall_gap_m);
-        Self {
-            walls,
-            room,
-            open,
-            gap_walls,
-        }
+        (walls, room)
     }
 
     /// Whether the cell lies in a predicted room.
@@ -322,6 +341,34 @@ mod tests {
         // A crossing no longer than the gaps walls may close (here 2.5 m) keeps it closed.
         let r = LayoutRaster::new(&cut, &g, 2.5);
         assert!(!r.uses_baseline(p));
+    }
+
+    #[test]
+    fn an_exact_layout_never_falls_back_to_the_baseline() {
+        let g = corridor();
+        let p = Cell::new(30, 15);
+        // The cut corridor that `new` judges open, and a room labelled open: as the true rooms
+        // both are complete, so the candidate counts only the unknown cells inside them.
+        for label in [RoomLabel::Partial, RoomLabel::Open] {
+            let cut = Layout {
+                rooms: vec![room(1, (0.05, 0.5), (3.2, 2.6), label)],
+                ..Layout::default()
+            };
+            assert!(LayoutRaster::new(&cut, &g, 1.0).uses_baseline(p));
+            let r = LayoutRaster::exact(&cut, &g);
+            assert!(!r.uses_baseline(p));
+            assert_eq!(r.gap_walls.count_true(), 0);
+            let with_l = layout_information_gain(&g, &r, p, 6.0);
+            // The room holds 0.1 m x 2.1 m of unknown cells past the corridor's end.
+            let base = information_gain(&g, p, 6.0);
+            assert!(
+                with_l < 0.5 && base > 10.0 * with_l,
+                "{label:?}: {with_l} vs {base}"
+            );
+        }
+        // Outside every room: the baseline.
+        let none = Layout::default();
+        assert!(LayoutRaster::exact(&none, &g).uses_baseline(p));
     }
 
     /// 4 x 1 m of free space (rows 0-9) under an observed wall (row 10) with a gap of unknown

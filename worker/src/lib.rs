@@ -41,8 +41,10 @@ pub enum JobError {
     NoStart(String),
     #[error("start pose ({x:.2}, {y:.2}) is not in free space of building {name}")]
     StartInWall { name: String, x: f64, y: f64 },
-    #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch, layout-gaps, layout-gaps-es)")]
+    #[error("unknown strategy '{0}' (available: {list})", list = STRATEGIES.join(", "))]
     UnknownStrategy(String),
+    #[error("strategy {strategy} takes its layout from the building's ground-truth rooms, and building {name} has none (a map without rooms); use it with a floorcast building file that lists rooms, or choose another strategy")]
+    NoRooms { strategy: String, name: String },
     #[error(transparent)]
     Settings(#[from] SettingsError),
 }
@@ -66,6 +68,12 @@ pub fn run_job(
         return Err(JobError::UnknownStrategy(job.strategy.clone()));
     }
     let mut config = job.settings.to_explore_config_for(&job.strategy)?;
+    if config.strategy.layout_from_truth && job.building.rooms.is_empty() {
+        return Err(JobError::NoRooms {
+            strategy: job.strategy.clone(),
+            name: job.building_name.clone(),
+        });
+    }
     config.snapshot_fractions = job.snapshot_fractions.clone();
     let (start, source) = match job.start {
         Some(p) => (p, "command line"),

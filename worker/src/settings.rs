@@ -140,7 +140,7 @@ pub enum SettingsError {
     Localization(String),
     #[error("settings.utility_distance: unknown value '{0}', expected path or euclidean")]
     UtilityDistance(String),
-    #[error("unknown strategy '{0}' (available: baseline, layout, layout-es, layout-aes, layout-switch, layout-gaps, layout-gaps-es)")]
+    #[error("unknown strategy '{0}' (available: {list})", list = Strategy::NAMES.join(", "))]
     Strategy(String),
 }
 

@@ -326,7 +326,8 @@ struct Explorer<'a> {
     stopped_early: bool,
     start: Pose,
     snapshots: Vec<MapSnapshot>,
-    /// Ground-truth room polygons (for the "rooms never entered" report only).
+    /// Ground-truth room polygons (for the "rooms never entered" report, and the layout of the
+    /// `layout-truth` oracle).
     rooms: Vec<crate::geom::Polygon>,
     /// The map's frontier cells, updated with each map update.
     frontiers: FrontierTracker,
@@ -1029,18 +1030,24 @@ impl Explorer<'_> {
                     self.layout_trusted = true;
                 }
             }
-            let mut made = None;
-            let layout_cfg = &self.cfg.layout;
-            let charged_s = match self.layout_cost.as_mut() {
-                Some(cost) => cost(&mut || made = Some(reconstruct_layout(grid, layout_cfg))),
-                None => 0.0,
+            let raster = if st.layout_from_truth {
+                // The oracle: nothing to compute (and nothing to charge).
+                let to_map = MapToWorld::new(&self.estimate, &self.sim.true_pose());
+                LayoutRaster::exact(&true_layout(&self.rooms, &to_map), grid)
+            } else {
+                let mut made = None;
+                let layout_cfg = &self.cfg.layout;
+                let charged_s = match self.layout_cost.as_mut() {
+                    Some(cost) => cost(&mut || made = Some(reconstruct_layout(grid, layout_cfg))),
+                    None => 0.0,
+                };
+                let layout = made.unwrap_or_else(|| reconstruct_layout(grid, layout_cfg));
+                if charged_s.is_finite() && charged_s > 0.0 {
+                    self.compute_debt_s += charged_s;
+                    self.layout_compute_s += charged_s;
+                }
+                LayoutRaster::new(&layout, grid, st.max_wall_gap_m)
             };
-            let layout = made.unwrap_or_else(|| reconstruct_layout(grid, layout_cfg));
-            if charged_s.is_finite() && charged_s > 0.0 {
-                self.compute_debt_s += charged_s;
-                self.layout_compute_s += charged_s;
-            }
-            let raster = LayoutRaster::new(&layout, grid, st.max_wall_gap_m);
             let predicted_unknown = grid
                 .data
                 .iter()
@@ -1612,6 +1619,36 @@ impl MapToWorld {
     /// The map cell (index) the centre of building cell `n` falls in, `None` off the frame.
     fn map_index_of(&self, frame: &GridFrame, n: Cell) -> Option<usize> {
         frame.index(frame.cell_from_world(self.backward(frame.world_from_cell(n))))
+    }
+}
+
+/// The building's rooms as a complete layout in the map's frame (world positions brought back
+/// through `to_map`, the current pose error): every room closed and fully known.
+fn true_layout(rooms: &[crate::geom::Polygon], to_map: &MapToWorld) -> crate::layout::Layout {
+    let rooms = rooms
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let polygon =
+                crate::geom::Polygon::new(p.vertices.iter().map(|v| to_map.backward(*v)).collect());
+            let area_m2 = polygon.area_m2();
+            crate::layout::LayoutRoom {
+                id: k as u32,
+                open_edges: vec![false; polygon.vertices.len()],
+                observed_polygon: polygon.clone(),
+                polygon,
+                label: crate::layout::RoomLabel::Partial,
+                predicted: false,
+                area_m2,
+                observed_area_m2: area_m2,
+                unknown_area_m2: 0.0,
+            }
+        })
+        .collect();
+    crate::layout::Layout {
+        rooms,
+        lines: Vec::new(),
+        diagnostics: Default::default(),
     }
 }
 

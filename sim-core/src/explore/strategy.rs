@@ -48,6 +48,11 @@ pub struct Strategy {
     /// predicted rooms visible in `M^L`; open rooms use the baseline) rather than by the baseline
     /// gain through the map whose short wall gaps the layout closes (`layout-gaps`).
     pub rank_by_predicted_rooms: bool,
+    /// The layout is the building's ground-truth rooms (brought into the map's frame by the
+    /// current pose error) instead of a prediction from the map: an oracle, so that the paper's
+    /// gain can be judged apart from the errors of the layout prediction (`layout-truth`). Needs
+    /// a building with rooms.
+    pub layout_from_truth: bool,
 }
 
 impl Strategy {
@@ -60,13 +65,16 @@ impl Strategy {
             switch_min_area_m2: 5.0,
             max_wall_gap_m: 1.0,
             rank_by_predicted_rooms: false,
+            layout_from_truth: false,
         }
     }
 
     /// The strategies by name: `baseline`; the paper's `layout` and `layout-es` (ES threshold
     /// 1 m2); `layout-aes` (aggressive ES, 2 m2 per candidate) and `layout-switch` (dynamic
     /// switch) from its discussion; `layout-gaps` and `layout-gaps-es`, which rank candidates by
-    /// the baseline gain through the map with short wall gaps closed by the layout's walls.
+    /// the baseline gain through the map with short wall gaps closed by the layout's walls;
+    /// `layout-truth` and `layout-truth-es`, the paper's two with the true rooms for a layout
+    /// (an oracle: the most a perfect layout prediction could give the paper's method).
     pub fn by_name(name: &str) -> Option<Self> {
         let b = Self::baseline();
         let paper = Self {
@@ -98,6 +106,15 @@ impl Strategy {
                 early_stop: EarlyStop::TotalGainBelow(1.0),
                 ..b
             },
+            "layout-truth" => Self {
+                layout_from_truth: true,
+                ..paper
+            },
+            "layout-truth-es" => Self {
+                early_stop: EarlyStop::TotalGainBelow(1.0),
+                layout_from_truth: true,
+                ..paper
+            },
             _ => return None,
         })
     }
@@ -111,6 +128,8 @@ impl Strategy {
         "layout-switch",
         "layout-gaps",
         "layout-gaps-es",
+        "layout-truth",
+        "layout-truth-es",
     ];
 
     /// Whether this strategy needs the layout at all.
@@ -151,6 +170,10 @@ mod tests {
         assert!(Strategy::by_name("nope").is_none());
         assert!(!Strategy::by_name("baseline").unwrap().uses_layout());
         assert!(Strategy::by_name("layout-es").unwrap().uses_layout());
+        let truth = Strategy::by_name("layout-truth-es").unwrap();
+        assert!(truth.layout_from_truth && truth.rank_by_predicted_rooms);
+        assert_eq!(truth.early_stop, EarlyStop::TotalGainBelow(1.0));
+        assert!(!Strategy::by_name("layout-es").unwrap().layout_from_truth);
     }
 
     #[test]

@@ -87,7 +87,7 @@ fn same_seed_same_run_and_seeds_differ() {
 fn layout_strategies_run_and_are_reproducible() {
     let b = corridor_building(4);
     let layout_strategies = Strategy::NAMES.iter().filter(|n| **n != "baseline");
-    assert_eq!(layout_strategies.clone().count(), 6);
+    assert_eq!(layout_strategies.clone().count(), 8);
     for &name in layout_strategies {
         let cfg = ExploreConfig {
             strategy: Strategy::by_name(name).unwrap(),
@@ -122,6 +122,84 @@ fn layout_es_stops_early_with_the_building_nearly_explored() {
     for r in early {
         assert_eq!(r.end_reason, EndReason::EarlyStop);
         assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
+    }
+}
+
+/// [`corridor_building`] with its ground-truth rooms: the corridor and the rooms on each side.
+fn corridor_building_with_rooms(n: usize) -> Building {
+    let mut b = corridor_building(n);
+    let len = 5.0 * n as f64;
+    let rect =
+        |x0: f64, y0: f64, x1: f64, y1: f64| Polygon::rect(Vec2::new(x0, y0), Vec2::new(x1, y1));
+    b.rooms.push(crate::building::Room {
+        id: 0,
+        kind: "corridor".into(),
+        polygon: rect(0.0, 4.0, len, 6.0),
+    });
+    for i in 0..n {
+        let x0 = 5.0 * i as f64;
+        for (y0, y1) in [(0.0, 4.0), (6.0, 10.0)] {
+            b.rooms.push(crate::building::Room {
+                id: b.rooms.len() as u32,
+                kind: "room".into(),
+                polygon: rect(x0, y0, x0 + 5.0, y1),
+            });
+        }
+    }
+    b
+}
+
+#[test]
+fn the_true_layout_is_the_building_rooms_in_the_map_frame() {
+    let b = corridor_building_with_rooms(2);
+    let rooms: Vec<Polygon> = b.rooms.iter().map(|r| r.polygon.clone()).collect();
+    // No pose error: the rooms themselves, all closed.
+    let start = Pose::new(1.0, 5.0, 0.3);
+    let l = true_layout(&rooms, &MapToWorld::new(&start, &start));
+    assert_eq!(l.rooms.len(), 5);
+    for (r, p) in l.rooms.iter().zip(&rooms) {
+        for (a, b) in r.polygon.vertices.iter().zip(&p.vertices) {
+            assert!((*a - *b).norm() < 1e-12);
+        }
+        assert!(r.open_edges.iter().all(|o| !o));
+        assert!((r.area_m2 - p.area_m2()).abs() < 1e-9);
+    }
+    // The estimate 0.5 m ahead (along x) of the truth: the map shows everything 0.5 m further
+    // along x than the building.
+    let truth = Pose::new(3.0, 5.0, 0.0);
+    let estimate = Pose::new(3.5, 5.0, 0.0);
+    let l = true_layout(&rooms, &MapToWorld::new(&estimate, &truth));
+    let v = l.rooms[0].polygon.vertices[0];
+    let w = rooms[0].vertices[0];
+    assert!(
+        (v - (w + Vec2::new(0.5, 0.0))).norm() < 1e-9,
+        "{v:?} vs {w:?}"
+    );
+}
+
+#[test]
+fn the_true_layout_oracle_explores_and_its_early_stop_leaves_little_unseen() {
+    let b = corridor_building_with_rooms(4);
+    for name in ["layout-truth", "layout-truth-es"] {
+        let cfg = ExploreConfig {
+            strategy: Strategy::by_name(name).unwrap(),
+            ..ExploreConfig::default()
+        };
+        for seed in 1..=2 {
+            let r = explore(&b, b.start.unwrap(), &cfg, seed, &mut |_| {});
+            assert!(r.layouts_computed > 0, "{name}");
+            assert_eq!(r.layout_compute_s, 0.0);
+            assert!(
+                r.explored_fraction >= 0.97,
+                "{name} seed {seed}: {} ({:?})",
+                r.explored_fraction,
+                r.end_reason
+            );
+            assert_eq!(r.rooms_never_entered, Some(0), "{name} seed {seed}");
+            if name == "layout-truth" {
+                assert_eq!(r.end_reason, EndReason::NoFrontiers);
+            }
+        }
     }
 }
 
