@@ -1,5 +1,7 @@
 """Paired gains of the true-layout oracle (`layout-truth`, `layout-truth-es`) over the paper's
-strategies of results/reference/paper (README, "With the true layout"):
+strategies of results/reference/paper, and of the oracle with a floor on the gain
+(`layout-truth-floor`) over the strategies of results/reference/paper-floor (README, "With the
+true layout"):
 python3 results/reference/paper-truth/paired.py (from the repository root)."""
 import csv
 import math
@@ -7,7 +9,7 @@ import statistics
 
 # Student's t (95 %, two-sided) by degrees of freedom, as `floorcast report` uses
 # (coordinator/src/table.rs, t95).
-T95 = {9: 2.262, 99: 1.984}
+T95 = {9: 2.262, 29: 2.045, 99: 1.984}
 
 
 def load(path):
@@ -16,6 +18,7 @@ def load(path):
 
 
 paper = load("results/reference/paper/results.csv")
+floor = load("results/reference/paper-floor/results.csv")
 truth = load("results/reference/paper-truth/results.csv")
 
 
@@ -58,3 +61,8 @@ for table, label in [(paper, "baseline"), (paper, "layout"), (paper, "layout-es"
     print("  %-16s time to 90 %% %6.0f s, path %5.0f m, explored %.4f (min %.3f), stopped early %d"
           % (label, statistics.mean(t90.values()), statistics.mean(path.values()),
              statistics.mean(frac.values()), min(frac.values()), stopped))
+print("\nwith a floor of 2 m2 on the gain (seeds 1-3, n = 30 each):")
+tf = {k: v for k, v in runs(truth, "layout-truth-floor").items() if k[1] <= 3}
+for ref_label in ["baseline", "layout", "layout-es"]:
+    m, ci = paired(runs(floor, ref_label), tf, 30)
+    print("  layout-truth-floor over %-10s (floor) %+6.1f +/- %.1f %%" % (ref_label, m, ci))
