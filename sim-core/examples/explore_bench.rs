@@ -113,7 +113,7 @@ fn main() {
         let (exy, eth) = pose_errors(&r);
         println!(
             "{:<12} free {:6.0} m2  explored {:.3}  end {:<12}  sim {:6.0} s  wall {:6.2} s  \
-             speed-up {:6.0}x real time  decisions {:4}  path {:5.0} m  occ-prec {:.3}  \
+             speed-up {:6.0}x real time  decisions {:4}  path {:5.0} m  occ-prec {:.3} (aligned {:.3})  \
              free-prec {:.3}  max pose err {:.2} m {:.1} deg  matches {}/{}  plans {}",
             loc.as_str(),
             r.free_area_m2,
@@ -125,6 +125,7 @@ fn main() {
             r.decisions.len(),
             r.path_length_m,
             r.map_quality.occupied_precision,
+            r.map_quality.occupied_precision_aligned,
             r.map_quality.free_precision,
             exy,
             eth,
