@@ -326,6 +326,14 @@ impl Plan {
         if file.strategies.is_empty() {
             return Err(invalid("strategies", "the grid names no strategy".into()));
         }
+        // The shared settings alone first, so that an error in one of them names `settings`
+        // rather than the first strategy they were merged into.
+        let shared: Settings = toml::Value::Table(file.settings.clone())
+            .try_into()
+            .map_err(|e: toml::de::Error| invalid("settings", one_line(&e.to_string())))?;
+        shared
+            .to_explore_config()
+            .map_err(|e| invalid("settings", e.to_string()))?;
         let mut labels = Vec::new();
         let mut resolved = Vec::new();
         for (i, s) in file.strategies.iter().enumerate() {
@@ -515,6 +523,16 @@ time_limit_s = 600
             let e = parse(&text).unwrap_err().to_string();
             assert!(e.contains(needle) && e.contains("x.toml"), "{needle}: {e}");
             assert_eq!(e.lines().count(), 1, "{e}");
+        }
+        // A bad shared setting is named as such, not as the first strategy's.
+        for bad in ["time_limit_s = -5", "time_limt_s = 600"] {
+            let e = parse(&GOOD.replace("time_limit_s = 600", bad))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("settings") && !e.contains("strategies["),
+                "{bad}: {e}"
+            );
         }
     }
 
