@@ -46,7 +46,9 @@ pub struct LabelRow {
     pub explored_fraction: Stat,
     pub stopped_early: usize,
     pub failed: usize,
-    /// Gain of mean time over the reference label, per cent (positive = faster).
+    /// Gain of mean time over the reference label, per cent (positive = faster); `None` unless
+    /// this label's successful runs are of exactly the reference's buildings and seeds (means
+    /// over different runs would compare buildings, not strategies).
     pub gain_pct: Option<f64>,
     /// Gain over the reference paired by (building, seed); `None` without common pairs.
     pub paired: Option<PairedGain>,
@@ -171,10 +173,12 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
             .map(|r| times_by_pair(subset, r))
             .unwrap_or_default();
         for row in &mut rows {
+            let mine = times_by_pair(subset, &row.label);
+            let same_runs = mine.keys().eq(reference_times.keys());
             row.gain_pct = base
-                .filter(|b| b.is_finite() && *b > 0.0)
+                .filter(|b| same_runs && b.is_finite() && *b > 0.0)
                 .map(|b| (b - row.time.mean) / b * 100.0);
-            let gains: Vec<f64> = times_by_pair(subset, &row.label)
+            let gains: Vec<f64> = mine
                 .iter()
                 .filter_map(|(k, t)| {
                     let b = *reference_times.get(k)?;
@@ -256,6 +260,18 @@ pub fn render_text(t: &Table) -> String {
             let _ = writeln!(out, "{b}:");
             fmt_rows(&mut out, rows, t.reference.as_ref());
         }
+    }
+    let unbalanced = std::iter::once(&t.overall)
+        .chain(t.per_building.values())
+        .flatten()
+        .any(|r| r.gain_pct.is_none() && t.reference.as_ref() != Some(&r.label));
+    if unbalanced {
+        let _ = writeln!(
+            out,
+            "gain '-': the label's runs are not the same buildings and seeds as {}'s (some are \
+             missing or failed); the paired gain compares the runs they share",
+            t.reference.as_deref().unwrap_or("the reference")
+        );
     }
     out
 }
@@ -474,9 +490,21 @@ mod tests {
         // Overall: 5 pairs across both buildings.
         assert_eq!(t.overall[1].paired.unwrap().pairs, 5);
         assert!(t.overall[0].paired.is_some_and(|p| p.mean_pct == 0.0));
+        // The plain gain of the means only where both labels ran the same buildings and seeds.
+        assert!(a.gain_pct.is_some_and(|g| (g - 10.0).abs() < 1e-9), "{a:?}");
+        assert_eq!(t.per_building["b"][1].gain_pct, None);
+        assert_eq!(t.overall[1].gain_pct, None);
         let text = render_text(&t);
         assert!(text.contains("+10.0 ± 0.0 % (n=3)"), "{text}");
         assert!(text.contains("b:"), "{text}");
+        assert!(text.contains("gain '-'"), "{text}");
+        let balanced: Vec<StoredResult> =
+            results.into_iter().filter(|r| r.building == "a").collect();
+        let text = render_text(&table(&balanced, &["baseline".into(), "layout".into()]));
+        assert!(
+            text.contains("+10.0 %") && !text.contains("gain '-'"),
+            "{text}"
+        );
     }
 
     #[test]
