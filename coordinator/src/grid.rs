@@ -326,14 +326,19 @@ impl Plan {
         if file.strategies.is_empty() {
             return Err(invalid("strategies", "the grid names no strategy".into()));
         }
+        // Settings from a table, checked; an error names `field`.
+        let settings_of = |table: toml::Table, field: &str| -> Result<Settings, GridError> {
+            let settings: Settings = toml::Value::Table(table)
+                .try_into()
+                .map_err(|e: toml::de::Error| invalid(field, one_line(&e.to_string())))?;
+            settings
+                .to_explore_config()
+                .map_err(|e| invalid(field, e.to_string()))?;
+            Ok(settings)
+        };
         // The shared settings alone first, so that an error in one of them names `settings`
         // rather than the first strategy they were merged into.
-        let shared: Settings = toml::Value::Table(file.settings.clone())
-            .try_into()
-            .map_err(|e: toml::de::Error| invalid("settings", one_line(&e.to_string())))?;
-        shared
-            .to_explore_config()
-            .map_err(|e| invalid("settings", e.to_string()))?;
+        settings_of(file.settings.clone(), "settings")?;
         let mut labels = Vec::new();
         let mut resolved = Vec::new();
         for (i, s) in file.strategies.iter().enumerate() {
@@ -359,15 +364,7 @@ impl Plan {
             for (k, v) in &s.settings {
                 merged.insert(k.clone(), v.clone());
             }
-            let settings: Settings =
-                toml::Value::Table(merged)
-                    .try_into()
-                    .map_err(|e: toml::de::Error| {
-                        invalid(&format!("{field}.settings"), one_line(&e.to_string()))
-                    })?;
-            settings
-                .to_explore_config()
-                .map_err(|e| invalid(&format!("{field}.settings"), e.to_string()))?;
+            let settings = settings_of(merged, &format!("{field}.settings"))?;
             if resolved
                 .iter()
                 .any(|(n, st, _): &(String, Settings, String)| n == &s.name && st == &settings)
