@@ -8,6 +8,7 @@ use floorcast_render::{building_figure, Color, Figure, Style};
 use serde::Serialize;
 use sim_core::building::StartSource;
 use sim_core::explore::RunResult;
+use sim_core::frontier::detect::{detect_frontiers, FrontierConfig};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 use sim_core::{Building, Vec2};
 
@@ -221,8 +222,10 @@ fn render_cmd(a: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// The paper-style picture of a run: the final map, the true trajectory, the decisions.
-pub fn exploration_figure(r: &RunResult) -> Figure {
+/// The paper-style picture of a run: the final map, the true trajectory, the decisions, and the
+/// frontiers (at least `min_frontier_m` long, as the explorer counts them) still on the map at
+/// the end: none after "no frontiers", what was left after an early stop or the time limit.
+pub fn exploration_figure(r: &RunResult, min_frontier_m: f64) -> Figure {
     let bounds = r.map.frame.bounds();
     let mut fig = Figure::new(bounds, 20.0);
     fig.grid(&r.map);
@@ -239,6 +242,19 @@ pub fn exploration_figure(r: &RunResult) -> Figure {
     );
     for d in &r.decisions {
         fig.circle(d.goal, 0.25, &Style::fill(Color::rgb(220, 30, 30)));
+    }
+    let frontier = Color::rgb(200, 0, 200);
+    let cfg = FrontierConfig::with_min_length_m(min_frontier_m, r.map.frame.resolution_m);
+    for f in detect_frontiers(&r.map, &cfg) {
+        for c in &f.cells {
+            fig.circle(
+                r.map.frame.world_from_cell(*c),
+                0.05,
+                &Style::fill(frontier),
+            );
+        }
+        let candidate = r.map.frame.world_from_cell(f.candidate);
+        fig.circle(candidate, 0.35, &Style::stroke(frontier, 2.0));
     }
     fig.arrow(&r.start, 1.0, &Style::stroke(Color::rgb(0, 150, 0), 3.0));
     fig

@@ -138,7 +138,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     write_text(&out.join("trajectory.csv"), &trajectory_csv(&output.result))?;
     floorcast_formats::map_server::write_map(&output.result.map, &out.join("map.yaml"))?;
     let picture = out.join(format!("final.{}", a.picture));
-    crate::cmd_building::exploration_figure(&output.result)
+    crate::cmd_building::exploration_figure(&output.result, job.settings.min_frontier_m)
         .save(&picture)
         .with_context(|| format!("cannot write {}", picture.display()))?;
 

@@ -86,6 +86,30 @@ fn explores_the_small_building_completely_and_reproducibly() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(image::open(a.join("final.png")).is_ok());
+    // A complete run leaves no frontier to draw.
+    assert_eq!(frontier_pixels(&a.join("final.png")), 0);
+}
+
+/// Pixels of the colour `final.png` draws the frontiers left at the end in.
+fn frontier_pixels(png: &std::path::Path) -> usize {
+    let img = image::open(png).unwrap().to_rgba8();
+    img.pixels()
+        .filter(|p| p.0[..3] == [200, 0, 200] && p.0[3] > 0)
+        .count()
+}
+
+#[test]
+fn the_picture_of_a_run_cut_short_shows_the_frontiers_left() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cut");
+    let s = explore_with(
+        &repo().join("buildings/small.toml"),
+        1,
+        &out,
+        &["--time-limit-s", "60"],
+    );
+    assert_eq!(s["end_reason"], "time limit", "{s}");
+    assert!(frontier_pixels(&out.join("final.png")) > 100);
 }
 
 #[test]
