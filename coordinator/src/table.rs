@@ -355,10 +355,10 @@ pub fn time_to_fraction(progress_csv: &str, fraction: f64) -> Option<f64> {
 
 /// One line per stored job, for pandas or R. `time_to_90_s` is the simulated time at which the
 /// run had explored 90 % (the paper's point from which layout knowledge pays off), empty if it
-/// never did.
+/// never did. `rooms_never_entered` and `rooms_unexplored` are empty without ground-truth rooms.
 pub fn results_csv(results: &[StoredResult]) -> String {
     let mut s = String::from(
-        "job_id,building,building_hash,strategy,label,seed,status,exploration_time_s,explored_area_m2,free_area_m2,explored_fraction,time_to_90_s,path_length_m,decisions,stopped_early,end_reason,wall_time_s,worker,floorcast_version\n",
+        "job_id,building,building_hash,strategy,label,seed,status,exploration_time_s,explored_area_m2,free_area_m2,explored_fraction,time_to_90_s,path_length_m,decisions,stopped_early,end_reason,unexplored_free_m2,rooms_never_entered,rooms_unexplored,wall_time_s,worker,floorcast_version\n",
     );
     for r in results {
         let sum = r
@@ -366,9 +366,10 @@ pub fn results_csv(results: &[StoredResult]) -> String {
             .as_deref()
             .and_then(|j| RunSummary::from_json(j).ok());
         let f = |v: Option<f64>| v.map(|x| format!("{x}")).unwrap_or_default();
+        let count = |v: Option<usize>| v.map(|x| x.to_string()).unwrap_or_default();
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.job_id,
             csv_field(&r.building),
             r.building_hash,
@@ -391,6 +392,9 @@ pub fn results_csv(results: &[StoredResult]) -> String {
                 .map(|s| s.stopped_early.to_string())
                 .unwrap_or_default(),
             csv_field(sum.as_ref().map(|s| s.end_reason.as_str()).unwrap_or("")),
+            f(sum.as_ref().map(|s| s.unexplored_free_m2)),
+            count(sum.as_ref().and_then(|s| s.rooms_never_entered)),
+            count(sum.as_ref().and_then(|s| s.rooms_unexplored)),
             r.wall_time_s,
             csv_field(&r.worker),
             r.floorcast_version
@@ -522,6 +526,11 @@ mod tests {
         let k = header.iter().position(|h| *h == "time_to_90_s").unwrap();
         assert_eq!(row[k], "4");
         assert_eq!(header.len(), row.len());
+        // A summary written before `rooms_unexplored` existed still reads; its cell is empty.
+        let col = |name: &str| row[header.iter().position(|h| *h == name).unwrap()];
+        assert_eq!(col("rooms_never_entered"), "0");
+        assert_eq!(col("rooms_unexplored"), "");
+        assert_eq!(col("unexplored_free_m2"), "0.22750000000002046");
     }
 
     #[test]

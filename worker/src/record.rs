@@ -40,6 +40,11 @@ pub struct RunSummary {
     pub unexplored_free_m2: f64,
     /// Ground-truth rooms the robot never entered (`null` without ground truth).
     pub rooms_never_entered: Option<usize>,
+    /// Ground-truth rooms of which less than half the reachable free area was explored (`null`
+    /// without ground truth, and in summaries written before the field existed): the rooms an
+    /// early stop left out. A room seen from its door is explored, though never entered.
+    #[serde(default)]
+    pub rooms_unexplored: Option<usize>,
     /// Layouts reconstructed during the run (layout strategies).
     pub layouts_computed: u64,
     /// Layout compute time added to simulated time (s; 0 unless `settings.charge_compute`).
@@ -89,6 +94,7 @@ impl RunSummary {
             stopped_early: r.stopped_early,
             unexplored_free_m2: (r.free_area_m2 - r.explored_area_m2).max(0.0),
             rooms_never_entered: r.rooms_never_entered,
+            rooms_unexplored: r.rooms_unexplored,
             layouts_computed: r.layouts_computed,
             layout_compute_s: r.layout_compute_s,
             charge_compute: job.settings.charge_compute,

@@ -236,6 +236,10 @@ pub struct RunResult {
     pub layout_compute_s: f64,
     /// Ground-truth rooms the robot never entered (when the building has rooms).
     pub rooms_never_entered: Option<usize>,
+    /// Ground-truth rooms of which less than half the reachable free area was explored (`None`
+    /// without rooms): the rooms an early stop left out, as the paper's "missing one room". A
+    /// room seen from its door counts as explored although it was never entered.
+    pub rooms_unexplored: Option<usize>,
     pub end_reason: EndReason,
     /// Simulated time at the end of exploration (before any return home).
     pub exploration_time_s: f64,
@@ -1475,6 +1479,21 @@ impl Explorer<'_> {
                 self.rooms
                     .iter()
                     .filter(|r| !self.trajectory.iter().any(|p| r.contains(p.position())))
+                    .count()
+            }),
+            rooms_unexplored: (!self.rooms.is_empty()).then(|| {
+                self.rooms
+                    .iter()
+                    .filter(|r| {
+                        let (mut free, mut explored) = (0usize, 0usize);
+                        crate::building::for_cells_in_polygon(self.map.frame, r, |i| {
+                            if self.truth.data[i] {
+                                free += 1;
+                                explored += self.explored.data[i] as usize;
+                            }
+                        });
+                        free > 0 && 2 * explored < free
+                    })
                     .count()
             }),
             end_reason,

@@ -196,11 +196,32 @@ fn the_true_layout_oracle_explores_and_its_early_stop_leaves_little_unseen() {
                 r.end_reason
             );
             assert_eq!(r.rooms_never_entered, Some(0), "{name} seed {seed}");
+            assert_eq!(r.rooms_unexplored, Some(0), "{name} seed {seed}");
             if name == "layout-truth" {
                 assert_eq!(r.end_reason, EndReason::NoFrontiers);
             }
         }
     }
+}
+
+#[test]
+fn a_run_cut_short_counts_the_rooms_it_left_unexplored() {
+    let b = corridor_building_with_rooms(4);
+    let rooms = b.rooms.len();
+    let cfg = ExploreConfig {
+        time_limit_s: 15.0,
+        ..ExploreConfig::default()
+    };
+    let r = explore(&b, b.start.unwrap(), &cfg, 1, &mut |_| {});
+    assert_eq!(r.end_reason, EndReason::TimeLimit);
+    let left = r.rooms_unexplored.unwrap();
+    assert!(left >= 1 && left < rooms, "{left} of {rooms}");
+    // A room left unexplored was never entered.
+    assert!(left <= r.rooms_never_entered.unwrap());
+    // Without ground-truth rooms there is nothing to count.
+    let plain = corridor_building(3);
+    let r = explore(&plain, plain.start.unwrap(), &cfg, 1, &mut |_| {});
+    assert_eq!(r.rooms_unexplored, None);
 }
 
 #[test]
