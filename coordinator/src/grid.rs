@@ -460,6 +460,24 @@ time_limit_s = 600
 "#;
 
     #[test]
+    fn every_shipped_grid_is_a_valid_plan() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../grids");
+        let mut grids: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+            .collect();
+        grids.sort();
+        assert!(grids.len() >= 10, "{grids:?}");
+        for g in &grids {
+            let text = std::fs::read_to_string(g).unwrap();
+            let plan =
+                Plan::parse(&text, g, None).unwrap_or_else(|e| panic!("{}: {e}", g.display()));
+            assert!(!plan.jobs.is_empty(), "{}", g.display());
+        }
+    }
+
+    #[test]
     fn expands_buildings_seeds_and_strategies() {
         let p = parse(GOOD).unwrap();
         assert_eq!(p.buildings.len(), 2);
