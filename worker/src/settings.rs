@@ -53,6 +53,12 @@ pub struct Settings {
     pub utility_distance: String,
     /// Frontiers shorter than this are ignored (m).
     pub min_frontier_m: f64,
+    /// Frontier cells closer than this to an observed wall are ignored (m; 0 = none), as by
+    /// explorers that look for frontiers in an inflated costmap. Not in floorcast's default
+    /// explorer. Written only when set, so that the records and job identities of runs without
+    /// it are those of earlier versions.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub frontier_clearance_m: f64,
     /// When a frontier's candidate (its middle cell, or a traversable cell within 0.5 m) cannot
     /// be reached, aim at the reachable cell of the frontier nearest to it instead of passing
     /// the frontier over. Not in the paper (false = its rule). Written only when true, so that
@@ -89,6 +95,10 @@ fn is_path(s: &str) -> bool {
     s == UtilityDistance::Path.as_str()
 }
 
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
 impl Default for Settings {
     fn default() -> Self {
         let c = ExploreConfig::default();
@@ -112,6 +122,7 @@ impl Default for Settings {
             gain_floor_m2: c.gain_floor_m2,
             utility_distance: c.utility_distance.as_str().to_string(),
             min_frontier_m: c.min_frontier_m,
+            frontier_clearance_m: c.frontier_clearance_m,
             candidate_from_reachable_part: c.candidate_from_reachable_part,
             redecide_period_s: c.redecide_period_s,
             redecide_min_growth_m2: c.redecide_min_growth_m2,
@@ -241,6 +252,7 @@ impl Settings {
         c.utility_distance = UtilityDistance::from_name(&self.utility_distance)
             .ok_or_else(|| SettingsError::UtilityDistance(self.utility_distance.clone()))?;
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
+        c.frontier_clearance_m = nonneg("frontier_clearance_m", self.frontier_clearance_m)?;
         c.candidate_from_reachable_part = self.candidate_from_reachable_part;
         c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
         c.redecide_min_growth_m2 = nonneg("redecide_min_growth_m2", self.redecide_min_growth_m2)?;
@@ -329,6 +341,27 @@ mod tests {
                 .unwrap()
                 .candidate_from_reachable_part
         );
+    }
+
+    #[test]
+    fn the_frontier_clearance_is_recorded_only_when_set_and_validated() {
+        let off = serde_json::to_value(Settings::default()).unwrap();
+        assert!(off.get("frontier_clearance_m").is_none(), "{off}");
+        let on = Settings {
+            frontier_clearance_m: 0.4,
+            ..Settings::default()
+        };
+        let v = serde_json::to_value(&on).unwrap();
+        assert_eq!(v["frontier_clearance_m"], 0.4);
+        let back: Settings = serde_json::from_value(v).unwrap();
+        assert_eq!(back, on);
+        assert_eq!(back.to_explore_config().unwrap().frontier_clearance_m, 0.4);
+        let bad = Settings {
+            frontier_clearance_m: -0.1,
+            ..Settings::default()
+        };
+        let e = bad.to_explore_config().unwrap_err().to_string();
+        assert!(e.contains("settings.frontier_clearance_m"), "{e}");
     }
 
     #[test]

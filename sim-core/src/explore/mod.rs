@@ -23,7 +23,9 @@ use self::calibration::OdometryCalibration;
 use self::gain_cache::GainCache;
 use crate::building::Building;
 use crate::frontier::blacklist::Blacklist;
-use crate::frontier::detect::{is_frontier_cell, Frontier, FrontierConfig, FrontierTracker};
+use crate::frontier::detect::{
+    frontiers_where, is_frontier_cell, Frontier, FrontierConfig, FrontierTracker,
+};
 use crate::gain::information_gain;
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
@@ -106,6 +108,15 @@ pub struct ExploreConfig {
     pub utility_distance: UtilityDistance,
     /// Frontiers shorter than this are ignored.
     pub min_frontier_m: f64,
+    /// Frontier cells closer than this to an observed obstacle are ignored (m; 0 = none, the
+    /// default). ROS explorers commonly look for frontiers in the inflated map the planner uses,
+    /// where cells near walls are not free (nav2d, the navigator of the paper's authors' later
+    /// exploration code, calls a cell free at more than about 0.4 m from a wall with its
+    /// defaults): they never see the small unknown wedges along walls that a 180° laser leaves
+    /// beside every door, which take most of a run's last stage here. A clearance beyond the
+    /// reach of the obstacle distance field (robot radius + safety margin + 0.2 m, 0.45 m by
+    /// default) widens that field, which the scan matcher also reads.
+    pub frontier_clearance_m: f64,
     /// When a frontier's candidate (its middle cell, or a traversable cell within 0.5 m of it)
     /// cannot be reached, use the reachable traversable cell of the frontier nearest to it
     /// instead of passing the frontier over (false = the paper's rule). A frontier seen through
@@ -162,6 +173,7 @@ impl Default for ExploreConfig {
             gain_floor_m2: 0.0,
             utility_distance: UtilityDistance::Path,
             min_frontier_m: 0.5,
+            frontier_clearance_m: 0.0,
             candidate_from_reachable_part: false,
             redecide_period_s: 10.0,
             redecide_min_growth_m2: 0.5,
@@ -428,7 +440,8 @@ pub fn explore_charged<'a>(
     let truth_cells = truth.count_true();
     let cap_cells =
         (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
-            .max(8);
+            .max(8)
+            .max((cfg.frontier_clearance_m / cfg.map_resolution_m).ceil() as u32 + 1);
     let sim = Simulator::new(building, start, &cfg.sim, seed);
     let ex = Explorer {
         cfg,
@@ -1274,9 +1287,15 @@ impl Explorer<'_> {
             }
         }
         let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
-        let mut frontiers: Vec<Frontier> = self
-            .frontiers
-            .detect(&self.map.occupancy, &fcfg)
+        let mut frontiers = self.frontiers.detect(&self.map.occupancy, &fcfg);
+        if cfg.frontier_clearance_m > 0.0 {
+            let min_cells = cfg.frontier_clearance_m / frame.resolution_m;
+            let obstacles = &self.obstacles;
+            frontiers = frontiers_where(frontiers, &fcfg, |c| {
+                f64::from(obstacles.get(c)) >= min_cells
+            });
+        }
+        let mut frontiers: Vec<Frontier> = frontiers
             .into_iter()
             .filter(|f| !self.blacklist.contains(frame.world_from_cell(f.candidate)))
             .collect();

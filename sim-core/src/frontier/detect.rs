@@ -98,6 +98,29 @@ pub fn detect_frontiers_in(
         }
     }
     let mut frontiers = Vec::new();
+    chains(
+        &mut mark,
+        bw,
+        bh,
+        Cell::new(x0, y0),
+        cfg.min_cells,
+        &mut frontiers,
+    );
+    frontiers
+}
+
+/// Appends to `out` the 8-connected chains of the cells marked 1 in `mark` (a `bw` x `bh` box
+/// whose cell (0, 0) is `origin`), in row-major order of their first cell, dropping chains of
+/// fewer than `min_cells`; marks them 2.
+fn chains(
+    mark: &mut [u8],
+    bw: usize,
+    bh: usize,
+    origin: Cell,
+    min_cells: usize,
+    out: &mut Vec<Frontier>,
+) {
+    let (x0, y0) = (origin.x, origin.y);
     let mut queue = VecDeque::new();
     for start in 0..mark.len() {
         if mark[start] != 1 {
@@ -123,19 +146,54 @@ pub fn detect_frontiers_in(
                 }
             }
         }
-        if comp.len() < cfg.min_cells.max(1) {
+        if comp.len() < min_cells.max(1) {
             continue;
         }
         comp.sort_unstable();
         let middle = middle_cell(&comp, bw);
         let to_cell = |i: usize| Cell::new(x0 + (i % bw) as i32, y0 + (i / bw) as i32);
-        frontiers.push(Frontier {
+        out.push(Frontier {
             size: comp.len(),
             candidate: to_cell(middle),
             cells: comp.into_iter().map(to_cell).collect(),
         });
     }
-    frontiers
+}
+
+/// The parts of `frontiers` made of cells that satisfy `keep`: the kept cells of each frontier
+/// split into 8-connected chains, those of fewer than `cfg.min_cells` dropped, each with its own
+/// middle cell (e.g. frontier cells too close to a wall for the robot, as explorers that look
+/// for frontiers in an inflated costmap see them). A frontier whose cells are all kept is
+/// returned as it is.
+pub fn frontiers_where(
+    frontiers: Vec<Frontier>,
+    cfg: &FrontierConfig,
+    keep: impl Fn(Cell) -> bool,
+) -> Vec<Frontier> {
+    let mut out = Vec::with_capacity(frontiers.len());
+    for f in frontiers {
+        let kept: Vec<Cell> = f.cells.iter().copied().filter(|c| keep(*c)).collect();
+        if kept.len() == f.cells.len() {
+            out.push(f);
+            continue;
+        }
+        let Some(first) = kept.first() else {
+            continue;
+        };
+        let (mut lo, mut hi) = (*first, *first);
+        for c in &kept {
+            lo = Cell::new(lo.x.min(c.x), lo.y.min(c.y));
+            hi = Cell::new(hi.x.max(c.x), hi.y.max(c.y));
+        }
+        let bw = (hi.x - lo.x + 1) as usize;
+        let bh = (hi.y - lo.y + 1) as usize;
+        let mut mark = vec![0u8; bw * bh];
+        for c in &kept {
+            mark[(c.y - lo.y) as usize * bw + (c.x - lo.x) as usize] = 1;
+        }
+        chains(&mut mark, bw, bh, lo, cfg.min_cells, &mut out);
+    }
+    out
 }
 
 /// Frontier cells kept up to date as the map changes, so that detecting the frontiers of a
@@ -363,6 +421,33 @@ mod tests {
         assert_eq!(f[0].size, 9);
         assert_eq!(f[0].candidate, Cell::new(4, 2));
         assert!(f[0].cells.iter().all(|c| c.y == 2));
+    }
+
+    #[test]
+    fn cells_left_out_split_a_frontier_into_chains_with_their_own_middles() {
+        let g = grid(
+            "
+            ?????????????
+            .............
+            .............
+            #############",
+        );
+        let cfg = FrontierConfig { min_cells: 3 };
+        let all = detect_frontiers(&g, &cfg);
+        assert_eq!(all.len(), 1);
+        // Everything kept: the same frontier.
+        assert_eq!(frontiers_where(all.clone(), &cfg, |_| true), all);
+        // Cells 4 and 5 left out: two chains, 0-3 and 6-12, each with its own middle cell.
+        let split = frontiers_where(all.clone(), &cfg, |c| c.x != 4 && c.x != 5);
+        assert_eq!(split.len(), 2);
+        assert_eq!((split[0].size, split[1].size), (4, 7));
+        assert!(split[0].cells.iter().all(|c| c.x <= 3 && c.y == 2));
+        assert_eq!(split[1].candidate, Cell::new(9, 2));
+        // A piece shorter than the minimum is dropped; nothing kept, nothing left.
+        let short = frontiers_where(all.clone(), &cfg, |c| c.x < 2 || c.x > 5);
+        assert_eq!(short.len(), 1);
+        assert_eq!(short[0].size, 7);
+        assert!(frontiers_where(all, &cfg, |_| false).is_empty());
     }
 
     #[test]
