@@ -225,6 +225,29 @@ fn a_run_cut_short_counts_the_rooms_it_left_unexplored() {
 }
 
 #[test]
+fn frontiers_kept_clear_of_walls_skip_the_corners() {
+    let b = corridor_building_with_rooms(4);
+    let plain = ExploreConfig::default();
+    let clear = ExploreConfig {
+        frontier_clearance_m: 0.4,
+        ..ExploreConfig::default()
+    };
+    let p = explore(&b, b.start.unwrap(), &plain, 1, &mut |_| {});
+    let c = explore(&b, b.start.unwrap(), &clear, 1, &mut |_| {});
+    assert_eq!(c.end_reason, EndReason::NoFrontiers);
+    assert!(c.explored_fraction >= 0.9, "{}", c.explored_fraction);
+    assert_eq!(c.rooms_unexplored, Some(0));
+    // No corner visited for its own sake: sooner done, with less seen.
+    assert!(
+        c.exploration_time_s < p.exploration_time_s,
+        "{} vs {}",
+        c.exploration_time_s,
+        p.exploration_time_s
+    );
+    assert!(c.explored_area_m2 <= p.explored_area_m2 + 1.0);
+}
+
+#[test]
 fn charged_layout_compute_delays_the_robot() {
     let b = corridor_building(3);
     let cfg = ExploreConfig {
