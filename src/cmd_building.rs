@@ -223,8 +223,9 @@ fn render_cmd(a: RenderArgs) -> Result<()> {
 }
 
 /// The paper-style picture of a run: the final map, the true trajectory, the decisions, and the
-/// frontiers (at least `min_frontier_m` long, as the explorer counts them) still on the map at
-/// the end: none after "no frontiers", what was left after an early stop or the time limit.
+/// frontiers (at least `min_frontier_m` long) still on the map at the end: what was left after an
+/// early stop or the time limit, and none after "no frontiers" unless `frontier_clearance_m` had
+/// the explorer ignore some.
 pub fn exploration_figure(r: &RunResult, min_frontier_m: f64) -> Figure {
     let bounds = r.map.frame.bounds();
     let mut fig = Figure::new(bounds, 20.0);

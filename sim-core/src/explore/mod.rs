@@ -111,8 +111,8 @@ pub struct ExploreConfig {
     /// Frontier cells closer than this to an observed obstacle are ignored (m; 0 = none, the
     /// default). ROS explorers commonly look for frontiers in the inflated map the planner uses,
     /// where cells near walls are not free (nav2d, the navigator of the paper's authors' later
-    /// exploration code, calls a cell free at more than about 0.4 m from a wall with its
-    /// defaults): they never see the small unknown wedges along walls that a 180° laser leaves
+    /// exploration code, calls a cell free at more than 0.4 m from a wall with that code's
+    /// settings: inflation radius 1 m, lethal cost 60 %): they never see the small unknown wedges along walls that a 180° laser leaves
     /// beside every door, which take most of a run's last stage here. A clearance beyond the
     /// reach of the obstacle distance field (robot radius + safety margin + 0.2 m, 0.45 m by
     /// default) widens that field, which the scan matcher also reads.
