@@ -113,7 +113,7 @@ pub struct ExploreConfig {
     /// where cells near walls are not free (nav2d, the navigator of the paper's authors' later
     /// exploration code, calls a cell free at more than 0.4 m from a wall with that code's
     /// settings: inflation radius 1 m, lethal cost 60 %): they never see the small unknown wedges along walls that a 180° laser leaves
-    /// beside every door, which take most of a run's last stage here. A clearance beyond the
+    /// beside every door, which take much of a run's last stage here. A clearance beyond the
     /// reach of the obstacle distance field (robot radius + safety margin + 0.2 m, 0.45 m by
     /// default) widens that field, which the scan matcher also reads.
     pub frontier_clearance_m: f64,
@@ -1289,10 +1289,10 @@ impl Explorer<'_> {
         let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
         let mut frontiers = self.frontiers.detect(&self.map.occupancy, &fcfg);
         if cfg.frontier_clearance_m > 0.0 {
-            let min_cells = cfg.frontier_clearance_m / frame.resolution_m;
+            let clearance_cells = cfg.frontier_clearance_m / frame.resolution_m;
             let obstacles = &self.obstacles;
             frontiers = frontiers_where(frontiers, &fcfg, |c| {
-                f64::from(obstacles.get(c)) >= min_cells
+                f64::from(obstacles.get(c)) >= clearance_cells
             });
         }
         let mut frontiers: Vec<Frontier> = frontiers
