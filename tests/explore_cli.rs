@@ -57,7 +57,7 @@ fn explores_the_small_building_completely_and_reproducibly() {
     ] {
         assert!(s1.get(k).is_some(), "summary lacks {k}");
     }
-    assert_eq!(s1["end_reason"], "no frontiers");
+    assert_eq!(s1["end_reason"], "complete");
     assert!(s1["explored_fraction"].as_f64().unwrap() >= 0.97, "{s1}");
     // Same seed: same summary but for the wall time.
     let strip = |v: &serde_json::Value| {
@@ -197,7 +197,7 @@ fn explores_real_school_maps_completely() {
         let s = explore(&map, seed, &dir.path().join(format!("{name}-{seed}")));
         let f = s["explored_fraction"].as_f64().unwrap();
         assert!(f >= 0.97, "{name} seed {seed}: explored {f}");
-        assert_eq!(s["end_reason"], "no frontiers", "{name} seed {seed}");
+        assert_eq!(s["end_reason"], "complete", "{name} seed {seed}");
         let p = s["map_occupied_precision_aligned"].as_f64().unwrap();
         assert!(p >= 0.85, "{name} seed {seed}: occupied precision {p}");
     }
@@ -228,7 +228,7 @@ fn a_ring_of_corridors_is_mapped_without_doubled_walls() {
     let s = explore_with(&b, 6, dir.path(), &["--strategy", "layout"]);
     let f = s["explored_fraction"].as_f64().unwrap();
     assert!(f >= 0.97, "explored {f}");
-    assert_eq!(s["end_reason"], "no frontiers");
+    assert_eq!(s["end_reason"], "complete");
     let p = s["map_occupied_precision_aligned"].as_f64().unwrap();
     assert!(p >= 0.9, "aligned occupied precision {p}");
 }
@@ -253,7 +253,7 @@ fn a_passage_narrower_than_the_safety_margin_does_not_end_the_run() {
         &["--settings", settings.to_str().unwrap()],
     );
     assert_eq!(s["settings"]["map_update_distance_m"], 0.5, "{s}");
-    assert_eq!(s["end_reason"], "no frontiers", "{s}");
+    assert_eq!(s["end_reason"], "complete", "{s}");
     let f = s["explored_fraction"].as_f64().unwrap();
     assert!(f >= 0.97, "explored {f}");
 }
@@ -272,7 +272,7 @@ fn alternating_goals_do_not_hold_the_robot_forever() {
         dir.path(),
         &["--strategy", "baseline", "--utility-distance", "euclidean"],
     );
-    assert_eq!(s["end_reason"], "no frontiers", "{s}");
+    assert_eq!(s["end_reason"], "complete", "{s}");
     assert!(s["explored_fraction"].as_f64().unwrap() >= 0.97, "{s}");
     assert!(
         s["exploration_time_s"].as_f64().unwrap() < 2.0 * 3600.0,

@@ -63,24 +63,50 @@ impl Localization {
     }
 }
 
-/// Why a run ended.
+/// Why a run ended. Every end is one of these classes, so that a report never averages a run
+/// that stopped short as if it were complete.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EndReason {
-    /// No reachable frontier candidate left: exploration complete.
-    NoFrontiers,
-    /// The simulated time limit was reached first.
-    TimeLimit,
+    /// No frontier left on the map: exploration complete.
+    Complete,
     /// The strategy's early-stopping rule ended exploration with frontiers left.
     EarlyStop,
+    /// The simulated time limit was reached first.
+    TimeLimit,
+    /// Frontiers are left that the robot could plan a path to, but every goal toward them was
+    /// given up for want of progress (the robot could not get there, or got there without
+    /// seeing into them).
+    Stuck,
+    /// Frontiers are left, but no path leads to any of them (seen through a gap the robot
+    /// cannot pass, or beyond the map's edge).
+    Unreachable,
 }
 
 impl EndReason {
+    /// Every class, in the order reports list them.
+    pub const ALL: [EndReason; 5] = [
+        EndReason::Complete,
+        EndReason::EarlyStop,
+        EndReason::TimeLimit,
+        EndReason::Stuck,
+        EndReason::Unreachable,
+    ];
+
+    /// The name in summaries and reports.
     pub fn as_str(self) -> &'static str {
         match self {
-            EndReason::NoFrontiers => "no frontiers",
-            EndReason::TimeLimit => "time limit",
+            EndReason::Complete => "complete",
             EndReason::EarlyStop => "early stop",
+            EndReason::TimeLimit => "time limit",
+            EndReason::Stuck => "stuck",
+            EndReason::Unreachable => "frontiers unreachable",
         }
+    }
+
+    /// Whether the run ended because it had explored everything it could see (complete) or
+    /// by the strategy's own choice (early stop), as opposed to being cut short.
+    pub fn is_normal(self) -> bool {
+        matches!(self, EndReason::Complete | EndReason::EarlyStop)
     }
 }
 
@@ -519,7 +545,7 @@ impl Explorer<'_> {
                 end_reason = if self.stopped_early {
                     EndReason::EarlyStop
                 } else {
-                    EndReason::NoFrontiers
+                    self.classify_end()
                 };
                 break;
             }
@@ -1402,6 +1428,47 @@ impl Explorer<'_> {
             best_distance_at_s: now,
         });
         true
+    }
+
+    /// Why a run that ran out of goals ended: complete when the map has no frontier left (of
+    /// the configured length, wherever it is), stuck when a path leads to one of the frontiers
+    /// left (every goal toward them was given up), unreachable otherwise.
+    fn classify_end(&mut self) -> EndReason {
+        let frame = self.map.frame;
+        let fcfg = FrontierConfig::with_min_length_m(self.cfg.min_frontier_m, frame.resolution_m);
+        let mut frontiers = self.frontiers.detect(&self.map.occupancy, &fcfg);
+        if self.cfg.frontier_clearance_m > 0.0 {
+            let clearance_cells = self.cfg.frontier_clearance_m / frame.resolution_m;
+            let obstacles = &self.obstacles;
+            frontiers = frontiers_where(frontiers, &fcfg, |c| {
+                f64::from(obstacles.get(c)) >= clearance_cells
+            });
+        }
+        if frontiers.is_empty() {
+            return EndReason::Complete;
+        }
+        let search = (0.5 / frame.resolution_m).ceil() as i32;
+        let targets: Vec<Cell> = {
+            let trav = self.traversability();
+            frontiers
+                .iter()
+                .flat_map(|f| f.cells.iter())
+                .filter_map(|&c| {
+                    if trav.at(c) {
+                        Some(c)
+                    } else {
+                        nearest_by(c, search, |n| trav.at(n))
+                    }
+                })
+                .collect()
+        };
+        self.set_relaxed_planning(true);
+        let plan = self.plan(&targets);
+        if targets.iter().any(|&c| plan.distance_m(c).is_some()) {
+            EndReason::Stuck
+        } else {
+            EndReason::Unreachable
+        }
     }
 
     fn drive(&mut self) {

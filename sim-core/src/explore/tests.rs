@@ -53,7 +53,7 @@ fn run(localization: Localization, seed: u64) -> RunResult {
 fn explores_a_corridor_building_completely() {
     for loc in [Localization::GroundTruth, Localization::Slam] {
         let r = run(loc, 1);
-        assert_eq!(r.end_reason, EndReason::NoFrontiers, "{loc:?}");
+        assert_eq!(r.end_reason, EndReason::Complete, "{loc:?}");
         assert!(
             r.explored_fraction >= 0.97,
             "{loc:?}: explored {}",
@@ -198,7 +198,7 @@ fn the_true_layout_oracle_explores_and_its_early_stop_leaves_little_unseen() {
             assert_eq!(r.rooms_never_entered, Some(0), "{name} seed {seed}");
             assert_eq!(r.rooms_unexplored, Some(0), "{name} seed {seed}");
             if name == "layout-truth" {
-                assert_eq!(r.end_reason, EndReason::NoFrontiers);
+                assert_eq!(r.end_reason, EndReason::Complete);
             }
         }
     }
@@ -234,7 +234,7 @@ fn frontiers_kept_clear_of_walls_skip_the_corners() {
     };
     let p = explore(&b, b.start.unwrap(), &plain, 1, &mut |_| {});
     let c = explore(&b, b.start.unwrap(), &clear, 1, &mut |_| {});
-    assert_eq!(c.end_reason, EndReason::NoFrontiers);
+    assert_eq!(c.end_reason, EndReason::Complete);
     assert!(c.explored_fraction >= 0.9, "{}", c.explored_fraction);
     assert_eq!(c.rooms_unexplored, Some(0));
     // No corner visited for its own sake: sooner done, with less seen.
@@ -363,7 +363,7 @@ fn the_euclidean_utility_distance_is_the_straight_line_to_the_candidate() {
     };
     let (path, straight) = (run(UtilityDistance::Path), run(UtilityDistance::Euclidean));
     for r in [&path, &straight] {
-        assert_eq!(r.end_reason, EndReason::NoFrontiers);
+        assert_eq!(r.end_reason, EndReason::Complete);
         assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
     }
     // The goal is the candidate or a traversable cell within 0.5 m of it.
@@ -412,6 +412,6 @@ fn goals_given_up_get_another_chance_before_the_run_ends() {
         "goals given up: {}",
         r.blacklisted_goals
     );
-    assert_eq!(r.end_reason, EndReason::NoFrontiers);
+    assert_eq!(r.end_reason, EndReason::Complete);
     assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
 }
