@@ -163,8 +163,33 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         summary.wall_time_s,
         summary.speedup
     );
+    if let Some(w) = short_run_warning(&summary) {
+        eprintln!("warning: {w}");
+    }
     say!("results in {}", out.display());
     Ok(())
+}
+
+/// What a user should know about a run that reached the time limit or explored less than 97 %
+/// of the reachable free area: a silent short run misleads.
+fn short_run_warning(s: &floorcast_worker::RunSummary) -> Option<String> {
+    let explored = s.explored_fraction * 100.0;
+    let why = match s.end_reason.as_str() {
+        "time limit" => "it reached the time limit (raise time_limit_s)".to_string(),
+        _ if s.explored_fraction >= 0.97 => return None,
+        "stuck" => format!(
+            "it gave up every goal toward the {} frontier cells left (magenta in final.png)",
+            s.frontier_cells_left
+        ),
+        "frontiers unreachable" => format!(
+            "no path leads to the {} frontier cells left (magenta in final.png; a passage narrower than the robot?)",
+            s.frontier_cells_left
+        ),
+        other => format!("it ended with '{other}'"),
+    };
+    Some(format!(
+        "the run ended short, {explored:.1} % explored: {why}"
+    ))
 }
 
 fn progress_csv(r: &RunResult) -> String {

@@ -53,7 +53,15 @@ pub struct RunSummary {
     /// Whether compute time was charged (then the times depend on the machine).
     #[serde(default)]
     pub charge_compute: bool,
+    /// Why the run ended: "complete" (no frontier left that the robot had not looked into),
+    /// "early stop", "time limit", "stuck" (frontiers left that a path leads to, every goal
+    /// toward them given up) or "frontiers unreachable". Summaries before 0.4 say "no
+    /// frontiers" for the last three of these alike.
     pub end_reason: String,
+    /// Frontier cells left on the map at the end that the robot had not looked into (0 when
+    /// complete, early stop or time limit; absent before 0.4).
+    #[serde(default)]
+    pub frontier_cells_left: usize,
     pub blacklisted_goals: usize,
     pub scans: u64,
     pub scan_matches_accepted: u64,
@@ -99,6 +107,7 @@ impl RunSummary {
             layout_compute_s: r.layout_compute_s,
             charge_compute: job.settings.charge_compute,
             end_reason: r.end_reason.as_str().to_string(),
+            frontier_cells_left: r.frontier_cells_left,
             blacklisted_goals: r.blacklisted_goals,
             scans: r.scans,
             scan_matches_accepted: r.scan_matches_accepted,

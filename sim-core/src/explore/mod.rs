@@ -279,6 +279,9 @@ pub struct RunResult {
     /// room seen from its door counts as explored although it was never entered.
     pub rooms_unexplored: Option<usize>,
     pub end_reason: EndReason,
+    /// Frontier cells left on the map at the end that the robot had not looked into (0 when
+    /// complete; counted only for runs that ran out of goals, else 0).
+    pub frontier_cells_left: usize,
     /// Simulated time at the end of exploration (before any return home).
     pub exploration_time_s: f64,
     /// Simulated time at the very end.
@@ -397,6 +400,8 @@ struct Explorer<'a> {
     walls_changed: bool,
     /// `known_cells` when goals given up were last given another chance (see `forgive`).
     forgiven_at: Option<usize>,
+    /// Frontier cells left at the end that the robot had not looked into (see `classify_end`).
+    frontier_cells_left: usize,
     /// The path search on `coarse`, and per cell of `far` whether it is in the corridor the
     /// search is confined to first (all false between searches).
     astar: AStar,
@@ -524,6 +529,7 @@ pub fn explore_charged<'a>(
         far: CoarseCosts::blocked(frame, DISTANCE_FACTOR),
         walls_changed: false,
         forgiven_at: None,
+        frontier_cells_left: 0,
         astar: AStar::default(),
         corridor: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
     };
@@ -1309,7 +1315,7 @@ impl Explorer<'_> {
                     > g.frontier.len()
             });
             if again {
-                self.blacklist.add(p, cfg.blacklist_radius_m);
+                self.blacklist.looked(p, cfg.blacklist_radius_m);
             }
         }
         let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
@@ -1430,9 +1436,11 @@ impl Explorer<'_> {
         true
     }
 
-    /// Why a run that ran out of goals ended: complete when the map has no frontier left (of
-    /// the configured length, wherever it is), stuck when a path leads to one of the frontiers
-    /// left (every goal toward them was given up), unreachable otherwise.
+    /// Why a run that ran out of goals ended. Frontier cells the robot looked into (stood at a
+    /// goal near them facing the unknown space, and they stayed frontier) are resolved as far as
+    /// the sensor allows. Complete when no other frontier cell is left on the map (frontiers of
+    /// the configured length, wherever they are); stuck when a path leads to one of the cells
+    /// left (every goal toward them was given up); unreachable otherwise.
     fn classify_end(&mut self) -> EndReason {
         let frame = self.map.frame;
         let fcfg = FrontierConfig::with_min_length_m(self.cfg.min_frontier_m, frame.resolution_m);
@@ -1444,15 +1452,25 @@ impl Explorer<'_> {
                 f64::from(obstacles.get(c)) >= clearance_cells
             });
         }
-        if frontiers.is_empty() {
+        let left: Vec<Cell> = frontiers
+            .iter()
+            .flat_map(|f| f.cells.iter().copied())
+            .filter(|&c| !self.blacklist.looked_at(frame.world_from_cell(c)))
+            .collect();
+        self.frontier_cells_left = left.len();
+        if left.is_empty() {
             return EndReason::Complete;
+        }
+        if left
+            .iter()
+            .any(|&c| self.blacklist.given_up_at(frame.world_from_cell(c)))
+        {
+            return EndReason::Stuck;
         }
         let search = (0.5 / frame.resolution_m).ceil() as i32;
         let targets: Vec<Cell> = {
             let trav = self.traversability();
-            frontiers
-                .iter()
-                .flat_map(|f| f.cells.iter())
+            left.iter()
                 .filter_map(|&c| {
                     if trav.at(c) {
                         Some(c)
@@ -1464,7 +1482,9 @@ impl Explorer<'_> {
         };
         self.set_relaxed_planning(true);
         let plan = self.plan(&targets);
-        if targets.iter().any(|&c| plan.distance_m(c).is_some()) {
+        let reachable = targets.iter().any(|&c| plan.distance_m(c).is_some());
+        self.set_relaxed_planning(false);
+        if reachable {
             EndReason::Stuck
         } else {
             EndReason::Unreachable
@@ -1583,6 +1603,7 @@ impl Explorer<'_> {
                     .count()
             }),
             end_reason,
+            frontier_cells_left: self.frontier_cells_left,
             exploration_time_s,
             total_time_s: self.sim.time_s(),
             explored_area_m2: self.explored_area_m2(),

@@ -396,8 +396,9 @@ fn the_euclidean_utility_distance_is_the_straight_line_to_the_candidate() {
 
 /// Goals given up for want of progress are forgiven before the run ends: with a progress
 /// timeout shorter than the turn in place that starts most paths, the robot gives up goal after
-/// goal, and the run must still explore the building and end with "no frontiers" (without the
-/// forgiveness it ends with the rooms behind the goals given up unexplored).
+/// goal, and the run must still explore the building (without the forgiveness it ends with the
+/// rooms behind the goals given up unexplored). Goals given up at the very end leave their
+/// frontiers' cells on the map: such a run ends "stuck", with the cells left counted.
 #[test]
 fn goals_given_up_get_another_chance_before_the_run_ends() {
     let b = corridor_building(3);
@@ -412,6 +413,60 @@ fn goals_given_up_get_another_chance_before_the_run_ends() {
         "goals given up: {}",
         r.blacklisted_goals
     );
+    assert!(
+        matches!(r.end_reason, EndReason::Complete | EndReason::Stuck),
+        "{:?}",
+        r.end_reason
+    );
+    assert_eq!(
+        r.end_reason == EndReason::Complete,
+        r.frontier_cells_left == 0
+    );
+    assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
+}
+
+/// Two 6 x 6 m rooms joined by a slit narrower than the robot: the laser sees through it into
+/// the second room, so that room's frontiers stay on the map, and no path leads to them. The run
+/// must say so ("frontiers unreachable", the frontier cells left counted), not "complete".
+#[test]
+fn a_room_seen_through_a_slit_ends_with_frontiers_unreachable() {
+    let w = |a: (f64, f64), b: (f64, f64)| {
+        Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
+    };
+    let solids = vec![
+        w((0.0, 0.0), (12.0, 0.0)),
+        w((12.0, 0.0), (12.0, 6.0)),
+        w((12.0, 6.0), (0.0, 6.0)),
+        w((0.0, 6.0), (0.0, 0.0)),
+        // The wall between the rooms, with a 0.25 m slit (the robot's diameter is larger).
+        w((6.0, 0.0), (6.0, 2.875)),
+        w((6.0, 3.125 + 0.2), (6.0, 6.0)),
+    ];
+    let b = Building {
+        name: "slit".into(),
+        geometry: Geometry::Vector {
+            outline: Polygon::rect(Vec2::new(-0.1, -0.1), Vec2::new(12.1, 6.1)),
+            solids,
+        },
+        rooms: vec![],
+        doors: vec![],
+        start: Some(Pose::new(3.0, 3.0, 0.0)),
+    };
+    let cfg = ExploreConfig {
+        localization: Localization::GroundTruth,
+        ..ExploreConfig::default()
+    };
+    let r = explore(&b, b.start.unwrap(), &cfg, 1, &mut |_| {});
+    assert_eq!(r.end_reason, EndReason::Unreachable);
+    assert!(r.frontier_cells_left > 0);
+    assert!(r.explored_fraction < 0.97, "{}", r.explored_fraction);
+    // The same building with a door the robot fits through is explored completely.
+    let mut open = b.clone();
+    if let Geometry::Vector { solids, .. } = &mut open.geometry {
+        solids[5] = w((6.0, 4.0), (6.0, 6.0));
+    }
+    let r = explore(&open, open.start.unwrap(), &cfg, 1, &mut |_| {});
     assert_eq!(r.end_reason, EndReason::Complete);
+    assert_eq!(r.frontier_cells_left, 0);
     assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
 }

@@ -17,6 +17,10 @@ pub struct BlacklistEntry {
     /// Given up (no progress, or standing still) rather than found unreachable: may be
     /// forgiven.
     pub given_up: bool,
+    /// Reached and looked at: the robot stood there facing the unknown space behind the
+    /// frontier, and the frontier's cells within the radius stayed frontier (they cannot be
+    /// seen from there).
+    pub looked: bool,
 }
 
 impl Blacklist {
@@ -26,21 +30,41 @@ impl Blacklist {
 
     /// Blacklists a goal that cannot be reached.
     pub fn add(&mut self, goal_m: Vec2, radius_m: f64) {
-        self.push(goal_m, radius_m, false);
+        self.push(goal_m, radius_m, false, false);
     }
 
     /// Blacklists a goal given up (no progress toward it); [`Blacklist::forgive`] lifts it.
     pub fn give_up(&mut self, goal_m: Vec2, radius_m: f64) {
-        self.push(goal_m, radius_m, true);
+        self.push(goal_m, radius_m, true, false);
     }
 
-    fn push(&mut self, goal_m: Vec2, radius_m: f64, given_up: bool) {
+    /// Blacklists a goal reached and looked at whose frontier is still there.
+    pub fn looked(&mut self, goal_m: Vec2, radius_m: f64) {
+        self.push(goal_m, radius_m, false, true);
+    }
+
+    fn push(&mut self, goal_m: Vec2, radius_m: f64, given_up: bool, looked: bool) {
         self.entries.push(BlacklistEntry {
             goal_m,
             radius_m: radius_m.max(0.0),
             given_up,
+            looked,
         });
         self.added += 1;
+    }
+
+    /// Whether `p` lies within the radius of a goal reached and looked at.
+    pub fn looked_at(&self, p: Vec2) -> bool {
+        self.entries
+            .iter()
+            .any(|e| e.looked && (p - e.goal_m).norm_squared() <= e.radius_m * e.radius_m)
+    }
+
+    /// Whether `p` lies within the radius of a goal given up.
+    pub fn given_up_at(&self, p: Vec2) -> bool {
+        self.entries
+            .iter()
+            .any(|e| e.given_up && (p - e.goal_m).norm_squared() <= e.radius_m * e.radius_m)
     }
 
     /// Removes the goals given up; returns how many.
