@@ -10,8 +10,6 @@
 
 use std::time::Instant;
 
-use sha2::{Digest, Sha256};
-
 use sim_core::explore::{explore, ExploreConfig, Localization, RunResult};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 
@@ -24,44 +22,6 @@ fn pose_errors(r: &RunResult) -> (f64, f64) {
         max_th = max_th.max(d.theta_rad.abs());
     }
     (max_xy, max_th.to_degrees())
-}
-
-/// SHA-256 (its first 8 bytes, in hex) over the bits of everything a run produced.
-fn fingerprint(r: &RunResult) -> String {
-    let mut h = Sha256::new();
-    let mut eat = |vs: &[f64]| vs.iter().for_each(|v| h.update(v.to_le_bytes()));
-    for p in r.trajectory.iter().chain(&r.estimated_trajectory) {
-        eat(&[p.x_m, p.y_m, p.theta_rad]);
-    }
-    for d in &r.decisions {
-        let (g, p) = (d.goal, d.pose);
-        eat(&[
-            d.time_s,
-            p.x_m,
-            p.y_m,
-            p.theta_rad,
-            g.x,
-            g.y,
-            d.gain_m2,
-            d.distance_m,
-        ]);
-        eat(&[d.candidates as f64]);
-    }
-    for s in &r.progress {
-        eat(&[s.time_s, s.explored_area_m2]);
-    }
-    eat(&[
-        r.explored_fraction,
-        r.path_length_m,
-        r.map_quality.occupied_precision,
-        r.map_quality.occupied_precision_aligned,
-        r.map_quality.free_precision,
-    ]);
-    h.update(r.map.data.iter().map(|c| *c as u8).collect::<Vec<u8>>());
-    h.finalize()[..8]
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
 }
 
 fn main() {
@@ -135,7 +95,7 @@ fn main() {
         );
         // A fingerprint of the run (every pose, decision, progress sample and map cell), so
         // that a change meant to be only faster can be checked to leave the run bit-identical.
-        println!("  fingerprint {}", fingerprint(&r));
+        println!("  fingerprint {}", r.fingerprint());
         if has("trace") {
             // Wrong occupied cells by their distance to solid space.
             let truth = building.reachable_free(r.map.frame, start.position());
