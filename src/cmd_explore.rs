@@ -163,7 +163,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         summary.wall_time_s,
         summary.speedup
     );
-    if let Some(w) = short_run_warning(&summary) {
+    if let Some(w) = short_run_warning(summary) {
         eprintln!("warning: {w}");
     }
     say!("results in {}", out.display());

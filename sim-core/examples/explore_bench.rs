@@ -8,6 +8,9 @@
 //! try: `upd=D,R,T` (map update after D m, R rad or T s) and `redecide=S` (the re-decision
 //! period).
 
+// Benchmarks, examples and integration tests run at the edge: they read files and clocks,
+// which the kernel itself may not (sim-core/clippy.toml).
+#![allow(clippy::disallowed_types, clippy::disallowed_methods)]
 use std::time::Instant;
 
 use sim_core::explore::{explore, ExploreConfig, Localization, RunResult};

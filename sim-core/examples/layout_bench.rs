@@ -10,6 +10,9 @@
 //!
 //! `cargo run -p sim-core --release --example layout_bench [-- --png /tmp/layouts] [--runs N]`
 
+// Benchmarks, examples and integration tests run at the edge: they read files and clocks,
+// which the kernel itself may not (sim-core/clippy.toml).
+#![allow(clippy::disallowed_types, clippy::disallowed_methods)]
 #[path = "../tests/common/mod.rs"]
 mod common;
 

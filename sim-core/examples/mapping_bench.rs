@@ -1,6 +1,9 @@
 //! Timings of the mapping / frontier / planning / gain kernels on a synthetic 60 x 60 m
 //! building at 0.05 m (1.44 M cells): `cargo run -p sim-core --release --example mapping_bench`.
 
+// Benchmarks, examples and integration tests run at the edge: they read files and clocks,
+// which the kernel itself may not (sim-core/clippy.toml).
+#![allow(clippy::disallowed_types, clippy::disallowed_methods)]
 use sim_core::frontier::detect::{detect_frontiers, detect_frontiers_in, FrontierConfig};
 use sim_core::gain::information_gain;
 use sim_core::mapping::distance_field::ObstacleDistance;

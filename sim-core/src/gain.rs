@@ -252,7 +252,7 @@ mod tests {
         }
         let r_cells = range_m / frame.resolution_m;
         let n_rays = ((std::f64::consts::TAU * r_cells).ceil() as usize).max(8);
-        let mut seen = std::collections::HashSet::new();
+        let mut seen = std::collections::BTreeSet::new();
         let mut count = 0usize;
         for k in 0..n_rays {
             let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
