@@ -33,6 +33,12 @@ pub struct LayoutRaster {
     open: Vec<bool>,
     /// Unknown cells of a layout wall that close a short gap in an observed wall.
     pub gap_walls: Bitmap,
+    /// In [`layout_information_gain`]: a layout wall does not block where the map shows free
+    /// space or where it closes a short gap of an observed wall (`gap_walls`: a doorway the
+    /// robot has seen, or an unseen piece of wall: for the early stop, the safe reading), and
+    /// unknown cells outside every predicted room count, so that a frontier in an opening of a wall line keeps a gain for what lies
+    /// beyond (false = the paper's `M^L`, where every layout wall blocks).
+    pub through_openings: bool,
 }
 
 impl LayoutRaster {
@@ -50,6 +56,7 @@ impl LayoutRaster {
             room,
             open,
             gap_walls,
+            through_openings: false,
         }
     }
 
@@ -63,6 +70,7 @@ impl LayoutRaster {
             room,
             open: vec![false; layout.rooms.len()],
             gap_walls: Bitmap::filled(grid.frame, false),
+            through_openings: false,
         }
     }
 
@@ -195,9 +203,12 @@ pub fn layout_information_gain(
         |c, i| {
             grid.data[i] == Occupancy::Occupied
                 || (raster.walls.get(c) == Some(&true)
+                    && !(raster.through_openings
+                        && (grid.data[i] == Occupancy::Free
+                            || raster.gap_walls.get(c) == Some(&true)))
                     && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
         },
-        |c, i| grid.data[i] == Occupancy::Unknown && raster.inside(c),
+        |c, i| grid.data[i] == Occupancy::Unknown && (raster.through_openings || raster.inside(c)),
     )
 }
 
@@ -311,6 +322,56 @@ mod tests {
         rows.push(format!("{}{}", "#".repeat(31), "?".repeat(29)));
         rows.extend(vec!["?".repeat(60); 5]);
         OccupancyGrid::from_ascii(&rows.join("\n"), 0.1)
+    }
+
+    /// A 1 x 1 m room, fully seen, whose right wall (one cell, x = 15) has a 0.5 m doorway (seen
+    /// free) with unknown beyond; the predicted room's right edge runs one cell outside the
+    /// wall, through the unknown beyond the doorway (a wall line fitted a little off).
+    fn room_with_doorway() -> (OccupancyGrid, Layout) {
+        let mut rows = Vec::new();
+        for y in 0..30 {
+            let mut row = String::new();
+            for x in 0..60 {
+                let inside = (5..15).contains(&y) && (5..15).contains(&x);
+                let wall = (4..=15).contains(&y) && (4..=15).contains(&x) && !inside;
+                let door = x == 15 && (8..13).contains(&y);
+                row.push(if inside || door {
+                    '.'
+                } else if wall {
+                    '#'
+                } else {
+                    '?'
+                });
+            }
+            rows.push(row);
+        }
+        // The first line of the text is the top row of the grid.
+        rows.reverse();
+        let layout = Layout {
+            rooms: vec![room(1, (0.5, 0.5), (1.66, 1.5), RoomLabel::Partial)],
+            ..Layout::default()
+        };
+        (OccupancyGrid::from_ascii(&rows.join("\n"), 0.1), layout)
+    }
+
+    #[test]
+    fn a_doorway_in_a_wall_line_keeps_the_gain_of_what_lies_beyond() {
+        let (g, layout) = room_with_doorway();
+        let mut r = LayoutRaster::new(&layout, &g, 1.0);
+        // Inside the room, in line with the doorway, three cells from the wall line.
+        let p = Cell::new(13, 10);
+        assert!(!r.uses_baseline(p));
+        // The paper's M^L: the wall line closes the doorway, next to nothing left to see.
+        let closed = layout_information_gain(&g, &r, p, 6.0);
+        assert!(closed < 0.1, "{closed}");
+        // Through the opening: the unknown beyond the doorway counts.
+        r.through_openings = true;
+        let through = layout_information_gain(&g, &r, p, 6.0);
+        assert!(through > 1.0, "{through}");
+        assert!(through <= information_gain(&g, p, 6.0) + 1e-9);
+        // Seen from a corner of the room, the doorway is hidden by the wall: nothing either way.
+        let q = Cell::new(14, 14);
+        assert!(layout_information_gain(&g, &r, q, 6.0) < 0.1);
     }
 
     #[test]

@@ -1141,7 +1141,7 @@ impl Explorer<'_> {
                     self.layout_trusted = true;
                 }
             }
-            let raster = if st.layout_from_truth {
+            let mut raster = if st.layout_from_truth {
                 // The oracle: nothing to compute (and nothing to charge).
                 let to_map = MapToWorld::new(&self.estimate, &self.sim.true_pose());
                 LayoutRaster::exact(&true_layout(&self.rooms, &to_map), grid)
@@ -1159,6 +1159,7 @@ impl Explorer<'_> {
                 }
                 LayoutRaster::new(&layout, grid, st.max_wall_gap_m)
             };
+            raster.through_openings = st.gain_through_openings;
             let predicted_unknown = grid
                 .data
                 .iter()
