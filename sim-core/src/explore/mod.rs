@@ -149,6 +149,14 @@ pub struct ExploreConfig {
     /// a door at a slant reaches into the room along a strip too narrow to drive, so its middle
     /// can lie where the robot cannot go while its other end is at the door.
     pub candidate_from_reachable_part: bool,
+    /// Frontiers the robot stands in are resolved as real explorers do (issue 20; off until the
+    /// reference results are rerun with it): a frontier whose middle cell was blacklisted
+    /// (reached and looked at with the frontier still there, given up, or unreachable) keeps its
+    /// other cells, its candidate moving to the nearest of them outside every blacklisted
+    /// radius; and at a goal whose unknown side surrounds the robot (the first scan's boundary,
+    /// one chain through the robot whose unknown lies right behind it), the robot turns to face
+    /// the frontier's outward side instead of taking the goal as seen.
+    pub robust_frontiers: bool,
     /// Re-decide this often while driving to a goal, once the map has grown by at least
     /// `redecide_min_growth_m2` since the last decision.
     pub redecide_period_s: f64,
@@ -201,6 +209,7 @@ impl Default for ExploreConfig {
             min_frontier_m: 0.5,
             frontier_clearance_m: 0.0,
             candidate_from_reachable_part: false,
+            robust_frontiers: false,
             redecide_period_s: 10.0,
             redecide_min_growth_m2: 0.5,
             safety_margin_m: 0.05,
@@ -470,6 +479,9 @@ struct Goal {
     /// Where the unknown space behind the frontier is: the robot faces it on arrival, so that its
     /// forward-looking laser sees it.
     look_at: Vec2,
+    /// The frontier's outward side (unit vector from its cells to their unknown neighbours, on
+    /// average): faced instead when `look_at` is where the robot stands (`robust_frontiers`).
+    look_dir: Option<Vec2>,
     arrived: bool,
     /// Cells of the frontier it was chosen for.
     frontier: Vec<Cell>,
@@ -828,7 +840,7 @@ impl Explorer<'_> {
         }
         if goal.arrived {
             // Turning toward the frontier; done when facing it.
-            let to = goal.look_at - self.estimate.position();
+            let to = look_vector(goal, &self.estimate, cfg.robust_frontiers);
             let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
             if err.abs() > 0.15 && to.norm() > 0.05 && now - goal.best_distance_at_s < 10.0 {
                 return false;
@@ -1372,9 +1384,18 @@ impl Explorer<'_> {
                 f64::from(obstacles.get(c)) >= clearance_cells
             });
         }
+        let blacklist = &self.blacklist;
         let mut frontiers: Vec<Frontier> = frontiers
             .into_iter()
-            .filter(|f| !self.blacklist.contains(frame.world_from_cell(f.candidate)))
+            .filter_map(|f| {
+                if !blacklist.contains(frame.world_from_cell(f.candidate)) {
+                    Some(f)
+                } else if cfg.robust_frontiers {
+                    outside_blacklist(f, blacklist, &frame)
+                } else {
+                    None
+                }
+            })
             .collect();
         self.goal = None;
         self.follower = PathFollower::default();
@@ -1467,10 +1488,15 @@ impl Explorer<'_> {
         let dist = self.follower.remaining_length_m(self.estimate.position());
         let look_at = unknown_centroid(&self.map.occupancy, &frontiers[best].cells)
             .unwrap_or_else(|| frame.world_from_cell(frontiers[best].candidate));
+        let look_dir = cfg
+            .robust_frontiers
+            .then(|| unknown_side(&self.map.occupancy, &frontiers[best].cells))
+            .flatten();
         self.goal = Some(Goal {
             cell: goal_cell,
             candidate: frontiers[best].candidate,
             look_at,
+            look_dir,
             arrived: false,
             frontier: frontiers[best].cells.clone(),
             decided_at_s: now,
@@ -1539,7 +1565,7 @@ impl Explorer<'_> {
     fn drive(&mut self) {
         let cfg = self.cfg;
         if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
-            let to = goal.look_at - self.estimate.position();
+            let to = look_vector(goal, &self.estimate, cfg.robust_frontiers);
             let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
             let w = (cfg.follow.heading_gain * err).clamp(
                 -cfg.sim.robot.max_turn_rate_radps,
@@ -1732,6 +1758,52 @@ fn start_cell(grid: &CoarseCosts, robot: Cell, radius_m: f64) -> Cell {
     } else {
         nearest_by(c, r, |n| grid.passable(n)).unwrap_or(c)
     }
+}
+
+/// A frontier whose middle cell is blacklisted, with its candidate moved to the cell nearest to
+/// the middle outside every blacklisted radius (the first in row-major order among equals), or
+/// `None` when every cell is blacklisted.
+fn outside_blacklist(
+    mut f: Frontier,
+    blacklist: &Blacklist,
+    frame: &GridFrame,
+) -> Option<Frontier> {
+    let from = f.candidate;
+    let d2 = |c: &Cell| {
+        let (dx, dy) = ((c.x - from.x) as i64, (c.y - from.y) as i64);
+        dx * dx + dy * dy
+    };
+    f.candidate = *f
+        .cells
+        .iter()
+        .filter(|c| !blacklist.contains(frame.world_from_cell(**c)))
+        .min_by_key(|c| d2(c))?;
+    Some(f)
+}
+
+/// What the robot faces at a goal it reached: the unknown space behind the frontier, or with
+/// `robust` the frontier's outward side when that space is centred on the robot itself (within
+/// 0.3 m: a frontier through the robot, whose unknown lies on both sides or right behind it).
+fn look_vector(goal: &Goal, estimate: &Pose, robust: bool) -> Vec2 {
+    let to = goal.look_at - estimate.position();
+    match goal.look_dir {
+        Some(d) if robust && to.norm() <= 0.3 => d,
+        _ => to,
+    }
+}
+
+/// The outward side of a frontier: the mean of the unit steps from its cells to their unknown
+/// 4-neighbours, normalised (`None` when they cancel out or there are none).
+fn unknown_side(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
+    let mut sum = Vec2::zeros();
+    for c in cells {
+        for nb in c.neighbours4() {
+            if grid.is(nb, Occupancy::Unknown) {
+                sum += Vec2::new(f64::from(nb.x - c.x), f64::from(nb.y - c.y));
+            }
+        }
+    }
+    (sum.norm() > 1e-9).then(|| sum / sum.norm())
 }
 
 /// Centre of the unknown cells next to a frontier.

@@ -470,3 +470,90 @@ fn a_room_seen_through_a_slit_ends_with_frontiers_unreachable() {
     assert_eq!(r.frontier_cells_left, 0);
     assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
 }
+
+/// The first scan of a robot in a large room facing +x: the boundary behind the 180-degree
+/// laser is one chain through the robot (the diameter), whose unknown side lies right behind
+/// it. Its middle is the robot's own cell and the centre of its unknown cells is 0.05 m away,
+/// so without `robust_frontiers` the robot took that goal as seen without turning, blacklisted
+/// it and, the frontier's middle being blacklisted, dropped the whole frontier (the run ended
+/// after 0 s). With it the robot turns to face the outward side, and a frontier whose middle is
+/// blacklisted keeps its other cells.
+#[test]
+fn a_frontier_through_the_robot_is_faced_and_kept() {
+    let grid = crate::grid::OccupancyGrid::from_ascii(
+        "
+        ????????
+        ???.....
+        ???.....
+        ???.....
+        ???.....
+        ???.....
+        ????????",
+        0.05,
+    );
+    let frame = grid.frame;
+    let cells: Vec<Cell> = (1..6).map(|y| Cell::new(3, y)).collect();
+    let robot = Pose::new(
+        frame.world_from_cell(Cell::new(3, 3)).x,
+        frame.world_from_cell(Cell::new(3, 3)).y,
+        0.0,
+    );
+    let centroid = unknown_centroid(&grid, &cells).unwrap();
+    let side = unknown_side(&grid, &cells).unwrap();
+    assert!((side - Vec2::new(-1.0, 0.0)).norm() < 1e-9, "{side:?}");
+    let goal = Goal {
+        cell: Cell::new(3, 3),
+        candidate: Cell::new(3, 3),
+        look_at: centroid,
+        look_dir: Some(side),
+        arrived: true,
+        frontier: cells.clone(),
+        decided_at_s: 0.0,
+        known_cells_at: 0,
+        best_distance_m: 0.0,
+        best_distance_at_s: 0.0,
+    };
+    // The paper's rule: the unknown's centre is one cell behind, closer than the 0.05 m the
+    // turn needs: no turn.
+    let plain = look_vector(&goal, &robot, false);
+    assert!((plain - (centroid - robot.position())).norm() < 1e-12);
+    assert!(plain.norm() <= 0.05 + 1e-9, "{plain:?}");
+    // Robust: the outward side, whatever the centre's distance.
+    assert_eq!(look_vector(&goal, &robot, true), side);
+    // The frontier's middle is blacklisted: the candidate moves to the nearest cell outside.
+    let f = Frontier {
+        cells: cells.clone(),
+        candidate: Cell::new(3, 3),
+        size: cells.len(),
+    };
+    let mut bl = Blacklist::new();
+    bl.looked(frame.world_from_cell(Cell::new(3, 3)), 0.06);
+    let moved = outside_blacklist(f.clone(), &bl, &frame).unwrap();
+    assert_eq!(moved.candidate, Cell::new(3, 1));
+    bl.looked(frame.world_from_cell(Cell::new(3, 3)), 2.0);
+    assert!(outside_blacklist(f, &bl, &frame).is_none());
+}
+
+/// `robust_frontiers` explores the small building and a large empty room as completely as the
+/// paper's rules (it changes what happens only at frontiers the robot stands in).
+#[test]
+fn robust_frontiers_explore_completely() {
+    let b = corridor_building(3);
+    let cfg = ExploreConfig {
+        robust_frontiers: true,
+        ..ExploreConfig::default()
+    };
+    for seed in 1..=2 {
+        let r = explore(&b, b.start.unwrap(), &cfg, seed, &mut |_| {});
+        assert!(
+            r.explored_fraction >= 0.97,
+            "seed {seed}: {}",
+            r.explored_fraction
+        );
+        assert!(
+            r.end_reason.is_normal() || r.end_reason == EndReason::Stuck,
+            "{:?}",
+            r.end_reason
+        );
+    }
+}
