@@ -9,11 +9,13 @@
 //! - [`net`]: the zenoh transport for remote workers (the only module that knows zenoh).
 //! - [`wire`]: the versioned messages between coordinator and workers.
 //! - [`table`]: the paper's Table 1 for a grid, and CSV export.
+//! - [`sequential`]: the sequential test (GSPRT) that decides a comparison from paired runs.
 
 pub mod grid;
 pub mod net;
 pub mod run;
 pub mod schedule;
+pub mod sequential;
 pub mod store;
 pub mod table;
 pub mod wire;
