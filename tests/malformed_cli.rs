@@ -95,7 +95,11 @@ fn check_case(case: &Case) -> Vec<String> {
     let dir = tempfile::tempdir().unwrap();
     let tmp = dir.path();
     copy_dir(&corpus_dir().join("files"), tmp);
-    std::fs::copy(common::repo().join("buildings/small.toml"), tmp.join("small.toml")).unwrap();
+    std::fs::copy(
+        common::repo().join("buildings/small.toml"),
+        tmp.join("small.toml"),
+    )
+    .unwrap();
     for d in &case.mkdir {
         std::fs::create_dir_all(tmp.join(d)).unwrap();
     }
@@ -105,11 +109,17 @@ fn check_case(case: &Case) -> Vec<String> {
         .map(|f| std::fs::read(tmp.join(f)).ok())
         .collect();
     let maps = common::maps_dir().display().to_string();
-    let args: Vec<String> = case.args.iter().map(|a| a.replace("{maps}", &maps)).collect();
+    let args: Vec<String> = case
+        .args
+        .iter()
+        .map(|a| a.replace("{maps}", &maps))
+        .collect();
     let bin = env!("CARGO_BIN_EXE_floorcast");
     let mut cmd = if Path::new("/usr/bin/prlimit").exists() {
         let mut c = Command::new("/usr/bin/prlimit");
-        c.arg(format!("--as={MEMORY_LIMIT_BYTES}")).arg("--").arg(bin);
+        c.arg(format!("--as={MEMORY_LIMIT_BYTES}"))
+            .arg("--")
+            .arg(bin);
         c
     } else {
         Command::new(bin)
@@ -127,7 +137,10 @@ fn check_case(case: &Case) -> Vec<String> {
     }
     let lines: Vec<&str> = err.lines().collect();
     if lines.len() != 1 || !lines[0].starts_with("error: ") {
-        problems.push(format!("expected one `error: ...` line, got {} lines", lines.len()));
+        problems.push(format!(
+            "expected one `error: ...` line, got {} lines",
+            lines.len()
+        ));
     }
     for w in &case.expect {
         if !err.contains(w.as_str()) {

@@ -657,7 +657,7 @@ theta_deg = 90.0
     fn error_non_positive_thickness() {
         let e = bad("thickness = 0.2", "thickness = -0.2");
         assert!(
-            e.contains("x.toml: walls[0].thickness: must be a positive number of metres, got -0.2"),
+            e.contains("x.toml: walls[0].thickness: must be a positive number of metres up to 100.0, got -0.2"),
             "{e}"
         );
     }

@@ -12,6 +12,9 @@ pub mod limits;
 pub mod map_server;
 pub mod stage;
 
+#[cfg(test)]
+mod fuzz;
+
 use std::path::Path;
 
 use sim_core::{Building, GridFrame, Occupancy, OccupancyGrid};

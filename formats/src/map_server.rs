@@ -295,6 +295,16 @@ pub(crate) fn read_image(referrer: &Path, field: &str, path: &Path) -> Result<Ma
             .saturating_mul(8)
             .saturating_add(1 << 20),
     )?;
+    decode_image(referrer, field, path, &bytes)
+}
+
+/// Decodes image bytes (see [`read_image`]).
+pub(crate) fn decode_image(
+    referrer: &Path,
+    field: &str,
+    path: &Path,
+    bytes: &[u8],
+) -> Result<MapImage, Error> {
     let err = |m: String| Error::image(referrer, field, path, m);
     let format = image::guess_format(&bytes)
         .map_err(|_| err("the content is neither PGM/PNM nor PNG".into()))?;
@@ -583,7 +593,9 @@ mod tests {
     fn error_non_positive_resolution() {
         let e = err_of(&GOOD_YAML.replace("0.5", "-0.05"), &[]);
         assert!(
-            e.contains("bad.yaml: resolution: must be a positive number"),
+            e.contains(
+                "bad.yaml: resolution: must be between 0.001 and 1.0 metres per pixel, got -0.05"
+            ),
             "{e}"
         );
         assert!(e.contains("-0.05"), "{e}");

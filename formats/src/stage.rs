@@ -26,7 +26,28 @@ pub const STAGE_OBSTACLE_BELOW: f64 = 128.0;
 /// Reads a Stage world as a raster building named after the file's stem.
 pub fn read_world(path: &Path) -> Result<Building, Error> {
     let text = crate::limits::read_text(path)?;
-    let world = parse_world(&text).ok_or_else(|| {
+    world_from_text(&text, path, &|image_path, field| {
+        if !image_path.is_file() {
+            return Err(Error::invalid(
+                path,
+                field,
+                format!(
+                    "{} does not exist; the bitmap is resolved relative to the world file's directory",
+                    image_path.display()
+                ),
+            ));
+        }
+        read_image(path, field, image_path)
+    })
+}
+
+/// A world file's text as a building; `load_image(path, field)` reads the floor plan's bitmap.
+pub(crate) fn world_from_text(
+    text: &str,
+    path: &Path,
+    load_image: &dyn Fn(&Path, &str) -> Result<crate::map_server::MapImage, Error>,
+) -> Result<Building, Error> {
+    let world = parse_world(text).ok_or_else(|| {
         Error::syntax(
             path,
             format!(
@@ -38,18 +59,8 @@ pub fn read_world(path: &Path) -> Result<Building, Error> {
     let plan = find_floorplan(&world, path)?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let image_path = dir.join(&plan.bitmap);
-    if !image_path.is_file() {
-        return Err(Error::invalid(
-            path,
-            format!("{}.bitmap", plan.model),
-            format!(
-                "{} does not exist; the bitmap is resolved relative to the world file's directory",
-                image_path.display()
-            ),
-        ));
-    }
     let field = format!("{}.bitmap", plan.model);
-    let img = read_image(path, &field, &image_path)?;
+    let img = load_image(&image_path, &field)?;
     let size_field = format!("{}.size", plan.model);
     let solid = rasterise(
         &img.rgba,
