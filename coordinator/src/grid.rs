@@ -123,7 +123,7 @@ pub enum GridError {
     Building {
         path: PathBuf,
         field: String,
-        source: floorcast_formats::Error,
+        source: Box<floorcast_formats::Error>,
     },
 }
 
@@ -267,7 +267,7 @@ impl Plan {
                     floorcast_formats::read_building(&p).map_err(|source| GridError::Building {
                         path: path.to_path_buf(),
                         field: field.clone(),
-                        source,
+                        source: Box::new(source),
                     })?;
                 let name = p
                     .file_stem()

@@ -306,9 +306,9 @@ pub(crate) fn decode_image(
     bytes: &[u8],
 ) -> Result<MapImage, Error> {
     let err = |m: String| Error::image(referrer, field, path, m);
-    let format = image::guess_format(&bytes)
+    let format = image::guess_format(bytes)
         .map_err(|_| err("the content is neither PGM/PNM nor PNG".into()))?;
-    let reader = || image::ImageReader::with_format(std::io::Cursor::new(&bytes[..]), format);
+    let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     let (w, h) = reader()
         .into_dimensions()
         .map_err(|e| err(format!("truncated or corrupt: {e}")))?;

@@ -550,7 +550,7 @@ pub fn settings_from_map(
 pub fn settings_from_json_text(text: &str) -> Result<Settings, SettingsError> {
     let v: serde_json::Value = serde_json::from_str(text).map_err(|e| {
         SettingsError::Shape(format!(
-            "not valid JSON ({}); expected an object such as {{\"alpha\": 0.8}}",
+            "not valid JSON ({}); expected a JSON object such as {{\"alpha\": 0.8}}",
             one_line(&e.to_string())
         ))
     })?;
