@@ -5,12 +5,13 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use floorcast_worker::{run_job, Job, Settings, STRATEGIES};
+use floorcast_worker::{check_job, run_job, Job, Settings, STRATEGIES};
 use sim_core::explore::RunResult;
 
 use crate::output::{create_dir, parse_pose, progress_bar, write_text};
 
 #[derive(Debug, Args)]
+#[command(after_long_help = floorcast_worker::settings::settings_help_text())]
 pub struct ExploreArgs {
     /// Building to explore: floorcast TOML, ROS map_server YAML, or Stage .world.
     #[arg(long, value_name = "FILE")]
@@ -28,10 +29,11 @@ pub struct ExploreArgs {
     /// point with the largest clearance).
     #[arg(long, value_name = "X,Y,THETA", value_parser = parse_pose, allow_hyphen_values = true)]
     start: Option<sim_core::Pose>,
-    /// Where the map's poses come from.
-    #[arg(long, default_value = "slam", value_parser = ["slam", "odometry", "ground-truth"])]
-    localization: String,
-    /// The utility's weight of distance against information gain.
+    /// Where the map's poses come from (default: slam, or the settings file's).
+    #[arg(long, value_parser = ["slam", "odometry", "ground-truth"])]
+    localization: Option<String>,
+    /// The utility's weight of distance against information gain, in [0, 1] (default: 0.5, or
+    /// the settings file's).
     #[arg(long)]
     alpha: Option<f64>,
     /// What the utility's distance D(p) measures: the planned path's length, or the straight
@@ -46,10 +48,12 @@ pub struct ExploreArgs {
     /// frontier nearest to it instead of passing the frontier over (not the paper's rule).
     #[arg(long)]
     candidate_from_reachable_part: bool,
-    /// Stop the run at this simulated time (seconds).
+    /// Stop the run at this simulated time, in seconds, 1 to 100000 (default: 14400, or the
+    /// settings file's).
     #[arg(long, value_name = "SECONDS")]
     time_limit_s: Option<f64>,
-    /// Settings file (JSON object of run settings; see README), applied before the flags.
+    /// Settings file: a JSON object of run settings such as {"alpha": 0.8} (the settings are
+    /// listed below); a flag given on the command line overrides the file's value.
     #[arg(long, value_name = "FILE")]
     settings: Option<PathBuf>,
     /// Picture format of the final map.
@@ -77,19 +81,15 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .unwrap_or_else(|| building.name.clone());
     let mut settings = match &a.settings {
         Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("cannot read settings file {}", p.display()))?;
-            serde_json::from_str::<Settings>(&text).with_context(|| {
-                format!(
-                    "{}: invalid settings (expected a JSON object such as {{\"alpha\": 1.0}}; \
-                         the names are those of a grid's [settings], see the README)",
-                    p.display()
-                )
-            })?
+            let text = floorcast_formats::limits::read_text(p)?;
+            floorcast_worker::settings::settings_from_json_text(&text)
+                .map_err(|e| anyhow::anyhow!("{}: {e} (see `floorcast settings`)", p.display()))?
         }
         None => Settings::default(),
     };
-    settings.localization = a.localization.clone();
+    if let Some(l) = &a.localization {
+        settings.localization = l.clone();
+    }
     if let Some(alpha) = a.alpha {
         settings.alpha = alpha;
     }
@@ -115,6 +115,12 @@ pub fn run(a: ExploreArgs) -> Result<()> {
             Vec::new()
         },
     };
+    // Everything is checked before any output is created.
+    // (A settings file was checked as it was read: what fails here came from a flag.)
+    job.settings
+        .validate()
+        .map_err(|e| anyhow::anyhow!("{e} (given on the command line)"))?;
+    check_job(&job).with_context(|| format!("{}: cannot explore", a.building.display()))?;
     let out = a.out.clone().unwrap_or_else(|| {
         PathBuf::from(format!("results/explore/{name}-{}-{}", a.strategy, a.seed))
     });

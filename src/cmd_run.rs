@@ -29,6 +29,7 @@ pub struct NetArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(after_long_help = floorcast_worker::settings::settings_help_text())]
 pub struct RunArgs {
     /// Grid file (TOML): buildings, seeds, strategies, settings; see README.
     grid: PathBuf,
@@ -53,6 +54,10 @@ pub struct RunArgs {
     /// Where results go (overrides the grid's `results`).
     #[arg(long, value_name = "DIR")]
     results: Option<PathBuf>,
+    /// Most jobs (buildings x seeds x strategies) the grid may hold; a larger grid is refused
+    /// before anything runs.
+    #[arg(long, value_name = "N", default_value_t = floorcast_coordinator::grid::DEFAULT_MAX_JOBS, value_parser = clap::value_parser!(u64).range(1..))]
+    max_jobs: u64,
     /// Only print the table of what is stored so far; run nothing.
     #[arg(long)]
     summary: bool,
@@ -79,7 +84,24 @@ pub struct ReportArgs {
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
-    let plan = Plan::load(&a.grid, a.results.as_deref())?;
+    if let Some(r) = &a.results {
+        if r.as_os_str().is_empty() {
+            anyhow::bail!("--results: empty; expected a directory such as results/my-grid");
+        }
+    }
+    let plan = Plan::load_with(
+        &a.grid,
+        a.results.as_deref(),
+        &floorcast_coordinator::grid::PlanLimits {
+            max_jobs: a.max_jobs,
+        },
+    )?;
+    if !(a.lease_s.is_finite() && (1.0..=86_400.0).contains(&a.lease_s)) {
+        anyhow::bail!(
+            "--lease-s: expected seconds in [1, 86400], got {}",
+            a.lease_s
+        );
+    }
     let store = Store::open(&plan.results_dir)?;
     if a.summary {
         let results = store.all()?;
@@ -101,7 +123,7 @@ pub fn run(a: RunArgs) -> Result<()> {
             store.path().display()
         );
         say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
-        return Ok(());
+        return failed_jobs(&plan, &store);
     }
     let networked = !a.listen.is_empty() || !a.connect.is_empty() || a.net.zenoh_config.is_some();
     let workers = a.workers.unwrap_or_else(|| {
@@ -113,9 +135,6 @@ pub fn run(a: RunArgs) -> Result<()> {
         anyhow::bail!(
             "--workers 0 runs nothing on this machine; add --listen ENDPOINT so that remote workers can join, or give --workers N"
         );
-    }
-    if !(a.lease_s.is_finite() && a.lease_s >= 1.0) {
-        anyhow::bail!("--lease-s must be at least 1 second, got {}", a.lease_s);
     }
     let opts = RunOptions {
         workers,
@@ -193,7 +212,7 @@ pub fn run(a: RunArgs) -> Result<()> {
                 store.path().display()
             );
             say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
-            Ok(())
+            failed_jobs(&plan, &store)
         }
         Outcome::Interrupted => {
             eprintln!(
@@ -205,6 +224,49 @@ pub fn run(a: RunArgs) -> Result<()> {
             std::process::exit(130);
         }
     }
+}
+
+/// An error naming the plan's failed jobs (building, strategy, seed, error) and the jobs that did
+/// not run, if any.
+fn failed_jobs(plan: &Plan, store: &Store) -> Result<()> {
+    let ids: std::collections::BTreeSet<&str> = plan.jobs.iter().map(|j| j.id.as_str()).collect();
+    let rows = store.all()?;
+    let failed: Vec<_> = rows
+        .iter()
+        .filter(|r| ids.contains(r.job_id.as_str()) && r.status != "ok")
+        .collect();
+    let missing = plan.jobs.len() - stored_of_plan(plan, store)?;
+    if failed.is_empty() && missing == 0 {
+        return Ok(());
+    }
+    let mut parts: Vec<String> = failed
+        .iter()
+        .take(3)
+        .map(|r| {
+            format!(
+                "{} {} seed {}: {}",
+                r.building,
+                r.label,
+                r.seed,
+                r.error.as_deref().unwrap_or("no error recorded")
+            )
+        })
+        .collect();
+    if failed.len() > 3 {
+        parts.push(format!("and {} more", failed.len() - 3));
+    }
+    if missing > 0 {
+        parts.push(format!(
+            "{missing} jobs did not run; run the same command again"
+        ));
+    }
+    anyhow::bail!(
+        "{} of {} jobs failed ({}); their rows in {} say why",
+        failed.len(),
+        plan.jobs.len(),
+        parts.join("; "),
+        store.path().display()
+    )
 }
 
 fn stored_of_plan(plan: &Plan, store: &Store) -> Result<usize> {

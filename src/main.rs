@@ -20,6 +20,12 @@ use clap::{Parser, Subcommand};
 #[derive(Debug, Parser)]
 #[command(name = "floorcast", version, about, long_about = None, propagate_version = true)]
 struct Cli {
+    /// Most grid cells a map or building may need (its 0.05 m exploration grid over its extent
+    /// plus 1 m each side, an image's pixels, a Stage floor plan's raster); a larger one is
+    /// refused before anything is allocated. Raise it for very large buildings (about 40 bytes of
+    /// memory per cell while exploring).
+    #[arg(long, global = true, value_name = "CELLS", default_value_t = floorcast_formats::limits::DEFAULT_MAX_CELLS, value_parser = clap::value_parser!(u64).range(1..=4_000_000_000))]
+    max_cells: u64,
     #[command(subcommand)]
     command: Command,
 }
@@ -40,10 +46,20 @@ enum Command {
     Worker(cmd_worker::WorkerArgs),
     /// Print the table of a results directory and export it as CSV.
     Report(cmd_run::ReportArgs),
+    /// Print the reference of every run setting (type, unit, default, range, meaning).
+    Settings(SettingsArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct SettingsArgs {
+    /// Print the reference as the markdown table of the README.
+    #[arg(long)]
+    markdown: bool,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    floorcast_formats::limits::set_max_cells(cli.max_cells);
     let result = match cli.command {
         Command::Building(c) => cmd_building::run(c),
         Command::Explore(a) => cmd_explore::run(a),
@@ -51,12 +67,55 @@ fn main() -> ExitCode {
         Command::Run(a) => cmd_run::run(a),
         Command::Worker(a) => cmd_worker::run(a),
         Command::Report(a) => cmd_run::report(a),
+        Command::Settings(a) => {
+            if a.markdown {
+                say_raw!(
+                    "{}",
+                    floorcast_worker::settings::settings_reference_markdown()
+                );
+            } else {
+                say_raw!("{}", floorcast_worker::settings::settings_help_text());
+            }
+            Ok(())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", one_line_error(&e));
             ExitCode::from(2)
         }
+    }
+}
+
+/// An error and its causes on one line, each cause said once: a cause whose text the message so
+/// far already holds (a library error that quotes its source) is left out.
+fn one_line_error(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        let text = text.trim();
+        if text.is_empty() || msg.contains(text) {
+            continue;
+        }
+        if !msg.is_empty() {
+            msg.push_str(": ");
+        }
+        msg.push_str(text);
+    }
+    msg.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line_error;
+
+    #[test]
+    fn causes_are_said_once_on_one_line() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
+        let e = anyhow::Error::new(io).context("cannot read x.json: No such file");
+        assert_eq!(one_line_error(&e), "cannot read x.json: No such file");
+        let e = anyhow::anyhow!("inner\nsecond line").context("outer");
+        assert_eq!(one_line_error(&e), "outer: inner second line");
     }
 }

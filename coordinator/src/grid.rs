@@ -123,24 +123,71 @@ pub enum GridError {
     Building {
         path: PathBuf,
         field: String,
-        source: floorcast_formats::Error,
+        source: Box<floorcast_formats::Error>,
     },
+}
+
+/// Bounds on a grid, checked before it is expanded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PlanLimits {
+    /// Most jobs a grid may hold (buildings x seeds x strategies).
+    pub max_jobs: u64,
+}
+
+/// Default [`PlanLimits::max_jobs`].
+pub const DEFAULT_MAX_JOBS: u64 = 100_000;
+
+impl Default for PlanLimits {
+    fn default() -> Self {
+        Self {
+            max_jobs: DEFAULT_MAX_JOBS,
+        }
+    }
 }
 
 impl Plan {
     /// Reads, validates and expands a grid file. `results_override` replaces its `results`.
     pub fn load(path: &Path, results_override: Option<&Path>) -> Result<Plan, GridError> {
-        let text = std::fs::read_to_string(path).map_err(|source| GridError::Read {
-            path: path.to_path_buf(),
-            source,
+        Self::load_with(path, results_override, &PlanLimits::default())
+    }
+
+    /// [`Plan::load`] with explicit limits.
+    pub fn load_with(
+        path: &Path,
+        results_override: Option<&Path>,
+        limits: &PlanLimits,
+    ) -> Result<Plan, GridError> {
+        let text = floorcast_formats::limits::read_text(path).map_err(|e| match e {
+            floorcast_formats::Error::Io { source, .. } => GridError::Read {
+                path: path.to_path_buf(),
+                source,
+            },
+            e => GridError::Syntax {
+                path: path.to_path_buf(),
+                message: e
+                    .to_string()
+                    .strip_prefix(&format!("{}: ", path.display()))
+                    .map(str::to_string)
+                    .unwrap_or_else(|| e.to_string()),
+            },
         })?;
-        Self::parse(&text, path, results_override)
+        Self::parse_with(&text, path, results_override, limits)
     }
 
     pub fn parse(
         text: &str,
         path: &Path,
         results_override: Option<&Path>,
+    ) -> Result<Plan, GridError> {
+        Self::parse_with(text, path, results_override, &PlanLimits::default())
+    }
+
+    /// [`Plan::parse`] with explicit limits.
+    pub fn parse_with(
+        text: &str,
+        path: &Path,
+        results_override: Option<&Path>,
+        limits: &PlanLimits,
     ) -> Result<Plan, GridError> {
         let invalid = |field: &str, problem: String| GridError::Invalid {
             path: path.to_path_buf(),
@@ -160,13 +207,23 @@ impl Plan {
             (Some(GRID_FORMAT), v) => {
                 return Err(invalid(
                     "version",
-                    format!("version {v:?} is not supported, expected {GRID_VERSION}"),
+                    match v {
+                        Some(v) => format!("version {v} is not supported, expected {GRID_VERSION}"),
+                        None => format!(
+                            "missing or not a whole number; expected version = {GRID_VERSION}"
+                        ),
+                    },
                 ))
             }
             (f, _) => {
                 return Err(invalid(
                     "format",
-                    format!("expected format = \"{GRID_FORMAT}\", found {f:?}"),
+                    match f {
+                        Some(f) => format!("expected format = \"{GRID_FORMAT}\", found \"{f}\""),
+                        None => {
+                            format!("missing or not a string; expected format = \"{GRID_FORMAT}\"")
+                        }
+                    },
                 ))
             }
         }
@@ -210,7 +267,7 @@ impl Plan {
                     floorcast_formats::read_building(&p).map_err(|source| GridError::Building {
                         path: path.to_path_buf(),
                         field: field.clone(),
-                        source,
+                        source: Box::new(source),
                     })?;
                 let name = p
                     .file_stem()
@@ -289,7 +346,8 @@ impl Plan {
             }
         }
 
-        // Seeds.
+        // Seeds (counted before they are listed).
+        check_job_count(&file, buildings.len(), limits, &invalid)?;
         let seeds: Vec<u64> = match (&file.seeds, &file.seed_range) {
             (Some(s), None) if !s.is_empty() => s.clone(),
             (None, Some([a, b])) if a <= b => (*a..=*b).collect(),
@@ -328,13 +386,10 @@ impl Plan {
         }
         // Settings from a table, checked; an error names `field`.
         let settings_of = |table: toml::Table, field: &str| -> Result<Settings, GridError> {
-            let settings: Settings = toml::Value::Table(table)
-                .try_into()
-                .map_err(|e: toml::de::Error| invalid(field, one_line(&e.to_string())))?;
-            settings
-                .to_explore_config()
-                .map_err(|e| invalid(field, e.to_string()))?;
-            Ok(settings)
+            settings_from_table(&table).map_err(|e| match e.field() {
+                Some(name) => invalid(&format!("{field}.{name}"), e.problem()),
+                None => invalid(field, e.problem()),
+            })
         };
         // The shared settings alone first, so that an error in one of them names `settings`
         // rather than the first strategy they were merged into.
@@ -354,6 +409,7 @@ impl Plan {
                 ));
             }
             let label = s.label.clone().unwrap_or_else(|| s.name.clone());
+            check_label(&label).map_err(|p| invalid(&format!("{field}.label"), p))?;
             if labels.contains(&label) {
                 return Err(invalid(
                     &format!("{field}.label"),
@@ -374,6 +430,8 @@ impl Plan {
                     format!("strategy '{label}' repeats another with the same name and settings"),
                 ));
             }
+            check_strategy_fits(&s.name, &settings, &buildings, path)
+                .map_err(|(f, p)| invalid(&format!("{field}{f}"), p))?;
             labels.push(label.clone());
             resolved.push((s.name.clone(), settings, label));
         }
@@ -394,6 +452,7 @@ impl Plan {
                 }
             }
         }
+        check_results(file.results.as_deref()).map_err(|p| invalid("results", p))?;
         let results_dir = match results_override {
             Some(p) => p.to_path_buf(),
             None => PathBuf::from(
@@ -411,6 +470,115 @@ impl Plan {
             jobs,
         })
     }
+}
+
+/// Settings from a grid's settings table, checked setting by setting.
+fn settings_from_table(table: &toml::Table) -> Result<Settings, floorcast_worker::SettingsError> {
+    match serde_json::to_value(table) {
+        Ok(serde_json::Value::Object(map)) => floorcast_worker::settings::settings_from_map(&map),
+        _ => Err(floorcast_worker::SettingsError::Shape(
+            "expected a table of settings such as { alpha = 0.8 }".into(),
+        )),
+    }
+}
+
+/// The number of jobs (buildings x seeds x strategies) must stay within the limit; counted
+/// without listing the seeds.
+fn check_job_count(
+    file: &GridFile,
+    buildings: usize,
+    limits: &PlanLimits,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<(), GridError> {
+    let (field, seeds): (&str, u128) = match (&file.seeds, &file.seed_range) {
+        (_, Some([a, b])) if a <= b => ("seed_range", *b as u128 - *a as u128 + 1),
+        (Some(s), _) => ("seeds", s.len() as u128),
+        _ => return Ok(()),
+    };
+    let jobs = seeds * buildings as u128 * file.strategies.len().max(1) as u128;
+    if jobs > limits.max_jobs as u128 {
+        return Err(invalid(
+            field,
+            format!(
+                "{seeds} seeds x {buildings} buildings x {} strategies make {jobs} jobs, more than the limit of {} jobs per grid; use fewer seeds or raise the limit with --max-jobs",
+                file.strategies.len(),
+                limits.max_jobs
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A strategy label is shown in tables and charts: non-empty, one line, printable.
+fn check_label(label: &str) -> Result<(), String> {
+    if label.trim().is_empty() {
+        return Err("the label is empty; give a short name such as \"nearest\"".into());
+    }
+    if label.chars().any(char::is_control) {
+        return Err(format!(
+            "{label:?} holds a line break or control character; expected one line of text"
+        ));
+    }
+    if label.chars().count() > 64 {
+        return Err("the label is longer than 64 characters; give a short name".into());
+    }
+    Ok(())
+}
+
+/// The results directory, when given, is a non-empty path on one line.
+fn check_results(results: Option<&str>) -> Result<(), String> {
+    match results {
+        Some(r) if r.trim().is_empty() => Err(
+            "empty; expected a directory such as \"results/my-grid\" (or leave `results` out)"
+                .into(),
+        ),
+        Some(r) if r.chars().any(char::is_control) => Err(format!(
+            "{r:?} holds a line break or control character; expected a directory path"
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// A strategy must be able to run on every building of the grid: the oracle strategies need
+/// ground-truth rooms, and every building's exploration grid at the strategy's map resolution
+/// must fit the cell budget. Returns the field suffix and the problem.
+fn check_strategy_fits(
+    name: &str,
+    settings: &Settings,
+    buildings: &[PlannedBuilding],
+    path: &Path,
+) -> Result<(), (String, String)> {
+    let truth = sim_core::explore::Strategy::by_name(name).is_some_and(|s| s.layout_from_truth);
+    for b in buildings {
+        if truth && b.building.rooms.is_empty() {
+            return Err((
+                ".name".into(),
+                format!(
+                    "strategy {name} takes its layout from the building's ground-truth rooms, and building {} ({}) has none; use buildings that list rooms or another strategy",
+                    b.name, b.source
+                ),
+            ));
+        }
+        floorcast_formats::limits::check_building(
+            &b.building,
+            path,
+            "map_resolution_m",
+            settings.map_resolution_m,
+        )
+        .map_err(|e| {
+            let e = e.to_string();
+            let prefix = format!("{}: map_resolution_m: ", path.display());
+            (
+                ".settings.map_resolution_m".into(),
+                format!(
+                    "building {}: {}",
+                    b.name,
+                    e.strip_prefix(&prefix).unwrap_or(&e)
+                ),
+            )
+        })?;
+    }
+    Ok(())
 }
 
 /// The identity of a job: a hash of everything that determines its result.

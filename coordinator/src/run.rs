@@ -413,7 +413,19 @@ fn local_worker(
         }
         match rx.blocking_recv() {
             Ok(Answer::Run(job)) => {
-                let result = exec(plan, &job, name);
+                // A panicking job is a failed job, never a lost one (nor a dead worker).
+                let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    exec(plan, &job, name)
+                }))
+                .unwrap_or_else(|p| {
+                    let mut row = expected_row(plan, &job, name);
+                    row.status = "failed".into();
+                    row.error = Some(format!(
+                        "the job panicked (a bug in floorcast, please report it): {}",
+                        floorcast_worker::panic_message(&*p)
+                    ));
+                    row
+                });
                 let (tx, rx) = oneshot::channel();
                 let submit = Inbox::Submit {
                     worker: name.to_string(),

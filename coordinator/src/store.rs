@@ -27,6 +27,8 @@ pub enum StoreError {
     Version { path: PathBuf, found: String },
     #[error("no results store in {0} (expected {DB_FILE}); run `floorcast run GRID` first")]
     Missing(PathBuf),
+    #[error("{path} is not a floorcast results store ({why}); floorcast leaves it untouched: give another --results directory")]
+    Foreign { path: PathBuf, why: String },
 }
 
 /// One stored job (also what a remote worker submits).
@@ -78,6 +80,9 @@ impl Store {
             source,
         })?;
         let path = dir.join(DB_FILE);
+        if std::fs::symlink_metadata(&path).is_ok() {
+            check_is_store(&path)?;
+        }
         let conn = Connection::open(&path).map_err(|source| StoreError::Sql {
             path: path.clone(),
             source,
@@ -89,16 +94,60 @@ impl Store {
 
     /// Opens an existing store read-only-ish (errors if absent).
     pub fn open_existing(dir: &Path) -> Result<Store, StoreError> {
-        if !dir.join(DB_FILE).exists() {
+        let path = dir.join(DB_FILE);
+        if !dir.is_dir() || std::fs::symlink_metadata(&path).is_err() {
             return Err(StoreError::Missing(dir.to_path_buf()));
         }
+        check_is_store(&path)?;
         Self::open(dir)
     }
 
     pub fn path(&self) -> &Path {
         &self.path
     }
+}
 
+/// Refuses, without writing anything, a file that is not a floorcast results store: not a file,
+/// empty, not SQLite, or a database without floorcast's `meta` table and store version.
+fn check_is_store(path: &Path) -> Result<(), StoreError> {
+    let foreign = |why: &str| StoreError::Foreign {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    };
+    let meta = std::fs::metadata(path).map_err(|_| foreign("it cannot be read"))?;
+    if !meta.is_file() {
+        return Err(foreign("not a regular file"));
+    }
+    if meta.len() == 0 {
+        return Err(foreign("an empty file"));
+    }
+    let conn = Connection::open_with_flags(
+        path,
+        rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY | rusqlite::OpenFlags::SQLITE_OPEN_NO_MUTEX,
+    )
+    .map_err(|_| foreign("not an SQLite database"))?;
+    let version: Option<String> = conn
+        .query_row(
+            "SELECT value FROM meta WHERE key = 'store_version'",
+            [],
+            |r| r.get(0),
+        )
+        .optional()
+        .map_err(|e| match e {
+            rusqlite::Error::SqliteFailure(f, _) if f.code == rusqlite::ErrorCode::NotADatabase => {
+                foreign("not an SQLite database")
+            }
+            _ => foreign("an SQLite database without floorcast's tables"),
+        })?;
+    match version {
+        None => Err(foreign(
+            "an SQLite database without a floorcast store version",
+        )),
+        Some(_) => Ok(()),
+    }
+}
+
+impl Store {
     fn sql<T>(&self, r: rusqlite::Result<T>) -> Result<T, StoreError> {
         r.map_err(|source| StoreError::Sql {
             path: self.path.clone(),
@@ -332,6 +381,63 @@ mod tests {
             worker: "local-0".into(),
             wall_time_s: 1.0,
             floorcast_version: "0".into(),
+        }
+    }
+
+    #[test]
+    fn foreign_files_are_refused_and_left_untouched() {
+        // (what is at results.sqlite, words of the message)
+        type Make = fn(&Path);
+        let cases: &[(&str, Make, &str)] = &[
+            (
+                "empty file",
+                |p| std::fs::write(p, b"").unwrap(),
+                "an empty file",
+            ),
+            (
+                "text file",
+                |p| {
+                    std::fs::write(p, b"hello, not a database at all....................................................................................").unwrap()
+                },
+                "not an SQLite database",
+            ),
+            (
+                "directory",
+                |p| std::fs::create_dir(p).unwrap(),
+                "not a regular file",
+            ),
+            (
+                "foreign sqlite",
+                |p| {
+                    let c = Connection::open(p).unwrap();
+                    c.execute_batch(
+                        "CREATE TABLE notes (x TEXT); INSERT INTO notes VALUES ('mine');",
+                    )
+                    .unwrap();
+                },
+                "without floorcast's tables",
+            ),
+        ];
+        for (what, make, words) in cases {
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join(DB_FILE);
+            make(&p);
+            let before = std::fs::read(&p).ok();
+            for r in [Store::open(dir.path()), Store::open_existing(dir.path())] {
+                let e = r.unwrap_err().to_string();
+                assert!(
+                    e.contains("is not a floorcast results store") && e.contains(words),
+                    "{what}: {e}"
+                );
+            }
+            assert_eq!(std::fs::read(&p).ok(), before, "{what} was changed");
+            if *what == "foreign sqlite" {
+                let c = Connection::open(&p).unwrap();
+                let n: i64 = c
+                    .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
+                    .unwrap();
+                assert_eq!(n, 1, "tables were added to a foreign database");
+            }
         }
     }
 

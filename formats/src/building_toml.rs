@@ -86,7 +86,7 @@ struct StartV1 {
 
 /// Reads and validates a building TOML file; the name defaults to the file's stem.
 pub fn read_building_toml(path: &Path) -> Result<Building, Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
+    let text = crate::limits::read_text(path)?;
     parse_building_toml(&text, path)
 }
 
@@ -233,12 +233,13 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
         let field = format!("walls[{i}]");
         let a = vec2(w.from, &format!("{field}.from"), path)?;
         let b = vec2(w.to, &format!("{field}.to"), path)?;
-        if !(w.thickness.is_finite() && w.thickness > 0.0) {
+        if !(w.thickness.is_finite() && w.thickness > 0.0 && w.thickness <= MAX_WALL_THICKNESS_M) {
             return Err(Error::invalid(
                 path,
                 format!("{field}.thickness"),
                 format!(
-                    "must be a positive number of metres, got {}",
+                    "must be a positive number of metres up to {}, got {}",
+                    num(MAX_WALL_THICKNESS_M),
                     num(w.thickness)
                 ),
             ));
@@ -366,7 +367,7 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
         }
     };
 
-    Ok(Building {
+    let building = Building {
         name: f.name.unwrap_or_else(|| {
             path.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -376,11 +377,32 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
         rooms,
         doors,
         start,
-    })
+    };
+    crate::limits::check_building(
+        &building,
+        path,
+        "outline",
+        crate::limits::EXPLORE_RESOLUTION_M,
+    )?;
+    Ok(building)
 }
+
+/// Thickest wall accepted (m).
+pub const MAX_WALL_THICKNESS_M: f64 = 100.0;
 
 fn vec2(p: [f64; 2], field: &str, path: &Path) -> Result<Vec2, Error> {
     if p.iter().all(|v| v.is_finite()) {
+        if !p.iter().all(|v| crate::limits::coordinate_ok(*v)) {
+            return Err(Error::invalid(
+                path,
+                field,
+                format!(
+                    "point {} is more than {} m from the origin; expected metres near the origin",
+                    point(p[0], p[1]),
+                    num(crate::limits::COORDINATE_LIMIT_M)
+                ),
+            ));
+        }
         Ok(Vec2::new(p[0], p[1]))
     } else {
         Err(Error::invalid(
@@ -433,10 +455,21 @@ fn ring(pts: &[[f64; 2]], field: &str, path: &Path) -> Result<Polygon, Error> {
     }
     let poly = Polygon::new(open.iter().map(|p| Vec2::new(p[0], p[1])).collect());
     if poly.area_m2() <= 0.0 {
+        let a = distinct[0];
+        let b = distinct[1];
+        let collinear = distinct.iter().all(|p| {
+            let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+            let len = |q: [f64; 2]| (q[0] - a[0]).hypot(q[1] - a[1]);
+            cross.abs() <= 1e-9 * len(b) * len(*p)
+        });
         return Err(Error::invalid(
             path,
             field,
-            "polygon has zero area (its vertices are collinear)",
+            if collinear {
+                "polygon has zero area (its vertices are collinear)"
+            } else {
+                "polygon has zero area: its edges cross each other (a figure-eight); list the vertices in order around the polygon"
+            },
         ));
     }
     Ok(poly)
@@ -624,7 +657,7 @@ theta_deg = 90.0
     fn error_non_positive_thickness() {
         let e = bad("thickness = 0.2", "thickness = -0.2");
         assert!(
-            e.contains("x.toml: walls[0].thickness: must be a positive number of metres, got -0.2"),
+            e.contains("x.toml: walls[0].thickness: must be a positive number of metres up to 100.0, got -0.2"),
             "{e}"
         );
     }

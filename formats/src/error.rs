@@ -27,9 +27,14 @@ pub enum Error {
         field: String,
         problem: String,
     },
-    /// An image that could not be decoded.
-    #[error("{}: not a readable image ({message}); expected a PGM (P5/P2) or PNG file", path.display())]
-    Image { path: PathBuf, message: String },
+    /// An image (named by `field` of the file at `path`) that could not be decoded.
+    #[error("{}: {field}: {}: not a readable image ({message}); expected a PGM (P5/P2) or PNG file", path.display(), image.display())]
+    Image {
+        path: PathBuf,
+        field: String,
+        image: PathBuf,
+        message: String,
+    },
     /// Something valid but outside what floorcast supports.
     #[error("{}: unsupported: {what}", path.display())]
     Unsupported { path: PathBuf, what: String },
@@ -56,9 +61,11 @@ impl Error {
             problem: one_line(problem.as_ref()),
         }
     }
-    pub(crate) fn image(path: &Path, message: impl AsRef<str>) -> Self {
+    pub(crate) fn image(path: &Path, field: &str, image: &Path, message: impl AsRef<str>) -> Self {
         Error::Image {
             path: path.to_path_buf(),
+            field: field.to_string(),
+            image: image.to_path_buf(),
             message: one_line(message.as_ref()),
         }
     }
@@ -94,6 +101,8 @@ pub(crate) fn one_line(s: &str) -> String {
 pub(crate) fn num(v: f64) -> String {
     if v.is_finite() && v == v.trunc() && v.abs() < 1e15 {
         format!("{v:.1}")
+    } else if v.is_finite() && (v.abs() >= 1e15 || v.abs() < 1e-4) {
+        format!("{v:e}")
     } else {
         format!("{v}")
     }

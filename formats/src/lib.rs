@@ -8,8 +8,12 @@
 
 pub mod building_toml;
 pub mod error;
+pub mod limits;
 pub mod map_server;
 pub mod stage;
+
+#[cfg(test)]
+mod fuzz;
 
 use std::path::Path;
 
@@ -79,6 +83,13 @@ pub fn read_occupancy(path: &Path) -> Result<OccupancyGrid, Error> {
         Kind::MapServer => read_map(path),
         Kind::Stage | Kind::Toml => {
             let b = read_building(path)?;
+            let bounds = b.bounds();
+            limits::check_cells(
+                path,
+                "outline",
+                limits::cells_for(bounds.width_m(), bounds.height_m(), OCCUPANCY_RESOLUTION_M),
+                &format!("drawing the building at {OCCUPANCY_RESOLUTION_M} m"),
+            )?;
             Ok(occupancy_of(&b, OCCUPANCY_RESOLUTION_M))
         }
     }

@@ -51,6 +51,10 @@ pub const PIXEL_FREE: u8 = 254;
 pub const PIXEL_OCCUPIED: u8 = 0;
 pub const PIXEL_UNKNOWN: u8 = 205;
 
+/// Finest and coarsest map resolution accepted (metres per pixel).
+pub const MIN_RESOLUTION_M: f64 = 0.001;
+pub const MAX_RESOLUTION_M: f64 = 1.0;
+
 const EXPECTED_KEYS: &str =
     "image, resolution, origin, negate, occupied_thresh, free_thresh (and optionally mode)";
 
@@ -67,13 +71,30 @@ pub fn read_map(yaml_path: &Path) -> Result<OccupancyGrid, Error> {
             ),
         ));
     }
-    let img = read_image(&meta.image_path)?;
+    let img = read_image(yaml_path, "image", &meta.image_path)?;
+    let (w, h) = img.rgba.dimensions();
+    crate::limits::check_cells(
+        yaml_path,
+        "resolution",
+        crate::limits::cells_for(
+            w as f64 * meta.resolution_m + 2.0 * crate::limits::EXPLORE_MARGIN_M,
+            h as f64 * meta.resolution_m + 2.0 * crate::limits::EXPLORE_MARGIN_M,
+            crate::limits::EXPLORE_RESOLUTION_M,
+        ),
+        &format!(
+            "{w} x {h} pixels of {} m span {} x {} m; exploring them on a {} m grid",
+            num(meta.resolution_m),
+            num(w as f64 * meta.resolution_m),
+            num(h as f64 * meta.resolution_m),
+            num(crate::limits::EXPLORE_RESOLUTION_M)
+        ),
+    )?;
     Ok(grid_from_image(&meta, &img))
 }
 
 /// Reads and validates a map_server YAML (without loading the image).
 pub fn read_map_yaml(yaml_path: &Path) -> Result<MapMeta, Error> {
-    let text = std::fs::read_to_string(yaml_path).map_err(|e| Error::io(yaml_path, "read", e))?;
+    let text = crate::limits::read_text(yaml_path)?;
     parse_map_yaml(&text, yaml_path)
 }
 
@@ -125,12 +146,14 @@ pub fn parse_map_yaml(text: &str, yaml_path: &Path) -> Result<MapMeta, Error> {
     let image_path = dir.join(image);
 
     let resolution_m = number("resolution", "a positive number of metres per pixel")?;
-    if resolution_m <= 0.0 {
+    if !(MIN_RESOLUTION_M..=MAX_RESOLUTION_M).contains(&resolution_m) {
         return Err(Error::invalid(
             yaml_path,
             "resolution",
             format!(
-                "must be a positive number of metres per pixel, got {}",
+                "must be between {} and {} metres per pixel, got {}",
+                num(MIN_RESOLUTION_M),
+                num(MAX_RESOLUTION_M),
                 num(resolution_m)
             ),
         ));
@@ -141,13 +164,20 @@ pub fn parse_map_yaml(text: &str, yaml_path: &Path) -> Result<MapMeta, Error> {
         .as_sequence()
         .and_then(|s| s.iter().map(Value::as_f64).collect());
     let origin = match origin {
-        Some(o) if (2..=3).contains(&o.len()) && o.iter().all(|v| v.is_finite()) => o,
+        Some(o)
+            if (2..=3).contains(&o.len())
+                && o[..2].iter().all(|v| crate::limits::coordinate_ok(*v))
+                && o.iter().all(|v| v.is_finite()) =>
+        {
+            o
+        }
         _ => {
             return Err(Error::invalid(
                 yaml_path,
                 "origin",
                 format!(
-                    "expected [x, y, yaw] (metres, metres, radians), got {}",
+                    "expected [x, y, yaw] (metres within {} m of 0, metres, radians), got {}",
+                    num(crate::limits::COORDINATE_LIMIT_M),
                     show(origin_v)
                 ),
             ))
@@ -233,6 +263,13 @@ fn show(v: &Value) -> String {
     match v {
         Value::Null => "nothing".to_string(),
         Value::String(s) => format!("{s:?}"),
+        Value::Number(n) if n.is_i64() || n.is_u64() => n.to_string(),
+        Value::Number(n) => n.as_f64().map(num).unwrap_or_else(|| n.to_string()),
+        Value::Sequence(items) if items.len() <= 8 => format!(
+            "[{}]",
+            items.iter().map(show).collect::<Vec<_>>().join(", ")
+        ),
+        Value::Sequence(_) => "a list".to_string(),
         _ => serde_yaml_ng::to_string(v)
             .map(|s| crate::error::one_line(&s))
             .unwrap_or_else(|_| "an unreadable value".to_string()),
@@ -248,16 +285,55 @@ pub(crate) struct MapImage {
     pub has_alpha: bool,
 }
 
-/// Decodes an image file (format guessed from its content).
-pub(crate) fn read_image(path: &Path) -> Result<MapImage, Error> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read image", e))?;
-    let format = image::guess_format(&bytes)
-        .map_err(|_| Error::image(path, "the content is neither PGM/PNM nor PNG"))?;
-    let img = image::load_from_memory_with_format(&bytes, format)
-        .map_err(|e| Error::image(path, format!("truncated or corrupt: {e}")))?;
+/// Decodes an image file (format guessed from its content), named by `field` of `referrer` (the
+/// YAML or world file) in messages. Its size is checked against the cell budget from its header,
+/// before any pixel is decoded.
+pub(crate) fn read_image(referrer: &Path, field: &str, path: &Path) -> Result<MapImage, Error> {
+    let bytes = crate::limits::read_bytes(
+        path,
+        crate::limits::max_cells()
+            .saturating_mul(8)
+            .saturating_add(1 << 20),
+    )?;
+    decode_image(referrer, field, path, &bytes)
+}
+
+/// Decodes image bytes (see [`read_image`]).
+pub(crate) fn decode_image(
+    referrer: &Path,
+    field: &str,
+    path: &Path,
+    bytes: &[u8],
+) -> Result<MapImage, Error> {
+    let err = |m: String| Error::image(referrer, field, path, m);
+    let format = image::guess_format(bytes)
+        .map_err(|_| err("the content is neither PGM/PNM nor PNG".into()))?;
+    let reader = || image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+    let (w, h) = reader()
+        .into_dimensions()
+        .map_err(|e| err(format!("truncated or corrupt: {e}")))?;
+    if w == 0 || h == 0 {
+        return Err(err("the image has no pixels".into()));
+    }
+    crate::limits::check_cells(
+        referrer,
+        field,
+        w as f64 * h as f64,
+        &format!("the image of {w} x {h} pixels"),
+    )?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(w);
+    limits.max_image_height = Some(h);
+    // RGBA8 plus the decoder's own buffer of at most 16-bit RGBA.
+    limits.max_alloc = Some((w as u64 * h as u64).saturating_mul(12).max(1 << 20));
+    let mut r = reader();
+    r.limits(limits);
+    let img = r
+        .decode()
+        .map_err(|e| err(format!("truncated or corrupt: {e}")))?;
     let color = img.color();
     if img.width() == 0 || img.height() == 0 {
-        return Err(Error::image(path, "the image has no pixels"));
+        return Err(err("the image has no pixels".into()));
     }
     Ok(MapImage {
         has_color: color.has_color(),
@@ -517,7 +593,9 @@ mod tests {
     fn error_non_positive_resolution() {
         let e = err_of(&GOOD_YAML.replace("0.5", "-0.05"), &[]);
         assert!(
-            e.contains("bad.yaml: resolution: must be a positive number"),
+            e.contains(
+                "bad.yaml: resolution: must be between 0.001 and 1.0 metres per pixel, got -0.05"
+            ),
             "{e}"
         );
         assert!(e.contains("-0.05"), "{e}");

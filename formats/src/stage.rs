@@ -25,25 +25,53 @@ pub const STAGE_OBSTACLE_BELOW: f64 = 128.0;
 
 /// Reads a Stage world as a raster building named after the file's stem.
 pub fn read_world(path: &Path) -> Result<Building, Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
-    let world = parse_world(&text);
+    let text = crate::limits::read_text(path)?;
+    world_from_text(&text, path, &|image_path, field| {
+        if !image_path.is_file() {
+            return Err(Error::invalid(
+                path,
+                field,
+                format!(
+                    "{} does not exist; the bitmap is resolved relative to the world file's directory",
+                    image_path.display()
+                ),
+            ));
+        }
+        read_image(path, field, image_path)
+    })
+}
+
+/// A world file's text as a building; `load_image(path, field)` reads the floor plan's bitmap.
+pub(crate) fn world_from_text(
+    text: &str,
+    path: &Path,
+    load_image: &dyn Fn(&Path, &str) -> Result<crate::map_server::MapImage, Error>,
+) -> Result<Building, Error> {
+    let world = parse_world(text).ok_or_else(|| {
+        Error::syntax(
+            path,
+            format!(
+                "models nested more than {} deep (too many unclosed `(`); expected a Stage world file",
+                crate::limits::MAX_WORLD_DEPTH
+            ),
+        )
+    })?;
     let plan = find_floorplan(&world, path)?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let image_path = dir.join(&plan.bitmap);
-    if !image_path.is_file() {
-        return Err(Error::invalid(
-            path,
-            format!("{}.bitmap", plan.model),
-            format!(
-                "{} does not exist; the bitmap is resolved relative to the world file's directory",
-                image_path.display()
-            ),
-        ));
-    }
-    let img = read_image(&image_path)?;
-    let solid = rasterise(&img.rgba, img.has_color, plan.size_m, plan.pose);
+    let field = format!("{}.bitmap", plan.model);
+    let img = load_image(&image_path, &field)?;
+    let size_field = format!("{}.size", plan.model);
+    let solid = rasterise(
+        &img.rgba,
+        img.has_color,
+        plan.size_m,
+        plan.pose,
+        path,
+        &size_field,
+    )?;
     let start = find_robot(&world, plan.index);
-    Ok(Building {
+    let building = Building {
         name: path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -52,7 +80,14 @@ pub fn read_world(path: &Path) -> Result<Building, Error> {
         rooms: Vec::new(),
         doors: Vec::new(),
         start,
-    })
+    };
+    crate::limits::check_building(
+        &building,
+        path,
+        &size_field,
+        crate::limits::EXPLORE_RESOLUTION_M,
+    )?;
+    Ok(building)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -141,20 +176,32 @@ struct World {
     defines: BTreeMap<String, (String, Entry)>,
 }
 
-fn parse_world(text: &str) -> World {
+/// The parsed world, or `None` when models nest deeper than [`crate::limits::MAX_WORLD_DEPTH`].
+fn parse_world(text: &str) -> Option<World> {
     let toks = tokenize(text);
     let mut i = 0;
     let mut world = World::default();
     let mut top = Entry::default();
+    let mut too_deep = false;
     // A stray `)` at the top level is skipped; parse again until the tokens are used up.
     while i < toks.len() {
-        parse_body(&toks, &mut i, 0, &mut top, &mut world.defines);
+        parse_body(
+            &toks,
+            &mut i,
+            0,
+            &mut top,
+            &mut world.defines,
+            &mut too_deep,
+        );
+        if too_deep {
+            return None;
+        }
         if i < toks.len() {
             i += 1;
         }
     }
     world.top = top;
-    world
+    Some(world)
 }
 
 /// Parses entries into `into` until a `)` closes the body (depth > 0) or the tokens end
@@ -165,7 +212,13 @@ fn parse_body(
     depth: usize,
     into: &mut Entry,
     defines: &mut BTreeMap<String, (String, Entry)>,
+    too_deep: &mut bool,
 ) {
+    if depth > crate::limits::MAX_WORLD_DEPTH {
+        *too_deep = true;
+        *i = toks.len();
+        return;
+    }
     while *i < toks.len() {
         match &toks[*i] {
             Tok::Close => {
@@ -186,7 +239,7 @@ fn parse_body(
                         kind: parent.clone(),
                         ..Entry::default()
                     };
-                    parse_body(toks, i, depth + 1, &mut body, defines);
+                    parse_body(toks, i, depth + 1, &mut body, defines, too_deep);
                     defines.insert(name.clone(), (parent.clone(), body));
                 }
             }
@@ -200,7 +253,7 @@ fn parse_body(
                             kind: key,
                             ..Entry::default()
                         };
-                        parse_body(toks, i, depth + 1, &mut child, defines);
+                        parse_body(toks, i, depth + 1, &mut child, defines, too_deep);
                         into.children.push(child);
                     }
                     Some(Tok::Word(v)) | Some(Tok::Str(v)) => {
@@ -378,7 +431,14 @@ fn find_robot(world: &World, floorplan_index: usize) -> Option<Pose> {
 }
 
 /// The bitmap placed in the world: spans `size_m` centred at `pose`, rotated by its yaw.
-fn rasterise(img: &image::RgbaImage, has_color: bool, size_m: Vec2, pose: Pose) -> Bitmap {
+fn rasterise(
+    img: &image::RgbaImage,
+    has_color: bool,
+    size_m: Vec2,
+    pose: Pose,
+    path: &Path,
+    field: &str,
+) -> Result<Bitmap, Error> {
     let (w, h) = img.dimensions();
     let px_w = size_m.x / w as f64;
     let px_h = size_m.y / h as f64;
@@ -396,6 +456,35 @@ fn rasterise(img: &image::RgbaImage, has_color: bool, size_m: Vec2, pose: Pose) 
         let r = n.round();
         (if (n - r).abs() < 1e-6 { r } else { n.ceil() }).max(1.0) as u32
     };
+    crate::limits::check_cells(
+        path,
+        field,
+        crate::limits::cells_for(bounds.width_m(), bounds.height_m(), res),
+        &format!(
+            "a floor plan of {} x {} m drawn with {w} x {h} pixels (pixels of {} m)",
+            num(size_m.x),
+            num(size_m.y),
+            num(res)
+        ),
+    )?;
+    if !crate::limits::coordinate_ok(
+        bounds
+            .min
+            .x
+            .abs()
+            .max(bounds.min.y.abs())
+            .max(bounds.max.x.abs())
+            .max(bounds.max.y.abs()),
+    ) {
+        return Err(Error::invalid(
+            path,
+            field,
+            format!(
+                "the floor plan reaches beyond {} m from the origin; expected size and pose in metres near the origin",
+                num(crate::limits::COORDINATE_LIMIT_M)
+            ),
+        ));
+    }
     let frame = GridFrame::new(
         bounds.min,
         res,
@@ -421,7 +510,7 @@ fn rasterise(img: &image::RgbaImage, has_color: bool, size_m: Vec2, pose: Pose) 
             solid.data[i] = dark(u as u32, v as u32);
         }
     }
-    solid
+    Ok(solid)
 }
 
 #[cfg(test)]
@@ -455,10 +544,22 @@ mod tests {
         let t = tokenize("a( b \"x y\" # c ) \n c [1 2] d(e(f 1)))");
         assert_eq!(t.len(), 18, "{t:?}");
         let w =
-            parse_world("define r position ( size [1 1] )\nr( pose [1 2 0 90] n( x 1 ) ) )) q 3");
+            parse_world("define r position ( size [1 1] )\nr( pose [1 2 0 90] n( x 1 ) ) )) q 3")
+                .unwrap();
         assert_eq!(w.top.children.len(), 1);
         assert_eq!(w.chain("r"), vec!["r".to_string(), "position".to_string()]);
         assert_eq!(find_robot(&w, usize::MAX).unwrap().y_m, 2.0);
+    }
+
+    #[test]
+    fn nesting_is_bounded() {
+        // (depth, parsed)
+        for (depth, ok) in [(10, true), (64, true), (66, false), (20_000, false)] {
+            let text = "a(".repeat(depth);
+            assert_eq!(parse_world(&text).is_some(), ok, "{depth}");
+        }
+        let e = read(&"m(".repeat(20_000)).unwrap_err();
+        assert!(e.contains("nested more than 64 deep"), "{e}");
     }
 
     #[test]

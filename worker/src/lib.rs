@@ -47,6 +47,10 @@ pub enum JobError {
     NoRooms { strategy: String, name: String },
     #[error(transparent)]
     Settings(#[from] SettingsError),
+    #[error("building {name}: {problem}")]
+    TooLarge { name: String, problem: String },
+    #[error("the simulation failed (a bug in floorcast, please report it): {0}")]
+    Panicked(String),
 }
 
 /// What a job produced.
@@ -59,11 +63,12 @@ pub struct JobOutput {
 /// The strategies this version implements.
 pub const STRATEGIES: &[&str] = sim_core::explore::Strategy::NAMES;
 
-/// Runs one job to completion. `on_progress` sees the exploration curve as it grows.
-pub fn run_job(
+/// Checks everything about a job that can be checked before it runs (strategy, settings, rooms
+/// for the oracle strategies, the map's size against the cell budget, the start pose), so that
+/// callers can refuse a bad job before they create any output. Returns the config and the start.
+pub fn check_job(
     job: &Job<'_>,
-    on_progress: &mut dyn FnMut(&ProgressSample),
-) -> Result<JobOutput, JobError> {
+) -> Result<(sim_core::explore::ExploreConfig, Pose, &'static str), JobError> {
     if !STRATEGIES.contains(&job.strategy.as_str()) {
         return Err(JobError::UnknownStrategy(job.strategy.clone()));
     }
@@ -75,6 +80,7 @@ pub fn run_job(
         });
     }
     config.snapshot_fractions = job.snapshot_fractions.clone();
+    check_size(job.building, &job.building_name, config.map_resolution_m)?;
     let (start, source) = match job.start {
         Some(p) => (p, "command line"),
         None => match job.building.default_start() {
@@ -90,6 +96,35 @@ pub fn run_job(
             y: start.y_m,
         });
     }
+    Ok((config, start, source))
+}
+
+/// The exploration grid of `building` at `resolution_m` must fit the cell budget
+/// ([`floorcast_formats::limits`]).
+fn check_size(building: &Building, name: &str, resolution_m: f64) -> Result<(), JobError> {
+    floorcast_formats::limits::check_building(
+        building,
+        std::path::Path::new(name),
+        "map_resolution_m",
+        resolution_m,
+    )
+    .map_err(|e| JobError::TooLarge {
+        name: name.to_string(),
+        problem: e
+            .to_string()
+            .strip_prefix(&format!("{name}: "))
+            .map(str::to_string)
+            .unwrap_or_else(|| e.to_string()),
+    })
+}
+
+/// Runs one job to completion. `on_progress` sees the exploration curve as it grows. A panic of
+/// the simulation is caught and returned as [`JobError::Panicked`].
+pub fn run_job(
+    job: &Job<'_>,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+) -> Result<JobOutput, JobError> {
+    let (config, start, source) = check_job(job)?;
     let t0 = Instant::now();
     // With charge_compute, each layout costs the wall time it took (the robot waits for it).
     let mut timed = |work: &mut dyn FnMut()| {
@@ -102,8 +137,22 @@ pub fn run_job(
     } else {
         None
     };
-    let result = explore_charged(job.building, start, &config, job.seed, on_progress, cost);
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        explore_charged(job.building, start, &config, job.seed, on_progress, cost)
+    }))
+    .map_err(|p| JobError::Panicked(panic_message(&*p)))?;
     let wall_time_s = t0.elapsed().as_secs_f64();
     let summary = RunSummary::new(job, &result, source, wall_time_s);
     Ok(JobOutput { summary, result })
+}
+
+/// The message of a caught panic.
+pub fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = p.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = p.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "a panic without a message".to_string()
+    }
 }

@@ -145,7 +145,7 @@ pub enum SettingsError {
     OutOfRange {
         field: &'static str,
         value: String,
-        expected: &'static str,
+        expected: String,
     },
     #[error("settings.localization: unknown value '{0}', expected slam, odometry or ground-truth")]
     Localization(String),
@@ -153,9 +153,520 @@ pub enum SettingsError {
     UtilityDistance(String),
     #[error("unknown strategy '{0}' (available: {list})", list = Strategy::NAMES.join(", "))]
     Strategy(String),
+    #[error("settings.{field}: expected {expected}, got {got}")]
+    Type {
+        field: String,
+        expected: String,
+        got: String,
+    },
+    #[error("settings.{field}: unknown setting; expected one of {list}", list = setting_names().join(", "))]
+    Unknown { field: String },
+    #[error("settings: {0}")]
+    Shape(String),
+}
+
+impl SettingsError {
+    /// The setting the error is about (`alpha`), if one.
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            SettingsError::OutOfRange { field, .. } => Some(field),
+            SettingsError::Localization(_) => Some("localization"),
+            SettingsError::UtilityDistance(_) => Some("utility_distance"),
+            SettingsError::Type { field, .. } | SettingsError::Unknown { field } => Some(field),
+            SettingsError::Strategy(_) | SettingsError::Shape(_) => None,
+        }
+    }
+
+    /// The message without the `settings.<field>: ` prefix.
+    pub fn problem(&self) -> String {
+        let s = self.to_string();
+        match self.field() {
+            Some(f) => s
+                .strip_prefix(&format!("settings.{f}: "))
+                .map(str::to_string)
+                .unwrap_or(s),
+            None => s
+                .strip_prefix("settings: ")
+                .map(str::to_string)
+                .unwrap_or(s),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The settings table: one row per setting drives validation, `--help` and the reference.
+
+/// The type of a setting's value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SettingKind {
+    /// A number in `[min, max]`.
+    Number {
+        min: f64,
+        max: f64,
+    },
+    /// A whole number in `[min, max]`.
+    Integer {
+        min: u64,
+        max: u64,
+    },
+    Bool,
+    /// One of these words.
+    Choice(&'static [&'static str]),
+}
+
+/// One setting: name, type and range, unit, meaning. The default is [`Settings::default`]'s.
+#[derive(Debug, Clone, Copy)]
+pub struct SettingInfo {
+    pub name: &'static str,
+    pub kind: SettingKind,
+    /// Unit of the value ("m", "m/s"; "" for none).
+    pub unit: &'static str,
+    /// One line saying what it does.
+    pub meaning: &'static str,
+}
+
+const fn num(
+    name: &'static str,
+    unit: &'static str,
+    min: f64,
+    max: f64,
+    meaning: &'static str,
+) -> SettingInfo {
+    SettingInfo {
+        name,
+        kind: SettingKind::Number { min, max },
+        unit,
+        meaning,
+    }
+}
+
+const fn flag(name: &'static str, meaning: &'static str) -> SettingInfo {
+    SettingInfo {
+        name,
+        kind: SettingKind::Bool,
+        unit: "",
+        meaning,
+    }
+}
+
+/// Every setting, in the order of [`Settings`]' fields. Ranges are physically sensible: a value
+/// outside them is refused on every path (command line, settings file, grid file, wire).
+pub const SETTINGS: &[SettingInfo] = &[
+    num("robot_radius_m", "m", 0.05, 2.0, "Robot radius."),
+    num("max_speed_mps", "m/s", 0.01, 5.0, "Maximum forward speed."),
+    num("max_turn_rate_radps", "rad/s", 0.01, 10.0, "Maximum turn rate."),
+    num("laser_fov_deg", "deg", 1.0, 360.0, "Laser field of view."),
+    num("laser_range_m", "m", 0.5, 30.0, "Laser range."),
+    SettingInfo {
+        name: "laser_beams",
+        kind: SettingKind::Integer { min: 2, max: 3600 },
+        unit: "",
+        meaning: "Beams per scan.",
+    },
+    num("laser_rate_hz", "Hz", 1.0, 100.0, "Scans per second (also the simulation step)."),
+    num("laser_noise_sd_m", "m", 0.0, 1.0, "Standard deviation of the Gaussian range noise."),
+    num(
+        "odometry_translation_error",
+        "m/m",
+        0.0,
+        0.5,
+        "Largest proportional translation error of odometry.",
+    ),
+    num(
+        "odometry_rotation_error_deg_per_rad",
+        "deg/rad",
+        0.0,
+        30.0,
+        "Largest proportional rotation error of odometry.",
+    ),
+    SettingInfo {
+        name: "localization",
+        kind: SettingKind::Choice(&["slam", "odometry", "ground-truth"]),
+        unit: "",
+        meaning: "Where the map's poses come from.",
+    },
+    num("map_resolution_m", "m", 0.01, 0.5, "Occupancy grid cell size."),
+    num(
+        "map_update_distance_m",
+        "m",
+        0.01,
+        10.0,
+        "Update the map (and match the scan) after this much motion...",
+    ),
+    num("map_update_angle_rad", "rad", 0.01, 6.3, "...or this much turning...",),
+    num(
+        "map_update_period_s",
+        "s",
+        0.01,
+        100.0,
+        "...or this much simulated time, whichever comes first.",
+    ),
+    num("alpha", "", 0.0, 1.0, "Weight of distance against gain in the utility (the paper's alpha)."),
+    num(
+        "gain_floor_m2",
+        "m2",
+        0.0,
+        10_000.0,
+        "In the utility a candidate's gain counts as at least this much (0 = the paper's utility).",
+    ),
+    SettingInfo {
+        name: "utility_distance",
+        kind: SettingKind::Choice(&["path", "euclidean"]),
+        unit: "",
+        meaning: "The utility's distance: the planned path's length, or the straight line (the paper's).",
+    },
+    num("min_frontier_m", "m", 0.0, 100.0, "Frontiers shorter than this are ignored."),
+    num(
+        "frontier_clearance_m",
+        "m",
+        0.0,
+        5.0,
+        "Frontier cells nearer than this to an observed wall are ignored (0 = none).",
+    ),
+    flag(
+        "candidate_from_reachable_part",
+        "Aim at a frontier's reachable part when its middle cell cannot be reached (not the paper's rule).",
+    ),
+    num(
+        "redecide_period_s",
+        "s",
+        0.1,
+        1e9,
+        "Re-decide this often while driving to a goal (simulated time)...",
+    ),
+    num(
+        "redecide_min_growth_m2",
+        "m2",
+        0.0,
+        1e6,
+        "...once the map grew by at least this much since the last decision (0 = every period).",
+    ),
+    num("blacklist_radius_m", "m", 0.0, 10.0, "Radius of the blacklist around unreachable goals."),
+    num("progress_timeout_s", "s", 0.5, 3600.0, "Abandon a goal after this long without progress."),
+    num("time_limit_s", "s", 1.0, 100_000.0, "Stop a run at this simulated time."),
+    flag("return_home", "Drive back to the start after exploring."),
+    num(
+        "es_threshold_m2",
+        "m2",
+        0.0,
+        10_000.0,
+        "layout-es: stop when the summed gain of all candidates is below this.",
+    ),
+    num(
+        "aes_min_gain_m2",
+        "m2",
+        0.0,
+        10_000.0,
+        "layout-aes: drop candidates whose gain is below this; stop when none is left.",
+    ),
+    num(
+        "layout_update_m2",
+        "m2",
+        0.1,
+        1e6,
+        "Layout strategies: rebuild the layout when the known area grew by this much.",
+    ),
+    num(
+        "max_wall_gap_m",
+        "m",
+        0.0,
+        20.0,
+        "Layout strategies: the layout's wall lines close gaps in observed walls up to this long.",
+    ),
+    flag(
+        "charge_compute",
+        "Add the measured wall time of every layout to simulated time (not reproducible).",
+    ),
+];
+
+/// The names of every setting, in table order.
+pub fn setting_names() -> Vec<&'static str> {
+    SETTINGS.iter().map(|s| s.name).collect()
+}
+
+/// The row of the table for `name`.
+pub fn setting_info(name: &str) -> Option<&'static SettingInfo> {
+    SETTINGS.iter().find(|s| s.name == name)
+}
+
+/// A setting's value, for validation and display.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SettingValue {
+    Number(f64),
+    Bool(bool),
+    Word(String),
+}
+
+impl std::fmt::Display for SettingValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SettingValue::Number(v) => write!(f, "{}", fmt_num(*v)),
+            SettingValue::Bool(b) => write!(f, "{b}"),
+            SettingValue::Word(w) => write!(f, "{w}"),
+        }
+    }
+}
+
+/// A number for messages and tables: `0.2`, `1000000000`, `1e300`.
+fn fmt_num(v: f64) -> String {
+    if v.is_finite() && v.abs() < 1e15 {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+impl SettingKind {
+    /// The type and range in words, with `unit`: `number in [0.05, 2] m`.
+    pub fn describe(&self, unit: &str) -> String {
+        let u = if unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {unit}")
+        };
+        match self {
+            SettingKind::Number { min, max } => {
+                format!("a number in [{}, {}]{u}", fmt_num(*min), fmt_num(*max))
+            }
+            SettingKind::Integer { min, max } => format!("an integer in [{min}, {max}]{u}"),
+            SettingKind::Bool => "true or false".to_string(),
+            SettingKind::Choice(words) => format!("one of {}", words.join(", ")),
+        }
+    }
+}
+
+impl SettingInfo {
+    /// The default value (from [`Settings::default`]).
+    pub fn default_value(&self) -> SettingValue {
+        Settings::default()
+            .value(self.name)
+            .unwrap_or(SettingValue::Word(String::new()))
+    }
+
+    /// Checks one value against the row: type and range.
+    fn check(&self, v: &SettingValue) -> Result<(), SettingsError> {
+        let expected = || self.kind.describe(self.unit);
+        match (&self.kind, v) {
+            (SettingKind::Number { min, max }, SettingValue::Number(x)) => {
+                if x.is_finite() && *x >= *min && *x <= *max {
+                    Ok(())
+                } else {
+                    Err(SettingsError::OutOfRange {
+                        field: self.name,
+                        value: fmt_num(*x),
+                        expected: expected(),
+                    })
+                }
+            }
+            (SettingKind::Integer { min, max }, SettingValue::Number(x)) => {
+                if *x >= *min as f64 && *x <= *max as f64 {
+                    Ok(())
+                } else {
+                    Err(SettingsError::OutOfRange {
+                        field: self.name,
+                        value: fmt_num(*x),
+                        expected: expected(),
+                    })
+                }
+            }
+            (SettingKind::Bool, SettingValue::Bool(_)) => Ok(()),
+            (SettingKind::Choice(words), SettingValue::Word(w)) => {
+                if words.contains(&w.as_str()) {
+                    Ok(())
+                } else if self.name == "localization" {
+                    Err(SettingsError::Localization(w.clone()))
+                } else if self.name == "utility_distance" {
+                    Err(SettingsError::UtilityDistance(w.clone()))
+                } else {
+                    Err(SettingsError::Type {
+                        field: self.name.to_string(),
+                        expected: expected(),
+                        got: format!("'{w}'"),
+                    })
+                }
+            }
+            (_, v) => Err(SettingsError::Type {
+                field: self.name.to_string(),
+                expected: expected(),
+                got: v.to_string(),
+            }),
+        }
+    }
+
+    /// Whether a JSON value has this setting's type (the range is checked later).
+    fn type_ok(&self, v: &serde_json::Value) -> bool {
+        match self.kind {
+            SettingKind::Number { .. } => v.is_number(),
+            SettingKind::Integer { .. } => v.is_u64(),
+            SettingKind::Bool => v.is_boolean(),
+            SettingKind::Choice(_) => v.is_string(),
+        }
+    }
+}
+
+/// A JSON value in a few words, for messages: `a string "x"`, `an array`, `a number 3`.
+fn describe_json(v: &serde_json::Value) -> String {
+    use serde_json::Value as J;
+    let short = |s: String| {
+        if s.chars().count() > 40 {
+            format!("{}...", s.chars().take(40).collect::<String>())
+        } else {
+            s
+        }
+    };
+    match v {
+        J::Null => "nothing (null)".to_string(),
+        J::Bool(b) => format!("the boolean {b}"),
+        J::Number(n) => format!("the number {}", short(n.to_string())),
+        J::String(s) => format!("the string {}", short(format!("{s:?}"))),
+        J::Array(_) => "an array".to_string(),
+        J::Object(_) => "a table".to_string(),
+    }
+}
+
+/// Settings from a table of `name = value` (a settings file's JSON object, a grid's
+/// `[settings]`): every key must be a known setting of the right type and range. Missing keys
+/// keep their defaults.
+pub fn settings_from_map(
+    map: &serde_json::Map<String, serde_json::Value>,
+) -> Result<Settings, SettingsError> {
+    for (k, v) in map {
+        let info = setting_info(k).ok_or_else(|| SettingsError::Unknown { field: k.clone() })?;
+        if !info.type_ok(v) {
+            return Err(SettingsError::Type {
+                field: k.clone(),
+                expected: info.kind.describe(info.unit),
+                got: describe_json(v),
+            });
+        }
+    }
+    let settings: Settings = serde_json::from_value(serde_json::Value::Object(map.clone()))
+        .map_err(|e| SettingsError::Shape(one_line(&e.to_string())))?;
+    settings.validate()?;
+    Ok(settings)
+}
+
+/// Settings from a settings file's text: a JSON object (`{"alpha": 0.8}`).
+pub fn settings_from_json_text(text: &str) -> Result<Settings, SettingsError> {
+    let v: serde_json::Value = serde_json::from_str(text).map_err(|e| {
+        SettingsError::Shape(format!(
+            "not valid JSON ({}); expected a JSON object such as {{\"alpha\": 0.8}}",
+            one_line(&e.to_string())
+        ))
+    })?;
+    match v {
+        serde_json::Value::Object(map) => settings_from_map(&map),
+        other => Err(SettingsError::Shape(format!(
+            "expected a JSON object of settings such as {{\"alpha\": 0.8}}, got {}",
+            describe_json(&other)
+        ))),
+    }
+}
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// The settings reference as a markdown table (name, type and range, unit, default, meaning);
+/// README.md carries it between `<!-- settings:begin -->` and `<!-- settings:end -->`.
+pub fn settings_reference_markdown() -> String {
+    let mut s = String::from(
+        "| setting | type and range | unit | default | meaning |\n|---|---|---|---|---|\n",
+    );
+    for i in SETTINGS {
+        let range = match i.kind {
+            SettingKind::Number { min, max } => {
+                format!("number, {} to {}", fmt_num(min), fmt_num(max))
+            }
+            SettingKind::Integer { min, max } => format!("integer, {min} to {max}"),
+            SettingKind::Bool => "true / false".to_string(),
+            SettingKind::Choice(w) => w.join(" / "),
+        };
+        let unit = if i.unit.is_empty() { "-" } else { i.unit };
+        s.push_str(&format!(
+            "| `{}` | {range} | {unit} | {} | {} |\n",
+            i.name,
+            i.default_value(),
+            i.meaning
+        ));
+    }
+    s
+}
+
+/// The settings as plain text for `--help`: one line per setting.
+pub fn settings_help_text() -> String {
+    let width = SETTINGS.iter().map(|i| i.name.len()).max().unwrap_or(0);
+    let mut s = String::from(
+        "Settings (in a --settings JSON file or a grid's [settings]; name: type and range, unit; default; meaning):\n",
+    );
+    for i in SETTINGS {
+        s.push_str(&format!(
+            "  {:width$}  {}; default {}; {}\n",
+            i.name,
+            i.kind.describe(i.unit),
+            i.default_value(),
+            i.meaning
+        ));
+    }
+    s
 }
 
 impl Settings {
+    /// The value of setting `name` (a row of [`SETTINGS`]).
+    pub fn value(&self, name: &str) -> Option<SettingValue> {
+        use SettingValue::{Bool, Number, Word};
+        Some(match name {
+            "robot_radius_m" => Number(self.robot_radius_m),
+            "max_speed_mps" => Number(self.max_speed_mps),
+            "max_turn_rate_radps" => Number(self.max_turn_rate_radps),
+            "laser_fov_deg" => Number(self.laser_fov_deg),
+            "laser_range_m" => Number(self.laser_range_m),
+            "laser_beams" => Number(self.laser_beams as f64),
+            "laser_rate_hz" => Number(self.laser_rate_hz),
+            "laser_noise_sd_m" => Number(self.laser_noise_sd_m),
+            "odometry_translation_error" => Number(self.odometry_translation_error),
+            "odometry_rotation_error_deg_per_rad" => {
+                Number(self.odometry_rotation_error_deg_per_rad)
+            }
+            "localization" => Word(self.localization.clone()),
+            "map_resolution_m" => Number(self.map_resolution_m),
+            "map_update_distance_m" => Number(self.map_update_distance_m),
+            "map_update_angle_rad" => Number(self.map_update_angle_rad),
+            "map_update_period_s" => Number(self.map_update_period_s),
+            "alpha" => Number(self.alpha),
+            "gain_floor_m2" => Number(self.gain_floor_m2),
+            "utility_distance" => Word(self.utility_distance.clone()),
+            "min_frontier_m" => Number(self.min_frontier_m),
+            "frontier_clearance_m" => Number(self.frontier_clearance_m),
+            "candidate_from_reachable_part" => Bool(self.candidate_from_reachable_part),
+            "redecide_period_s" => Number(self.redecide_period_s),
+            "redecide_min_growth_m2" => Number(self.redecide_min_growth_m2),
+            "blacklist_radius_m" => Number(self.blacklist_radius_m),
+            "progress_timeout_s" => Number(self.progress_timeout_s),
+            "time_limit_s" => Number(self.time_limit_s),
+            "return_home" => Bool(self.return_home),
+            "es_threshold_m2" => Number(self.es_threshold_m2),
+            "aes_min_gain_m2" => Number(self.aes_min_gain_m2),
+            "layout_update_m2" => Number(self.layout_update_m2),
+            "max_wall_gap_m" => Number(self.max_wall_gap_m),
+            "charge_compute" => Bool(self.charge_compute),
+            _ => return None,
+        })
+    }
+
+    /// Checks every setting against its row of [`SETTINGS`] (type and range).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        for info in SETTINGS {
+            let v = self
+                .value(info.name)
+                .ok_or_else(|| SettingsError::Unknown {
+                    field: info.name.to_string(),
+                })?;
+            info.check(&v)?;
+        }
+        Ok(())
+    }
+
     /// The simulation config for strategy `name` (see [`sim_core::explore::Strategy::by_name`]),
     /// with this file's thresholds.
     pub fn to_explore_config_for(&self, name: &str) -> Result<ExploreConfig, SettingsError> {
@@ -177,6 +688,7 @@ impl Settings {
 
     /// Checks every field and builds the simulation config.
     pub fn to_explore_config(&self) -> Result<ExploreConfig, SettingsError> {
+        self.validate()?;
         fn check(
             field: &'static str,
             v: f64,
@@ -189,7 +701,7 @@ impl Settings {
                 Err(SettingsError::OutOfRange {
                     field,
                     value: v.to_string(),
-                    expected,
+                    expected: expected.to_string(),
                 })
             }
         }
@@ -211,7 +723,7 @@ impl Settings {
             return Err(SettingsError::OutOfRange {
                 field: "laser_beams",
                 value: self.laser_beams.to_string(),
-                expected: "an integer from 2 to 10000",
+                expected: "an integer from 2 to 10000".to_string(),
             });
         }
         c.sim.laser.beams = self.laser_beams;
@@ -388,6 +900,164 @@ mod tests {
         assert!(
             e.contains("settings.utility_distance") && e.contains("manhattan"),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn the_table_has_one_row_per_field_in_order_and_the_defaults_pass() {
+        let all_written = Settings {
+            utility_distance: "euclidean".into(),
+            frontier_clearance_m: 0.4,
+            candidate_from_reachable_part: true,
+            ..Settings::default()
+        };
+        let v = serde_json::to_value(&all_written).unwrap();
+        let fields: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
+        let mut names = setting_names();
+        let mut sorted_fields = fields.clone();
+        sorted_fields.sort_unstable();
+        names.sort_unstable();
+        assert_eq!(sorted_fields, names);
+        for info in SETTINGS {
+            assert!(
+                Settings::default().value(info.name).is_some(),
+                "{}",
+                info.name
+            );
+            info.check(&info.default_value())
+                .unwrap_or_else(|e| panic!("default of {}: {e}", info.name));
+        }
+        Settings::default().validate().unwrap();
+    }
+
+    #[test]
+    fn settings_files_are_checked_field_by_field() {
+        // (file text, words the message must hold; "" = accepted)
+        let cases: &[(&str, &[&str])] = &[
+            ("{}", &[]),
+            (r#"{"alpha": 0.8, "time_limit_s": 600}"#, &[]),
+            ("[1, 2, 3]", &["expected a JSON object", "an array"]),
+            ("3", &["expected a JSON object", "the number 3"]),
+            ("{", &["not valid JSON"]),
+            (
+                r#"{"alpha": "high"}"#,
+                &[
+                    "settings.alpha",
+                    "expected a number in [0, 1]",
+                    "the string \"high\"",
+                ],
+            ),
+            (
+                r#"{"laser_beams": 1.5}"#,
+                &["settings.laser_beams", "an integer"],
+            ),
+            (
+                r#"{"laser_beams": -4}"#,
+                &["settings.laser_beams", "an integer"],
+            ),
+            (
+                r#"{"return_home": 1}"#,
+                &["settings.return_home", "true or false"],
+            ),
+            (
+                r#"{"localization": "magic"}"#,
+                &["settings.localization", "magic", "slam"],
+            ),
+            (
+                r#"{"localization": 3}"#,
+                &["settings.localization", "one of slam"],
+            ),
+            (
+                r#"{"utility_distance": "manhattan"}"#,
+                &["settings.utility_distance", "manhattan"],
+            ),
+            (
+                r#"{"alpah": 0.3}"#,
+                &["settings.alpah", "unknown setting", "alpha"],
+            ),
+            (
+                r#"{"laser_rate_hz": 1e6}"#,
+                &["settings.laser_rate_hz", "[1, 100] Hz"],
+            ),
+            (
+                r#"{"robot_radius_m": 50}"#,
+                &["settings.robot_radius_m", "[0.05, 2] m"],
+            ),
+            (
+                r#"{"max_speed_mps": 1e9}"#,
+                &["settings.max_speed_mps", "m/s"],
+            ),
+            (
+                r#"{"laser_noise_sd_m": 1000}"#,
+                &["settings.laser_noise_sd_m"],
+            ),
+            (
+                r#"{"odometry_translation_error": 5}"#,
+                &["settings.odometry_translation_error"],
+            ),
+            (
+                r#"{"time_limit_s": 1e300}"#,
+                &["settings.time_limit_s", "1e300"],
+            ),
+            (r#"{"map_resolution_m": 0}"#, &["settings.map_resolution_m"]),
+            (r#"{"alpha": null}"#, &["settings.alpha", "null"]),
+        ];
+        for (text, words) in cases {
+            let r = settings_from_json_text(text);
+            match (r, words.is_empty()) {
+                (Ok(_), true) => {}
+                (Err(e), false) => {
+                    let e = e.to_string();
+                    assert_eq!(e.lines().count(), 1, "{e}");
+                    for w in *words {
+                        assert!(e.contains(w), "{text}: {w:?} not in {e}");
+                    }
+                }
+                (r, _) => panic!("{text}: {r:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn the_reference_lists_every_setting_with_its_default() {
+        let md = settings_reference_markdown();
+        assert_eq!(md.lines().count(), SETTINGS.len() + 2);
+        assert!(
+            md.contains("| `robot_radius_m` | number, 0.05 to 2 | m | 0.2 | Robot radius. |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| `localization` | slam / odometry / ground-truth | - | slam |"),
+            "{md}"
+        );
+        let help = settings_help_text();
+        for i in SETTINGS {
+            assert!(help.contains(i.name), "{}", i.name);
+        }
+    }
+
+    /// README.md carries the reference generated from the table (print it with
+    /// `floorcast settings --markdown`).
+    #[test]
+    fn readme_holds_the_settings_reference() {
+        let readme = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"),
+        )
+        .unwrap();
+        let begin = "<!-- settings:begin -->\n";
+        let end = "<!-- settings:end -->";
+        let a = readme
+            .find(begin)
+            .expect("README.md has no <!-- settings:begin --> line")
+            + begin.len();
+        let b = readme[a..]
+            .find(end)
+            .expect("README.md has no <!-- settings:end --> line")
+            + a;
+        assert_eq!(
+            &readme[a..b],
+            settings_reference_markdown(),
+            "README.md's settings block is stale: replace it with the output of `floorcast settings --markdown`"
         );
     }
 

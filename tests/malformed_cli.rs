@@ -1,0 +1,198 @@
+//! The malformed-input corpus (`tests/malformed/cases.toml`): every case fails cleanly (exit code
+//! 2, one `error: ...` line naming the file and the field, no panic) within bounded time and
+//! memory, and leaves nothing behind. All failing cases are reported at once, by name.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde::Deserialize;
+
+/// Longest a case may take.
+const TIMEOUT: Duration = Duration::from_secs(20);
+/// Address space a case may use (bytes), enforced with `prlimit` where it exists.
+const MEMORY_LIMIT_BYTES: u64 = 4 << 30;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Corpus {
+    case: Vec<Case>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Case {
+    name: String,
+    args: Vec<String>,
+    /// Words the error line must hold.
+    expect: Vec<String>,
+    /// Paths (in the case's directory) that must not exist afterwards.
+    #[serde(default)]
+    absent: Vec<String>,
+    /// Files that must be byte-identical afterwards.
+    #[serde(default)]
+    unchanged: Vec<String>,
+    /// Directories to create before the run.
+    #[serde(default)]
+    mkdir: Vec<String>,
+    /// Words that must appear exactly once (an OS error said once, not twice).
+    #[serde(default)]
+    once: Vec<String>,
+    /// Words that must not appear (Rust debug text).
+    #[serde(default)]
+    never: Vec<String>,
+}
+
+fn corpus_dir() -> PathBuf {
+    common::repo().join("tests/malformed")
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).unwrap();
+        }
+    }
+}
+
+/// Runs `cmd` with a timeout; `None` when it had to be killed.
+fn run_bounded(mut cmd: Command) -> Option<(Option<i32>, String)> {
+    let mut child = cmd
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("floorcast starts");
+    let mut stderr = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        use std::io::Read;
+        let _ = stderr.read_to_string(&mut s);
+        s
+    });
+    let t0 = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return Some((status.code(), reader.join().unwrap()));
+        }
+        if t0.elapsed() > TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// What is wrong with one case's run (empty: it passed).
+fn check_case(case: &Case) -> Vec<String> {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    copy_dir(&corpus_dir().join("files"), tmp);
+    std::fs::copy(
+        common::repo().join("buildings/small.toml"),
+        tmp.join("small.toml"),
+    )
+    .unwrap();
+    for d in &case.mkdir {
+        std::fs::create_dir_all(tmp.join(d)).unwrap();
+    }
+    let before: Vec<Option<Vec<u8>>> = case
+        .unchanged
+        .iter()
+        .map(|f| std::fs::read(tmp.join(f)).ok())
+        .collect();
+    let maps = common::maps_dir().display().to_string();
+    let args: Vec<String> = case
+        .args
+        .iter()
+        .map(|a| a.replace("{maps}", &maps))
+        .collect();
+    let bin = env!("CARGO_BIN_EXE_floorcast");
+    let mut cmd = if Path::new("/usr/bin/prlimit").exists() {
+        let mut c = Command::new("/usr/bin/prlimit");
+        c.arg(format!("--as={MEMORY_LIMIT_BYTES}"))
+            .arg("--")
+            .arg(bin);
+        c
+    } else {
+        Command::new(bin)
+    };
+    cmd.args(&args).current_dir(tmp);
+    let mut problems = Vec::new();
+    let Some((code, err)) = run_bounded(cmd) else {
+        return vec![format!("did not finish within {} s", TIMEOUT.as_secs())];
+    };
+    if code != Some(2) {
+        problems.push(format!("exit code {code:?}, expected 2"));
+    }
+    if err.contains("panicked") || err.contains("RUST_BACKTRACE") {
+        problems.push("panicked".into());
+    }
+    let lines: Vec<&str> = err.lines().collect();
+    if lines.len() != 1 || !lines[0].starts_with("error: ") {
+        problems.push(format!(
+            "expected one `error: ...` line, got {} lines",
+            lines.len()
+        ));
+    }
+    for w in &case.expect {
+        if !err.contains(w.as_str()) {
+            problems.push(format!("{w:?} missing"));
+        }
+    }
+    for w in &case.once {
+        let n = err.matches(w.as_str()).count();
+        if n != 1 {
+            problems.push(format!("{w:?} appears {n} times, expected once"));
+        }
+    }
+    for w in &case.never {
+        if err.contains(w.as_str()) {
+            problems.push(format!("{w:?} appears"));
+        }
+    }
+    for p in &case.absent {
+        if tmp.join(p).exists() {
+            problems.push(format!("{p} was created"));
+        }
+    }
+    for (f, b) in case.unchanged.iter().zip(before) {
+        if std::fs::read(tmp.join(f)).ok() != b {
+            problems.push(format!("{f} was changed"));
+        }
+    }
+    if !problems.is_empty() {
+        problems.push(format!("stderr: {}", err.trim()));
+    }
+    problems
+}
+
+#[test]
+fn every_malformed_input_fails_cleanly() {
+    let text = std::fs::read_to_string(corpus_dir().join("cases.toml")).unwrap();
+    let corpus: Corpus = toml::from_str(&text).unwrap();
+    assert!(corpus.case.len() >= 60, "{} cases", corpus.case.len());
+    let mut names = std::collections::BTreeSet::new();
+    let mut failures = Vec::new();
+    for case in &corpus.case {
+        assert!(names.insert(case.name.clone()), "case {} twice", case.name);
+        let problems = check_case(case);
+        if !problems.is_empty() {
+            failures.push(format!("{}: {}", case.name, problems.join("; ")));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} malformed-input cases failed:\n{}",
+        failures.len(),
+        corpus.case.len(),
+        failures.join("\n")
+    );
+}
