@@ -384,6 +384,12 @@ fn run_document(doc: &Path) -> Vec<String> {
     for block in sh_blocks(&text) {
         let vars = binary_variables(&block);
         for cmd in &block.commands {
+            let first = cmd.split_whitespace().next().unwrap_or("");
+            assert!(
+                !first.starts_with('$') || vars.iter().any(|v| v == first),
+                "{}: `{cmd}` runs {first}, which no assignment in its block names",
+                doc.display()
+            );
             let Some(cmd) = floorcast_command(cmd, &vars) else {
                 continue;
             };
