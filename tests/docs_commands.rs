@@ -9,7 +9,7 @@
 //! --example`) are not run: they build or test this repository, which is what running this test
 //! already does. Lines of other programs (`python3`, `zenohd`) are not run either.
 //!
-//! Each document's commands run in order, with `sh -c`, in a fresh temporary directory that
+//! Each document's commands run in order, with `bash -c`, in a fresh temporary directory that
 //! mirrors the repository: copies of `buildings/`, `grids/` and `results/` (so commands that
 //! write there leave the repository clean), `target/release/floorcast` and `bin/floorcast`
 //! (on `PATH`) linking to the built binary, and a `shared` sibling linking to the real
@@ -249,11 +249,8 @@ fn floorcast_command(cmd: &str, vars: &[String]) -> Option<String> {
     }
     let invokes = |s: &str| {
         s.split(|c: char| c.is_whitespace() || c == ';' || c == '&' || c == '|')
-            .any(|w| {
-                w == "floorcast"
-                    || w.ends_with("/floorcast")
-                    || vars.iter().any(|v| w == v || w == format!("\"{v}\""))
-            })
+            .map(|w| w.trim_matches('"'))
+            .any(|w| w == "floorcast" || w.ends_with("/floorcast") || vars.iter().any(|v| w == v))
     };
     invokes(cmd).then(|| cmd.to_string())
 }
@@ -299,7 +296,10 @@ fn mirror() -> (tempfile::TempDir, PathBuf) {
     let bin = Path::new(env!("CARGO_BIN_EXE_floorcast"));
     link(bin, &root.join("target/release/floorcast"));
     link(bin, &tmp.path().join("bin/floorcast"));
-    let shared = repo().join("../shared").canonicalize().expect("../shared beside the repository");
+    let shared = repo()
+        .join("../shared")
+        .canonicalize()
+        .expect("../shared beside the repository");
     link(&shared, &tmp.path().join("shared"));
     (tmp, root)
 }
@@ -316,7 +316,11 @@ fn stand_in_store() -> &'static Path {
             .current_dir(repo())
             .output()
             .unwrap();
-        assert!(out.status.success(), "quick grid: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "quick grid: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         (tmp, dir)
     });
     dir
@@ -328,7 +332,7 @@ fn sh(script: &str, dir: &Path, bin_dir: &Path) -> std::process::Output {
         bin_dir.display(),
         std::env::var("PATH").unwrap_or_default()
     );
-    Command::new("sh")
+    Command::new("bash")
         .arg("-c")
         .arg(script)
         .current_dir(dir)
@@ -451,7 +455,10 @@ fn docs_commands_parse_as_printed() {
             "for g in a b; do\nfloorcast run grids/$g.toml\ndone"
         ]
     );
-    assert_eq!(arguments(&cmds[0], &vars), "explore --building b.toml --seed 1");
+    assert_eq!(
+        arguments(&cmds[0], &vars),
+        "explore --building b.toml --seed 1"
+    );
     assert_eq!(
         floorcast_command("cargo run --release -- explore --building x", &[]).as_deref(),
         Some("floorcast explore --building x")
