@@ -6,6 +6,11 @@
 //! blocking cell or at the range; a cell counts (once: a bit set over the disc) when its
 //! centre is within range.
 //! The same core serves the layout variant, which passes other `blocks` / `counts` predicates.
+//!
+//! Implementation: the 360-degree rays are stored as a prefix tree of cell offsets, built once per
+//! range, so the cells that rays share near `p` are tested once, and a blocked cell skips every ray
+//! through it. Between decisions, `explore::gain_cache` reuses a candidate's gain while the map
+//! within range of it is unchanged.
 
 use crate::grid::{Cell, GridFrame, Occupancy, OccupancyGrid};
 use crate::mapping::ray::walk_segment;

@@ -9,6 +9,31 @@
 //! given up, blacklisted until the run would otherwise end: those goals then get another chance
 //! (once per square metre of new map), so a run never hangs and a moment of bad luck does not
 //! end it early.
+//!
+//! Planning uses two grids, both stored padded by one blocked cell and searched in place
+//! (`plan::coarse`): the distances to every candidate come from one Dijkstra on the 0.2 m grid,
+//! the path to the chosen candidate from A* on the 0.1 m grid inside a corridor around the coarse
+//! path. A planning cell is passable when any of its map cells is traversable; only the cells whose
+//! map cells or obstacle distances changed since the last plan are recomputed. A candidate with no
+//! fine path is passed over for that decision. When no frontier's candidate can be reached, the
+//! candidates move to their frontiers' nearest reachable cells (`Explorer::reachable_candidates`;
+//! at every decision with `candidate_from_reachable_part`), and if none of those can be reached
+//! either, the decision is made again with paths planned without the safety margin
+//! (`Explorer::set_relaxed_planning`, for that decision only; every planning cell is recomputed
+//! when it switches). Every run ends in one [`EndReason`] (`Explorer::classify_end`).
+//!
+//! The explored area credits, whenever cells become known, the building cells around where the
+//! sensor saw them whose centres, moved into the map by the pose error of that moment, fall in a
+//! known map cell (the map is drawn at the estimated pose), so a consistent but rotated map is not
+//! counted as unexplored; with ground-truth poses this is the plain cell-by-cell comparison.
+//! [`explore_charged`] takes a caller's cost hook that times each layout computation
+//! (`--charge-compute`): the clock stays outside sim-core, and only such runs depend on the
+//! machine. The `layout-truth` oracle's layout is the building's true rooms moved into the map
+//! frame by the current pose error (`true_layout`), rasterised by `LayoutRaster::exact`; it is the
+//! only strategy whose decisions read ground truth.
+//!
+//! These incremental structures (frontier tracker, gain cache, planning cells) change no result:
+//! runs are bit-identical to full recomputation.
 
 mod calibration;
 mod follow;

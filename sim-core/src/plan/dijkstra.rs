@@ -6,6 +6,14 @@
 //! extra cost of entering a cell (e.g. near walls, to keep paths centred). Integer costs allow a
 //! bucket queue (Dial's algorithm): linear time. Diagonal steps may not cut a corner: both
 //! adjacent straight cells must be traversable.
+//!
+//! Implementation, for speed (results are bit-identical to a plain Dijkstra): [`dijkstra_padded`]
+//! searches the planning grid as stored, padded by one blocked cell so that no neighbour needs a
+//! bounds check, and stops once every target cell is settled; each cell has one record (cost, entry
+//! cost, parent), and the eight relaxations of an expansion are tested together as a bit mask
+//! before any is applied. [`AStar`] (octile heuristic) finds the path to the one chosen goal on the
+//! fine grid, first inside a corridor around the coarse path; its buffers are kept between searches
+//! and only the cells a search touched are reset.
 
 use crate::grid::{Bitmap, Cell, Grid, GridFrame};
 use crate::mapping::distance_field::ObstacleDistance;
