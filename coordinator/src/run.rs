@@ -575,7 +575,7 @@ mod tests {
         .unwrap();
         let store = Store::open(&plan.results_dir).unwrap();
         let exec: Arc<LocalExecutor> = Arc::new(|plan: &Plan, job: &PlannedJob, worker: &str| {
-            if job.seed % 2 == 0 {
+            if job.seed.is_multiple_of(2) {
                 panic!("boom at seed {}", job.seed);
             }
             execute(plan, job, worker)
