@@ -196,3 +196,47 @@ fn every_malformed_input_fails_cleanly() {
         failures.join("\n")
     );
 }
+
+/// A job that fails while the grid runs (here: a building without free space to start in) makes
+/// `run` exit with code 2 and an error line naming the building, strategy, seed and error; the
+/// other jobs' results are kept.
+#[test]
+fn run_exits_non_zero_naming_failed_jobs() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    std::fs::write(
+        tmp.join("solid.toml"),
+        "format = \"floorcast-building\"\nversion = 1\noutline = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0], [0.0, 0.0]]\n[[solids]]\npolygon = [[-1.0, -1.0], [5.0, -1.0], [5.0, 5.0], [-1.0, 5.0], [-1.0, -1.0]]\n",
+    )
+    .unwrap();
+    std::fs::write(
+        tmp.join("grid.toml"),
+        "format = \"floorcast-grid\"\nversion = 1\nname = \"f\"\nbuildings = [\"solid.toml\"]\nseeds = [7]\n[[strategies]]\nname = \"baseline\"\n",
+    )
+    .unwrap();
+    let o = common::floorcast()
+        .args([
+            "run",
+            "grid.toml",
+            "--results",
+            "r",
+            "--quiet",
+            "--workers",
+            "1",
+        ])
+        .current_dir(tmp)
+        .output()
+        .unwrap();
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let last = err.trim().lines().last().unwrap_or_default();
+    for w in [
+        "error: 1 of 1 jobs failed",
+        "solid baseline seed 7",
+        "no free space",
+    ] {
+        assert!(last.contains(w), "{w:?} not in {last}");
+    }
+    assert!(tmp.join("r/results.sqlite").is_file());
+}

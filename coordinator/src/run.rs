@@ -551,3 +551,60 @@ pub(crate) fn execute_job(mut row: StoredResult, spec: &Job<'_>) -> StoredResult
     }
     row
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// A job that panics is stored as a failed job (with the panic's message), never lost, and
+    /// the other workers' jobs still run.
+    #[test]
+    fn a_panicking_job_is_a_failed_job() {
+        let dir = tempfile::tempdir().unwrap();
+        let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
+        let text = format!(
+            "format = \"floorcast-grid\"\nversion = 1\nname = \"p\"\nbuildings = [\"{}\"]\nseeds = [1, 2, 3, 4]\n[[strategies]]\nname = \"baseline\"\n[settings]\ntime_limit_s = 10\n",
+            small.display()
+        );
+        let plan = Plan::parse(
+            &text,
+            &dir.path().join("grid.toml"),
+            Some(&dir.path().join("r")),
+        )
+        .unwrap();
+        let store = Store::open(&plan.results_dir).unwrap();
+        let exec: Arc<LocalExecutor> = Arc::new(|plan: &Plan, job: &PlannedJob, worker: &str| {
+            if job.seed.is_multiple_of(2) {
+                panic!("boom at seed {}", job.seed);
+            }
+            execute(plan, job, worker)
+        });
+        let opts = RunOptions {
+            workers: 2,
+            executor: Some(exec),
+            ..RunOptions::default()
+        };
+        let (outcome, counts) = run_plan(
+            &plan,
+            &store,
+            &opts,
+            &AtomicBool::new(false),
+            &mut |_| {},
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(outcome, Outcome::Complete);
+        assert_eq!((counts.done, counts.failed), (4, 2));
+        let rows = store.all().unwrap();
+        assert_eq!(rows.len(), 4);
+        for r in rows {
+            let failed = r.seed % 2 == 0;
+            assert_eq!(r.status == "failed", failed, "{r:?}");
+            if failed {
+                let e = r.error.unwrap();
+                assert!(e.contains(&format!("boom at seed {}", r.seed)), "{e}");
+            }
+        }
+    }
+}
