@@ -149,8 +149,8 @@ struct CheckReport {
 fn check_report(file: &std::path::Path, b: &Building) -> Result<CheckReport> {
     let bounds = b.bounds();
     let (start, source) = b
-        .default_start()
-        .with_context(|| format!("{}: the building has no free space", file.display()))?;
+        .default_start(floorcast_worker::Settings::default().robot_radius_m)
+        .with_context(|| format!("{}: no start pose", file.display()))?;
     let frame = b.area_frame();
     let reachable =
         b.reachable_free(frame, start.position()).count_true() as f64 * frame.cell_area_m2();

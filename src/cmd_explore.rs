@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use floorcast_worker::{check_job, run_job, Job, Settings, STRATEGIES};
+use floorcast_worker::{check_job, check_start, run_job, GivenStart, Job, Settings, STRATEGIES};
 use sim_core::explore::RunResult;
 
 use crate::output::{create_dir, parse_pose, progress_bar, write_text};
@@ -25,10 +25,14 @@ pub struct ExploreArgs {
     /// Output directory (default: results/explore/<building>-<strategy>-<seed>).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Start pose "x,y,theta" in metres and degrees (default: the building's, else the free
-    /// point with the largest clearance).
-    #[arg(long, value_name = "X,Y,THETA", value_parser = parse_pose, allow_hyphen_values = true)]
-    start: Option<sim_core::Pose>,
+    /// Start pose "x,y,theta": x and y in metres, the heading theta in degrees within
+    /// [-360, 360]; the robot's body (a disc of robot_radius_m, 0.2 m by default) must fit in
+    /// free space there. Or "random": a pose drawn from --seed (draw 0 of that stream), uniform
+    /// over the free cells with room for the body plus a 0.05 m margin that connect to the
+    /// largest-clearance point, heading uniform. Default: the building file's [start], else the
+    /// free point with the largest clearance, facing +x.
+    #[arg(long, value_name = "X,Y,THETA|random", value_parser = parse_start, allow_hyphen_values = true)]
+    start: Option<StartArg>,
     /// Where the map's poses come from (default: slam, or the settings file's).
     #[arg(long, value_parser = ["slam", "odometry", "ground-truth"])]
     localization: Option<String>,
@@ -102,13 +106,35 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     settings.return_home |= a.return_home;
     settings.candidate_from_reachable_part |= a.candidate_from_reachable_part;
     settings.charge_compute |= a.charge_compute;
+    let start = match a.start {
+        None => None,
+        Some(StartArg::Pose(pose)) => {
+            check_start(&building, &name, pose, settings.robot_radius_m, "--start")
+                .with_context(|| format!("{}: cannot explore", a.building.display()))?;
+            Some(GivenStart {
+                pose,
+                source: GivenStart::COMMAND_LINE.into(),
+            })
+        }
+        Some(StartArg::Random) => Some(GivenStart {
+            pose: building
+                .random_start(settings.robot_radius_m, a.seed, 0)
+                .with_context(|| {
+                    format!(
+                        "{}: --start random: cannot draw a start",
+                        a.building.display()
+                    )
+                })?,
+            source: GivenStart::RANDOM.into(),
+        }),
+    };
     let job = Job {
         building: &building,
         building_name: name.clone(),
         strategy: a.strategy.clone(),
         seed: a.seed,
         settings,
-        start: a.start,
+        start,
         snapshot_fractions: if a.layout_snapshots {
             vec![0.2, 0.4, 0.6, 0.8, 0.9]
         } else {
@@ -196,6 +222,27 @@ fn short_run_warning(s: &floorcast_worker::RunSummary) -> Option<String> {
     Some(format!(
         "the run ended short, {explored:.1} % explored: {why}"
     ))
+}
+
+/// The value of `--start`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StartArg {
+    Pose(sim_core::Pose),
+    Random,
+}
+
+fn parse_start(s: &str) -> Result<StartArg, String> {
+    if s.trim() == "random" {
+        return Ok(StartArg::Random);
+    }
+    let pose = parse_pose(s)?;
+    let deg = s.rsplit(',').next().unwrap_or("").trim();
+    if !(-360.0..=360.0).contains(&pose.theta_rad.to_degrees()) {
+        return Err(format!(
+            "heading {deg} in '{s}' is outside [-360, 360] degrees (expected x,y,theta with theta in degrees, or random)"
+        ));
+    }
+    Ok(StartArg::Pose(pose))
 }
 
 fn progress_csv(r: &RunResult) -> String {

@@ -11,7 +11,7 @@ use floorcast_coordinator::grid::Plan;
 use floorcast_coordinator::net::NetConfig;
 use floorcast_coordinator::run::{run_plan, Outcome, RunOptions};
 use floorcast_coordinator::store::{provenance, Store, DB_FILE};
-use floorcast_coordinator::table::{render_text, results_csv, table};
+use floorcast_coordinator::table::{render_ends, render_text, results_csv, table};
 
 use crate::output::{progress_bar, write_text};
 
@@ -70,7 +70,9 @@ pub struct RunArgs {
 pub struct ReportArgs {
     /// Results directory (holding results.sqlite), e.g. results/quick.
     results: PathBuf,
-    /// Also write one line per job as CSV (for pandas, R, spreadsheets).
+    /// Also write one line per job as CSV (for pandas, R, spreadsheets): identity, times,
+    /// explored area, end_reason (complete, early stop, time limit, stuck, frontiers
+    /// unreachable), start pose (start_x_m, start_y_m, start_theta_rad) and start_source.
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
     /// Also draw charts into this directory: gains.png (the paired gain over baseline per
@@ -282,7 +284,9 @@ pub fn report(a: ReportArgs) -> Result<()> {
         results.len(),
         a.results.join(DB_FILE).display()
     );
-    say_raw!("{}", render_text(&table(&results, &[])));
+    let t = table(&results, &[]);
+    say_raw!("{}", render_text(&t));
+    say_raw!("{}", render_ends(&t));
     if let Some(csv) = &a.csv {
         write_text(csv, &results_csv(&results))
             .with_context(|| format!("cannot export to {}", csv.display()))?;

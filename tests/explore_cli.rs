@@ -113,20 +113,161 @@ fn the_picture_of_a_run_cut_short_shows_the_frontiers_left() {
 }
 
 #[test]
-fn a_start_in_a_wall_is_a_clean_error() {
-    let dir = tempfile::tempdir().unwrap();
+fn a_start_without_room_for_the_robot_is_refused_with_a_position_that_has_room() {
     let b = repo().join("buildings/small.toml");
-    let o = run(&[
-        "explore",
-        "--building",
-        b.to_str().unwrap(),
-        "--start",
-        "-50,-50,0",
-        "--out",
-        dir.path().to_str().unwrap(),
-        "--quiet",
-    ]);
-    assert_clean_failure(&o, &["small.toml", "free space"]);
+    // (start, what is wrong with it); small.toml's west wall's face is at x = -0.1.
+    let cases = [
+        ("-50,-50,0", "is not in free space"),
+        (
+            "0.0,9.81,0",
+            "is 0.100 m from solid space, too close for the robot's body",
+        ),
+        ("0.05,9.81,90", "is 0.150 m from solid space"),
+    ];
+    for (start, problem) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let o = run(&[
+            "explore",
+            "--building",
+            b.to_str().unwrap(),
+            "--start",
+            start,
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--quiet",
+        ]);
+        let hint = "the nearest free position with room for the robot is ";
+        assert_clean_failure(&o, &["small.toml", "from --start", problem, hint]);
+        // The position suggested is accepted.
+        let err = stderr(&o);
+        let xy = err.trim().rsplit(hint).next().unwrap();
+        let s = explore_with(
+            &b,
+            1,
+            dir.path(),
+            &["--start", &format!("{xy},0"), "--time-limit-s", "5"],
+        );
+        assert_eq!(s["start_source"], "command line", "{s}");
+        assert_eq!(
+            format!(
+                "{:.2},{:.2}",
+                s["start"][0].as_f64().unwrap(),
+                s["start"][1].as_f64().unwrap()
+            ),
+            xy
+        );
+    }
+}
+
+#[test]
+fn a_start_heading_beyond_a_full_turn_is_refused() {
+    let b = repo().join("buildings/small.toml");
+    for (start, needle) in [
+        ("3,3,1e300", "heading 1e300"),
+        ("3,3,361", "[-360, 360]"),
+        ("3,3,-400", "[-360, 360]"),
+        ("3,nan,0", "not a number"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let o = run(&[
+            "explore",
+            "--building",
+            b.to_str().unwrap(),
+            &format!("--start={start}"),
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--quiet",
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{start}: {err}");
+        assert!(
+            err.contains(needle) && !err.contains("panicked"),
+            "{start}: {err}"
+        );
+    }
+}
+
+#[test]
+fn a_random_start_is_drawn_from_the_seed() {
+    let b = repo().join("buildings/small.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["--start", "random", "--time-limit-s", "5"];
+    let a = explore_with(&b, 3, &dir.path().join("a"), &args);
+    let again = explore_with(&b, 3, &dir.path().join("again"), &args);
+    let other = explore_with(&b, 4, &dir.path().join("other"), &args);
+    assert_eq!(a["start_source"], "random");
+    assert_eq!(a["start"], again["start"]);
+    assert_ne!(a["start"], other["start"]);
+    // Not the building file's start.
+    let file = explore_with(&b, 3, &dir.path().join("file"), &["--time-limit-s", "5"]);
+    assert_eq!(file["start_source"], "building file");
+    assert_ne!(a["start"], file["start"]);
+}
+
+#[test]
+fn buildings_open_to_their_outline_start_inside_and_are_explored() {
+    // BUILDING_FORMAT.md's example without its [start] (walls only along the bottom and half
+    // way up the middle: the outline closes the rest), and an outline alone (60 m2). Both
+    // used to start in a corner or not at all.
+    let doc = std::fs::read_to_string(repo().join("formats/BUILDING_FORMAT.md")).unwrap();
+    let example: String = doc
+        .split("```toml\n")
+        .nth(1)
+        .unwrap()
+        .split("```")
+        .next()
+        .unwrap()
+        .split("[start]")
+        .next()
+        .unwrap()
+        .to_string();
+    assert!(example.contains("[[walls]]") && !example.contains("[start]"));
+    let outline = "format = \"floorcast-building\"\nversion = 1\n\
+                   outline = [[0.0, 0.0], [10.0, 0.0], [10.0, 6.0], [0.0, 6.0], [0.0, 0.0]]\n";
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in [("doc.toml", example.as_str()), ("outline.toml", outline)] {
+        let file = dir.path().join(name);
+        std::fs::write(&file, text).unwrap();
+        let s = explore_with(
+            &file,
+            1,
+            &dir.path().join(format!("{name}-out")),
+            &["--localization", "ground-truth"],
+        );
+        assert_eq!(s["start_source"], "largest clearance", "{name}: {s}");
+        let (x, y) = (
+            s["start"][0].as_f64().unwrap(),
+            s["start"][1].as_f64().unwrap(),
+        );
+        assert!(
+            (2.5..=7.6).contains(&x) && (2.9..=3.6).contains(&y),
+            "{name}: {x}, {y}"
+        );
+        assert_eq!(s["end_reason"], "complete", "{name}: {s}");
+        assert!(
+            s["explored_fraction"].as_f64().unwrap() > 0.97,
+            "{name}: {s}"
+        );
+    }
+}
+
+#[test]
+fn the_readme_quick_start_pose_on_franch1_has_room_for_the_robot() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = explore_with(
+        &maps_dir().join("schools/Franch1.yaml"),
+        1,
+        dir.path(),
+        &[
+            "--localization",
+            "ground-truth",
+            "--start",
+            "8,5,90",
+            "--time-limit-s",
+            "5",
+        ],
+    );
+    assert_eq!(s["start_source"], "command line");
 }
 
 #[test]

@@ -80,6 +80,12 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
         csv.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // How the runs ended, per strategy.
+    let out = stdout(&o);
+    assert!(
+        out.contains("How runs ended") && out.contains("frontiers unreachable"),
+        "{out}"
+    );
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 1 + 6);
     assert!(text.starts_with("job_id,building,"));

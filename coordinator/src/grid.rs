@@ -6,11 +6,13 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use floorcast_worker::{Settings, FLOORCAST_VERSION, STRATEGIES, SUMMARY_VERSION};
+use floorcast_worker::{
+    check_start, GivenStart, Settings, FLOORCAST_VERSION, STRATEGIES, SUMMARY_VERSION,
+};
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
-use sim_core::Building;
+use sim_core::{Building, Pose};
 
 pub const GRID_FORMAT: &str = "floorcast-grid";
 pub const GRID_VERSION: u32 = 1;
@@ -38,7 +40,38 @@ struct GridFile {
     /// Settings shared by all jobs (robot, laser, mapping...), as in `--settings` files.
     #[serde(default)]
     settings: toml::Table,
+    /// Start poses as a factor of the grid (default: each building's own start).
+    starts: Option<StartsSpec>,
 }
+
+/// `[starts]`: random start poses per building and/or explicit ones.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StartsSpec {
+    /// Random start poses per building.
+    #[serde(default)]
+    random: u32,
+    /// The stream they are drawn from.
+    #[serde(default = "default_starts_seed")]
+    seed: u64,
+    /// `[[starts.poses]]`: a building (named as in the plan) and a pose `[x_m, y_m, heading_deg]`.
+    #[serde(default)]
+    poses: Vec<PoseSpec>,
+}
+
+fn default_starts_seed() -> u64 {
+    1
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PoseSpec {
+    building: String,
+    pose: [f64; 3],
+}
+
+/// Most random starts per building a grid may ask for.
+pub const MAX_RANDOM_STARTS: u32 = 1000;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -90,6 +123,16 @@ pub struct PlannedJob {
     pub label: String,
     pub seed: u64,
     pub settings: Settings,
+    /// The start pose, when the grid sets one (`[starts]`); `None`: the building's own.
+    pub start: Option<PlannedStart>,
+}
+
+/// A start pose set by the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedStart {
+    pub pose: Pose,
+    /// "random" (drawn by [`Building::random_start`]) or "grid" (listed in `[[starts.poses]]`).
+    pub source: String,
 }
 
 /// A validated grid.
@@ -436,19 +479,29 @@ impl Plan {
             resolved.push((s.name.clone(), settings, label));
         }
 
-        // Jobs: building-major, then seed, then strategy (so partial grids compare fairly).
+        let radius_m = resolved
+            .iter()
+            .map(|(_, s, _)| s.robot_radius_m)
+            .fold(0.0, f64::max);
+        let starts = plan_starts(file.starts.as_ref(), &buildings, radius_m, &invalid)?;
+
+        // Jobs: building-major, then start, then seed, then strategy (so partial grids compare
+        // fairly).
         let mut jobs = Vec::new();
         for (bi, b) in buildings.iter().enumerate() {
-            for &seed in &seeds {
-                for (name, settings, label) in &resolved {
-                    jobs.push(PlannedJob {
-                        id: job_id(&b.hash, name, seed, settings),
-                        building: bi,
-                        strategy: name.clone(),
-                        label: label.clone(),
-                        seed,
-                        settings: settings.clone(),
-                    });
+            for start in &starts[bi] {
+                for &seed in &seeds {
+                    for (name, settings, label) in &resolved {
+                        jobs.push(PlannedJob {
+                            id: job_id_from(&b.hash, name, seed, settings, start.as_ref()),
+                            building: bi,
+                            strategy: name.clone(),
+                            label: label.clone(),
+                            seed,
+                            settings: settings.clone(),
+                            start: start.clone(),
+                        });
+                    }
                 }
             }
         }
@@ -482,7 +535,7 @@ fn settings_from_table(table: &toml::Table) -> Result<Settings, floorcast_worker
     }
 }
 
-/// The number of jobs (buildings x seeds x strategies) must stay within the limit; counted
+/// The number of jobs (buildings x starts x seeds x strategies) must stay within the limit; counted
 /// without listing the seeds.
 fn check_job_count(
     file: &GridFile,
@@ -495,12 +548,18 @@ fn check_job_count(
         (Some(s), _) => ("seeds", s.len() as u128),
         _ => return Ok(()),
     };
-    let jobs = seeds * buildings as u128 * file.strategies.len().max(1) as u128;
+    // Start poses per building: the random draws plus the listed poses (at most), else one.
+    let starts = file
+        .starts
+        .as_ref()
+        .map_or(1, |s| s.random as u128 + s.poses.len() as u128)
+        .max(1);
+    let jobs = seeds * starts * buildings as u128 * file.strategies.len().max(1) as u128;
     if jobs > limits.max_jobs as u128 {
         return Err(invalid(
             field,
             format!(
-                "{seeds} seeds x {buildings} buildings x {} strategies make {jobs} jobs, more than the limit of {} jobs per grid; use fewer seeds or raise the limit with --max-jobs",
+                "{seeds} seeds x {buildings} buildings x {starts} starts x {} strategies make {jobs} jobs, more than the limit of {} jobs per grid; use fewer seeds or raise the limit with --max-jobs",
                 file.strategies.len(),
                 limits.max_jobs
             ),
@@ -581,9 +640,116 @@ fn check_strategy_fits(
     Ok(())
 }
 
+/// The start poses of each building's jobs: `[None]` (the building's own start, checked for
+/// a robot of `radius_m`) without `[starts]`; else the random draws then the listed poses
+/// (a building with neither keeps its own start). Every pose is checked for the largest
+/// robot of the grid, `radius_m`.
+fn plan_starts(
+    spec: Option<&StartsSpec>,
+    buildings: &[PlannedBuilding],
+    radius_m: f64,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<Vec<Vec<Option<PlannedStart>>>, GridError> {
+    let mut out: Vec<Vec<Option<PlannedStart>>> = vec![Vec::new(); buildings.len()];
+    if let Some(spec) = spec {
+        if spec.random > MAX_RANDOM_STARTS {
+            return Err(invalid(
+                "starts.random",
+                format!(
+                    "{} random starts per building; at most {MAX_RANDOM_STARTS}",
+                    spec.random
+                ),
+            ));
+        }
+        if spec.random == 0 && spec.poses.is_empty() {
+            return Err(invalid(
+                "starts",
+                "sets no start: give `random = N` (random starts per building) or \
+                 [[starts.poses]] entries, or remove [starts]"
+                    .into(),
+            ));
+        }
+        if spec.random > 0 {
+            for (bi, b) in buildings.iter().enumerate() {
+                let sampler = sim_core::building::StartSampler::new(&b.building, radius_m)
+                    .map_err(|e| invalid("starts.random", format!("building {}: {e}", b.name)))?;
+                for k in 0..spec.random {
+                    out[bi].push(Some(PlannedStart {
+                        pose: sampler.draw(spec.seed, k as u64),
+                        source: GivenStart::RANDOM.into(),
+                    }));
+                }
+            }
+        }
+        for (i, p) in spec.poses.iter().enumerate() {
+            let field = format!("starts.poses[{i}]");
+            let Some(bi) = buildings.iter().position(|b| b.name == p.building) else {
+                let names: Vec<&str> = buildings.iter().map(|b| b.name.as_str()).collect();
+                return Err(invalid(
+                    &format!("{field}.building"),
+                    format!(
+                        "no building of the grid is named '{}' (the names: {})",
+                        p.building,
+                        names.join(", ")
+                    ),
+                ));
+            };
+            let [x, y, deg] = p.pose;
+            if !(-360.0..=360.0).contains(&deg) {
+                return Err(invalid(
+                    &format!("{field}.pose"),
+                    format!("heading {deg} is not in [-360, 360] degrees (expected [x_m, y_m, heading_deg])"),
+                ));
+            }
+            let pose = Pose::new(x, y, deg.to_radians());
+            let b = &buildings[bi];
+            check_start(&b.building, &b.name, pose, radius_m, &format!("{field}.pose"))
+                .map_err(|e| invalid(&format!("{field}.pose"), e.to_string()))?;
+            let start = Some(PlannedStart {
+                pose,
+                source: GivenStart::GRID.into(),
+            });
+            if out[bi].contains(&start) {
+                return Err(invalid(
+                    &format!("{field}.pose"),
+                    format!("building {} already starts at this pose", b.name),
+                ));
+            }
+            out[bi].push(start);
+        }
+    }
+    for (bi, b) in buildings.iter().enumerate() {
+        if out[bi].is_empty() {
+            // The building's own start: the file's (checked) or the largest clearance.
+            let (pose, source) = b
+                .building
+                .default_start(radius_m)
+                .map_err(|e| invalid("buildings", format!("{} ({}): {e}", b.name, b.source)))?;
+            if source == sim_core::building::StartSource::File {
+                check_start(&b.building, &b.name, pose, radius_m, "the building file's [start]")
+                    .map_err(|e| invalid("buildings", format!("{}: {e}", b.source)))?;
+            }
+            out[bi].push(None);
+        }
+    }
+    Ok(out)
+}
+
 /// The identity of a job: a hash of everything that determines its result.
 pub fn job_id(building_hash: &str, strategy: &str, seed: u64, settings: &Settings) -> String {
-    let canonical = serde_json::json!({
+    job_id_from(building_hash, strategy, seed, settings, None)
+}
+
+/// [`job_id`] of a job whose start pose the grid sets (bit-exact); without one, the same id
+/// as [`job_id`].
+pub fn job_id_from(
+    building_hash: &str,
+    strategy: &str,
+    seed: u64,
+    settings: &Settings,
+    start: Option<&PlannedStart>,
+) -> String {
+    let mut canonical = serde_json::json!({
         "floorcast_version": FLOORCAST_VERSION,
         "result_format": SUMMARY_VERSION,
         "building_hash": building_hash,
@@ -591,6 +757,10 @@ pub fn job_id(building_hash: &str, strategy: &str, seed: u64, settings: &Setting
         "seed": seed,
         "settings": settings,
     });
+    if let Some(s) = start {
+        let bits = [s.pose.x_m, s.pose.y_m, s.pose.theta_rad].map(|v| format!("{:016x}", v.to_bits()));
+        canonical["start"] = serde_json::json!({ "pose_bits": bits, "source": s.source });
+    }
     let digest = Sha256::digest(canonical.to_string().as_bytes());
     digest[..16].iter().map(|b| format!("{b:02x}")).collect()
 }
@@ -717,6 +887,141 @@ time_limit_s = 600
                 "{bad}: {e}"
             );
         }
+    }
+
+    #[test]
+    fn the_starts_grid_plans_ten_random_starts_on_every_shared_map_and_paper_building() {
+        let g = Path::new(env!("CARGO_MANIFEST_DIR")).join("../grids/starts.toml");
+        let p = Plan::parse(&std::fs::read_to_string(&g).unwrap(), &g, None).unwrap();
+        let maps = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/maps");
+        let mut expected = 10; // the paper set
+        for folder in ["schools", "partial", "radish", "stage"] {
+            expected += std::fs::read_dir(maps.join(folder))
+                .unwrap()
+                .filter(|e| {
+                    let p = e.as_ref().unwrap().path();
+                    p.extension().is_some_and(|x| x == "yaml" || x == "world")
+                })
+                .count();
+        }
+        assert_eq!(p.buildings.len(), expected);
+        assert_eq!(p.jobs.len(), expected * 10 * 2);
+        let radius = Settings::default().robot_radius_m;
+        for (bi, b) in p.buildings.iter().enumerate() {
+            let starts: std::collections::BTreeSet<[u64; 3]> = p
+                .jobs
+                .iter()
+                .filter(|j| j.building == bi)
+                .map(|j| {
+                    let s = j.start.as_ref().expect("a start pose");
+                    assert_eq!(s.source, "random");
+                    assert!(b.building.check_start(s.pose, radius).is_ok(), "{}", b.name);
+                    [s.pose.x_m, s.pose.y_m, s.pose.theta_rad].map(f64::to_bits)
+                })
+                .collect();
+            assert_eq!(starts.len(), 10, "{}", b.name);
+        }
+        let ids: std::collections::BTreeSet<_> = p.jobs.iter().map(|j| j.id.clone()).collect();
+        assert_eq!(ids.len(), p.jobs.len());
+    }
+
+    #[test]
+    fn starts_multiply_the_jobs_and_change_only_their_ids() {
+        let plain = parse(GOOD).unwrap();
+        let with = |starts: &str| parse(&format!("{GOOD}{starts}"));
+        let p = with("[starts]\nrandom = 2\n").unwrap();
+        assert_eq!(p.jobs.len(), 2 * plain.jobs.len());
+        // Without [starts] every job keeps the id it has always had.
+        for j in &plain.jobs {
+            assert_eq!(j.start, None);
+            assert_eq!(
+                j.id,
+                job_id(&plain.buildings[j.building].hash, &j.strategy, j.seed, &j.settings)
+            );
+        }
+        let ids: std::collections::BTreeSet<_> = p.jobs.iter().map(|j| j.id.clone()).collect();
+        assert_eq!(ids.len(), p.jobs.len());
+        assert!(p.jobs.iter().all(|j| !plain.jobs.iter().any(|q| q.id == j.id)));
+        // The same draws every time; another seed draws others.
+        assert_eq!(with("[starts]\nrandom = 2\n").unwrap().jobs, p.jobs);
+        let other = with("[starts]\nrandom = 2\nseed = 9\n").unwrap();
+        assert_ne!(other.jobs[0].start, p.jobs[0].start);
+        // Every strategy and seed of a building starts from the same poses.
+        let small: Vec<_> = p.jobs.iter().filter(|j| j.building == 0).collect();
+        assert_eq!(small[0].start, small[5].start);
+        assert_ne!(small[0].start, small[6].start);
+        // Listed poses, per building; a building without any keeps its own start.
+        let listed = with(
+            "[starts]\n[[starts.poses]]\nbuilding = \"small\"\npose = [3.0, 3.0, 90.0]\n\
+             [[starts.poses]]\nbuilding = \"small\"\npose = [5.0, 3.0, -45.0]\n",
+        )
+        .unwrap();
+        let starts: Vec<Option<PlannedStart>> =
+            listed.jobs.iter().map(|j| j.start.clone()).collect();
+        assert_eq!(listed.jobs.len(), 2 * 6 + 6);
+        assert_eq!(
+            starts[0],
+            Some(PlannedStart {
+                pose: Pose::new(3.0, 3.0, 90f64.to_radians()),
+                source: "grid".into()
+            })
+        );
+        assert!(starts[12..].iter().all(|s| s.is_none()));
+        let gen = &listed.jobs[12];
+        assert_eq!(
+            gen.id,
+            plain.jobs.iter().find(|j| j.building == 1).unwrap().id
+        );
+    }
+
+    #[test]
+    fn bad_starts_name_the_field() {
+        let cases = [
+            ("[starts]\nrandom = 1001\n", "starts.random", "at most 1000"),
+            ("[starts]\nseed = 2\n", "starts", "sets no start"),
+            ("[starts]\nrandmo = 2\n", "randmo", ""),
+            (
+                "[[starts.poses]]\nbuilding = \"nope\"\npose = [3.0, 3.0, 0.0]\n",
+                "starts.poses[0].building",
+                "small, gen-school-500-4",
+            ),
+            (
+                "[[starts.poses]]\nbuilding = \"small\"\npose = [3.0, 3.0, 1e300]\n",
+                "starts.poses[0].pose",
+                "[-360, 360]",
+            ),
+            (
+                "[[starts.poses]]\nbuilding = \"small\"\npose = [-50.0, 3.0, 0.0]\n",
+                "starts.poses[0].pose",
+                "not in free space in building small; the nearest free position",
+            ),
+            (
+                "[[starts.poses]]\nbuilding = \"small\"\npose = [0.0, 9.81, 0.0]\n",
+                "starts.poses[0].pose",
+                "too close for the robot's body",
+            ),
+            (
+                "[[starts.poses]]\nbuilding = \"small\"\npose = [3.0, 3.0, 0.0]\n\
+                 [[starts.poses]]\nbuilding = \"small\"\npose = [3.0, 3.0, 0.0]\n",
+                "starts.poses[1].pose",
+                "already starts at this pose",
+            ),
+        ];
+        for (starts, field, needle) in cases {
+            let e = parse(&format!("{GOOD}{starts}")).unwrap_err().to_string();
+            assert!(
+                e.contains(field) && e.contains(needle) && e.contains("x.toml"),
+                "{starts}: {e}"
+            );
+            assert_eq!(e.lines().count(), 1, "{e}");
+        }
+        // A robot too large for any start of the building.
+        let e = parse(
+            &GOOD.replace("time_limit_s = 600", "time_limit_s = 600\nrobot_radius_m = 5.0"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("room for the robot's body"), "{e}");
     }
 
     #[test]

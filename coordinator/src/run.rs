@@ -14,15 +14,15 @@ use std::sync::mpsc;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use floorcast_worker::{run_job, Job};
-use sim_core::Building;
+use floorcast_worker::{run_job, GivenStart, Job};
+use sim_core::{Building, Pose};
 use tokio::sync::oneshot;
 
 use crate::grid::{Plan, PlannedJob};
 use crate::net::{self, NetConfig, NetError};
 use crate::schedule::{Action, Event, RequeueReason, Scheduler};
 use crate::store::{Store, StoreError, StoredResult};
-use crate::wire::{check_result, RenewReply, SubmitReply, WireJob};
+use crate::wire::{check_result, check_result_start, RenewReply, SubmitReply, WireJob, WireStart};
 
 /// What workers (embedded threads or the network bridge) tell the coordinator loop.
 #[derive(Debug)]
@@ -269,7 +269,9 @@ pub fn run_plan(
                 } => {
                     let job_id = result.job_id.clone();
                     let verdict = match jobs.get(&job_id) {
-                        Some(j) => check_result(&result, &expected_row(&plan, j, "")),
+                        Some(j) => check_result(&result, &expected_row(&plan, j, "")).and_then(
+                            |()| check_result_start(&result, wire_job(&plan, j).start.as_ref()),
+                        ),
                         None => Ok(()), // the scheduler rejects unknown jobs
                     };
                     if let Err(reason) = verdict {
@@ -454,6 +456,10 @@ pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
         label: job.label.clone(),
         seed: job.seed,
         settings: job.settings.clone(),
+        start: job.start.as_ref().map(|s| WireStart {
+            pose: [s.pose.x_m, s.pose.y_m, s.pose.theta_rad],
+            source: s.source.clone(),
+        }),
     }
 }
 
@@ -473,7 +479,10 @@ pub fn execute(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
             strategy: job.strategy.clone(),
             seed: job.seed,
             settings: job.settings.clone(),
-            start: None,
+            start: job.start.as_ref().map(|s| GivenStart {
+                pose: s.pose,
+                source: s.source.clone(),
+            }),
             snapshot_fractions: Vec::new(),
         },
     )
@@ -520,7 +529,10 @@ pub fn execute_wire(job: &WireJob, building: &Building, worker: &str) -> StoredR
             strategy: job.strategy.clone(),
             seed: job.seed,
             settings: job.settings.clone(),
-            start: None,
+            start: job.start.as_ref().map(|s| GivenStart {
+                pose: Pose::new(s.pose[0], s.pose[1], s.pose[2]),
+                source: s.source.clone(),
+            }),
             snapshot_fractions: Vec::new(),
         },
     )

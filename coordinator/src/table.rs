@@ -2,11 +2,18 @@
 //! the mean and standard deviation of exploration time over all runs, and the gain over the
 //! baseline in per cent with its spread (paired by building and seed: the mean of the per-pair
 //! gains and a 95 % confidence interval); the same per building; and a CSV export.
+//!
+//! Only runs that ended normally (complete: no frontier left, or the strategy's early stop)
+//! have an exploration time: runs cut off by the time limit, stuck, or left with unreachable
+//! frontiers are counted per class and left out of the time statistics and gains, and a note
+//! under the table says how many and why. Runs ending short of [`SHORT_OF_FRACTION`] explored
+//! are marked.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use floorcast_worker::RunSummary;
+use sim_core::explore::EndReason;
 
 use crate::store::StoredResult;
 
@@ -38,14 +45,49 @@ impl Stat {
     }
 }
 
+/// Runs that end with less than this fraction explored are marked in the tables.
+pub const SHORT_OF_FRACTION: f64 = 0.97;
+
+/// The end classes in the order tables list them (`sim_core`'s [`EndReason`] names).
+pub fn end_classes() -> [&'static str; 5] {
+    EndReason::ALL.map(EndReason::as_str)
+}
+
+/// The end class of a stored summary: its `end_reason`, with the "no frontiers" of summaries
+/// written before the classes existed read as "complete".
+pub fn end_class(s: &RunSummary) -> &str {
+    match s.end_reason.as_str() {
+        "no frontiers" => EndReason::Complete.as_str(),
+        other => other,
+    }
+}
+
+/// Whether a run ended normally (complete or early stop), so that its exploration time is
+/// the time to explore the building (or to decide to stop).
+pub fn ended_normally(s: &RunSummary) -> bool {
+    EndReason::ALL
+        .iter()
+        .any(|r| r.is_normal() && r.as_str() == end_class(s))
+}
+
 /// One row per strategy label.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LabelRow {
     pub label: String,
+    /// Exploration time of the runs that ended normally (see [`ended_normally`]).
     pub time: Stat,
+    /// Explored fraction of every successful run.
     pub explored_fraction: Stat,
     pub stopped_early: usize,
     pub failed: usize,
+    /// Successful runs per end class: every class of [`end_classes`] in order (zeros
+    /// included), then any other `end_reason` found.
+    pub ends: Vec<(String, usize)>,
+    /// Successful runs left out of `time` (and the gains): ended by the time limit, stuck,
+    /// frontiers unreachable, or an unknown end.
+    pub left_out: usize,
+    /// Successful runs that ended with less than [`SHORT_OF_FRACTION`] explored.
+    pub short: usize,
     /// Gain of mean time over the reference label, per cent (positive = faster); `None` unless
     /// this label's successful runs are of exactly the reference's buildings and seeds (means
     /// over different runs would compare buildings, not strategies).
@@ -98,16 +140,39 @@ fn t95(df: usize) -> f64 {
     }
 }
 
-/// Exploration time of the successful runs of `label` in `subset`, by (building, seed).
-fn times_by_pair(subset: &[&StoredResult], label: &str) -> BTreeMap<(String, u64), f64> {
+/// What pairs a run with the reference's: building, seed and start pose (bits).
+type PairKey = (String, u64, [u64; 3]);
+
+/// Exploration time of the successful runs of `label` in `subset` that ended normally, by
+/// (building, seed, start pose).
+fn times_by_pair(subset: &[&StoredResult], label: &str) -> BTreeMap<PairKey, f64> {
     subset
         .iter()
         .filter(|r| r.label == label && r.status == "ok")
         .filter_map(|r| {
             let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
-            Some(((r.building.clone(), r.seed), s.exploration_time_s))
+            ended_normally(&s).then(|| {
+                (
+                    (r.building.clone(), r.seed, s.start.map(f64::to_bits)),
+                    s.exploration_time_s,
+                )
+            })
         })
         .collect()
+}
+
+/// Counts per end class: [`end_classes`] in order, then other names in sorted order.
+fn count_ends<'a>(summaries: impl Iterator<Item = &'a RunSummary>) -> Vec<(String, usize)> {
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for s in summaries {
+        *counts.entry(end_class(s)).or_default() += 1;
+    }
+    let mut out: Vec<(String, usize)> = end_classes()
+        .iter()
+        .map(|c| (c.to_string(), counts.remove(c).unwrap_or(0)))
+        .collect();
+    out.extend(counts.into_iter().map(|(c, n)| (c.to_string(), n)));
+    out
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -151,7 +216,11 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
                             .and_then(|s| RunSummary::from_json(s).ok())
                     })
                     .collect();
-                let times: Vec<f64> = summaries.iter().map(|s| s.exploration_time_s).collect();
+                let times: Vec<f64> = summaries
+                    .iter()
+                    .filter(|s| ended_normally(s))
+                    .map(|s| s.exploration_time_s)
+                    .collect();
                 let fracs: Vec<f64> = summaries.iter().map(|s| s.explored_fraction).collect();
                 Some(LabelRow {
                     label: label.clone(),
@@ -159,6 +228,12 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
                     explored_fraction: Stat::of(&fracs),
                     stopped_early: summaries.iter().filter(|s| s.stopped_early).count(),
                     failed: mine.len() - summaries.len(),
+                    ends: count_ends(summaries.iter()),
+                    left_out: summaries.len() - times.len(),
+                    short: summaries
+                        .iter()
+                        .filter(|s| s.explored_fraction < SHORT_OF_FRACTION)
+                        .count(),
                     gain_pct: None,
                     paired: None,
                 })
@@ -205,6 +280,12 @@ pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
     }
 }
 
+fn is_normal_class(class: &str) -> bool {
+    EndReason::ALL
+        .iter()
+        .any(|r| r.is_normal() && r.as_str() == class)
+}
+
 fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
     let _ = writeln!(
         out,
@@ -226,6 +307,26 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
             Some(p) => format!("{:+.1} % (n={})", p.mean_pct, p.pairs),
             None => "-".into(),
         };
+        let mut marks = Vec::new();
+        if r.failed > 0 {
+            marks.push(format!("{} failed", r.failed));
+        }
+        if r.left_out > 0 {
+            let classes: Vec<String> = r
+                .ends
+                .iter()
+                .filter(|(c, n)| *n > 0 && !is_normal_class(c))
+                .map(|(c, n)| format!("{n} {c}"))
+                .collect();
+            marks.push(format!("{} left out: {}", r.left_out, classes.join(", ")));
+        }
+        if r.short > 0 {
+            marks.push(format!(
+                "{} short of {:.0} %",
+                r.short,
+                SHORT_OF_FRACTION * 100.0
+            ));
+        }
         let _ = writeln!(
             out,
             "  {:<16} {:>5} {:>10.0} {:>9.0} {:>9} {:>22} {:>9.1}% {:>6}{}",
@@ -237,10 +338,10 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
             paired,
             r.explored_fraction.mean * 100.0,
             r.stopped_early,
-            if r.failed > 0 {
-                format!("  ({} failed)", r.failed)
-            } else {
+            if marks.is_empty() {
                 String::new()
+            } else {
+                format!("  ({})", marks.join("; "))
             }
         );
     }
@@ -269,9 +370,94 @@ pub fn render_text(t: &Table) -> String {
         let _ = writeln!(
             out,
             "gain '-': the label's runs are not the same buildings and seeds as {}'s (some are \
-             missing or failed); the paired gain compares the runs they share",
+             missing, failed or left out); the paired gain compares the runs they share",
             t.reference.as_deref().unwrap_or("the reference")
         );
+    }
+    let left_out: usize = t.overall.iter().map(|r| r.left_out).sum();
+    if left_out > 0 {
+        let mut classes: BTreeMap<&str, usize> = BTreeMap::new();
+        for r in &t.overall {
+            for (c, n) in &r.ends {
+                if !is_normal_class(c) && *n > 0 {
+                    *classes.entry(c.as_str()).or_default() += n;
+                }
+            }
+        }
+        let mut listed: Vec<String> = end_classes()
+            .iter()
+            .filter_map(|c| classes.remove(c).map(|n| format!("{n} {c}")))
+            .collect();
+        listed.extend(classes.iter().map(|(c, n)| format!("{n} {c}")));
+        let _ = writeln!(
+            out,
+            "left out of the times and gains: {left_out} runs that did not end by exploring \
+             everything they could reach or by an early stop ({}); their times say when they \
+             were cut off, not how long exploring took (`runs` counts the rest; see how runs \
+             ended below)",
+            listed.join(", ")
+        );
+    }
+    let short: usize = t.overall.iter().map(|r| r.short).sum();
+    if short > 0 {
+        let _ = writeln!(
+            out,
+            "{short} runs ended with less than {:.0} % of the reachable free area explored \
+             (marked 'short'); 'explored' averages every run",
+            SHORT_OF_FRACTION * 100.0
+        );
+    }
+    out
+}
+
+/// How the runs ended: per strategy label (overall, then per building when there are
+/// several), the successful runs of each end class and those short of
+/// [`SHORT_OF_FRACTION`] explored.
+pub fn render_ends(t: &Table) -> String {
+    let mut out = String::new();
+    let extra: Vec<String> = std::iter::once(&t.overall)
+        .chain(t.per_building.values())
+        .flatten()
+        .flat_map(|r| {
+            r.ends
+                .iter()
+                .skip(end_classes().len())
+                .map(|(c, _)| c.clone())
+        })
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    let classes: Vec<&str> = end_classes()
+        .iter()
+        .copied()
+        .chain(extra.iter().map(String::as_str))
+        .collect();
+    let rows = |out: &mut String, rows: &[LabelRow]| {
+        let mut head = format!("  {:<16}", "strategy");
+        for c in &classes {
+            let _ = write!(head, " {c:>10}");
+        }
+        let _ = writeln!(
+            out,
+            "{head} {:>10}",
+            format!("< {:.0} %", SHORT_OF_FRACTION * 100.0)
+        );
+        for r in rows {
+            let mut line = format!("  {:<16}", r.label);
+            for c in &classes {
+                let n = r.ends.iter().find(|(e, _)| e == c).map_or(0, |(_, n)| *n);
+                let _ = write!(line, " {:>w$}", n, w = c.len().max(10));
+            }
+            let _ = writeln!(out, "{line} {:>10}", r.short);
+        }
+    };
+    let _ = writeln!(out, "How runs ended (successful runs per end class):");
+    rows(&mut out, &t.overall);
+    if t.per_building.len() > 1 {
+        for (b, r) in &t.per_building {
+            let _ = writeln!(out, "{b}:");
+            rows(&mut out, r);
+        }
     }
     out
 }
@@ -356,9 +542,11 @@ pub fn time_to_fraction(progress_csv: &str, fraction: f64) -> Option<f64> {
 /// One line per stored job, for pandas or R. `time_to_90_s` is the simulated time at which the
 /// run had explored 90 % (the paper's point from which layout knowledge pays off), empty if it
 /// never did. `rooms_never_entered` and `rooms_unexplored` are empty without ground-truth rooms.
+/// `end_reason` is the end class ([`end_class`]). The start pose (`start_x_m`, `start_y_m`,
+/// `start_theta_rad`, full precision) and where it came from close each line.
 pub fn results_csv(results: &[StoredResult]) -> String {
     let mut s = String::from(
-        "job_id,building,building_hash,strategy,label,seed,status,exploration_time_s,explored_area_m2,free_area_m2,explored_fraction,time_to_90_s,path_length_m,decisions,stopped_early,end_reason,unexplored_free_m2,rooms_never_entered,rooms_unexplored,wall_time_s,worker,floorcast_version\n",
+        "job_id,building,building_hash,strategy,label,seed,status,exploration_time_s,explored_area_m2,free_area_m2,explored_fraction,time_to_90_s,path_length_m,decisions,stopped_early,end_reason,unexplored_free_m2,rooms_never_entered,rooms_unexplored,wall_time_s,worker,floorcast_version,start_x_m,start_y_m,start_theta_rad,start_source\n",
     );
     for r in results {
         let sum = r
@@ -369,7 +557,7 @@ pub fn results_csv(results: &[StoredResult]) -> String {
         let count = |v: Option<usize>| v.map(|x| x.to_string()).unwrap_or_default();
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.job_id,
             csv_field(&r.building),
             r.building_hash,
@@ -391,13 +579,17 @@ pub fn results_csv(results: &[StoredResult]) -> String {
             sum.as_ref()
                 .map(|s| s.stopped_early.to_string())
                 .unwrap_or_default(),
-            csv_field(sum.as_ref().map(|s| s.end_reason.as_str()).unwrap_or("")),
+            csv_field(sum.as_ref().map(end_class).unwrap_or("")),
             f(sum.as_ref().map(|s| s.unexplored_free_m2)),
             count(sum.as_ref().and_then(|s| s.rooms_never_entered)),
             count(sum.as_ref().and_then(|s| s.rooms_unexplored)),
             r.wall_time_s,
             csv_field(&r.worker),
-            r.floorcast_version
+            r.floorcast_version,
+            f(sum.as_ref().map(|s| s.start[0])),
+            f(sum.as_ref().map(|s| s.start[1])),
+            f(sum.as_ref().map(|s| s.start[2])),
+            csv_field(sum.as_ref().map(|s| s.start_source.as_str()).unwrap_or("")),
         );
     }
     s
@@ -511,6 +703,165 @@ mod tests {
         );
     }
 
+    /// A stored run with its end class, explored fraction and start pose replaced.
+    fn stored_end(
+        label: &str,
+        seed: u64,
+        time_s: f64,
+        end_reason: &str,
+        fraction: f64,
+        start: [f64; 3],
+    ) -> StoredResult {
+        let mut r = stored("b", label, seed, time_s);
+        let mut v: serde_json::Value =
+            serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+        v["end_reason"] = serde_json::json!(end_reason);
+        v["explored_fraction"] = serde_json::json!(fraction);
+        v["stopped_early"] = serde_json::json!(end_reason == "early stop");
+        v["start"] = serde_json::json!(start);
+        r.summary_json = Some(v.to_string());
+        r.job_id = format!("{label}-{seed}-{}", start[0]);
+        r
+    }
+
+    #[test]
+    fn every_end_class_is_counted_and_only_normal_ends_are_timed() {
+        let s0 = [1.0, 2.0, 0.0];
+        // (seed, time_s, end_reason, explored_fraction): the baseline's runs.
+        let runs = [
+            (1, 100.0, "complete", 1.0),
+            (2, 200.0, "no frontiers", 0.99), // written before the classes: complete
+            (3, 300.0, "early stop", 0.98),
+            (4, 14400.0, "time limit", 0.6),
+            (5, 500.0, "stuck", 0.9),
+            (6, 600.0, "frontiers unreachable", 0.95),
+            (7, 700.0, "complete", 0.96), // complete, but short of 97 %
+        ];
+        let mut results: Vec<StoredResult> = runs
+            .iter()
+            .map(|&(seed, t, end, f)| stored_end("baseline", seed, t, end, f, s0))
+            .collect();
+        // The other label completes every seed in half the time.
+        for &(seed, t, _, _) in &runs {
+            results.push(stored_end("layout", seed, t / 2.0, "complete", 1.0, s0));
+        }
+        let t = table(&results, &["baseline".into(), "layout".into()]);
+        let base = &t.overall[0];
+        let counts: Vec<(&str, usize)> = base.ends.iter().map(|(c, n)| (c.as_str(), *n)).collect();
+        assert_eq!(
+            counts,
+            [
+                ("complete", 3),
+                ("early stop", 1),
+                ("time limit", 1),
+                ("stuck", 1),
+                ("frontiers unreachable", 1)
+            ]
+        );
+        // Times of the complete and early-stop runs only: 100, 200, 300, 700.
+        assert_eq!(base.time.n, 4);
+        assert_eq!(base.time.mean, 325.0);
+        assert_eq!(base.left_out, 3);
+        assert_eq!(base.short, 4);
+        assert_eq!(base.explored_fraction.n, 7);
+        // Pairs only where the baseline ended normally; no plain gain over different runs.
+        let layout = &t.overall[1];
+        assert_eq!(layout.left_out, 0);
+        assert_eq!(layout.paired.unwrap().pairs, 4);
+        assert_eq!(layout.paired.unwrap().mean_pct, 50.0);
+        assert_eq!(layout.gain_pct, None);
+        let text = render_text(&t);
+        for needle in [
+            "(3 left out: 1 time limit, 1 stuck, 1 frontiers unreachable; 4 short of 97 %)",
+            "left out of the times and gains: 3 runs",
+            "(1 time limit, 1 stuck, 1 frontiers unreachable)",
+            "4 runs ended with less than 97 %",
+            "gain '-'",
+        ] {
+            assert!(text.contains(needle), "{needle}: {text}");
+        }
+        let ends = render_ends(&t);
+        let line = |label: &str| {
+            ends.lines()
+                .find(|l| l.trim_start().starts_with(label))
+                .unwrap()
+                .split_whitespace()
+                .skip(1)
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        assert_eq!(line("baseline"), "3 1 1 1 1 4", "{ends}");
+        assert_eq!(line("layout"), "7 0 0 0 0 0", "{ends}");
+        assert!(ends.contains("frontiers unreachable"), "{ends}");
+    }
+
+    #[test]
+    fn an_unknown_end_is_left_out_and_shown() {
+        let s0 = [1.0, 2.0, 0.0];
+        let results = vec![
+            stored_end("baseline", 1, 100.0, "complete", 1.0, s0),
+            stored_end("baseline", 2, 900.0, "meteor", 1.0, s0),
+        ];
+        let t = table(&results, &[]);
+        assert_eq!(t.overall[0].time.n, 1);
+        assert_eq!(t.overall[0].left_out, 1);
+        assert!(render_text(&t).contains("1 meteor"), "{}", render_text(&t));
+        assert!(render_ends(&t).contains("meteor"));
+    }
+
+    #[test]
+    fn tables_of_normal_ends_carry_no_marks() {
+        let s0 = [1.0, 2.0, 0.0];
+        let results: Vec<StoredResult> = [(1, "complete"), (2, "no frontiers"), (3, "early stop")]
+            .iter()
+            .flat_map(|&(seed, end)| {
+                [
+                    stored_end("baseline", seed, 100.0, end, 0.99, s0),
+                    stored_end("layout", seed, 90.0, end, 0.99, s0),
+                ]
+            })
+            .collect();
+        let t = table(&results, &[]);
+        let text = render_text(&t);
+        assert!(
+            !text.contains("left out") && !text.contains("short") && !text.contains("gain '-'"),
+            "{text}"
+        );
+        assert!(text.contains("+10.0 %"), "{text}");
+        assert_eq!(t.overall[0].time.n, 3);
+    }
+
+    #[test]
+    fn runs_from_different_starts_pair_with_the_reference_from_the_same_start() {
+        // One seed, two start poses: layout is 10 % faster from one and 30 % from the other.
+        let (a, b) = ([1.0, 2.0, 0.5], [3.0, 4.0, -1.0]);
+        let results = vec![
+            stored_end("baseline", 1, 100.0, "complete", 1.0, a),
+            stored_end("baseline", 1, 200.0, "complete", 1.0, b),
+            stored_end("layout", 1, 90.0, "complete", 1.0, a),
+            stored_end("layout", 1, 140.0, "complete", 1.0, b),
+        ];
+        let t = table(&results, &[]);
+        let p = t.overall[1].paired.unwrap();
+        assert_eq!(p.pairs, 2);
+        assert!((p.mean_pct - 20.0).abs() < 1e-9, "{p:?}");
+        assert_eq!(t.overall[1].time.n, 2);
+        // The CSV carries each start pose exactly.
+        let csv = results_csv(&results);
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        let col = |row: &str, name: &str| {
+            row.split(',')
+                .nth(header.iter().position(|h| *h == name).unwrap())
+                .unwrap()
+                .to_string()
+        };
+        let row = csv.lines().nth(2).unwrap();
+        assert_eq!(col(row, "start_x_m"), "3");
+        assert_eq!(col(row, "start_y_m"), "4");
+        assert_eq!(col(row, "start_theta_rad"), "-1");
+        assert_eq!(col(row, "start_source"), "building file");
+    }
+
     #[test]
     fn time_to_a_fraction_is_the_first_sample_reaching_it() {
         let p = "time_s,explored_area_m2,explored_fraction\n0,0,0\n2,5,0.5\n4,9,0.9\n6,10,1\n";
@@ -531,6 +882,10 @@ mod tests {
         assert_eq!(col("rooms_never_entered"), "0");
         assert_eq!(col("rooms_unexplored"), "");
         assert_eq!(col("unexplored_free_m2"), "0.22750000000002046");
+        // Summaries written before the end classes said "no frontiers": complete.
+        assert_eq!(col("end_reason"), "complete");
+        assert_eq!(col("start_x_m"), "1.1999999999999993");
+        assert_eq!(col("start_theta_rad"), "0");
     }
 
     #[test]

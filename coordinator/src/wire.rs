@@ -161,6 +161,40 @@ pub struct WireJob {
     pub label: String,
     pub seed: u64,
     pub settings: Settings,
+    /// The start pose the grid sets, bit-exact (absent: the building's own start).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<WireStart>,
+}
+
+/// A start pose set by the grid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WireStart {
+    /// `[x_m, y_m, theta_rad]`.
+    pub pose: [f64; 3],
+    /// "random" or "grid".
+    pub source: String,
+}
+
+/// Checks that a submitted successful result started where its planned job starts: the
+/// summary's start pose bit for bit and its source (`planned` = `None`: the building's own
+/// start, which the job id's building hash already fixes).
+pub fn check_result_start(
+    result: &StoredResult,
+    planned: Option<&WireStart>,
+) -> Result<(), String> {
+    let (Some(planned), Some(summary)) = (planned, result.summary_json.as_deref()) else {
+        return Ok(());
+    };
+    let s = RunSummary::from_json(summary).map_err(|e| format!("summary: {e}"))?;
+    if s.start.map(f64::to_bits) != planned.pose.map(f64::to_bits) || s.start_source != planned.source
+    {
+        return Err(format!(
+            "the run started at {:?} ({}), the grid's job at {:?} ({})",
+            s.start, s.start_source, planned.pose, planned.source
+        ));
+    }
+    Ok(())
 }
 
 /// A worker returns a result (`ctl/submit/<job_id>`).

@@ -44,7 +44,10 @@ fn main() {
         rotation_rad: if has("rot") { 0.4 } else { 0.0 },
         ..Default::default()
     });
-    let start = building.default_start().expect("building has free space").0;
+    let start = building
+        .default_start(ExploreConfig::default().sim.robot.radius_m)
+        .expect("building has room to start")
+        .0;
     let mut locs = vec![Localization::Slam];
     if has("baseline") {
         locs.push(Localization::Odometry);

@@ -9,7 +9,7 @@ use sha2::{Digest, Sha256};
 
 use crate::distance::distance_to;
 use crate::geom::{Aabb, Polygon, Pose, Segment, Vec2};
-use crate::grid::{Bitmap, Cell, GridFrame};
+use crate::grid::{Bitmap, Cell, Grid, GridFrame};
 
 /// Resolution at which vector buildings are rasterised to measure areas.
 pub const AREA_RESOLUTION_M: f64 = 0.05;
@@ -51,6 +51,179 @@ pub struct Building {
     pub doors: Vec<Door>,
     pub start: Option<Pose>,
 }
+
+/// Headings of start poses are refused beyond this (360°).
+pub const MAX_HEADING_RAD: f64 = std::f64::consts::TAU * (1.0 + 1e-12);
+
+/// Room kept free around the robot's body at a random start (the explorer's safety margin).
+pub const RANDOM_START_MARGIN_M: f64 = 0.05;
+
+/// Why no start pose could be chosen.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StartError {
+    /// The building has no free space at all.
+    NoFreeSpace,
+    /// No free point is far enough from solid space for the robot's body.
+    NoRoom { needed_m: f64, max_clearance_m: f64 },
+}
+
+impl std::fmt::Display for StartError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StartError::NoFreeSpace => write!(f, "the building has no free space to start in"),
+            StartError::NoRoom {
+                needed_m,
+                max_clearance_m,
+            } => write!(
+                f,
+                "no free point has room for the robot's body: the largest clearance from solid \
+                 space is {max_clearance_m:.3} m, the robot needs {needed_m:.3} m; use a smaller \
+                 robot_radius_m, or check that the map's free space is not walled in by unknown \
+                 (grey) cells"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for StartError {}
+
+/// Why a given start pose is refused.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PoseProblem {
+    NotFinite,
+    /// The heading is beyond ±360°.
+    Heading,
+    /// The position is not in free space (in a wall or outside the building).
+    NotFree,
+    /// The robot's body would overlap solid space.
+    TooClose {
+        clearance_m: f64,
+    },
+}
+
+impl std::fmt::Display for PoseProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PoseProblem::NotFinite => write!(f, "is not a finite pose"),
+            PoseProblem::Heading => write!(f, "has a heading beyond [-360, 360] degrees"),
+            PoseProblem::NotFree => write!(f, "is not in free space"),
+            PoseProblem::TooClose { clearance_m } => write!(
+                f,
+                "is {clearance_m:.3} m from solid space, too close for the robot's body"
+            ),
+        }
+    }
+}
+
+/// The clearance of the cells of a grid covering a building ([`Building::clearance_field`]).
+#[derive(Debug, Clone)]
+pub struct ClearanceField {
+    /// The building's [`Building::area_frame`].
+    pub base: GridFrame,
+    /// `base` padded by one (solid) cell on every side.
+    pub frame: GridFrame,
+    pub free: Bitmap,
+    /// Per cell, a lower bound of the distance (m) from its centre to solid space; 0 on solid
+    /// cells.
+    pub clearance_m: Grid<f32>,
+}
+
+impl ClearanceField {
+    /// The world position of the centre of cell `index` of `frame`, computed on `base` (so
+    /// that a point is bit for bit the same as on the building's own grid).
+    pub fn position(&self, index: usize) -> Vec2 {
+        let c = self.frame.cell_of_index(index);
+        self.base.world_from_cell(Cell::new(c.x - 1, c.y - 1))
+    }
+
+    /// The free cell of largest clearance (lowest row-major index on ties) and its clearance.
+    pub fn largest(&self) -> Option<(usize, f32)> {
+        let mut best: Option<(usize, f32)> = None;
+        for (i, &c) in self.clearance_m.data.iter().enumerate() {
+            if self.free.data[i] && best.is_none_or(|(_, bc)| c > bc) {
+                best = Some((i, c));
+            }
+        }
+        best
+    }
+}
+
+/// Draws random start poses: cell centres of free space with room for the robot's body plus
+/// [`RANDOM_START_MARGIN_M`], uniformly over such cells connected (through such cells) to the
+/// largest-clearance point, heading uniform in [-π, π). Each draw is a pure function of the
+/// building, the radius, the seed and the draw's index.
+#[derive(Debug, Clone)]
+pub struct StartSampler<'a> {
+    building: &'a Building,
+    robot_radius_m: f64,
+    /// The centres of the cells a start may be drawn from, in row-major order.
+    cells: Vec<Vec2>,
+}
+
+impl<'a> StartSampler<'a> {
+    pub fn new(building: &'a Building, robot_radius_m: f64) -> Result<Self, StartError> {
+        let field = building.clearance_field();
+        let (best, best_clearance) = field.largest().ok_or(StartError::NoFreeSpace)?;
+        let need_m = robot_radius_m + RANDOM_START_MARGIN_M;
+        if (best_clearance as f64) < need_m {
+            return Err(StartError::NoRoom {
+                needed_m: need_m,
+                max_clearance_m: best_clearance as f64,
+            });
+        }
+        let roomy = Bitmap {
+            frame: field.frame,
+            data: field
+                .clearance_m
+                .data
+                .iter()
+                .map(|&c| c as f64 >= need_m)
+                .collect(),
+        };
+        let reach = flood_fill(&roomy, field.frame.cell_of_index(best));
+        let cells = (0..reach.data.len())
+            .filter(|&i| reach.data[i])
+            .map(|i| field.position(i))
+            .collect();
+        Ok(Self {
+            building,
+            robot_radius_m,
+            cells,
+        })
+    }
+
+    /// How many cells a start may be drawn from.
+    pub fn cells(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// The `index`-th start of the stream `seed`. A drawn cell whose centre the exact check
+    /// ([`Building::check_start`]) refuses is drawn again from the same stream.
+    pub fn draw(&self, seed: u64, index: u64) -> Pose {
+        use rand::RngCore;
+        use rand::SeedableRng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(RANDOM_START_STREAM);
+        // 2 words per draw, up to 64 tries per start.
+        rng.set_word_pos(index as u128 * 128 * 2);
+        let n = self.cells.len() as u128;
+        let mut first = None;
+        for _ in 0..64 {
+            let k = ((rng.next_u64() as u128 * n) >> 64) as usize;
+            let u = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+            let p = self.cells[k];
+            let pose = Pose::new(p.x, p.y, -std::f64::consts::PI + u * std::f64::consts::TAU);
+            if self.building.check_start(pose, self.robot_radius_m).is_ok() {
+                return pose;
+            }
+            first.get_or_insert(pose);
+        }
+        first.expect("at least one draw")
+    }
+}
+
+/// The ChaCha stream of random start poses (the simulator's streams are 1 and 2).
+const RANDOM_START_STREAM: u64 = 0x5354_4152_54;
 
 /// Where a start pose comes from, for reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -138,30 +311,143 @@ impl Building {
         self.free_mask(f).count_true() as f64 * f.cell_area_m2()
     }
 
-    /// The start pose: the file's, or else the free point with the largest clearance from walls
-    /// (centre of the cell farthest from any solid cell, lowest row-major index on ties),
-    /// facing +x. `None` only for a building with no free space.
-    pub fn default_start(&self) -> Option<(Pose, StartSource)> {
+    /// The start pose: the file's, or else [`Building::largest_clearance_start`] for a robot of
+    /// `robot_radius_m`. The file's pose is returned as written: check it with
+    /// [`Building::check_start`].
+    pub fn default_start(&self, robot_radius_m: f64) -> Result<(Pose, StartSource), StartError> {
         if let Some(p) = self.start {
-            return Some((p, StartSource::File));
+            return Ok((p, StartSource::File));
         }
-        let frame = self.area_frame();
-        let free = self.free_mask(frame);
+        self.largest_clearance_start(robot_radius_m)
+            .map(|p| (p, StartSource::LargestClearance))
+    }
+
+    /// The free point of largest clearance inside the building, facing +x: the centre of the
+    /// free cell farthest from solid space (outside the outline or the raster is solid; lowest
+    /// row-major index on ties). Refused when even there a disc of `robot_radius_m` would
+    /// overlap solid space.
+    pub fn largest_clearance_start(&self, robot_radius_m: f64) -> Result<Pose, StartError> {
+        let field = self.clearance_field();
+        let (i, _) = field.largest().ok_or(StartError::NoFreeSpace)?;
+        let p = field.position(i);
+        let clearance_m = self.clearance_at(p);
+        if clearance_m < robot_radius_m {
+            return Err(StartError::NoRoom {
+                needed_m: robot_radius_m,
+                max_clearance_m: clearance_m,
+            });
+        }
+        Ok(Pose::new(p.x, p.y, 0.0))
+    }
+
+    /// The distance (m) from `p` to the nearest solid space, 0 where `p` is not free. Exact:
+    /// measured to the boundary segments the simulated robot collides with.
+    pub fn clearance_at(&self, p: Vec2) -> f64 {
+        if !self.is_free(p) {
+            return 0.0;
+        }
+        self.boundary_segments()
+            .iter()
+            .map(|s| s.distance_to(p))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Checks a start pose for a robot of `robot_radius_m`: finite, heading within ±2π (±360°),
+    /// in free space, and the robot's body (a disc) clear of solid space.
+    pub fn check_start(&self, pose: Pose, robot_radius_m: f64) -> Result<(), PoseProblem> {
+        if !(pose.x_m.is_finite() && pose.y_m.is_finite() && pose.theta_rad.is_finite()) {
+            return Err(PoseProblem::NotFinite);
+        }
+        if pose.theta_rad.abs() > MAX_HEADING_RAD {
+            return Err(PoseProblem::Heading);
+        }
+        let p = pose.position();
+        if !self.is_free(p) {
+            return Err(PoseProblem::NotFree);
+        }
+        let clearance_m = self.clearance_at(p);
+        if clearance_m < robot_radius_m {
+            return Err(PoseProblem::TooClose { clearance_m });
+        }
+        Ok(())
+    }
+
+    /// The free point nearest to `p` (cell centre on the clearance grid) where a disc of
+    /// `robot_radius_m` fits with 1 cm to spare (for rounding when printed), if any: what to
+    /// suggest instead of a refused start.
+    pub fn nearest_start_position(&self, p: Vec2, robot_radius_m: f64) -> Option<Vec2> {
+        let field = self.clearance_field();
+        let mut best: Option<(f64, usize)> = None;
+        for (i, &c) in field.clearance_m.data.iter().enumerate() {
+            if (c as f64) < robot_radius_m + 0.01 {
+                continue;
+            }
+            let q = field.position(i);
+            let d = (q - p).norm();
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, i));
+            }
+        }
+        best.map(|(_, i)| field.position(i))
+    }
+
+    /// A random start pose for a robot of `robot_radius_m`: the `index`-th draw of the stream
+    /// `seed` (see [`StartSampler`]). A pure function of the building and its arguments.
+    pub fn random_start(
+        &self,
+        robot_radius_m: f64,
+        seed: u64,
+        index: u64,
+    ) -> Result<Pose, StartError> {
+        Ok(StartSampler::new(self, robot_radius_m)?.draw(seed, index))
+    }
+
+    /// The clearance of every cell of [`Building::area_frame`] (the raster's own grid or a
+    /// 0.05 m grid over the outline's box), padded by one solid cell all around: outside the
+    /// outline or the raster is solid.
+    pub fn clearance_field(&self) -> ClearanceField {
+        let base = self.area_frame();
+        let base_free = self.free_mask(base);
+        let frame = GridFrame::new(
+            base.origin_m - Vec2::new(base.resolution_m, base.resolution_m),
+            base.resolution_m,
+            base.width + 2,
+            base.height + 2,
+        );
+        let mut free = Bitmap::filled(frame, false);
+        for (i, &f) in base_free.data.iter().enumerate() {
+            let c = base.cell_of_index(i);
+            free.set(Cell::new(c.x + 1, c.y + 1), f);
+        }
         let solid = Bitmap {
             frame,
             data: free.data.iter().map(|f| !f).collect(),
         };
         let dist = distance_to(&solid);
-        let mut best: Option<(usize, f32)> = None;
-        for (i, &d) in dist.data.iter().enumerate() {
-            if free.data[i] && d.is_finite() && best.is_none_or(|(_, bd)| d > bd) {
-                best = Some((i, d));
-            }
+        // From a free cell's centre to the nearest point of a solid cell whose centre is `d`
+        // cells away: at least `d - sqrt(2) / 2` cells.
+        let res = frame.resolution_m;
+        let clearance_m = Grid {
+            frame,
+            data: dist
+                .data
+                .iter()
+                .zip(&free.data)
+                .map(|(&d, &f)| {
+                    if f && d.is_finite() {
+                        ((d as f64 - std::f64::consts::FRAC_1_SQRT_2).max(0.0) * res) as f32
+                    } else {
+                        0.0
+                    }
+                })
+                .collect(),
+        };
+        ClearanceField {
+            base,
+            frame,
+            free,
+            clearance_m,
         }
-        best.map(|(i, _)| {
-            let p = frame.world_from_cell(frame.cell_of_index(i));
-            (Pose::new(p.x, p.y, 0.0), StartSource::LargestClearance)
-        })
     }
 
     /// A content hash (SHA-256, hex, first 16 bytes) of everything that shapes a run: geometry,
@@ -395,10 +681,224 @@ mod tests {
     #[test]
     fn default_start_is_free_and_deterministic() {
         let b = two_rooms_vector();
-        let (p, src) = b.default_start().unwrap();
+        let (p, src) = b.default_start(0.2).unwrap();
         assert_eq!(src, StartSource::LargestClearance);
-        assert!(b.is_free(p.position()));
-        assert_eq!(b.default_start().unwrap().0, p);
+        assert!(b.check_start(p, 0.2).is_ok());
+        assert_eq!(b.default_start(0.2).unwrap().0, p);
+    }
+
+    fn vector(outline: Polygon, solids: Vec<Polygon>) -> Building {
+        Building {
+            name: "v".into(),
+            geometry: Geometry::Vector { outline, solids },
+            rooms: vec![],
+            doors: vec![],
+            start: None,
+        }
+    }
+
+    fn raster(ascii: &str, resolution_m: f64) -> Building {
+        let g = OccupancyGrid::from_ascii(ascii, resolution_m);
+        let solid = Bitmap {
+            frame: g.frame,
+            data: g
+                .data
+                .iter()
+                .map(|s| *s != crate::grid::Occupancy::Free)
+                .collect(),
+        };
+        Building {
+            name: "r".into(),
+            geometry: Geometry::Raster { solid },
+            rooms: vec![],
+            doors: vec![],
+            start: None,
+        }
+    }
+
+    #[test]
+    fn the_default_start_is_the_point_farthest_from_solid_space_and_the_outside() {
+        let rect = |x0, y0, x1, y1| Polygon::rect(Vec2::new(x0, y0), Vec2::new(x1, y1));
+        let area = |x0, y0, x1, y1| [x0, y0, x1, y1];
+        // (building, where the start must be [x0, y0, x1, y1], clearance at least m)
+        let cases = [
+            // An outline alone (60 m2): on its middle line (3 m from the outline).
+            (
+                vector(rect(0.0, 0.0, 10.0, 6.0), vec![]),
+                area(2.95, 2.95, 7.05, 3.05),
+                2.95,
+            ),
+            // BUILDING_FORMAT.md's example without its [start]: a wall along the bottom, half a
+            // wall at x = 5 and a small solid. Measured on the bounding box alone, the point
+            // farthest from every solid was a top corner; the outside is solid too.
+            (
+                vector(
+                    rect(0.0, 0.0, 10.0, 6.0),
+                    vec![
+                        Polygon::thick_segment(Vec2::new(0.0, 0.0), Vec2::new(10.0, 0.0), 0.2),
+                        Polygon::thick_segment(Vec2::new(5.0, 0.0), Vec2::new(5.0, 2.5), 0.2),
+                        Polygon::new(vec![
+                            Vec2::new(2.0, 2.0),
+                            Vec2::new(2.5, 2.0),
+                            Vec2::new(2.5, 2.5),
+                        ]),
+                    ],
+                ),
+                // Farthest from the right outline, the top and the inner wall's top corner.
+                area(7.3, 3.3, 7.65, 3.65),
+                2.45,
+            ),
+            // A raster whose free space reaches the raster's edge: the outside is solid, so the
+            // start is inside the free 6 x 4 cells, not on their open edge.
+            (
+                raster(
+                    "
+                    ......
+                    ......
+                    ......
+                    ......
+                    ",
+                    1.0,
+                ),
+                area(0.9, 0.9, 5.1, 3.1),
+                1.49,
+            ),
+        ];
+        for (i, (b, [x0, y0, x1, y1], min_clearance)) in cases.iter().enumerate() {
+            let (p, src) = b
+                .default_start(0.2)
+                .unwrap_or_else(|e| panic!("case {i}: {e}"));
+            assert_eq!(src, StartSource::LargestClearance);
+            assert!(
+                (*x0..=*x1).contains(&p.x_m) && (*y0..=*y1).contains(&p.y_m),
+                "case {i}: {p:?}"
+            );
+            let c = b.clearance_at(p.position());
+            assert!(c >= *min_clearance, "case {i}: clearance {c}");
+            assert!(b.check_start(p, 0.2).is_ok(), "case {i}");
+        }
+    }
+
+    #[test]
+    fn a_building_without_room_for_the_robot_is_refused() {
+        // A 0.3 m wide corridor: a 0.2 m robot (0.4 m across) does not fit anywhere.
+        let narrow = vector(
+            Polygon::rect(Vec2::new(0.0, 0.0), Vec2::new(5.0, 0.3)),
+            vec![],
+        );
+        match narrow.default_start(0.2) {
+            Err(StartError::NoRoom {
+                needed_m,
+                max_clearance_m,
+            }) => {
+                assert_eq!(needed_m, 0.2);
+                assert!((max_clearance_m - 0.15).abs() < 0.03, "{max_clearance_m}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(narrow.default_start(0.1).is_ok());
+        assert!(narrow.random_start(0.2, 1, 0).is_err());
+        let all_solid = raster("\n###\n###\n", 1.0);
+        assert_eq!(all_solid.default_start(0.2), Err(StartError::NoFreeSpace));
+        // A file's start is returned as written: check_start judges it.
+        let mut with_start = narrow.clone();
+        with_start.start = Some(Pose::new(1.0, 0.15, 0.0));
+        assert_eq!(with_start.default_start(0.2).unwrap().1, StartSource::File);
+    }
+
+    #[test]
+    fn a_start_pose_is_checked_for_the_robots_body() {
+        let b = two_rooms_vector();
+        let r = 0.2;
+        let cases = [
+            (Pose::new(2.5, 3.0, 0.0), None),
+            (Pose::new(2.5, 3.0, -std::f64::consts::TAU), None),
+            (Pose::new(f64::NAN, 3.0, 0.0), Some("is not a finite pose")),
+            (
+                Pose::new(2.5, f64::INFINITY, 0.0),
+                Some("is not a finite pose"),
+            ),
+            (Pose::new(2.5, 3.0, 1e300), Some("heading")),
+            (Pose::new(2.5, 3.0, 7.0), Some("heading")),
+            (Pose::new(-1.0, 3.0, 0.0), Some("not in free space")),
+            (Pose::new(5.0, 1.0, 0.0), Some("not in free space")),
+            // Free, but 0.15 m from the inner wall's face (x = 4.9).
+            (Pose::new(4.75, 1.0, 0.0), Some("too close")),
+            // 0.25 m from it: room for the body.
+            (Pose::new(4.65, 1.0, 0.0), None),
+        ];
+        for (pose, want) in cases {
+            let got = b.check_start(pose, r);
+            match want {
+                None => assert!(got.is_ok(), "{pose:?}: {got:?}"),
+                Some(needle) => {
+                    let e = got.expect_err("refused").to_string();
+                    assert!(e.contains(needle), "{pose:?}: {e}");
+                }
+            }
+        }
+        // The suggestion has room for the body and is near the refused point.
+        let near = b.nearest_start_position(Vec2::new(4.75, 1.0), r).unwrap();
+        assert!(b.check_start(Pose::new(near.x, near.y, 0.0), r).is_ok());
+        assert!((near - Vec2::new(4.75, 1.0)).norm() < 0.2, "{near:?}");
+    }
+
+    #[test]
+    fn random_starts_are_free_connected_distinct_and_reproducible() {
+        // Two rooms joined by a door, and a closed third room the robot cannot reach.
+        let mut b = two_rooms_vector();
+        if let Geometry::Vector { outline, solids } = &mut b.geometry {
+            *outline = Polygon::rect(Vec2::new(0.0, 0.0), Vec2::new(14.0, 6.0));
+            solids.push(Polygon::thick_segment(
+                Vec2::new(10.0, 0.0),
+                Vec2::new(10.0, 6.0),
+                0.2,
+            ));
+            solids.push(Polygon::thick_segment(
+                Vec2::new(10.0, 0.0),
+                Vec2::new(14.0, 0.0),
+                0.2,
+            ));
+            solids.push(Polygon::thick_segment(
+                Vec2::new(14.0, 0.0),
+                Vec2::new(14.0, 6.0),
+                0.2,
+            ));
+            solids.push(Polygon::thick_segment(
+                Vec2::new(10.0, 6.0),
+                Vec2::new(14.0, 6.0),
+                0.2,
+            ));
+        }
+        let r = 0.2;
+        let sampler = StartSampler::new(&b, r).unwrap();
+        let poses: Vec<Pose> = (0..200).map(|k| sampler.draw(7, k)).collect();
+        let (mut left, mut right) = (0, 0);
+        for p in &poses {
+            assert!(b.check_start(*p, r).is_ok(), "{p:?}");
+            assert!(b.clearance_at(p.position()) >= r + RANDOM_START_MARGIN_M - 0.01);
+            assert!(p.x_m < 10.0, "in the closed room: {p:?}");
+            assert!((-std::f64::consts::PI..std::f64::consts::PI).contains(&p.theta_rad));
+            if p.x_m < 5.0 {
+                left += 1;
+            } else {
+                right += 1;
+            }
+        }
+        // Both rooms (about equal areas) are drawn from.
+        assert!(left > 60 && right > 60, "{left} {right}");
+        let distinct: std::collections::BTreeSet<(u64, u64)> = poses
+            .iter()
+            .map(|p| (p.x_m.to_bits(), p.y_m.to_bits()))
+            .collect();
+        assert!(distinct.len() > 150, "{}", distinct.len());
+        // A pure function of building, radius, seed and index.
+        assert_eq!(b.random_start(r, 7, 3).unwrap(), poses[3]);
+        assert_ne!(b.random_start(r, 8, 3).unwrap(), poses[3]);
+        // Headings cover the circle.
+        assert!(
+            poses.iter().any(|p| p.theta_rad < -2.0) && poses.iter().any(|p| p.theta_rad > 2.0)
+        );
     }
 
     #[test]

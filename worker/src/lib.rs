@@ -10,7 +10,7 @@ pub mod settings;
 
 use std::time::Instant;
 
-use sim_core::building::StartSource;
+use sim_core::building::{PoseProblem, StartSource};
 use sim_core::explore::{explore_charged, ProgressSample, RunResult};
 use sim_core::{Building, Pose};
 
@@ -30,17 +30,43 @@ pub struct Job<'a> {
     pub seed: u64,
     pub settings: Settings,
     /// Overrides the building's start pose.
-    pub start: Option<Pose>,
+    pub start: Option<GivenStart>,
     /// Explored fractions at which to keep a copy of the map (see `ExploreConfig`).
     pub snapshot_fractions: Vec<f64>,
 }
 
+/// A start pose chosen outside the building file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GivenStart {
+    pub pose: Pose,
+    /// Where it came from, as the summary's `start_source` records it: "command line",
+    /// "random" (drawn by [`Building::random_start`]) or "grid" (listed in a grid file).
+    pub source: String,
+}
+
+impl GivenStart {
+    pub const COMMAND_LINE: &'static str = "command line";
+    pub const RANDOM: &'static str = "random";
+    pub const GRID: &'static str = "grid";
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum JobError {
-    #[error("building {0} has no free space to start in")]
-    NoStart(String),
-    #[error("start pose ({x:.2}, {y:.2}) is not in free space of building {name}")]
-    StartInWall { name: String, x: f64, y: f64 },
+    #[error("building {name}: {source}")]
+    NoStart {
+        name: String,
+        source: sim_core::building::StartError,
+    },
+    #[error("{}", bad_start_message(name, origin, pose, problem, *hint))]
+    BadStart {
+        name: String,
+        /// Where the pose came from, e.g. "the building file's [start]".
+        origin: String,
+        pose: Pose,
+        problem: PoseProblem,
+        /// The nearest position with room for the robot's body.
+        hint: Option<sim_core::Vec2>,
+    },
     #[error("unknown strategy '{0}' (available: {list})", list = STRATEGIES.join(", "))]
     UnknownStrategy(String),
     #[error("strategy {strategy} takes its layout from the building's ground-truth rooms, and building {name} has none (a map without rooms); use it with a floorcast building file that lists rooms, or choose another strategy")]
@@ -68,7 +94,7 @@ pub const STRATEGIES: &[&str] = sim_core::explore::Strategy::NAMES;
 /// callers can refuse a bad job before they create any output. Returns the config and the start.
 pub fn check_job(
     job: &Job<'_>,
-) -> Result<(sim_core::explore::ExploreConfig, Pose, &'static str), JobError> {
+) -> Result<(sim_core::explore::ExploreConfig, Pose, String), JobError> {
     if !STRATEGIES.contains(&job.strategy.as_str()) {
         return Err(JobError::UnknownStrategy(job.strategy.clone()));
     }
@@ -81,21 +107,29 @@ pub fn check_job(
     }
     config.snapshot_fractions = job.snapshot_fractions.clone();
     check_size(job.building, &job.building_name, config.map_resolution_m)?;
-    let (start, source) = match job.start {
-        Some(p) => (p, "command line"),
-        None => match job.building.default_start() {
-            Some((p, StartSource::File)) => (p, "building file"),
-            Some((p, StartSource::LargestClearance)) => (p, "largest clearance"),
-            None => return Err(JobError::NoStart(job.building_name.clone())),
+    let radius_m = job.settings.robot_radius_m;
+    let (start, source, origin) = match &job.start {
+        Some(g) => (g.pose, g.source.clone(), format!("the {} start", g.source)),
+        None => match job.building.default_start(radius_m) {
+            Ok((p, StartSource::File)) => (
+                p,
+                "building file".to_string(),
+                "the building file's [start]".to_string(),
+            ),
+            Ok((p, StartSource::LargestClearance)) => (
+                p,
+                "largest clearance".to_string(),
+                "the largest clearance".to_string(),
+            ),
+            Err(source) => {
+                return Err(JobError::NoStart {
+                    name: job.building_name.clone(),
+                    source,
+                })
+            }
         },
     };
-    if !job.building.is_free(start.position()) {
-        return Err(JobError::StartInWall {
-            name: job.building_name.clone(),
-            x: start.x_m,
-            y: start.y_m,
-        });
-    }
+    check_start(job.building, &job.building_name, start, radius_m, &origin)?;
     Ok((config, start, source))
 }
 
@@ -142,7 +176,7 @@ pub fn run_job(
     }))
     .map_err(|p| JobError::Panicked(panic_message(&*p)))?;
     let wall_time_s = t0.elapsed().as_secs_f64();
-    let summary = RunSummary::new(job, &result, source, wall_time_s);
+    let summary = RunSummary::new(job, &result, &source, wall_time_s);
     Ok(JobOutput { summary, result })
 }
 
@@ -154,5 +188,139 @@ pub fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
         s.clone()
     } else {
         "a panic without a message".to_string()
+    }
+}
+
+/// Checks a start pose for a robot of `robot_radius_m` in `building`; the error names
+/// `origin` (where the pose came from, e.g. "--start") and suggests the nearest free position
+/// with room for the robot's body.
+pub fn check_start(
+    building: &Building,
+    building_name: &str,
+    pose: Pose,
+    robot_radius_m: f64,
+    origin: &str,
+) -> Result<(), JobError> {
+    building
+        .check_start(pose, robot_radius_m)
+        .map_err(|problem| {
+            let hint = match problem {
+                PoseProblem::NotFinite | PoseProblem::Heading => None,
+                _ => building.nearest_start_position(pose.position(), robot_radius_m),
+            };
+            JobError::BadStart {
+                name: building_name.to_string(),
+                origin: origin.to_string(),
+                pose,
+                problem,
+                hint,
+            }
+        })
+}
+
+fn bad_start_message(
+    name: &str,
+    origin: &str,
+    pose: &Pose,
+    problem: &PoseProblem,
+    hint: Option<sim_core::Vec2>,
+) -> String {
+    let what = match problem {
+        PoseProblem::NotFinite | PoseProblem::Heading => format!(
+            "start pose {}, {}, {} deg",
+            pose.x_m,
+            pose.y_m,
+            pose.theta_rad.to_degrees()
+        ),
+        _ => format!("start position {:.2}, {:.2}", pose.x_m, pose.y_m),
+    };
+    let next = match (problem, hint) {
+        (PoseProblem::NotFinite, _) => {
+            "give finite x,y in metres and a heading in degrees".to_string()
+        }
+        (PoseProblem::Heading, _) => "give a heading in degrees within [-360, 360]".to_string(),
+        (_, Some(h)) => format!(
+            "the nearest free position with room for the robot is {:.2},{:.2}",
+            h.x, h.y
+        ),
+        (_, None) => "no position in the building has room for the robot".to_string(),
+    };
+    format!("{what} from {origin} {problem} in building {name}; {next}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sim_core::{Geometry, Polygon, Vec2};
+
+    fn box_building(start: Option<Pose>) -> Building {
+        Building {
+            name: "box".into(),
+            geometry: Geometry::Vector {
+                outline: Polygon::rect(Vec2::new(0.0, 0.0), Vec2::new(4.0, 3.0)),
+                solids: vec![],
+            },
+            rooms: vec![],
+            doors: vec![],
+            start,
+        }
+    }
+
+    fn job<'a>(b: &'a Building, start: Option<GivenStart>) -> Job<'a> {
+        Job {
+            building: b,
+            building_name: "box".into(),
+            strategy: "baseline".into(),
+            seed: 1,
+            settings: Settings {
+                time_limit_s: 2.0,
+                ..Settings::default()
+            },
+            start,
+            snapshot_fractions: vec![],
+        }
+    }
+
+    #[test]
+    fn every_start_is_checked_and_named_by_where_it_came_from() {
+        let given = |x, y, source: &str| {
+            Some(GivenStart {
+                pose: Pose::new(x, y, 0.0),
+                source: source.into(),
+            })
+        };
+        // (building's start, given start, error wanted (None = runs), start_source)
+        let cases = [
+            (None, None, None, "largest clearance"),
+            (Some(Pose::new(2.0, 1.5, 0.0)), None, None, "building file"),
+            (
+                Some(Pose::new(0.1, 1.5, 0.0)),
+                None,
+                Some("from the building file's [start] is 0.100 m from solid space"),
+                "",
+            ),
+            (
+                Some(Pose::new(5.0, 1.5, 0.0)),
+                None,
+                Some("the building file's [start] is not in free space in building box; the nearest free position with room for the robot is 3.7"),
+                "",
+            ),
+            (None, given(1.0, 1.0, GivenStart::GRID), None, "grid"),
+            (
+                None,
+                given(1.0, 0.15, GivenStart::RANDOM),
+                Some("from the random start is 0.150 m"),
+                "",
+            ),
+        ];
+        for (file_start, given_start, want_error, source) in cases {
+            let b = box_building(file_start);
+            match (run_job(&job(&b, given_start), &mut |_| {}), want_error) {
+                (Ok(out), None) => assert_eq!(out.summary.start_source, source),
+                (Err(e), Some(needle)) => assert!(e.to_string().contains(needle), "{e}"),
+                (Ok(out), Some(n)) => panic!("{n}: ran from {:?}", out.summary.start),
+                (Err(e), None) => panic!("{e}"),
+            }
+        }
     }
 }
