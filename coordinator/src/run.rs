@@ -269,9 +269,11 @@ pub fn run_plan(
                 } => {
                     let job_id = result.job_id.clone();
                     let verdict = match jobs.get(&job_id) {
-                        Some(j) => check_result(&result, &expected_row(&plan, j, "")).and_then(
-                            |()| check_result_start(&result, wire_job(&plan, j).start.as_ref()),
-                        ),
+                        Some(j) => {
+                            check_result(&result, &expected_row(&plan, j, "")).and_then(|()| {
+                                check_result_start(&result, wire_job(&plan, j).start.as_ref())
+                            })
+                        }
                         None => Ok(()), // the scheduler rejects unknown jobs
                     };
                     if let Err(reason) = verdict {
@@ -568,6 +570,47 @@ pub(crate) fn execute_job(mut row: StoredResult, spec: &Job<'_>) -> StoredResult
 mod tests {
     use super::*;
     use std::path::Path;
+
+    /// A job of a grid with `[starts]` runs from its planned pose whether it runs here or on
+    /// a remote worker (through its wire form), and a result that started elsewhere is refused.
+    #[test]
+    fn a_grid_start_crosses_the_wire_and_is_checked_on_return() {
+        let dir = tempfile::tempdir().unwrap();
+        let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
+        let text = format!(
+            "format = \"floorcast-grid\"\nversion = 1\nname = \"s\"\nbuildings = [\"{}\"]\nseeds = [1]\n[[strategies]]\nname = \"baseline\"\n[settings]\ntime_limit_s = 5\n[starts]\nrandom = 2\nseed = 3\n",
+            small.display()
+        );
+        let plan = Plan::parse(
+            &text,
+            &dir.path().join("grid.toml"),
+            Some(&dir.path().join("r")),
+        )
+        .unwrap();
+        assert_eq!(plan.jobs.len(), 2);
+        let (a, b) = (&plan.jobs[0], &plan.jobs[1]);
+        assert_ne!(a.start, b.start);
+        let wire = wire_job(&plan, a);
+        let wire: WireJob = serde_json::from_str(&serde_json::to_string(&wire).unwrap()).unwrap();
+        let building = &plan.buildings[a.building].building;
+        let remote = execute_wire(&wire, building, "w");
+        let local = execute(&plan, a, "local");
+        for r in [&remote, &local] {
+            assert_eq!(r.status, "ok", "{:?}", r.error);
+            let s = floorcast_worker::RunSummary::from_json(r.summary_json.as_deref().unwrap())
+                .unwrap();
+            let planned = a.start.as_ref().unwrap();
+            assert_eq!(
+                s.start.map(f64::to_bits),
+                [planned.pose.x_m, planned.pose.y_m, planned.pose.theta_rad].map(f64::to_bits)
+            );
+            assert_eq!(s.start_source, "random");
+            assert!(check_result_start(r, wire.start.as_ref()).is_ok());
+        }
+        // The other job's start is not this result's.
+        let e = check_result_start(&remote, wire_job(&plan, b).start.as_ref()).unwrap_err();
+        assert!(e.contains("the grid's job at"), "{e}");
+    }
 
     /// A job that panics is stored as a failed job (with the panic's message), never lost, and
     /// the other workers' jobs still run.

@@ -187,7 +187,8 @@ pub fn check_result_start(
         return Ok(());
     };
     let s = RunSummary::from_json(summary).map_err(|e| format!("summary: {e}"))?;
-    if s.start.map(f64::to_bits) != planned.pose.map(f64::to_bits) || s.start_source != planned.source
+    if s.start.map(f64::to_bits) != planned.pose.map(f64::to_bits)
+        || s.start_source != planned.source
     {
         return Err(format!(
             "the run started at {:?} ({}), the grid's job at {:?} ({})",

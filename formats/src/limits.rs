@@ -12,7 +12,7 @@ use sim_core::Building;
 
 use crate::error::{num, Error};
 
-/// Default cell budget: the 0.05 m exploration grid of a 250 m x 250 m building (every shipped
+/// Default cell budget: the 0.05 m exploration grid of a 230 m x 230 m building (every shipped
 /// map and paper building needs at most a fifth of it).
 pub const DEFAULT_MAX_CELLS: u64 = 25_000_000;
 
@@ -25,8 +25,6 @@ pub const COORDINATE_LIMIT_M: f64 = 100_000.0;
 
 /// Resolution of the exploration map grid by default (the settings' `map_resolution_m`).
 pub const EXPLORE_RESOLUTION_M: f64 = 0.05;
-/// Margin the exploration grid adds around a building's bounds (metres, each side).
-pub const EXPLORE_MARGIN_M: f64 = 1.0;
 
 /// Deepest nesting of `( ... )` accepted in a Stage world file.
 pub const MAX_WORLD_DEPTH: usize = 64;
@@ -101,8 +99,9 @@ pub fn check_building(
             ),
         ));
     }
-    let w = b.width_m() + 2.0 * EXPLORE_MARGIN_M;
-    let h = b.height_m() + 2.0 * EXPLORE_MARGIN_M;
+    let margin_m = sim_core::explore::map_margin_m(&b);
+    let w = b.width_m() + 2.0 * margin_m;
+    let h = b.height_m() + 2.0 * margin_m;
     check_cells(
         path,
         field,
@@ -203,9 +202,9 @@ mod tests {
         // (side, offset, resolution, accepted, words in the message)
         let cases: &[(f64, f64, f64, bool, &str)] = &[
             (100.0, 0.0, 0.05, true, ""),
-            (240.0, 0.0, 0.05, true, ""),
+            (230.0, 0.0, 0.05, true, ""),
             (260.0, 0.0, 0.05, false, "--max-cells"),
-            (45.0, 0.0, 0.01, true, ""),
+            (35.0, 0.0, 0.01, true, ""),
             (50.0, 0.0, 0.01, false, "0.01 m grid"),
             (1e300, 0.0, 0.05, false, "beyond the limit"),
             (20_000.0, 0.0, 0.05, false, "budget of 25000000 cells"),

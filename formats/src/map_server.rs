@@ -76,11 +76,18 @@ pub fn read_map(yaml_path: &Path) -> Result<OccupancyGrid, Error> {
     crate::limits::check_cells(
         yaml_path,
         "resolution",
-        crate::limits::cells_for(
-            w as f64 * meta.resolution_m + 2.0 * crate::limits::EXPLORE_MARGIN_M,
-            h as f64 * meta.resolution_m + 2.0 * crate::limits::EXPLORE_MARGIN_M,
-            crate::limits::EXPLORE_RESOLUTION_M,
-        ),
+        {
+            let (w_m, h_m) = (w as f64 * meta.resolution_m, h as f64 * meta.resolution_m);
+            let margin_m = sim_core::explore::map_margin_m(&sim_core::Aabb {
+                min: sim_core::Vec2::zeros(),
+                max: sim_core::Vec2::new(w_m, h_m),
+            });
+            crate::limits::cells_for(
+                w_m + 2.0 * margin_m,
+                h_m + 2.0 * margin_m,
+                crate::limits::EXPLORE_RESOLUTION_M,
+            )
+        },
         &format!(
             "{w} x {h} pixels of {} m span {} x {} m; exploring them on a {} m grid",
             num(meta.resolution_m),

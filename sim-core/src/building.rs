@@ -525,6 +525,143 @@ impl Building {
     }
 }
 
+/// The free cells of `reachable` (a building's free space connected to the start, see
+/// [`Building::reachable_free`]) that a robot whose body is a disc of `robot_radius_m` could
+/// see with a laser of `range_m` from somewhere it can drive to: the denominator of the
+/// explored fraction. Free space behind a gap narrower than the robot, or a pocket of a raster
+/// map joined to the rest by a one-cell gap, is free but cannot be explored; counting it would
+/// make complete runs look short.
+///
+/// The body can stand where the clearance of a cell's centre (a lower bound, as in
+/// [`Building::clearance_field`]) is at least `robot_radius_m`; the places it can drive to are
+/// those 4-connected to the start's cell (or, when the start's cell is just short of the
+/// clearance by the bound's rounding, to the nearest such cell). Every free cell within the
+/// body's radius of such a place is seen (the disc around it is free). Other cells are seen
+/// when a ray from a place on the boundary of the drivable region, in one of 720 directions
+/// (every 0.5 degree), reaches them through free cells within `range_m`: a line of sight from
+/// anywhere in the region leaves it through its boundary, so its boundary sees all the region
+/// does. A ray that enters the region again stops, since the region's boundary farther along
+/// casts its own.
+///
+/// Without any drivable place (no room for the body), `reachable` is returned unchanged.
+pub fn explorable_free(
+    reachable: &Bitmap,
+    start: Vec2,
+    robot_radius_m: f64,
+    range_m: f64,
+) -> Bitmap {
+    let frame = reachable.frame;
+    let res = frame.resolution_m;
+    let solid = Bitmap {
+        frame,
+        data: reachable.data.iter().map(|f| !f).collect(),
+    };
+    let dist = distance_to(&solid);
+    let need_cells = robot_radius_m / res + std::f64::consts::FRAC_1_SQRT_2;
+    let roomy = Bitmap {
+        frame,
+        data: dist.data.iter().map(|&d| d as f64 >= need_cells).collect(),
+    };
+    let start_cell = frame.cell_from_world(start);
+    let seed = if roomy.get(start_cell) == Some(&true) {
+        Some(start_cell)
+    } else {
+        // The roomy cell nearest to the start (lowest index on ties).
+        let mut best: Option<(i64, usize)> = None;
+        for (i, &r) in roomy.data.iter().enumerate() {
+            if r {
+                let c = frame.cell_of_index(i);
+                let (dx, dy) = ((c.x - start_cell.x) as i64, (c.y - start_cell.y) as i64);
+                let d = dx * dx + dy * dy;
+                if best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, i));
+                }
+            }
+        }
+        best.map(|(_, i)| frame.cell_of_index(i))
+    };
+    let Some(seed) = seed else {
+        return reachable.clone();
+    };
+    let drivable = flood_fill(&roomy, seed);
+    // Seen from inside the disc: within the body's radius of a drivable cell.
+    let to_drivable = distance_to(&drivable);
+    let body_cells = robot_radius_m / res;
+    let mut seen = Bitmap {
+        frame,
+        data: to_drivable
+            .data
+            .iter()
+            .zip(&reachable.data)
+            .map(|(&d, &f)| f && (d as f64) <= body_cells)
+            .collect(),
+    };
+    // Rays from the drivable region's boundary.
+    const RAYS: usize = 720;
+    // A ray sees a gap of one or two cells (the speckle of a scanned map) but not through it:
+    // it shows a glimpse, not a room.
+    let narrow = narrow_gaps(reachable);
+    let range_cells = range_m / res;
+    let dirs: Vec<[f64; 2]> = (0..RAYS)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / RAYS as f64;
+            [a.cos() * range_cells, a.sin() * range_cells]
+        })
+        .collect();
+    for i in 0..drivable.data.len() {
+        if !drivable.data[i] {
+            continue;
+        }
+        let c = frame.cell_of_index(i);
+        if c.neighbours4()
+            .iter()
+            .all(|&n| drivable.get(n) == Some(&true))
+        {
+            continue;
+        }
+        let a = [c.x as f64 + 0.5, c.y as f64 + 0.5];
+        for d in &dirs {
+            let b = [a[0] + d[0], a[1] + d[1]];
+            for cell in crate::mapping::ray::SegmentCells::new(a, b).skip(1) {
+                let Some(j) = frame.index(cell) else { break };
+                if !reachable.data[j] || drivable.data[j] {
+                    break;
+                }
+                seen.data[j] = true;
+                if narrow.data[j] {
+                    break;
+                }
+            }
+        }
+    }
+    seen
+}
+
+/// The true cells of `free` in a gap of one or two cells: along the row or the column through
+/// the cell, at most two true cells lie between false ones (outside counts as false). Rays
+/// walk 4-connected, so they never pass between cells that touch only at a corner.
+fn narrow_gaps(free: &Bitmap) -> Bitmap {
+    let frame = free.frame;
+    let is_free = |c: Cell| free.get(c).copied().unwrap_or(false);
+    let mut out = Bitmap::filled(frame, false);
+    for i in 0..free.data.len() {
+        if !free.data[i] {
+            continue;
+        }
+        let c = frame.cell_of_index(i);
+        out.data[i] = [(1, 0), (0, 1)].iter().any(|&(dx, dy)| {
+            // Free cells in a row through `c` along (dx, dy), counting up to 3.
+            let run = |sign: i32| {
+                (1..=2)
+                    .take_while(|&k| is_free(Cell::new(c.x + sign * k * dx, c.y + sign * k * dy)))
+                    .count()
+            };
+            1 + run(1) + run(-1) <= 2
+        });
+    }
+    out
+}
+
 /// Cells of `mask` 4-connected to `seed` (empty when `seed` is not in `mask`).
 pub fn flood_fill(mask: &Bitmap, seed: Cell) -> Bitmap {
     let frame = mask.frame;
@@ -648,6 +785,55 @@ pub fn for_cells_in_polygon(f: GridFrame, poly: &Polygon, mut visit: impl FnMut(
 mod tests {
     use super::*;
     use crate::grid::OccupancyGrid;
+
+    /// Two rooms of 12 x 12 cells (0.05 m) side by side, the wall between them open over
+    /// `opening` cells in its middle; `.` free, `#` solid. Row 0 is the top.
+    fn rooms_with_opening(opening: usize) -> Bitmap {
+        let (w, h) = (27usize, 14usize);
+        let frame = GridFrame::new(Vec2::zeros(), 0.05, w as u32, h as u32);
+        let mut b = Bitmap::filled(frame, false);
+        let top = (h - opening) / 2;
+        for y in 1..h - 1 {
+            for x in 1..w - 1 {
+                let in_wall = x == 13 && !(top..top + opening).contains(&y);
+                b.set(Cell::new(x as i32, y as i32), !in_wall);
+            }
+        }
+        b
+    }
+
+    fn cells_in(b: &Bitmap, xs: std::ops::Range<i32>) -> usize {
+        b.iter().filter(|(c, &v)| v && xs.contains(&c.x)).count()
+    }
+
+    /// What a robot of radius 0.1 m (4 cells across) with a 1 m laser, started in the left
+    /// room, can explore of the right one: all of it through an opening it fits through,
+    /// part of it (what is in sight through the gap) through one it does not fit through, and
+    /// nothing beyond a one- or two-cell gap (the speckle of a scanned map).
+    #[test]
+    fn explorable_space_is_what_the_laser_sees_from_where_the_body_fits() {
+        let start = Vec2::new(0.3, 0.35);
+        let right = 14..26;
+        // (opening in cells, right room cells explorable: min, max)
+        let cases = [(6, 144, 144), (4, 20, 143), (2, 0, 0), (1, 0, 0), (0, 0, 0)];
+        for (opening, min, max) in cases {
+            let free = rooms_with_opening(opening);
+            let reachable = flood_fill(&free, free.frame.cell_from_world(start));
+            let e = explorable_free(&reachable, start, 0.1, 1.0);
+            let got = cells_in(&e, right.clone());
+            assert!(
+                (min..=max).contains(&got),
+                "opening {opening}: {got} cells of the right room, expected {min}..={max}"
+            );
+            // The left room is explorable whole; nothing outside the reachable free space is.
+            assert_eq!(cells_in(&e, 1..13), 144, "opening {opening}");
+            assert!(e.data.iter().zip(&reachable.data).all(|(&e, &r)| !e || r));
+        }
+        // No room for the body anywhere: the reachable free space as it is.
+        let free = rooms_with_opening(4);
+        let reachable = flood_fill(&free, free.frame.cell_from_world(start));
+        assert_eq!(explorable_free(&reachable, start, 0.5, 1.0), reachable);
+    }
 
     fn two_rooms_vector() -> Building {
         // 10 x 6 m box, an inner wall at x = 5 with a 1 m door.

@@ -28,15 +28,21 @@ pub struct RunSummary {
     /// Simulated seconds until the run ended.
     pub total_time_s: f64,
     pub explored_area_m2: f64,
-    /// Free area reachable from the start (the explored fraction's denominator).
+    /// The explorable free area (m2): free space connected to the start that the laser can see
+    /// from where the robot's body fits; the explored fraction's denominator. Before 0.4 it
+    /// was all free space connected to the start.
     pub free_area_m2: f64,
+    /// Free area connected to the start that is not explorable (m2): behind openings narrower
+    /// than the robot and out of the laser's sight (absent before 0.4).
+    #[serde(default)]
+    pub unexplorable_free_m2: f64,
     pub explored_fraction: f64,
     pub path_length_m: f64,
     pub decisions: usize,
     /// Ended by the strategy's early-stopping rule (`explored_fraction` is then the fraction at
     /// the stop).
     pub stopped_early: bool,
-    /// Reachable free area the map had not observed at the end (m2).
+    /// Explorable free area the map had not observed at the end (m2).
     pub unexplored_free_m2: f64,
     /// Ground-truth rooms the robot never entered (`null` without ground truth).
     pub rooms_never_entered: Option<usize>,
@@ -96,6 +102,7 @@ impl RunSummary {
             total_time_s: r.total_time_s,
             explored_area_m2: r.explored_area_m2,
             free_area_m2: r.free_area_m2,
+            unexplorable_free_m2: r.unexplorable_free_m2,
             explored_fraction: r.explored_fraction,
             path_length_m: r.path_length_m,
             decisions: r.decisions.len(),

@@ -65,6 +65,16 @@ pub struct Settings {
     /// the records and job identities of runs without it are those of earlier versions.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub candidate_from_reachable_part: bool,
+    /// Resolve frontiers by the paper's rule (false = floorcast's since 0.4): a frontier whose
+    /// middle cell is blacklisted is dropped whole, and a goal whose unknown side surrounds the
+    /// robot counts as seen without a turn. Written only when true.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub paper_frontiers: bool,
+    /// The layout gain I(p) by the paper's rule (false = floorcast's since 0.4): predicted
+    /// walls block the gain's rays also across doorways, and unknown space outside the
+    /// predicted rooms counts nothing. Written only when true.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub paper_layout_gain: bool,
     /// Re-decide this often while driving to a goal (s of simulated time)...
     pub redecide_period_s: f64,
     /// ...once the map has grown by at least this much since the last decision (m2; 0 = at
@@ -124,6 +134,8 @@ impl Default for Settings {
             min_frontier_m: c.min_frontier_m,
             frontier_clearance_m: c.frontier_clearance_m,
             candidate_from_reachable_part: c.candidate_from_reachable_part,
+            paper_frontiers: !c.robust_frontiers,
+            paper_layout_gain: !c.strategy.gain_through_openings,
             redecide_period_s: c.redecide_period_s,
             redecide_min_growth_m2: c.redecide_min_growth_m2,
             blacklist_radius_m: c.blacklist_radius_m,
@@ -326,6 +338,14 @@ pub const SETTINGS: &[SettingInfo] = &[
     flag(
         "candidate_from_reachable_part",
         "Aim at a frontier's reachable part when its middle cell cannot be reached (not the paper's rule).",
+    ),
+    flag(
+        "paper_frontiers",
+        "The paper's frontier rule: a frontier whose middle cell is blacklisted is dropped whole, a goal around the robot counts as seen without a turn (before 0.4).",
+    ),
+    flag(
+        "paper_layout_gain",
+        "The paper's layout gain: predicted walls block it across doorways, unknown space outside predicted rooms counts nothing (before 0.4).",
     ),
     num(
         "redecide_period_s",
@@ -639,6 +659,8 @@ impl Settings {
             "min_frontier_m" => Number(self.min_frontier_m),
             "frontier_clearance_m" => Number(self.frontier_clearance_m),
             "candidate_from_reachable_part" => Bool(self.candidate_from_reachable_part),
+            "paper_frontiers" => Bool(self.paper_frontiers),
+            "paper_layout_gain" => Bool(self.paper_layout_gain),
             "redecide_period_s" => Number(self.redecide_period_s),
             "redecide_min_growth_m2" => Number(self.redecide_min_growth_m2),
             "blacklist_radius_m" => Number(self.blacklist_radius_m),
@@ -675,6 +697,7 @@ impl Settings {
             Strategy::by_name(name).ok_or_else(|| SettingsError::Strategy(name.to_string()))?;
         st.layout_update_m2 = c.strategy.layout_update_m2;
         st.max_wall_gap_m = c.strategy.max_wall_gap_m;
+        st.gain_through_openings = c.strategy.gain_through_openings;
         st.early_stop = match st.early_stop {
             EarlyStop::TotalGainBelow(_) => EarlyStop::TotalGainBelow(self.es_threshold_m2),
             EarlyStop::DropCandidatesBelow(_) => {
@@ -766,6 +789,8 @@ impl Settings {
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
         c.frontier_clearance_m = nonneg("frontier_clearance_m", self.frontier_clearance_m)?;
         c.candidate_from_reachable_part = self.candidate_from_reachable_part;
+        c.robust_frontiers = !self.paper_frontiers;
+        c.strategy.gain_through_openings = !self.paper_layout_gain;
         c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
         c.redecide_min_growth_m2 = nonneg("redecide_min_growth_m2", self.redecide_min_growth_m2)?;
         c.blacklist_radius_m = nonneg("blacklist_radius_m", self.blacklist_radius_m)?;
@@ -903,12 +928,44 @@ mod tests {
         );
     }
 
+    /// The paper's rules are off by default, recorded only when on, and reach the explorer
+    /// (`paper_layout_gain` for every strategy, whatever its name).
+    #[test]
+    fn the_paper_rules_are_switches_recorded_only_when_on() {
+        let default = Settings::default();
+        let v = serde_json::to_value(&default).unwrap();
+        assert!(v.get("paper_frontiers").is_none() && v.get("paper_layout_gain").is_none());
+        for name in ["baseline", "layout-es", "layout-aes"] {
+            let c = default.to_explore_config_for(name).unwrap();
+            assert!(
+                c.robust_frontiers && c.strategy.gain_through_openings,
+                "{name}"
+            );
+        }
+        let paper = Settings {
+            paper_frontiers: true,
+            paper_layout_gain: true,
+            ..Settings::default()
+        };
+        let back: Settings = serde_json::from_value(serde_json::to_value(&paper).unwrap()).unwrap();
+        assert_eq!(back, paper);
+        for name in ["baseline", "layout-es", "layout-aes"] {
+            let c = paper.to_explore_config_for(name).unwrap();
+            assert!(
+                !c.robust_frontiers && !c.strategy.gain_through_openings,
+                "{name}"
+            );
+        }
+    }
+
     #[test]
     fn the_table_has_one_row_per_field_in_order_and_the_defaults_pass() {
         let all_written = Settings {
             utility_distance: "euclidean".into(),
             frontier_clearance_m: 0.4,
             candidate_from_reachable_part: true,
+            paper_frontiers: true,
+            paper_layout_gain: true,
             ..Settings::default()
         };
         let v = serde_json::to_value(&all_written).unwrap();

@@ -174,8 +174,8 @@ pub struct ExploreConfig {
     /// a door at a slant reaches into the room along a strip too narrow to drive, so its middle
     /// can lie where the robot cannot go while its other end is at the door.
     pub candidate_from_reachable_part: bool,
-    /// Frontiers the robot stands in are resolved as real explorers do (issue 20; off until the
-    /// reference results are rerun with it): a frontier whose middle cell was blacklisted
+    /// Frontiers the robot stands in are resolved as real explorers do (on by default since
+    /// 0.4; off: the paper's rule, setting `paper_frontiers`): a frontier whose middle cell was blacklisted
     /// (reached and looked at with the frontier still there, given up, or unreachable) keeps its
     /// other cells, its candidate moving to the nearest of them outside every blacklisted
     /// radius; and at a goal whose unknown side surrounds the robot (the first scan's boundary,
@@ -234,7 +234,7 @@ impl Default for ExploreConfig {
             min_frontier_m: 0.5,
             frontier_clearance_m: 0.0,
             candidate_from_reachable_part: false,
-            robust_frontiers: false,
+            robust_frontiers: true,
             redecide_period_s: 10.0,
             redecide_min_growth_m2: 0.5,
             safety_margin_m: 0.05,
@@ -321,8 +321,13 @@ pub struct RunResult {
     /// Simulated time at the very end.
     pub total_time_s: f64,
     pub explored_area_m2: f64,
-    /// Free area reachable from the start (the denominator of the explored fraction).
+    /// The explorable free area: free space connected to the start that the laser can see
+    /// from where the robot's body fits (the denominator of the explored fraction; see
+    /// [`crate::building::explorable_free`]).
     pub free_area_m2: f64,
+    /// Free area connected to the start (through gaps of any width) that is not explorable:
+    /// behind openings narrower than the robot, out of the laser's sight.
+    pub unexplorable_free_m2: f64,
     pub explored_fraction: f64,
     pub path_length_m: f64,
     pub decisions: Vec<Decision>,
@@ -404,8 +409,11 @@ struct Explorer<'a> {
     sim: Simulator,
     map: LogOddsMap,
     obstacles: ObstacleDistance,
-    /// Reachable free space of the building on the map grid (ground truth for the explored area).
+    /// Explorable free space of the building on the map grid (ground truth for the explored
+    /// area and the rooms left unexplored).
     truth: Bitmap,
+    /// Free space connected to the start (ground truth for the map's quality).
+    free: Bitmap,
     truth_cells: usize,
     /// Truth-free cells observed, kept incrementally. Observed means free or occupied in the
     /// map: a cell whose centre is free but which a wall surface crosses is rightly mapped
@@ -531,6 +539,20 @@ pub fn explore(
     explore_charged(building, start, cfg, seed, on_progress, None)
 }
 
+/// The margin (m) the map grid adds around a building's bounds on every side: 15 % of the
+/// longer side, at least 1 m and at most 8 m. A map that turns as a whole (a heading error
+/// made in a large room, before any wall came into view) reaches beyond the building's
+/// bounds by about the turn times the distance from the start; cut at the grid's edge, it
+/// would leave frontiers there that no path reaches.
+pub fn map_margin_m(bounds: &crate::geom::Aabb) -> f64 {
+    (0.15 * bounds.width_m().max(bounds.height_m())).clamp(1.0, 8.0)
+}
+
+/// The grid of a run's map and ground truth: the building's bounds plus [`map_margin_m`].
+pub fn map_frame(bounds: &crate::geom::Aabb, resolution_m: f64) -> GridFrame {
+    GridFrame::covering(bounds, resolution_m, map_margin_m(bounds))
+}
+
 /// A caller's measure of the layout's compute cost: it is given the computation, must run it
 /// once, and returns the seconds to charge (e.g. the wall time it took).
 pub type LayoutCost<'a> = &'a mut dyn FnMut(&mut dyn FnMut()) -> f64;
@@ -547,8 +569,14 @@ pub fn explore_charged<'a>(
     on_progress: &mut dyn FnMut(&ProgressSample),
     layout_cost: Option<LayoutCost<'a>>,
 ) -> RunResult {
-    let frame = GridFrame::covering(&building.bounds(), cfg.map_resolution_m, 1.0);
-    let truth = building.reachable_free(frame, start.position());
+    let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
+    let free = building.reachable_free(frame, start.position());
+    let truth = crate::building::explorable_free(
+        &free,
+        start.position(),
+        cfg.sim.robot.radius_m + cfg.safety_margin_m,
+        cfg.sim.laser.max_range_m,
+    );
     let truth_cells = truth.count_true();
     let cap_cells =
         (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
@@ -568,6 +596,7 @@ pub fn explore_charged<'a>(
         map: LogOddsMap::new(frame),
         obstacles: ObstacleDistance::new(frame, cap_cells),
         truth,
+        free,
         truth_cells,
         explored_cells: 0,
         known: Bitmap::filled(frame, false),
@@ -1650,7 +1679,7 @@ impl Explorer<'_> {
         // Always close the curve with the final state.
         self.next_progress_s = f64::NEG_INFINITY;
         self.record_progress(on_progress);
-        let mut map_quality = map_quality(&self.map.occupancy, &self.truth);
+        let mut map_quality = map_quality(&self.map.occupancy, &self.free);
         // The map as a whole may sit rotated about the start (a heading error made before any
         // wall was in view); the best fit of the estimated trajectory onto the true one undoes
         // that, and the search around it takes out what remains of a rigid misplacement, so
@@ -1663,7 +1692,7 @@ impl Explorer<'_> {
         map_quality.occupied_precision_aligned =
             crate::mapping::alignment::aligned_occupied_precision(
                 &self.map.occupancy,
-                &self.truth,
+                &self.free,
                 &prior,
                 prior
                     .compose(&Pose::new(self.start.x_m, self.start.y_m, 0.0))
@@ -1704,6 +1733,8 @@ impl Explorer<'_> {
             total_time_s: self.sim.time_s(),
             explored_area_m2: self.explored_area_m2(),
             free_area_m2: self.truth_cells as f64 * self.map.frame.cell_area_m2(),
+            unexplorable_free_m2: (self.free.count_true() - self.truth_cells) as f64
+                * self.map.frame.cell_area_m2(),
             explored_fraction: self.explored_fraction(),
             path_length_m: self.sim.path_length_m(),
             blacklisted_goals: self.blacklist.added(),

@@ -55,8 +55,8 @@ pub struct Strategy {
     pub layout_from_truth: bool,
     /// The paper's `I(p)` sees through openings of the layout's wall lines (see
     /// [`crate::layout_gain::LayoutRaster::through_openings`]): an early stop then drops only
-    /// what the layout predicts, never a room beyond a doorway the robot has seen. Off by
-    /// default until the reference results are rerun with it (issue 20).
+    /// what the layout predicts, never a room beyond a doorway the robot has seen. On by default
+    /// since 0.4 (off: the paper's rule, setting `paper_layout_gain`).
     pub gain_through_openings: bool,
 }
 
@@ -71,7 +71,7 @@ impl Strategy {
             max_wall_gap_m: 1.0,
             rank_by_predicted_rooms: false,
             layout_from_truth: false,
-            gain_through_openings: false,
+            gain_through_openings: true,
         }
     }
 
