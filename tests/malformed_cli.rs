@@ -197,11 +197,12 @@ fn every_malformed_input_fails_cleanly() {
     );
 }
 
-/// A job that fails while the grid runs (here: a building without free space to start in) makes
-/// `run` exit with code 2 and an error line naming the building, strategy, seed and error; the
-/// other jobs' results are kept.
+/// A job that could only fail (here: a building without free space to start in) is found
+/// when the grid is checked as a whole, before anything runs: `run` exits with code 2 and one
+/// line naming the grid, the building and why. (A job that fails while running, a panic, is
+/// stored as a failed job: `coordinator::run`'s tests.)
 #[test]
-fn run_exits_non_zero_naming_failed_jobs() {
+fn run_refuses_a_grid_with_a_job_that_cannot_start() {
     let dir = tempfile::tempdir().unwrap();
     let tmp = dir.path();
     std::fs::write(
@@ -230,13 +231,9 @@ fn run_exits_non_zero_naming_failed_jobs() {
     let err = common::stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(!err.contains("panicked"), "{err}");
-    let last = err.trim().lines().last().unwrap_or_default();
-    for w in [
-        "error: 1 of 1 jobs failed",
-        "solid baseline seed 7",
-        "no free space",
-    ] {
-        assert!(last.contains(w), "{w:?} not in {last}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    for w in ["grid.toml: buildings:", "solid.toml", "no free space"] {
+        assert!(err.contains(w), "{w:?} not in {err}");
     }
-    assert!(tmp.join("r/results.sqlite").is_file());
+    assert!(!tmp.join("r/results.sqlite").exists());
 }

@@ -573,20 +573,21 @@ mod tests {
 
     /// A job of a grid with `[starts]` runs from its planned pose whether it runs here or on
     /// a remote worker (through its wire form), and a result that started elsewhere is refused.
+    /// A plan of `baseline` on the small building with `seeds`, `time_limit_s` and `extra`
+    /// lines, its results in `dir`.
+    fn small_plan(dir: &Path, seeds: &str, time_limit_s: u32, extra: &str) -> Plan {
+        let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
+        let text = format!(
+            "format = \"floorcast-grid\"\nversion = 1\nname = \"p\"\nbuildings = [\"{}\"]\nseeds = {seeds}\n[[strategies]]\nname = \"baseline\"\n[settings]\ntime_limit_s = {time_limit_s}\n{extra}",
+            small.display()
+        );
+        Plan::parse(&text, &dir.join("grid.toml"), Some(&dir.join("r"))).unwrap()
+    }
+
     #[test]
     fn a_grid_start_crosses_the_wire_and_is_checked_on_return() {
         let dir = tempfile::tempdir().unwrap();
-        let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
-        let text = format!(
-            "format = \"floorcast-grid\"\nversion = 1\nname = \"s\"\nbuildings = [\"{}\"]\nseeds = [1]\n[[strategies]]\nname = \"baseline\"\n[settings]\ntime_limit_s = 5\n[starts]\nrandom = 2\nseed = 3\n",
-            small.display()
-        );
-        let plan = Plan::parse(
-            &text,
-            &dir.path().join("grid.toml"),
-            Some(&dir.path().join("r")),
-        )
-        .unwrap();
+        let plan = small_plan(dir.path(), "[1]", 5, "[starts]\nrandom = 2\nseed = 3\n");
         assert_eq!(plan.jobs.len(), 2);
         let (a, b) = (&plan.jobs[0], &plan.jobs[1]);
         assert_ne!(a.start, b.start);
@@ -617,17 +618,7 @@ mod tests {
     #[test]
     fn a_panicking_job_is_a_failed_job() {
         let dir = tempfile::tempdir().unwrap();
-        let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
-        let text = format!(
-            "format = \"floorcast-grid\"\nversion = 1\nname = \"p\"\nbuildings = [\"{}\"]\nseeds = [1, 2, 3, 4]\n[[strategies]]\nname = \"baseline\"\n[settings]\ntime_limit_s = 10\n",
-            small.display()
-        );
-        let plan = Plan::parse(
-            &text,
-            &dir.path().join("grid.toml"),
-            Some(&dir.path().join("r")),
-        )
-        .unwrap();
+        let plan = small_plan(dir.path(), "[1, 2, 3, 4]", 10, "");
         let store = Store::open(&plan.results_dir).unwrap();
         let exec: Arc<LocalExecutor> = Arc::new(|plan: &Plan, job: &PlannedJob, worker: &str| {
             if job.seed.is_multiple_of(2) {
