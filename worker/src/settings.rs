@@ -341,7 +341,7 @@ pub const SETTINGS: &[SettingInfo] = &[
     ),
     flag(
         "paper_frontiers",
-        "The paper's frontier rule: a frontier whose middle cell is blacklisted is dropped whole, a goal around the robot counts as seen without a turn (before 0.4).",
+        "The paper's frontier rule: a frontier whose middle cell is blacklisted is dropped whole, a goal around the robot counts as seen without a turn, an early stop weighs only the frontiers whose goal is reachable as they stand (before 0.4).",
     ),
     flag(
         "paper_layout_gain",
