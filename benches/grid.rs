@@ -20,11 +20,11 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
+use floorcast_coordinator::execute::{execute_wire, expected_row, failed_wire_row};
 use floorcast_coordinator::grid::{Plan, PlannedJob};
+use floorcast_coordinator::inbox::RemoteWorkers;
 use floorcast_coordinator::net::{run_worker, NetConfig, WorkerOptions};
-use floorcast_coordinator::run::{
-    execute_wire, expected_row, failed_wire_row, run_plan, RunOptions,
-};
+use floorcast_coordinator::run::{run_plan, RunOptions};
 use floorcast_coordinator::store::{Store, StoredResult};
 use floorcast_coordinator::wire::WireJob;
 use sim_core::Building;
@@ -112,11 +112,13 @@ fn timed_run(plan: &Plan, local: usize, role: Option<&str>, procs: usize) -> f64
     let endpoint = format!("tcp/127.0.0.1:{port}");
     let opts = RunOptions {
         workers: local,
-        net: role.map(|_| NetConfig {
-            listen: vec![endpoint.clone()],
-            connect: vec![],
-            zenoh_config: None,
-            campaign: "bench".into(),
+        remote: role.map(|_| {
+            Arc::new(NetConfig {
+                listen: vec![endpoint.clone()],
+                connect: vec![],
+                zenoh_config: None,
+                campaign: "bench".into(),
+            }) as Arc<dyn RemoteWorkers>
         }),
         lease_s: 600.0,
         linger_s: 3.0,

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use anyhow::{Context, Result};
 use clap::Args;
 use floorcast_coordinator::grid::Plan;
+use floorcast_coordinator::inbox::RemoteWorkers;
 use floorcast_coordinator::net::NetConfig;
 use floorcast_coordinator::run::{run_plan, Outcome, RunOptions};
 use floorcast_coordinator::store::{provenance, Store, DB_FILE};
@@ -140,11 +141,13 @@ pub fn run(a: RunArgs) -> Result<()> {
     }
     let opts = RunOptions {
         workers,
-        net: networked.then(|| NetConfig {
-            listen: a.listen.clone(),
-            connect: a.connect.clone(),
-            zenoh_config: a.net.zenoh_config.clone(),
-            campaign: a.net.campaign.clone(),
+        remote: networked.then(|| {
+            Arc::new(NetConfig {
+                listen: a.listen.clone(),
+                connect: a.connect.clone(),
+                zenoh_config: a.net.zenoh_config.clone(),
+                campaign: a.net.campaign.clone(),
+            }) as Arc<dyn RemoteWorkers>
         }),
         lease_s: a.lease_s,
         ..RunOptions::default()
@@ -185,7 +188,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         &interrupt,
         &mut |c| {
             pb.set_position(c.done as u64);
-            let remote = if opts.net.is_some() {
+            let remote = if opts.remote.is_some() {
                 format!(", {} remote workers", c.remote_workers)
             } else {
                 String::new()

@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use anyhow::Result;
 use clap::Args;
+use floorcast_coordinator::execute::execute_wire;
 use floorcast_coordinator::net::{run_worker, NetConfig, WorkerEvent, WorkerOptions};
-use floorcast_coordinator::run::execute_wire;
 
 use crate::cmd_run::NetArgs;
 

@@ -130,7 +130,10 @@ fn grid_errors_name_the_field() {
 #[test]
 fn interrupted_grid_resumes_without_duplicates() {
     let dir = tempfile::tempdir().unwrap();
-    let g = grid(dir.path(), "[1, 2, 3, 4]");
+    // 80 jobs on one worker: seconds of work, so that Ctrl-C after the first stored result
+    // always lands before the end.
+    let seeds: Vec<String> = (1..=40).map(|s| s.to_string()).collect();
+    let g = grid(dir.path(), &format!("[{}]", seeds.join(", ")));
     let res = dir.path().join("res");
     let mut child = floorcast()
         .args([
@@ -162,13 +165,13 @@ fn interrupted_grid_resumes_without_duplicates() {
         .args(["-INT", &child.id().to_string()])
         .status();
     let status = child.wait().unwrap();
-    if status.code() == Some(130) {
-        let o = run(&["report", res.to_str().unwrap()]);
-        assert!(
-            !stdout(&o).starts_with("8 results"),
-            "interrupted before the end"
-        );
-    }
+    assert_eq!(status.code(), Some(130), "Ctrl-C ends a grid with 130");
+    let o = run(&["report", res.to_str().unwrap()]);
+    assert!(
+        !stdout(&o).starts_with("80 results"),
+        "interrupted before the end: {}",
+        stdout(&o)
+    );
     let o = run(&[
         "run",
         g.to_str().unwrap(),
@@ -190,10 +193,10 @@ fn interrupted_grid_resumes_without_duplicates() {
         .skip(1)
         .map(|l| l.split(',').next().unwrap())
         .collect();
-    assert_eq!(ids.len(), 8);
+    assert_eq!(ids.len(), 80);
     ids.sort();
     ids.dedup();
-    assert_eq!(ids.len(), 8, "every job stored exactly once");
+    assert_eq!(ids.len(), 80, "every job stored exactly once");
 }
 
 #[test]

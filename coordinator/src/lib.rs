@@ -5,13 +5,19 @@
 //! - [`schedule`]: the scheduler, a state machine without IO or clock (events in, actions out).
 //! - [`store`]: the SQLite results store (WAL), one row per job, resumable.
 //! - [`run`]: the coordinator loop; runs a plan with embedded worker threads and/or remote
-//!   workers.
-//! - [`net`]: the zenoh transport for remote workers (the only module that knows zenoh).
+//!   workers through a transport its caller hands it.
+//! - [`inbox`]: the contract between workers and the loop (messages, the transport trait).
+//! - [`execute`]: runs one job (planned here or received from the network) into a store row.
+//! - [`net`]: the zenoh transport for remote workers and the worker process's loop (the only
+//!   module that knows zenoh). Modules depend one way: `net` on `inbox` and `execute`, `run` on
+//!   `inbox`, `execute` and `schedule`; `run` never names `net`.
 //! - [`wire`]: the versioned messages between coordinator and workers.
 //! - [`table`]: the paper's Table 1 for a grid, and CSV export.
 //! - [`sequential`]: the sequential test (GSPRT) that decides a comparison from paired runs.
 
+pub mod execute;
 pub mod grid;
+pub mod inbox;
 pub mod net;
 pub mod run;
 pub mod schedule;

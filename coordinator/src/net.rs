@@ -30,8 +30,9 @@ use zenoh::query::{ConsolidationMode, Query, QueryTarget};
 use zenoh::sample::SampleKind;
 use zenoh::Session;
 
+use crate::execute::{failed_wire_row, wire_job};
 use crate::grid::Plan;
-use crate::run::{Answer, Inbox};
+use crate::inbox::{Answer, Inbox, InboxSender, RemoteSession, RemoteWorkers, LOCAL};
 use crate::store::StoredResult;
 use crate::wire::{
     decode, encode, BuildingRequest, Hello, Message, NextReply, RenewReply, Renewal, Submission,
@@ -176,19 +177,19 @@ fn last_chunk(k: &str) -> &str {
 
 /// The coordinator's zenoh session and its tasks; dropped with [`Listener::close`].
 #[derive(Debug)]
-pub(crate) struct Listener {
+struct Listener {
     rt: tokio::runtime::Runtime,
     session: Session,
     describe: String,
 }
 
-impl Listener {
-    pub(crate) fn describe(&self) -> String {
+impl RemoteSession for Listener {
+    fn describe(&self) -> String {
         self.describe.clone()
     }
 
-    pub(crate) fn close(self) {
-        let Listener { rt, session, .. } = self;
+    fn close(self: Box<Self>) {
+        let Listener { rt, session, .. } = *self;
         rt.block_on(async {
             let _ = tokio::time::timeout(Duration::from_secs(3), session.close()).await;
         });
@@ -211,9 +212,22 @@ impl Ctx {
     }
 }
 
+/// The coordinator's side of the network: `run_plan` opens it when its caller passes the
+/// `NetConfig` as the run's [`RemoteWorkers`].
+impl RemoteWorkers for NetConfig {
+    fn open(
+        &self,
+        plan: Arc<Plan>,
+        lease_s: f64,
+        inbox: InboxSender,
+    ) -> Result<Box<dyn RemoteSession>, Box<dyn std::error::Error + Send + Sync>> {
+        Ok(Box::new(serve(self, plan, lease_s, inbox.0)?))
+    }
+}
+
 /// Opens the coordinator's session, declares its queryables and liveliness subscriber, and
 /// forwards what workers say into `inbox`.
-pub(crate) fn serve(
+fn serve(
     cfg: &NetConfig,
     plan: Arc<Plan>,
     lease_s: f64,
@@ -355,11 +369,11 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
         Ok(h) => h,
         Err(e) => return refuse(&ctx, &q, "not a job request", e.to_string()).await,
     };
-    if !valid_chunk(&hello.worker) || hello.worker.starts_with(crate::run::LOCAL) {
+    if !valid_chunk(&hello.worker) || hello.worker.starts_with(LOCAL) {
         let why = format!(
             "'{}' is not a valid remote worker id (letters, digits, '-', '_', '.'; not starting with '{}')",
             hello.worker,
-            crate::run::LOCAL
+            LOCAL
         );
         return refuse(&ctx, &q, "bad worker id", why).await;
     }
@@ -378,7 +392,7 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
     };
     let msg = match answer {
         Answer::Run(job) => NextReply::Job {
-            job: Box::new(crate::run::wire_job(&ctx.plan, &job)),
+            job: Box::new(wire_job(&ctx.plan, &job)),
             lease_s: ctx.lease_s,
         },
         Answer::Wait => NextReply::Wait { retry_ms: 200 },
@@ -499,12 +513,12 @@ pub fn run_worker(
     events: Arc<EventSink>,
 ) -> Result<WorkerReport, NetError> {
     if let Some(n) = &opts.name {
-        if !valid_chunk(n) || n.starts_with(crate::run::LOCAL) {
+        if !valid_chunk(n) || n.starts_with(LOCAL) {
             return Err(NetError::Option {
                 what: "--name".into(),
                 message: format!(
                     "'{n}' is not a name of letters, digits, '-', '_' or '.' (not starting with '{}')",
-                    crate::run::LOCAL
+                    LOCAL
                 ),
             });
         }
@@ -761,7 +775,7 @@ async fn run_one(x: &Arc<Slots>, job: WireJob, lease_s: f64) -> Result<(), NetEr
         Ok(b) => tokio::task::spawn_blocking(move || exec(&job, &b, &worker))
             .await
             .map_err(zerr)?,
-        Err(e) => crate::run::failed_wire_row(&job, &worker, e),
+        Err(e) => failed_wire_row(&job, &worker, e),
     };
     renewer.abort();
     x.run.fetch_add(1, Ordering::SeqCst);
@@ -858,7 +872,8 @@ mod tests {
     use std::path::Path;
 
     use super::*;
-    use crate::run::{execute_wire, run_plan, RunOptions};
+    use crate::execute::{execute_wire, expected_row};
+    use crate::run::{run_plan, RunOptions};
     use crate::store::Store;
 
     fn plan(dir: &Path, seeds: &str) -> Plan {
@@ -889,7 +904,7 @@ mod tests {
             let store = Store::open(&plan.results_dir).unwrap();
             let opts = RunOptions {
                 workers: 0,
-                net: Some(net(vec![ep], vec![])),
+                remote: Some(Arc::new(net(vec![ep], vec![]))),
                 lease_s: 30.0,
                 linger_s: 1.0,
                 executor: None,
@@ -970,7 +985,7 @@ mod tests {
                 assert!(r.is_err(), "{key_rest}: {r:?}");
             }
             // A forged result: right key, wrong building hash -> rejected, not stored.
-            let mut forged = crate::run::expected_row(&p, &p.jobs[0], "forger");
+            let mut forged = expected_row(&p, &p.jobs[0], "forger");
             forged.building_hash = "0".repeat(32);
             forged.summary_json = Some("{}".into());
             let r = ask::<SubmitReply>(

@@ -1,62 +1,26 @@
 //! Runs a plan: the coordinator loop around the [`Scheduler`], fed by embedded worker threads
-//! (in-process channels, no network, no port) and, with a [`NetConfig`], by remote workers
-//! through `net.rs`. Both kinds of worker send the same [`Inbox`] messages, so local and
-//! distributed runs share one code path.
+//! (in-process channels, no network, no port) and by remote workers through a transport its
+//! caller hands it ([`RemoteWorkers`]: `net.rs` for zenoh; this module names none). Both kinds
+//! of worker send the same [`Inbox`] messages, so local and distributed runs share one code path.
 //!
 //! Results are stored as they arrive: the loop takes every message waiting, commits the results
 //! among them in one SQLite transaction, and only then acknowledges them (a killed coordinator
 //! loses nothing it acknowledged; a burst of results costs one disk sync).
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::fmt::Write as _;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use floorcast_worker::{run_job, GivenStart, Job};
-use sim_core::{Building, Pose};
 use tokio::sync::oneshot;
 
+use crate::execute::{execute, expected_row, wire_job};
 use crate::grid::{Plan, PlannedJob};
-use crate::net::{self, NetConfig, NetError};
+use crate::inbox::{Answer, Inbox, InboxSender, RemoteWorkers, LOCAL};
 use crate::schedule::{Action, Event, RequeueReason, Scheduler};
 use crate::store::{Store, StoreError, StoredResult};
-use crate::wire::{check_result, check_result_start, RenewReply, SubmitReply, WireJob, WireStart};
-
-/// What workers (embedded threads or the network bridge) tell the coordinator loop.
-#[derive(Debug)]
-pub(crate) enum Inbox {
-    /// A worker asks for a job.
-    Request {
-        worker: String,
-        reply: oneshot::Sender<Answer>,
-    },
-    /// A worker returns a result.
-    Submit {
-        worker: String,
-        result: Box<StoredResult>,
-        reply: oneshot::Sender<SubmitReply>,
-    },
-    /// A worker still runs `job`.
-    Renew {
-        worker: String,
-        job: String,
-        reply: oneshot::Sender<RenewReply>,
-    },
-    Joined(String),
-    Left(String),
-    /// Something to show the user (a refused worker, a dropped message).
-    Log(String),
-}
-
-/// The coordinator's answer to a request.
-#[derive(Debug)]
-pub(crate) enum Answer {
-    Run(Box<PlannedJob>),
-    Wait,
-    Done,
-}
+use crate::wire::{check_result, check_result_start, RenewReply, SubmitReply};
 
 /// Counts for a progress display.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -83,10 +47,10 @@ pub type LocalExecutor = dyn Fn(&Plan, &PlannedJob, &str) -> StoredResult + Send
 /// How to run a plan.
 #[derive(Clone)]
 pub struct RunOptions {
-    /// Embedded worker threads (0 is allowed only with `net`).
+    /// Embedded worker threads (0 is allowed only with `remote`).
     pub workers: usize,
-    /// Accept remote workers through zenoh.
-    pub net: Option<NetConfig>,
+    /// Accept remote workers through this transport (the binary gives `net::NetConfig`).
+    pub remote: Option<Arc<dyn RemoteWorkers>>,
     /// Lease of a remote job; a worker renews it while it runs the job.
     pub lease_s: f64,
     /// After the last result, keep answering "done" this long so remote workers leave cleanly.
@@ -99,7 +63,7 @@ impl std::fmt::Debug for RunOptions {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("RunOptions")
             .field("workers", &self.workers)
-            .field("net", &self.net)
+            .field("remote", &self.remote.as_ref().map(|_| "remote workers"))
             .field("lease_s", &self.lease_s)
             .field("linger_s", &self.linger_s)
             .field("executor", &self.executor.as_ref().map(|_| "custom"))
@@ -111,7 +75,7 @@ impl Default for RunOptions {
     fn default() -> Self {
         Self {
             workers: 1,
-            net: None,
+            remote: None,
             lease_s: 60.0,
             linger_s: 2.0,
             executor: None,
@@ -123,15 +87,12 @@ impl Default for RunOptions {
 pub enum RunError {
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// The transport for remote workers could not open.
     #[error(transparent)]
-    Net(#[from] NetError),
+    Remote(Box<dyn std::error::Error + Send + Sync>),
     #[error("no workers: --workers 0 needs --listen or --connect so that remote workers can join")]
     NoWorkers,
 }
-
-/// Prefix of embedded workers' ids (refused for remote workers: embedded workers' leases are
-/// renewed by the coordinator itself).
-pub(crate) const LOCAL: &str = "local-";
 
 /// Runs every job of `plan` not yet in `store`. `interrupt` stops the run (jobs already stored
 /// stay stored; running ones are abandoned and run again next time). `on_log` receives lines
@@ -144,7 +105,7 @@ pub fn run_plan(
     on_progress: &mut dyn FnMut(Counts),
     on_log: &mut dyn FnMut(&str),
 ) -> Result<(Outcome, Counts), RunError> {
-    if opts.workers == 0 && opts.net.is_none() {
+    if opts.workers == 0 && opts.remote.is_none() {
         return Err(RunError::NoWorkers);
     }
     let stored = store.stored_ids()?;
@@ -172,13 +133,16 @@ pub fn run_plan(
     }
     let plan = Arc::new(plan.clone());
     let (inbox_tx, inbox) = mpsc::channel::<Inbox>();
-    let listener = match &opts.net {
-        Some(cfg) => Some(net::serve(
-            cfg,
-            Arc::clone(&plan),
-            opts.lease_s,
-            inbox_tx.clone(),
-        )?),
+    let listener = match &opts.remote {
+        Some(remote) => Some(
+            remote
+                .open(
+                    Arc::clone(&plan),
+                    opts.lease_s,
+                    InboxSender(inbox_tx.clone()),
+                )
+                .map_err(RunError::Remote)?,
+        ),
         None => None,
     };
     if let Some(l) = &listener {
@@ -446,172 +410,10 @@ fn local_worker(
     }
 }
 
-/// A planned job as it is handed to a remote worker.
-pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
-    let b = &plan.buildings[job.building];
-    WireJob {
-        job_id: job.id.clone(),
-        grid: plan.name.clone(),
-        building_name: b.name.clone(),
-        building_hash: b.hash.clone(),
-        strategy: job.strategy.clone(),
-        label: job.label.clone(),
-        seed: job.seed,
-        settings: job.settings.clone(),
-        start: job.start.as_ref().map(|s| WireStart {
-            pose: [s.pose.x_m, s.pose.y_m, s.pose.theta_rad],
-            source: s.source.clone(),
-        }),
-    }
-}
-
-/// The store row a planned job produces, before it ran (identity fields only).
-pub fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
-    wire_row(&wire_job(plan, job), worker)
-}
-
-/// Runs one planned job and turns its outcome (success or a job error) into a store row.
-pub fn execute(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
-    let b = &plan.buildings[job.building];
-    execute_job(
-        expected_row(plan, job, worker),
-        &Job {
-            building: &b.building,
-            building_name: b.name.clone(),
-            strategy: job.strategy.clone(),
-            seed: job.seed,
-            settings: job.settings.clone(),
-            start: job.start.as_ref().map(|s| GivenStart {
-                pose: s.pose,
-                source: s.source.clone(),
-            }),
-            snapshot_fractions: Vec::new(),
-        },
-    )
-}
-
-/// The store row of a job received from the network, before it ran (identity fields only).
-pub fn wire_row(job: &WireJob, worker: &str) -> StoredResult {
-    StoredResult {
-        job_id: job.job_id.clone(),
-        grid: job.grid.clone(),
-        building: job.building_name.clone(),
-        building_hash: job.building_hash.clone(),
-        strategy: job.strategy.clone(),
-        label: job.label.clone(),
-        seed: job.seed,
-        settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
-        status: "ok".into(),
-        error: None,
-        summary_json: None,
-        progress_csv: None,
-        worker: worker.to_string(),
-        wall_time_s: 0.0,
-        floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
-    }
-}
-
-/// A `failed` row for a network job that could not run (e.g. its building arrived damaged).
-pub fn failed_wire_row(job: &WireJob, worker: &str, error: String) -> StoredResult {
-    StoredResult {
-        status: "failed".into(),
-        error: Some(error),
-        ..wire_row(job, worker)
-    }
-}
-
-/// Runs a job received from the network (see `net.rs`) in its building (already checked
-/// against the job's building hash).
-pub fn execute_wire(job: &WireJob, building: &Building, worker: &str) -> StoredResult {
-    execute_job(
-        wire_row(job, worker),
-        &Job {
-            building,
-            building_name: job.building_name.clone(),
-            strategy: job.strategy.clone(),
-            seed: job.seed,
-            settings: job.settings.clone(),
-            start: job.start.as_ref().map(|s| GivenStart {
-                pose: Pose::new(s.pose[0], s.pose[1], s.pose[2]),
-                source: s.source.clone(),
-            }),
-            snapshot_fractions: Vec::new(),
-        },
-    )
-}
-
-/// Runs `spec` and fills the outcome into `row` (which carries the job's identity).
-pub(crate) fn execute_job(mut row: StoredResult, spec: &Job<'_>) -> StoredResult {
-    let t = Instant::now();
-    let outcome = run_job(spec, &mut |_| {});
-    row.wall_time_s = t.elapsed().as_secs_f64();
-    match outcome {
-        Ok(out) => {
-            row.summary_json = serde_json::to_string(&out.summary).ok();
-            let mut csv = String::from("time_s,explored_area_m2,explored_fraction\n");
-            for p in &out.result.progress {
-                let _ = writeln!(
-                    csv,
-                    "{:.1},{:.3},{:.5}",
-                    p.time_s, p.explored_area_m2, p.explored_fraction
-                );
-            }
-            row.progress_csv = Some(csv);
-        }
-        Err(e) => {
-            row.status = "failed".into();
-            row.error = Some(e.to_string());
-        }
-    }
-    row
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::Path;
-
-    /// A job of a grid with `[starts]` runs from its planned pose whether it runs here or on
-    /// a remote worker (through its wire form), and a result that started elsewhere is refused.
-    /// A plan of `baseline` on the small building with `seeds`, `time_limit_s` and `extra`
-    /// lines, its results in `dir`.
-    fn small_plan(dir: &Path, seeds: &str, time_limit_s: u32, extra: &str) -> Plan {
-        let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
-        let text = format!(
-            "format = \"floorcast-grid\"\nversion = 1\nname = \"p\"\nbuildings = [\"{}\"]\nseeds = {seeds}\n[[strategies]]\nname = \"baseline\"\n[settings]\ntime_limit_s = {time_limit_s}\n{extra}",
-            small.display()
-        );
-        Plan::parse(&text, &dir.join("grid.toml"), Some(&dir.join("r"))).unwrap()
-    }
-
-    #[test]
-    fn a_grid_start_crosses_the_wire_and_is_checked_on_return() {
-        let dir = tempfile::tempdir().unwrap();
-        let plan = small_plan(dir.path(), "[1]", 5, "[starts]\nrandom = 2\nseed = 3\n");
-        assert_eq!(plan.jobs.len(), 2);
-        let (a, b) = (&plan.jobs[0], &plan.jobs[1]);
-        assert_ne!(a.start, b.start);
-        let wire = wire_job(&plan, a);
-        let wire: WireJob = serde_json::from_str(&serde_json::to_string(&wire).unwrap()).unwrap();
-        let building = &plan.buildings[a.building].building;
-        let remote = execute_wire(&wire, building, "w");
-        let local = execute(&plan, a, "local");
-        for r in [&remote, &local] {
-            assert_eq!(r.status, "ok", "{:?}", r.error);
-            let s = floorcast_worker::RunSummary::from_json(r.summary_json.as_deref().unwrap())
-                .unwrap();
-            let planned = a.start.as_ref().unwrap();
-            assert_eq!(
-                s.start.map(f64::to_bits),
-                [planned.pose.x_m, planned.pose.y_m, planned.pose.theta_rad].map(f64::to_bits)
-            );
-            assert_eq!(s.start_source, "random");
-            assert!(check_result_start(r, wire.start.as_ref()).is_ok());
-        }
-        // The other job's start is not this result's.
-        let e = check_result_start(&remote, wire_job(&plan, b).start.as_ref()).unwrap_err();
-        assert!(e.contains("the grid's job at"), "{e}");
-    }
+    use crate::execute::tests::small_plan;
 
     /// A job that panics is stored as a failed job (with the panic's message), never lost, and
     /// the other workers' jobs still run.
@@ -647,10 +449,12 @@ mod tests {
         for r in rows {
             let failed = r.seed % 2 == 0;
             assert_eq!(r.status == "failed", failed, "{r:?}");
-            if failed {
-                let e = r.error.unwrap();
-                assert!(e.contains(&format!("boom at seed {}", r.seed)), "{e}");
-            }
+            let boom = format!("boom at seed {}", r.seed);
+            assert_eq!(
+                r.error.as_deref().is_some_and(|e| e.contains(&boom)),
+                failed,
+                "{r:?}"
+            );
         }
     }
 }
