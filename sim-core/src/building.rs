@@ -1081,7 +1081,7 @@ mod tests {
 
     #[test]
     fn raster_boundary_merges_runs() {
-        let g = OccupancyGrid::from_ascii(
+        let b = raster(
             "
             ######
             #....#
@@ -1090,21 +1090,6 @@ mod tests {
             ",
             1.0,
         );
-        let solid = Bitmap {
-            frame: g.frame,
-            data: g
-                .data
-                .iter()
-                .map(|s| *s != crate::grid::Occupancy::Free)
-                .collect(),
-        };
-        let b = Building {
-            name: "box".into(),
-            geometry: Geometry::Raster { solid },
-            rooms: vec![],
-            doors: vec![],
-            start: None,
-        };
         let segs = b.boundary_segments();
         assert_eq!(segs.len(), 4, "{segs:?}");
         let total: f64 = segs.iter().map(|s| s.length_m()).sum();
