@@ -18,7 +18,7 @@ use tokio::sync::oneshot;
 use crate::execute::{execute, expected_row, wire_job};
 use crate::grid::{Plan, PlannedJob};
 use crate::inbox::{Answer, Inbox, InboxSender, RemoteWorkers, LOCAL};
-use crate::schedule::{Action, Event, RequeueReason, Scheduler};
+use crate::schedule::{Grant, Note, Renewal, RequeueReason, Scheduler, Verdict};
 use crate::store::{Store, StoreError, StoredResult};
 use crate::wire::{check_result, check_result_start, RenewReply, SubmitReply};
 
@@ -189,7 +189,7 @@ pub fn run_plan(
             }
         }
         let now = t0.elapsed().as_secs_f64();
-        let mut events: Vec<Action> = Vec::new();
+        let mut notes: Vec<Note> = Vec::new();
         // Embedded workers cannot die alone (they are threads of this process): keep their
         // leases alive.
         if now - last_renewal >= opts.lease_s / 4.0 {
@@ -200,31 +200,26 @@ pub fn run_plan(
                 .map(|(j, w)| (j.clone(), w.clone()))
                 .collect();
             for (job, worker) in local {
-                events.extend(sched.handle(Event::LeaseRenewed { worker, job }, now));
+                notes.extend(sched.renew(&worker, &job, now).notes);
             }
         }
-        events.extend(sched.handle(Event::Tick, now));
+        notes.extend(sched.tick(now));
         let mut to_store: Vec<StoredResult> = Vec::new();
         let mut acks: Vec<(oneshot::Sender<SubmitReply>, SubmitReply)> = Vec::new();
         for msg in batch {
             match msg {
                 Inbox::Request { worker, reply } => {
-                    for a in sched.handle(Event::JobRequested(worker), now) {
-                        let answer = match a {
-                            Action::Lease { job, .. } => match jobs.get(&job) {
-                                Some(j) => Answer::Run(Box::new(j.clone())),
-                                None => Answer::Wait,
-                            },
-                            Action::Wait { .. } => Answer::Wait,
-                            Action::Done { .. } => Answer::Done,
-                            other => {
-                                events.push(other);
-                                continue;
-                            }
-                        };
-                        let _ = reply.send(answer);
-                        break;
-                    }
+                    let r = sched.request(worker, now);
+                    notes.extend(r.notes);
+                    let answer = match r.answer {
+                        Grant::Lease { job, .. } => match jobs.get(&job) {
+                            Some(j) => Answer::Run(Box::new(j.clone())),
+                            None => Answer::Wait,
+                        },
+                        Grant::Wait => Answer::Wait,
+                        Grant::Done => Answer::Done,
+                    };
+                    let _ = reply.send(answer);
                 }
                 Inbox::Submit {
                     worker,
@@ -247,76 +242,52 @@ pub fn run_plan(
                         let _ = reply.send(SubmitReply::Rejected { reason });
                         continue;
                     }
-                    let actions = sched.handle(
-                        Event::ResultSubmitted {
-                            worker: worker.clone(),
-                            job: job_id.clone(),
-                        },
-                        now,
-                    );
-                    let mut reply = Some(reply);
-                    for a in actions {
-                        match a {
-                            Action::Store { .. } => {
-                                if result.status != "ok" {
-                                    failed += 1;
-                                    on_log(&format!(
-                                        "job {} ({} {} seed {}) failed on {worker}: {}",
-                                        job_id,
-                                        result.building,
-                                        result.label,
-                                        result.seed,
-                                        result.error.as_deref().unwrap_or("")
-                                    ));
-                                }
-                                to_store.push((*result).clone());
-                                if let Some(r) = reply.take() {
-                                    acks.push((r, SubmitReply::Stored));
-                                }
+                    let r = sched.submit(&job_id);
+                    notes.extend(r.notes);
+                    match r.answer {
+                        Verdict::Store => {
+                            if result.status != "ok" {
+                                failed += 1;
+                                on_log(&format!(
+                                    "job {} ({} {} seed {}) failed on {worker}: {}",
+                                    job_id,
+                                    result.building,
+                                    result.label,
+                                    result.seed,
+                                    result.error.as_deref().unwrap_or("")
+                                ));
                             }
-                            Action::AckDuplicate { .. } => {
-                                if let Some(r) = reply.take() {
-                                    acks.push((r, SubmitReply::Duplicate));
-                                }
-                            }
-                            Action::RejectUnknown { .. } => {
-                                let reason =
-                                    format!("job {job_id} is not part of grid '{}'", plan.name);
-                                on_log(&format!("rejected result from {worker}: {reason}"));
-                                if let Some(r) = reply.take() {
-                                    let _ = r.send(SubmitReply::Rejected { reason });
-                                }
-                            }
-                            other => events.push(other),
+                            to_store.push(*result);
+                            acks.push((reply, SubmitReply::Stored));
+                        }
+                        Verdict::Duplicate => acks.push((reply, SubmitReply::Duplicate)),
+                        Verdict::Unknown => {
+                            let reason =
+                                format!("job {job_id} is not part of grid '{}'", plan.name);
+                            on_log(&format!("rejected result from {worker}: {reason}"));
+                            let _ = reply.send(SubmitReply::Rejected { reason });
                         }
                     }
                 }
                 Inbox::Renew { worker, job, reply } => {
-                    for a in sched.handle(Event::LeaseRenewed { worker, job }, now) {
-                        match a {
-                            Action::Renewed { .. } => {
-                                let _ = reply.send(RenewReply::Renewed);
-                                break;
-                            }
-                            Action::NotLeased { .. } => {
-                                let _ = reply.send(RenewReply::NotLeased);
-                                break;
-                            }
-                            other => events.push(other),
-                        }
-                    }
+                    let r = sched.renew(&worker, &job, now);
+                    notes.extend(r.notes);
+                    let _ = reply.send(match r.answer {
+                        Renewal::Renewed { .. } => RenewReply::Renewed,
+                        Renewal::NotLeased => RenewReply::NotLeased,
+                    });
                 }
                 Inbox::Joined(w) => {
                     if remote.insert(w.clone()) {
                         on_log(&format!("worker {w} joined"));
                     }
-                    events.extend(sched.handle(Event::WorkerJoined(w), now));
+                    sched.joined(w);
                 }
                 Inbox::Left(w) => {
                     if remote.remove(&w) {
                         on_log(&format!("worker {w} left"));
                     }
-                    events.extend(sched.handle(Event::WorkerLeft(w), now));
+                    notes.extend(sched.left(&w));
                 }
                 Inbox::Log(line) => on_log(&line),
             }
@@ -326,9 +297,9 @@ pub fn run_plan(
         for (r, a) in acks {
             let _ = r.send(a);
         }
-        for a in events {
-            match a {
-                Action::Requeued {
+        for n in notes {
+            match n {
+                Note::Requeued {
                     job,
                     worker,
                     reason,
@@ -339,8 +310,7 @@ pub fn run_plan(
                         RequeueReason::LeaseExpired => format!("lease of {worker} expired"),
                     }
                 )),
-                Action::Finished => finished_at = Some(Instant::now()),
-                _ => {}
+                Note::Finished => finished_at = Some(Instant::now()),
             }
         }
         if sched.is_finished() && finished_at.is_none() {

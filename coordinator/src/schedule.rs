@@ -1,4 +1,5 @@
-//! The job scheduler as a deterministic state machine: `handle(event, now) -> actions`.
+//! The job scheduler as a deterministic state machine: one method per thing that happens, each
+//! returning its typed answer and the [`Note`]s of what happened meanwhile.
 //!
 //! Pull-based: a worker asks for a job when it has a free slot and gets one with a lease. A
 //! worker that leaves (its liveliness token dropped) or whose lease expires gives its jobs back
@@ -12,62 +13,55 @@ pub type JobId = String;
 /// A worker's identity (its zenoh id or a local name).
 pub type WorkerId = String;
 
-/// Something that happened, as the transport saw it.
+/// The answer to a worker's request for a job.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Event {
-    WorkerJoined(WorkerId),
-    WorkerLeft(WorkerId),
-    /// A worker asks for one job.
-    JobRequested(WorkerId),
-    /// A worker returns the result of a job.
-    ResultSubmitted {
-        worker: WorkerId,
-        job: JobId,
-    },
-    /// A worker still runs a job: extend its lease.
-    LeaseRenewed {
-        worker: WorkerId,
-        job: JobId,
-    },
-    /// Time passes (check leases).
-    Tick,
+pub enum Grant {
+    /// Run `job`, leased until `deadline_s`.
+    Lease { job: JobId, deadline_s: f64 },
+    /// Nothing to hand out now, ask again later.
+    Wait,
+    /// The grid is complete, the worker may leave.
+    Done,
 }
 
-/// What the transport must do.
+/// What to do with a submitted result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// The job's first result: store it durably, then acknowledge it.
+    Store,
+    /// Acknowledge without storing (a duplicate or late result of a job already stored).
+    Duplicate,
+    /// Refuse it: the job is not part of this grid.
+    Unknown,
+}
+
+/// The answer to a lease renewal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Renewal {
+    /// The lease now runs until `deadline_s`.
+    Renewed { deadline_s: f64 },
+    /// The job is not leased to this worker (requeued meanwhile, or already stored).
+    NotLeased,
+}
+
+/// What happened meanwhile, for logs and progress.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Action {
-    /// Answer the request of `worker` with `job`, leased until `deadline_s`.
-    Lease {
-        worker: WorkerId,
-        job: JobId,
-        deadline_s: f64,
-    },
-    /// Answer the request: nothing to hand out now, ask again later.
-    Wait { worker: WorkerId },
-    /// Answer the request: the grid is complete, the worker may leave.
-    Done { worker: WorkerId },
-    /// Store this result durably, then acknowledge it.
-    Store { worker: WorkerId, job: JobId },
-    /// Acknowledge without storing (duplicate or late result of a job already stored).
-    AckDuplicate { worker: WorkerId, job: JobId },
-    /// Refuse a result for a job that is not part of this grid.
-    RejectUnknown { worker: WorkerId, job: JobId },
-    /// A job went back to the queue (for logs and progress).
+pub enum Note {
+    /// A job went back to the queue.
     Requeued {
         job: JobId,
         worker: WorkerId,
         reason: RequeueReason,
     },
-    /// The lease of `job` now runs until `deadline_s`.
-    Renewed {
-        worker: WorkerId,
-        job: JobId,
-        deadline_s: f64,
-    },
-    /// `job` is not leased to `worker` (requeued meanwhile, or already stored).
-    NotLeased { worker: WorkerId, job: JobId },
     /// Every job is stored.
     Finished,
+}
+
+/// An answer and the notes of what happened while it was made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reply<T> {
+    pub answer: T,
+    pub notes: Vec<Note>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -139,86 +133,102 @@ impl Scheduler {
         self.leased.iter().map(|(j, l)| (j, &l.worker))
     }
 
-    /// Feeds one event at time `now_s`; returns what to do, in order.
-    pub fn handle(&mut self, event: Event, now_s: f64) -> Vec<Action> {
-        let mut out = Vec::new();
-        match event {
-            Event::WorkerJoined(w) => {
-                self.workers.insert(w);
-            }
-            Event::WorkerLeft(w) => {
-                self.workers.remove(&w);
-                self.requeue_where(|l| l.worker == w, RequeueReason::WorkerLeft, &mut out);
-            }
-            Event::JobRequested(w) => {
-                // A request also proves the worker is alive.
-                self.workers.insert(w.clone());
-                self.expire(now_s, &mut out);
-                if let Some(job) = self.pending.pop_front() {
-                    let deadline_s = now_s + self.lease_s;
-                    self.leased.insert(
-                        job.clone(),
-                        Lease {
-                            worker: w.clone(),
-                            deadline_s,
-                        },
-                    );
-                    out.push(Action::Lease {
-                        worker: w,
-                        job,
-                        deadline_s,
-                    });
-                } else if self.is_finished() {
-                    out.push(Action::Done { worker: w });
-                } else {
-                    out.push(Action::Wait { worker: w });
-                }
-            }
-            Event::ResultSubmitted { worker, job } => {
-                if !self.all.contains(&job) {
-                    out.push(Action::RejectUnknown { worker, job });
-                } else if self.done.contains(&job) {
-                    out.push(Action::AckDuplicate { worker, job });
-                } else {
-                    // First result of this job, from whoever ran it (results are deterministic).
-                    self.leased.remove(&job);
-                    self.pending.retain(|j| j != &job);
-                    self.done.insert(job.clone());
-                    out.push(Action::Store { worker, job });
-                }
-            }
-            Event::LeaseRenewed { worker, job } => {
-                self.expire(now_s, &mut out);
-                match self.leased.get_mut(&job) {
-                    Some(l) if l.worker == worker => {
-                        l.deadline_s = now_s + self.lease_s;
-                        out.push(Action::Renewed {
-                            worker,
-                            job,
-                            deadline_s: l.deadline_s,
-                        });
-                    }
-                    _ => out.push(Action::NotLeased { worker, job }),
-                }
-            }
-            Event::Tick => self.expire(now_s, &mut out),
-        }
-        if self.is_finished() && !self.finished_announced {
-            self.finished_announced = true;
-            out.push(Action::Finished);
-        }
-        out
+    /// A worker joined.
+    pub fn joined(&mut self, worker: WorkerId) {
+        self.workers.insert(worker);
     }
 
-    fn expire(&mut self, now_s: f64, out: &mut Vec<Action>) {
-        self.requeue_where(|l| l.deadline_s <= now_s, RequeueReason::LeaseExpired, out);
+    /// A worker left: its jobs go back to the queue.
+    pub fn left(&mut self, worker: &str) -> Vec<Note> {
+        self.workers.remove(worker);
+        let mut notes = Vec::new();
+        self.requeue_where(
+            |l| l.worker == worker,
+            RequeueReason::WorkerLeft,
+            &mut notes,
+        );
+        notes
+    }
+
+    /// A worker asks for one job at time `now_s` (a request also proves it is alive).
+    pub fn request(&mut self, worker: WorkerId, now_s: f64) -> Reply<Grant> {
+        let mut notes = Vec::new();
+        self.workers.insert(worker.clone());
+        self.expire(now_s, &mut notes);
+        let answer = if let Some(job) = self.pending.pop_front() {
+            let deadline_s = now_s + self.lease_s;
+            self.leased
+                .insert(job.clone(), Lease { worker, deadline_s });
+            Grant::Lease { job, deadline_s }
+        } else if self.is_finished() {
+            Grant::Done
+        } else {
+            Grant::Wait
+        };
+        self.reply(answer, notes)
+    }
+
+    /// A worker returns the result of `job`.
+    pub fn submit(&mut self, job: &str) -> Reply<Verdict> {
+        let answer = if !self.all.contains(job) {
+            Verdict::Unknown
+        } else if self.done.contains(job) {
+            Verdict::Duplicate
+        } else {
+            // First result of this job, from whoever ran it (results are deterministic).
+            self.leased.remove(job);
+            self.pending.retain(|j| j != job);
+            self.done.insert(job.to_string());
+            Verdict::Store
+        };
+        self.reply(answer, Vec::new())
+    }
+
+    /// A worker still runs `job` at time `now_s`: extend its lease if it holds it.
+    pub fn renew(&mut self, worker: &str, job: &str, now_s: f64) -> Reply<Renewal> {
+        let mut notes = Vec::new();
+        self.expire(now_s, &mut notes);
+        let answer = match self.leased.get_mut(job) {
+            Some(l) if l.worker == worker => {
+                l.deadline_s = now_s + self.lease_s;
+                Renewal::Renewed {
+                    deadline_s: l.deadline_s,
+                }
+            }
+            _ => Renewal::NotLeased,
+        };
+        self.reply(answer, notes)
+    }
+
+    /// Time passes: leases past their deadline are requeued.
+    pub fn tick(&mut self, now_s: f64) -> Vec<Note> {
+        let mut notes = Vec::new();
+        self.expire(now_s, &mut notes);
+        self.reply((), notes).notes
+    }
+
+    /// `answer` with `notes` and, the first time every job is stored, [`Note::Finished`].
+    fn reply<T>(&mut self, answer: T, mut notes: Vec<Note>) -> Reply<T> {
+        if self.is_finished() && !self.finished_announced {
+            self.finished_announced = true;
+            notes.push(Note::Finished);
+        }
+        Reply { answer, notes }
+    }
+
+    fn expire(&mut self, now_s: f64, notes: &mut Vec<Note>) {
+        self.requeue_where(
+            |l| l.deadline_s <= now_s,
+            RequeueReason::LeaseExpired,
+            notes,
+        );
     }
 
     fn requeue_where(
         &mut self,
         pred: impl Fn(&Lease) -> bool,
         reason: RequeueReason,
-        out: &mut Vec<Action>,
+        notes: &mut Vec<Note>,
     ) {
         let gone: Vec<JobId> = self
             .leased
@@ -230,7 +240,7 @@ impl Scheduler {
         for job in gone.into_iter().rev() {
             let lease = self.leased.remove(&job).expect("listed above");
             self.pending.push_front(job.clone());
-            out.push(Action::Requeued {
+            notes.push(Note::Requeued {
                 job,
                 worker: lease.worker,
                 reason,
@@ -252,85 +262,49 @@ mod tests {
     #[test]
     fn hands_out_each_job_once_and_finishes() {
         let mut s = Scheduler::new(ids(2), &BTreeSet::new(), 60.0);
-        let a = s.handle(Event::JobRequested("w1".into()), 0.0);
-        assert!(matches!(&a[..], [Action::Lease { job, .. }] if job == "job000"));
-        let b = s.handle(Event::JobRequested("w2".into()), 0.0);
-        assert!(matches!(&b[..], [Action::Lease { job, .. }] if job == "job001"));
-        assert!(matches!(
-            &s.handle(Event::JobRequested("w3".into()), 0.0)[..],
-            [Action::Wait { .. }]
-        ));
-        let r = s.handle(
-            Event::ResultSubmitted {
-                worker: "w1".into(),
-                job: "job000".into(),
-            },
-            1.0,
-        );
-        assert!(matches!(&r[..], [Action::Store { .. }]));
-        let r = s.handle(
-            Event::ResultSubmitted {
-                worker: "w2".into(),
-                job: "job001".into(),
-            },
-            1.0,
-        );
-        assert!(matches!(&r[..], [Action::Store { .. }, Action::Finished]));
-        assert!(matches!(
-            &s.handle(Event::JobRequested("w1".into()), 2.0)[..],
-            [Action::Done { .. }]
-        ));
+        let a = s.request("w1".into(), 0.0);
+        assert!(matches!(&a.answer, Grant::Lease { job, .. } if job == "job000"));
+        let b = s.request("w2".into(), 0.0);
+        assert!(matches!(&b.answer, Grant::Lease { job, .. } if job == "job001"));
+        assert_eq!(s.request("w3".into(), 0.0).answer, Grant::Wait);
+        let r = s.submit("job000");
+        assert_eq!((r.answer, r.notes), (Verdict::Store, vec![]));
+        let r = s.submit("job001");
+        assert_eq!((r.answer, r.notes), (Verdict::Store, vec![Note::Finished]));
+        let r = s.request("w1".into(), 2.0);
+        assert_eq!((r.answer, r.notes), (Grant::Done, vec![]));
     }
 
     #[test]
     fn a_worker_leaving_requeues_its_job_and_late_results_are_discarded() {
         let mut s = Scheduler::new(ids(1), &BTreeSet::new(), 60.0);
-        s.handle(Event::JobRequested("w1".into()), 0.0);
-        let a = s.handle(Event::WorkerLeft("w1".into()), 1.0);
+        s.request("w1".into(), 0.0);
+        let notes = s.left("w1");
         assert!(matches!(
-            &a[..],
-            [Action::Requeued {
+            &notes[..],
+            [Note::Requeued {
                 reason: RequeueReason::WorkerLeft,
                 ..
             }]
         ));
-        let a = s.handle(Event::JobRequested("w2".into()), 2.0);
-        assert!(matches!(&a[..], [Action::Lease { worker, .. }] if worker == "w2"));
-        s.handle(
-            Event::ResultSubmitted {
-                worker: "w2".into(),
-                job: "job000".into(),
-            },
-            3.0,
-        );
+        assert_eq!(s.workers().count(), 0);
+        let a = s.request("w2".into(), 2.0);
+        assert!(matches!(&a.answer, Grant::Lease { job, .. } if job == "job000"));
+        assert_eq!(s.leases().next().map(|(_, w)| w.as_str()), Some("w2"));
+        assert_eq!(s.submit("job000").answer, Verdict::Store);
         // The first worker comes back and submits too: acknowledged, not stored.
-        let a = s.handle(
-            Event::ResultSubmitted {
-                worker: "w1".into(),
-                job: "job000".into(),
-            },
-            4.0,
-        );
-        assert!(matches!(&a[..], [Action::AckDuplicate { .. }]));
-        let a = s.handle(
-            Event::ResultSubmitted {
-                worker: "w1".into(),
-                job: "nope".into(),
-            },
-            4.0,
-        );
-        assert!(matches!(&a[..], [Action::RejectUnknown { .. }]));
+        assert_eq!(s.submit("job000").answer, Verdict::Duplicate);
+        assert_eq!(s.submit("nope").answer, Verdict::Unknown);
     }
 
     #[test]
     fn expired_leases_are_requeued() {
         let mut s = Scheduler::new(ids(1), &BTreeSet::new(), 10.0);
-        s.handle(Event::JobRequested("w1".into()), 0.0);
-        assert!(s.handle(Event::Tick, 9.0).is_empty());
-        let a = s.handle(Event::Tick, 10.0);
+        s.request("w1".into(), 0.0);
+        assert!(s.tick(9.0).is_empty());
         assert!(matches!(
-            &a[..],
-            [Action::Requeued {
+            &s.tick(10.0)[..],
+            [Note::Requeued {
                 reason: RequeueReason::LeaseExpired,
                 ..
             }]
@@ -341,33 +315,17 @@ mod tests {
     #[test]
     fn renewals_keep_a_lease_alive_only_for_its_holder() {
         let mut s = Scheduler::new(ids(1), &BTreeSet::new(), 10.0);
-        s.handle(Event::JobRequested("w1".into()), 0.0);
-        let renew = |s: &mut Scheduler, w: &str, now| {
-            s.handle(
-                Event::LeaseRenewed {
-                    worker: w.into(),
-                    job: "job000".into(),
-                },
-                now,
-            )
-        };
-        assert!(
-            matches!(&renew(&mut s, "w1", 8.0)[..], [Action::Renewed { deadline_s, .. }] if *deadline_s == 18.0)
+        s.request("w1".into(), 0.0);
+        assert_eq!(
+            s.renew("w1", "job000", 8.0).answer,
+            Renewal::Renewed { deadline_s: 18.0 }
         );
-        assert!(
-            s.handle(Event::Tick, 15.0).is_empty(),
-            "renewed lease holds"
-        );
-        assert!(matches!(
-            &renew(&mut s, "w2", 16.0)[..],
-            [Action::NotLeased { .. }]
-        ));
+        assert!(s.tick(15.0).is_empty(), "renewed lease holds");
+        assert_eq!(s.renew("w2", "job000", 16.0).answer, Renewal::NotLeased);
         // Not renewed in time: requeued, and a late renewal is refused.
-        let a = renew(&mut s, "w1", 30.0);
-        assert!(
-            matches!(&a[..], [Action::Requeued { .. }, Action::NotLeased { .. }]),
-            "{a:?}"
-        );
+        let r = s.renew("w1", "job000", 30.0);
+        assert_eq!(r.answer, Renewal::NotLeased);
+        assert!(matches!(&r.notes[..], [Note::Requeued { .. }]), "{r:?}");
     }
 
     #[test]
@@ -375,8 +333,8 @@ mod tests {
         let done: BTreeSet<JobId> = ["job000".to_string()].into();
         let mut s = Scheduler::new(ids(2), &done, 10.0);
         assert_eq!((s.total(), s.done(), s.pending()), (2, 1, 1));
-        let a = s.handle(Event::JobRequested("w".into()), 0.0);
-        assert!(matches!(&a[..], [Action::Lease { job, .. }] if job == "job001"));
+        let a = s.request("w".into(), 0.0);
+        assert!(matches!(&a.answer, Grant::Lease { job, .. } if job == "job001"));
     }
 
     #[derive(Debug, Clone)]
@@ -408,45 +366,40 @@ mod tests {
             // What each worker holds (it may keep holding a job after it "left": a late result).
             let mut held: BTreeMap<u8, Vec<JobId>> = BTreeMap::new();
             let mut stored: BTreeMap<JobId, usize> = BTreeMap::new();
-            let mut apply = |s: &mut Scheduler, e: Event, now: f64, held: &mut BTreeMap<u8, Vec<JobId>>| {
-                for a in s.handle(e, now) {
-                    match a {
-                        Action::Lease { worker, job, .. } => {
-                            held.entry(worker[1..].parse().unwrap()).or_default().push(job)
-                        }
-                        Action::Store { job, .. } => *stored.entry(job).or_default() += 1,
-                        _ => {}
+            let request = |s: &mut Scheduler, w: u8, now: f64, held: &mut BTreeMap<u8, Vec<JobId>>| {
+                if let Grant::Lease { job, .. } = s.request(format!("w{w}"), now).answer {
+                    held.entry(w).or_default().push(job);
+                }
+            };
+            let mut submit = |s: &mut Scheduler, w: u8, held: &mut BTreeMap<u8, Vec<JobId>>| {
+                if let Some(job) = held.get_mut(&w).and_then(|v| v.pop()) {
+                    if s.submit(&job).answer == Verdict::Store {
+                        *stored.entry(job).or_default() += 1;
                     }
                 }
             };
             for st in steps {
                 now += 1.0;
                 match st {
-                    Step::Request(w) => apply(&mut s, Event::JobRequested(format!("w{w}")), now, &mut held),
-                    Step::Submit(w) => {
-                        if let Some(job) = held.get_mut(&w).and_then(|v| v.pop()) {
-                            apply(&mut s, Event::ResultSubmitted { worker: format!("w{w}"), job }, now, &mut held);
-                        }
-                    }
-                    Step::Leave(w) => apply(&mut s, Event::WorkerLeft(format!("w{w}")), now, &mut held),
+                    Step::Request(w) => request(&mut s, w, now, &mut held),
+                    Step::Submit(w) => submit(&mut s, w, &mut held),
+                    Step::Leave(w) => { s.left(&format!("w{w}")); }
                     Step::Renew(w) => {
                         if let Some(job) = held.get(&w).and_then(|v| v.last()).cloned() {
-                            apply(&mut s, Event::LeaseRenewed { worker: format!("w{w}"), job }, now, &mut held);
+                            s.renew(&format!("w{w}"), &job, now);
                         }
                     }
-                    Step::Tick(dt) => { now += dt as f64; apply(&mut s, Event::Tick, now, &mut held) }
+                    Step::Tick(dt) => { now += dt as f64; s.tick(now); }
                 }
             }
             // Then the other workers hang (their leases expire) and one reliable worker drains
             // the grid.
             now += 100.0;
-            apply(&mut s, Event::Tick, now, &mut held);
+            s.tick(now);
             for _ in 0..(3 * n + 3) {
                 now += 1.0;
-                apply(&mut s, Event::JobRequested("w9".into()), now, &mut held);
-                if let Some(job) = held.get_mut(&9).and_then(|v| v.pop()) {
-                    apply(&mut s, Event::ResultSubmitted { worker: "w9".into(), job }, now, &mut held);
-                }
+                request(&mut s, 9, now, &mut held);
+                submit(&mut s, 9, &mut held);
             }
             prop_assert!(s.is_finished());
             prop_assert_eq!(stored.len(), n);
