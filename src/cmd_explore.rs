@@ -5,10 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use floorcast_worker::settings::{LocalizationSetting, UtilityDistanceSetting};
 use floorcast_worker::{check_job, check_start, run_job, GivenStart, Job, Settings, STRATEGIES};
 use sim_core::explore::RunResult;
 
-use crate::output::{create_dir, parse_pose, progress_bar, write_text};
+use crate::output::{create_dir, parse_pose, progress_bar, write_text, Picture};
 
 #[derive(Debug, Args)]
 #[command(after_long_help = floorcast_worker::settings::settings_help_text())]
@@ -34,8 +35,8 @@ pub struct ExploreArgs {
     #[arg(long, value_name = "X,Y,THETA|random", value_parser = parse_start, allow_hyphen_values = true)]
     start: Option<StartArg>,
     /// Where the map's poses come from (default: slam, or the settings file's).
-    #[arg(long, value_parser = ["slam", "odometry", "ground-truth"])]
-    localization: Option<String>,
+    #[arg(long, value_enum)]
+    localization: Option<LocalizationSetting>,
     /// The utility's weight of distance against information gain, in [0, 1] (default: 0.5, or
     /// the settings file's).
     #[arg(long)]
@@ -43,8 +44,8 @@ pub struct ExploreArgs {
     /// What the utility's distance D(p) measures: the planned path's length, or the straight
     /// line from the robot to the candidate as the paper defines it (default: path, or the
     /// settings file's).
-    #[arg(long, value_parser = ["path", "euclidean"])]
-    utility_distance: Option<String>,
+    #[arg(long, value_enum)]
+    utility_distance: Option<UtilityDistanceSetting>,
     /// Drive back to the start after exploring.
     #[arg(long)]
     return_home: bool,
@@ -61,8 +62,8 @@ pub struct ExploreArgs {
     #[arg(long, value_name = "FILE")]
     settings: Option<PathBuf>,
     /// Picture format of the final map.
-    #[arg(long, default_value = "png", value_parser = ["png", "svg"])]
-    picture: String,
+    #[arg(long, value_enum, default_value_t = Picture::Png)]
+    picture: Picture,
     /// Also draw the layout of the map at 20, 40, 60, 80 and 90 % explored
     /// (layout-20.png ... layout-90.png), like the paper's Fig. 3.
     #[arg(long)]
@@ -91,8 +92,8 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         }
         None => Settings::default(),
     };
-    if let Some(l) = &a.localization {
-        settings.localization = l.clone();
+    if let Some(l) = a.localization {
+        settings.localization = l;
     }
     if let Some(alpha) = a.alpha {
         settings.alpha = alpha;
@@ -100,8 +101,8 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     if let Some(t) = a.time_limit_s {
         settings.time_limit_s = t;
     }
-    if let Some(d) = &a.utility_distance {
-        settings.utility_distance = d.clone();
+    if let Some(d) = a.utility_distance {
+        settings.utility_distance = d;
     }
     settings.return_home |= a.return_home;
     settings.candidate_from_reachable_part |= a.candidate_from_reachable_part;
@@ -169,7 +170,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     write_text(&out.join("decisions.csv"), &decisions_csv(&output.result))?;
     write_text(&out.join("trajectory.csv"), &trajectory_csv(&output.result))?;
     floorcast_formats::map_server::write_map(&output.result.map, &out.join("map.yaml"))?;
-    let picture = out.join(format!("final.{}", a.picture));
+    let picture = out.join(format!("final.{}", a.picture.extension()));
     crate::cmd_building::exploration_figure(&output.result, job.settings.min_frontier_m)
         .save(&picture)
         .with_context(|| format!("cannot write {}", picture.display()))?;
@@ -179,7 +180,11 @@ pub fn run(a: ExploreArgs) -> Result<()> {
             &snap.map,
             &sim_core::layout::LayoutConfig::default(),
         );
-        let p = out.join(format!("layout-{:.0}.{}", snap.fraction * 100.0, a.picture));
+        let p = out.join(format!(
+            "layout-{:.0}.{}",
+            snap.fraction * 100.0,
+            a.picture.extension()
+        ));
         crate::cmd_layout::layout_figure(&snap.map, &layout)
             .save(&p)
             .with_context(|| format!("cannot write {}", p.display()))?;

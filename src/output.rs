@@ -7,6 +7,23 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Creates `dir` (and parents), with a message naming it on failure.
+/// The picture format of a run's maps (`--picture`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Picture {
+    Png,
+    Svg,
+}
+
+impl Picture {
+    /// The file extension, which also chooses the encoder.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Picture::Png => "png",
+            Picture::Svg => "svg",
+        }
+    }
+}
+
 pub fn create_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir)
         .with_context(|| format!("cannot create directory {}", dir.display()))

@@ -5,6 +5,90 @@
 use serde::{Deserialize, Serialize};
 use sim_core::explore::{EarlyStop, ExploreConfig, Localization, Strategy, UtilityDistance};
 
+/// Where the map's poses come from (setting `localization`, flag `--localization`): written as
+/// `slam`, `odometry` or `ground-truth`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum LocalizationSetting {
+    // Scan matching against the map, odometry as the prior (the default).
+    #[default]
+    Slam,
+    // Dead reckoning from the noisy odometry.
+    Odometry,
+    // The true pose (an oracle).
+    GroundTruth,
+}
+
+impl LocalizationSetting {
+    /// Every value, in the order of the settings reference.
+    pub const ALL: [Self; 3] = [Self::Slam, Self::Odometry, Self::GroundTruth];
+
+    /// The word written in files and records.
+    pub fn as_str(self) -> &'static str {
+        Localization::from(self).as_str()
+    }
+}
+
+impl From<LocalizationSetting> for Localization {
+    fn from(l: LocalizationSetting) -> Self {
+        match l {
+            LocalizationSetting::Slam => Localization::Slam,
+            LocalizationSetting::Odometry => Localization::Odometry,
+            LocalizationSetting::GroundTruth => Localization::GroundTruth,
+        }
+    }
+}
+
+impl From<Localization> for LocalizationSetting {
+    fn from(l: Localization) -> Self {
+        match l {
+            Localization::Slam => LocalizationSetting::Slam,
+            Localization::Odometry => LocalizationSetting::Odometry,
+            Localization::GroundTruth => LocalizationSetting::GroundTruth,
+        }
+    }
+}
+
+/// What the utility's distance measures (setting `utility_distance`, flag
+/// `--utility-distance`): written as `path` or `euclidean`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum UtilityDistanceSetting {
+    // The planned path's length (the default).
+    #[default]
+    Path,
+    // The straight line from the robot to the candidate (the paper's).
+    Euclidean,
+}
+
+impl UtilityDistanceSetting {
+    /// Every value, in the order of the settings reference.
+    pub const ALL: [Self; 2] = [Self::Path, Self::Euclidean];
+
+    /// The word written in files and records.
+    pub fn as_str(self) -> &'static str {
+        UtilityDistance::from(self).as_str()
+    }
+}
+
+impl From<UtilityDistanceSetting> for UtilityDistance {
+    fn from(d: UtilityDistanceSetting) -> Self {
+        match d {
+            UtilityDistanceSetting::Path => UtilityDistance::Path,
+            UtilityDistanceSetting::Euclidean => UtilityDistance::Euclidean,
+        }
+    }
+}
+
+impl From<UtilityDistance> for UtilityDistanceSetting {
+    fn from(d: UtilityDistance) -> Self {
+        match d {
+            UtilityDistance::Path => UtilityDistanceSetting::Path,
+            UtilityDistance::Euclidean => UtilityDistanceSetting::Euclidean,
+        }
+    }
+}
+
 /// Settings as written in files and records. Every field has the documented default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -29,8 +113,8 @@ pub struct Settings {
     pub odometry_translation_error: f64,
     /// Maximum proportional rotation error of odometry (degrees per radian).
     pub odometry_rotation_error_deg_per_rad: f64,
-    /// "slam" (default), "odometry" or "ground-truth".
-    pub localization: String,
+    /// Where the map's poses come from.
+    pub localization: LocalizationSetting,
     /// Occupancy grid cell size (m).
     pub map_resolution_m: f64,
     /// The map is updated (and the scan matched) after this much motion (m)...
@@ -50,7 +134,7 @@ pub struct Settings {
     /// it). Written only when not "path", so that the records and job identities of runs with
     /// the default are those of earlier versions.
     #[serde(skip_serializing_if = "is_path")]
-    pub utility_distance: String,
+    pub utility_distance: UtilityDistanceSetting,
     /// Frontiers shorter than this are ignored (m).
     pub min_frontier_m: f64,
     /// Frontier cells closer than this to an observed wall are ignored (m; 0 = none), as by
@@ -101,8 +185,8 @@ pub struct Settings {
     pub charge_compute: bool,
 }
 
-fn is_path(s: &str) -> bool {
-    s == UtilityDistance::Path.as_str()
+fn is_path(d: &UtilityDistanceSetting) -> bool {
+    *d == UtilityDistanceSetting::Path
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -123,14 +207,14 @@ impl Default for Settings {
             laser_noise_sd_m: c.sim.laser.range_noise_sd_m,
             odometry_translation_error: c.sim.odometry.max_translation_error,
             odometry_rotation_error_deg_per_rad: c.sim.odometry.max_rotation_error.to_degrees(),
-            localization: c.localization.as_str().to_string(),
+            localization: c.localization.into(),
             map_resolution_m: c.map_resolution_m,
             map_update_distance_m: c.map_update_distance_m,
             map_update_angle_rad: c.map_update_angle_rad,
             map_update_period_s: c.map_update_period_s,
             alpha: c.alpha,
             gain_floor_m2: c.gain_floor_m2,
-            utility_distance: c.utility_distance.as_str().to_string(),
+            utility_distance: c.utility_distance.into(),
             min_frontier_m: c.min_frontier_m,
             frontier_clearance_m: c.frontier_clearance_m,
             candidate_from_reachable_part: c.candidate_from_reachable_part,
@@ -559,6 +643,10 @@ pub fn settings_from_map(
                 got: describe_json(v),
             });
         }
+        // A word outside the choices is named here, before serde reads the typed value.
+        if let (SettingKind::Choice(_), Some(w)) = (info.kind, v.as_str()) {
+            info.check(&SettingValue::Word(w.to_string()))?;
+        }
     }
     let settings: Settings = serde_json::from_value(serde_json::Value::Object(map.clone()))
         .map_err(|e| SettingsError::Shape(one_line(&e.to_string())))?;
@@ -648,14 +736,14 @@ impl Settings {
             "odometry_rotation_error_deg_per_rad" => {
                 Number(self.odometry_rotation_error_deg_per_rad)
             }
-            "localization" => Word(self.localization.clone()),
+            "localization" => Word(self.localization.as_str().to_string()),
             "map_resolution_m" => Number(self.map_resolution_m),
             "map_update_distance_m" => Number(self.map_update_distance_m),
             "map_update_angle_rad" => Number(self.map_update_angle_rad),
             "map_update_period_s" => Number(self.map_update_period_s),
             "alpha" => Number(self.alpha),
             "gain_floor_m2" => Number(self.gain_floor_m2),
-            "utility_distance" => Word(self.utility_distance.clone()),
+            "utility_distance" => Word(self.utility_distance.as_str().to_string()),
             "min_frontier_m" => Number(self.min_frontier_m),
             "frontier_clearance_m" => Number(self.frontier_clearance_m),
             "candidate_from_reachable_part" => Bool(self.candidate_from_reachable_part),
@@ -762,12 +850,7 @@ impl Settings {
         )?
         .to_radians();
         c.sim.step_s = 1.0 / c.sim.laser.rate_hz;
-        c.localization = match self.localization.as_str() {
-            "slam" => Localization::Slam,
-            "odometry" => Localization::Odometry,
-            "ground-truth" => Localization::GroundTruth,
-            other => return Err(SettingsError::Localization(other.to_string())),
-        };
+        c.localization = self.localization.into();
         c.map_resolution_m = check(
             "map_resolution_m",
             self.map_resolution_m,
@@ -784,8 +867,7 @@ impl Settings {
             "a number in [0, 1]",
         )?;
         c.gain_floor_m2 = nonneg("gain_floor_m2", self.gain_floor_m2)?;
-        c.utility_distance = UtilityDistance::from_name(&self.utility_distance)
-            .ok_or_else(|| SettingsError::UtilityDistance(self.utility_distance.clone()))?;
+        c.utility_distance = self.utility_distance.into();
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
         c.frontier_clearance_m = nonneg("frontier_clearance_m", self.frontier_clearance_m)?;
         c.candidate_from_reachable_part = self.candidate_from_reachable_part;
@@ -828,15 +910,11 @@ mod tests {
         };
         let e = s.to_explore_config().unwrap_err().to_string();
         assert!(e.contains("settings.alpha") && e.contains("[0, 1]"), "{e}");
-        let s = Settings {
-            localization: "gps".into(),
-            ..Settings::default()
-        };
-        assert!(s
-            .to_explore_config()
-            .unwrap_err()
-            .to_string()
-            .contains("gps"));
+        let e = settings_from_json_text(r#"{"localization": "gps"}"#).unwrap_err();
+        assert!(
+            e.to_string().contains("settings.localization") && e.to_string().contains("gps"),
+            "{e}"
+        );
         let s = Settings {
             robot_radius_m: f64::NAN,
             ..Settings::default()
@@ -906,7 +984,7 @@ mod tests {
         let off = serde_json::to_value(Settings::default()).unwrap();
         assert!(off.get("utility_distance").is_none(), "{off}");
         let on = Settings {
-            utility_distance: "euclidean".into(),
+            utility_distance: UtilityDistanceSetting::Euclidean,
             ..Settings::default()
         };
         let v = serde_json::to_value(&on).unwrap();
@@ -917,11 +995,9 @@ mod tests {
             back.to_explore_config().unwrap().utility_distance,
             UtilityDistance::Euclidean
         );
-        let bad = Settings {
-            utility_distance: "manhattan".into(),
-            ..Settings::default()
-        };
-        let e = bad.to_explore_config().unwrap_err().to_string();
+        let e = settings_from_json_text(r#"{"utility_distance": "manhattan"}"#)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("settings.utility_distance") && e.contains("manhattan"),
             "{e}"
@@ -958,10 +1034,69 @@ mod tests {
         }
     }
 
+    /// A word choice is written the same in the settings table, in files and records (serde)
+    /// and on the command line (clap), and reaches the explorer as the core's value.
+    #[test]
+    fn word_choices_are_one_set_of_words_everywhere() {
+        use clap::ValueEnum;
+        fn words<T: ValueEnum + Serialize>(all: &[T]) -> Vec<(String, String)> {
+            all.iter()
+                .map(|v| {
+                    let clap = v.to_possible_value().unwrap().get_name().to_string();
+                    let serde = serde_json::to_value(v)
+                        .unwrap()
+                        .as_str()
+                        .unwrap()
+                        .to_string();
+                    (clap, serde)
+                })
+                .collect()
+        }
+        let cases: [(&str, Vec<(String, String)>, Vec<&str>); 2] = [
+            (
+                "localization",
+                words(&LocalizationSetting::ALL),
+                LocalizationSetting::ALL.map(|v| v.as_str()).to_vec(),
+            ),
+            (
+                "utility_distance",
+                words(&UtilityDistanceSetting::ALL),
+                UtilityDistanceSetting::ALL.map(|v| v.as_str()).to_vec(),
+            ),
+        ];
+        for (name, clap_serde, core) in cases {
+            let SettingKind::Choice(table) = setting_info(name).unwrap().kind else {
+                panic!("{name} is not a choice");
+            };
+            assert_eq!(table, &core[..], "{name}");
+            for ((clap, serde), word) in clap_serde.iter().zip(&core) {
+                assert_eq!((clap.as_str(), serde.as_str()), (*word, *word), "{name}");
+            }
+        }
+        assert_eq!(
+            LocalizationSetting::ALL.len(),
+            LocalizationSetting::value_variants().len()
+        );
+        assert_eq!(
+            UtilityDistanceSetting::ALL.len(),
+            UtilityDistanceSetting::value_variants().len()
+        );
+        let c = settings_from_json_text(
+            r#"{"localization": "ground-truth", "utility_distance": "euclidean"}"#,
+        )
+        .unwrap()
+        .to_explore_config()
+        .unwrap();
+        assert_eq!(
+            (c.localization, c.utility_distance),
+            (Localization::GroundTruth, UtilityDistance::Euclidean)
+        );
+    }
+
     #[test]
     fn the_table_has_one_row_per_field_in_order_and_the_defaults_pass() {
         let all_written = Settings {
-            utility_distance: "euclidean".into(),
+            utility_distance: UtilityDistanceSetting::Euclidean,
             frontier_clearance_m: 0.4,
             candidate_from_reachable_part: true,
             paper_frontiers: true,
