@@ -1039,7 +1039,9 @@ mod tests {
     #[test]
     fn word_choices_are_one_set_of_words_everywhere() {
         use clap::ValueEnum;
-        fn words<T: ValueEnum + Serialize>(all: &[T]) -> Vec<(String, String)> {
+        /// Per value: its clap name and its serde word.
+        type Words = Vec<(String, String)>;
+        fn words<T: ValueEnum + Serialize>(all: &[T]) -> Words {
             all.iter()
                 .map(|v| {
                     let clap = v.to_possible_value().unwrap().get_name().to_string();
@@ -1052,7 +1054,7 @@ mod tests {
                 })
                 .collect()
         }
-        let cases: [(&str, Vec<(String, String)>, Vec<&str>); 2] = [
+        let cases: [(&str, Words, Vec<&str>); 2] = [
             (
                 "localization",
                 words(&LocalizationSetting::ALL),
