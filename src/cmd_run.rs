@@ -12,9 +12,11 @@ use floorcast_coordinator::inbox::RemoteWorkers;
 use floorcast_coordinator::net::NetConfig;
 use floorcast_coordinator::run::{run_plan, Outcome, RunOptions};
 use floorcast_coordinator::store::{provenance, Store, DB_FILE};
-use floorcast_coordinator::table::{render_ends, render_text, results_csv, table};
+use floorcast_coordinator::table::{
+    gains_against, labels_of, render_against, render_ends, render_text, results_csv, table,
+};
 
-use crate::output::{progress_bar, write_text};
+use crate::output::{progress_bar, write_text, Picture};
 
 /// Network options shared by `run` and `worker`.
 #[derive(Debug, Args)]
@@ -82,8 +84,18 @@ pub struct ReportArgs {
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
     /// Picture format of the charts.
-    #[arg(long, default_value = "png", value_parser = ["png", "svg"])]
-    picture: String,
+    #[arg(long, value_enum, default_value_t = Picture::Png)]
+    picture: Picture,
+    /// Also compare with another results directory (or this one): the gain of each strategy
+    /// label here over a label there (the same label, or --against-label), paired by building
+    /// content, seed and start pose, with its 95 % interval; for a grid that changes one thing
+    /// against a reference grid, e.g. results/paper-alpha --against results/paper.
+    #[arg(long, value_name = "DIR")]
+    against: Option<PathBuf>,
+    /// With --against: the label there that every label here is compared with (default: the
+    /// same label), e.g. baseline.
+    #[arg(long, value_name = "LABEL", requires = "against")]
+    against_label: Option<String>,
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
@@ -282,6 +294,23 @@ fn stored_of_plan(plan: &Plan, store: &Store) -> Result<usize> {
 pub fn report(a: ReportArgs) -> Result<()> {
     let store = Store::open_existing(&a.results)?;
     let results = store.all()?;
+    // The other store and its label are checked before anything is printed.
+    let against = match &a.against {
+        Some(dir) => {
+            let other = Store::open_existing(dir)?.all()?;
+            if let Some(l) = &a.against_label {
+                if !other.iter().any(|r| &r.label == l) {
+                    anyhow::bail!(
+                        "--against-label: {} holds no runs labelled '{l}'; its labels: {}",
+                        dir.display(),
+                        labels_of(&other).join(", ")
+                    );
+                }
+            }
+            Some((dir, other))
+        }
+        None => None,
+    };
     say!(
         "{} results in {}",
         results.len(),
@@ -290,13 +319,17 @@ pub fn report(a: ReportArgs) -> Result<()> {
     let t = table(&results, &[]);
     say_raw!("{}", render_text(&t));
     say_raw!("{}", render_ends(&t));
+    if let Some((dir, other)) = &against {
+        let gains = gains_against(&results, other, a.against_label.as_deref());
+        say_raw!("{}", render_against(&gains, &dir.display().to_string()));
+    }
     if let Some(csv) = &a.csv {
         write_text(csv, &results_csv(&results))
             .with_context(|| format!("cannot export to {}", csv.display()))?;
         say!("wrote {}", csv.display());
     }
     if let Some(dir) = &a.plots {
-        let n = write_plots(&results, dir, &a.picture)?;
+        let n = write_plots(&results, dir, a.picture.extension())?;
         say!("wrote {n} charts to {}", dir.display());
     }
     Ok(())

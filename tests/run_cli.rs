@@ -127,6 +127,75 @@ fn grid_errors_name_the_field() {
     assert_clean_failure(&o, &["nothing", "floorcast run"]);
 }
 
+/// `report --against` pairs the runs of two results directories by building content, seed and
+/// start pose: two stores of the same grid pair every run with a gain of exactly zero, and a
+/// label compared with another label of the same store gives the table's own paired gain.
+#[test]
+fn report_against_pairs_runs_across_results_directories() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path(), "[1, 2]");
+    // Runs that explore the building to the end: runs cut by the time limit are not timed.
+    let text = std::fs::read_to_string(&g).unwrap();
+    std::fs::write(&g, text.replace("time_limit_s = 60", "time_limit_s = 3600")).unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    for res in [&a, &b] {
+        let o = run(&[
+            "run",
+            g.to_str().unwrap(),
+            "--results",
+            res.to_str().unwrap(),
+            "-q",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let report = |args: &[&str]| {
+        let mut all = vec!["report", a.to_str().unwrap(), "--against"];
+        all.extend_from_slice(args);
+        run(&all)
+    };
+    let o = report(&[b.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let against = out.split("Against ").nth(1).expect("an --against section");
+    for (label, over) in [("baseline", "baseline"), ("near", "near")] {
+        let line = against
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(label))
+            .unwrap_or_else(|| panic!("no line for {label}: {out}"));
+        let words: Vec<&str> = line.split_whitespace().collect();
+        assert_eq!(words[1], over, "{line}");
+        assert_eq!(&words[2..], ["+0.0", "±", "0.0", "%", "(n=2)"], "{line}");
+    }
+    // Against baseline of the same store: the table's paired gain of "near".
+    let o = report(&[a.to_str().unwrap(), "--against-label", "baseline"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let (table, against) = out.split_once("Against ").unwrap();
+    let cell = |text: &str| {
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("near "))
+            .unwrap_or_else(|| panic!("no near line: {out}"));
+        let start = line.find(['+', '-']).unwrap();
+        line[start..].split(')').next().unwrap().to_string()
+    };
+    let table_line = table
+        .lines()
+        .find(|l| l.trim_start().starts_with("near "))
+        .unwrap();
+    let paired_in_table = table_line[table_line.find("% ").unwrap() + 2..]
+        .trim_start()
+        .split(')')
+        .next()
+        .unwrap()
+        .to_string();
+    assert_eq!(cell(against), paired_in_table, "{out}");
+    // A label the other store does not hold: one line naming it and the labels there.
+    let o = report(&[b.to_str().unwrap(), "--against-label", "nope"]);
+    assert_clean_failure(&o, &["--against-label", "nope", "baseline, near"]);
+    assert!(stdout(&o).is_empty(), "nothing printed before the error");
+}
+
 #[test]
 fn interrupted_grid_resumes_without_duplicates() {
     let dir = tempfile::tempdir().unwrap();

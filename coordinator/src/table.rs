@@ -132,6 +132,20 @@ impl PairedGain {
     }
 }
 
+impl PairedGain {
+    /// `+1.9 ± 16.9 % (n=3)`, or without the interval for one pair.
+    pub fn cell(&self) -> String {
+        if self.ci95_pct.is_finite() {
+            format!(
+                "{:+.1} ± {:.1} % (n={})",
+                self.mean_pct, self.ci95_pct, self.pairs
+            )
+        } else {
+            format!("{:+.1} % (n={})", self.mean_pct, self.pairs)
+        }
+    }
+}
+
 /// Two-sided 95 % quantile of Student's t with `df` degrees of freedom.
 fn t95(df: usize) -> f64 {
     const T: [f64; 30] = [
@@ -154,6 +168,16 @@ type PairKey = (String, u64, [u64; 3]);
 /// Exploration time of the successful runs of `label` in `subset` that ended normally, by
 /// (building, seed, start pose).
 fn times_by_pair(subset: &[&StoredResult], label: &str) -> BTreeMap<PairKey, f64> {
+    times_by(subset, label, |r| r.building.clone())
+}
+
+/// [`times_by_pair`] with the building named by `building` (its name, or its content hash when
+/// runs of two results sets are paired).
+fn times_by(
+    subset: &[&StoredResult],
+    label: &str,
+    building: impl Fn(&StoredResult) -> String,
+) -> BTreeMap<PairKey, f64> {
     subset
         .iter()
         .filter(|r| r.label == label && r.status == "ok")
@@ -161,12 +185,93 @@ fn times_by_pair(subset: &[&StoredResult], label: &str) -> BTreeMap<PairKey, f64
             let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
             ended_normally(&s).then(|| {
                 (
-                    (r.building.clone(), r.seed, s.start.map(f64::to_bits)),
+                    (building(r), r.seed, s.start.map(f64::to_bits)),
                     s.exploration_time_s,
                 )
             })
         })
         .collect()
+}
+
+/// The strategy labels of `results`, in the order they first appear.
+pub fn labels_of(results: &[StoredResult]) -> Vec<&str> {
+    let mut labels: Vec<&str> = Vec::new();
+    for r in results {
+        if !labels.contains(&r.label.as_str()) {
+            labels.push(&r.label);
+        }
+    }
+    labels
+}
+
+/// The paired gain of one label of a results set over a label of another (`report --against`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrossGain {
+    pub label: String,
+    pub against_label: String,
+    /// `None` when the two labels share no run (building content, seed and start pose).
+    pub gain: Option<PairedGain>,
+}
+
+/// The gain of each label of `results` (in the order they first appear) over `against_label`
+/// of `against` (`None`: the same label), paired by building content (its hash: the same
+/// building under any name), seed and start pose, over the runs that ended normally. A positive
+/// gain is faster in `results`. For grids that change one thing against a reference grid, e.g.
+/// `results/paper-alpha` against `results/paper`.
+pub fn gains_against(
+    results: &[StoredResult],
+    against: &[StoredResult],
+    against_label: Option<&str>,
+) -> Vec<CrossGain> {
+    let labels = labels_of(results);
+    let mine: Vec<&StoredResult> = results.iter().collect();
+    let theirs: Vec<&StoredResult> = against.iter().collect();
+    let hash = |r: &StoredResult| r.building_hash.clone();
+    labels
+        .into_iter()
+        .map(|label| {
+            let other = against_label.unwrap_or(label);
+            let reference = times_by(&theirs, other, hash);
+            let gains: Vec<f64> = times_by(&mine, label, hash)
+                .iter()
+                .filter_map(|(k, t)| {
+                    let b = *reference.get(k)?;
+                    (b > 0.0).then(|| (b - t) / b * 100.0)
+                })
+                .collect();
+            CrossGain {
+                label: label.to_string(),
+                against_label: other.to_string(),
+                gain: PairedGain::of(&gains),
+            }
+        })
+        .collect()
+}
+
+/// The lines of `report --against`: per label, the label it is compared with and the paired
+/// gain with its 95 % interval.
+pub fn render_against(gains: &[CrossGain], against: &str) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "Against {against} (paired by building content, seed and start pose; positive: faster here):"
+    );
+    let _ = writeln!(
+        out,
+        "  {:<16}  {:<16}  {:>22}",
+        "strategy", "over (there)", "paired gain (95% CI)"
+    );
+    for g in gains {
+        let cell = g
+            .gain
+            .map_or_else(|| "no common runs".to_string(), |p| p.cell());
+        let _ = writeln!(
+            out,
+            "  {:<16}  {:<16}  {cell:>22}",
+            g.label, g.against_label
+        );
+    }
+    out
 }
 
 /// Counts per end class: [`end_classes`] in order, then other names in sorted order.
@@ -313,10 +418,7 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
         };
         let paired = match r.paired {
             _ if is_reference => String::new(),
-            Some(p) if p.ci95_pct.is_finite() => {
-                format!("{:+.1} ± {:.1} % (n={})", p.mean_pct, p.ci95_pct, p.pairs)
-            }
-            Some(p) => format!("{:+.1} % (n={})", p.mean_pct, p.pairs),
+            Some(p) => p.cell(),
             None => "-".into(),
         };
         let mut marks = Vec::new();
