@@ -28,6 +28,17 @@ time_limit_s = 60
     p
 }
 
+/// `floorcast run GRID --results DIR -q`.
+fn run_grid(grid: &std::path::Path, results: &std::path::Path) -> std::process::Output {
+    run(&[
+        "run",
+        grid.to_str().unwrap(),
+        "--results",
+        results.to_str().unwrap(),
+        "-q",
+    ])
+}
+
 #[test]
 fn runs_a_grid_then_resumes_with_nothing_to_do() {
     let dir = tempfile::tempdir().unwrap();
@@ -59,13 +70,7 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
     );
     // One more seed: only the new jobs run.
     let g = grid(dir.path(), "[1, 2, 3]");
-    let o = run(&[
-        "run",
-        g.to_str().unwrap(),
-        "--results",
-        res.to_str().unwrap(),
-        "-q",
-    ]);
+    let o = run_grid(&g, &res);
     assert!(
         stdout(&o).contains("done: 2 jobs run now, 4 stored before"),
         "{}",
@@ -139,13 +144,7 @@ fn report_against_pairs_runs_across_results_directories() {
     std::fs::write(&g, text.replace("time_limit_s = 60", "time_limit_s = 3600")).unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
     for res in [&a, &b] {
-        let o = run(&[
-            "run",
-            g.to_str().unwrap(),
-            "--results",
-            res.to_str().unwrap(),
-            "-q",
-        ]);
+        let o = run_grid(&g, res);
         assert!(o.status.success(), "{}", stderr(&o));
     }
     let report = |args: &[&str]| {
@@ -241,13 +240,7 @@ fn interrupted_grid_resumes_without_duplicates() {
         "interrupted before the end: {}",
         stdout(&o)
     );
-    let o = run(&[
-        "run",
-        g.to_str().unwrap(),
-        "--results",
-        res.to_str().unwrap(),
-        "-q",
-    ]);
+    let o = run_grid(&g, &res);
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = dir.path().join("r.csv");
     run(&[
