@@ -1485,66 +1485,64 @@ impl Explorer<'_> {
             plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
         }
         let (scores, best, wps) = loop {
-            let Some(mut scores) = self.score(&frontiers, &goals, &plan, use_layout) else {
-                // The early stop weighs the reachable candidates only. Before it ends the run,
-                // frontiers whose goal cannot be reached get the same fallbacks as below (their
-                // reachable part, then the plan without the safety margin): a doorway seen at a
-                // slant leaves a wedge of free cells beyond it too thin to drive, whose frontier
-                // is reachable only at the doorway, and the room behind must weigh in the rule
-                // (modern-office, layout-es from a random start, stopped at 96.7 % with a room
-                // never entered).
-                if cfg.robust_frontiers && !moved_to_reachable {
-                    moved_to_reachable = true;
-                    plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
-                    continue;
-                }
-                if cfg.robust_frontiers && !self.relaxed_planning {
-                    self.set_relaxed_planning(true);
-                    return self.decide_planned();
-                }
-                self.stopped_early = true;
-                return false;
-            };
-            // The best candidate with a path on the planning grid: the distance grid is
-            // coarser and may connect what the planning grid does not (yet: a door seen at a
-            // slant opens as the robot comes closer), so a candidate without a path is passed
-            // over for this decision, not blacklisted.
-            let chosen = loop {
-                let Some(best) =
-                    best_candidate(&with_gain_floor(&scores, cfg.gain_floor_m2), cfg.alpha)
-                else {
-                    break None;
-                };
-                let goal_cell = goals[best].expect("best candidate is reachable");
-                match self.waypoints_to(&plan, goal_cell) {
-                    Some(wps) => break Some((best, wps)),
-                    None => scores[best].distance_m = None,
-                }
-            };
-            match chosen {
-                Some((best, wps)) => break (scores, best, wps),
-                None if !moved_to_reachable => {
-                    moved_to_reachable = true;
-                    plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
-                }
-                // Frontiers exist but none can be reached with the safety margin: try without
-                // it. Where the map shows a passage (often the one the robot came in by) a little
-                // narrower than the robot's diameter plus twice the margin, the robot would
-                // otherwise end the run with frontiers it can reach (Lamuniere1, seed 2, with
-                // updates every 0.5 m / 0.25 rad: 86 % explored).
-                None if !self.relaxed_planning => {
-                    self.set_relaxed_planning(true);
-                    return self.decide_planned();
-                }
-                None => {
-                    // Frontiers exist but none is reachable: blacklist them all so the run can end.
-                    for f in &frontiers {
-                        self.blacklist
-                            .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
+            // `None` when the early-stop rule ends the exploration.
+            let chosen = self
+                .score(&frontiers, &goals, &plan, use_layout)
+                .map(|mut scores| {
+                    // The best candidate with a path on the planning grid: the distance grid is
+                    // coarser and may connect what the planning grid does not (yet: a door seen
+                    // at a slant opens as the robot comes closer), so a candidate without a path
+                    // is passed over for this decision, not blacklisted.
+                    loop {
+                        let Some(best) =
+                            best_candidate(&with_gain_floor(&scores, cfg.gain_floor_m2), cfg.alpha)
+                        else {
+                            break None;
+                        };
+                        let goal_cell = goals[best].expect("best candidate is reachable");
+                        match self.waypoints_to(&plan, goal_cell) {
+                            Some(wps) => break Some((scores, best, wps)),
+                            None => scores[best].distance_m = None,
+                        }
                     }
-                    return false;
+                });
+            let early_stop = match chosen {
+                Some(Some(found)) => break found,
+                Some(None) => false,
+                None => true,
+            };
+            // Frontiers exist but none can be reached as they stand, or the early stop would end
+            // the run. The last resorts first, in order. The early stop weighs the reachable
+            // candidates only, so it gets them too (not under the paper's frontier rule): a
+            // doorway seen at a slant leaves a wedge of free cells beyond it too thin to drive,
+            // whose frontier is reachable only at the doorway, and the room behind must weigh in
+            // the rule (modern-office, layout-es from a random start, stopped at 96.7 % with a
+            // room never entered).
+            let last_resorts = !early_stop || cfg.robust_frontiers;
+            // 1. Each frontier's reachable part.
+            if last_resorts && !moved_to_reachable {
+                moved_to_reachable = true;
+                plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
+                continue;
+            }
+            // 2. The plan without the safety margin. Where the map shows a passage (often the
+            // one the robot came in by) a little narrower than the robot's diameter plus twice
+            // the margin, the robot would otherwise end the run with frontiers it can reach
+            // (Lamuniere1, seed 2, with updates every 0.5 m / 0.25 rad: 86 % explored).
+            if last_resorts && !self.relaxed_planning {
+                self.set_relaxed_planning(true);
+                return self.decide_planned();
+            }
+            if early_stop {
+                self.stopped_early = true;
+            } else {
+                // Frontiers exist but none is reachable: blacklist them all so the run can end.
+                for f in &frontiers {
+                    self.blacklist
+                        .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
                 }
             }
+            return false;
         };
         let goal_cell = goals[best].expect("best candidate is reachable");
         let now = self.sim.time_s();
