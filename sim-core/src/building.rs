@@ -151,13 +151,16 @@ impl ClearanceField {
 /// Draws random start poses: cell centres of free space with room for the robot's body plus
 /// [`RANDOM_START_MARGIN_M`], uniformly over such cells connected (through such cells) to the
 /// largest-clearance point, heading uniform in [-π, π). Each draw is a pure function of the
-/// building, the radius, the seed and the draw's index.
+/// building's content ([`Building::content_digest`]), the radius, the seed and the draw's
+/// index: the same seed draws unrelated poses and headings in different buildings.
 #[derive(Debug, Clone)]
 pub struct StartSampler<'a> {
     building: &'a Building,
     robot_radius_m: f64,
     /// The centres of the cells a start may be drawn from, in row-major order.
     cells: Vec<Vec2>,
+    /// The building's content digest, mixed into every draw's seed.
+    key: [u8; 32],
 }
 
 impl<'a> StartSampler<'a> {
@@ -189,6 +192,7 @@ impl<'a> StartSampler<'a> {
             building,
             robot_radius_m,
             cells,
+            key: building.content_digest(),
         })
     }
 
@@ -202,7 +206,11 @@ impl<'a> StartSampler<'a> {
     pub fn draw(&self, seed: u64, index: u64) -> Pose {
         use rand::RngCore;
         use rand::SeedableRng;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut h = Sha256::new();
+        h.update(b"floorcast-random-start-v2\0");
+        h.update(self.key);
+        h.update(seed.to_le_bytes());
+        let mut rng = rand_chacha::ChaCha8Rng::from_seed(h.finalize().into());
         rng.set_stream(RANDOM_START_STREAM);
         // 2 words per draw, up to 64 tries per start.
         rng.set_word_pos(index as u128 * 128 * 2);
@@ -453,6 +461,12 @@ impl Building {
     /// A content hash (SHA-256, hex, first 16 bytes) of everything that shapes a run: geometry,
     /// rooms, doors and start. The name is not part of it.
     pub fn content_hash(&self) -> String {
+        let digest = self.content_digest();
+        digest[..16].iter().map(|b| format!("{b:02x}")).collect()
+    }
+
+    /// The full SHA-256 digest behind [`Building::content_hash`].
+    pub fn content_digest(&self) -> [u8; 32] {
         let mut h = Sha256::new();
         h.update(b"floorcast-building-v1\0");
         let f = |h: &mut Sha256, v: f64| h.update(v.to_le_bytes());
@@ -514,8 +528,7 @@ impl Building {
             }
             None => h.update(b"nostart"),
         }
-        let digest = h.finalize();
-        digest[..16].iter().map(|b| format!("{b:02x}")).collect()
+        h.finalize().into()
     }
 
     /// Free cells 4-connected to `start` on `frame` (the space a robot could map).
@@ -1077,6 +1090,16 @@ mod tests {
         assert!(
             poses.iter().any(|p| p.theta_rad < -2.0) && poses.iter().any(|p| p.theta_rad > 2.0)
         );
+        // Another building draws other headings with the same seed and index (the building's
+        // content is part of the draw), though its free space is the same.
+        let mut other = b.clone();
+        other.start = Some(Pose::new(2.5, 3.0, 0.0));
+        assert_ne!(other.content_hash(), b.content_hash());
+        let sampler = StartSampler::new(&other, r).unwrap();
+        let same = (0..200)
+            .filter(|&k| sampler.draw(7, k).theta_rad == poses[k as usize].theta_rad)
+            .count();
+        assert_eq!(same, 0);
     }
 
     #[test]

@@ -18,9 +18,10 @@
 //! fine path is passed over for that decision. When no frontier's candidate can be reached, the
 //! candidates move to their frontiers' nearest reachable cells (`Explorer::reachable_candidates`;
 //! at every decision with `candidate_from_reachable_part`), and if none of those can be reached
-//! either, the decision is made again with paths planned without the safety margin
-//! (`Explorer::set_relaxed_planning`, for that decision only; every planning cell is recomputed
-//! when it switches). Every run ends in one [`EndReason`] (`Explorer::classify_end`).
+//! either, the decision is made again with paths planned without the safety margin, and then
+//! once more through the free map cells the robot has travelled as well (`Planning`, set with
+//! `Explorer::set_planning` for that decision only; every planning cell is recomputed when it
+//! switches). Every run ends in one [`EndReason`] (`Explorer::classify_end`).
 //!
 //! The explored area credits, whenever cells become known, the building cells around where the
 //! sensor saw them whose centres, moved into the map by the pose error of that moment, fall in a
@@ -480,8 +481,11 @@ struct Explorer<'a> {
     coarse: CoarseCosts,
     coarse_dirty: Vec<u32>,
     coarse_dirty_mark: Vec<bool>,
-    /// Paths are planned without the safety margin (see `decide`'s last resort).
-    relaxed_planning: bool,
+    /// How permissive path planning is (see `decide_planned`'s last resorts).
+    planning: Planning,
+    /// Map cells the robot's estimated centre passed through (the segments between its poses at
+    /// map updates): its body fitted there, whatever the map shows now.
+    travelled: Bitmap,
     /// The coarser grid the candidates' distances are searched on, updated with `coarse`.
     far: CoarseCosts,
     /// Whether a cell became or stopped being occupied since the path was last checked.
@@ -637,7 +641,8 @@ pub fn explore_charged<'a>(
         coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
         coarse_dirty: Vec::new(),
         coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
-        relaxed_planning: false,
+        planning: Planning::WithMargin,
+        travelled: Bitmap::filled(frame, false),
         far: CoarseCosts::blocked(frame, DISTANCE_FACTOR),
         walls_changed: false,
         forgiven_at: None,
@@ -806,11 +811,35 @@ impl Explorer<'_> {
                 self.credit_explored(i, &map_to_world);
             }
         }
+        self.mark_travelled(self.last_update_pose.position(), self.estimate.position());
         self.last_update_pose = self.estimate;
         self.update_odometry = odo_pose;
         self.last_update_time_s = self.sim.time_s();
         self.trajectory.push(self.sim.true_pose());
         self.estimated_trajectory.push(self.estimate);
+    }
+
+    /// Marks the map cells on the segment `from`-`to` (world) travelled, and their planning
+    /// cells for recomputing when they are new (they count while planning the way the robot came).
+    fn mark_travelled(&mut self, from: Vec2, to: Vec2) {
+        let frame = self.map.frame;
+        let to_grid = |p: Vec2| {
+            let g = (p - frame.origin_m) / frame.resolution_m;
+            [g.x, g.y]
+        };
+        let mut new = Vec::new();
+        walk_segment(to_grid(from), to_grid(to), |c| {
+            if let Some(i) = frame.index(c) {
+                if !self.travelled.data[i] {
+                    self.travelled.data[i] = true;
+                    new.push((i as u32, true));
+                }
+            }
+            true
+        });
+        if !new.is_empty() {
+            self.mark_planning_cells(&[], &new);
+        }
     }
 
     /// Credits the building cells observed through map cell `i`, just observed from the current
@@ -961,22 +990,20 @@ impl Explorer<'_> {
     }
 
     /// How far from obstacles the robot's centre must stay on planned paths: its radius and
-    /// the safety margin, or its radius alone while planning is relaxed.
+    /// the safety margin, or its radius alone while planning is relaxed (`Planning`).
     fn inflation_m(&self) -> f64 {
-        if self.relaxed_planning {
-            self.cfg.sim.robot.radius_m
-        } else {
-            self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m
+        match self.planning {
+            Planning::WithMargin => self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m,
+            Planning::NoMargin | Planning::Travelled => self.cfg.sim.robot.radius_m,
         }
     }
 
-    /// Plans with or without the safety margin from now on (every planning cell is recomputed
-    /// when this changes).
-    fn set_relaxed_planning(&mut self, on: bool) {
-        if self.relaxed_planning == on {
+    /// Plans at `level` from now on (every planning cell is recomputed when it changes).
+    fn set_planning(&mut self, level: Planning) {
+        if self.planning == level {
             return;
         }
-        self.relaxed_planning = on;
+        self.planning = level;
         for (i, m) in self.coarse_dirty_mark.iter_mut().enumerate() {
             if !*m {
                 *m = true;
@@ -1055,6 +1082,11 @@ impl Explorer<'_> {
         // Not `self.traversability()`: the planning grid below is updated while this borrows
         // only the map and the obstacle field.
         let trav = Traversability::new(&self.map.occupancy, &self.obstacles, radius_m);
+        let travelled = (self.planning == Planning::Travelled).then_some(&self.travelled.data);
+        let occupancy = &self.map.occupancy.data;
+        let traversable = |i: usize| {
+            trav.at_index(i) || travelled.is_some_and(|t| t[i] && occupancy[i] == Occupancy::Free)
+        };
         let res = self.map.frame.resolution_m;
         let obstacles = &self.obstacles.data;
         // The extra cost by obstacle distance, tabulated in steps of 1/8 cell (the field is
@@ -1073,12 +1105,8 @@ impl Explorer<'_> {
             .collect();
         let last = table.len() - 1;
         let extra = |j: usize| table[((obstacles[j] * STEPS_PER_CELL) as usize).min(last)];
-        self.coarse.recompute(
-            self.map.frame,
-            &self.coarse_dirty,
-            |i| trav.at_index(i),
-            extra,
-        );
+        self.coarse
+            .recompute(self.map.frame, &self.coarse_dirty, traversable, extra);
         // The distance grid's cells covering the changed planning cells.
         let k = (DISTANCE_FACTOR / PLAN_FACTOR) as usize;
         let (cw, fw, fh) = (
@@ -1096,7 +1124,7 @@ impl Explorer<'_> {
         far_dirty.sort_unstable();
         far_dirty.dedup();
         self.far
-            .recompute(self.map.frame, &far_dirty, |i| trav.at_index(i), extra);
+            .recompute(self.map.frame, &far_dirty, traversable, extra);
         for &i in &self.coarse_dirty {
             self.coarse_dirty_mark[i as usize] = false;
         }
@@ -1405,7 +1433,7 @@ impl Explorer<'_> {
     /// Chooses the next goal. Returns false when no reachable candidate is left.
     fn decide(&mut self) -> bool {
         // A relaxed plan (see below) holds for one decision.
-        self.set_relaxed_planning(false);
+        self.set_planning(Planning::WithMargin);
         self.decide_planned()
     }
 
@@ -1529,8 +1557,16 @@ impl Explorer<'_> {
             // one the robot came in by) a little narrower than the robot's diameter plus twice
             // the margin, the robot would otherwise end the run with frontiers it can reach
             // (Lamuniere1, seed 2, with updates every 0.5 m / 0.25 rad: 86 % explored).
-            if last_resorts && !self.relaxed_planning {
-                self.set_relaxed_planning(true);
+            // 3. The plan through the cells the robot has travelled as well: where the map,
+            // sharpened by later scans, shows the passage it came in by narrower than its body
+            // (a crowded room, a narrow corridor), the robot is in a pocket of the planning grid
+            // and reaches nothing (freiburg_building101 and intel_map from random starts,
+            // stuck at 95 % explored). Its body fitted there: it leaves the way it came.
+            if last_resorts && self.planning != Planning::Travelled {
+                self.set_planning(match self.planning {
+                    Planning::WithMargin => Planning::NoMargin,
+                    Planning::NoMargin | Planning::Travelled => Planning::Travelled,
+                });
                 return self.decide_planned();
             }
             if early_stop {
@@ -1621,10 +1657,10 @@ impl Explorer<'_> {
                 })
                 .collect()
         };
-        self.set_relaxed_planning(true);
+        self.set_planning(Planning::Travelled);
         let plan = self.plan(&targets);
         let reachable = targets.iter().any(|&c| plan.distance_m(c).is_some());
-        self.set_relaxed_planning(false);
+        self.set_planning(Planning::WithMargin);
         if reachable {
             EndReason::Stuck
         } else {
@@ -1797,6 +1833,17 @@ fn far_search_cells() -> i32 {
 }
 
 /// The distances to the candidates, and what is needed to find the path to one of them.
+/// How permissive path planning is: the rungs of `decide_planned`'s last resorts, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Planning {
+    /// Paths keep the robot's radius and the safety margin from the map's obstacles.
+    WithMargin,
+    /// The robot's radius only.
+    NoMargin,
+    /// The robot's radius, or any free map cell the robot has travelled.
+    Travelled,
+}
+
 struct Plan {
     /// The distance grid and the search over it.
     far: CoarseCosts,
