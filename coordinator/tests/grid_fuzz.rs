@@ -28,37 +28,24 @@ fn grid_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../grids/fuzz.toml")
 }
 
+/// The tokens that matter to a grid file.
+const TOKENS: [&[u8]; 12] = [
+    b"1e300",
+    b"-1",
+    b"nan",
+    b"[",
+    b"\"",
+    b"\n",
+    b"9223372036854775807",
+    b"\"\"",
+    b"{",
+    b"layout-truth",
+    b"*",
+    b"0",
+];
+
 fn mutate(text: &str, edits: &[(usize, u8, u8)]) -> String {
-    let mut b = text.as_bytes().to_vec();
-    for &(pos, op, byte) in edits {
-        let i = pos % (b.len() + 1);
-        match op % 4 {
-            0 if i < b.len() => b[i] = byte,
-            1 => b.insert(i, byte),
-            2 if i < b.len() => {
-                b.remove(i);
-            }
-            _ => {
-                let tokens: [&[u8]; 12] = [
-                    b"1e300",
-                    b"-1",
-                    b"nan",
-                    b"[",
-                    b"\"",
-                    b"\n",
-                    b"9223372036854775807",
-                    b"\"\"",
-                    b"{",
-                    b"layout-truth",
-                    b"*",
-                    b"0",
-                ];
-                let t = tokens[byte as usize % tokens.len()];
-                b.splice(i..i, t.iter().copied());
-            }
-        }
-    }
-    String::from_utf8_lossy(&b).into_owned()
+    floorcast_formats::mutation::mutate(text, edits, &TOKENS)
 }
 
 proptest! {

@@ -12,34 +12,13 @@ use crate::map_server::{decode_image, parse_map_yaml, MapImage};
 /// Longest any one parse may take.
 const BOUND: Duration = Duration::from_secs(2);
 
-/// A valid file changed by `edits` (position, operation, byte): replace, insert, delete, or
-/// repeat a short stretch.
+/// The tokens that matter to the formats read here.
+const TOKENS: [&[u8]; 10] = [
+    b"1e300", b"-1", b"nan", b"[", b"(", b"\"", b"\n", b"0", b"1e-300", b"]",
+];
+
 fn mutate(text: &str, edits: &[(usize, u8, u8)]) -> String {
-    let mut b = text.as_bytes().to_vec();
-    for &(pos, op, byte) in edits {
-        let i = if b.is_empty() { 0 } else { pos % (b.len() + 1) };
-        match op % 5 {
-            0 if i < b.len() => b[i] = byte,
-            1 => b.insert(i, byte),
-            2 if i < b.len() => {
-                b.remove(i);
-            }
-            3 => {
-                // A token that matters to the format.
-                let tokens: [&[u8]; 10] = [
-                    b"1e300", b"-1", b"nan", b"[", b"(", b"\"", b"\n", b"0", b"1e-300", b"]",
-                ];
-                let t = tokens[byte as usize % tokens.len()];
-                b.splice(i..i, t.iter().copied());
-            }
-            _ => {
-                let end = (i + 1 + byte as usize % 16).min(b.len());
-                let piece: Vec<u8> = b[i.min(end)..end].to_vec();
-                b.splice(i..i, piece.iter().copied().chain(piece.iter().copied()));
-            }
-        }
-    }
-    String::from_utf8_lossy(&b).into_owned()
+    crate::mutation::mutate(text, edits, &TOKENS)
 }
 
 fn edits() -> impl Strategy<Value = Vec<(usize, u8, u8)>> {

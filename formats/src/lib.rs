@@ -14,6 +14,9 @@ pub mod stage;
 
 #[cfg(test)]
 mod fuzz;
+#[cfg(any(test, feature = "test-support"))]
+#[doc(hidden)]
+pub mod mutation;
 
 use std::path::Path;
 

@@ -6,25 +6,11 @@ use proptest::prelude::*;
 
 const SETTINGS: &str = r#"{"alpha": 0.8, "time_limit_s": 600, "localization": "odometry", "laser_beams": 90, "return_home": true, "utility_distance": "euclidean"}"#;
 
+/// The tokens that matter to a settings file.
+const TOKENS: [&[u8]; 8] = [b"1e300", b"-1", b"[", b"\"", b"null", b"{", b"1e6", b"0"];
+
 fn mutate(text: &str, edits: &[(usize, u8, u8)]) -> String {
-    let mut b = text.as_bytes().to_vec();
-    for &(pos, op, byte) in edits {
-        let i = pos % (b.len() + 1);
-        match op % 4 {
-            0 if i < b.len() => b[i] = byte,
-            1 => b.insert(i, byte),
-            2 if i < b.len() => {
-                b.remove(i);
-            }
-            _ => {
-                let tokens: [&[u8]; 8] =
-                    [b"1e300", b"-1", b"[", b"\"", b"null", b"{", b"1e6", b"0"];
-                let t = tokens[byte as usize % tokens.len()];
-                b.splice(i..i, t.iter().copied());
-            }
-        }
-    }
-    String::from_utf8_lossy(&b).into_owned()
+    floorcast_formats::mutation::mutate(text, edits, &TOKENS)
 }
 
 proptest! {
