@@ -35,9 +35,12 @@ pub fn mutate(text: &str, edits: &[(usize, u8, u8)], tokens: &[&[u8]]) -> String
 mod tests {
     use super::mutate;
 
+    /// Edits, and what they make of "abc".
+    type Case = (&'static [(usize, u8, u8)], &'static str);
+
     #[test]
     fn each_operation_does_what_it_says() {
-        let cases: &[(&[(usize, u8, u8)], &str)] = &[
+        let cases: &[Case] = &[
             (&[], "abc"),
             (&[(1, 0, b'x')], "axc"),
             (&[(3, 0, b'x')], "abc"),
