@@ -1832,7 +1832,6 @@ fn far_search_cells() -> i32 {
     (cells + f - 1) / f
 }
 
-/// The distances to the candidates, and what is needed to find the path to one of them.
 /// How permissive path planning is: the rungs of `decide_planned`'s last resorts, in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Planning {
@@ -1844,6 +1843,7 @@ enum Planning {
     Travelled,
 }
 
+/// The distances to the candidates, and what is needed to find the path to one of them.
 struct Plan {
     /// The distance grid and the search over it.
     far: CoarseCosts,
