@@ -59,7 +59,7 @@ use crate::layout::reconstruct_layout;
 use crate::layout_gain::{gap_closed_information_gain, layout_information_gain, LayoutRaster};
 use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
-use crate::mapping::ray::walk_segment;
+use crate::mapping::ray::{grid_from_world, walk_segment};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
 use crate::plan::coarse::CoarseCosts;
 use crate::plan::dijkstra::{dijkstra_padded, AStar, CostField};
@@ -819,25 +819,27 @@ impl Explorer<'_> {
         self.estimated_trajectory.push(self.estimate);
     }
 
-    /// Marks the map cells on the segment `from`-`to` (world) travelled, and their planning
-    /// cells for recomputing when they are new (they count while planning the way the robot came).
+    /// Marks the map cells on the segment `from`-`to` (world) travelled. They count only while
+    /// planning the way the robot came (`Planning::Travelled`, which recomputes every planning
+    /// cell when it is set), so only then are the new ones' planning cells marked for recomputing.
     fn mark_travelled(&mut self, from: Vec2, to: Vec2) {
         let frame = self.map.frame;
-        let to_grid = |p: Vec2| {
-            let g = (p - frame.origin_m) / frame.resolution_m;
-            [g.x, g.y]
-        };
         let mut new = Vec::new();
-        walk_segment(to_grid(from), to_grid(to), |c| {
-            if let Some(i) = frame.index(c) {
-                if !self.travelled.data[i] {
-                    self.travelled.data[i] = true;
-                    new.push((i as u32, true));
+        let travelled = &mut self.travelled.data;
+        walk_segment(
+            grid_from_world(&frame, from),
+            grid_from_world(&frame, to),
+            |c| {
+                if let Some(i) = frame.index(c) {
+                    if !travelled[i] {
+                        travelled[i] = true;
+                        new.push((i as u32, true));
+                    }
                 }
-            }
-            true
-        });
-        if !new.is_empty() {
+                true
+            },
+        );
+        if self.planning == Planning::Travelled && !new.is_empty() {
             self.mark_planning_cells(&[], &new);
         }
     }
@@ -1140,10 +1142,7 @@ impl Explorer<'_> {
             return false;
         };
         let grid = &self.coarse;
-        let to_grid = |p: Vec2| {
-            let g = (p - grid.frame.origin_m) / grid.frame.resolution_m;
-            [g.x, g.y]
-        };
+        let to_grid = |p: Vec2| grid_from_world(&grid.frame, p);
         let robot = grid.frame.cell_from_world(self.estimate.position());
         let mut from = to_grid(start);
         let mut blocked = false;
@@ -1562,11 +1561,8 @@ impl Explorer<'_> {
             // (a crowded room, a narrow corridor), the robot is in a pocket of the planning grid
             // and reaches nothing (freiburg_building101 and intel_map from random starts,
             // stuck at 95 % explored). Its body fitted there: it leaves the way it came.
-            if last_resorts && self.planning != Planning::Travelled {
-                self.set_planning(match self.planning {
-                    Planning::WithMargin => Planning::NoMargin,
-                    Planning::NoMargin | Planning::Travelled => Planning::Travelled,
-                });
+            if let Some(looser) = self.planning.looser().filter(|_| last_resorts) {
+                self.set_planning(looser);
                 return self.decide_planned();
             }
             if early_stop {
@@ -1841,6 +1837,17 @@ enum Planning {
     NoMargin,
     /// The robot's radius, or any free map cell the robot has travelled.
     Travelled,
+}
+
+impl Planning {
+    /// The next rung, `None` on the last.
+    fn looser(self) -> Option<Self> {
+        match self {
+            Self::WithMargin => Some(Self::NoMargin),
+            Self::NoMargin => Some(Self::Travelled),
+            Self::Travelled => None,
+        }
+    }
 }
 
 /// The distances to the candidates, and what is needed to find the path to one of them.
