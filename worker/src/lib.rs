@@ -218,6 +218,16 @@ pub fn check_start(
         })
 }
 
+/// A coordinate for a message: centimetres, or scientific notation when that would take more
+/// than a few digits (a start of 1e300 m is refused in one short line).
+fn metres(v: f64) -> String {
+    if v.abs() < 1e6 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
 fn bad_start_message(
     name: &str,
     origin: &str,
@@ -232,7 +242,7 @@ fn bad_start_message(
             pose.y_m,
             pose.theta_rad.to_degrees()
         ),
-        _ => format!("start position {:.2}, {:.2}", pose.x_m, pose.y_m),
+        _ => format!("start position {}, {}", metres(pose.x_m), metres(pose.y_m)),
     };
     let next = match (problem, hint) {
         (PoseProblem::NotFinite, _) => {
