@@ -5,8 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use floorcast_worker::external::ExternalStrategy;
 use floorcast_worker::settings::{LocalizationSetting, UtilityDistanceSetting};
-use floorcast_worker::{check_job, check_start, run_job, GivenStart, Job, Settings, STRATEGIES};
+use floorcast_worker::{
+    check_job, check_start, run_job, GivenStart, Job, Settings, StrategyProgram, STRATEGIES,
+};
 use sim_core::explore::RunResult;
 
 use crate::output::{create_dir, parse_pose, progress_bar, write_text, Picture};
@@ -17,9 +20,20 @@ pub struct ExploreArgs {
     /// Building to explore: floorcast TOML, ROS map_server YAML, or Stage .world.
     #[arg(long, value_name = "FILE")]
     building: PathBuf,
-    /// Exploration strategy.
+    /// Exploration strategy (built in).
     #[arg(long, default_value = "baseline", value_parser = clap::builder::PossibleValuesParser::new(STRATEGIES))]
     strategy: String,
+    /// Your own strategy: a program speaking floorcast's strategy protocol
+    /// (docs/strategy-protocol.md) on its stdin and stdout, e.g. "python3 my_strategy.py"
+    /// (split into words as a shell splits them; files it names are hashed into the run's
+    /// record). It chooses among the baseline's candidates; its stderr goes to
+    /// strategy-stderr.txt in the output directory.
+    #[arg(long, value_name = "COMMAND", conflicts_with = "strategy")]
+    strategy_command: Option<String>,
+    /// Seconds the --strategy-command program has for each reply (the first includes its start),
+    /// 0.01 to 3600.
+    #[arg(long, value_name = "SECONDS", default_value_t = floorcast_worker::external::DEFAULT_TIMEOUT_S, requires = "strategy_command")]
+    strategy_timeout_s: f64,
     /// Seed of the run's randomness (odometry error, laser noise).
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -129,10 +143,28 @@ pub fn run(a: ExploreArgs) -> Result<()> {
             source: GivenStart::RANDOM.into(),
         }),
     };
+    // An external strategy is started once to learn its name (and refused here if it cannot
+    // start or shake hands), before any output is created.
+    let (label, program) = match &a.strategy_command {
+        Some(line) => {
+            let program = StrategyProgram::from_command_line(
+                line,
+                std::path::Path::new("."),
+                a.strategy_timeout_s,
+            )
+            .map_err(|e| anyhow::anyhow!("--strategy-command: {e}"))?;
+            let probe = ExternalStrategy::start(&program)?;
+            let name = probe.hello().name.clone();
+            probe.finish()?;
+            (name, Some(program))
+        }
+        None => (a.strategy.clone(), None),
+    };
     let job = Job {
         building: &building,
         building_name: name.clone(),
-        strategy: a.strategy.clone(),
+        strategy: label.clone(),
+        program,
         seed: a.seed,
         settings,
         start,
@@ -149,14 +181,29 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{e} (given on the command line)"))?;
     check_job(&job).with_context(|| format!("{}: cannot explore", a.building.display()))?;
     let out = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from(format!("results/explore/{name}-{}-{}", a.strategy, a.seed))
+        let label: String = label
+            .chars()
+            .map(|c| match c {
+                'a'..='z' | 'A'..='Z' | '0'..='9' | '.' | '_' | '-' => c,
+                _ => '_',
+            })
+            .collect();
+        PathBuf::from(format!("results/explore/{name}-{label}-{}", a.seed))
     });
+    let existed = out.exists();
     create_dir(&out)?;
 
     let pb = progress_bar(1000, a.quiet, "{spinner} {msg} [{bar:40}] {pos}‰ explored");
     let output = run_job(&job, &mut |s| {
         pb.set_position((s.explored_fraction * 1000.0) as u64);
         pb.set_message(format!("t = {:.0} s", s.time_s));
+    })
+    .inspect_err(|_| {
+        // A run that failed (an external strategy that broke the protocol) leaves no empty
+        // directory behind.
+        if !existed {
+            let _ = std::fs::remove_dir(&out);
+        }
     })
     .with_context(|| format!("{}: cannot explore", a.building.display()))?;
     pb.finish_and_clear();
@@ -169,6 +216,9 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     write_text(&out.join("progress.csv"), &progress_csv(&output.result))?;
     write_text(&out.join("decisions.csv"), &decisions_csv(&output.result))?;
     write_text(&out.join("trajectory.csv"), &trajectory_csv(&output.result))?;
+    if let Some(text) = output.strategy_stderr.as_ref().filter(|t| !t.is_empty()) {
+        write_text(&out.join("strategy-stderr.txt"), text)?;
+    }
     floorcast_formats::map_server::write_map(&output.result.map, &out.join("map.yaml"))?;
     let picture = out.join(format!("final.{}", a.picture.extension()));
     crate::cmd_building::exploration_figure(&output.result, job.settings.min_frontier_m)

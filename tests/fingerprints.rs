@@ -56,6 +56,7 @@ fn fingerprint(building: &Path, strategy: &str, seed: u64) -> String {
         building: &b,
         building_name: b.name.clone(),
         strategy: strategy.to_string(),
+        program: None,
         seed,
         settings: Settings::default(),
         start: None,

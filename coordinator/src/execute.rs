@@ -9,7 +9,7 @@ use sim_core::{Building, Pose};
 
 use crate::grid::{Plan, PlannedJob};
 use crate::store::StoredResult;
-use crate::wire::{WireJob, WireStart};
+use crate::wire::{WireJob, WireProgram, WireStart};
 
 /// A planned job as it is handed to a remote worker.
 pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
@@ -26,6 +26,14 @@ pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
         start: job.start.as_ref().map(|s| WireStart {
             pose: [s.pose.x_m, s.pose.y_m, s.pose.theta_rad],
             source: s.source.clone(),
+        }),
+        program: job.program.as_ref().map(|p| {
+            let empty = Vec::new();
+            let contents = plan
+                .program_files
+                .get(&p.files_sha256)
+                .map_or(&empty, |c| c.as_ref());
+            WireProgram::new(p, contents)
         }),
     }
 }
@@ -44,6 +52,7 @@ pub fn execute(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
             building: &b.building,
             building_name: b.name.clone(),
             strategy: job.strategy.clone(),
+            program: job.program.clone(),
             seed: job.seed,
             settings: job.settings.clone(),
             start: job.start.as_ref().map(|s| GivenStart {
@@ -88,12 +97,29 @@ pub fn failed_wire_row(job: &WireJob, worker: &str, error: String) -> StoredResu
 /// Runs a job received from the network (see `net.rs`) in its building (already checked
 /// against the job's building hash).
 pub fn execute_wire(job: &WireJob, building: &Building, worker: &str) -> StoredResult {
-    execute_job(
+    // An external strategy's files go to a directory of this job's own, removed after it.
+    let dir = std::env::temp_dir().join(format!(
+        "floorcast-job-{}-{}",
+        std::process::id(),
+        job.job_id
+    ));
+    let program = match &job.program {
+        Some(p) => match p.materialize(&dir) {
+            Ok(p) => Some(p),
+            Err(e) => {
+                let _ = std::fs::remove_dir_all(&dir);
+                return failed_wire_row(job, worker, format!("cannot run its strategy: {e}"));
+            }
+        },
+        None => None,
+    };
+    let row = execute_job(
         wire_row(job, worker),
         &Job {
             building,
             building_name: job.building_name.clone(),
             strategy: job.strategy.clone(),
+            program,
             seed: job.seed,
             settings: job.settings.clone(),
             start: job.start.as_ref().map(|s| GivenStart {
@@ -102,7 +128,11 @@ pub fn execute_wire(job: &WireJob, building: &Building, worker: &str) -> StoredR
             }),
             snapshot_fractions: Vec::new(),
         },
-    )
+    );
+    if job.program.is_some() {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    row
 }
 
 /// Runs `spec` and fills the outcome into `row` (which carries the job's identity).

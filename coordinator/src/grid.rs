@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use floorcast_worker::{
-    check_start, GivenStart, Settings, FLOORCAST_VERSION, STRATEGIES, SUMMARY_VERSION,
+    check_start, GivenStart, Settings, StrategyProgram, FLOORCAST_VERSION, STRATEGIES,
+    SUMMARY_VERSION,
 };
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
@@ -94,8 +95,18 @@ fn default_kind() -> String {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct StrategySpec {
-    name: String,
-    /// How the strategy is reported (default: its name). Lets one grid compare parameter sets.
+    /// A built-in strategy (or `command`).
+    name: Option<String>,
+    /// An external strategy: its command, split into words; words naming files are relative
+    /// to the grid file.
+    command: Option<Vec<String>>,
+    /// Further files the external strategy needs, relative to the grid file.
+    #[serde(default)]
+    files: Vec<String>,
+    /// Seconds the external strategy has for each reply.
+    timeout_s: Option<f64>,
+    /// How the strategy is reported (default: its name; required with `command`). Lets one
+    /// grid compare parameter sets.
     label: Option<String>,
     /// Settings overriding the shared ones for this strategy (e.g. `alpha`).
     #[serde(default)]
@@ -119,8 +130,11 @@ pub struct PlannedJob {
     pub id: String,
     /// Index into [`Plan::buildings`].
     pub building: usize,
+    /// The built-in strategy's name, or the external strategy's label.
     pub strategy: String,
     pub label: String,
+    /// An external strategy's program (`None`: the built-in `strategy`).
+    pub program: Option<StrategyProgram>,
     pub seed: u64,
     pub settings: Settings,
     /// The start pose, when the grid sets one (`[starts]`); `None`: the building's own.
@@ -145,6 +159,9 @@ pub struct Plan {
     /// Strategy labels in file order (the first `baseline` one is the reference of gains).
     pub labels: Vec<String>,
     pub jobs: Vec<PlannedJob>,
+    /// External strategies' files as read when the grid was planned (by their hash), for
+    /// remote workers.
+    pub program_files: BTreeMap<String, Arc<floorcast_worker::external::ProgramFiles>>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -439,19 +456,73 @@ impl Plan {
         settings_of(file.settings.clone(), "settings")?;
         let mut labels = Vec::new();
         let mut resolved = Vec::new();
+        let grid_dir = path.parent().unwrap_or(Path::new("."));
+        let mut program_files = BTreeMap::new();
         for (i, s) in file.strategies.iter().enumerate() {
             let field = format!("strategies[{i}]");
-            if !STRATEGIES.contains(&s.name.as_str()) {
-                return Err(invalid(
-                    &format!("{field}.name"),
-                    format!(
-                        "unknown strategy '{}' (available: {})",
-                        s.name,
-                        STRATEGIES.join(", ")
-                    ),
-                ));
-            }
-            let label = s.label.clone().unwrap_or_else(|| s.name.clone());
+            let (name, program) = match (&s.name, &s.command) {
+                (Some(name), None) => {
+                    if !STRATEGIES.contains(&name.as_str()) {
+                        return Err(invalid(
+                            &format!("{field}.name"),
+                            format!(
+                                "unknown strategy '{}' (available: {})",
+                                name,
+                                STRATEGIES.join(", ")
+                            ),
+                        ));
+                    }
+                    for (key, given) in [
+                        ("files", !s.files.is_empty()),
+                        ("timeout_s", s.timeout_s.is_some()),
+                    ] {
+                        if given {
+                            return Err(invalid(
+                                &format!("{field}.{key}"),
+                                "belongs to an external strategy (one with a command), not to a built-in one".into(),
+                            ));
+                        }
+                    }
+                    (name.clone(), None)
+                }
+                (None, Some(command)) => {
+                    let Some(label) = &s.label else {
+                        return Err(invalid(
+                            &format!("{field}.label"),
+                            "an external strategy (one with a command) needs a label".into(),
+                        ));
+                    };
+                    let program = StrategyProgram::new(
+                        command.clone(),
+                        s.files.clone(),
+                        grid_dir,
+                        s.timeout_s
+                            .unwrap_or(floorcast_worker::external::DEFAULT_TIMEOUT_S),
+                    )
+                    .map_err(|p| invalid(&format!("{field}.command"), p))?;
+                    let contents = program
+                        .read_files()
+                        .map_err(|p| invalid(&format!("{field}.command"), p))?;
+                    program_files.insert(program.files_sha256.clone(), Arc::new(contents));
+                    (label.clone(), Some(program))
+                }
+                (Some(_), Some(_)) => {
+                    return Err(invalid(
+                        &field,
+                        "gives both a name (a built-in strategy) and a command (an external one); keep one".into(),
+                    ))
+                }
+                (None, None) => {
+                    return Err(invalid(
+                        &field,
+                        format!(
+                            "names no strategy: give name = one of {}, or command = [\"python3\", \"my_strategy.py\"] with a label",
+                            STRATEGIES.join(", ")
+                        ),
+                    ))
+                }
+            };
+            let label = s.label.clone().unwrap_or_else(|| name.clone());
             check_label(&label).map_err(|p| invalid(&format!("{field}.label"), p))?;
             if labels.contains(&label) {
                 return Err(invalid(
@@ -464,24 +535,34 @@ impl Plan {
                 merged.insert(k.clone(), v.clone());
             }
             let settings = settings_of(merged, &format!("{field}.settings"))?;
-            if resolved
-                .iter()
-                .any(|(n, st, _): &(String, Settings, String)| n == &s.name && st == &settings)
-            {
+            if resolved.iter().any(|r: &Resolved| {
+                r.settings == settings
+                    && match (&r.program, &program) {
+                        (None, None) => r.name == name,
+                        (Some(a), Some(b)) => program_identity(a) == program_identity(b),
+                        _ => false,
+                    }
+            }) {
                 return Err(invalid(
                     &field,
                     format!("strategy '{label}' repeats another with the same name and settings"),
                 ));
             }
-            check_strategy_fits(&s.name, &settings, &buildings, path)
+            let built_in = if program.is_some() { "baseline" } else { &name };
+            check_strategy_fits(built_in, &settings, &buildings, path)
                 .map_err(|(f, p)| invalid(&format!("{field}{f}"), p))?;
             labels.push(label.clone());
-            resolved.push((s.name.clone(), settings, label));
+            resolved.push(Resolved {
+                name,
+                settings,
+                label,
+                program,
+            });
         }
 
         let radius_m = resolved
             .iter()
-            .map(|(_, s, _)| s.robot_radius_m)
+            .map(|r| r.settings.robot_radius_m)
             .fold(0.0, f64::max);
         let starts = plan_starts(file.starts.as_ref(), &buildings, radius_m, &invalid)?;
 
@@ -491,14 +572,20 @@ impl Plan {
         for (bi, b) in buildings.iter().enumerate() {
             for start in &starts[bi] {
                 for &seed in &seeds {
-                    for (name, settings, label) in &resolved {
+                    for r in &resolved {
+                        let mut id =
+                            job_id_from(&b.hash, &r.name, seed, &r.settings, start.as_ref());
+                        if let Some(p) = &r.program {
+                            id = program_job_id(&id, p);
+                        }
                         jobs.push(PlannedJob {
-                            id: job_id_from(&b.hash, name, seed, settings, start.as_ref()),
+                            id,
                             building: bi,
-                            strategy: name.clone(),
-                            label: label.clone(),
+                            strategy: r.name.clone(),
+                            label: r.label.clone(),
+                            program: r.program.clone(),
                             seed,
-                            settings: settings.clone(),
+                            settings: r.settings.clone(),
                             start: start.clone(),
                         });
                     }
@@ -521,6 +608,7 @@ impl Plan {
             buildings,
             labels,
             jobs,
+            program_files,
         })
     }
 }
@@ -774,6 +862,32 @@ pub fn job_id_from(
             [s.pose.x_m, s.pose.y_m, s.pose.theta_rad].map(|v| format!("{:016x}", v.to_bits()));
         canonical["start"] = serde_json::json!({ "pose_bits": bits, "source": s.source });
     }
+    let digest = Sha256::digest(canonical.to_string().as_bytes());
+    digest[..16].iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A strategy of the grid, resolved.
+struct Resolved {
+    /// The built-in strategy's name, or the external strategy's label.
+    name: String,
+    settings: Settings,
+    label: String,
+    program: Option<StrategyProgram>,
+}
+
+/// What identifies an external strategy's program: its command as written, its files and
+/// their hash (not where they are, nor its timeout).
+fn program_identity(p: &StrategyProgram) -> serde_json::Value {
+    serde_json::json!({
+        "command": p.command,
+        "files": p.files,
+        "files_sha256": p.files_sha256,
+    })
+}
+
+/// The id of an external strategy's job: the built-in id's hash with the program's identity.
+fn program_job_id(id: &str, p: &StrategyProgram) -> String {
+    let canonical = serde_json::json!({ "job": id, "program": program_identity(p) });
     let digest = Sha256::digest(canonical.to_string().as_bytes());
     digest[..16].iter().map(|b| format!("{b:02x}")).collect()
 }

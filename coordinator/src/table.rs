@@ -430,16 +430,28 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
                 SHORT_OF_FRACTION * 100.0
             ));
         }
+        // A label without a run to average (all failed) shows dashes, not NaN.
+        let number = |v: f64, digits: usize| {
+            if v.is_finite() {
+                format!("{v:.digits$}")
+            } else {
+                "-".to_string()
+            }
+        };
+        let explored = match number(r.explored_fraction.mean * 100.0, 1).as_str() {
+            "-" => "-".to_string(),
+            e => format!("{e}%"),
+        };
         let _ = writeln!(
             out,
-            "  {:<16} {:>5} {:>10.0} {:>9.0} {:>9} {:>22} {:>9.1}% {:>6}{}",
+            "  {:<16} {:>5} {:>10} {:>9} {:>9} {:>22} {:>10} {:>6}{}",
             r.label,
             r.time.n,
-            r.time.mean,
-            r.time.sd,
+            number(r.time.mean, 0),
+            number(r.time.sd, 0),
             gain,
             paired,
-            r.explored_fraction.mean * 100.0,
+            explored,
             r.stopped_early,
             if marks.is_empty() {
                 String::new()

@@ -164,6 +164,69 @@ pub struct WireJob {
     /// The start pose the grid sets, bit-exact (absent: the building's own start).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start: Option<WireStart>,
+    /// An external strategy's program, with its files (absent: the built-in `strategy`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub program: Option<WireProgram>,
+}
+
+/// An external strategy's program as it travels: its identity and its files' contents, which
+/// the worker writes to a directory of its own and checks against `files_sha256` before it
+/// runs anything.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WireProgram {
+    pub command: Vec<String>,
+    #[serde(default)]
+    pub files: Vec<String>,
+    pub files_sha256: String,
+    pub timeout_s: f64,
+    /// Each file's name as written (relative to the grid file) and its bytes in base64.
+    pub contents: Vec<(String, String)>,
+}
+
+impl WireProgram {
+    /// The program with its files (read when the grid was planned).
+    pub fn new(p: &floorcast_worker::StrategyProgram, contents: &[(String, Vec<u8>)]) -> Self {
+        let b64 = base64::engine::general_purpose::STANDARD;
+        Self {
+            command: p.command.clone(),
+            files: p.files.clone(),
+            files_sha256: p.files_sha256.clone(),
+            timeout_s: p.timeout_s,
+            contents: contents
+                .iter()
+                .map(|(n, b)| (n.clone(), b64.encode(b)))
+                .collect(),
+        }
+    }
+
+    /// Writes the files under `root` and returns the program to run, checked by hash.
+    pub fn materialize(
+        &self,
+        root: &std::path::Path,
+    ) -> Result<floorcast_worker::StrategyProgram, String> {
+        let b64 = base64::engine::general_purpose::STANDARD;
+        if self.contents.len() > floorcast_worker::external::MAX_PROGRAM_FILES {
+            return Err(format!("the program has {} files", self.contents.len()));
+        }
+        let contents = self
+            .contents
+            .iter()
+            .map(|(n, b)| {
+                b64.decode(b)
+                    .map(|bytes| (n.clone(), bytes))
+                    .map_err(|e| format!("file {n} is not base64: {e}"))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        floorcast_worker::StrategyProgram::materialize(
+            self.command.clone(),
+            self.files.clone(),
+            &contents,
+            &self.files_sha256,
+            self.timeout_s,
+            root,
+        )
+    }
 }
 
 /// A start pose set by the grid.

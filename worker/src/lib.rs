@@ -5,15 +5,17 @@
 //! `sim-core`'s and stays pure. It does no file IO: the binary and the coordinator store what it
 //! returns.
 
+pub mod external;
 pub mod record;
 pub mod settings;
 
 use std::time::Instant;
 
 use sim_core::building::{PoseProblem, StartSource};
-use sim_core::explore::{explore_charged, ProgressSample, RunResult};
+use sim_core::explore::{explore_with, Hooks, ProgressSample, RunResult};
 use sim_core::{Building, Pose};
 
+pub use external::{StrategyError, StrategyProgram};
 pub use record::{RunSummary, SUMMARY_FORMAT, SUMMARY_VERSION};
 pub use settings::{Settings, SettingsError};
 
@@ -26,7 +28,10 @@ pub struct Job<'a> {
     pub building: &'a Building,
     /// Name to record (usually the file stem or the building's name).
     pub building_name: String,
+    /// A built-in strategy's name, or an external strategy's label.
     pub strategy: String,
+    /// The external strategy's program (`None`: the built-in `strategy`).
+    pub program: Option<StrategyProgram>,
     pub seed: u64,
     pub settings: Settings,
     /// Overrides the building's start pose.
@@ -75,6 +80,8 @@ pub enum JobError {
     Settings(#[from] SettingsError),
     #[error("building {name}: {problem}")]
     TooLarge { name: String, problem: String },
+    #[error(transparent)]
+    Strategy(#[from] StrategyError),
     #[error("the simulation failed (a bug in floorcast, please report it): {0}")]
     Panicked(String),
 }
@@ -84,6 +91,8 @@ pub enum JobError {
 pub struct JobOutput {
     pub summary: RunSummary,
     pub result: RunResult,
+    /// What an external strategy wrote to stderr.
+    pub strategy_stderr: Option<String>,
 }
 
 /// The strategies this version implements.
@@ -95,10 +104,16 @@ pub const STRATEGIES: &[&str] = sim_core::explore::Strategy::NAMES;
 pub fn check_job(
     job: &Job<'_>,
 ) -> Result<(sim_core::explore::ExploreConfig, Pose, String), JobError> {
-    if !STRATEGIES.contains(&job.strategy.as_str()) {
+    // An external strategy chooses among the baseline's candidates and gains (and the layout's,
+    // when it asks for them).
+    let built_in = match job.program {
+        Some(_) => "baseline",
+        None => job.strategy.as_str(),
+    };
+    if !STRATEGIES.contains(&built_in) {
         return Err(JobError::UnknownStrategy(job.strategy.clone()));
     }
-    let mut config = job.settings.to_explore_config_for(&job.strategy)?;
+    let mut config = job.settings.to_explore_config_for(built_in)?;
     if config.strategy.layout_from_truth && job.building.rooms.is_empty() {
         return Err(JobError::NoRooms {
             strategy: job.strategy.clone(),
@@ -160,6 +175,30 @@ pub fn run_job(
 ) -> Result<JobOutput, JobError> {
     let (config, start, source) = check_job(job)?;
     let t0 = Instant::now();
+    let mut external = match &job.program {
+        Some(program) => {
+            program.check_files().map_err(|what| StrategyError {
+                command: program.display(),
+                what,
+            })?;
+            let mut s = external::ExternalStrategy::start(program)?;
+            let frame =
+                sim_core::explore::map_frame(&job.building.bounds(), config.map_resolution_m);
+            s.begin(
+                external::run_message(
+                    &job.building_name,
+                    &job.building.content_hash(),
+                    job.seed,
+                    start,
+                    &job.settings,
+                    &frame,
+                ),
+                job.settings.charge_compute,
+            )?;
+            Some(s)
+        }
+        None => None,
+    };
     // With charge_compute, each layout costs the wall time it took (the robot waits for it).
     let mut timed = |work: &mut dyn FnMut()| {
         let t = Instant::now();
@@ -172,12 +211,33 @@ pub fn run_job(
         None
     };
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        explore_charged(job.building, start, &config, job.seed, on_progress, cost)
+        let hooks = Hooks {
+            layout_cost: cost,
+            policy: external
+                .as_mut()
+                .map(|s| s as &mut dyn sim_core::explore::Policy),
+        };
+        explore_with(job.building, start, &config, job.seed, on_progress, hooks)
     }))
     .map_err(|p| JobError::Panicked(panic_message(&*p)))?;
     let wall_time_s = t0.elapsed().as_secs_f64();
-    let summary = RunSummary::new(job, &result, &source, wall_time_s);
-    Ok(JobOutput { summary, result })
+    let mut summary = RunSummary::new(job, &result, &source, wall_time_s);
+    let strategy_stderr = match external {
+        Some(s) => {
+            let name = s.hello().name.clone();
+            let stats = s.finish()?;
+            summary.strategy_name = Some(name);
+            summary.strategy_compute_s = Some(stats.compute_s);
+            summary.strategy_replies = Some(stats.replies);
+            Some(stats.stderr)
+        }
+        None => None,
+    };
+    Ok(JobOutput {
+        summary,
+        result,
+        strategy_stderr,
+    })
 }
 
 /// The message of a caught panic.
@@ -281,6 +341,7 @@ mod tests {
             building: b,
             building_name: "box".into(),
             strategy: "baseline".into(),
+            program: None,
             seed: 1,
             settings: Settings {
                 time_limit_s: 2.0,

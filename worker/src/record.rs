@@ -17,7 +17,22 @@ pub struct RunSummary {
     pub floorcast_version: String,
     pub building: String,
     pub building_hash: String,
+    /// The built-in strategy's name, or the external strategy's label.
     pub strategy: String,
+    /// An external strategy's program: its command, the hash of its files, its reply timeout
+    /// (absent for built-in strategies).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strategy_program: Option<crate::StrategyProgram>,
+    /// The name an external strategy gave itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strategy_name: Option<String>,
+    /// Wall seconds an external strategy took to answer, summed over its replies (charged to
+    /// simulated time with `charge_compute`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strategy_compute_s: Option<f64>,
+    /// Decision messages an external strategy answered.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strategy_replies: Option<u64>,
     pub seed: u64,
     pub settings: Settings,
     /// Start pose `[x_m, y_m, theta_rad]` and where it came from.
@@ -94,6 +109,10 @@ impl RunSummary {
             building: job.building_name.clone(),
             building_hash: job.building.content_hash(),
             strategy: job.strategy.clone(),
+            strategy_program: job.program.clone(),
+            strategy_name: None,
+            strategy_compute_s: None,
+            strategy_replies: None,
             seed: job.seed,
             settings: job.settings.clone(),
             start: [r.start.x_m, r.start.y_m, r.start.theta_rad],

@@ -39,10 +39,12 @@
 mod calibration;
 mod follow;
 mod gain_cache;
+pub mod policy;
 pub mod strategy;
 
 pub use crate::utility::UtilityDistance;
 pub use follow::{Command, FollowConfig, PathFollower};
+pub use policy::{CandidateView, DecisionView, Needs, Policy, Reply, RunEnd};
 pub use strategy::{EarlyStop, GainModel, Strategy};
 
 use self::calibration::OdometryCalibration;
@@ -309,6 +311,8 @@ pub struct RunResult {
     pub layouts_computed: u64,
     /// Layout compute time charged to simulated time (s; 0 unless charged).
     pub layout_compute_s: f64,
+    /// A [`Policy`]'s compute time charged to simulated time (s; 0 unless charged).
+    pub strategy_compute_s: f64,
     /// Ground-truth rooms the robot never entered (when the building has rooms).
     pub rooms_never_entered: Option<usize>,
     /// Ground-truth rooms of which less than half the reachable free area was explored (`None`
@@ -463,6 +467,14 @@ struct Explorer<'a> {
     compute_debt_s: f64,
     /// Layout compute time charged so far (s).
     layout_compute_s: f64,
+    /// The decision rule in place of the strategy's own, if any, what it needs, how often it
+    /// was asked, whether it said stop or failed, and its compute time charged so far (s).
+    policy: Option<&'a mut dyn Policy>,
+    policy_needs: Needs,
+    policy_decisions: usize,
+    policy_stopped: bool,
+    policy_failed: bool,
+    strategy_compute_s: f64,
     /// Where the robot has stayed (within `STILL_RADIUS_M`) since `still_since_s`.
     still_at: Vec2,
     still_since_s: f64,
@@ -575,6 +587,46 @@ pub fn explore_charged<'a>(
     on_progress: &mut dyn FnMut(&ProgressSample),
     layout_cost: Option<LayoutCost<'a>>,
 ) -> RunResult {
+    let hooks = Hooks {
+        layout_cost,
+        policy: None,
+    };
+    explore_with(building, start, cfg, seed, on_progress, hooks)
+}
+
+/// What a caller can plug into a run besides its settings.
+#[derive(Default)]
+pub struct Hooks<'a> {
+    /// Measures each layout computation, to charge its cost (see [`explore_charged`]).
+    pub layout_cost: Option<LayoutCost<'a>>,
+    /// Chooses the candidates in place of the configured strategy (whose gain model and early
+    /// stop still apply: give it [`Strategy::baseline`] for the plain gains and no early stop).
+    pub policy: Option<&'a mut dyn Policy>,
+}
+
+impl std::fmt::Debug for Hooks<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Hooks")
+            .field("layout_cost", &self.layout_cost.is_some())
+            .field("policy", &self.policy.as_ref().map(|p| p.needs()))
+            .finish()
+    }
+}
+
+/// [`explore`] with the caller's [`Hooks`].
+pub fn explore_with<'a>(
+    building: &Building,
+    start: Pose,
+    cfg: &'a ExploreConfig,
+    seed: u64,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+    hooks: Hooks<'a>,
+) -> RunResult {
+    let Hooks {
+        layout_cost,
+        policy,
+    } = hooks;
+    let policy_needs = policy.as_ref().map(|p| p.needs()).unwrap_or_default();
     let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
     let free = building.reachable_free(frame, start.position());
     let truth = crate::building::explorable_free(
@@ -632,6 +684,12 @@ pub fn explore_charged<'a>(
         layout_cost,
         compute_debt_s: 0.0,
         layout_compute_s: 0.0,
+        policy,
+        policy_needs,
+        policy_decisions: 0,
+        policy_stopped: false,
+        policy_failed: false,
+        strategy_compute_s: 0.0,
         layout_trusted: false,
         stopped_early: false,
         start,
@@ -676,7 +734,16 @@ impl Explorer<'_> {
             self.drive();
         }
         let exploration_time_s = self.sim.time_s();
-        if cfg.return_home && end_reason != EndReason::TimeLimit {
+        let end = RunEnd {
+            reason: end_reason,
+            exploration_time_s,
+            explored_fraction: self.explored_fraction(),
+            decisions: self.decisions.len(),
+        };
+        if let Some(p) = self.policy.as_mut() {
+            p.end(&end);
+        }
+        if cfg.return_home && end_reason != EndReason::TimeLimit && !self.policy_failed {
             self.return_home();
         }
         self.finish(end_reason, exploration_time_s, on_progress)
@@ -1208,7 +1275,7 @@ impl Explorer<'_> {
     /// last one. Returns whether gains should use the layout now.
     fn refresh_layout(&mut self) -> bool {
         let st = &self.cfg.strategy;
-        if !st.uses_layout() {
+        if !st.uses_layout() && !self.policy_needs.layout_gain {
             return false;
         }
         let cell_area = self.map.frame.cell_area_m2();
@@ -1416,7 +1483,7 @@ impl Explorer<'_> {
     /// stuck on clutter, a pose estimate briefly off) would otherwise end the run with
     /// frontiers left. Returns whether any were forgiven.
     fn forgive(&mut self) -> bool {
-        if self.stopped_early {
+        if self.stopped_early || self.policy_failed {
             return false;
         }
         let grown = self.forgiven_at.is_none_or(|at| {
@@ -1520,19 +1587,47 @@ impl Explorer<'_> {
                     // coarser and may connect what the planning grid does not (yet: a door seen
                     // at a slant opens as the robot comes closer), so a candidate without a path
                     // is passed over for this decision, not blacklisted.
+                    let mut attempt = 0;
                     loop {
-                        let Some(best) =
+                        let pick = if self.policy.is_some() {
+                            self.ask_policy(&frontiers, &goals, &plan, &scores, attempt)
+                        } else {
                             best_candidate(&with_gain_floor(&scores, cfg.gain_floor_m2), cfg.alpha)
-                        else {
-                            break None;
+                                .map(Pick::One)
                         };
-                        let goal_cell = goals[best].expect("best candidate is reachable");
-                        match self.waypoints_to(&plan, goal_cell) {
-                            Some(wps) => break Some((scores, best, wps)),
-                            None => scores[best].distance_m = None,
+                        match pick {
+                            None => break None,
+                            Some(Pick::One(best)) => {
+                                let goal_cell = goals[best].expect("best candidate is reachable");
+                                match self.waypoints_to(&plan, goal_cell) {
+                                    Some(wps) => break Some((scores, best, wps)),
+                                    None => scores[best].distance_m = None,
+                                }
+                                attempt += 1;
+                            }
+                            Some(Pick::Ranked(ids)) => {
+                                let mut found = None;
+                                for id in ids {
+                                    let goal_cell =
+                                        goals[id].expect("ranked candidate is reachable");
+                                    if let Some(wps) = self.waypoints_to(&plan, goal_cell) {
+                                        found = Some((id, wps));
+                                        break;
+                                    }
+                                }
+                                break found.map(|(id, wps)| (scores, id, wps));
+                            }
                         }
                     }
                 });
+            // A policy that said stop ends the run now; one that failed ends it at once.
+            if self.policy_failed {
+                return false;
+            }
+            if self.policy_stopped {
+                self.stopped_early = true;
+                return false;
+            }
             let early_stop = match chosen {
                 Some(Some(found)) => break found,
                 Some(None) => false,
@@ -1607,6 +1702,89 @@ impl Explorer<'_> {
             best_distance_at_s: now,
         });
         true
+    }
+
+    /// Asks the policy to choose among the reachable candidates (`scores` with a distance).
+    /// `None` when there is none, or the policy said stop (`policy_stopped`) or failed
+    /// (`policy_failed`, also for a reply naming no candidate shown).
+    fn ask_policy(
+        &mut self,
+        frontiers: &[Frontier],
+        goals: &[Option<Cell>],
+        plan: &Plan,
+        scores: &[CandidateScore],
+        attempt: usize,
+    ) -> Option<Pick> {
+        let frame = self.map.frame;
+        let robot = self.estimate.position();
+        let range_m = self.cfg.sim.laser.max_range_m;
+        let mut views = Vec::new();
+        for (i, s) in scores.iter().enumerate() {
+            let (Some(distance_m), Some(goal)) = (s.distance_m, goals[i]) else {
+                continue;
+            };
+            let f = &frontiers[i];
+            let point = frame.world_from_cell(f.candidate);
+            let layout_gain_m2 = match (&self.layout, self.policy_needs.layout_gain) {
+                (Some(l), true) => {
+                    let grid = &self.map.occupancy;
+                    Some(self.room_gains.gain(f.candidate, range_m, self.scans, || {
+                        layout_information_gain(grid, &l.raster, f.candidate, range_m)
+                    }))
+                }
+                _ => None,
+            };
+            views.push(CandidateView {
+                id: i,
+                cell: f.candidate,
+                point,
+                goal: frame.world_from_cell(goal),
+                frontier_cells: f.size,
+                distance_m,
+                path_m: plan.distance_m(goal).unwrap_or(distance_m),
+                straight_m: (point - robot).norm(),
+                gain_m2: s.gain_m2,
+                layout_gain_m2,
+            });
+        }
+        if views.is_empty() {
+            return None;
+        }
+        if attempt == 0 {
+            self.policy_decisions += 1;
+        }
+        let view = DecisionView {
+            decision: self.policy_decisions - 1,
+            attempt,
+            time_s: self.sim.time_s(),
+            pose: self.estimate,
+            candidates: &views,
+            map: &self.map.occupancy,
+        };
+        let (reply, charged_s) = self.policy.as_mut()?.decide(&view);
+        if charged_s.is_finite() && charged_s > 0.0 {
+            self.compute_debt_s += charged_s;
+            self.strategy_compute_s += charged_s;
+        }
+        let shown = |id: &usize| views.iter().any(|v| v.id == *id);
+        match reply {
+            Reply::Choose(id) if shown(&id) => Some(Pick::One(id)),
+            Reply::Rank(ids)
+                if !ids.is_empty()
+                    && ids.iter().all(shown)
+                    && ids.iter().collect::<std::collections::BTreeSet<_>>().len() == ids.len() =>
+            {
+                Some(Pick::Ranked(ids))
+            }
+            Reply::Stop => {
+                self.policy_stopped = true;
+                None
+            }
+            _ => {
+                self.policy_failed = true;
+                None
+            }
+        }
     }
 
     /// Why a run that ran out of goals ended. Frontier cells the robot looked into (stood at a
@@ -1754,6 +1932,7 @@ impl Explorer<'_> {
             stopped_early: end_reason == EndReason::EarlyStop,
             layouts_computed: self.layouts_computed,
             layout_compute_s: self.layout_compute_s,
+            strategy_compute_s: self.strategy_compute_s,
             rooms_never_entered: (!self.rooms.is_empty()).then(|| {
                 self.rooms
                     .iter()
@@ -1820,6 +1999,13 @@ const TARGET_SEARCH_CELLS: i32 = 4;
 const MAX_EXTRA: u32 = 10;
 
 /// `TARGET_SEARCH_CELLS` in cells of the distance grid (the same distance in metres).
+/// What a decision tries: one candidate (the next best is asked for when it has no path), or
+/// a policy's ranking (the first with a path).
+enum Pick {
+    One(usize),
+    Ranked(Vec<usize>),
+}
+
 fn far_search_cells() -> i32 {
     let (cells, f) = (
         TARGET_SEARCH_CELLS * PLAN_FACTOR as i32,

@@ -1,0 +1,101 @@
+//! The decision seen from outside the explorer: a [`Policy`] is asked, at every decision, which
+//! of the reachable frontier candidates to drive to, given what a strategy may know (the robot's
+//! estimated pose, the candidates with their distances and gains, the map). The built-in
+//! strategies decide inside the explorer ([`super::Strategy`]); a policy replaces their choice
+//! of candidate (and their early stop) while the explorer keeps everything else: mapping,
+//! frontiers, planning, the last resorts before a run ends, scoring the run. An external
+//! program speaking floorcast's strategy protocol is one (in the `floorcast-worker` crate:
+//! sim-core does no IO).
+//!
+//! A policy never sees ground truth: only what the explorer derives from the laser and the
+//! odometry.
+
+use crate::geom::{Pose, Vec2};
+use crate::grid::{Cell, OccupancyGrid};
+
+/// What a policy asks the explorer to compute for it besides the baseline gains.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Needs {
+    /// The paper's `I(p)` inside the rooms of the layout predicted from the map
+    /// ([`CandidateView::layout_gain_m2`]); the layout is rebuilt as for the layout strategies.
+    pub layout_gain: bool,
+}
+
+/// One reachable frontier candidate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CandidateView {
+    /// The candidate's number at this decision (stable across the attempts of one decision).
+    pub id: usize,
+    /// The frontier's candidate cell (its middle cell) and that cell's centre.
+    pub cell: Cell,
+    pub point: Vec2,
+    /// Where the robot would drive: the candidate, or the nearest traversable cell to it.
+    pub goal: Vec2,
+    /// Cells of the frontier.
+    pub frontier_cells: usize,
+    /// The utility's `D(p)` as the run's `utility_distance` defines it (m).
+    pub distance_m: f64,
+    /// Planned path length to the goal on the distance grid (m).
+    pub path_m: f64,
+    /// Straight line from the robot's estimated position to `point` (m).
+    pub straight_m: f64,
+    /// The baseline information gain `I(p)` (m2).
+    pub gain_m2: f64,
+    /// The paper's `I(p)` inside the predicted rooms (m2), when the policy needs it and a
+    /// layout exists.
+    pub layout_gain_m2: Option<f64>,
+}
+
+/// What a policy is shown at a decision.
+#[derive(Debug, Clone, Copy)]
+pub struct DecisionView<'a> {
+    /// Decisions asked before this one.
+    pub decision: usize,
+    /// 0, then 1, 2, ... when the chosen candidate had no drivable path and the policy is asked
+    /// again within the same decision (without that candidate).
+    pub attempt: usize,
+    /// Simulated time (s).
+    pub time_s: f64,
+    /// The robot's estimated pose in the map frame.
+    pub pose: Pose,
+    /// The reachable candidates (never empty).
+    pub candidates: &'a [CandidateView],
+    /// The map as the robot has built it.
+    pub map: &'a OccupancyGrid,
+}
+
+/// A policy's answer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Reply {
+    /// Drive to the candidate with this id.
+    Choose(usize),
+    /// Try these candidates in this order and take the first with a drivable path; the others
+    /// are not tried at this decision.
+    Rank(Vec<usize>),
+    /// End the exploration now (an early stop).
+    Stop,
+    /// The policy failed (it says why to its caller): the run ends at once, its result is not
+    /// to be used.
+    Fail,
+}
+
+/// How a run ended, for the policy's last message.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunEnd {
+    pub reason: super::EndReason,
+    pub exploration_time_s: f64,
+    pub explored_fraction: f64,
+    pub decisions: usize,
+}
+
+/// A decision rule the explorer consults instead of its built-in strategy's.
+pub trait Policy {
+    /// What the explorer must compute for the policy.
+    fn needs(&self) -> Needs;
+    /// The choice at one decision, and the compute time to charge to simulated time for it
+    /// (s; 0 when nothing is charged). A reply naming no candidate of the view is a failure
+    /// of the policy; the explorer treats it as [`Reply::Fail`].
+    fn decide(&mut self, view: &DecisionView<'_>) -> (Reply, f64);
+    /// The run ended (no reply).
+    fn end(&mut self, _end: &RunEnd) {}
+}

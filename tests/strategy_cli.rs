@@ -1,0 +1,244 @@
+//! External strategies over the strategy protocol (`docs/strategy-protocol.md`), end to end:
+//! `explore --strategy-command` with the Python examples, and programs that break the protocol.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::*;
+
+fn python_command(script: &str) -> String {
+    format!("python3 {}", repo().join(script).display())
+}
+
+/// Runs `explore` with `extra` arguments; returns the output directory's summary.
+fn explore(
+    building: &Path,
+    seed: u64,
+    start: &str,
+    out: &Path,
+    extra: &[&str],
+) -> serde_json::Value {
+    let seed = seed.to_string();
+    let mut args = vec![
+        "explore",
+        "--building",
+        building.to_str().unwrap(),
+        "--seed",
+        &seed,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    if !start.is_empty() {
+        args.extend_from_slice(&["--start", start]);
+    }
+    args.extend_from_slice(extra);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+fn read(p: PathBuf) -> String {
+    std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// `examples/strategies/baseline.py` makes exactly the built-in `baseline`'s decisions: the same
+/// decisions, trajectory and map, the same summary but for the strategy's identity and the
+/// wall times.
+fn python_baseline_is_the_built_in(building: &Path, seed: u64, start: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("built-in"), dir.path().join("python"));
+    let mut built_in = explore(building, seed, start, &a, &["--strategy", "baseline"]);
+    let command = python_command("examples/strategies/baseline.py");
+    let mut python = explore(building, seed, start, &b, &["--strategy-command", &command]);
+    for file in ["decisions.csv", "trajectory.csv", "progress.csv", "map.pgm"] {
+        assert!(
+            std::fs::read(a.join(file)).unwrap() == std::fs::read(b.join(file)).unwrap(),
+            "{file} differs"
+        );
+    }
+    assert_eq!(python["strategy"], "baseline.py");
+    assert_eq!(python["strategy_name"], "baseline.py");
+    assert_eq!(
+        python["strategy_program"]["files_sha256"]
+            .as_str()
+            .unwrap()
+            .len(),
+        64
+    );
+    // Every decision was asked of the program (and some again, after a candidate without a path).
+    let decisions = python["decisions"].as_u64().unwrap();
+    assert!(decisions > 0);
+    assert!(python["strategy_replies"].as_u64().unwrap() >= decisions);
+    let python = python.as_object_mut().unwrap();
+    for key in [
+        "strategy",
+        "strategy_program",
+        "strategy_name",
+        "strategy_compute_s",
+        "strategy_replies",
+        "wall_time_s",
+        "speedup",
+    ] {
+        python.remove(key);
+        built_in.as_object_mut().unwrap().remove(key);
+    }
+    assert_eq!(&built_in, &serde_json::Value::Object(python.clone()));
+}
+
+macro_rules! same_as_built_in_cases {
+    ($($name:ident: $building:expr, $seed:expr, $start:expr;)*) => {$(
+        #[test]
+        fn $name() {
+            python_baseline_is_the_built_in(&$building, $seed, $start);
+        }
+    )*};
+}
+
+same_as_built_in_cases! {
+    python_baseline_small_building: repo().join("buildings/small.toml"), 1, "";
+    python_baseline_franch1: maps_dir().join("schools/Franch1.yaml"), 2, "";
+    python_baseline_freiburg79_random_start: maps_dir().join("radish/freiburg_building79.yaml"), 3, "random";
+}
+
+#[test]
+fn python_baseline_on_a_generated_building() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = dir.path().join("gen.toml");
+    let o = run(&[
+        "building",
+        "generate",
+        "--seed",
+        "11",
+        "--area-m2",
+        "900",
+        "--out",
+        b.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    python_baseline_is_the_built_in(&b, 4, "");
+}
+
+#[test]
+fn nearest_frontier_first_explores_the_small_building() {
+    let dir = tempfile::tempdir().unwrap();
+    let command = python_command("examples/strategies/nearest.py");
+    let s = explore(
+        &repo().join("buildings/small.toml"),
+        1,
+        "",
+        dir.path(),
+        &["--strategy-command", &command],
+    );
+    assert_eq!(s["strategy"], "nearest.py");
+    assert_eq!(s["end_reason"], "complete");
+    assert!(s["explored_fraction"].as_f64().unwrap() >= 0.97, "{s}");
+}
+
+#[test]
+fn a_strategy_that_needs_the_layout_and_the_map_gets_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let command = python_command("tests/strategies/needs_everything.py");
+    let s = explore(
+        &repo().join("buildings/small.toml"),
+        1,
+        "",
+        dir.path(),
+        &["--strategy-command", &command],
+    );
+    // The program checks every message (a layout gain per candidate, the map's changes within
+    // its size) and fails the run otherwise; it reports what it saw on stderr.
+    assert!(s["layouts_computed"].as_u64().unwrap() > 0, "{s}");
+    let log = read(dir.path().join("strategy-stderr.txt"));
+    let replies = s["strategy_replies"].as_u64().unwrap();
+    assert!(
+        log.contains(&format!("needs_everything: {replies} decisions")),
+        "{log}"
+    );
+}
+
+#[test]
+fn a_strategy_that_stops_ends_the_run_as_an_early_stop() {
+    let dir = tempfile::tempdir().unwrap();
+    let command = python_command("tests/strategies/stops_at_once.py");
+    let s = explore(
+        &repo().join("buildings/small.toml"),
+        1,
+        "",
+        dir.path(),
+        &["--strategy-command", &command],
+    );
+    assert_eq!(s["end_reason"], "early stop");
+    assert_eq!(s["stopped_early"], true);
+    assert_eq!(s["decisions"], 0);
+    assert_eq!(s["strategy_replies"], 1);
+}
+
+/// A program that breaks the protocol fails the run: exit 2, one line naming the program and
+/// what it did, no output directory left behind.
+fn fails_cleanly(command: &str, needles: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = run(&[
+        "explore",
+        "--building",
+        repo().join("buildings/small.toml").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--strategy-timeout-s",
+        "2",
+        "--strategy-command",
+        command,
+    ]);
+    assert_clean_failure(&o, needles);
+    assert!(!out.exists(), "an output directory was left behind");
+}
+
+macro_rules! broken_strategy_cases {
+    ($($name:ident: $command:expr => [$($needle:expr),*];)*) => {$(
+        #[test]
+        fn $name() {
+            fails_cleanly($command.as_ref(), &[$($needle),*]);
+        }
+    )*};
+}
+
+broken_strategy_cases! {
+    crash_at_hello: python_command("tests/strategies/crash_at_hello.py") =>
+        ["crash_at_hello.py", "exited with status 3 before answering the hello message", "something went wrong"];
+    crash_mid_run: python_command("tests/strategies/crash_mid_run.py") =>
+        ["crash_mid_run.py", "exited with status 1 before answering decision 2", "strategy bug at decision 3"];
+    hang: python_command("tests/strategies/hang.py") =>
+        ["hang.py", "did not answer decision 0 within 2 s"];
+    nonsense: python_command("tests/strategies/nonsense.py") =>
+        ["nonsense.py", "answered decision 0 with a line that is not a protocol message: 'this is not json'"];
+    chatty: python_command("tests/strategies/chatty.py") =>
+        ["chatty.py", "'debug: deciding'", "logs go to stderr"];
+    illegal_id: python_command("tests/strategies/illegal_id.py") =>
+        ["illegal_id.py", "chose candidate 99999, which decision 0 did not offer"];
+    wrong_protocol: python_command("tests/strategies/wrong_protocol.py") =>
+        ["wrong_protocol.py", "speaks protocol version 99; this floorcast speaks version 1"];
+    missing_interpreter: "no-such-interpreter-x7 strategy.py" =>
+        ["cannot start 'no-such-interpreter-x7': no such program"];
+    unclosed_quote: "python3 'my strategy.py" =>
+        ["--strategy-command", "cannot split", "unclosed quote"];
+    empty_command: "  " =>
+        ["--strategy-command", "the strategy command is empty"];
+}
+
+#[test]
+fn a_strategy_command_with_a_built_in_strategy_is_refused() {
+    let o = run(&[
+        "explore",
+        "--building",
+        repo().join("buildings/small.toml").to_str().unwrap(),
+        "--strategy",
+        "layout",
+        "--strategy-command",
+        "python3 x.py",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("cannot be used with"), "{}", stderr(&o));
+}

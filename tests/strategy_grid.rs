@@ -1,0 +1,306 @@
+//! External strategies in grids: on this machine and on remote workers, which receive the
+//! program's files with the job; a strategy that breaks the protocol fails only its own jobs.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Stdio};
+use std::time::{Duration, Instant};
+
+use common::*;
+
+/// A project as a user lays it out: `strategies/` with the programs (copied from the
+/// repository, so that they sit nowhere near floorcast's own `python/`), `grids/grid.toml`
+/// naming them relative to itself.
+fn project(dir: &Path, seeds: &str, strategies: &str) -> PathBuf {
+    std::fs::create_dir_all(dir.join("strategies")).unwrap();
+    std::fs::create_dir_all(dir.join("grids")).unwrap();
+    for f in [
+        "examples/strategies/baseline.py",
+        "examples/strategies/nearest.py",
+        "tests/strategies/crash_mid_run.py",
+        "tests/strategies/hang.py",
+    ] {
+        let name = Path::new(f).file_name().unwrap();
+        std::fs::copy(repo().join(f), dir.join("strategies").join(name)).unwrap();
+    }
+    let text = format!(
+        "format = \"floorcast-grid\"\nversion = 1\nname = \"ext\"\nbuildings = [\"{}\"]\nseeds = {seeds}\n{strategies}\n[settings]\ntime_limit_s = 600\n",
+        repo().join("buildings/small.toml").display()
+    );
+    let g = dir.join("grids/grid.toml");
+    std::fs::write(&g, text).unwrap();
+    g
+}
+
+const BASELINES: &str = r#"
+[[strategies]]
+name = "baseline"
+[[strategies]]
+label = "baseline.py"
+command = ["python3", "../strategies/baseline.py"]
+"#;
+
+/// The report's CSV rows by (label, seed): column name -> value.
+fn rows(res: &Path) -> BTreeMap<(String, String), BTreeMap<String, String>> {
+    let csv = res.join("export.csv");
+    let o = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    lines
+        .map(|l| {
+            let row: BTreeMap<String, String> = header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(str::to_string))
+                .collect();
+            ((row["label"].clone(), row["seed"].clone()), row)
+        })
+        .collect()
+}
+
+/// The outcome columns of the python baseline's rows equal the built-in's.
+fn assert_python_baseline_is_the_built_in(res: &Path, seeds: &[&str]) {
+    let rows = rows(res);
+    for seed in seeds {
+        let a = &rows[&("baseline".to_string(), seed.to_string())];
+        let b = &rows[&("baseline.py".to_string(), seed.to_string())];
+        assert_eq!(b["status"], "ok");
+        for col in [
+            "exploration_time_s",
+            "explored_area_m2",
+            "explored_fraction",
+            "path_length_m",
+            "decisions",
+            "end_reason",
+        ] {
+            assert_eq!(a[col], b[col], "seed {seed}: {col}");
+        }
+    }
+}
+
+#[test]
+fn a_grid_runs_external_strategies_beside_the_built_in_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let strategies = format!(
+        "{BASELINES}\n[[strategies]]\nlabel = \"nearest\"\ncommand = [\"python3\", \"../strategies/nearest.py\"]\n[[strategies]]\nlabel = \"crashes\"\ncommand = [\"python3\", \"../strategies/crash_mid_run.py\"]\n"
+    );
+    let g = project(dir.path(), "[1, 2]", &strategies);
+    let res = dir.path().join("res");
+    let o = run(&[
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "-q",
+    ]);
+    // The crashing strategy fails its own two jobs, with its message; the rest are stored.
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("2 of 8 jobs failed"), "{err}");
+    assert!(err.contains("crashes seed 1"), "{err}");
+    assert!(err.contains("strategy bug at decision 3"), "{err}");
+    assert_python_baseline_is_the_built_in(&res, &["1", "2"]);
+    let rows = rows(&res);
+    for seed in ["1", "2"] {
+        assert_eq!(rows[&("nearest".into(), seed.into())]["status"], "ok");
+        assert_eq!(rows[&("crashes".into(), seed.into())]["status"], "failed");
+    }
+    // The program's identity is in its jobs' ids: the same grid again has nothing to do; a
+    // changed program makes new jobs.
+    let again = run(&[
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(
+        stdout(&again).contains("nothing to do"),
+        "{}",
+        stdout(&again)
+    );
+    let script = dir.path().join("strategies/nearest.py");
+    let text = std::fs::read_to_string(&script).unwrap();
+    std::fs::write(&script, format!("{text}\n# changed\n")).unwrap();
+    let changed = run(&[
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(
+        stdout(&changed).contains("done: 2 jobs run now, 6 stored before"),
+        "{}",
+        stdout(&changed)
+    );
+}
+
+#[test]
+fn grid_errors_name_the_external_strategy_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "[[strategies]]\ncommand = [\"python3\", \"x.py\"]\n",
+            "strategies[0].label: an external strategy (one with a command) needs a label",
+        ),
+        (
+            "[[strategies]]\nname = \"baseline\"\ncommand = [\"python3\", \"x.py\"]\n",
+            "strategies[0]: gives both a name",
+        ),
+        (
+            "[[strategies]]\nlabel = \"x\"\ncommand = []\n",
+            "strategies[0].command: the strategy command is empty",
+        ),
+        (
+            "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\nfiles = [\"missing.py\"]\n",
+            "strategies[0].command: file 'missing.py' is not a file",
+        ),
+        (
+            "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\ntimeout_s = 0\n",
+            "strategies[0].command: the strategy timeout 0 s is outside",
+        ),
+        (
+            "[[strategies]]\nname = \"baseline\"\ntimeout_s = 5\n",
+            "strategies[0].timeout_s: belongs to an external strategy",
+        ),
+    ];
+    for (strategies, needle) in cases {
+        let g = project(dir.path(), "[1]", strategies);
+        let o = run(&["run", g.to_str().unwrap(), "--summary"]);
+        assert_clean_failure(&o, &["grid.toml", needle]);
+    }
+}
+
+/// A `floorcast` child whose output lines are collected.
+struct Proc(Child, std::sync::mpsc::Receiver<String>);
+
+fn spawn(args: &[&str], cwd: &Path) -> Proc {
+    let mut child = floorcast()
+        .args(args)
+        .current_dir(cwd)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    for stream in [
+        Box::new(child.stderr.take().unwrap()) as Box<dyn std::io::Read + Send>,
+        Box::new(child.stdout.take().unwrap()),
+    ] {
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stream).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+    }
+    Proc(child, rx)
+}
+
+impl Proc {
+    fn finish(mut self, timeout: Duration) -> (Option<i32>, String) {
+        let t0 = Instant::now();
+        let mut seen = Vec::new();
+        loop {
+            while let Ok(l) = self.1.try_recv() {
+                seen.push(l);
+            }
+            if let Some(status) = self.0.try_wait().unwrap() {
+                std::thread::sleep(Duration::from_millis(100));
+                while let Ok(l) = self.1.try_recv() {
+                    seen.push(l);
+                }
+                return (status.code(), seen.join("\n"));
+            }
+            if t0.elapsed() > timeout {
+                let _ = self.0.kill();
+                panic!("did not exit within {timeout:?}: {}", seen.join("\n"));
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+#[test]
+fn remote_workers_receive_the_program_and_a_hanging_one_fails_only_its_jobs() {
+    let dir = tempfile::tempdir().unwrap();
+    let strategies = format!(
+        "{BASELINES}\n[[strategies]]\nlabel = \"hangs\"\ncommand = [\"python3\", \"../strategies/hang.py\"]\ntimeout_s = 1\n"
+    );
+    let g = project(dir.path(), "[1, 2]", &strategies);
+    let res = dir.path().join("res");
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let listen = format!("tcp/127.0.0.1:{port}");
+    let c = spawn(
+        &[
+            "run",
+            g.to_str().unwrap(),
+            "--results",
+            res.to_str().unwrap(),
+            "--workers",
+            "0",
+            "-q",
+            "--listen",
+            &listen,
+        ],
+        dir.path(),
+    );
+    // The workers run elsewhere, where none of the programs' files are.
+    let elsewhere = tempfile::tempdir().unwrap();
+    let worker = |name: &str| {
+        spawn(
+            &[
+                "worker",
+                "--connect",
+                &listen,
+                "--jobs",
+                "1",
+                "--wait-s",
+                "60",
+                "--name",
+                name,
+            ],
+            elsewhere.path(),
+        )
+    };
+    let (w1, w2) = (worker("w1"), worker("w2"));
+    let (c1, out1) = w1.finish(Duration::from_secs(240));
+    let (c2, out2) = w2.finish(Duration::from_secs(60));
+    let (cc, outc) = c.finish(Duration::from_secs(60));
+    assert_eq!((c1, c2), (Some(0), Some(0)), "{out1}\n---\n{out2}");
+    // The hanging strategy's two jobs failed, named; the grid went on.
+    assert_eq!(cc, Some(2), "{outc}");
+    assert!(outc.contains("2 of 6 jobs failed"), "{outc}");
+    assert!(
+        outc.contains("did not answer decision 0 within 1 s"),
+        "{outc}"
+    );
+    assert_python_baseline_is_the_built_in(&res, &["1", "2"]);
+    let rows = rows(&res);
+    let remote = |label: &str| {
+        ["1", "2"]
+            .iter()
+            .all(|s| rows[&(label.to_string(), s.to_string())]["worker"].starts_with('w'))
+    };
+    assert!(remote("baseline.py") && remote("hangs"), "{rows:?}");
+}

@@ -1,0 +1,1025 @@
+//! External strategies: a program, in any language, that speaks floorcast's strategy protocol
+//! (`docs/strategy-protocol.md`) over its stdin and stdout, one JSON object per line. One
+//! process serves one run: [`ExternalStrategy::start`] spawns it and shakes hands,
+//! [`ExternalStrategy::begin`] announces the run, the explorer asks it at every decision through
+//! [`Policy`], and [`ExternalStrategy::finish`] ends it and says whether it kept to the protocol.
+//!
+//! Every reply is awaited for at most the program's timeout; a crash, a timeout, a line that is
+//! not protocol JSON or a reply naming no candidate offered fails the run with a message that
+//! names the program and what it did. The program's stderr is kept (its last line goes into
+//! such messages) and handed back, so that its logs are not lost.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::sync::{Arc, Mutex, OnceLock};
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+use sim_core::explore::{DecisionView, Needs, Policy, Reply, RunEnd};
+use sim_core::grid::{GridFrame, Occupancy};
+
+/// The protocol version this floorcast speaks.
+pub const PROTOCOL_VERSION: u64 = 1;
+/// The default time a program has for each reply (s).
+pub const DEFAULT_TIMEOUT_S: f64 = 10.0;
+/// The longest reply line read (bytes).
+const MAX_LINE: usize = 1 << 20;
+/// Stderr kept from a program (bytes; the rest is dropped).
+const MAX_STDERR: usize = 1 << 20;
+
+/// An external strategy's program: how to start it and what it is, as a job and its record
+/// carry it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StrategyProgram {
+    /// The command, split into words (the first is the executable); words that name files
+    /// are relative to `dir`.
+    pub command: Vec<String>,
+    /// Further files the program needs (relative to `dir`): hashed into its identity and sent
+    /// to remote workers with the words of the command that name files.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub files: Vec<String>,
+    /// SHA-256 (hex) over the program's files ([`StrategyProgram::file_names`]: their names as
+    /// written and their contents): the program's identity (empty when it has none).
+    pub files_sha256: String,
+    /// Seconds the program has for each reply.
+    pub timeout_s: f64,
+    /// Where the words and files are relative to (not part of the identity).
+    #[serde(skip)]
+    pub dir: PathBuf,
+}
+
+/// A program's files: each name as written and its bytes.
+pub type ProgramFiles = Vec<(String, Vec<u8>)>;
+
+/// Most files a program may have, and bytes in all (they travel with every remote job).
+pub const MAX_PROGRAM_FILES: usize = 64;
+pub const MAX_PROGRAM_BYTES: u64 = 8 << 20;
+
+impl StrategyProgram {
+    /// The program run by `command` (with further `files`), whose words that name files
+    /// relative to `dir` are hashed into its identity with `files`. The command is not run.
+    pub fn new(
+        command: Vec<String>,
+        files: Vec<String>,
+        dir: &Path,
+        timeout_s: f64,
+    ) -> Result<Self, String> {
+        if command.is_empty() || command[0].trim().is_empty() {
+            return Err("the strategy command is empty (expected a program and its arguments, e.g. \"python3 my_strategy.py\")".into());
+        }
+        if !(timeout_s.is_finite() && (0.01..=3600.0).contains(&timeout_s)) {
+            return Err(format!(
+                "the strategy timeout {timeout_s} s is outside [0.01, 3600] s"
+            ));
+        }
+        for f in &files {
+            if !dir.join(f).is_file() {
+                return Err(format!(
+                    "file '{f}' is not a file (files are relative to {})",
+                    shown_dir(dir)
+                ));
+            }
+            relative_parts(f)?;
+        }
+        let mut p = Self {
+            command,
+            files,
+            files_sha256: String::new(),
+            timeout_s,
+            dir: dir.to_path_buf(),
+        };
+        p.files_sha256 = p.hash_files()?;
+        Ok(p)
+    }
+
+    /// The program from a command line split as a shell splits words.
+    pub fn from_command_line(line: &str, dir: &Path, timeout_s: f64) -> Result<Self, String> {
+        let words = shlex::split(line).ok_or_else(|| {
+            format!("cannot split the strategy command '{line}' into words (an unclosed quote?)")
+        })?;
+        Self::new(words, Vec::new(), dir, timeout_s)
+    }
+
+    /// The program's files, as written: the words of the command that name files (relative to
+    /// `dir`), then `files`, each once.
+    pub fn file_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = Vec::new();
+        let words = self.command.iter().filter(|w| self.dir.join(w).is_file());
+        for n in words.chain(&self.files) {
+            if !names.contains(n) {
+                names.push(n.clone());
+            }
+        }
+        names
+    }
+
+    /// The files' contents, by name ([`StrategyProgram::file_names`]), size-checked.
+    pub fn read_files(&self) -> Result<ProgramFiles, String> {
+        let names = self.file_names();
+        if names.len() > MAX_PROGRAM_FILES {
+            return Err(format!(
+                "the program has {} files, more than {MAX_PROGRAM_FILES}",
+                names.len()
+            ));
+        }
+        let mut total = 0u64;
+        names
+            .into_iter()
+            .map(|n| {
+                let path = self.dir.join(&n);
+                total += std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+                if total > MAX_PROGRAM_BYTES {
+                    return Err(format!(
+                        "the program's files reach {} with more than the {} MiB a program may have",
+                        path.display(),
+                        MAX_PROGRAM_BYTES >> 20
+                    ));
+                }
+                let bytes = std::fs::read(&path)
+                    .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+                Ok((n, bytes))
+            })
+            .collect()
+    }
+
+    fn hash_files(&self) -> Result<String, String> {
+        Ok(files_sha256(&self.read_files()?))
+    }
+
+    /// Checks that the files are still the ones the identity was made of.
+    pub fn check_files(&self) -> Result<(), String> {
+        let now = self.hash_files()?;
+        if now != self.files_sha256 {
+            return Err(format!(
+                "the program's files changed since the grid was planned (sha256 {}, expected {})",
+                &now[..now.len().min(12)],
+                &self.files_sha256[..self.files_sha256.len().min(12)]
+            ));
+        }
+        Ok(())
+    }
+
+    /// The program with its files written under `root` (as a remote worker receives them),
+    /// their relative layout kept; checked against `files_sha256`.
+    pub fn materialize(
+        command: Vec<String>,
+        files: Vec<String>,
+        contents: &[(String, Vec<u8>)],
+        sha256: &str,
+        timeout_s: f64,
+        root: &Path,
+    ) -> Result<Self, String> {
+        if files_sha256(contents) != sha256 {
+            return Err("the program's files arrived damaged (their hash differs)".into());
+        }
+        // A name may climb out of its directory ("../python/x.py"): the files go that many
+        // levels below `root`, so that every name stays inside it.
+        let mut depth = 0;
+        for (name, _) in contents {
+            depth = depth.max(relative_parts(name)?.0);
+        }
+        let mut dir = root.to_path_buf();
+        for i in 0..depth {
+            dir.push(format!("d{i}"));
+        }
+        for (name, bytes) in contents {
+            let (up, parts) = relative_parts(name)?;
+            let mut path = dir.clone();
+            for _ in 0..up {
+                path.pop();
+            }
+            path.extend(parts);
+            if let Some(parent) = path.parent() {
+                std::fs::create_dir_all(parent)
+                    .map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
+            }
+            std::fs::write(&path, bytes)
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        }
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        let p = Self {
+            command,
+            files,
+            files_sha256: sha256.to_string(),
+            timeout_s,
+            dir,
+        };
+        p.check_files()?;
+        Ok(p)
+    }
+
+    /// The command with its words that name files made paths from here.
+    fn resolved_command(&self) -> Vec<String> {
+        self.command
+            .iter()
+            .map(|w| {
+                let p = self.dir.join(w);
+                if p.is_file() {
+                    p.to_string_lossy().into_owned()
+                } else {
+                    w.clone()
+                }
+            })
+            .collect()
+    }
+
+    /// The command as one line, for messages.
+    pub fn display(&self) -> String {
+        shlex::try_join(self.command.iter().map(String::as_str))
+            .unwrap_or_else(|_| self.command.join(" "))
+    }
+}
+
+fn shown_dir(dir: &Path) -> String {
+    if dir.as_os_str().is_empty() || dir == Path::new(".") {
+        "the current directory".into()
+    } else {
+        dir.display().to_string()
+    }
+}
+
+/// A relative file name as the levels it climbs ("..") and the parts below: refused when
+/// absolute or climbing after descending.
+fn relative_parts(name: &str) -> Result<(usize, Vec<String>), String> {
+    use std::path::Component;
+    let (mut up, mut parts) = (0usize, Vec::new());
+    for c in Path::new(name).components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir if parts.is_empty() => up += 1,
+            Component::ParentDir => {
+                parts.pop();
+            }
+            Component::Normal(p) => parts.push(p.to_string_lossy().into_owned()),
+            Component::RootDir | Component::Prefix(_) => {
+                return Err(format!(
+                    "file '{name}' is an absolute path (give it relative to the grid file, so that remote workers can receive it)"
+                ))
+            }
+        }
+    }
+    if parts.is_empty() {
+        return Err(format!("file '{name}' names no file"));
+    }
+    Ok((up, parts))
+}
+
+/// The identity of a program's files: SHA-256 over their names and contents.
+fn files_sha256(files: &[(String, Vec<u8>)]) -> String {
+    if files.is_empty() {
+        return String::new();
+    }
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    for (name, bytes) in files {
+        h.update(name.as_bytes());
+        h.update([0]);
+        h.update((bytes.len() as u64).to_le_bytes());
+        h.update(bytes);
+    }
+    format!("{:x}", h.finalize())
+}
+
+/// floorcast's Python module for strategies (`python/floorcast_strategy.py`, built into the
+/// binary): every strategy program finds it on its `PYTHONPATH`, so `import
+/// floorcast_strategy` works wherever the program lives, remote workers included, and always
+/// speaks this floorcast's protocol.
+pub const PYTHON_MODULE: &str = include_str!("../../python/floorcast_strategy.py");
+
+/// The directory holding [`PYTHON_MODULE`] (written once per version into the temporary
+/// directory), or `None` if it cannot be written.
+fn python_dir() -> Option<PathBuf> {
+    static DIR: OnceLock<Option<PathBuf>> = OnceLock::new();
+    DIR.get_or_init(|| {
+        use sha2::{Digest, Sha256};
+        let hash = format!("{:x}", Sha256::digest(PYTHON_MODULE.as_bytes()));
+        let dir = std::env::temp_dir().join(format!("floorcast-python-{}", &hash[..12]));
+        let file = dir.join("floorcast_strategy.py");
+        if std::fs::read_to_string(&file).ok().as_deref() != Some(PYTHON_MODULE) {
+            std::fs::create_dir_all(&dir).ok()?;
+            let tmp = dir.join(format!(".tmp-{}", std::process::id()));
+            std::fs::write(&tmp, PYTHON_MODULE).ok()?;
+            std::fs::rename(&tmp, &file).ok()?;
+        }
+        Some(dir)
+    })
+    .clone()
+}
+
+/// What the program said of itself.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Hello {
+    pub name: String,
+    pub needs_layout_gain: bool,
+    pub needs_map: bool,
+}
+
+/// A program that broke the protocol (or could not be run), and what it did.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("strategy '{command}': {what}")]
+pub struct StrategyError {
+    pub command: String,
+    pub what: String,
+}
+
+/// What a finished program leaves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StrategyStats {
+    /// Wall seconds from sending each decision to reading its reply, summed.
+    pub compute_s: f64,
+    /// Decision messages answered.
+    pub replies: u64,
+    /// What it wrote to stderr (at most 1 MiB).
+    pub stderr: String,
+}
+
+enum Line {
+    Text(String),
+    TooLong,
+    Eof,
+    Failed(String),
+}
+
+/// A running external strategy.
+pub struct ExternalStrategy {
+    program: StrategyProgram,
+    command: String,
+    child: Child,
+    /// Lines to write to the program's stdin, written by a thread of their own: a program that
+    /// stops reading blocks that thread, never the run (its reply then times out).
+    stdin: Option<mpsc::Sender<String>>,
+    stderr_reader: Option<std::thread::JoinHandle<()>>,
+    lines: Receiver<Line>,
+    stderr: Arc<Mutex<Stderr>>,
+    timeout: Duration,
+    hello: Hello,
+    /// The first protocol error; every later call fails at once.
+    error: Option<String>,
+    /// The map's cells as last sent (for `map_changes`).
+    sent_map: Vec<Occupancy>,
+    charge: bool,
+    compute_s: f64,
+    replies: u64,
+}
+
+impl std::fmt::Debug for ExternalStrategy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ExternalStrategy")
+            .field("command", &self.command)
+            .field("hello", &self.hello)
+            .field("error", &self.error)
+            .finish()
+    }
+}
+
+#[derive(Default)]
+struct Stderr {
+    text: String,
+    last_line: String,
+}
+
+impl ExternalStrategy {
+    /// Starts the program and shakes hands.
+    pub fn start(program: &StrategyProgram) -> Result<Self, StrategyError> {
+        let command = program.display();
+        let fail = |what: String| StrategyError {
+            command: command.clone(),
+            what,
+        };
+        let command_words = program.resolved_command();
+        let mut cmd = Command::new(&command_words[0]);
+        cmd.args(&command_words[1..]);
+        // No __pycache__ beside the programs (or in a repository's python/).
+        cmd.env("PYTHONDONTWRITEBYTECODE", "1");
+        // floorcast's Python module, importable by every strategy program.
+        if let Some(dir) = python_dir() {
+            let mut paths = vec![dir];
+            if let Some(old) = std::env::var_os("PYTHONPATH") {
+                paths.extend(std::env::split_paths(&old));
+            }
+            if let Ok(joined) = std::env::join_paths(paths) {
+                cmd.env("PYTHONPATH", joined);
+            }
+        }
+        let mut child = cmd
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| {
+                fail(match e.kind() {
+                    std::io::ErrorKind::NotFound => format!(
+                        "cannot start '{}': no such program (is it installed and on PATH?)",
+                        program.command[0]
+                    ),
+                    _ => format!("cannot start '{}': {e}", program.command[0]),
+                })
+            })?;
+        let stdin = child.stdin.take().map(|pipe| {
+            let (tx, rx) = mpsc::channel::<String>();
+            std::thread::spawn(move || write_lines(pipe, rx));
+            tx
+        });
+        let stdout = child.stdout.take().expect("stdout is piped");
+        let stderr_pipe = child.stderr.take().expect("stderr is piped");
+        let (tx, lines) = mpsc::channel();
+        std::thread::spawn(move || read_lines(stdout, tx));
+        let stderr = Arc::new(Mutex::new(Stderr::default()));
+        let sink = Arc::clone(&stderr);
+        let stderr_reader = Some(std::thread::spawn(move || read_stderr(stderr_pipe, sink)));
+        let mut s = Self {
+            program: program.clone(),
+            command: command.clone(),
+            child,
+            stdin,
+            stderr_reader,
+            lines,
+            stderr,
+            timeout: Duration::from_secs_f64(program.timeout_s),
+            hello: Hello {
+                name: String::new(),
+                needs_layout_gain: false,
+                needs_map: false,
+            },
+            error: None,
+            sent_map: Vec::new(),
+            charge: false,
+            compute_s: 0.0,
+            replies: 0,
+        };
+        let reply = s
+            .exchange(
+                &json!({"type": "hello", "protocol": PROTOCOL_VERSION, "floorcast": crate::FLOORCAST_VERSION}),
+                "the hello message",
+            )
+            .and_then(|v| parse_hello(&v));
+        match reply {
+            Ok(hello) => {
+                s.hello = hello;
+                Ok(s)
+            }
+            Err(what) => Err(fail(what)),
+        }
+    }
+
+    /// What the program said of itself.
+    pub fn hello(&self) -> &Hello {
+        &self.hello
+    }
+
+    /// The program.
+    pub fn program(&self) -> &StrategyProgram {
+        &self.program
+    }
+
+    /// Announces a run (`run` is the message's content besides its type) and waits for the
+    /// program to be ready. With `charge`, each reply's wall time is charged to simulated time.
+    pub fn begin(&mut self, mut run: Value, charge: bool) -> Result<(), StrategyError> {
+        self.charge = charge;
+        run["type"] = json!("run");
+        let r = self.exchange(&run, "the run message").and_then(|v| {
+            match v.get("type").and_then(Value::as_str) {
+                Some("ready") => Ok(()),
+                _ => Err(format!(
+                    "answered the run message with {} (expected {{\"type\":\"ready\"}})",
+                    quote_json(&v)
+                )),
+            }
+        });
+        r.map_err(|what| self.error(what))
+    }
+
+    /// Ends the program (it is killed if it does not exit within a second) and returns what it
+    /// left, or the first protocol error it made.
+    pub fn finish(mut self) -> Result<StrategyStats, StrategyError> {
+        self.stdin = None;
+        let deadline = Instant::now() + Duration::from_secs(1);
+        while Instant::now() < deadline {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        self.join_stderr();
+        if let Some(what) = self.error.take() {
+            return Err(self.error(what));
+        }
+        Ok(StrategyStats {
+            compute_s: self.compute_s,
+            replies: self.replies,
+            stderr: self.stderr_text(),
+        })
+    }
+
+    /// What the program wrote to stderr so far.
+    pub fn stderr_text(&self) -> String {
+        self.stderr
+            .lock()
+            .map(|s| s.text.clone())
+            .unwrap_or_default()
+    }
+
+    fn error(&self, what: String) -> StrategyError {
+        StrategyError {
+            command: self.command.clone(),
+            what,
+        }
+    }
+
+    /// Sends `msg` and waits for one reply line, parsed as JSON. `what` names the message in
+    /// errors ("decision 4").
+    fn exchange(&mut self, msg: &Value, what: &str) -> Result<Value, String> {
+        self.send(msg)
+            .map_err(|_| self.ended(&format!("before answering {what}")))?;
+        let line = match self.lines.recv_timeout(self.timeout) {
+            Ok(Line::Text(t)) => t,
+            Ok(Line::TooLong) => {
+                return Err(format!(
+                    "answered {what} with a line longer than {} MiB",
+                    MAX_LINE >> 20
+                ))
+            }
+            Ok(Line::Eof) | Err(RecvTimeoutError::Disconnected) => {
+                return Err(self.ended(&format!("before answering {what}")))
+            }
+            Ok(Line::Failed(e)) => return Err(format!("cannot read its answer to {what}: {e}")),
+            Err(RecvTimeoutError::Timeout) => {
+                return Err(format!(
+                    "did not answer {what} within {} s (the timeout; raise it with --strategy-timeout-s)",
+                    self.program.timeout_s
+                ))
+            }
+        };
+        serde_json::from_str::<Value>(&line)
+            .ok()
+            .filter(Value::is_object)
+            .ok_or_else(|| {
+                format!(
+                    "answered {what} with a line that is not a protocol message: '{}' (a strategy writes only protocol lines to stdout; logs go to stderr)",
+                    clip(&line, 80)
+                )
+            })
+    }
+
+    fn send(&mut self, msg: &Value) -> Result<(), ()> {
+        let stdin = self.stdin.as_ref().ok_or(())?;
+        let mut line = serde_json::to_string(msg).map_err(|_| ())?;
+        line.push('\n');
+        stdin.send(line).map_err(|_| ())
+    }
+
+    /// Waits (at most a second) for the stderr reader to take in what the program wrote before
+    /// it ended.
+    fn join_stderr(&mut self) {
+        if let Some(h) = self.stderr_reader.take() {
+            let deadline = Instant::now() + Duration::from_secs(1);
+            while !h.is_finished() && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            if h.is_finished() {
+                let _ = h.join();
+            }
+        }
+    }
+
+    /// How the program ended, for a message: its exit status and last stderr line.
+    fn ended(&mut self, when: &str) -> String {
+        let deadline = Instant::now() + Duration::from_secs(1);
+        let status = loop {
+            match self.child.try_wait() {
+                Ok(Some(s)) => break Some(s),
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(5))
+                }
+                _ => break None,
+            }
+        };
+        if status.is_some() {
+            self.join_stderr();
+        }
+        let last = self
+            .stderr
+            .lock()
+            .map(|s| s.last_line.clone())
+            .unwrap_or_default();
+        let how = match status {
+            Some(s) => match s.code() {
+                Some(c) => format!("exited with status {c}"),
+                None => format!("was ended by a signal ({s})"),
+            },
+            None => "closed its stdout".to_string(),
+        };
+        if last.is_empty() {
+            format!("{how} {when}")
+        } else {
+            format!("{how} {when}; its last stderr line: '{}'", clip(&last, 200))
+        }
+    }
+
+    fn decide_message(&mut self, view: &DecisionView<'_>) -> Value {
+        let candidates: Vec<Value> = view
+            .candidates
+            .iter()
+            .map(|c| {
+                let mut v = json!({
+                    "id": c.id,
+                    "cell": [c.cell.x, c.cell.y],
+                    "point": [c.point.x, c.point.y],
+                    "goal": [c.goal.x, c.goal.y],
+                    "frontier_cells": c.frontier_cells,
+                    "distance_m": c.distance_m,
+                    "path_m": c.path_m,
+                    "straight_m": c.straight_m,
+                    "gain_m2": c.gain_m2,
+                });
+                if self.hello.needs_layout_gain {
+                    v["layout_gain_m2"] = json!(c.layout_gain_m2);
+                }
+                v
+            })
+            .collect();
+        let mut msg = json!({
+            "type": "decide",
+            "decision": view.decision,
+            "attempt": view.attempt,
+            "time_s": view.time_s,
+            "pose": [view.pose.x_m, view.pose.y_m, view.pose.theta_rad],
+            "candidates": candidates,
+        });
+        if self.hello.needs_map {
+            let data = &view.map.data;
+            if self.sent_map.len() != data.len() {
+                self.sent_map = vec![Occupancy::Unknown; data.len()];
+            }
+            let (mut free, mut occupied, mut unknown) = (Vec::new(), Vec::new(), Vec::new());
+            for (i, (now, sent)) in data.iter().zip(self.sent_map.iter_mut()).enumerate() {
+                if now != sent {
+                    match now {
+                        Occupancy::Free => free.push(i),
+                        Occupancy::Occupied => occupied.push(i),
+                        Occupancy::Unknown => unknown.push(i),
+                    }
+                    *sent = *now;
+                }
+            }
+            msg["map_changes"] = json!({"free": free, "occupied": occupied, "unknown": unknown});
+        }
+        msg
+    }
+}
+
+impl Drop for ExternalStrategy {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Policy for ExternalStrategy {
+    fn needs(&self) -> Needs {
+        Needs {
+            layout_gain: self.hello.needs_layout_gain,
+        }
+    }
+
+    fn decide(&mut self, view: &DecisionView<'_>) -> (Reply, f64) {
+        if self.error.is_some() {
+            return (Reply::Fail, 0.0);
+        }
+        let msg = self.decide_message(view);
+        let what = if view.attempt == 0 {
+            format!("decision {}", view.decision)
+        } else {
+            format!("decision {} (attempt {})", view.decision, view.attempt)
+        };
+        let t0 = Instant::now();
+        let reply = self.exchange(&msg, &what);
+        let took_s = t0.elapsed().as_secs_f64();
+        self.compute_s += took_s;
+        self.replies += 1;
+        match reply.and_then(|v| parse_reply(&v, view, &what)) {
+            Ok(r) => (r, if self.charge { took_s } else { 0.0 }),
+            Err(e) => {
+                self.error = Some(e);
+                (Reply::Fail, 0.0)
+            }
+        }
+    }
+
+    fn end(&mut self, end: &RunEnd) {
+        if self.error.is_some() {
+            return;
+        }
+        // No reply is awaited; a program that has already gone is no error.
+        let _ = self.send(&json!({
+            "type": "end",
+            "reason": end.reason.as_str(),
+            "exploration_time_s": end.exploration_time_s,
+            "explored_fraction": end.explored_fraction,
+            "decisions": end.decisions,
+        }));
+    }
+}
+
+/// The run message's content (besides its type) for a run.
+pub fn run_message(
+    building_name: &str,
+    building_hash: &str,
+    seed: u64,
+    start: sim_core::Pose,
+    settings: &crate::Settings,
+    frame: &GridFrame,
+) -> Value {
+    json!({
+        "building": building_name,
+        "building_hash": building_hash,
+        "seed": seed,
+        "start": [start.x_m, start.y_m, start.theta_rad],
+        "settings": every_setting(settings),
+        "map": {
+            "resolution_m": frame.resolution_m,
+            "width": frame.width,
+            "height": frame.height,
+            "origin": [frame.origin_m.x, frame.origin_m.y],
+        },
+    })
+}
+
+/// The settings with every key, those a summary leaves out at their defaults too.
+fn every_setting(settings: &crate::Settings) -> Value {
+    let mut v = json!(settings);
+    if let Value::Object(map) = &mut v {
+        let full = [
+            ("utility_distance", json!(settings.utility_distance)),
+            ("frontier_clearance_m", json!(settings.frontier_clearance_m)),
+            (
+                "candidate_from_reachable_part",
+                json!(settings.candidate_from_reachable_part),
+            ),
+            ("paper_frontiers", json!(settings.paper_frontiers)),
+            ("paper_layout_gain", json!(settings.paper_layout_gain)),
+        ];
+        for (k, value) in full {
+            map.entry(k).or_insert(value);
+        }
+    }
+    v
+}
+
+fn parse_hello(v: &Value) -> Result<Hello, String> {
+    let what = || format!("answered the hello message with {}", quote_json(v));
+    if v.get("type").and_then(Value::as_str) != Some("hello") {
+        return Err(format!("{} (expected a hello message)", what()));
+    }
+    match v.get("protocol").and_then(Value::as_u64) {
+        Some(PROTOCOL_VERSION) => {}
+        Some(p) => {
+            return Err(format!(
+                "speaks protocol version {p}; this floorcast speaks version {PROTOCOL_VERSION} (docs/strategy-protocol.md)"
+            ))
+        }
+        None => {
+            return Err(format!(
+                "{} (expected \"protocol\": {PROTOCOL_VERSION})",
+                what()
+            ))
+        }
+    }
+    let name = v.get("name").and_then(Value::as_str).unwrap_or("");
+    if name.trim().is_empty() || name.chars().count() > 100 || name.chars().any(char::is_control) {
+        return Err(format!(
+            "{} (expected \"name\": a non-empty string of at most 100 characters, no control characters)",
+            what()
+        ));
+    }
+    let mut hello = Hello {
+        name: name.to_string(),
+        needs_layout_gain: false,
+        needs_map: false,
+    };
+    match v.get("needs") {
+        None | Some(Value::Null) => {}
+        Some(Value::Array(needs)) => {
+            for n in needs {
+                match n.as_str() {
+                    Some("layout_gain") => hello.needs_layout_gain = true,
+                    Some("map") => hello.needs_map = true,
+                    _ => {
+                        return Err(format!(
+                            "needs {} (floorcast offers \"layout_gain\" and \"map\")",
+                            quote_json(n)
+                        ))
+                    }
+                }
+            }
+        }
+        Some(other) => {
+            return Err(format!(
+                "gave \"needs\": {} (expected a list such as [\"layout_gain\", \"map\"])",
+                quote_json(other)
+            ))
+        }
+    }
+    Ok(hello)
+}
+
+fn parse_reply(v: &Value, view: &DecisionView<'_>, what: &str) -> Result<Reply, String> {
+    let offered = |id: u64| view.candidates.iter().any(|c| c.id as u64 == id);
+    let ids = || {
+        let ids: Vec<String> = view.candidates.iter().map(|c| c.id.to_string()).collect();
+        clip(&ids.join(", "), 80)
+    };
+    match v.get("type").and_then(Value::as_str) {
+        Some("choose") => match v.get("id").and_then(Value::as_u64) {
+            Some(id) if offered(id) => Ok(Reply::Choose(id as usize)),
+            Some(id) => Err(format!(
+                "chose candidate {id}, which {what} did not offer (it offered {})",
+                ids()
+            )),
+            None => Err(format!(
+                "answered {what} with {} (expected \"id\": one of the candidates' ids)",
+                quote_json(v)
+            )),
+        },
+        Some("rank") => {
+            let list = v.get("ids").and_then(Value::as_array);
+            let parsed: Option<Vec<u64>> = list.and_then(|l| l.iter().map(Value::as_u64).collect());
+            let Some(parsed) = parsed.filter(|p| !p.is_empty()) else {
+                return Err(format!(
+                    "answered {what} with {} (expected \"ids\": a non-empty list of candidate ids)",
+                    quote_json(v)
+                ));
+            };
+            let mut seen = std::collections::BTreeSet::new();
+            for &id in &parsed {
+                if !offered(id) {
+                    return Err(format!(
+                        "ranked candidate {id}, which {what} did not offer (it offered {})",
+                        ids()
+                    ));
+                }
+                if !seen.insert(id) {
+                    return Err(format!("ranked candidate {id} twice in {what}"));
+                }
+            }
+            Ok(Reply::Rank(
+                parsed.into_iter().map(|i| i as usize).collect(),
+            ))
+        }
+        Some("stop") => Ok(Reply::Stop),
+        _ => Err(format!(
+            "answered {what} with {} (expected a choose, rank or stop message)",
+            quote_json(v)
+        )),
+    }
+}
+
+fn quote_json(v: &Value) -> String {
+    clip(&v.to_string(), 80)
+}
+
+/// At most `n` characters of `s`, with "..." when cut.
+fn clip(s: &str, n: usize) -> String {
+    if s.chars().count() <= n {
+        s.to_string()
+    } else {
+        format!("{}...", s.chars().take(n).collect::<String>())
+    }
+}
+
+fn write_lines(mut pipe: ChildStdin, lines: mpsc::Receiver<String>) {
+    for line in lines {
+        if pipe.write_all(line.as_bytes()).is_err() || pipe.flush().is_err() {
+            return;
+        }
+    }
+}
+
+fn read_lines(stdout: impl Read, tx: mpsc::Sender<Line>) {
+    let mut r = BufReader::new(stdout);
+    loop {
+        let mut buf = Vec::new();
+        let line = match (&mut r)
+            .take(MAX_LINE as u64 + 1)
+            .read_until(b'\n', &mut buf)
+        {
+            Ok(0) => Line::Eof,
+            Ok(_) if buf.last() != Some(&b'\n') && buf.len() > MAX_LINE => Line::TooLong,
+            Ok(_) => {
+                let text = String::from_utf8_lossy(&buf);
+                Line::Text(text.trim_end_matches(['\n', '\r']).to_string())
+            }
+            Err(e) => Line::Failed(e.to_string()),
+        };
+        let done = !matches!(line, Line::Text(_));
+        if tx.send(line).is_err() || done {
+            return;
+        }
+    }
+}
+
+fn read_stderr(mut stderr: impl Read, sink: Arc<Mutex<Stderr>>) {
+    let mut chunk = [0u8; 8192];
+    let mut current = Vec::new();
+    let last = |current: &[u8], s: &mut Stderr| {
+        let line = String::from_utf8_lossy(current).trim().to_string();
+        if !line.is_empty() {
+            s.last_line = line;
+        }
+    };
+    loop {
+        let n = match stderr.read(&mut chunk) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => n,
+        };
+        let Ok(mut s) = sink.lock() else { return };
+        let text = String::from_utf8_lossy(&chunk[..n]);
+        if s.text.len() + text.len() <= MAX_STDERR {
+            s.text.push_str(&text);
+        }
+        for &b in &chunk[..n] {
+            if b == b'\n' {
+                last(&current, &mut s);
+                current.clear();
+            } else if current.len() < 4096 {
+                current.push(b);
+            }
+        }
+    }
+    if let Ok(mut s) = sink.lock() {
+        last(&current, &mut s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_run_message_carries_every_setting() {
+        let v = every_setting(&crate::Settings::default());
+        for s in crate::settings::SETTINGS {
+            assert!(v.get(s.name).is_some(), "{} missing", s.name);
+        }
+    }
+
+    #[test]
+    fn relative_names_keep_their_layout_inside_the_root() {
+        // (name, levels up, parts) or the error's words.
+        type Want = Result<(usize, &'static [&'static str]), &'static str>;
+        let cases: [(&str, Want); 6] = [
+            ("a.py", Ok((0, &["a.py"]))),
+            ("./lib/b.py", Ok((0, &["lib", "b.py"]))),
+            ("../../python/m.py", Ok((2, &["python", "m.py"]))),
+            ("lib/../c.py", Ok((0, &["c.py"]))),
+            ("/etc/passwd", Err("absolute path")),
+            ("..", Err("names no file")),
+        ];
+        for (name, want) in cases {
+            match (relative_parts(name), want) {
+                (Ok((up, parts)), Ok((u, p))) => {
+                    assert_eq!(up, u, "{name}");
+                    assert_eq!(parts, p, "{name}");
+                }
+                (Err(e), Err(needle)) => assert!(e.contains(needle), "{name}: {e}"),
+                (got, want) => panic!("{name}: got {got:?}, want {want:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_materialized_program_is_checked_by_hash() {
+        let root = std::env::temp_dir().join(format!("fc-mat-{}", std::process::id()));
+        let files = vec![
+            ("../s/a.py".to_string(), b"print(1)\n".to_vec()),
+            ("../python/m.py".to_string(), b"x = 2\n".to_vec()),
+        ];
+        let sha = files_sha256(&files);
+        let command = vec!["python3".to_string(), "../s/a.py".to_string()];
+        let p = StrategyProgram::materialize(
+            command.clone(),
+            vec!["../python/m.py".into()],
+            &files,
+            &sha,
+            1.0,
+            &root,
+        )
+        .unwrap();
+        assert!(p.dir.starts_with(&root));
+        assert_eq!(
+            std::fs::read(p.dir.join("../python/m.py")).unwrap(),
+            b"x = 2\n"
+        );
+        assert_eq!(p.file_names(), vec!["../s/a.py", "../python/m.py"]);
+        let damaged = StrategyProgram::materialize(command, vec![], &files, "00", 1.0, &root);
+        assert!(damaged.unwrap_err().contains("damaged"));
+        let _ = std::fs::remove_dir_all(&root);
+    }
+}
