@@ -6,6 +6,7 @@ mod cmd_building;
 mod cmd_explore;
 mod cmd_layout;
 mod cmd_run;
+mod cmd_strategy;
 mod cmd_worker;
 
 use std::process::ExitCode;
@@ -46,6 +47,9 @@ enum Command {
     Worker(cmd_worker::WorkerArgs),
     /// Print the table of a results directory and export it as CSV.
     Report(cmd_run::ReportArgs),
+    /// Tools for your own strategies (the strategy protocol): check a program's compliance.
+    #[command(subcommand)]
+    Strategy(cmd_strategy::StrategyCommand),
     /// Print the reference of every run setting (type, unit, default, range, meaning).
     Settings(SettingsArgs),
 }
@@ -67,6 +71,7 @@ fn main() -> ExitCode {
         Command::Run(a) => cmd_run::run(a),
         Command::Worker(a) => cmd_worker::run(a),
         Command::Report(a) => cmd_run::report(a),
+        Command::Strategy(c) => cmd_strategy::run(c),
         Command::Settings(a) => {
             if a.markdown {
                 say_raw!(

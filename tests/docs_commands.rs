@@ -10,7 +10,7 @@
 //! already does. Lines of other programs (`python3`, `zenohd`) are not run either.
 //!
 //! Each document's commands run in order, with `bash -c`, in a fresh temporary directory that
-//! mirrors the repository: copies of `buildings/`, `grids/` and `results/` (so commands that
+//! mirrors the repository: copies of `buildings/`, `grids/`, `results/` and `examples/` (so commands that
 //! write there leave the repository clean), `target/release/floorcast` and `bin/floorcast`
 //! (on `PATH`) linking to the built binary, and a `shared` sibling linking to the real
 //! `../shared`, so that relative paths in the commands mean what they mean in a checkout.
@@ -291,7 +291,7 @@ fn copy_dir(from: &Path, to: &Path) {
 fn mirror() -> (tempfile::TempDir, PathBuf) {
     let tmp = tempfile::tempdir().unwrap();
     let root = tmp.path().join("floorcast");
-    for dir in ["buildings", "grids", "results"] {
+    for dir in ["buildings", "grids", "results", "examples"] {
         copy_dir(&repo().join(dir), &root.join(dir));
     }
     let bin = Path::new(env!("CARGO_BIN_EXE_floorcast"));

@@ -242,3 +242,68 @@ fn a_strategy_command_with_a_built_in_strategy_is_refused() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("cannot be used with"), "{}", stderr(&o));
 }
+
+/// `floorcast strategy check`: every check passes for a compliant program; a broken one fails
+/// at the check it breaks, exit 2.
+#[test]
+fn the_compliance_check_names_the_rule_a_program_breaks() {
+    // (program, last line printed on stdout, exit code)
+    let cases = [
+        (
+            "examples/strategies/baseline.py",
+            "keeps to the strategy protocol version 1",
+            0,
+        ),
+        (
+            "examples/strategies/nearest.py",
+            "keeps to the strategy protocol version 1",
+            0,
+        ),
+        (
+            "tests/strategies/needs_everything.py",
+            "keeps to the strategy protocol version 1",
+            0,
+        ),
+        (
+            "tests/strategies/crash_at_hello.py",
+            "FAIL  hello: exited with status 3",
+            2,
+        ),
+        (
+            "tests/strategies/wrong_protocol.py",
+            "FAIL  hello: speaks protocol version 99",
+            2,
+        ),
+        (
+            "tests/strategies/illegal_id.py",
+            "FAIL  decide: chose candidate 99999",
+            2,
+        ),
+        (
+            "tests/strategies/chatty.py",
+            "FAIL  decide: answered decision 0 with a line that is not a protocol message",
+            2,
+        ),
+        (
+            "tests/strategies/crash_mid_run.py",
+            "FAIL  decide with one candidate (id 7): exited with status 1",
+            2,
+        ),
+    ];
+    for (script, last, code) in cases {
+        let o = run(&[
+            "strategy",
+            "check",
+            &python_command(script),
+            "--strategy-timeout-s",
+            "2",
+        ]);
+        let out = stdout(&o);
+        assert_eq!(o.status.code(), Some(code), "{script}: {out}{}", stderr(&o));
+        assert!(
+            out.trim().lines().last().unwrap_or("").contains(last),
+            "{script}: {out}"
+        );
+        assert!(!stderr(&o).contains("panicked"), "{script}");
+    }
+}

@@ -336,6 +336,8 @@ pub struct StrategyStats {
     pub replies: u64,
     /// What it wrote to stderr (at most 1 MiB).
     pub stderr: String,
+    /// Whether it exited by itself within a second of its stdin closing (else it was killed).
+    pub exited: bool,
 }
 
 enum Line {
@@ -499,8 +501,10 @@ impl ExternalStrategy {
     pub fn finish(mut self) -> Result<StrategyStats, StrategyError> {
         self.stdin = None;
         let deadline = Instant::now() + Duration::from_secs(1);
+        let mut exited = false;
         while Instant::now() < deadline {
             if let Ok(Some(_)) = self.child.try_wait() {
+                exited = true;
                 break;
             }
             std::thread::sleep(Duration::from_millis(5));
@@ -515,6 +519,7 @@ impl ExternalStrategy {
             compute_s: self.compute_s,
             replies: self.replies,
             stderr: self.stderr_text(),
+            exited,
         })
     }
 
@@ -552,7 +557,7 @@ impl ExternalStrategy {
             Ok(Line::Failed(e)) => return Err(format!("cannot read its answer to {what}: {e}")),
             Err(RecvTimeoutError::Timeout) => {
                 return Err(format!(
-                    "did not answer {what} within {} s (the timeout; raise it with --strategy-timeout-s)",
+                    "did not answer {what} within {} s (the timeout: raise it with --strategy-timeout-s, or timeout_s in a grid)",
                     self.program.timeout_s
                 ))
             }
@@ -726,6 +731,149 @@ impl Policy for ExternalStrategy {
             "decisions": end.decisions,
         }));
     }
+}
+
+/// One check of [`check_program`]: what was checked, and what the program did (`Err`: how it
+/// broke the protocol).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Check {
+    pub what: &'static str,
+    pub outcome: Result<String, String>,
+}
+
+/// Runs a program through a scripted session that touches every message and rule of the
+/// protocol (the handshake, a run, a decision and a second attempt at it, a decision with one
+/// candidate whose id is not its position, the end, exiting when stdin closes) and returns
+/// every check, stopping at the first the program fails: floorcast's compliance checker.
+pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
+    use sim_core::explore::CandidateView;
+    let mut checks = Vec::new();
+    let mut push = |what, outcome: Result<String, String>| {
+        let ok = outcome.is_ok();
+        checks.push(Check { what, outcome });
+        ok
+    };
+    let mut s = match ExternalStrategy::start(program) {
+        Ok(s) => s,
+        Err(e) => {
+            push("hello", Err(e.what));
+            return checks;
+        }
+    };
+    let h = s.hello().clone();
+    let mut needs: Vec<&str> = Vec::new();
+    if h.needs_layout_gain {
+        needs.push("layout_gain");
+    }
+    if h.needs_map {
+        needs.push("map");
+    }
+    push(
+        "hello",
+        Ok(format!("name '{}', needs [{}]", h.name, needs.join(", "))),
+    );
+    // A room of 4 x 2 m seen from its middle, unknown beyond its open ends.
+    let map = sim_core::grid::OccupancyGrid::from_ascii(
+        "
+        ????????????????????????
+        ?######################?
+        ?.......................
+        ?.......................
+        ?......................?
+        ?......................?
+        ?######################?
+        ",
+        0.2,
+    );
+    let settings = crate::Settings::default();
+    let start = sim_core::Pose::new(2.4, 0.7, 0.0);
+    let begun = s.begin(
+        run_message("check", "0", 1, start, &settings, &map.frame),
+        false,
+    );
+    if !push("run", begun.map(|_| "ready".into()).map_err(|e| e.what)) {
+        return checks;
+    }
+    let candidate = |id: usize, x: i32, y: i32, path_m: f64, gain_m2: f64| {
+        let point = map.frame.world_from_cell(sim_core::grid::Cell::new(x, y));
+        CandidateView {
+            id,
+            cell: sim_core::grid::Cell::new(x, y),
+            point,
+            goal: point,
+            frontier_cells: 4,
+            distance_m: path_m,
+            path_m,
+            straight_m: (point - start.position()).norm(),
+            gain_m2,
+            layout_gain_m2: h.needs_layout_gain.then_some(gain_m2 * 0.5),
+        }
+    };
+    let three = [
+        candidate(0, 23, 3, 2.2, 4.0),
+        candidate(2, 23, 4, 2.3, 3.5),
+        candidate(5, 1, 3, 2.0, 1.0),
+    ];
+    let view = |decision, attempt, candidates| DecisionView {
+        decision,
+        attempt,
+        time_s: 1.0 + decision as f64,
+        pose: start,
+        candidates,
+        map: &map,
+    };
+    let shown = |r: &Reply| match r {
+        Reply::Choose(id) => format!("choose {id}"),
+        Reply::Rank(ids) => format!("rank {ids:?}"),
+        Reply::Stop => "stop".into(),
+        Reply::Fail => "failed".into(),
+    };
+    let mut ask = |s: &mut ExternalStrategy, what, v: &DecisionView<'_>| {
+        let (r, _) = s.decide(v);
+        let outcome = match (&r, &s.error) {
+            (_, Some(e)) => Err(e.clone()),
+            (r, None) => Ok(shown(r)),
+        };
+        (push(what, outcome), r)
+    };
+    let (ok, first) = ask(&mut s, "decide", &view(0, 0, &three));
+    if !ok {
+        return checks;
+    }
+    // The chosen candidate "had no path": asked again without it.
+    let rest: Vec<CandidateView> = match first {
+        Reply::Choose(id) => three.iter().filter(|c| c.id != id).copied().collect(),
+        _ => three[1..].to_vec(),
+    };
+    if !ask(&mut s, "decide again (attempt 1)", &view(0, 1, &rest)).0 {
+        return checks;
+    }
+    let one = [candidate(7, 1, 2, 2.1, 0.5)];
+    if !ask(
+        &mut s,
+        "decide with one candidate (id 7)",
+        &view(1, 0, &one),
+    )
+    .0
+    {
+        return checks;
+    }
+    s.end(&RunEnd {
+        reason: sim_core::explore::EndReason::Complete,
+        exploration_time_s: 3.0,
+        explored_fraction: 1.0,
+        decisions: 2,
+    });
+    let finished = s.finish();
+    let _ = match finished {
+        Ok(stats) if stats.exited => push("end, then exit when stdin closes", Ok("exited".into())),
+        Ok(_) => push(
+            "end, then exit when stdin closes",
+            Err("did not exit within 1 s of its stdin closing (it was killed)".into()),
+        ),
+        Err(e) => push("end, then exit when stdin closes", Err(e.what)),
+    };
+    checks
 }
 
 /// The run message's content (besides its type) for a run.

@@ -740,7 +740,7 @@ impl Explorer<'_> {
             explored_fraction: self.explored_fraction(),
             decisions: self.decisions.len(),
         };
-        if let Some(p) = self.policy.as_mut() {
+        if let Some(p) = self.policy.as_mut().filter(|_| !self.policy_failed) {
             p.end(&end);
         }
         if cfg.return_home && end_reason != EndReason::TimeLimit && !self.policy_failed {

@@ -593,3 +593,121 @@ fn a_hall_larger_than_the_laser_explores_completely_from_its_door() {
         );
     }
 }
+
+/// A policy in Rust: the paper's utility over the candidates it is shown (the built-in
+/// baseline's rule), or a fixed behaviour, with a charge per decision.
+struct TestPolicy {
+    behaviour: &'static str,
+    charge_s: f64,
+    asked: usize,
+    ended: Option<RunEnd>,
+}
+
+impl TestPolicy {
+    fn new(behaviour: &'static str, charge_s: f64) -> Self {
+        Self {
+            behaviour,
+            charge_s,
+            asked: 0,
+            ended: None,
+        }
+    }
+}
+
+impl Policy for TestPolicy {
+    fn needs(&self) -> Needs {
+        Needs::default()
+    }
+
+    fn decide(&mut self, view: &DecisionView<'_>) -> (Reply, f64) {
+        self.asked += 1;
+        let scores: Vec<CandidateScore> = view
+            .candidates
+            .iter()
+            .map(|c| CandidateScore {
+                distance_m: Some(c.distance_m),
+                gain_m2: c.gain_m2,
+            })
+            .collect();
+        let best = view.candidates[best_candidate(&scores, 0.5).unwrap()].id;
+        let reply = match self.behaviour {
+            "utility" => Reply::Choose(best),
+            "stop-at-3" if self.asked == 3 => Reply::Stop,
+            "stop-at-3" => Reply::Choose(best),
+            "fail-at-3" if self.asked == 3 => Reply::Fail,
+            "fail-at-3" => Reply::Choose(best),
+            "not-offered" => Reply::Choose(usize::MAX),
+            "rank-twice" => Reply::Rank(vec![best, best]),
+            other => panic!("{other}"),
+        };
+        (reply, self.charge_s)
+    }
+
+    fn end(&mut self, end: &RunEnd) {
+        self.ended = Some(*end);
+    }
+}
+
+fn run_with_policy(policy: &mut TestPolicy) -> RunResult {
+    let b = corridor_building(3);
+    let cfg = ExploreConfig::default();
+    let hooks = Hooks {
+        layout_cost: None,
+        policy: Some(policy),
+    };
+    explore_with(&b, b.start.unwrap(), &cfg, 1, &mut |_| {}, hooks)
+}
+
+#[test]
+fn a_policy_with_the_papers_utility_is_the_built_in_baseline() {
+    let b = corridor_building(3);
+    let built_in = explore(
+        &b,
+        b.start.unwrap(),
+        &ExploreConfig::default(),
+        1,
+        &mut |_| {},
+    );
+    let mut p = TestPolicy::new("utility", 0.0);
+    let r = run_with_policy(&mut p);
+    assert_eq!(r.fingerprint(), built_in.fingerprint());
+    assert!(p.asked >= r.decisions.len() && !r.decisions.is_empty());
+    let end = p.ended.expect("told the end");
+    assert_eq!(end.reason, r.end_reason);
+    assert_eq!(end.decisions, r.decisions.len());
+}
+
+#[test]
+fn a_policy_decides_how_the_run_goes_on() {
+    // (behaviour, decisions made, end reason)
+    let cases = [
+        ("stop-at-3", Some(2), Some(EndReason::EarlyStop)),
+        ("fail-at-3", Some(2), None),
+        ("not-offered", Some(0), None),
+        ("rank-twice", Some(0), None),
+    ];
+    for (behaviour, decisions, end) in cases {
+        let mut p = TestPolicy::new(behaviour, 0.0);
+        let r = run_with_policy(&mut p);
+        assert_eq!(Some(r.decisions.len()), decisions, "{behaviour}");
+        assert!(end.is_none_or(|e| r.end_reason == e), "{behaviour}");
+        // A failed policy is asked nothing more and told nothing.
+        let failed = end.is_none();
+        assert_eq!(p.ended.is_none(), failed, "{behaviour}");
+        assert!(
+            r.explored_fraction < 0.9,
+            "{behaviour}: {}",
+            r.explored_fraction
+        );
+    }
+}
+
+#[test]
+fn a_policys_charged_compute_delays_the_robot() {
+    let mut free = TestPolicy::new("utility", 0.0);
+    let mut charged = TestPolicy::new("utility", 2.0);
+    let (a, b) = (run_with_policy(&mut free), run_with_policy(&mut charged));
+    assert_eq!(a.strategy_compute_s, 0.0);
+    assert_eq!(b.strategy_compute_s, 2.0 * charged.asked as f64);
+    assert!(b.exploration_time_s > a.exploration_time_s);
+}

@@ -1,0 +1,117 @@
+//! `floorcast strategy`: tools for external strategies (the strategy protocol).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use floorcast_worker::external::{check_program, DEFAULT_TIMEOUT_S};
+use floorcast_worker::{run_job, Job, Settings, StrategyProgram};
+
+#[derive(Debug, Subcommand)]
+pub enum StrategyCommand {
+    /// Check that a program keeps to the strategy protocol (docs/strategy-protocol.md): a
+    /// scripted session through every message and rule, then a real exploration with it.
+    /// Prints each check; exits 2 at the first the program fails.
+    Check(CheckArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// The program, e.g. "python3 my_strategy.py" (split into words as a shell splits them).
+    #[arg(value_name = "COMMAND")]
+    command: String,
+    /// Seconds the program has for each reply, 0.01 to 3600.
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_TIMEOUT_S)]
+    strategy_timeout_s: f64,
+    /// Building of the exploration (default: a generated school of about 400 m2, seed 1).
+    #[arg(long, value_name = "FILE")]
+    building: Option<PathBuf>,
+    /// Simulated seconds the exploration may take, 1 to 100000.
+    #[arg(long, value_name = "SECONDS", default_value_t = 1800.0)]
+    time_limit_s: f64,
+}
+
+pub fn run(c: StrategyCommand) -> Result<()> {
+    match c {
+        StrategyCommand::Check(a) => check(a),
+    }
+}
+
+fn check(a: CheckArgs) -> Result<()> {
+    let program = StrategyProgram::from_command_line(
+        &a.command,
+        std::path::Path::new("."),
+        a.strategy_timeout_s,
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let shown = program.display();
+    let mut failed = None;
+    for c in check_program(&program) {
+        match &c.outcome {
+            Ok(what) => say!("ok    {}: {what}", c.what),
+            Err(what) => {
+                say!("FAIL  {}: {what}", c.what);
+                failed = Some(format!(
+                    "strategy '{shown}' fails the check '{}': {what}",
+                    c.what
+                ));
+            }
+        }
+    }
+    if let Some(f) = failed {
+        anyhow::bail!(f);
+    }
+    let (building, name) = match &a.building {
+        Some(p) => (
+            floorcast_formats::read_building(p)?,
+            p.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        ),
+        None => (
+            sim_core::generate::generate(&sim_core::generate::GenerateConfig {
+                seed: 1,
+                area_m2: 400.0,
+                name: "check".into(),
+                ..Default::default()
+            }),
+            "a generated school of 400 m2".to_string(),
+        ),
+    };
+    let job = Job {
+        building: &building,
+        building_name: name.clone(),
+        strategy: "check".into(),
+        program: Some(program),
+        seed: 1,
+        settings: Settings {
+            time_limit_s: a.time_limit_s,
+            ..Settings::default()
+        },
+        start: None,
+        snapshot_fractions: Vec::new(),
+    };
+    job.settings
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--time-limit-s: {e}"))?;
+    let out = run_job(&job, &mut |_| {}).with_context(|| {
+        say!("FAIL  explore {name}");
+        format!("strategy '{shown}' fails the check 'explore'")
+    })?;
+    let s = &out.summary;
+    let replies = s.strategy_replies.unwrap_or(0);
+    say!(
+        "ok    explore {name}: {} after {:.0} s simulated, {:.1} % explored, {} decisions, {} replies, {:.2} ms per reply",
+        s.end_reason,
+        s.exploration_time_s,
+        s.explored_fraction * 100.0,
+        s.decisions,
+        replies,
+        s.strategy_compute_s.unwrap_or(0.0) * 1000.0 / replies.max(1) as f64
+    );
+    say!(
+        "strategy '{shown}' keeps to the strategy protocol version {}",
+        floorcast_worker::external::PROTOCOL_VERSION
+    );
+    Ok(())
+}
