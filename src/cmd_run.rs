@@ -118,27 +118,31 @@ pub fn run(a: RunArgs) -> Result<()> {
         );
     }
     let store = Store::open(&plan.results_dir)?;
+    // A sequential grid's jobs so far: those of every batch whose predecessors are all stored.
+    let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
     if a.summary {
         let results = store.all()?;
         say!(
             "{} of {} jobs stored in {}",
-            stored_of_plan(&plan, &store)?,
-            plan.jobs.len(),
+            stored_of(&jobs, &store)?,
+            jobs.len(),
             store.path().display()
         );
         say_raw!("{}", render_text(&table(&results, &plan.labels)));
+        print_sequential(&plan, &progress);
         return Ok(());
     }
-    let before = stored_of_plan(&plan, &store)?;
-    if before == plan.jobs.len() {
+    let before = stored_of(&jobs, &store)?;
+    if before == jobs.len() && progress.finished {
         say!(
             "nothing to do: all {} jobs of grid '{}' are already stored in {}",
-            plan.jobs.len(),
+            jobs.len(),
             plan.name,
             store.path().display()
         );
         say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
-        return failed_jobs(&plan, &store);
+        print_sequential(&plan, &progress);
+        return failed_jobs(&jobs, &store);
     }
     let networked = !a.listen.is_empty() || !a.connect.is_empty() || a.net.zenoh_config.is_some();
     let workers = a.workers.unwrap_or_else(|| {
@@ -168,15 +172,28 @@ pub fn run(a: RunArgs) -> Result<()> {
         &a.grid.display().to_string(),
         &std::env::args().collect::<Vec<_>>().join(" "),
     ))?;
-    say!(
-        "grid '{}': {} jobs ({} buildings x seeds x {} strategies), {} already stored, {} local workers",
-        plan.name,
-        plan.jobs.len(),
-        plan.buildings.len(),
-        plan.labels.len(),
-        before,
-        workers
-    );
+    match &plan.sequential {
+        Some(q) => say!(
+            "grid '{}': sequential, {} buildings x {} strategies, seeds in batches of {} up to {} ({} jobs so far, {} already stored), {} local workers",
+            plan.name,
+            plan.buildings.len(),
+            plan.labels.len(),
+            q.batch_seeds,
+            q.max_seeds,
+            jobs.len(),
+            before,
+            workers
+        ),
+        None => say!(
+            "grid '{}': {} jobs ({} buildings x seeds x {} strategies), {} already stored, {} local workers",
+            plan.name,
+            plan.jobs.len(),
+            plan.buildings.len(),
+            plan.labels.len(),
+            before,
+            workers
+        ),
+    }
     let interrupt = Arc::new(AtomicBool::new(false));
     {
         let flag = Arc::clone(&interrupt);
@@ -229,7 +246,9 @@ pub fn run(a: RunArgs) -> Result<()> {
                 store.path().display()
             );
             say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
-            failed_jobs(&plan, &store)
+            let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
+            print_sequential(&plan, &progress);
+            failed_jobs(&jobs, &store)
         }
         Outcome::Interrupted => {
             eprintln!(
@@ -245,14 +264,14 @@ pub fn run(a: RunArgs) -> Result<()> {
 
 /// An error naming the plan's failed jobs (building, strategy, seed, error) and the jobs that did
 /// not run, if any.
-fn failed_jobs(plan: &Plan, store: &Store) -> Result<()> {
-    let ids: std::collections::BTreeSet<&str> = plan.jobs.iter().map(|j| j.id.as_str()).collect();
+fn failed_jobs(jobs: &[floorcast_coordinator::grid::PlannedJob], store: &Store) -> Result<()> {
+    let ids: std::collections::BTreeSet<&str> = jobs.iter().map(|j| j.id.as_str()).collect();
     let rows = store.all()?;
     let failed: Vec<_> = rows
         .iter()
         .filter(|r| ids.contains(r.job_id.as_str()) && r.status != "ok")
         .collect();
-    let missing = plan.jobs.len() - stored_of_plan(plan, store)?;
+    let missing = jobs.len() - stored_of(jobs, store)?;
     if failed.is_empty() && missing == 0 {
         return Ok(());
     }
@@ -280,15 +299,22 @@ fn failed_jobs(plan: &Plan, store: &Store) -> Result<()> {
     anyhow::bail!(
         "{} of {} jobs failed ({}); their rows in {} say why",
         failed.len(),
-        plan.jobs.len(),
+        jobs.len(),
         parts.join("; "),
         store.path().display()
     )
 }
 
-fn stored_of_plan(plan: &Plan, store: &Store) -> Result<usize> {
+fn stored_of(jobs: &[floorcast_coordinator::grid::PlannedJob], store: &Store) -> Result<usize> {
     let ids = store.stored_ids()?;
-    Ok(plan.jobs.iter().filter(|j| ids.contains(&j.id)).count())
+    Ok(jobs.iter().filter(|j| ids.contains(&j.id)).count())
+}
+
+/// A sequential grid's decisions so far.
+fn print_sequential(plan: &Plan, progress: &floorcast_coordinator::sequential::Progress) {
+    if let Some(q) = &plan.sequential {
+        say_raw!("{}", floorcast_coordinator::sequential::render(progress, q));
+    }
 }
 
 pub fn report(a: ReportArgs) -> Result<()> {
@@ -319,6 +345,29 @@ pub fn report(a: ReportArgs) -> Result<()> {
     let t = table(&results, &[]);
     say_raw!("{}", render_text(&t));
     say_raw!("{}", render_ends(&t));
+    // Sequential grids' decisions: each label's last test.
+    let tests = store.tests()?;
+    let mut last: std::collections::BTreeMap<
+        (&str, &str),
+        &floorcast_coordinator::sequential::LabelTest,
+    > = Default::default();
+    for (grid, t) in &tests {
+        last.insert((grid.as_str(), t.label.as_str()), t);
+    }
+    for ((grid, _), t) in last {
+        let s = &t.state;
+        say!(
+            "sequential grid '{grid}': {} against {}: {} after {} pairs (seeds 1-{}), LLR {:.2} in [{:.2}, {:.2}]",
+            t.label,
+            t.reference,
+            s.decision.as_str(),
+            s.pairs,
+            t.through_seed,
+            s.llr,
+            s.lower,
+            s.upper
+        );
+    }
     if let Some((dir, other)) = &against {
         let gains = gains_against(&results, other, a.against_label.as_deref());
         say_raw!("{}", render_against(&gains, &dir.display().to_string()));

@@ -2,7 +2,7 @@
 //! (buildings loaded and hashed, seeds and strategies expanded into jobs with stable ids) before
 //! anything runs.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -43,7 +43,47 @@ struct GridFile {
     settings: toml::Table,
     /// Start poses as a factor of the grid (default: each building's own start).
     starts: Option<StartsSpec>,
+    /// Seeds added in batches until a sequential test decides each comparison.
+    sequential: Option<SequentialSpec>,
 }
+
+/// `[sequential]`: the comparisons decided by a sequential test (see `sequential.rs`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SequentialSpec {
+    /// The label every other label is compared with.
+    reference: String,
+    #[serde(default)]
+    h0_gain_pct: f64,
+    #[serde(default = "default_h1_gain_pct")]
+    h1_gain_pct: f64,
+    #[serde(default = "default_error_rate")]
+    alpha: f64,
+    #[serde(default = "default_error_rate")]
+    beta: f64,
+    /// Seeds added per round, on every building and start, for every label still undecided.
+    #[serde(default = "default_batch_seeds")]
+    batch_seeds: u64,
+    /// The most seeds a comparison takes; undecided then.
+    #[serde(default = "default_max_seeds")]
+    max_seeds: u64,
+}
+
+fn default_h1_gain_pct() -> f64 {
+    5.0
+}
+fn default_error_rate() -> f64 {
+    0.05
+}
+fn default_batch_seeds() -> u64 {
+    2
+}
+fn default_max_seeds() -> u64 {
+    30
+}
+
+/// Most seeds a sequential grid may take.
+pub const MAX_SEQUENTIAL_SEEDS: u64 = 10_000;
 
 /// `[starts]`: random start poses per building and/or explicit ones.
 #[derive(Debug, Deserialize)]
@@ -162,6 +202,47 @@ pub struct Plan {
     /// External strategies' files as read when the grid was planned (by their hash), for
     /// remote workers.
     pub program_files: BTreeMap<String, Arc<floorcast_worker::external::ProgramFiles>>,
+    /// The sequential test, when the grid has a `[sequential]` table: `jobs` then holds the
+    /// first batch of seeds, and [`Plan::jobs_for`] makes the next ones.
+    pub sequential: Option<crate::sequential::SequentialPlan>,
+    /// The strategies and each building's start poses, for [`Plan::jobs_for`].
+    strategies: Vec<Resolved>,
+    starts: Vec<Vec<Option<PlannedStart>>>,
+}
+
+impl Plan {
+    /// The jobs of `seeds` for the labels `labels` (all when `None`): building-major, then
+    /// start, then seed, then strategy (so partial grids compare fairly).
+    pub fn jobs_for(&self, seeds: &[u64], labels: Option<&BTreeSet<String>>) -> Vec<PlannedJob> {
+        let mut jobs = Vec::new();
+        for (bi, b) in self.buildings.iter().enumerate() {
+            for start in &self.starts[bi] {
+                for &seed in seeds {
+                    for r in &self.strategies {
+                        if labels.is_some_and(|l| !l.contains(&r.label)) {
+                            continue;
+                        }
+                        let mut id =
+                            job_id_from(&b.hash, &r.name, seed, &r.settings, start.as_ref());
+                        if let Some(p) = &r.program {
+                            id = program_job_id(&id, p);
+                        }
+                        jobs.push(PlannedJob {
+                            id,
+                            building: bi,
+                            strategy: r.name.clone(),
+                            label: r.label.clone(),
+                            program: r.program.clone(),
+                            seed,
+                            settings: r.settings.clone(),
+                            start: start.clone(),
+                        });
+                    }
+                }
+            }
+        }
+        jobs
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -406,9 +487,17 @@ impl Plan {
             }
         }
 
-        // Seeds (counted before they are listed).
+        // Seeds (counted before they are listed). A sequential grid adds them in batches.
         check_job_count(&file, buildings.len(), limits, &invalid)?;
+        let sequential = match &file.sequential {
+            Some(q) => Some(sequential_plan(q, &file, &invalid)?),
+            None => None,
+        };
         let seeds: Vec<u64> = match (&file.seeds, &file.seed_range) {
+            _ if sequential.is_some() => {
+                let batch = sequential.as_ref().map_or(1, |q| q.batch_seeds);
+                (1..=batch).collect()
+            }
             (Some(s), None) if !s.is_empty() => s.clone(),
             (None, Some([a, b])) if a <= b => (*a..=*b).collect(),
             (None, Some(r)) => {
@@ -566,30 +655,22 @@ impl Plan {
             .fold(0.0, f64::max);
         let starts = plan_starts(file.starts.as_ref(), &buildings, radius_m, &invalid)?;
 
-        // Jobs: building-major, then start, then seed, then strategy (so partial grids compare
-        // fairly).
-        let mut jobs = Vec::new();
-        for (bi, b) in buildings.iter().enumerate() {
-            for start in &starts[bi] {
-                for &seed in &seeds {
-                    for r in &resolved {
-                        let mut id =
-                            job_id_from(&b.hash, &r.name, seed, &r.settings, start.as_ref());
-                        if let Some(p) = &r.program {
-                            id = program_job_id(&id, p);
-                        }
-                        jobs.push(PlannedJob {
-                            id,
-                            building: bi,
-                            strategy: r.name.clone(),
-                            label: r.label.clone(),
-                            program: r.program.clone(),
-                            seed,
-                            settings: r.settings.clone(),
-                            start: start.clone(),
-                        });
-                    }
-                }
+        if let Some(q) = &sequential {
+            if !labels.contains(&q.reference) {
+                return Err(invalid(
+                    "sequential.reference",
+                    format!(
+                        "'{}' is not a label of the grid's strategies ({})",
+                        q.reference,
+                        labels.join(", ")
+                    ),
+                ));
+            }
+            if labels.len() < 2 {
+                return Err(invalid(
+                    "sequential",
+                    "a sequential grid compares labels with the reference: give at least two strategies".into(),
+                ));
             }
         }
         check_results(file.results.as_deref()).map_err(|p| invalid("results", p))?;
@@ -607,9 +688,13 @@ impl Plan {
             results_dir,
             buildings,
             labels,
-            jobs,
+            jobs: Vec::new(),
             program_files,
-        })
+            sequential,
+            strategies: resolved,
+            starts,
+        }
+        .with_jobs_for(&seeds))
     }
 }
 
@@ -632,6 +717,10 @@ fn check_job_count(
     invalid: &dyn Fn(&str, String) -> GridError,
 ) -> Result<(), GridError> {
     let (field, seeds): (&str, u128) = match (&file.seeds, &file.seed_range) {
+        _ if file.sequential.is_some() => (
+            "sequential.max_seeds",
+            file.sequential.as_ref().map_or(0, |q| q.max_seeds) as u128,
+        ),
         (_, Some([a, b])) if a <= b => ("seed_range", *b as u128 - *a as u128 + 1),
         (Some(s), _) => ("seeds", s.len() as u128),
         _ => return Ok(()),
@@ -866,7 +955,60 @@ pub fn job_id_from(
     digest[..16].iter().map(|b| format!("{b:02x}")).collect()
 }
 
+impl Plan {
+    fn with_jobs_for(mut self, seeds: &[u64]) -> Self {
+        self.jobs = self.jobs_for(seeds, None);
+        self
+    }
+}
+
+/// A sequential grid's test, checked; the error names the field.
+fn sequential_plan(
+    q: &SequentialSpec,
+    file: &GridFile,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<crate::sequential::SequentialPlan, GridError> {
+    if file.seeds.is_some() || file.seed_range.is_some() {
+        return Err(invalid(
+            if file.seeds.is_some() { "seeds" } else { "seed_range" },
+            "a grid with [sequential] adds seeds 1, 2, ... in batches itself; leave out seeds and seed_range (max_seeds bounds them)".into(),
+        ));
+    }
+    let config = crate::sequential::SprtConfig {
+        h0_gain_pct: q.h0_gain_pct,
+        h1_gain_pct: q.h1_gain_pct,
+        alpha: q.alpha,
+        beta: q.beta,
+    };
+    config.validate().map_err(|e| match e.split_once(": ") {
+        Some((field, problem)) => invalid(&format!("sequential.{field}"), problem.to_string()),
+        None => invalid("sequential", e),
+    })?;
+    if !(1..=MAX_SEQUENTIAL_SEEDS).contains(&q.max_seeds) {
+        return Err(invalid(
+            "sequential.max_seeds",
+            format!("{} is not in [1, {MAX_SEQUENTIAL_SEEDS}]", q.max_seeds),
+        ));
+    }
+    if !(1..=q.max_seeds).contains(&q.batch_seeds) {
+        return Err(invalid(
+            "sequential.batch_seeds",
+            format!(
+                "{} is not in [1, max_seeds = {}]",
+                q.batch_seeds, q.max_seeds
+            ),
+        ));
+    }
+    Ok(crate::sequential::SequentialPlan {
+        config,
+        reference: q.reference.clone(),
+        batch_seeds: q.batch_seeds,
+        max_seeds: q.max_seeds,
+    })
+}
+
 /// A strategy of the grid, resolved.
+#[derive(Debug, Clone)]
 struct Resolved {
     /// The built-in strategy's name, or the external strategy's label.
     name: String,

@@ -94,6 +94,43 @@ pub enum RunError {
     NoWorkers,
 }
 
+/// While a sequential grid's current batch is all stored: tests it (the tests are stored and
+/// logged) and adds the next batch's jobs to the scheduler; tells it when no more will come.
+fn advance(
+    plan: &Plan,
+    store: &Store,
+    progress: &mut crate::sequential::Progress,
+    sched: &mut Scheduler,
+    jobs: &mut BTreeMap<String, PlannedJob>,
+    on_log: &mut dyn FnMut(&str),
+) -> Result<(), RunError> {
+    while !progress.finished && sched.batch_complete() {
+        let results = store.all()?;
+        let before = progress.path.len();
+        let next = progress.advance(plan, &results);
+        store.record_tests(&plan.name, &progress.path[before..])?;
+        for t in &progress.path[before..] {
+            if t.state.decision != crate::sequential::Decision::Undecided {
+                on_log(&format!(
+                    "{} against {}: {} after {} pairs (seeds 1-{})",
+                    t.label,
+                    t.reference,
+                    t.state.decision.as_str(),
+                    t.state.pairs,
+                    t.through_seed
+                ));
+            }
+        }
+        let stored = store.stored_ids()?;
+        sched.add(next.iter().map(|j| j.id.clone()).collect(), &stored);
+        jobs.extend(next.into_iter().map(|j| (j.id.clone(), j)));
+        if progress.finished {
+            sched.expect_more(false);
+        }
+    }
+    Ok(())
+}
+
 /// Runs every job of `plan` not yet in `store`. `interrupt` stops the run (jobs already stored
 /// stay stored; running ones are abandoned and run again next time). `on_log` receives lines
 /// for the user (workers joining or refused, requeued jobs, dropped messages).
@@ -111,11 +148,15 @@ pub fn run_plan(
     let stored = store.stored_ids()?;
     let ids: Vec<String> = plan.jobs.iter().map(|j| j.id.clone()).collect();
     let mut sched = Scheduler::new(ids, &stored, opts.lease_s);
-    let jobs: BTreeMap<String, PlannedJob> = plan
+    let mut jobs: BTreeMap<String, PlannedJob> = plan
         .jobs
         .iter()
         .map(|j| (j.id.clone(), j.clone()))
         .collect();
+    // A sequential grid: batches of seeds added as the tests go (replaying those already run).
+    let mut progress = crate::sequential::Progress::start(plan);
+    sched.expect_more(!progress.finished);
+    advance(plan, store, &mut progress, &mut sched, &mut jobs, on_log)?;
     let resumed = sched.done();
     let mut failed = 0usize;
     let mut remote: BTreeSet<String> = BTreeSet::new();
@@ -313,6 +354,7 @@ pub fn run_plan(
                 Note::Finished => finished_at = Some(Instant::now()),
             }
         }
+        advance(&plan, store, &mut progress, &mut sched, &mut jobs, on_log)?;
         if sched.is_finished() && finished_at.is_none() {
             finished_at = Some(Instant::now());
         }

@@ -86,6 +86,8 @@ pub struct Scheduler {
     all: BTreeSet<JobId>,
     workers: BTreeSet<WorkerId>,
     finished_announced: bool,
+    /// More jobs may be added (a sequential grid between batches): workers wait, not leave.
+    more_to_come: bool,
 }
 
 impl Scheduler {
@@ -107,6 +109,7 @@ impl Scheduler {
             all,
             workers: BTreeSet::new(),
             finished_announced: false,
+            more_to_come: false,
         }
     }
 
@@ -122,8 +125,30 @@ impl Scheduler {
     pub fn pending(&self) -> usize {
         self.pending.len()
     }
+    /// Every job is stored and no more will come.
     pub fn is_finished(&self) -> bool {
+        self.batch_complete() && !self.more_to_come
+    }
+    /// Every job added so far is stored.
+    pub fn batch_complete(&self) -> bool {
         self.done.len() == self.all.len()
+    }
+    /// Whether more jobs may be added ([`Scheduler::add`]): until told otherwise, a worker
+    /// without a job waits instead of leaving.
+    pub fn expect_more(&mut self, more: bool) {
+        self.more_to_come = more;
+    }
+    /// Adds jobs (in the order to hand them out); those in `already_done` count as stored.
+    pub fn add(&mut self, jobs: Vec<JobId>, already_done: &BTreeSet<JobId>) {
+        for j in jobs {
+            if self.all.insert(j.clone()) {
+                if already_done.contains(&j) {
+                    self.done.insert(j);
+                } else {
+                    self.pending.push_back(j);
+                }
+            }
+        }
     }
     pub fn workers(&self) -> impl Iterator<Item = &WorkerId> {
         self.workers.iter()

@@ -9,19 +9,27 @@
 //! large one). A gain of `g` per cent (`t_label = (1 - g / 100) t_ref`) is the effect
 //! `e = -ln(1 - g / 100)`.
 //!
-//! Hypotheses: H0, the mean effect is `e0` (the gain is at most `h0_gain_pct`), against H1, it is
-//! `e1` (at least `h1_gain_pct`), for approximately normal outcomes whose variance is unknown.
-//! The generalized log-likelihood ratio of H1 against H0 over `n` pairs, each hypothesis with its
-//! own maximum-likelihood variance about its mean, is `(n / 2) ln(S0 / S1)` with `S_k` the sum of
-//! squared distances of the outcomes to `e_k`; the test accepts H1 when it rises above
-//! `ln((1 - beta) / alpha)` and H0 when it falls below `ln(beta / (1 - alpha))` (Wald's bounds),
-//! and looks only after each batch. Why this form and not fishtest's normal approximation
-//! `n (e1 - e0) (2 m - e0 - e1) / (2 s2)` with the pooled sample variance `s2`: with a handful of
-//! pairs `s2` is often far too small, and that approximation then decided wrongly 7-8 % of the
-//! time at nominal 5 % in the simulations of `tests::error_rates_hold_under_repeated_looks`
-//! (outcomes with a spread twice the difference between the hypotheses, batches of 6 pairs),
-//! while the ratio of the two variances keeps both error rates within `alpha` and `beta`, as that
-//! test measures on 2000 simulated tests under each hypothesis.
+//! Hypotheses: H0, the mean effect is at most `e0` (the gain is at most `h0_gain_pct`), against
+//! H1, it is at least `e1` (at least `h1_gain_pct`), for approximately normal outcomes whose
+//! variance is unknown. The generalized log-likelihood ratio of H1 against H0 over `n` pairs is
+//! `(n / 2) ln(S0 / S1)`, with `S_k` the sum of squared distances of the outcomes to the mean
+//! hypothesis `k` allows nearest to their mean `m` (`S0` about `min(m, e0)`, `S1` about
+//! `max(m, e1)`: each hypothesis with its own maximum-likelihood variance); the test accepts H1
+//! when it rises above `ln((1 - beta) / alpha)` and H0 when it falls below
+//! `ln(beta / (1 - alpha))` (Wald's bounds). It decides on at least [`MIN_PAIRS`] pairs and looks
+//! again only once [`LOOK_PAIRS`] new pairs have come (a grid's batches that add fewer are
+//! pooled): with a handful of pairs the variance estimate is often far too small, and looking
+//! after every 2 pairs decided wrongly 10-12 % of the time at nominal 5 % in the simulations of
+//! `tests::error_rates_hold_under_repeated_looks`. Measured there (2000 simulated tests under
+//! each hypothesis, at the boundaries e0 and e1 where composite hypotheses err most): both error
+//! rates within `alpha` and `beta` up to simulation noise for spreads of the outcomes up to 4
+//! times the gap `e1 - e0` (0.2 against 0.05: about 90 pairs under H0); at 6 times the gap they
+//! reach 6-7 % (180 pairs). Against the simple hypotheses `e0` and `e1` alone (the form before),
+//! a large gain decides far sooner: 30 % faster with a pair-to-pair spread of 10 % takes one
+//! look, where the simple form was still undecided after 8 pairs (its variances about `e0` and
+//! `e1` both absorb the distance to the true mean). Fishtest's normal approximation
+//! `n (e1 - e0) (2 m - e0 - e1) / (2 s2)` with the pooled sample variance `s2` is the same test
+//! for large `n`, and wrong 7-8 % of the time with a handful of pairs.
 //!
 //! Zero variance (two labels whose runs are identical, or differ by the same factor in every
 //! pair) is the limit of the ratio: outcomes all equal to `e0` decide H0 at once, all equal to
@@ -29,7 +37,18 @@
 //!
 //! Nothing here reads a clock or a file: the grid runner feeds it outcomes.
 
+use std::collections::BTreeSet;
+
 use serde::{Deserialize, Serialize};
+
+use crate::grid::{Plan, PlannedJob};
+use crate::store::StoredResult;
+
+/// Fewest pairs a test decides on.
+pub const MIN_PAIRS: usize = 10;
+/// Fewest new pairs between two looks: a label's test decides only when its pairs grew by this
+/// much since it last looked (batches that add fewer pairs are pooled).
+pub const LOOK_PAIRS: usize = 10;
 
 /// A sequential test's parameters, as in a grid file's `[sequential]` table.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -168,11 +187,14 @@ impl SprtConfig {
         // The generalized likelihood ratio with the variance unknown under each hypothesis
         // (each its own maximum-likelihood variance about its mean): (n / 2) ln(S0 / S1), with
         // S_k the sum of squared distances of the outcomes to e_k.
-        let s0: f64 = outcomes.iter().map(|x| (x - e0).powi(2)).sum();
-        let s1: f64 = outcomes.iter().map(|x| (x - e1).powi(2)).sum();
+        // Each hypothesis is composite (H0: mean <= e0, H1: mean >= e1): its variance is taken
+        // about the mean it allows nearest to the outcomes' mean.
+        let ss = |mu: f64| outcomes.iter().map(|x| (x - mu).powi(2)).sum::<f64>();
+        let s0: f64 = ss(mean.min(e0));
+        let s1: f64 = ss(mean.max(e1));
         // Sums below rounding of the log ratios count as zero.
         let tiny = 1e-24 * n as f64;
-        let llr = if n < 2 || (s0 <= tiny && s1 <= tiny) {
+        let llr = if n < MIN_PAIRS || (s0 <= tiny && s1 <= tiny) {
             0.0
         } else if s1 <= tiny {
             f64::INFINITY
@@ -198,6 +220,202 @@ impl SprtConfig {
             decision,
         }
     }
+}
+
+/// A grid's sequential test: the comparisons of every label with `reference`, seeds added
+/// `batch_seeds` at a time up to `max_seeds`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SequentialPlan {
+    pub config: SprtConfig,
+    pub reference: String,
+    pub batch_seeds: u64,
+    pub max_seeds: u64,
+}
+
+/// One comparison's test after the runs of seeds `1..=through_seed`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabelTest {
+    pub label: String,
+    pub reference: String,
+    pub through_seed: u64,
+    pub state: SprtState,
+}
+
+impl SequentialPlan {
+    /// The test of each label (in `labels` order, the reference left out) on the stored runs of
+    /// seeds up to `through_seed`: pairs of a label's run and the reference's run on the same
+    /// building, seed and start pose that both ended normally (complete or early stop; failed
+    /// runs and runs cut short pair with nothing), in the order of their keys.
+    pub fn tests(
+        &self,
+        labels: &[String],
+        results: &[StoredResult],
+        through_seed: u64,
+    ) -> Vec<LabelTest> {
+        let within: Vec<&StoredResult> =
+            results.iter().filter(|r| r.seed <= through_seed).collect();
+        let reference = crate::table::normal_times_by_pair(&within, &self.reference);
+        labels
+            .iter()
+            .filter(|l| **l != self.reference)
+            .map(|label| {
+                let times = crate::table::normal_times_by_pair(&within, label);
+                let outcomes: Vec<f64> = times
+                    .iter()
+                    .filter_map(|(k, t)| pair_outcome(*reference.get(k)?, *t))
+                    .collect();
+                LabelTest {
+                    label: label.clone(),
+                    reference: self.reference.clone(),
+                    through_seed,
+                    state: self.config.state(&outcomes),
+                }
+            })
+            .collect()
+    }
+}
+
+/// Where a sequential grid stands: the seeds planned so far, the labels still undecided, and
+/// the path of every test (one [`LabelTest`] per label per batch while it was open).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Progress {
+    /// Seeds `1..=through_seed` are planned for the labels open at each batch.
+    pub through_seed: u64,
+    pub open: BTreeSet<String>,
+    pub path: Vec<LabelTest>,
+    /// Every comparison decided, or `max_seeds` reached.
+    pub finished: bool,
+    /// The ids of the jobs planned so far (the runs the tests may use).
+    pub planned: BTreeSet<String>,
+    /// Pairs of each label's test when it last looked.
+    looked_at: std::collections::BTreeMap<String, usize>,
+}
+
+impl Progress {
+    /// The first batch of `plan` (whose `jobs` it is).
+    pub fn start(plan: &Plan) -> Self {
+        let seq = plan.sequential.as_ref();
+        Self {
+            through_seed: seq.map_or(0, |q| q.batch_seeds),
+            open: plan
+                .labels
+                .iter()
+                .filter(|l| seq.is_some_and(|q| **l != q.reference))
+                .cloned()
+                .collect(),
+            path: Vec::new(),
+            finished: seq.is_none(),
+            planned: plan.jobs.iter().map(|j| j.id.clone()).collect(),
+            looked_at: Default::default(),
+        }
+    }
+
+    /// Every job planned so far is stored (in `results`): tests the batch just completed, and
+    /// returns the next batch's jobs (the next seeds, for the reference and the labels still
+    /// undecided), or none when the grid is finished.
+    pub fn advance(&mut self, plan: &Plan, results: &[StoredResult]) -> Vec<PlannedJob> {
+        let Some(seq) = plan.sequential.as_ref() else {
+            self.finished = true;
+            return Vec::new();
+        };
+        if self.finished {
+            return Vec::new();
+        }
+        let ours: Vec<StoredResult> = results
+            .iter()
+            .filter(|r| self.planned.contains(&r.job_id))
+            .cloned()
+            .collect();
+        let labels: Vec<String> = plan
+            .labels
+            .iter()
+            .filter(|l| self.open.contains(*l) || **l == seq.reference)
+            .cloned()
+            .collect();
+        for mut t in seq.tests(&labels, &ours, self.through_seed) {
+            // A look needs LOOK_PAIRS new pairs: fewer are pooled with the next batch's.
+            let last = self.looked_at.get(&t.label).copied().unwrap_or(0);
+            if t.state.pairs >= last + LOOK_PAIRS {
+                self.looked_at.insert(t.label.clone(), t.state.pairs);
+            } else {
+                t.state.decision = Decision::Undecided;
+            }
+            if t.state.decision != Decision::Undecided {
+                self.open.remove(&t.label);
+            }
+            self.path.push(t);
+        }
+        if self.open.is_empty() || self.through_seed >= seq.max_seeds {
+            self.finished = true;
+            return Vec::new();
+        }
+        let next = (self.through_seed + seq.batch_seeds).min(seq.max_seeds);
+        let seeds: Vec<u64> = (self.through_seed + 1..=next).collect();
+        self.through_seed = next;
+        let mut labels = self.open.clone();
+        labels.insert(seq.reference.clone());
+        let jobs = plan.jobs_for(&seeds, Some(&labels));
+        self.planned.extend(jobs.iter().map(|j| j.id.clone()));
+        jobs
+    }
+
+    /// The tests of the last batch each label took part in, in the plan's label order.
+    pub fn latest(&self) -> Vec<&LabelTest> {
+        let mut by_label: std::collections::BTreeMap<&str, &LabelTest> = Default::default();
+        for t in &self.path {
+            by_label.insert(&t.label, t);
+        }
+        let mut v: Vec<&LabelTest> = by_label.into_values().collect();
+        v.sort_by_key(|t| self.path.iter().position(|p| p.label == t.label));
+        v
+    }
+}
+
+/// Replays a sequential grid over a store: the progress it had reached (every batch whose jobs
+/// are all stored is tested, as the run did) and every job planned so far. A coordinator killed
+/// mid-grid resumes from here.
+pub fn replay(plan: &Plan, results: &[StoredResult]) -> (Progress, Vec<PlannedJob>) {
+    let stored: BTreeSet<&str> = results.iter().map(|r| r.job_id.as_str()).collect();
+    let mut progress = Progress::start(plan);
+    let mut jobs = plan.jobs.clone();
+    while !progress.finished
+        && progress
+            .planned
+            .iter()
+            .all(|id| stored.contains(id.as_str()))
+    {
+        jobs.extend(progress.advance(plan, results));
+    }
+    (progress, jobs)
+}
+
+/// One line per comparison: its decision, pairs, statistic and bounds.
+pub fn render(progress: &Progress, seq: &SequentialPlan) -> String {
+    use std::fmt::Write as _;
+    let mut out = format!(
+        "Sequential test (GSPRT on ln(t_ref / t), H0: gain <= {} %, H1: gain >= {} %, alpha {}, beta {}):\n",
+        seq.config.h0_gain_pct, seq.config.h1_gain_pct, seq.config.alpha, seq.config.beta
+    );
+    for t in progress.latest() {
+        let s = &t.state;
+        let _ = writeln!(
+            out,
+            "  {:<16} vs {:<12} {:<9} after {:>3} pairs (seeds 1-{}), mean gain {:+.1} %, LLR {:.2} in [{:.2}, {:.2}]",
+            t.label,
+            t.reference,
+            s.decision.as_str(),
+            s.pairs,
+            t.through_seed,
+            gain_pct_of_effect(s.mean),
+            s.llr,
+            s.lower,
+            s.upper
+        );
+    }
+    if !progress.finished {
+        let _ = writeln!(out, "  (not finished: run the same command again to go on)");
+    }
+    out
 }
 
 #[cfg(test)]
@@ -264,23 +482,32 @@ mod tests {
         assert!(SprtConfig::default().validate().is_ok());
     }
 
-    /// Two labels whose runs are identical: zero variance, mean 0 = e0, decided H0 at once, no
-    /// NaN; a label 10 % faster in every pair: H1 within a few pairs.
+    /// Two labels whose runs are identical: zero variance, mean 0 = e0, decided H0 at the first
+    /// look, no NaN; a label 10 % faster in every pair: H1; a large gain with a spread: H1 at
+    /// the first look (the composite hypotheses measure it from its own mean).
     #[test]
     fn zero_variance_decides_without_numeric_trouble() {
         let cfg = SprtConfig::default();
-        let same = cfg.state(&[0.0; 4]);
+        let same = cfg.state(&[0.0; MIN_PAIRS]);
         assert_eq!(same.decision, Decision::H0);
         assert_eq!(same.llr, f64::NEG_INFINITY);
         assert!(!same.mean.is_nan() && !same.variance.is_nan());
-        let faster = cfg.state(&[effect_of_gain_pct(10.0); 6]);
+        let faster = cfg.state(&[effect_of_gain_pct(10.0); MIN_PAIRS]);
         assert_eq!(faster.decision, Decision::H1);
-        assert!(faster.llr.is_finite());
+        assert!(!faster.llr.is_nan());
+        // About 30 % faster, pair to pair between 20 and 40 %.
+        let spread: Vec<f64> = (0..MIN_PAIRS)
+            .map(|i| effect_of_gain_pct(20.0 + 20.0 * i as f64 / (MIN_PAIRS - 1) as f64))
+            .collect();
+        assert_eq!(cfg.state(&spread).decision, Decision::H1);
         // Exactly between the hypotheses: the data say nothing.
         let mid = (effect_of_gain_pct(0.0) + effect_of_gain_pct(5.0)) / 2.0;
-        assert_eq!(cfg.state(&[mid; 4]).decision, Decision::Undecided);
-        // Nothing is decided on one pair.
-        assert_eq!(cfg.state(&[0.0]).decision, Decision::Undecided);
+        assert_eq!(cfg.state(&[mid; MIN_PAIRS]).decision, Decision::Undecided);
+        // Nothing is decided on fewer than MIN_PAIRS pairs.
+        assert_eq!(
+            cfg.state(&[0.0; MIN_PAIRS - 1]).decision,
+            Decision::Undecided
+        );
         assert_eq!(cfg.state(&[]).decision, Decision::Undecided);
     }
 
@@ -321,7 +548,7 @@ mod tests {
         );
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(20261125);
         let runs = 2000;
-        for (sd, batch) in [(0.05, 6), (0.1, 6), (0.1, 20), (0.2, 10)] {
+        for (sd, batch) in [(0.02, 10), (0.05, 10), (0.1, 10), (0.1, 20), (0.2, 10)] {
             let mut false_h1 = 0;
             let mut false_h0 = 0;
             let mut pairs = 0;

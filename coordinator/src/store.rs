@@ -192,6 +192,20 @@ impl Store {
                 host TEXT NOT NULL,
                 floorcast_version TEXT NOT NULL,
                 started_unix_s REAL NOT NULL
+             );
+             CREATE TABLE IF NOT EXISTS sequential (
+                grid TEXT NOT NULL,
+                label TEXT NOT NULL,
+                reference TEXT NOT NULL,
+                through_seed INTEGER NOT NULL,
+                pairs INTEGER NOT NULL,
+                mean REAL NOT NULL,
+                variance REAL NOT NULL,
+                llr REAL NOT NULL,
+                lower REAL NOT NULL,
+                upper REAL NOT NULL,
+                decision TEXT NOT NULL,
+                PRIMARY KEY (grid, label, reference, through_seed)
              );",
         ))?;
         let found: Option<String> = self.sql(
@@ -302,6 +316,77 @@ impl Store {
                 wall_time_s: r.get(13)?,
                 floorcast_version: r.get(14)?,
             })
+        }))?;
+        let mut out = Vec::new();
+        for r in rows {
+            out.push(self.sql(r)?);
+        }
+        Ok(out)
+    }
+
+    /// Stores the tests of a sequential grid's batch (the path of each test statistic; a test
+    /// replayed after a restart replaces its equal).
+    pub fn record_tests(
+        &self,
+        grid: &str,
+        tests: &[crate::sequential::LabelTest],
+    ) -> Result<(), StoreError> {
+        let tx = self.sql(self.conn.unchecked_transaction())?;
+        for t in tests {
+            let s = &t.state;
+            self.sql(tx.execute(
+                "INSERT OR REPLACE INTO sequential (grid, label, reference, through_seed, pairs, mean,
+                    variance, llr, lower, upper, decision)
+                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
+                params![
+                    grid,
+                    t.label,
+                    t.reference,
+                    t.through_seed as i64,
+                    s.pairs as i64,
+                    s.mean,
+                    s.variance,
+                    s.llr,
+                    s.lower,
+                    s.upper,
+                    s.decision.as_str()
+                ],
+            ))?;
+        }
+        self.sql(tx.commit())
+    }
+
+    /// The stored tests of sequential grids, by grid, label and batch.
+    pub fn tests(&self) -> Result<Vec<(String, crate::sequential::LabelTest)>, StoreError> {
+        use crate::sequential::{Decision, LabelTest, SprtState};
+        let mut st = self.sql(self.conn.prepare(
+            "SELECT grid, label, reference, through_seed, pairs, mean, variance, llr, lower, upper,
+                    decision
+             FROM sequential ORDER BY grid, label, through_seed",
+        ))?;
+        let rows = self.sql(st.query_map([], |r| {
+            let decision = match r.get::<_, String>(10)?.as_str() {
+                "H0" => Decision::H0,
+                "H1" => Decision::H1,
+                _ => Decision::Undecided,
+            };
+            Ok((
+                r.get::<_, String>(0)?,
+                LabelTest {
+                    label: r.get(1)?,
+                    reference: r.get(2)?,
+                    through_seed: r.get::<_, i64>(3)? as u64,
+                    state: SprtState {
+                        pairs: r.get::<_, i64>(4)? as usize,
+                        mean: r.get(5)?,
+                        variance: r.get(6)?,
+                        llr: r.get(7)?,
+                        lower: r.get(8)?,
+                        upper: r.get(9)?,
+                        decision,
+                    },
+                },
+            ))
         }))?;
         let mut out = Vec::new();
         for r in rows {

@@ -153,12 +153,21 @@ fn t95(df: usize) -> f64 {
 }
 
 /// What pairs a run with the reference's: building, seed and start pose (bits).
-type PairKey = (String, u64, [u64; 3]);
+pub(crate) type PairKey = (String, u64, [u64; 3]);
 
 /// Exploration time of the successful runs of `label` in `subset` that ended normally, by
 /// (building, seed, start pose).
 fn times_by_pair(subset: &[&StoredResult], label: &str) -> BTreeMap<PairKey, f64> {
     times_by(subset, label, |r| r.building.clone())
+}
+
+/// The exploration times of `label`'s successful runs in `subset` that ended normally, by
+/// (building, seed, start pose): the pairs of a sequential test.
+pub(crate) fn normal_times_by_pair(
+    subset: &[&StoredResult],
+    label: &str,
+) -> BTreeMap<PairKey, f64> {
+    times_by_pair(subset, label)
 }
 
 /// [`times_by_pair`] with the building named by `building` (its name, or its content hash when

@@ -50,6 +50,11 @@ pub struct StrategyProgram {
     /// Where the words and files are relative to (not part of the identity).
     #[serde(skip)]
     pub dir: PathBuf,
+    /// Written from a remote job's contents, checked against `files_sha256` then (its words
+    /// may have been moved: a file named by an absolute path is written inside the job's
+    /// directory).
+    #[serde(skip)]
+    pub received: bool,
 }
 
 /// A program's files: each name as written and its bytes.
@@ -91,6 +96,7 @@ impl StrategyProgram {
             files_sha256: String::new(),
             timeout_s,
             dir: dir.to_path_buf(),
+            received: false,
         };
         p.files_sha256 = p.hash_files()?;
         Ok(p)
@@ -150,8 +156,12 @@ impl StrategyProgram {
         Ok(files_sha256(&self.read_files()?))
     }
 
-    /// Checks that the files are still the ones the identity was made of.
+    /// Checks that the files are still the ones the identity was made of (a program received
+    /// with a remote job was checked as it was written).
     pub fn check_files(&self) -> Result<(), String> {
+        if self.received {
+            return Ok(());
+        }
         let now = self.hash_files()?;
         if now != self.files_sha256 {
             return Err(format!(
@@ -177,22 +187,36 @@ impl StrategyProgram {
             return Err("the program's files arrived damaged (their hash differs)".into());
         }
         // A name may climb out of its directory ("../python/x.py"): the files go that many
-        // levels below `root`, so that every name stays inside it.
+        // levels below `root`, so that every name stays inside it. A file named by an absolute
+        // path (on the coordinator's machine) goes to a directory of its own in `root`, and the
+        // words naming it are moved there.
+        let is_absolute = |name: &str| Path::new(name).is_absolute();
         let mut depth = 0;
-        for (name, _) in contents {
+        for (name, _) in contents.iter().filter(|(n, _)| !is_absolute(n)) {
             depth = depth.max(relative_parts(name)?.0);
         }
         let mut dir = root.to_path_buf();
         for i in 0..depth {
             dir.push(format!("d{i}"));
         }
-        for (name, bytes) in contents {
-            let (up, parts) = relative_parts(name)?;
-            let mut path = dir.clone();
-            for _ in 0..up {
-                path.pop();
-            }
-            path.extend(parts);
+        let mut moved: Vec<(String, String)> = Vec::new();
+        for (i, (name, bytes)) in contents.iter().enumerate() {
+            let path = if is_absolute(name) {
+                let base = Path::new(name)
+                    .file_name()
+                    .ok_or_else(|| format!("file '{name}' names no file"))?;
+                let p = root.join(format!("abs{i}")).join(base);
+                moved.push((name.clone(), p.to_string_lossy().into_owned()));
+                p
+            } else {
+                let (up, parts) = relative_parts(name)?;
+                let mut path = dir.clone();
+                for _ in 0..up {
+                    path.pop();
+                }
+                path.extend(parts);
+                path
+            };
             if let Some(parent) = path.parent() {
                 std::fs::create_dir_all(parent)
                     .map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
@@ -202,15 +226,20 @@ impl StrategyProgram {
         }
         std::fs::create_dir_all(&dir)
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-        let p = Self {
-            command,
-            files,
+        let moved_word = |w: String| {
+            moved
+                .iter()
+                .find(|(from, _)| *from == w)
+                .map_or(w.clone(), |(_, to)| to.clone())
+        };
+        Ok(Self {
+            command: command.into_iter().map(moved_word).collect(),
+            files: files.into_iter().map(moved_word).collect(),
             files_sha256: sha256.to_string(),
             timeout_s,
             dir,
-        };
-        p.check_files()?;
-        Ok(p)
+            received: true,
+        })
     }
 
     /// The command with its words that name files made paths from here.
@@ -1168,6 +1197,21 @@ mod tests {
         assert_eq!(p.file_names(), vec!["../s/a.py", "../python/m.py"]);
         let damaged = StrategyProgram::materialize(command, vec![], &files, "00", 1.0, &root);
         assert!(damaged.unwrap_err().contains("damaged"));
+        // A file named by an absolute path on the coordinator's machine lands in the job's
+        // directory, and the command names it there.
+        let abs = vec![("/home/me/s.py".to_string(), b"print(3)\n".to_vec())];
+        let p = StrategyProgram::materialize(
+            vec!["python3".into(), "/home/me/s.py".into()],
+            vec![],
+            &abs,
+            &files_sha256(&abs),
+            1.0,
+            &root,
+        )
+        .unwrap();
+        let moved = Path::new(&p.command[1]);
+        assert!(moved.starts_with(&root), "{moved:?}");
+        assert_eq!(std::fs::read(moved).unwrap(), b"print(3)\n");
         let _ = std::fs::remove_dir_all(&root);
     }
 }

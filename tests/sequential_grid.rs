@@ -1,0 +1,237 @@
+//! Sequential grids (`[sequential]`): seeds added in batches until each comparison is decided,
+//! on this machine and on remote workers, resumed from what is stored.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+
+use common::*;
+
+/// A grid on the small building: `baseline` (the reference), the Python `baseline.py` (the same
+/// runs: H0), `nearest` (about 30 % faster: H1).
+fn grid(dir: &Path, sequential: &str, seeds: &str) -> PathBuf {
+    let text = format!(
+        r#"format = "floorcast-grid"
+version = 1
+name = "seq"
+buildings = ["{small}"]
+{seeds}
+[[strategies]]
+name = "baseline"
+[[strategies]]
+label = "same"
+command = ["python3", "{baseline}"]
+[[strategies]]
+label = "nearest"
+command = ["python3", "{nearest}"]
+{sequential}
+[settings]
+time_limit_s = 1200
+"#,
+        small = repo().join("buildings/small.toml").display(),
+        baseline = repo().join("examples/strategies/baseline.py").display(),
+        nearest = repo().join("examples/strategies/nearest.py").display(),
+    );
+    let p = dir.join("grid.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const SEQUENTIAL: &str =
+    "[sequential]\nreference = \"baseline\"\nh1_gain_pct = 5\nbatch_seeds = 4\nmax_seeds = 16\n";
+
+fn run_grid(g: &Path, res: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
+/// The decisions printed, as (label, decision, pairs).
+fn decisions(out: &str) -> Vec<(String, String, String)> {
+    out.lines()
+        .filter(|l| l.contains(" vs baseline "))
+        .map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            (w[0].to_string(), w[3].to_string(), w[5].to_string())
+        })
+        .collect()
+}
+
+fn assert_decided(out: &str) {
+    assert_eq!(
+        decisions(out),
+        vec![
+            ("same".to_string(), "H0".to_string(), "12".to_string()),
+            ("nearest".to_string(), "H1".to_string(), "12".to_string()),
+        ],
+        "{out}"
+    );
+}
+
+#[test]
+fn a_sequential_grid_stops_when_every_comparison_is_decided() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path(), SEQUENTIAL, "");
+    let res = dir.path().join("res");
+    let o = run_grid(&g, &res, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    // Batches of 4 seeds; the first look needs 10 pairs: seeds 1-12, 3 labels, then decided.
+    assert!(out.contains("done: 36 jobs run now"), "{out}");
+    assert_decided(&out);
+    // Again: nothing to do, the same decisions; `report` reads them from the store.
+    let again = run_grid(&g, &res, &[]);
+    assert!(
+        stdout(&again).contains("nothing to do: all 36 jobs"),
+        "{}",
+        stdout(&again)
+    );
+    assert_decided(&stdout(&again));
+    let r = run(&["report", res.to_str().unwrap()]);
+    let report = stdout(&r);
+    assert!(
+        report.contains("nearest against baseline: H1 after 12 pairs (seeds 1-12)"),
+        "{report}"
+    );
+    assert!(
+        report.contains("same against baseline: H0 after 12 pairs"),
+        "{report}"
+    );
+}
+
+#[test]
+fn a_sequential_grid_goes_on_from_the_runs_already_stored() {
+    let dir = tempfile::tempdir().unwrap();
+    let res = dir.path().join("res");
+    // Seeds 1-6 stored by a plain grid of the same strategies (the jobs are the same).
+    let plain = grid(dir.path(), "", "seed_range = [1, 6]");
+    let o = run_grid(&plain, &res, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let g = grid(dir.path(), SEQUENTIAL, "");
+    let o = run_grid(&g, &res, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("done: 18 jobs run now, 18 stored before"),
+        "{out}"
+    );
+    assert_decided(&out);
+}
+
+#[test]
+fn remote_workers_serve_a_sequential_grid_across_its_batches() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path(), SEQUENTIAL, "");
+    let res = dir.path().join("res");
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let spawn = |args: &[&str]| {
+        floorcast()
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let c = spawn(&[
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "--workers",
+        "0",
+        "-q",
+        "--listen",
+        &endpoint,
+    ]);
+    let w: Vec<_> = ["w1", "w2"]
+        .iter()
+        .map(|name| {
+            spawn(&[
+                "worker",
+                "--connect",
+                &endpoint,
+                "--jobs",
+                "1",
+                "--wait-s",
+                "60",
+                "--name",
+                name,
+            ])
+        })
+        .collect();
+    let wait = |mut child: std::process::Child, what: &str| {
+        let t0 = Instant::now();
+        while child.try_wait().unwrap().is_none() {
+            assert!(
+                t0.elapsed() < Duration::from_secs(300),
+                "{what} did not finish"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        child.wait_with_output().unwrap()
+    };
+    let outs: Vec<_> = w.into_iter().map(|c| wait(c, "a worker")).collect();
+    let co = wait(c, "the coordinator");
+    for o in &outs {
+        assert!(o.status.success(), "{}", stderr(o));
+        // Between batches the workers waited instead of leaving.
+        assert!(stderr(o).contains("grid complete") || stdout(o).contains("grid complete"));
+    }
+    assert!(co.status.success(), "{}", stderr(&co));
+    assert_decided(&stdout(&co));
+}
+
+#[test]
+fn sequential_grid_errors_name_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            SEQUENTIAL,
+            "seed_range = [1, 4]",
+            "seed_range: a grid with [sequential] adds seeds",
+        ),
+        (
+            "[sequential]\nreference = \"nope\"\n",
+            "",
+            "sequential.reference: 'nope' is not a label",
+        ),
+        (
+            "[sequential]\nreference = \"baseline\"\nh0_gain_pct = 5\nh1_gain_pct = 5\n",
+            "",
+            "sequential.h1_gain_pct",
+        ),
+        (
+            "[sequential]\nreference = \"baseline\"\nalpha = 0.7\n",
+            "",
+            "sequential.alpha",
+        ),
+        (
+            "[sequential]\nreference = \"baseline\"\nbatch_seeds = 5\nmax_seeds = 4\n",
+            "",
+            "sequential.batch_seeds: 5 is not in [1, max_seeds = 4]",
+        ),
+        (
+            "[sequential]\nreference = \"baseline\"\nmax_seeds = 0\n",
+            "",
+            "sequential.max_seeds",
+        ),
+    ];
+    for (sequential, seeds, needle) in cases {
+        let g = grid(dir.path(), sequential, seeds);
+        let o = run(&["run", g.to_str().unwrap(), "--summary"]);
+        assert_clean_failure(&o, &["grid.toml", needle]);
+    }
+}
