@@ -216,6 +216,8 @@ pub fn run(a: RunArgs) -> Result<()> {
         &opts,
         &interrupt,
         &mut |c| {
+            // A sequential grid's jobs grow batch by batch.
+            pb.set_length(c.total as u64);
             pb.set_position(c.done as u64);
             let remote = if opts.remote.is_some() {
                 format!(", {} remote workers", c.remote_workers)

@@ -39,3 +39,90 @@ pub fn assert_clean_failure(o: &Output, needles: &[&str]) {
         assert!(err.contains(n), "'{n}' missing from: {err}");
     }
 }
+
+/// The rows of `report DIR --csv`: column name -> value, one map per stored job.
+pub fn report_rows(res: &Path) -> Vec<std::collections::BTreeMap<String, String>> {
+    let csv = res.join("export.csv");
+    let o = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(str::to_string))
+                .collect()
+        })
+        .collect()
+}
+
+/// A `floorcast` child whose stdout and stderr lines are collected.
+#[derive(Debug)]
+pub struct Proc(std::process::Child, std::sync::mpsc::Receiver<String>);
+
+impl Proc {
+    /// Starts `floorcast ARGS` in `cwd`.
+    pub fn spawn(args: &[&str], cwd: &Path) -> Proc {
+        use std::io::BufRead;
+        let mut child = floorcast()
+            .args(args)
+            .current_dir(cwd)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        for stream in [
+            Box::new(child.stderr.take().unwrap()) as Box<dyn std::io::Read + Send>,
+            Box::new(child.stdout.take().unwrap()),
+        ] {
+            let tx = tx.clone();
+            std::thread::spawn(move || {
+                for line in std::io::BufReader::new(stream)
+                    .lines()
+                    .map_while(Result::ok)
+                {
+                    let _ = tx.send(line);
+                }
+            });
+        }
+        Proc(child, rx)
+    }
+
+    /// Waits for the exit (killed after `timeout`, failing the test); returns the exit code and
+    /// every line printed.
+    pub fn finish(mut self, timeout: std::time::Duration) -> (Option<i32>, String) {
+        let t0 = std::time::Instant::now();
+        let mut seen = Vec::new();
+        loop {
+            while let Ok(l) = self.1.try_recv() {
+                seen.push(l);
+            }
+            if let Some(status) = self.0.try_wait().unwrap() {
+                std::thread::sleep(std::time::Duration::from_millis(100));
+                while let Ok(l) = self.1.try_recv() {
+                    seen.push(l);
+                }
+                return (status.code(), seen.join("\n"));
+            }
+            if t0.elapsed() > timeout {
+                let _ = self.0.kill();
+                panic!("did not exit within {timeout:?}: {}", seen.join("\n"));
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+    }
+}

@@ -4,8 +4,7 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Stdio;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use common::*;
 
@@ -137,61 +136,48 @@ fn remote_workers_serve_a_sequential_grid_across_its_batches() {
         .unwrap()
         .port();
     let endpoint = format!("tcp/127.0.0.1:{port}");
-    let spawn = |args: &[&str]| {
-        floorcast()
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap()
-    };
-    let c = spawn(&[
-        "run",
-        g.to_str().unwrap(),
-        "--results",
-        res.to_str().unwrap(),
-        "--workers",
-        "0",
-        "-q",
-        "--listen",
-        &endpoint,
-    ]);
-    let w: Vec<_> = ["w1", "w2"]
+    let c = Proc::spawn(
+        &[
+            "run",
+            g.to_str().unwrap(),
+            "--results",
+            res.to_str().unwrap(),
+            "--workers",
+            "0",
+            "-q",
+            "--listen",
+            &endpoint,
+        ],
+        dir.path(),
+    );
+    let workers: Vec<Proc> = ["w1", "w2"]
         .iter()
         .map(|name| {
-            spawn(&[
-                "worker",
-                "--connect",
-                &endpoint,
-                "--jobs",
-                "1",
-                "--wait-s",
-                "60",
-                "--name",
-                name,
-            ])
+            Proc::spawn(
+                &[
+                    "worker",
+                    "--connect",
+                    &endpoint,
+                    "--jobs",
+                    "1",
+                    "--wait-s",
+                    "60",
+                    "--name",
+                    name,
+                ],
+                dir.path(),
+            )
         })
         .collect();
-    let wait = |mut child: std::process::Child, what: &str| {
-        let t0 = Instant::now();
-        while child.try_wait().unwrap().is_none() {
-            assert!(
-                t0.elapsed() < Duration::from_secs(300),
-                "{what} did not finish"
-            );
-            std::thread::sleep(Duration::from_millis(100));
-        }
-        child.wait_with_output().unwrap()
-    };
-    let outs: Vec<_> = w.into_iter().map(|c| wait(c, "a worker")).collect();
-    let co = wait(c, "the coordinator");
-    for o in &outs {
-        assert!(o.status.success(), "{}", stderr(o));
+    for w in workers {
+        let (code, out) = w.finish(Duration::from_secs(300));
+        assert_eq!(code, Some(0), "{out}");
         // Between batches the workers waited instead of leaving.
-        assert!(stderr(o).contains("grid complete") || stdout(o).contains("grid complete"));
+        assert!(out.contains("grid complete"), "{out}");
     }
-    assert!(co.status.success(), "{}", stderr(&co));
-    assert_decided(&stdout(&co));
+    let (code, out) = c.finish(Duration::from_secs(60));
+    assert_eq!(code, Some(0), "{out}");
+    assert_decided(&out);
 }
 
 #[test]

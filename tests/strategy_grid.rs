@@ -4,10 +4,8 @@
 mod common;
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use common::*;
 
@@ -45,31 +43,9 @@ command = ["python3", "../strategies/baseline.py"]
 
 /// The report's CSV rows by (label, seed): column name -> value.
 fn rows(res: &Path) -> BTreeMap<(String, String), BTreeMap<String, String>> {
-    let csv = res.join("export.csv");
-    let o = run(&[
-        "report",
-        res.to_str().unwrap(),
-        "--csv",
-        csv.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<String> = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    lines
-        .map(|l| {
-            let row: BTreeMap<String, String> = header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(str::to_string))
-                .collect();
-            ((row["label"].clone(), row["seed"].clone()), row)
-        })
+    report_rows(res)
+        .into_iter()
+        .map(|row| ((row["label"].clone(), row["seed"].clone()), row))
         .collect()
 }
 
@@ -187,56 +163,6 @@ fn grid_errors_name_the_external_strategy_field() {
     }
 }
 
-/// A `floorcast` child whose output lines are collected.
-struct Proc(Child, std::sync::mpsc::Receiver<String>);
-
-fn spawn(args: &[&str], cwd: &Path) -> Proc {
-    let mut child = floorcast()
-        .args(args)
-        .current_dir(cwd)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    for stream in [
-        Box::new(child.stderr.take().unwrap()) as Box<dyn std::io::Read + Send>,
-        Box::new(child.stdout.take().unwrap()),
-    ] {
-        let tx = tx.clone();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stream).lines().map_while(Result::ok) {
-                let _ = tx.send(line);
-            }
-        });
-    }
-    Proc(child, rx)
-}
-
-impl Proc {
-    fn finish(mut self, timeout: Duration) -> (Option<i32>, String) {
-        let t0 = Instant::now();
-        let mut seen = Vec::new();
-        loop {
-            while let Ok(l) = self.1.try_recv() {
-                seen.push(l);
-            }
-            if let Some(status) = self.0.try_wait().unwrap() {
-                std::thread::sleep(Duration::from_millis(100));
-                while let Ok(l) = self.1.try_recv() {
-                    seen.push(l);
-                }
-                return (status.code(), seen.join("\n"));
-            }
-            if t0.elapsed() > timeout {
-                let _ = self.0.kill();
-                panic!("did not exit within {timeout:?}: {}", seen.join("\n"));
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-    }
-}
-
 #[test]
 fn remote_workers_receive_the_program_and_a_hanging_one_fails_only_its_jobs() {
     let dir = tempfile::tempdir().unwrap();
@@ -251,7 +177,7 @@ fn remote_workers_receive_the_program_and_a_hanging_one_fails_only_its_jobs() {
         .unwrap()
         .port();
     let listen = format!("tcp/127.0.0.1:{port}");
-    let c = spawn(
+    let c = Proc::spawn(
         &[
             "run",
             g.to_str().unwrap(),
@@ -268,7 +194,7 @@ fn remote_workers_receive_the_program_and_a_hanging_one_fails_only_its_jobs() {
     // The workers run elsewhere, where none of the programs' files are.
     let elsewhere = tempfile::tempdir().unwrap();
     let worker = |name: &str| {
-        spawn(
+        Proc::spawn(
             &[
                 "worker",
                 "--connect",
