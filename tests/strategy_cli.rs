@@ -172,7 +172,8 @@ fn a_strategy_that_stops_ends_the_run_as_an_early_stop() {
     assert_eq!(s["end_reason"], "early stop");
     assert_eq!(s["stopped_early"], true);
     assert_eq!(s["decisions"], 0);
-    assert_eq!(s["strategy_replies"], 1);
+    // Asked again with the last resorts' candidates before the stop stood.
+    assert!(s["strategy_replies"].as_u64().unwrap() >= 2, "{s}");
 }
 
 /// A program that breaks the protocol fails the run: exit 2, one line naming the program and

@@ -855,6 +855,7 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         Reply::Choose(id) => format!("choose {id}"),
         Reply::Rank(ids) => format!("rank {ids:?}"),
         Reply::Stop => "stop".into(),
+        Reply::Pass => "pass".into(),
         Reply::Fail => "failed".into(),
     };
     let mut ask = |s: &mut ExternalStrategy, what, v: &DecisionView<'_>| {

@@ -68,7 +68,7 @@ use crate::plan::dijkstra::{dijkstra_padded, AStar, CostField};
 use crate::plan::inflate::{nearest_by, Traversability};
 use crate::plan::waypoints::waypoints_by;
 use crate::sim::{SimConfig, Simulator};
-use crate::utility::{best_candidate, with_gain_floor, CandidateScore};
+use crate::utility::CandidateScore;
 
 /// Where the map's poses come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -469,10 +469,9 @@ struct Explorer<'a> {
     layout_compute_s: f64,
     /// The decision rule in place of the strategy's own, if any, what it needs, how often it
     /// was asked, whether it said stop or failed, and its compute time charged so far (s).
-    policy: Option<&'a mut dyn Policy>,
+    policy: PolicySlot<'a>,
     policy_needs: Needs,
     policy_decisions: usize,
-    policy_stopped: bool,
     policy_failed: bool,
     strategy_compute_s: f64,
     /// Where the robot has stayed (within `STILL_RADIUS_M`) since `still_since_s`.
@@ -626,7 +625,21 @@ pub fn explore_with<'a>(
         layout_cost,
         policy,
     } = hooks;
-    let policy_needs = policy.as_ref().map(|p| p.needs()).unwrap_or_default();
+    let policy = match policy {
+        Some(p) => PolicySlot::External(p),
+        None => PolicySlot::BuiltIn(strategy::BuiltInPolicy::new(
+            cfg.strategy.early_stop,
+            cfg.alpha,
+            cfg.gain_floor_m2,
+        )),
+    };
+    let policy_needs = match &policy {
+        PolicySlot::External(p) => p.needs(),
+        // The rule judges the paper's I(p) only when the strategy uses the layout.
+        PolicySlot::BuiltIn(b) => Needs {
+            layout_gain: b.needs().layout_gain && cfg.strategy.uses_layout(),
+        },
+    };
     let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
     let free = building.reachable_free(frame, start.position());
     let truth = crate::building::explorable_free(
@@ -687,7 +700,6 @@ pub fn explore_with<'a>(
         policy,
         policy_needs,
         policy_decisions: 0,
-        policy_stopped: false,
         policy_failed: false,
         strategy_compute_s: 0.0,
         layout_trusted: false,
@@ -740,8 +752,8 @@ impl Explorer<'_> {
             explored_fraction: self.explored_fraction(),
             decisions: self.decisions.len(),
         };
-        if let Some(p) = self.policy.as_mut().filter(|_| !self.policy_failed) {
-            p.end(&end);
+        if !self.policy_failed {
+            self.policy.get().end(&end);
         }
         if cfg.return_home && end_reason != EndReason::TimeLimit && !self.policy_failed {
             self.return_home();
@@ -1399,16 +1411,16 @@ impl Explorer<'_> {
     }
 
     /// Scores every frontier for the utility: distance to its goal (`None` if unreachable in
-    /// `plan` or dropped by the strategy's early-stop rule; the path's length, or the straight
-    /// line to the candidate with [`UtilityDistance::Euclidean`]) and information gain. `None`
-    /// when the early-stop rule ends the exploration.
+    /// `plan`; the path's length, or the straight line to the candidate with
+    /// [`UtilityDistance::Euclidean`]) and information gain (as the strategy's gain model
+    /// defines it).
     fn score(
         &mut self,
         frontiers: &[Frontier],
         goals: &[Option<Cell>],
         plan: &Plan,
         use_layout: bool,
-    ) -> Option<Vec<CandidateScore>> {
+    ) -> Vec<CandidateScore> {
         let cfg = self.cfg;
         let mut scores = Vec::with_capacity(frontiers.len());
         let (frame, robot) = (self.map.frame, self.estimate.position());
@@ -1444,37 +1456,7 @@ impl Explorer<'_> {
                 gain_m2,
             });
         }
-        // Early stopping on the reachable candidates' gains.
-        let reachable: Vec<usize> = (0..scores.len())
-            .filter(|&i| scores[i].distance_m.is_some())
-            .collect();
-        // The rule judges the paper's I(p) when the layout is in use: what is left to see inside
-        // the predicted rooms.
-        let gains: Vec<f64> = match (&self.layout, use_layout) {
-            (Some(l), true) if cfg.strategy.early_stop != EarlyStop::Never => {
-                let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
-                reachable
-                    .iter()
-                    .map(|&i| {
-                        let p = frontiers[i].candidate;
-                        self.room_gains.gain(p, range_m, self.scans, || {
-                            layout_information_gain(grid, &l.raster, p, range_m)
-                        })
-                    })
-                    .collect()
-            }
-            _ => reachable.iter().map(|&i| scores[i].gain_m2).collect(),
-        };
-        let (keep, stop) = strategy::early_stop(cfg.strategy.early_stop, &gains);
-        if stop {
-            return None;
-        }
-        for (k, &i) in keep.iter().zip(&reachable) {
-            if !k {
-                scores[i].distance_m = None;
-            }
-        }
-        Some(scores)
+        scores
     }
 
     /// Before the run ends for want of candidates: gives the goals given up (by the progress
@@ -1579,53 +1561,42 @@ impl Explorer<'_> {
             plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
         }
         let (scores, best, wps) = loop {
-            // `None` when the early-stop rule ends the exploration.
-            let chosen = self
-                .score(&frontiers, &goals, &plan, use_layout)
-                .map(|mut scores| {
-                    // The best candidate with a path on the planning grid: the distance grid is
-                    // coarser and may connect what the planning grid does not (yet: a door seen
-                    // at a slant opens as the robot comes closer), so a candidate without a path
-                    // is passed over for this decision, not blacklisted.
-                    let mut attempt = 0;
-                    loop {
-                        let pick = if self.policy.is_some() {
-                            self.ask_policy(&frontiers, &goals, &plan, &scores, attempt)
-                        } else {
-                            best_candidate(&with_gain_floor(&scores, cfg.gain_floor_m2), cfg.alpha)
-                                .map(Pick::One)
-                        };
-                        match pick {
-                            None => break None,
-                            Some(Pick::One(best)) => {
-                                let goal_cell = goals[best].expect("best candidate is reachable");
-                                match self.waypoints_to(&plan, goal_cell) {
-                                    Some(wps) => break Some((scores, best, wps)),
-                                    None => scores[best].distance_m = None,
-                                }
-                                attempt += 1;
+            // `None` when the strategy says stop.
+            let mut scores = self.score(&frontiers, &goals, &plan, use_layout);
+            // The best candidate with a path on the planning grid: the distance grid is coarser
+            // and may connect what the planning grid does not (yet: a door seen at a slant opens
+            // as the robot comes closer), so a candidate without a path is passed over for this
+            // decision (the strategy is asked again without it), not blacklisted.
+            let mut attempt = 0;
+            let chosen = loop {
+                match self.ask_policy(&frontiers, &goals, &plan, &scores, attempt, use_layout) {
+                    Answer::Stop => break None,
+                    Answer::Nothing => break Some(None),
+                    Answer::One(best) => {
+                        let goal_cell = goals[best].expect("best candidate is reachable");
+                        match self.waypoints_to(&plan, goal_cell) {
+                            Some(wps) => {
+                                break Some(Some((std::mem::take(&mut scores), best, wps)))
                             }
-                            Some(Pick::Ranked(ids)) => {
-                                let mut found = None;
-                                for id in ids {
-                                    let goal_cell =
-                                        goals[id].expect("ranked candidate is reachable");
-                                    if let Some(wps) = self.waypoints_to(&plan, goal_cell) {
-                                        found = Some((id, wps));
-                                        break;
-                                    }
-                                }
-                                break found.map(|(id, wps)| (scores, id, wps));
+                            None => scores[best].distance_m = None,
+                        }
+                        attempt += 1;
+                    }
+                    Answer::Ranked(ids) => {
+                        let mut found = None;
+                        for id in ids {
+                            let goal_cell = goals[id].expect("ranked candidate is reachable");
+                            if let Some(wps) = self.waypoints_to(&plan, goal_cell) {
+                                found = Some((id, wps));
+                                break;
                             }
                         }
+                        break Some(found.map(|(id, wps)| (std::mem::take(&mut scores), id, wps)));
                     }
-                });
-            // A policy that said stop ends the run now; one that failed ends it at once.
+                }
+            };
+            // A policy that failed ends the run at once.
             if self.policy_failed {
-                return false;
-            }
-            if self.policy_stopped {
-                self.stopped_early = true;
                 return false;
             }
             let early_stop = match chosen {
@@ -1704,9 +1675,9 @@ impl Explorer<'_> {
         true
     }
 
-    /// Asks the policy to choose among the reachable candidates (`scores` with a distance).
-    /// `None` when there is none, or the policy said stop (`policy_stopped`) or failed
-    /// (`policy_failed`, also for a reply naming no candidate shown).
+    /// Asks the strategy's policy to choose among the reachable candidates (`scores` with a
+    /// distance). [`Answer::Nothing`] when there is none, when the policy passes, or when it
+    /// failed (`policy_failed`, also for a reply naming no candidate shown).
     fn ask_policy(
         &mut self,
         frontiers: &[Frontier],
@@ -1714,7 +1685,11 @@ impl Explorer<'_> {
         plan: &Plan,
         scores: &[CandidateScore],
         attempt: usize,
-    ) -> Option<Pick> {
+        use_layout: bool,
+    ) -> Answer {
+        // A built-in strategy's rule weighs the layout's gain only while it uses the layout.
+        let layout_gain = self.policy_needs.layout_gain
+            && (use_layout || matches!(self.policy, PolicySlot::External(_)));
         let frame = self.map.frame;
         let robot = self.estimate.position();
         let range_m = self.cfg.sim.laser.max_range_m;
@@ -1725,7 +1700,7 @@ impl Explorer<'_> {
             };
             let f = &frontiers[i];
             let point = frame.world_from_cell(f.candidate);
-            let layout_gain_m2 = match (&self.layout, self.policy_needs.layout_gain) {
+            let layout_gain_m2 = match (&self.layout, layout_gain) {
                 (Some(l), true) => {
                     let grid = &self.map.occupancy;
                     Some(self.room_gains.gain(f.candidate, range_m, self.scans, || {
@@ -1748,7 +1723,7 @@ impl Explorer<'_> {
             });
         }
         if views.is_empty() {
-            return None;
+            return Answer::Nothing;
         }
         if attempt == 0 {
             self.policy_decisions += 1;
@@ -1761,28 +1736,26 @@ impl Explorer<'_> {
             candidates: &views,
             map: &self.map.occupancy,
         };
-        let (reply, charged_s) = self.policy.as_mut()?.decide(&view);
+        let (reply, charged_s) = self.policy.get().decide(&view);
         if charged_s.is_finite() && charged_s > 0.0 {
             self.compute_debt_s += charged_s;
             self.strategy_compute_s += charged_s;
         }
         let shown = |id: &usize| views.iter().any(|v| v.id == *id);
         match reply {
-            Reply::Choose(id) if shown(&id) => Some(Pick::One(id)),
+            Reply::Choose(id) if shown(&id) => Answer::One(id),
             Reply::Rank(ids)
                 if !ids.is_empty()
                     && ids.iter().all(shown)
                     && ids.iter().collect::<std::collections::BTreeSet<_>>().len() == ids.len() =>
             {
-                Some(Pick::Ranked(ids))
+                Answer::Ranked(ids)
             }
-            Reply::Stop => {
-                self.policy_stopped = true;
-                None
-            }
+            Reply::Pass => Answer::Nothing,
+            Reply::Stop => Answer::Stop,
             _ => {
                 self.policy_failed = true;
-                None
+                Answer::Nothing
             }
         }
     }
@@ -1999,11 +1972,28 @@ const TARGET_SEARCH_CELLS: i32 = 4;
 const MAX_EXTRA: u32 = 10;
 
 /// `TARGET_SEARCH_CELLS` in cells of the distance grid (the same distance in metres).
-/// What a decision tries: one candidate (the next best is asked for when it has no path), or
-/// a policy's ranking (the first with a path).
-enum Pick {
+/// A policy's answer as a decision uses it: one candidate (the next best is asked for when it
+/// has no path), a ranking (the first with a path), none, or stop.
+enum Answer {
     One(usize),
     Ranked(Vec<usize>),
+    Nothing,
+    Stop,
+}
+
+/// The run's policy: the built-in strategy's rule, or the caller's.
+enum PolicySlot<'a> {
+    BuiltIn(strategy::BuiltInPolicy),
+    External(&'a mut dyn Policy),
+}
+
+impl PolicySlot<'_> {
+    fn get(&mut self) -> &mut dyn Policy {
+        match self {
+            PolicySlot::BuiltIn(b) => b,
+            PolicySlot::External(p) => &mut **p,
+        }
+    }
 }
 
 fn far_search_cells() -> i32 {

@@ -1,11 +1,11 @@
 //! The decision seen from outside the explorer: a [`Policy`] is asked, at every decision, which
 //! of the reachable frontier candidates to drive to, given what a strategy may know (the robot's
-//! estimated pose, the candidates with their distances and gains, the map). The built-in
-//! strategies decide inside the explorer ([`super::Strategy`]); a policy replaces their choice
-//! of candidate (and their early stop) while the explorer keeps everything else: mapping,
-//! frontiers, planning, the last resorts before a run ends, scoring the run. An external
-//! program speaking floorcast's strategy protocol is one (in the `floorcast-worker` crate:
-//! sim-core does no IO).
+//! estimated pose, the candidates with their distances and gains, the map). Every strategy
+//! decides through one: the built-in ones through [`super::strategy::BuiltInPolicy`] (their
+//! early stop and the paper's utility), an external program speaking floorcast's strategy
+//! protocol through its own (in the `floorcast-worker` crate: sim-core does no IO). The explorer
+//! keeps everything else: mapping, frontiers, planning, the gains, the last resorts before a run
+//! ends, scoring the run.
 //!
 //! A policy never sees ground truth: only what the explorer derives from the laser and the
 //! odometry.
@@ -72,7 +72,12 @@ pub enum Reply {
     /// Try these candidates in this order and take the first with a drivable path; the others
     /// are not tried at this decision.
     Rank(Vec<usize>),
-    /// End the exploration now (an early stop).
+    /// None of these candidates: the decision goes on as when no candidate has a path (the
+    /// explorer's last resorts, else the run ends).
+    Pass,
+    /// End the exploration (an early stop). Before it ends a run with frontiers left, the
+    /// explorer asks again with the candidates of its last resorts (frontiers' reachable
+    /// parts, plans with less clearance), if any: a stop stands when the policy says it again.
     Stop,
     /// The policy failed (it says why to its caller): the run ends at once, its result is not
     /// to be used.

@@ -1,5 +1,9 @@
 //! Exploration strategies: how the information gain `I(p)` of a candidate is estimated and when
-//! exploration may stop before the last frontier is visited.
+//! exploration may stop before the last frontier is visited; their choice among the candidates
+//! is a [`Policy`] ([`BuiltInPolicy`]), as an external strategy's is.
+
+use super::policy::{CandidateView, DecisionView, Needs, Policy, Reply};
+use crate::utility::{best_candidate, with_gain_floor, CandidateScore};
 
 /// How `I(p)` is estimated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -161,6 +165,78 @@ pub fn early_stop(rule: EarlyStop, gains_m2: &[f64]) -> (Vec<bool>, bool) {
             let stop = !gains_m2.is_empty() && !keep.iter().any(|k| *k);
             (keep, stop)
         }
+    }
+}
+
+/// A built-in strategy's decision rule as a [`Policy`]: its early-stopping rule on the
+/// candidates' gains (the paper's `I(p)` inside the predicted rooms when the layout is in use,
+/// [`CandidateView::layout_gain_m2`], else the ranking gain), then the paper's utility with the
+/// gain floor over the candidates the rule keeps. The explorer computes the gains the
+/// strategy's gain model defines ([`CandidateView::gain_m2`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuiltInPolicy {
+    pub early_stop: EarlyStop,
+    pub alpha: f64,
+    pub gain_floor_m2: f64,
+    /// The candidates the rule kept at this decision's first attempt.
+    kept: Vec<usize>,
+}
+
+impl BuiltInPolicy {
+    pub fn new(early_stop: EarlyStop, alpha: f64, gain_floor_m2: f64) -> Self {
+        Self {
+            early_stop,
+            alpha,
+            gain_floor_m2,
+            kept: Vec::new(),
+        }
+    }
+}
+
+impl Policy for BuiltInPolicy {
+    fn needs(&self) -> Needs {
+        Needs {
+            layout_gain: self.early_stop != EarlyStop::Never,
+        }
+    }
+
+    fn decide(&mut self, view: &DecisionView<'_>) -> (Reply, f64) {
+        if view.attempt == 0 {
+            let gains: Vec<f64> = view
+                .candidates
+                .iter()
+                .map(|c| c.layout_gain_m2.unwrap_or(c.gain_m2))
+                .collect();
+            let (keep, stop) = early_stop(self.early_stop, &gains);
+            if stop {
+                return (Reply::Stop, 0.0);
+            }
+            self.kept = view
+                .candidates
+                .iter()
+                .zip(keep)
+                .filter(|(_, k)| *k)
+                .map(|(c, _)| c.id)
+                .collect();
+        }
+        let shown: Vec<&CandidateView> = view
+            .candidates
+            .iter()
+            .filter(|c| self.kept.contains(&c.id))
+            .collect();
+        let scores: Vec<CandidateScore> = shown
+            .iter()
+            .map(|c| CandidateScore {
+                distance_m: Some(c.distance_m),
+                gain_m2: c.gain_m2,
+            })
+            .collect();
+        let reply = match best_candidate(&with_gain_floor(&scores, self.gain_floor_m2), self.alpha)
+        {
+            Some(i) => Reply::Choose(shown[i].id),
+            None => Reply::Pass,
+        };
+        (reply, 0.0)
     }
 }
 

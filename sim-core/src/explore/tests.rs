@@ -1,6 +1,7 @@
 use super::*;
 use crate::building::Geometry;
 use crate::geom::Polygon;
+use crate::utility::best_candidate;
 
 /// A corridor (2 m wide) with `n` rooms of 5 x 4 m on each side, 1 m doors, outer walls.
 pub(crate) fn corridor_building(n: usize) -> Building {
@@ -632,8 +633,11 @@ impl Policy for TestPolicy {
         let best = view.candidates[best_candidate(&scores, 0.5).unwrap()].id;
         let reply = match self.behaviour {
             "utility" => Reply::Choose(best),
-            "stop-at-3" if self.asked == 3 => Reply::Stop,
-            "stop-at-3" => Reply::Choose(best),
+            // A stop is asked again with the last resorts' candidates: it stands when repeated.
+            "stop-from-3" if self.asked >= 3 => Reply::Stop,
+            "stop-from-3" => Reply::Choose(best),
+            "stop-once-at-3" if self.asked == 3 => Reply::Stop,
+            "stop-once-at-3" => Reply::Choose(best),
             "fail-at-3" if self.asked == 3 => Reply::Fail,
             "fail-at-3" => Reply::Choose(best),
             "not-offered" => Reply::Choose(usize::MAX),
@@ -681,7 +685,7 @@ fn a_policy_with_the_papers_utility_is_the_built_in_baseline() {
 fn a_policy_decides_how_the_run_goes_on() {
     // (behaviour, decisions made, end reason)
     let cases = [
-        ("stop-at-3", Some(2), Some(EndReason::EarlyStop)),
+        ("stop-from-3", Some(2), Some(EndReason::EarlyStop)),
         ("fail-at-3", Some(2), None),
         ("not-offered", Some(0), None),
         ("rank-twice", Some(0), None),
@@ -700,6 +704,14 @@ fn a_policy_decides_how_the_run_goes_on() {
             r.explored_fraction
         );
     }
+}
+
+#[test]
+fn a_stop_not_repeated_when_asked_again_does_not_end_the_run() {
+    let mut p = TestPolicy::new("stop-once-at-3", 0.0);
+    let r = run_with_policy(&mut p);
+    assert_eq!(r.end_reason, EndReason::Complete);
+    assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
 }
 
 #[test]
