@@ -96,6 +96,16 @@ pub struct ReportArgs {
     /// same label), e.g. baseline.
     #[arg(long, value_name = "LABEL", requires = "against")]
     against_label: Option<String>,
+    /// The label every other label is compared with (default: baseline if present, else the
+    /// first label).
+    #[arg(long, value_name = "LABEL")]
+    reference: Option<String>,
+    /// Also write the report as JSON (versioned, documented in docs/report-json.md): per label
+    /// its times, ends and failures; per comparison (overall and per building) the paired mean
+    /// gain with its t and bootstrap intervals, the Wilcoxon p-value, the Holm-adjusted one, the
+    /// effect size, pairs and unpaired runs, and a sequential grid's decision.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
@@ -344,9 +354,29 @@ pub fn report(a: ReportArgs) -> Result<()> {
         results.len(),
         a.results.join(DB_FILE).display()
     );
-    let t = table(&results, &[]);
+    let labels = labels_of(&results);
+    let reference = match &a.reference {
+        Some(r) if !labels.contains(&r.as_str()) => anyhow::bail!(
+            "--reference: {} holds no runs labelled '{r}'; its labels: {}",
+            a.results.display(),
+            labels.join(", ")
+        ),
+        Some(r) => r.clone(),
+        None => labels
+            .iter()
+            .find(|l| **l == "baseline")
+            .or(labels.first())
+            .map(|l| l.to_string())
+            .unwrap_or_default(),
+    };
+    let t = floorcast_coordinator::table::table_against(&results, &[], Some(&reference));
     say_raw!("{}", render_text(&t));
     say_raw!("{}", render_ends(&t));
+    let comparisons = floorcast_coordinator::table::comparisons(&results, &reference);
+    say_raw!(
+        "{}",
+        floorcast_coordinator::table::render_comparisons(&comparisons)
+    );
     // Sequential grids' decisions: each label's last test.
     let tests = store.tests()?;
     let mut last: std::collections::BTreeMap<
@@ -373,6 +403,12 @@ pub fn report(a: ReportArgs) -> Result<()> {
     if let Some((dir, other)) = &against {
         let gains = gains_against(&results, other, a.against_label.as_deref());
         say_raw!("{}", render_against(&gains, &dir.display().to_string()));
+    }
+    if let Some(path) = &a.json {
+        let v = floorcast_coordinator::table::report_json(&results, &reference, &tests);
+        write_text(path, &(serde_json::to_string_pretty(&v)? + "\n"))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        say!("wrote {}", path.display());
     }
     if let Some(csv) = &a.csv {
         write_text(csv, &results_csv(&results))

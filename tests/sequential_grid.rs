@@ -104,6 +104,53 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
         report.contains("same against baseline: H0 after 12 pairs"),
         "{report}"
     );
+    // `report --json`: every comparison with its statistics and the sequential decision.
+    let json = dir.path().join("report.json");
+    let r = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["format"], "floorcast-report");
+    assert_eq!(v["version"], 1);
+    assert_eq!(v["reference"], "baseline");
+    let overall = |label: &str| {
+        v["comparisons"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["label"] == label && c["building"].is_null())
+            .unwrap_or_else(|| panic!("no comparison of {label}: {v}"))
+            .clone()
+    };
+    let nearest = overall("nearest");
+    assert_eq!(nearest["decision"], "H1");
+    assert_eq!(nearest["pairs"], 12);
+    assert_eq!(nearest["sequential_pairs"], 12);
+    let p = nearest["wilcoxon_p"].as_f64().unwrap();
+    assert!(p < 0.01, "{nearest}");
+    assert!(nearest["holm_p"].as_f64().unwrap() >= p);
+    let [lo, hi] = [0, 1].map(|i| nearest["bootstrap_ci95_pct"][i].as_f64().unwrap());
+    let mean = nearest["mean_gain_pct"].as_f64().unwrap();
+    assert!(lo < mean && mean < hi && lo > 10.0, "{nearest}");
+    // Identical runs: no non-zero difference, no Wilcoxon p, decided H0.
+    let same = overall("same");
+    assert_eq!(same["decision"], "H0");
+    assert!(same["wilcoxon_p"].is_null(), "{same}");
+    assert_eq!(same["mean_gain_pct"], 0.0);
+    // Another reference: the labels are compared with it.
+    let r = run(&["report", res.to_str().unwrap(), "--reference", "nearest"]);
+    assert!(
+        stdout(&r).contains("Paired gains over nearest"),
+        "{}",
+        stdout(&r)
+    );
+    let r = run(&["report", res.to_str().unwrap(), "--reference", "nope"]);
+    assert_clean_failure(&r, &["--reference", "no runs labelled 'nope'"]);
 }
 
 #[test]

@@ -12,8 +12,11 @@
 //!   module that knows zenoh). Modules depend one way: `net` on `inbox` and `execute`, `run` on
 //!   `inbox`, `execute` and `schedule`; `run` never names `net`.
 //! - [`wire`]: the versioned messages between coordinator and workers.
-//! - [`table`]: the paper's Table 1 for a grid, and CSV export.
-//! - [`sequential`]: the sequential test (GSPRT) that decides a comparison from paired runs.
+//! - [`table`]: the paper's Table 1 for a grid, the comparisons of `report` (and `--json`), and
+//!   CSV export.
+//! - [`stats`]: Wilcoxon, bootstrap, Holm, effect size of paired differences.
+//! - [`sequential`]: the sequential test (GSPRT) that decides a comparison from paired runs,
+//!   and a sequential grid's progress.
 
 pub mod execute;
 pub mod grid;
@@ -22,6 +25,7 @@ pub mod net;
 pub mod run;
 pub mod schedule;
 pub mod sequential;
+pub mod stats;
 pub mod store;
 pub mod table;
 pub mod wire;

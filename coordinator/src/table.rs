@@ -298,17 +298,30 @@ pub struct Table {
 /// Builds the table. `labels` gives the order (labels found only in the store come after);
 /// the reference is `baseline` if present, else the first label.
 pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
+    table_against(results, labels, None)
+}
+
+/// [`table`] with the gains over `reference` (default: `baseline` if present, else the first
+/// label).
+pub fn table_against(
+    results: &[StoredResult],
+    labels: &[String],
+    reference: Option<&str>,
+) -> Table {
     let mut order: Vec<String> = labels.to_vec();
     for r in results {
         if !order.contains(&r.label) {
             order.push(r.label.clone());
         }
     }
-    let reference = order
-        .iter()
-        .find(|l| l.as_str() == "baseline")
-        .or(order.first())
-        .cloned();
+    let reference = match reference {
+        Some(r) => Some(r.to_string()),
+        None => order
+            .iter()
+            .find(|l| l.as_str() == "baseline")
+            .or(order.first())
+            .cloned(),
+    };
     let reference_label = reference.clone();
     let rows_for = |subset: &[&StoredResult]| -> Vec<LabelRow> {
         let mut rows: Vec<LabelRow> = order
@@ -469,6 +482,188 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
             }
         );
     }
+}
+
+/// One comparison of a label with the reference, over all buildings (`building` = `None`) or on
+/// one: statistics of the per-pair gains `(t_ref - t) / t_ref` in per cent, over the pairs of
+/// runs (same building, seed and start pose) that both ended normally.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Comparison {
+    pub label: String,
+    pub reference: String,
+    pub building: Option<String>,
+    pub pairs: usize,
+    /// The label's normally ended runs without a partner among the reference's.
+    pub unpaired: usize,
+    pub mean_gain_pct: Option<f64>,
+    pub sd_gain_pct: Option<f64>,
+    /// Student's t 95 % interval of the mean gain.
+    pub t_ci95_pct: Option<[f64; 2]>,
+    /// The seeded percentile bootstrap 95 % interval of the mean gain
+    /// ([`crate::stats::bootstrap_mean_ci95`]).
+    pub bootstrap_ci95_pct: Option<[f64; 2]>,
+    /// Two-sided Wilcoxon signed-rank p-value of the gains.
+    pub wilcoxon_p: Option<f64>,
+    /// `wilcoxon_p` adjusted by Holm's method over every comparison of the report.
+    pub holm_p: Option<f64>,
+    /// Cohen's d_z: the mean gain over its standard deviation.
+    pub effect_size_dz: Option<f64>,
+}
+
+/// The comparisons of every label with `reference`, over all buildings and then per building,
+/// with Holm's adjustment across all of them.
+pub fn comparisons(results: &[StoredResult], reference: &str) -> Vec<Comparison> {
+    let mut out = Vec::new();
+    let labels: Vec<String> = labels_of(results)
+        .into_iter()
+        .filter(|l| *l != reference)
+        .map(str::to_string)
+        .collect();
+    let mut buildings: Vec<Option<String>> = vec![None];
+    let mut names: Vec<&str> = results.iter().map(|r| r.building.as_str()).collect();
+    names.sort();
+    names.dedup();
+    buildings.extend(names.into_iter().map(|b| Some(b.to_string())));
+    for building in &buildings {
+        let subset: Vec<&StoredResult> = results
+            .iter()
+            .filter(|r| building.as_ref().is_none_or(|b| &r.building == b))
+            .collect();
+        let reference_times = times_by_pair(&subset, reference);
+        for label in &labels {
+            let mine = times_by_pair(&subset, label);
+            if mine.is_empty() {
+                continue;
+            }
+            let gains: Vec<f64> = mine
+                .iter()
+                .filter_map(|(k, t)| {
+                    let b = *reference_times.get(k)?;
+                    (b > 0.0).then(|| (b - t) / b * 100.0)
+                })
+                .collect();
+            let paired = PairedGain::of(&gains);
+            out.push(Comparison {
+                label: label.clone(),
+                reference: reference.to_string(),
+                building: building.clone(),
+                pairs: gains.len(),
+                unpaired: mine.len() - gains.len(),
+                mean_gain_pct: paired.map(|p| p.mean_pct),
+                sd_gain_pct: paired.map(|p| p.sd_pct).filter(|v| v.is_finite()),
+                t_ci95_pct: paired
+                    .filter(|p| p.ci95_pct.is_finite())
+                    .map(|p| [p.mean_pct - p.ci95_pct, p.mean_pct + p.ci95_pct]),
+                bootstrap_ci95_pct: crate::stats::bootstrap_mean_ci95(&gains).map(|(a, b)| [a, b]),
+                wilcoxon_p: crate::stats::wilcoxon_signed_rank_p(&gains),
+                holm_p: None,
+                effect_size_dz: crate::stats::effect_size_dz(&gains),
+            });
+        }
+    }
+    let adjusted = crate::stats::holm(&out.iter().map(|c| c.wilcoxon_p).collect::<Vec<_>>());
+    for (c, p) in out.iter_mut().zip(adjusted) {
+        c.holm_p = p;
+    }
+    out
+}
+
+/// The comparisons over all buildings as text: one line each.
+pub fn render_comparisons(cs: &[Comparison]) -> String {
+    let mut out = String::new();
+    let overall: Vec<&Comparison> = cs.iter().filter(|c| c.building.is_none()).collect();
+    if overall.is_empty() {
+        return out;
+    }
+    let _ = writeln!(
+        out,
+        "Paired gains over {} (all buildings): t and bootstrap 95 % intervals, Wilcoxon p (Holm-adjusted over the report's {} comparisons), effect size d_z:",
+        overall[0].reference,
+        cs.len()
+    );
+    let range =
+        |r: Option<[f64; 2]>| r.map_or("-".to_string(), |[a, b]| format!("[{a:+.1}, {b:+.1}]"));
+    let num =
+        |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |v| format!("{v:.digits$}"));
+    for c in overall {
+        let _ = writeln!(
+            out,
+            "  {:<16} {:>8} % t {:<16} boot {:<16} p {:<7} Holm {:<7} d_z {:<6} {} pairs, {} unpaired",
+            c.label,
+            c.mean_gain_pct.map_or("-".to_string(), |m| format!("{m:+.1}")),
+            range(c.t_ci95_pct),
+            range(c.bootstrap_ci95_pct),
+            num(c.wilcoxon_p, 4),
+            num(c.holm_p, 4),
+            num(c.effect_size_dz, 2),
+            c.pairs,
+            c.unpaired
+        );
+    }
+    out
+}
+
+/// The format and version of `report --json`.
+pub const REPORT_FORMAT: &str = "floorcast-report";
+pub const REPORT_VERSION: u32 = 1;
+
+/// `report --json`: the labels' statistics, every comparison, and sequential grids' decisions
+/// (documented in `docs/report-json.md`).
+pub fn report_json(
+    results: &[StoredResult],
+    reference: &str,
+    tests: &[(String, crate::sequential::LabelTest)],
+) -> serde_json::Value {
+    use serde_json::json;
+    let t = table_against(results, &[], Some(reference));
+    let label_row = |r: &LabelRow| {
+        json!({
+            "label": r.label,
+            "runs_timed": r.time.n,
+            "time_mean_s": finite(r.time.mean),
+            "time_sd_s": finite(r.time.sd),
+            "explored_fraction_mean": finite(r.explored_fraction.mean),
+            "early_stops": r.stopped_early,
+            "failed": r.failed,
+            "left_out": r.left_out,
+            "ends": r.ends.iter().map(|(c, n)| (c.clone(), *n)).collect::<BTreeMap<String, usize>>(),
+        })
+    };
+    // The last test of each (grid, label, reference).
+    let mut decided: BTreeMap<(String, String), &crate::sequential::LabelTest> = BTreeMap::new();
+    for (_, test) in tests {
+        decided.insert((test.label.clone(), test.reference.clone()), test);
+    }
+    let comparisons: Vec<serde_json::Value> = comparisons(results, reference)
+        .into_iter()
+        .map(|c| {
+            let mut v = serde_json::to_value(&c).unwrap_or_default();
+            let seq = c
+                .building
+                .is_none()
+                .then(|| decided.get(&(c.label.clone(), c.reference.clone())))
+                .flatten();
+            v["decision"] = seq.map_or(serde_json::Value::Null, |s| {
+                json!(s.state.decision.as_str())
+            });
+            v["sequential_pairs"] = seq.map_or(serde_json::Value::Null, |s| json!(s.state.pairs));
+            v
+        })
+        .collect();
+    json!({
+        "format": REPORT_FORMAT,
+        "version": REPORT_VERSION,
+        "floorcast_version": floorcast_worker::FLOORCAST_VERSION,
+        "reference": reference,
+        "runs": results.len(),
+        "labels": t.overall.iter().map(label_row).collect::<Vec<_>>(),
+        "per_building": t.per_building.iter().map(|(b, rows)| (b.clone(), rows.iter().map(label_row).collect::<Vec<_>>())).collect::<BTreeMap<String, Vec<serde_json::Value>>>(),
+        "comparisons": comparisons,
+    })
+}
+
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
 }
 
 /// The table as text.
