@@ -2,8 +2,9 @@
 //! producing a versioned run record ([`record::RunSummary`]) plus the in-memory result.
 //!
 //! This crate measures wall time and knows the floorcast version; the simulation itself is
-//! `sim-core`'s and stays pure. It does no file IO: the binary and the coordinator store what it
-//! returns.
+//! `sim-core`'s and stays pure. It stores nothing (the binary and the coordinator store what it
+//! returns); the only processes and files it touches are an external strategy's
+//! ([`external`]: its program, a remote job's copy of its files, the Python module).
 
 pub mod external;
 pub mod record;
