@@ -104,7 +104,7 @@ impl Proc {
 
     /// Waits for the exit (killed after `timeout`, failing the test); returns the exit code and
     /// every line printed.
-    pub fn finish(mut self, timeout: std::time::Duration) -> (Option<i32>, String) {
+    pub fn finish(mut self, timeout: std::time::Duration) -> Exit {
         let t0 = std::time::Instant::now();
         let mut seen = Vec::new();
         loop {
@@ -125,4 +125,63 @@ impl Proc {
             std::thread::sleep(std::time::Duration::from_millis(50));
         }
     }
+}
+
+/// A process's exit code and everything it printed.
+pub type Exit = (Option<i32>, String);
+
+/// `floorcast run GRID --results RES --workers 0 --listen` on a free loopback port with one
+/// `floorcast worker` per name (one job each) started in `workers_cwd`; waits for all. Returns
+/// the coordinator's exit code and output, then each worker's.
+pub fn run_with_remote_workers(
+    grid: &Path,
+    res: &Path,
+    names: &[&str],
+    workers_cwd: &Path,
+) -> (Exit, Vec<Exit>) {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let cwd = grid.parent().unwrap_or(Path::new("."));
+    let c = Proc::spawn(
+        &[
+            "run",
+            grid.to_str().unwrap(),
+            "--results",
+            res.to_str().unwrap(),
+            "--workers",
+            "0",
+            "-q",
+            "--listen",
+            &endpoint,
+        ],
+        cwd,
+    );
+    let workers: Vec<Proc> = names
+        .iter()
+        .map(|name| {
+            Proc::spawn(
+                &[
+                    "worker",
+                    "--connect",
+                    &endpoint,
+                    "--jobs",
+                    "1",
+                    "--wait-s",
+                    "60",
+                    "--name",
+                    name,
+                ],
+                workers_cwd,
+            )
+        })
+        .collect();
+    let outs: Vec<Exit> = workers
+        .into_iter()
+        .map(|w| w.finish(std::time::Duration::from_secs(300)))
+        .collect();
+    (c.finish(std::time::Duration::from_secs(60)), outs)
 }

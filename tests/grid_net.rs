@@ -139,24 +139,9 @@ fn worker(port: u16, name: &str, extra: &[&str]) -> Proc {
 
 /// Rows of the results store, as (job_id, worker).
 fn stored(res: &Path) -> Vec<(String, String)> {
-    let csv = res.join("export.csv");
-    let o = run(&[
-        "report",
-        res.to_str().unwrap(),
-        "--csv",
-        csv.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let (j, w) = (col("job_id"), col("worker"));
-    lines
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            (f[j].to_string(), f[w].to_string())
-        })
+    report_rows(res)
+        .into_iter()
+        .map(|r| (r["job_id"].clone(), r["worker"].clone()))
         .collect()
 }
 

@@ -4,7 +4,6 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use common::*;
 
@@ -177,52 +176,12 @@ fn remote_workers_serve_a_sequential_grid_across_its_batches() {
     let dir = tempfile::tempdir().unwrap();
     let g = grid(dir.path(), SEQUENTIAL, "");
     let res = dir.path().join("res");
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    let endpoint = format!("tcp/127.0.0.1:{port}");
-    let c = Proc::spawn(
-        &[
-            "run",
-            g.to_str().unwrap(),
-            "--results",
-            res.to_str().unwrap(),
-            "--workers",
-            "0",
-            "-q",
-            "--listen",
-            &endpoint,
-        ],
-        dir.path(),
-    );
-    let workers: Vec<Proc> = ["w1", "w2"]
-        .iter()
-        .map(|name| {
-            Proc::spawn(
-                &[
-                    "worker",
-                    "--connect",
-                    &endpoint,
-                    "--jobs",
-                    "1",
-                    "--wait-s",
-                    "60",
-                    "--name",
-                    name,
-                ],
-                dir.path(),
-            )
-        })
-        .collect();
-    for w in workers {
-        let (code, out) = w.finish(Duration::from_secs(300));
+    let ((code, out), workers) = run_with_remote_workers(&g, &res, &["w1", "w2"], dir.path());
+    for (code, out) in workers {
         assert_eq!(code, Some(0), "{out}");
         // Between batches the workers waited instead of leaving.
         assert!(out.contains("grid complete"), "{out}");
     }
-    let (code, out) = c.finish(Duration::from_secs(60));
     assert_eq!(code, Some(0), "{out}");
     assert_decided(&out);
 }

@@ -5,7 +5,6 @@ mod common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 use common::*;
 
@@ -171,48 +170,10 @@ fn remote_workers_receive_the_program_and_a_hanging_one_fails_only_its_jobs() {
     );
     let g = project(dir.path(), "[1, 2]", &strategies);
     let res = dir.path().join("res");
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    let listen = format!("tcp/127.0.0.1:{port}");
-    let c = Proc::spawn(
-        &[
-            "run",
-            g.to_str().unwrap(),
-            "--results",
-            res.to_str().unwrap(),
-            "--workers",
-            "0",
-            "-q",
-            "--listen",
-            &listen,
-        ],
-        dir.path(),
-    );
     // The workers run elsewhere, where none of the programs' files are.
     let elsewhere = tempfile::tempdir().unwrap();
-    let worker = |name: &str| {
-        Proc::spawn(
-            &[
-                "worker",
-                "--connect",
-                &listen,
-                "--jobs",
-                "1",
-                "--wait-s",
-                "60",
-                "--name",
-                name,
-            ],
-            elsewhere.path(),
-        )
-    };
-    let (w1, w2) = (worker("w1"), worker("w2"));
-    let (c1, out1) = w1.finish(Duration::from_secs(240));
-    let (c2, out2) = w2.finish(Duration::from_secs(60));
-    let (cc, outc) = c.finish(Duration::from_secs(60));
+    let ((cc, outc), workers) = run_with_remote_workers(&g, &res, &["w1", "w2"], elsewhere.path());
+    let [(c1, out1), (c2, out2)] = [workers[0].clone(), workers[1].clone()];
     assert_eq!((c1, c2), (Some(0), Some(0)), "{out1}\n---\n{out2}");
     // The hanging strategy's two jobs failed, named; the grid went on.
     assert_eq!(cc, Some(2), "{outc}");

@@ -161,6 +161,17 @@ fn times_by_pair(subset: &[&StoredResult], label: &str) -> BTreeMap<PairKey, f64
     times_by(subset, label, |r| r.building.clone())
 }
 
+/// The per-pair gains `(t_ref - t) / t_ref` in per cent of the runs in `mine` that have a
+/// partner in `reference`.
+fn paired_gains(mine: &BTreeMap<PairKey, f64>, reference: &BTreeMap<PairKey, f64>) -> Vec<f64> {
+    mine.iter()
+        .filter_map(|(k, t)| {
+            let b = *reference.get(k)?;
+            (b > 0.0).then(|| (b - t) / b * 100.0)
+        })
+        .collect()
+}
+
 /// The exploration times of `label`'s successful runs in `subset` that ended normally, by
 /// (building, seed, start pose): the pairs of a sequential test.
 pub(crate) fn normal_times_by_pair(
@@ -382,14 +393,7 @@ pub fn table_against(
             row.gain_pct = base
                 .filter(|b| same_runs && b.is_finite() && *b > 0.0)
                 .map(|b| (b - row.time.mean) / b * 100.0);
-            let gains: Vec<f64> = mine
-                .iter()
-                .filter_map(|(k, t)| {
-                    let b = *reference_times.get(k)?;
-                    (b > 0.0).then(|| (b - t) / b * 100.0)
-                })
-                .collect();
-            row.paired = PairedGain::of(&gains);
+            row.paired = PairedGain::of(&paired_gains(&mine, &reference_times));
         }
         rows
     };
@@ -535,13 +539,7 @@ pub fn comparisons(results: &[StoredResult], reference: &str) -> Vec<Comparison>
             if mine.is_empty() {
                 continue;
             }
-            let gains: Vec<f64> = mine
-                .iter()
-                .filter_map(|(k, t)| {
-                    let b = *reference_times.get(k)?;
-                    (b > 0.0).then(|| (b - t) / b * 100.0)
-                })
-                .collect();
+            let gains = paired_gains(&mine, &reference_times);
             let paired = PairedGain::of(&gains);
             out.push(Comparison {
                 label: label.clone(),
