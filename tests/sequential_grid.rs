@@ -136,6 +136,19 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     let [lo, hi] = [0, 1].map(|i| nearest["bootstrap_ci95_pct"][i].as_f64().unwrap());
     let mean = nearest["mean_gain_pct"].as_f64().unwrap();
     assert!(lo < mean && mean < hi && lo > 10.0, "{nearest}");
+    // The labels' other metrics.
+    let labels = v["labels"].as_array().unwrap();
+    assert_eq!(labels.len(), 3);
+    for l in labels {
+        let m = &l["metrics"];
+        assert_eq!(m["runs_reaching_99"], 12, "{l}");
+        let t90 = m["time_to_90_s_mean"].as_f64().unwrap();
+        assert!(
+            t90 > 0.0 && t90 <= m["time_to_99_s_mean"].as_f64().unwrap(),
+            "{l}"
+        );
+        assert!(m["unexplored_area_s_mean"].as_f64().unwrap() > 0.0, "{l}");
+    }
     // Identical runs: no non-zero difference, no Wilcoxon p, decided H0.
     let same = overall("same");
     assert_eq!(same["decision"], "H0");

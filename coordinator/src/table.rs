@@ -614,8 +614,8 @@ pub fn report_json(
 ) -> serde_json::Value {
     use serde_json::json;
     let t = table_against(results, &[], Some(reference));
-    let label_row = |r: &LabelRow| {
-        json!({
+    let label_row = |r: &LabelRow, building: Option<&str>| {
+        let mut v = json!({
             "label": r.label,
             "runs_timed": r.time.n,
             "time_mean_s": finite(r.time.mean),
@@ -625,7 +625,14 @@ pub fn report_json(
             "failed": r.failed,
             "left_out": r.left_out,
             "ends": r.ends.iter().map(|(c, n)| (c.clone(), *n)).collect::<BTreeMap<String, usize>>(),
-        })
+        });
+        v["metrics"] = label_metrics(
+            results
+                .iter()
+                .filter(|x| building.is_none_or(|b| x.building == b)),
+            &r.label,
+        );
+        v
     };
     // The last test of each (grid, label, reference).
     let mut decided: BTreeMap<(String, String), &crate::sequential::LabelTest> = BTreeMap::new();
@@ -654,10 +661,58 @@ pub fn report_json(
         "floorcast_version": floorcast_worker::FLOORCAST_VERSION,
         "reference": reference,
         "runs": results.len(),
-        "labels": t.overall.iter().map(label_row).collect::<Vec<_>>(),
-        "per_building": t.per_building.iter().map(|(b, rows)| (b.clone(), rows.iter().map(label_row).collect::<Vec<_>>())).collect::<BTreeMap<String, Vec<serde_json::Value>>>(),
+        "labels": t.overall.iter().map(|r| label_row(r, None)).collect::<Vec<_>>(),
+        "per_building": t.per_building.iter().map(|(b, rows)| (b.clone(), rows.iter().map(|r| label_row(r, Some(b))).collect::<Vec<_>>())).collect::<BTreeMap<String, Vec<serde_json::Value>>>(),
         "comparisons": comparisons,
     })
+}
+
+/// The area above a run's explored-fraction curve up to its end, `∫ (1 - f(t)) dt` in seconds
+/// (trapezoids between the samples): how long the building stays unseen on average, lower is
+/// better; it weighs early progress, where the exploration time sees only the end.
+pub fn unexplored_area_s(progress_csv: &str) -> Option<f64> {
+    let mut prev: Option<(f64, f64)> = None;
+    let mut area = 0.0;
+    for (t, f) in progress_curve(progress_csv) {
+        if let Some((t0, f0)) = prev {
+            area += (t - t0) * (2.0 - f0 - f) / 2.0;
+        }
+        prev = Some((t, f));
+    }
+    prev.map(|_| area)
+}
+
+/// A label's other metrics, as means over its successful runs (`null` without one): times to
+/// 90, 95 and 99 % explored (over the runs that reached them, with how many did), the
+/// unexplored area, path length, explored fraction, rooms left unexplored, map quality.
+fn label_metrics<'a>(
+    results: impl Iterator<Item = &'a StoredResult>,
+    label: &str,
+) -> serde_json::Value {
+    let runs: Vec<(RunSummary, &str)> = results
+        .filter(|r| r.label == label && r.status == "ok")
+        .filter_map(|r| {
+            let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
+            Some((s, r.progress_csv.as_deref().unwrap_or("")))
+        })
+        .collect();
+    let mean = |xs: Vec<f64>| finite(Stat::of(&xs).mean).filter(|_| !xs.is_empty());
+    let mut v = serde_json::json!({
+        "unexplored_area_s_mean": mean(runs.iter().filter_map(|(_, p)| unexplored_area_s(p)).collect()),
+        "path_length_m_mean": mean(runs.iter().map(|(s, _)| s.path_length_m).collect()),
+        "explored_fraction_min": runs.iter().map(|(s, _)| s.explored_fraction).reduce(f64::min),
+        "rooms_unexplored_total": runs.iter().filter_map(|(s, _)| s.rooms_unexplored).reduce(|a, b| a + b),
+        "map_occupied_precision_aligned_mean": mean(runs.iter().map(|(s, _)| s.map_occupied_precision_aligned).collect()),
+    });
+    for pct in [90u32, 95, 99] {
+        let times: Vec<f64> = runs
+            .iter()
+            .filter_map(|(_, p)| time_to_fraction(p, pct as f64 / 100.0))
+            .collect();
+        v[format!("runs_reaching_{pct}")] = serde_json::json!(times.len());
+        v[format!("time_to_{pct}_s_mean")] = serde_json::json!(mean(times));
+    }
+    v
 }
 
 fn finite(v: f64) -> Option<f64> {
@@ -1248,6 +1303,17 @@ mod tests {
         assert_eq!(col(row, "start_y_m"), "4");
         assert_eq!(col(row, "start_theta_rad"), "-1");
         assert_eq!(col(row, "start_source"), "building file");
+    }
+
+    #[test]
+    fn the_unexplored_area_integrates_what_is_left_to_see() {
+        let csv = "time_s,explored_area_m2,explored_fraction\n0,0,0\n10,5,0.5\n20,10,1.0\n";
+        // 10 s at 1 -> 0.5 unexplored (7.5 s), 10 s at 0.5 -> 0 (2.5 s).
+        assert_eq!(unexplored_area_s(csv), Some(10.0));
+        assert_eq!(
+            unexplored_area_s("time_s,explored_area_m2,explored_fraction\n"),
+            None
+        );
     }
 
     #[test]
