@@ -185,3 +185,38 @@ pub fn run_with_remote_workers(
         .collect();
     (c.finish(std::time::Duration::from_secs(60)), outs)
 }
+
+/// `floorcast run GRID --results RES -q`.
+pub fn run_grid(grid: &Path, res: &Path) -> Output {
+    run(&[
+        "run",
+        grid.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "-q",
+    ])
+}
+
+/// Runs one exploration with extra arguments; returns its summary.
+pub fn explore_with(
+    building: &std::path::Path,
+    seed: u64,
+    out: &std::path::Path,
+    extra: &[&str],
+) -> serde_json::Value {
+    let seed = seed.to_string();
+    let mut args = vec![
+        "explore",
+        "--building",
+        building.to_str().unwrap(),
+        "--seed",
+        &seed,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}

@@ -8,30 +8,6 @@ fn explore(building: &std::path::Path, seed: u64, out: &std::path::Path) -> serd
     explore_with(building, seed, out, &["--strategy", "baseline"])
 }
 
-/// Runs one exploration with extra arguments; returns its summary.
-fn explore_with(
-    building: &std::path::Path,
-    seed: u64,
-    out: &std::path::Path,
-    extra: &[&str],
-) -> serde_json::Value {
-    let seed = seed.to_string();
-    let mut args = vec![
-        "explore",
-        "--building",
-        building.to_str().unwrap(),
-        "--seed",
-        &seed,
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ];
-    args.extend_from_slice(extra);
-    let o = run(&args);
-    assert!(o.status.success(), "{}", stderr(&o));
-    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
-}
-
 #[test]
 fn explores_the_small_building_completely_and_reproducibly() {
     let dir = tempfile::tempdir().unwrap();

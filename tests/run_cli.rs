@@ -28,17 +28,6 @@ time_limit_s = 60
     p
 }
 
-/// `floorcast run GRID --results DIR -q`.
-fn run_grid(grid: &std::path::Path, results: &std::path::Path) -> std::process::Output {
-    run(&[
-        "run",
-        grid.to_str().unwrap(),
-        "--results",
-        results.to_str().unwrap(),
-        "-q",
-    ])
-}
-
 #[test]
 fn runs_a_grid_then_resumes_with_nothing_to_do() {
     let dir = tempfile::tempdir().unwrap();

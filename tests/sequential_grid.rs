@@ -40,18 +40,6 @@ time_limit_s = 1200
 const SEQUENTIAL: &str =
     "[sequential]\nreference = \"baseline\"\nh1_gain_pct = 5\nbatch_seeds = 4\nmax_seeds = 16\n";
 
-fn run_grid(g: &Path, res: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
-        "run",
-        g.to_str().unwrap(),
-        "--results",
-        res.to_str().unwrap(),
-        "-q",
-    ];
-    args.extend_from_slice(extra);
-    run(&args)
-}
-
 /// The decisions printed, as (label, decision, pairs).
 fn decisions(out: &str) -> Vec<(String, String, String)> {
     out.lines()
@@ -79,14 +67,14 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     let dir = tempfile::tempdir().unwrap();
     let g = grid(dir.path(), SEQUENTIAL, "");
     let res = dir.path().join("res");
-    let o = run_grid(&g, &res, &[]);
+    let o = run_grid(&g, &res);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     // Batches of 4 seeds; the first look needs 10 pairs: seeds 1-12, 3 labels, then decided.
     assert!(out.contains("done: 36 jobs run now"), "{out}");
     assert_decided(&out);
     // Again: nothing to do, the same decisions; `report` reads them from the store.
-    let again = run_grid(&g, &res, &[]);
+    let again = run_grid(&g, &res);
     assert!(
         stdout(&again).contains("nothing to do: all 36 jobs"),
         "{}",
@@ -171,10 +159,10 @@ fn a_sequential_grid_goes_on_from_the_runs_already_stored() {
     let res = dir.path().join("res");
     // Seeds 1-6 stored by a plain grid of the same strategies (the jobs are the same).
     let plain = grid(dir.path(), "", "seed_range = [1, 6]");
-    let o = run_grid(&plain, &res, &[]);
+    let o = run_grid(&plain, &res);
     assert!(o.status.success(), "{}", stderr(&o));
     let g = grid(dir.path(), SEQUENTIAL, "");
-    let o = run_grid(&g, &res, &[]);
+    let o = run_grid(&g, &res);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(

@@ -11,7 +11,8 @@ fn python_command(script: &str) -> String {
     format!("python3 {}", repo().join(script).display())
 }
 
-/// Runs `explore` with `extra` arguments; returns the output directory's summary.
+/// Runs `explore` from `start` (empty: the default) with `extra` arguments; returns the output
+/// directory's summary.
 fn explore(
     building: &Path,
     seed: u64,
@@ -19,24 +20,12 @@ fn explore(
     out: &Path,
     extra: &[&str],
 ) -> serde_json::Value {
-    let seed = seed.to_string();
-    let mut args = vec![
-        "explore",
-        "--building",
-        building.to_str().unwrap(),
-        "--seed",
-        &seed,
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ];
+    let mut args: Vec<&str> = Vec::new();
     if !start.is_empty() {
         args.extend_from_slice(&["--start", start]);
     }
     args.extend_from_slice(extra);
-    let o = run(&args);
-    assert!(o.status.success(), "{}", stderr(&o));
-    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+    explore_with(building, seed, out, &args)
 }
 
 fn read(p: PathBuf) -> String {

@@ -76,13 +76,7 @@ fn a_grid_runs_external_strategies_beside_the_built_in_ones() {
     );
     let g = project(dir.path(), "[1, 2]", &strategies);
     let res = dir.path().join("res");
-    let o = run(&[
-        "run",
-        g.to_str().unwrap(),
-        "--results",
-        res.to_str().unwrap(),
-        "-q",
-    ]);
+    let o = run_grid(&g, &res);
     // The crashing strategy fails its own two jobs, with its message; the rest are stored.
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
@@ -97,13 +91,7 @@ fn a_grid_runs_external_strategies_beside_the_built_in_ones() {
     }
     // The program's identity is in its jobs' ids: the same grid again has nothing to do; a
     // changed program makes new jobs.
-    let again = run(&[
-        "run",
-        g.to_str().unwrap(),
-        "--results",
-        res.to_str().unwrap(),
-        "-q",
-    ]);
+    let again = run_grid(&g, &res);
     assert!(
         stdout(&again).contains("nothing to do"),
         "{}",
@@ -112,13 +100,7 @@ fn a_grid_runs_external_strategies_beside_the_built_in_ones() {
     let script = dir.path().join("strategies/nearest.py");
     let text = std::fs::read_to_string(&script).unwrap();
     std::fs::write(&script, format!("{text}\n# changed\n")).unwrap();
-    let changed = run(&[
-        "run",
-        g.to_str().unwrap(),
-        "--results",
-        res.to_str().unwrap(),
-        "-q",
-    ]);
+    let changed = run_grid(&g, &res);
     assert!(
         stdout(&changed).contains("done: 2 jobs run now, 6 stored before"),
         "{}",

@@ -341,7 +341,7 @@ fn python_dir() -> Option<PathBuf> {
 }
 
 /// What the program said of itself.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Hello {
     pub name: String,
     pub needs_layout_gain: bool,
@@ -501,11 +501,6 @@ impl ExternalStrategy {
     /// What the program said of itself.
     pub fn hello(&self) -> &Hello {
         &self.hello
-    }
-
-    /// The program.
-    pub fn program(&self) -> &StrategyProgram {
-        &self.program
     }
 
     /// Announces a run (`run` is the message's content besides its type) and waits for the
