@@ -1633,7 +1633,7 @@ impl Explorer<'_> {
             }
             // 4. A closer look (see `approach`).
             if !early_stop {
-                if let Some((i, goal_cell, wps)) = self.approach(&goals, &plan) {
+                if let Some((i, goal_cell, wps)) = self.approach(&frontiers, &goals, &plan) {
                     return self.set_goal(&frontiers, i, goal_cell, wps, None);
                 }
             }
@@ -1794,6 +1794,7 @@ impl Explorer<'_> {
     /// Returns the frontier's index, the goal (map cell) and the path's waypoints.
     fn approach(
         &mut self,
+        frontiers: &[Frontier],
         goals: &[Option<Cell>],
         plan: &Plan,
     ) -> Option<(usize, Cell, Vec<Vec2>)> {
@@ -1807,6 +1808,13 @@ impl Explorer<'_> {
         for (i, g) in goals.iter().enumerate() {
             let Some(g) = *g else { continue };
             if plan.distance_m(g).is_none() {
+                continue;
+            }
+            // Slivers behind a wall and corners seen at a slant are not worth the drive; a
+            // doorway opens onto a room. The baseline's gain (not the strategy's: a layout's
+            // wall line may close the very doorway; not cached: the caches hold the strategy's).
+            let (grid, candidate) = (&self.map.occupancy, frontiers[i].candidate);
+            if information_gain(grid, candidate, range_m) < CLOSER_LOOK_MIN_GAIN_M2 {
                 continue;
             }
             let target = frame.world_from_cell(g);
@@ -2046,8 +2054,10 @@ const DISTANCE_FACTOR: u32 = 4;
 const TARGET_SEARCH_CELLS: i32 = 4;
 /// Largest extra cost of entering a cell near a wall (cost units, 10 per straight step).
 const MAX_EXTRA: u32 = 10;
+/// Least baseline gain (m2) of a frontier worth a closer look (see `Explorer::approach`): two
+/// square metres, about what a doorway's view adds at once; slivers and corners add less.
+const CLOSER_LOOK_MIN_GAIN_M2: f64 = 2.0;
 
-/// `TARGET_SEARCH_CELLS` in cells of the distance grid (the same distance in metres).
 /// A policy's answer as a decision uses it: one candidate (the next best is asked for when it
 /// has no path), a ranking (the first with a path), none, or stop.
 enum Answer {
