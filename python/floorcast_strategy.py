@@ -41,9 +41,12 @@ class Strategy:
     #: What floorcast should compute and send besides the baseline: "layout_gain" (the
     #: candidates' `layout_gain_m2`), "map" (the decide messages' `map_changes`).
     needs = ()
+    #: The strategy's own parameters for the current run (the run message's `params`: a
+    #: grid's `params` table, or `explore --strategy-params`); set before `new_run`.
+    params = {}
 
     def new_run(self, run):
-        """The run message (building, seed, start, settings, map geometry)."""
+        """The run message (building, seed, start, settings, params, map geometry)."""
         self.run = run
 
     def decide(self, d):
@@ -214,6 +217,8 @@ def run(strategy):
                 sys.stderr.flush()
             send(_check_hello(strategy))
         elif kind == "run":
+            params = msg.get("params")
+            strategy.params = params if isinstance(params, dict) else {}
             strategy.new_run(msg)
             send({"type": "ready"})
         elif kind == "decide":

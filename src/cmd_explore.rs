@@ -34,6 +34,11 @@ pub struct ExploreArgs {
     /// 0.01 to 3600.
     #[arg(long, value_name = "SECONDS", default_value_t = floorcast_worker::external::DEFAULT_TIMEOUT_S, requires = "strategy_command")]
     strategy_timeout_s: f64,
+    /// The --strategy-command program's own parameters, a JSON object (at most 64 KiB), e.g.
+    /// '{"stop_below_m2": 5}': sent to it in the run message as `params` and recorded with
+    /// the run.
+    #[arg(long, value_name = "JSON", requires = "strategy_command")]
+    strategy_params: Option<String>,
     /// Seed of the run's randomness (odometry error, laser noise).
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -153,6 +158,11 @@ pub fn run(a: ExploreArgs) -> Result<()> {
                 a.strategy_timeout_s,
             )
             .map_err(|e| anyhow::anyhow!("--strategy-command: {e}"))?;
+            let program = match &a.strategy_params {
+                Some(text) => program.with_params(strategy_params(text)?),
+                None => Ok(program),
+            }
+            .map_err(|e| anyhow::anyhow!("--strategy-params: {e}"))?;
             let probe = ExternalStrategy::start(&program)?;
             let name = probe.hello().name.clone();
             probe.finish()?;
@@ -343,4 +353,17 @@ fn trajectory_csv(r: &RunResult) -> String {
         );
     }
     s
+}
+
+/// `--strategy-params`: a JSON object.
+fn strategy_params(text: &str) -> anyhow::Result<serde_json::Map<String, serde_json::Value>> {
+    match serde_json::from_str::<serde_json::Value>(text) {
+        Ok(serde_json::Value::Object(map)) => Ok(map),
+        Ok(_) => Err(anyhow::anyhow!(
+            "--strategy-params: expected a JSON object such as '{{\"stop_below_m2\": 5}}'"
+        )),
+        Err(e) => Err(anyhow::anyhow!(
+            "--strategy-params: not JSON ({e}); expected an object such as '{{\"stop_below_m2\": 5}}'"
+        )),
+    }
 }

@@ -125,6 +125,26 @@ fn nearest_frontier_first_explores_the_small_building() {
     assert!(s["explored_fraction"].as_f64().unwrap() >= 0.97, "{s}");
 }
 
+/// A strategy's own parameters reach it in the run message and are recorded with the run:
+/// `nearest.py` stops exploring when no candidate's gain reaches `stop_below_m2`.
+#[test]
+fn a_strategy_gets_its_params() {
+    let dir = tempfile::tempdir().unwrap();
+    let command = python_command("examples/strategies/nearest.py");
+    let params = r#"{"stop_below_m2": 1e9, "note": ["any", {"json": true}]}"#;
+    let s = explore(
+        &repo().join("buildings/small.toml"),
+        1,
+        "",
+        dir.path(),
+        &["--strategy-command", &command, "--strategy-params", params],
+    );
+    assert_eq!(s["end_reason"], "early stop", "{s}");
+    assert_eq!(s["decisions"], 0, "{s}");
+    let given: serde_json::Value = serde_json::from_str(params).unwrap();
+    assert_eq!(s["strategy_program"]["params"], given, "{s}");
+}
+
 #[test]
 fn a_strategy_that_needs_the_layout_and_the_map_gets_them() {
     let dir = tempfile::tempdir().unwrap();
@@ -168,12 +188,18 @@ fn a_strategy_that_stops_ends_the_run_as_an_early_stop() {
 /// A program that breaks the protocol fails the run: exit 2, one line naming the program and
 /// what it did, no output directory left behind.
 fn fails_cleanly(command: &str, needles: &[&str]) {
+    fails_cleanly_with(command, &[], needles);
+}
+
+/// As [`fails_cleanly`], with `extra` arguments.
+fn fails_cleanly_with(command: &str, extra: &[&str], needles: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = run(&[
+    let building = repo().join("buildings/small.toml");
+    let mut args = vec![
         "explore",
         "--building",
-        repo().join("buildings/small.toml").to_str().unwrap(),
+        building.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
         "--quiet",
@@ -181,7 +207,9 @@ fn fails_cleanly(command: &str, needles: &[&str]) {
         "2",
         "--strategy-command",
         command,
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let o = run(&args);
     assert_clean_failure(&o, needles);
     assert!(!out.exists(), "an output directory was left behind");
 }
@@ -216,6 +244,26 @@ broken_strategy_cases! {
         ["--strategy-command", "cannot split", "unclosed quote"];
     empty_command: "  " =>
         ["--strategy-command", "the strategy command is empty"];
+}
+
+macro_rules! bad_params_cases {
+    ($($name:ident: $params:expr => [$($needle:expr),*];)*) => {$(
+        #[test]
+        fn $name() {
+            let command = python_command("examples/strategies/nearest.py");
+            let params: String = $params.into();
+            fails_cleanly_with(&command, &["--strategy-params", &params], &[$($needle),*]);
+        }
+    )*};
+}
+
+bad_params_cases! {
+    params_not_an_object: "[1, 2]" =>
+        ["--strategy-params", "expected a JSON object"];
+    params_not_json: "{stop_below_m2 = 5}" =>
+        ["--strategy-params", "not JSON", "expected an object"];
+    params_too_large: format!(r#"{{"blob": "{}"}}"#, "x".repeat(70_000)) =>
+        ["--strategy-params", "bytes of JSON (at most 65536)"];
 }
 
 #[test]

@@ -136,6 +136,22 @@ fn grid_errors_name_the_external_strategy_field() {
             "[[strategies]]\nname = \"baseline\"\ntimeout_s = 5\n",
             "strategies[0].timeout_s: belongs to an external strategy",
         ),
+        (
+            "[[strategies]]\nname = \"baseline\"\nparams = { a = 1 }\n",
+            "strategies[0].params: belongs to an external strategy",
+        ),
+        (
+            "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\nparams = { when = 2026-11-25 }\n",
+            "strategies[0].params.when: 2026-11-25 is a TOML date or time",
+        ),
+        (
+            "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\nparams = { a = { b = [1.0, nan] } }\n",
+            "strategies[0].params.a.b[1]: NaN has no JSON form",
+        ),
+        (
+            "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\nparams = 5\n",
+            "params = 5 | ^ invalid type: integer `5`, expected a map",
+        ),
     ];
     for (strategies, needle) in cases {
         let g = project(dir.path(), "[1]", strategies);
@@ -147,8 +163,10 @@ fn grid_errors_name_the_external_strategy_field() {
 #[test]
 fn remote_workers_receive_the_program_and_a_hanging_one_fails_only_its_jobs() {
     let dir = tempfile::tempdir().unwrap();
+    // `stops` is nearest.py with a parameter that makes it stop at once: the parameters travel
+    // with the job.
     let strategies = format!(
-        "{BASELINES}\n[[strategies]]\nlabel = \"hangs\"\ncommand = [\"python3\", \"../strategies/hang.py\"]\ntimeout_s = 1\n"
+        "{BASELINES}\n[[strategies]]\nlabel = \"hangs\"\ncommand = [\"python3\", \"../strategies/hang.py\"]\ntimeout_s = 1\n[[strategies]]\nlabel = \"stops\"\ncommand = [\"python3\", \"../strategies/nearest.py\"]\nparams = {{ stop_below_m2 = 1e9 }}\n"
     );
     let g = project(dir.path(), "[1, 2]", &strategies);
     let res = dir.path().join("res");
@@ -159,7 +177,7 @@ fn remote_workers_receive_the_program_and_a_hanging_one_fails_only_its_jobs() {
     assert_eq!((c1, c2), (Some(0), Some(0)), "{out1}\n---\n{out2}");
     // The hanging strategy's two jobs failed, named; the grid went on.
     assert_eq!(cc, Some(2), "{outc}");
-    assert!(outc.contains("2 of 6 jobs failed"), "{outc}");
+    assert!(outc.contains("2 of 8 jobs failed"), "{outc}");
     assert!(
         outc.contains("did not answer decision 0 within 1 s"),
         "{outc}"
@@ -171,5 +189,16 @@ fn remote_workers_receive_the_program_and_a_hanging_one_fails_only_its_jobs() {
             .iter()
             .all(|s| rows[&(label.to_string(), s.to_string())]["worker"].starts_with('w'))
     };
-    assert!(remote("baseline.py") && remote("hangs"), "{rows:?}");
+    assert!(
+        remote("baseline.py") && remote("hangs") && remote("stops"),
+        "{rows:?}"
+    );
+    for seed in ["1", "2"] {
+        let row = &rows[&("stops".to_string(), seed.to_string())];
+        assert_eq!(
+            (row["status"].as_str(), row["end_reason"].as_str()),
+            ("ok", "early stop"),
+            "{row:?}"
+        );
+    }
 }

@@ -145,6 +145,8 @@ struct StrategySpec {
     files: Vec<String>,
     /// Seconds the external strategy has for each reply.
     timeout_s: Option<f64>,
+    /// The external strategy's own parameters, sent to it in the run message.
+    params: Option<toml::Table>,
     /// How the strategy is reported (default: its name; required with `command`). Lets one
     /// grid compare parameter sets.
     label: Option<String>,
@@ -564,6 +566,7 @@ impl Plan {
                     for (key, given) in [
                         ("files", !s.files.is_empty()),
                         ("timeout_s", s.timeout_s.is_some()),
+                        ("params", s.params.is_some()),
                     ] {
                         if given {
                             return Err(invalid(
@@ -589,6 +592,14 @@ impl Plan {
                             .unwrap_or(floorcast_worker::external::DEFAULT_TIMEOUT_S),
                     )
                     .map_err(|p| invalid(&format!("{field}.command"), p))?;
+                    let params = match &s.params {
+                        Some(t) => params_json(t, &format!("{field}.params"))
+                            .map_err(|(f, p)| invalid(&f, p))?,
+                        None => serde_json::Map::new(),
+                    };
+                    let program = program
+                        .with_params(params)
+                        .map_err(|p| invalid(&format!("{field}.params"), p))?;
                     let contents = program
                         .read_files()
                         .map_err(|p| invalid(&format!("{field}.command"), p))?;
@@ -1018,13 +1029,60 @@ struct Resolved {
 }
 
 /// What identifies an external strategy's program: its command as written, its files and
-/// their hash (not where they are, nor its timeout).
+/// their hash, its params when it has any (not where it is, nor its timeout).
 fn program_identity(p: &StrategyProgram) -> serde_json::Value {
-    serde_json::json!({
+    let mut id = serde_json::json!({
         "command": p.command,
         "files": p.files,
         "files_sha256": p.files_sha256,
-    })
+    });
+    if !p.params.is_empty() {
+        id["params"] = serde_json::Value::Object(p.params.clone());
+    }
+    id
+}
+
+/// A strategy's `params` table as JSON; TOML's dates and times, infinities and NaNs have no
+/// JSON form and are refused (the failing field and why).
+fn params_json(
+    t: &toml::Table,
+    field: &str,
+) -> Result<serde_json::Map<String, serde_json::Value>, (String, String)> {
+    fn value(v: &toml::Value, field: &str) -> Result<serde_json::Value, (String, String)> {
+        use serde_json::Value as J;
+        Ok(match v {
+            toml::Value::String(s) => J::String(s.clone()),
+            toml::Value::Integer(i) => J::from(*i),
+            toml::Value::Boolean(b) => J::Bool(*b),
+            toml::Value::Float(x) => match serde_json::Number::from_f64(*x) {
+                Some(n) => J::Number(n),
+                None => {
+                    return Err((
+                        field.to_string(),
+                        format!("{x} has no JSON form (expected a finite number)"),
+                    ))
+                }
+            },
+            toml::Value::Datetime(d) => {
+                return Err((
+                    field.to_string(),
+                    format!(
+                        "{d} is a TOML date or time, which JSON has not (write it as a string)"
+                    ),
+                ))
+            }
+            toml::Value::Array(a) => J::Array(
+                a.iter()
+                    .enumerate()
+                    .map(|(i, x)| value(x, &format!("{field}[{i}]")))
+                    .collect::<Result<_, _>>()?,
+            ),
+            toml::Value::Table(t) => J::Object(params_json(t, field)?),
+        })
+    }
+    t.iter()
+        .map(|(k, v)| Ok((k.clone(), value(v, &format!("{field}.{k}"))?)))
+        .collect()
 }
 
 /// The id of an external strategy's job: the built-in id's hash with the program's identity.

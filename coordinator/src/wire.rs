@@ -180,6 +180,9 @@ pub struct WireProgram {
     pub files: Vec<String>,
     pub files_sha256: String,
     pub timeout_s: f64,
+    /// The strategy's own parameters (sent to it in the run message).
+    #[serde(default, skip_serializing_if = "serde_json::Map::is_empty")]
+    pub params: serde_json::Map<String, serde_json::Value>,
     /// Each file's name as written (relative to the grid file) and its bytes in base64.
     pub contents: Vec<(String, String)>,
 }
@@ -193,6 +196,7 @@ impl WireProgram {
             files: p.files.clone(),
             files_sha256: p.files_sha256.clone(),
             timeout_s: p.timeout_s,
+            params: p.params.clone(),
             contents: contents
                 .iter()
                 .map(|(n, b)| (n.clone(), b64.encode(b)))
@@ -225,7 +229,8 @@ impl WireProgram {
             &self.files_sha256,
             self.timeout_s,
             root,
-        )
+        )?
+        .with_params(self.params.clone())
     }
 }
 

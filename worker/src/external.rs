@@ -17,7 +17,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use serde_json::{json, Map, Value};
 use sim_core::explore::{DecisionView, Needs, Policy, Reply, RunEnd};
 use sim_core::grid::{GridFrame, Occupancy};
 
@@ -27,6 +27,8 @@ pub const PROTOCOL_VERSION: u64 = 1;
 pub const DEFAULT_TIMEOUT_S: f64 = 10.0;
 /// The longest reply line read (bytes).
 const MAX_LINE: usize = 1 << 20;
+/// The largest `params` object (bytes of its JSON).
+pub const MAX_PARAMS_BYTES: usize = 64 << 10;
 /// Stderr kept from a program (bytes; the rest is dropped).
 const MAX_STDERR: usize = 1 << 20;
 
@@ -47,6 +49,10 @@ pub struct StrategyProgram {
     pub files_sha256: String,
     /// Seconds the program has for each reply.
     pub timeout_s: f64,
+    /// The strategy's own parameters, sent to it in the run message (`params`): part of its
+    /// identity, so that one program with other parameters is another strategy.
+    #[serde(default, skip_serializing_if = "Map::is_empty")]
+    pub params: Map<String, Value>,
     /// Where the words and files are relative to (not part of the identity).
     #[serde(skip)]
     pub dir: PathBuf,
@@ -95,11 +101,24 @@ impl StrategyProgram {
             files,
             files_sha256: String::new(),
             timeout_s,
+            params: Map::new(),
             dir: dir.to_path_buf(),
             received: false,
         };
         p.files_sha256 = p.hash_files()?;
         Ok(p)
+    }
+
+    /// The program with its own parameters (at most [`MAX_PARAMS_BYTES`] of JSON).
+    pub fn with_params(mut self, params: Map<String, Value>) -> Result<Self, String> {
+        let bytes = Value::Object(params.clone()).to_string().len();
+        if bytes > MAX_PARAMS_BYTES {
+            return Err(format!(
+                "the strategy's params take {bytes} bytes of JSON (at most {MAX_PARAMS_BYTES}); pass large data as a file"
+            ));
+        }
+        self.params = params;
+        Ok(self)
     }
 
     /// The program from a command line split as a shell splits words.
@@ -237,6 +256,7 @@ impl StrategyProgram {
             files: files.into_iter().map(moved_word).collect(),
             files_sha256: sha256.to_string(),
             timeout_s,
+            params: Map::new(),
             dir,
             received: true,
         })
@@ -812,7 +832,15 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
     let settings = crate::Settings::default();
     let start = sim_core::Pose::new(2.4, 0.7, 0.0);
     let begun = s.begin(
-        run_message("check", "0", 1, start, &settings, &map.frame),
+        run_message(
+            "check",
+            "0",
+            1,
+            start,
+            &settings,
+            &program.params,
+            &map.frame,
+        ),
         false,
     );
     if !push("run", begun.map(|_| "ready".into()).map_err(|e| e.what)) {
@@ -901,13 +929,14 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
     checks
 }
 
-/// The run message's content (besides its type) for a run.
+/// The run message's content (besides its type) for a run of a strategy with `params`.
 pub fn run_message(
     building_name: &str,
     building_hash: &str,
     seed: u64,
     start: sim_core::Pose,
     settings: &crate::Settings,
+    params: &Map<String, Value>,
     frame: &GridFrame,
 ) -> Value {
     json!({
@@ -916,6 +945,7 @@ pub fn run_message(
         "seed": seed,
         "start": [start.x_m, start.y_m, start.theta_rad],
         "settings": every_setting(settings),
+        "params": params,
         "map": {
             "resolution_m": frame.resolution_m,
             "width": frame.width,

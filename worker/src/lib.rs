@@ -192,6 +192,7 @@ pub fn run_job(
                     job.seed,
                     start,
                     &job.settings,
+                    &program.params,
                     &frame,
                 ),
                 job.settings.charge_compute,
