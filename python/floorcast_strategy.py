@@ -14,7 +14,7 @@ a strategy only decides:
             if d["time_s"] > 3600:
                 return None  # stop exploring
             best = min(d["candidates"], key=lambda c: (c["path_m"], c["id"]))
-            return best["id"]  # or a list of ids: try them in this order
+            return best["id"]  # or a list of ids (try them in this order), or goal(x, y)
 
     run(Nearest())
 
@@ -51,11 +51,24 @@ class Strategy:
 
     def decide(self, d):
         """The decide message -> a candidate id (go there), a list of ids (try them in this
-        order, take the first with a drivable path) or None (stop exploring now)."""
+        order, take the first with a drivable path), goal(x, y) (go to a point of your own)
+        or None (stop exploring now)."""
         raise NotImplementedError("a Strategy must override decide()")
 
     def end_run(self, end):
         """The end message (reason, exploration_time_s, explored_fraction, decisions)."""
+
+
+class goal(tuple):
+    """A point of the strategy's own to drive to, `goal(x, y)` in metres in the map frame, as
+    `decide`'s return value. When no drivable path leads there, `decide` is called again for
+    the same decision with the point in the message's `unreachable_goal`."""
+
+    def __new__(cls, x, y):
+        x, y = float(x), float(y)
+        if not (_finite(x) and _finite(y)):
+            raise ValueError("goal(%r, %r): a goal point's coordinates must be finite" % (x, y))
+        return super().__new__(cls, (x, y))
 
 
 def _fmax(a, b):
@@ -150,7 +163,8 @@ def _as_id(x, ids):
         i = operator.index(x)
     except TypeError:
         raise TypeError(
-            "decide() returned %r: expected a candidate id (int), a list of ids or None" % (x,)
+            "decide() returned %r: expected a candidate id (int), a list of ids, goal(x, y) or None"
+            % (x,)
         ) from None
     if i not in ids:
         raise ValueError("decide() returned id %d, not a candidate of this decide message" % i)
@@ -161,6 +175,8 @@ def _reply_to_decide(result, d):
     ids = {c["id"] for c in d["candidates"]}
     if result is None:
         return {"type": "stop"}
+    if isinstance(result, goal):
+        return {"type": "goal", "point": [result[0], result[1]]}
     if isinstance(result, (list, tuple)):
         ranked = [_as_id(x, ids) for x in result]
         if not ranked:

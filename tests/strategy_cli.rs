@@ -145,6 +145,32 @@ fn a_strategy_gets_its_params() {
     assert_eq!(s["strategy_program"]["params"], given, "{s}");
 }
 
+/// A strategy's own goal points (goal replies): one off the map is reported back as
+/// unreachable at the next attempt; the others are driven to, and the building explored.
+#[test]
+fn a_strategy_drives_to_points_of_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let command = python_command("tests/strategies/goal_points.py");
+    let s = explore(
+        &repo().join("buildings/small.toml"),
+        1,
+        "",
+        dir.path(),
+        &["--strategy-command", &command],
+    );
+    assert_eq!(s["end_reason"], "complete", "{s}");
+    assert!(s["explored_fraction"].as_f64().unwrap() >= 0.97, "{s}");
+    let log = read(dir.path().join("strategy-stderr.txt"));
+    assert!(log.contains("told unreachable: True"), "{log}");
+    let points: usize = log
+        .split("goal_points: ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{log}"));
+    assert!(points >= 5, "{log}");
+}
+
 #[test]
 fn a_strategy_that_needs_the_layout_and_the_map_gets_them() {
     let dir = tempfile::tempdir().unwrap();
@@ -234,6 +260,10 @@ broken_strategy_cases! {
         ["nonsense.py", "answered decision 0 with a line that is not a protocol message: 'this is not json'"];
     chatty: python_command("tests/strategies/chatty.py") =>
         ["chatty.py", "'debug: deciding'", "logs go to stderr"];
+    goal_not_a_point: format!("{} '{{\"type\":\"goal\",\"point\":\"here\"}}'", python_command("tests/strategies/nonsense.py")) =>
+        ["nonsense.py", "answered decision 0 with {\"point\":\"here\",\"type\":\"goal\"} (expected \"point\": [x, y], metres in the map frame)"];
+    goal_of_three_numbers: format!("{} '{{\"type\":\"goal\",\"point\":[1,2,3]}}'", python_command("tests/strategies/nonsense.py")) =>
+        ["nonsense.py", "(expected \"point\": [x, y]"];
     illegal_id: python_command("tests/strategies/illegal_id.py") =>
         ["illegal_id.py", "chose candidate 99999, which decision 0 did not offer"];
     wrong_protocol: python_command("tests/strategies/wrong_protocol.py") =>

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Test strategy: shakes hands, gets ready, answers the first decide message with a line that
-is not JSON."""
+is not JSON, or with the line given as its argument."""
 import json
 import sys
 
@@ -17,4 +17,4 @@ for line in sys.stdin:
     elif msg["type"] == "run":
         send(json.dumps({"type": "ready"}))
     elif msg["type"] == "decide":
-        send("this is not json")
+        send(sys.argv[1] if len(sys.argv) > 1 else "this is not json")

@@ -702,6 +702,9 @@ impl ExternalStrategy {
             "pose": [view.pose.x_m, view.pose.y_m, view.pose.theta_rad],
             "candidates": candidates,
         });
+        if let Some(p) = view.unreachable_goal {
+            msg["unreachable_goal"] = json!([p.x, p.y]);
+        }
         if self.hello.needs_map {
             let data = &view.map.data;
             if self.sent_map.len() != data.len() {
@@ -872,11 +875,13 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         time_s: 1.0 + decision as f64,
         pose: start,
         candidates,
+        unreachable_goal: None,
         map: &map,
     };
     let shown = |r: &Reply| match r {
         Reply::Choose(id) => format!("choose {id}"),
         Reply::Rank(ids) => format!("rank {ids:?}"),
+        Reply::Goal(p) => format!("goal [{}, {}]", p.x, p.y),
         Reply::Stop => "stop".into(),
         Reply::Pass => "pass".into(),
         Reply::Fail => "failed".into(),
@@ -1076,9 +1081,20 @@ fn parse_reply(v: &Value, view: &DecisionView<'_>, what: &str) -> Result<Reply, 
                 parsed.into_iter().map(|i| i as usize).collect(),
             ))
         }
+        Some("goal") => {
+            let point = v.get("point").and_then(Value::as_array);
+            let xy: Option<Vec<f64>> = point.and_then(|p| p.iter().map(Value::as_f64).collect());
+            match xy.as_deref() {
+                Some(&[x, y]) => Ok(Reply::Goal(sim_core::Vec2::new(x, y))),
+                _ => Err(format!(
+                    "answered {what} with {} (expected \"point\": [x, y], metres in the map frame)",
+                    quote_json(v)
+                )),
+            }
+        }
         Some("stop") => Ok(Reply::Stop),
         _ => Err(format!(
-            "answered {what} with {} (expected a choose, rank or stop message)",
+            "answered {what} with {} (expected a choose, rank, goal or stop message)",
             quote_json(v)
         )),
     }

@@ -44,7 +44,9 @@ pub mod strategy;
 
 pub use crate::utility::UtilityDistance;
 pub use follow::{Command, FollowConfig, PathFollower};
-pub use policy::{CandidateView, DecisionView, Needs, Policy, Reply, RunEnd};
+pub use policy::{
+    CandidateView, DecisionView, Needs, Policy, Reply, RunEnd, MAX_UNREACHABLE_GOALS,
+};
 pub use strategy::{EarlyStop, GainModel, Strategy};
 
 use self::calibration::OdometryCalibration;
@@ -1568,10 +1570,28 @@ impl Explorer<'_> {
             // as the robot comes closer), so a candidate without a path is passed over for this
             // decision (the strategy is asked again without it), not blacklisted.
             let mut attempt = 0;
+            // A goal point of the policy's own without a path (`Reply::Goal`), and how many.
+            let (mut unreachable_goal, mut unreachable_goals) = (None, 0);
             let chosen = loop {
-                match self.ask_policy(&frontiers, &goals, &plan, &scores, attempt, use_layout) {
+                let asked = Asked {
+                    attempt,
+                    use_layout,
+                    unreachable_goal: unreachable_goal.take(),
+                };
+                match self.ask_policy(&frontiers, &goals, &plan, &scores, asked) {
                     Answer::Stop => break None,
                     Answer::Nothing => break Some(None),
+                    Answer::Point(p) => {
+                        if let Some((goal_cell, wps)) = self.point_goal(p) {
+                            return self.set_point_goal(frontiers.len(), p, goal_cell, wps);
+                        }
+                        unreachable_goals += 1;
+                        if unreachable_goals >= MAX_UNREACHABLE_GOALS {
+                            break Some(None);
+                        }
+                        unreachable_goal = Some(p);
+                        attempt += 1;
+                    }
                     Answer::One(best) => {
                         let goal_cell = goals[best].expect("best candidate is reachable");
                         match self.waypoints_to(&plan, goal_cell) {
@@ -1698,6 +1718,64 @@ impl Explorer<'_> {
         true
     }
 
+    /// The goal cell and path for a policy's own goal point `p` (`Reply::Goal`): the nearest
+    /// traversable map cell within 0.5 m of it, and a path there on the planning grid. `None`
+    /// when `p` is off the map or no path leads there.
+    fn point_goal(&mut self, p: Vec2) -> Option<(Cell, Vec<Vec2>)> {
+        let frame = self.map.frame;
+        let c = frame.cell_from_world(p);
+        frame.index(c)?;
+        let search = (0.5 / frame.resolution_m).ceil() as i32;
+        let goal = {
+            let trav = self.traversability();
+            if trav.at(c) {
+                Some(c)
+            } else {
+                nearest_by(c, search, |n| trav.at(n))
+            }
+        }?;
+        let plan = self.plan(&[goal]);
+        plan.distance_m(goal)?;
+        let wps = self.waypoints_to(&plan, goal)?;
+        Some((goal, wps))
+    }
+
+    /// Heads for a policy's own goal point `p` through `goal_cell` along `wps` (no frontier:
+    /// the goal ends on arrival, and is given up, as any, when the robot makes no progress).
+    /// `candidates`: how many were shown. Returns true.
+    fn set_point_goal(
+        &mut self,
+        candidates: usize,
+        p: Vec2,
+        goal_cell: Cell,
+        wps: Vec<Vec2>,
+    ) -> bool {
+        let now = self.sim.time_s();
+        self.follower = PathFollower::from(self.estimate.position(), wps);
+        let dist = self.follower.remaining_length_m(self.estimate.position());
+        self.decisions.push(Decision {
+            time_s: now,
+            pose: self.estimate,
+            goal: p,
+            candidates,
+            gain_m2: 0.0,
+            distance_m: dist,
+        });
+        self.goal = Some(Goal {
+            cell: goal_cell,
+            candidate: goal_cell,
+            look_at: p,
+            look_dir: None,
+            arrived: false,
+            frontier: Vec::new(),
+            decided_at_s: now,
+            known_cells_at: self.known_cells,
+            best_distance_m: dist,
+            best_distance_at_s: now,
+        });
+        true
+    }
+
     /// Asks the strategy's policy to choose among the reachable candidates (`scores` with a
     /// distance). [`Answer::Nothing`] when there is none, when the policy passes, or when it
     /// failed (`policy_failed`, also for a reply naming no candidate shown).
@@ -1707,9 +1785,13 @@ impl Explorer<'_> {
         goals: &[Option<Cell>],
         plan: &Plan,
         scores: &[CandidateScore],
-        attempt: usize,
-        use_layout: bool,
+        asked: Asked,
     ) -> Answer {
+        let Asked {
+            attempt,
+            use_layout,
+            unreachable_goal,
+        } = asked;
         // A built-in strategy's rule weighs the layout's gain only while it uses the layout.
         let layout_gain = self.policy_needs.layout_gain
             && (use_layout || matches!(self.policy, PolicySlot::External(_)));
@@ -1757,6 +1839,7 @@ impl Explorer<'_> {
             time_s: self.sim.time_s(),
             pose: self.estimate,
             candidates: &views,
+            unreachable_goal,
             map: &self.map.occupancy,
         };
         let (reply, charged_s) = self.policy.get().decide(&view);
@@ -1774,6 +1857,7 @@ impl Explorer<'_> {
             {
                 Answer::Ranked(ids)
             }
+            Reply::Goal(p) if p.x.is_finite() && p.y.is_finite() => Answer::Point(p),
             Reply::Pass => Answer::Nothing,
             Reply::Stop => Answer::Stop,
             _ => {
@@ -2059,12 +2143,21 @@ const MAX_EXTRA: u32 = 10;
 const CLOSER_LOOK_MIN_GAIN_M2: f64 = 2.0;
 
 /// A policy's answer as a decision uses it: one candidate (the next best is asked for when it
-/// has no path), a ranking (the first with a path), none, or stop.
+/// has no path), a ranking (the first with a path), a point of its own, none, or stop.
 enum Answer {
     One(usize),
     Ranked(Vec<usize>),
+    Point(Vec2),
     Nothing,
     Stop,
+}
+
+/// How a policy is asked within one decision: the attempt, whether a built-in strategy uses the
+/// layout now, and the goal point of the previous attempt that had no path.
+struct Asked {
+    attempt: usize,
+    use_layout: bool,
+    unreachable_goal: Option<Vec2>,
 }
 
 /// The run's policy: the built-in strategy's rule, or the caller's.

@@ -60,18 +60,30 @@ pub struct DecisionView<'a> {
     pub pose: Pose,
     /// The reachable candidates (never empty).
     pub candidates: &'a [CandidateView],
+    /// The point of the previous attempt's [`Reply::Goal`] when no drivable path led there.
+    pub unreachable_goal: Option<Vec2>,
     /// The map as the robot has built it.
     pub map: &'a OccupancyGrid,
 }
 
+/// Most [`Reply::Goal`] points without a drivable path in one decision; the next is taken as
+/// [`Reply::Pass`].
+pub const MAX_UNREACHABLE_GOALS: usize = 8;
+
 /// A policy's answer.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Reply {
     /// Drive to the candidate with this id.
     Choose(usize),
     /// Try these candidates in this order and take the first with a drivable path; the others
     /// are not tried at this decision.
     Rank(Vec<usize>),
+    /// Drive to this point (map frame, m), or to the nearest traversable cell within 0.5 m of
+    /// it: a goal of the policy's own, not a frontier's. When no drivable path leads there the
+    /// policy is asked again (the next attempt, with the point in
+    /// [`DecisionView::unreachable_goal`]); the [`MAX_UNREACHABLE_GOALS`]th such point in a
+    /// decision counts as [`Reply::Pass`]. A point that is not finite is a failure.
+    Goal(Vec2),
     /// None of these candidates: the decision goes on as when no candidate has a path (the
     /// explorer's last resorts, else the run ends).
     Pass,

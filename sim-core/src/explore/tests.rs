@@ -601,6 +601,8 @@ struct TestPolicy {
     behaviour: &'static str,
     charge_s: f64,
     asked: usize,
+    /// Views that reported the previous attempt's goal point unreachable.
+    told_unreachable: usize,
     ended: Option<RunEnd>,
 }
 
@@ -610,6 +612,7 @@ impl TestPolicy {
             behaviour,
             charge_s,
             asked: 0,
+            told_unreachable: 0,
             ended: None,
         }
     }
@@ -622,6 +625,11 @@ impl Policy for TestPolicy {
 
     fn decide(&mut self, view: &DecisionView<'_>) -> (Reply, f64) {
         self.asked += 1;
+        let off_map = Vec2::new(1e6, -1e6);
+        if let Some(p) = view.unreachable_goal {
+            assert_eq!(p, off_map);
+            self.told_unreachable += 1;
+        }
         let scores: Vec<CandidateScore> = view
             .candidates
             .iter()
@@ -642,6 +650,11 @@ impl Policy for TestPolicy {
             "fail-at-3" => Reply::Choose(best),
             "not-offered" => Reply::Choose(usize::MAX),
             "rank-twice" => Reply::Rank(vec![best, best]),
+            "goal-at-best" => {
+                Reply::Goal(view.candidates.iter().find(|c| c.id == best).unwrap().goal)
+            }
+            "goal-off-map" => Reply::Goal(off_map),
+            "goal-nan" => Reply::Goal(Vec2::new(f64::NAN, 0.0)),
             other => panic!("{other}"),
         };
         (reply, self.charge_s)
@@ -689,6 +702,7 @@ fn a_policy_decides_how_the_run_goes_on() {
         ("fail-at-3", Some(2), None),
         ("not-offered", Some(0), None),
         ("rank-twice", Some(0), None),
+        ("goal-nan", Some(0), None),
     ];
     for (behaviour, decisions, end) in cases {
         let mut p = TestPolicy::new(behaviour, 0.0);
@@ -704,6 +718,34 @@ fn a_policy_decides_how_the_run_goes_on() {
             r.explored_fraction
         );
     }
+}
+
+#[test]
+fn a_policy_drives_to_points_of_its_own() {
+    let mut p = TestPolicy::new("goal-at-best", 0.0);
+    let r = run_with_policy(&mut p);
+    assert_eq!(r.end_reason, EndReason::Complete);
+    assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
+    assert!(r.decisions.len() >= 3, "{}", r.decisions.len());
+    assert_eq!(p.told_unreachable, 0);
+}
+
+#[test]
+fn goal_points_without_a_path_count_as_a_pass() {
+    // Every decision: the policy is asked again after each unreachable point, told which it
+    // was, and its MAX_UNREACHABLE_GOALS-th counts as a pass; the run ends, it does not hang.
+    let mut p = TestPolicy::new("goal-off-map", 0.0);
+    let r = run_with_policy(&mut p);
+    // The robot goes only where the explorer's own last resorts (a closer look) send it.
+    assert!(r.decisions.iter().all(|d| d.gain_m2 == 0.0 && d.goal.x < 1e3));
+    assert_ne!(r.end_reason, EndReason::TimeLimit);
+    assert!(p.asked >= MAX_UNREACHABLE_GOALS, "{}", p.asked);
+    assert_eq!(p.asked % MAX_UNREACHABLE_GOALS, 0, "{}", p.asked);
+    assert_eq!(
+        p.told_unreachable,
+        p.asked / MAX_UNREACHABLE_GOALS * (MAX_UNREACHABLE_GOALS - 1)
+    );
+    assert!(p.ended.is_some());
 }
 
 #[test]
