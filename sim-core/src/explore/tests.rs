@@ -737,7 +737,10 @@ fn goal_points_without_a_path_count_as_a_pass() {
     let mut p = TestPolicy::new("goal-off-map", 0.0);
     let r = run_with_policy(&mut p);
     // The robot goes only where the explorer's own last resorts (a closer look) send it.
-    assert!(r.decisions.iter().all(|d| d.gain_m2 == 0.0 && d.goal.x < 1e3));
+    assert!(r
+        .decisions
+        .iter()
+        .all(|d| d.gain_m2 == 0.0 && d.goal.x < 1e3));
     assert_ne!(r.end_reason, EndReason::TimeLimit);
     assert!(p.asked >= MAX_UNREACHABLE_GOALS, "{}", p.asked);
     assert_eq!(p.asked % MAX_UNREACHABLE_GOALS, 0, "{}", p.asked);

@@ -1,0 +1,91 @@
+//! The layout state: the layout predicted from the map, rebuilt when the map has grown enough and
+//! a strategy needs it (`refresh_layout`), or the oracle's true rooms.
+
+use super::*;
+
+impl Explorer<'_> {
+    /// Recomputes the layout when the strategy uses it and the map has grown enough since the
+    /// last one. Returns whether gains should use the layout now.
+    pub(super) fn refresh_layout(&mut self) -> bool {
+        let st = &self.cfg.strategy;
+        if !st.uses_layout() && !self.policy_needs.layout_gain {
+            return false;
+        }
+        let cell_area = self.map.frame.cell_area_m2();
+        let grown_m2 = self.layout.as_ref().map_or(f64::INFINITY, |l| {
+            (self.known_cells.saturating_sub(l.known_cells_at)) as f64 * cell_area
+        });
+        if grown_m2 >= st.layout_update_m2 {
+            let grid = &self.map.occupancy;
+            // Judge the previous layout by what was revealed since (for the switch strategy).
+            if let Some(prev) = &self.layout {
+                let (mut known, mut free) = (0usize, 0usize);
+                for &i in &prev.predicted_unknown {
+                    match grid.data[i as usize] {
+                        Occupancy::Free => {
+                            known += 1;
+                            free += 1;
+                        }
+                        Occupancy::Occupied => known += 1,
+                        Occupancy::Unknown => {}
+                    }
+                }
+                if known as f64 * cell_area >= st.switch_min_area_m2
+                    && free as f64 >= st.switch_agreement * known as f64
+                {
+                    self.layout_trusted = true;
+                }
+            }
+            let mut raster = if st.layout_from_truth {
+                // The oracle: nothing to compute (and nothing to charge).
+                let to_map = MapToWorld::new(&self.estimate, &self.sim.true_pose());
+                LayoutRaster::exact(&true_layout(&self.rooms, &to_map), grid)
+            } else {
+                let mut made = None;
+                let layout_cfg = &self.cfg.layout;
+                let charged_s = match self.layout_cost.as_mut() {
+                    Some(cost) => cost(&mut || made = Some(reconstruct_layout(grid, layout_cfg))),
+                    None => 0.0,
+                };
+                let layout = made.unwrap_or_else(|| reconstruct_layout(grid, layout_cfg));
+                if charged_s.is_finite() && charged_s > 0.0 {
+                    self.compute_debt_s += charged_s;
+                    self.layout_compute_s += charged_s;
+                }
+                LayoutRaster::new(&layout, grid, st.max_wall_gap_m)
+            };
+            raster.through_openings = st.gain_through_openings;
+            let predicted_unknown = grid
+                .data
+                .iter()
+                .enumerate()
+                .filter(|(i, s)| {
+                    **s == Occupancy::Unknown && raster.inside(self.map.frame.cell_of_index(*i))
+                })
+                .map(|(i, _)| i as u32)
+                .collect();
+            self.layout = Some(LayoutState {
+                raster,
+                known_cells_at: self.known_cells,
+                predicted_unknown,
+            });
+            self.layouts_computed += 1;
+            // Cached gains were computed with the previous layout.
+            self.gains.clear();
+            self.room_gains.clear();
+        }
+        match st.gain {
+            GainModel::Baseline => false,
+            GainModel::Layout => true,
+            GainModel::Switch => self.layout_trusted,
+        }
+    }
+}
+
+/// The last layout and what is needed to judge it.
+pub(super) struct LayoutState {
+    pub(super) raster: LayoutRaster,
+    pub(super) known_cells_at: usize,
+    /// Cells unknown when the layout was made that it predicted inside a room.
+    pub(super) predicted_unknown: Vec<u32>,
+}

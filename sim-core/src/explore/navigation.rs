@@ -1,0 +1,463 @@
+//! Navigation: the planning and distance grids kept up to date with the map, the plans on them
+//! (`Plan`: path costs from the robot to every candidate on the distance grid, the path to the
+//! chosen one on the planning grid), the ladder of plans with less clearance (`Planning`), the
+//! goal kept, re-planned or given up while driving (`needs_decision`), and driving itself.
+
+use super::*;
+
+impl Explorer<'_> {
+    pub(super) fn needs_decision(&mut self) -> bool {
+        let cfg = self.cfg;
+        let now = self.sim.time_s();
+        let Some(goal) = &mut self.goal else {
+            return true;
+        };
+        // Whatever the goals, a robot that has not moved for long is stuck (e.g. alternating
+        // between goals it cannot approach, each new one restarting the progress timeout):
+        // abandon the current goal.
+        let position = self.estimate.position();
+        if (position - self.still_at).norm() > STILL_RADIUS_M {
+            self.still_at = position;
+            self.still_since_s = now;
+        } else if now - self.still_since_s > STILL_FACTOR * cfg.progress_timeout_s {
+            self.blacklist.give_up(
+                self.map.frame.world_from_cell(goal.candidate),
+                cfg.blacklist_radius_m,
+            );
+            self.goal = None;
+            self.still_since_s = now;
+            return true;
+        }
+        if goal.arrived {
+            // Turning toward the frontier; done when facing it.
+            let to = look_vector(goal, &self.estimate, cfg.robust_frontiers);
+            let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
+            if err.abs() > 0.15 && to.norm() > 0.05 && now - goal.best_distance_at_s < 10.0 {
+                return false;
+            }
+            self.last_reached = Some(self.map.frame.world_from_cell(goal.candidate));
+            return true;
+        }
+        // Periodically, once the map shows something new: without new information the choice
+        // would be the same (see `redecide_min_growth_m2`).
+        let grown_m2 = self.known_cells.saturating_sub(goal.known_cells_at) as f64
+            * self.map.frame.cell_area_m2();
+        if now - goal.decided_at_s >= cfg.redecide_period_s
+            && grown_m2 >= cfg.redecide_min_growth_m2
+        {
+            return true;
+        }
+        // The goal's frontier has (mostly) disappeared: nothing left to see there.
+        let still = goal
+            .frontier
+            .iter()
+            .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
+            .count();
+        if still * 5 < goal.frontier.len() {
+            return true;
+        }
+        // No progress along the path for too long: abandon the goal. (The length of the path
+        // left, not the straight line to the goal: a path around a wall first leads away.)
+        let d = self.follower.remaining_length_m(self.estimate.position());
+        if d < goal.best_distance_m - 0.1 {
+            goal.best_distance_m = d;
+            goal.best_distance_at_s = now;
+        } else if now - goal.best_distance_at_s > cfg.progress_timeout_s {
+            let p = self.map.frame.world_from_cell(goal.candidate);
+            self.blacklist.give_up(p, cfg.blacklist_radius_m);
+            self.goal = None;
+            return true;
+        }
+        // The map now shows an obstacle on the path: plan the path again (the goal is kept, and
+        // so is the time of the last progress), or choose another goal if it cannot be reached.
+        let to = goal.cell;
+        if std::mem::take(&mut self.walls_changed) && self.path_blocked() {
+            let Some(wps) = self.path_to(to) else {
+                return true;
+            };
+            self.follower = PathFollower::from(self.estimate.position(), wps);
+            let d = self.follower.remaining_length_m(self.estimate.position());
+            if let Some(goal) = &mut self.goal {
+                goal.best_distance_m = d;
+            }
+        }
+        false
+    }
+
+    /// Waypoints of a path from the robot to map cell `c`: as for a decision, a distance search
+    /// (stopping at `c`) on the distance grid, then the planning grid's search within a corridor
+    /// around its path ([`Self::waypoints_to`]). A search of the whole planning grid, guided by
+    /// the straight-line distance only, took 6 % of a run (its wall penalty leaves the
+    /// heuristic far below the true cost).
+    pub(super) fn path_to(&mut self, c: Cell) -> Option<Vec<Vec2>> {
+        let plan = self.plan(&[c]);
+        self.waypoints_to(&plan, c)
+    }
+
+    /// How far from obstacles the robot's centre must stay on planned paths: its radius and
+    /// the safety margin, or its radius alone while planning is relaxed (`Planning`).
+    pub(super) fn inflation_m(&self) -> f64 {
+        match self.planning {
+            Planning::WithMargin => self.cfg.sim.robot.radius_m + self.cfg.safety_margin_m,
+            Planning::NoMargin | Planning::Travelled => self.cfg.sim.robot.radius_m,
+        }
+    }
+
+    /// Plans at `level` from now on (every planning cell is recomputed when it changes).
+    pub(super) fn set_planning(&mut self, level: Planning) {
+        if self.planning == level {
+            return;
+        }
+        self.planning = level;
+        for (i, m) in self.coarse_dirty_mark.iter_mut().enumerate() {
+            if !*m {
+                *m = true;
+                self.coarse_dirty.push(i as u32);
+            }
+        }
+    }
+
+    /// Marks the planning cells that a map update may have changed: those of cells whose state
+    /// changed and, around cells that became or stopped being occupied, those within the reach
+    /// of the obstacle distance field (which decides traversability and the wall cost).
+    pub(super) fn mark_planning_cells(&mut self, flips: &[u32], free_changes: &[(u32, bool)]) {
+        let frame = self.map.frame;
+        let f = self.coarse.factor as i32;
+        let (cw, ch) = (
+            self.coarse.frame.width as i32,
+            self.coarse.frame.height as i32,
+        );
+        let mut mark = |x0: i32, y0: i32, x1: i32, y1: i32| {
+            for cy in y0.div_euclid(f).max(0)..=y1.div_euclid(f).min(ch - 1) {
+                for cx in x0.div_euclid(f).max(0)..=x1.div_euclid(f).min(cw - 1) {
+                    let i = (cy * cw + cx) as usize;
+                    if !self.coarse_dirty_mark[i] {
+                        self.coarse_dirty_mark[i] = true;
+                        self.coarse_dirty.push(i as u32);
+                    }
+                }
+            }
+        };
+        let reach = self.obstacles.cap_cells as i32 + 1;
+        for &i in flips {
+            let c = frame.cell_of_index(i as usize);
+            mark(c.x - reach, c.y - reach, c.x + reach, c.y + reach);
+        }
+        for &(i, _) in free_changes {
+            let c = frame.cell_of_index(i as usize);
+            mark(c.x, c.y, c.x, c.y);
+        }
+    }
+
+    pub(super) fn traversability(&self) -> Traversability<'_> {
+        Traversability::new(&self.map.occupancy, &self.obstacles, self.inflation_m())
+    }
+
+    /// Path costs from the robot (metres, plus a penalty for passing close to walls, so paths
+    /// keep to the middle of corridors and doors) on the distance grid, stopping once every
+    /// target (map cells) is settled; the path to the chosen one is then searched on the finer
+    /// planning grid ([`Plan::waypoints_to`]). A robot closer to a wall than the inflation
+    /// radius starts from the nearest passable cell (it then first drives out).
+    pub(super) fn plan(&mut self, targets: &[Cell]) -> Plan {
+        self.refresh_planning_grids();
+        let radius_m = self.inflation_m();
+        let robot = self.map.frame.cell_from_world(self.estimate.position());
+        let start_on = |grid: &CoarseCosts| start_cell(grid, robot, radius_m);
+        let far = self.far.clone();
+        let start = start_on(&far);
+        let far_targets: Vec<Cell> = targets
+            .iter()
+            .filter_map(|c| far.passable_near(*c, far_search_cells()))
+            .collect();
+        let field = dijkstra_padded(far.frame, start, far.padded(), MAX_EXTRA, &far_targets);
+        Plan {
+            far,
+            field,
+            near_start: start_on(&self.coarse),
+        }
+    }
+
+    /// Brings the planning and distance grids up to date with the map.
+    pub(super) fn refresh_planning_grids(&mut self) {
+        if self.coarse_dirty.is_empty() {
+            return;
+        }
+        const WALL_BAND_M: f64 = 0.3;
+        let radius_m = self.inflation_m();
+        // Not `self.traversability()`: the planning grid below is updated while this borrows
+        // only the map and the obstacle field.
+        let trav = Traversability::new(&self.map.occupancy, &self.obstacles, radius_m);
+        let travelled = (self.planning == Planning::Travelled).then_some(&self.travelled.data);
+        let occupancy = &self.map.occupancy.data;
+        let traversable = |i: usize| {
+            trav.at_index(i) || travelled.is_some_and(|t| t[i] && occupancy[i] == Occupancy::Free)
+        };
+        let res = self.map.frame.resolution_m;
+        let obstacles = &self.obstacles.data;
+        // The extra cost by obstacle distance, tabulated in steps of 1/8 cell (the field is
+        // capped, so the table is small) instead of evaluated per cell.
+        const STEPS_PER_CELL: f32 = 8.0;
+        let table: Vec<u32> = (0..=(self.obstacles.cap_cells as usize * 8 + 1))
+            .map(|k| {
+                let d_cells = k as f64 / STEPS_PER_CELL as f64;
+                let beyond = (d_cells * res - radius_m) / WALL_BAND_M;
+                if beyond >= 1.0 {
+                    0
+                } else {
+                    (MAX_EXTRA as f64 * (1.0 - beyond.max(0.0))).round() as u32
+                }
+            })
+            .collect();
+        let last = table.len() - 1;
+        let extra = |j: usize| table[((obstacles[j] * STEPS_PER_CELL) as usize).min(last)];
+        self.coarse
+            .recompute(self.map.frame, &self.coarse_dirty, traversable, extra);
+        // The distance grid's cells covering the changed planning cells.
+        let k = (DISTANCE_FACTOR / PLAN_FACTOR) as usize;
+        let (cw, fw, fh) = (
+            self.coarse.frame.width as usize,
+            self.far.frame.width as usize,
+            self.far.frame.height as usize,
+        );
+        let mut far_dirty: Vec<u32> = self
+            .coarse_dirty
+            .iter()
+            .map(|&i| ((i as usize % cw) / k, (i as usize / cw) / k))
+            .filter(|&(x, y)| x < fw && y < fh)
+            .map(|(x, y)| (y * fw + x) as u32)
+            .collect();
+        far_dirty.sort_unstable();
+        far_dirty.dedup();
+        self.far
+            .recompute(self.map.frame, &far_dirty, traversable, extra);
+        for &i in &self.coarse_dirty {
+            self.coarse_dirty_mark[i as usize] = false;
+        }
+        self.coarse_dirty.clear();
+    }
+
+    /// Whether the rest of the path being followed (from the start of the segment the robot is
+    /// on) crosses a planning cell that the map now shows impassable; the cells within one
+    /// planning cell of the robot are not tested (a robot close to a wall stands in one).
+    pub(super) fn path_blocked(&mut self) -> bool {
+        self.refresh_planning_grids();
+        let Some((start, rest)) = self.follower.current_segment() else {
+            return false;
+        };
+        let grid = &self.coarse;
+        let to_grid = |p: Vec2| grid_from_world(&grid.frame, p);
+        let robot = grid.frame.cell_from_world(self.estimate.position());
+        let mut from = to_grid(start);
+        let mut blocked = false;
+        for &w in rest {
+            let to = to_grid(w);
+            walk_segment(from, to, |c| {
+                let near_robot = (c.x - robot.x).abs() <= 1 && (c.y - robot.y).abs() <= 1;
+                blocked = !near_robot && !grid.passable(c);
+                !blocked
+            });
+            if blocked {
+                return true;
+            }
+            from = to;
+        }
+        false
+    }
+
+    /// Waypoints (world) of the path to map cell `c`, searched on the planning grid from the
+    /// robot's cell when `plan` was made (the grid has not changed since): first within a
+    /// corridor three cells of the distance grid wide around the path `plan` found there, which
+    /// touches few cells; over the whole grid if no path lies inside it.
+    pub(super) fn waypoints_to(&mut self, plan: &Plan, c: Cell) -> Option<Vec<Vec2>> {
+        let near = &self.coarse;
+        let goal = near.passable_near(c, TARGET_SEARCH_CELLS)?;
+        let (start, k) = (plan.near_start, (DISTANCE_FACTOR / PLAN_FACTOR) as i32);
+        let mut found = None;
+        if let Some(far_path) = plan.far_path(c) {
+            let frame = plan.far.frame;
+            let mut marked = Vec::with_capacity(far_path.len() * 3);
+            for p in &far_path {
+                for n in std::iter::once(*p).chain(p.neighbours8()) {
+                    if let Some(i) = frame.index(n) {
+                        if !self.corridor[i] {
+                            self.corridor[i] = true;
+                            marked.push(i);
+                        }
+                    }
+                }
+            }
+            let corridor = &self.corridor;
+            found =
+                self.astar
+                    .path_within(near.frame, start, near.padded(), MAX_EXTRA, goal, |n| {
+                        frame
+                            .index(Cell::new(n.x.div_euclid(k), n.y.div_euclid(k)))
+                            .is_some_and(|i| corridor[i])
+                    });
+            for i in marked {
+                self.corridor[i] = false;
+            }
+        }
+        let (path, _) = match found {
+            Some(p) => p,
+            None => self
+                .astar
+                .path(near.frame, start, near.padded(), MAX_EXTRA, goal)?,
+        };
+        Some(waypoints_by(&path, &near.frame, |n| near.passable(n)))
+    }
+
+    pub(super) fn drive(&mut self) {
+        let cfg = self.cfg;
+        if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
+            let to = look_vector(goal, &self.estimate, cfg.robust_frontiers);
+            let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
+            let w = (cfg.follow.heading_gain * err).clamp(
+                -cfg.sim.robot.max_turn_rate_radps,
+                cfg.sim.robot.max_turn_rate_radps,
+            );
+            self.sim.step(0.0, w);
+            return;
+        }
+        match self.follower.command(
+            &self.estimate,
+            &cfg.follow,
+            cfg.sim.robot.max_speed_mps,
+            cfg.sim.robot.max_turn_rate_radps,
+        ) {
+            Command::Drive { v_mps, w_radps } => self.sim.step(v_mps, w_radps),
+            Command::Arrived => {
+                // Goal reached: turn toward the unknown space behind the frontier.
+                if let Some(goal) = &mut self.goal {
+                    goal.arrived = true;
+                    goal.best_distance_at_s = self.sim.time_s();
+                }
+                self.sim.idle();
+            }
+        }
+    }
+
+    pub(super) fn return_home(&mut self) {
+        let cfg = self.cfg;
+        let frame = self.map.frame;
+        let start = self.trajectory.first().copied().unwrap_or(self.estimate);
+        let home = frame.cell_from_world(start.position());
+        let plan = self.plan(&[home]);
+        let Some(wps) = self.waypoints_to(&plan, home) else {
+            return;
+        };
+        self.follower = PathFollower::new(wps);
+        while self.sim.time_s() < cfg.time_limit_s {
+            match self.follower.command(
+                &self.estimate,
+                &cfg.follow,
+                cfg.sim.robot.max_speed_mps,
+                cfg.sim.robot.max_turn_rate_radps,
+            ) {
+                Command::Arrived => break,
+                Command::Drive { v_mps, w_radps } => self.sim.step(v_mps, w_radps),
+            }
+            self.sense();
+        }
+    }
+}
+
+/// A robot that stays within this radius...
+pub(super) const STILL_RADIUS_M: f64 = 0.5;
+
+/// ...for this many progress timeouts is stuck.
+pub(super) const STILL_FACTOR: f64 = 3.0;
+
+/// Map cells per side of a planning cell (0.05 m map: 0.1 m planning grid), on which the
+/// robot's paths are searched.
+pub(super) const PLAN_FACTOR: u32 = 2;
+
+/// Map cells per side of a cell of the grid on which the distances to all candidates are
+/// searched (0.05 m map: 0.2 m), a multiple of `PLAN_FACTOR`. That search covers most of the
+/// known building at every decision; on the coarser grid it touches a quarter of the cells.
+/// The grid connects whatever the planning grid connects (a cell is passable when any of its
+/// map cells is traversable), so no candidate reachable by a path is lost.
+pub(super) const DISTANCE_FACTOR: u32 = 4;
+
+/// How far (planning cells) a goal may be moved to reach a passable planning cell.
+pub(super) const TARGET_SEARCH_CELLS: i32 = 4;
+
+/// Largest extra cost of entering a cell near a wall (cost units, 10 per straight step).
+pub(super) const MAX_EXTRA: u32 = 10;
+
+pub(super) fn far_search_cells() -> i32 {
+    let (cells, f) = (
+        TARGET_SEARCH_CELLS * PLAN_FACTOR as i32,
+        DISTANCE_FACTOR as i32,
+    );
+    (cells + f - 1) / f
+}
+
+/// How permissive path planning is: the rungs of `decide_planned`'s last resorts, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Planning {
+    /// Paths keep the robot's radius and the safety margin from the map's obstacles.
+    WithMargin,
+    /// The robot's radius only.
+    NoMargin,
+    /// The robot's radius, or any free map cell the robot has travelled.
+    Travelled,
+}
+
+impl Planning {
+    /// The next rung, `None` on the last.
+    pub(super) fn looser(self) -> Option<Self> {
+        match self {
+            Self::WithMargin => Some(Self::NoMargin),
+            Self::NoMargin => Some(Self::Travelled),
+            Self::Travelled => None,
+        }
+    }
+}
+
+/// The distances to the candidates, and what is needed to find the path to one of them.
+pub(super) struct Plan {
+    /// The distance grid and the search over it.
+    pub(super) far: CoarseCosts,
+    pub(super) field: CostField,
+    /// The robot's cell on the planning grid.
+    pub(super) near_start: Cell,
+}
+
+impl Plan {
+    /// Path length (with the wall penalty) to the map cell `c`, `None` if unreachable.
+    pub(super) fn distance_m(&self, c: Cell) -> Option<f64> {
+        self.field
+            .distance_m(self.far.passable_near(c, far_search_cells())?)
+    }
+
+    /// The path to the map cell `c` on the distance grid.
+    pub(super) fn far_path(&self, c: Cell) -> Option<Vec<Cell>> {
+        self.field
+            .path_to(self.far.passable_near(c, far_search_cells())?)
+    }
+}
+
+/// The cell of `grid` a path from the robot (in map cell `robot`) starts from: its own, or the
+/// nearest passable one when it stands closer to a wall than the inflation radius `radius_m`
+/// (it then first drives out).
+pub(super) fn start_cell(grid: &CoarseCosts, robot: Cell, radius_m: f64) -> Cell {
+    let c = grid.coarse_of(robot);
+    let r = ((2.0 * radius_m) / grid.frame.resolution_m).ceil() as i32 + 1;
+    if grid.passable(c) {
+        c
+    } else {
+        nearest_by(c, r, |n| grid.passable(n)).unwrap_or(c)
+    }
+}
+
+/// What the robot faces at a goal it reached: the unknown space behind the frontier, or with
+/// `robust` the frontier's outward side when that space is centred on the robot itself (within
+/// 0.3 m: a frontier through the robot, whose unknown lies on both sides or right behind it).
+pub(super) fn look_vector(goal: &Goal, estimate: &Pose, robust: bool) -> Vec2 {
+    let to = goal.look_at - estimate.position();
+    match goal.look_dir {
+        Some(d) if robust && to.norm() <= 0.3 => d,
+        _ => to,
+    }
+}
