@@ -51,8 +51,9 @@ class Strategy:
 
     def decide(self, d):
         """The decide message -> a candidate id (go there), a list of ids (try them in this
-        order, take the first with a drivable path), goal(x, y) (go to a point of your own)
-        or None (stop exploring now)."""
+        order, take the first with a drivable path), goal(x, y) (go to a point of your own),
+        drop(ids) (give those candidates up and be asked again without them) or None (stop
+        exploring now)."""
         raise NotImplementedError("a Strategy must override decide()")
 
     def end_run(self, end):
@@ -69,6 +70,15 @@ class goal(tuple):
         if not (_finite(x) and _finite(y)):
             raise ValueError("goal(%r, %r): a goal point's coordinates must be finite" % (x, y))
         return super().__new__(cls, (x, y))
+
+
+class drop(tuple):
+    """Candidates to give up for the rest of the run, `drop([3, 5])`, as `decide`'s return
+    value: floorcast blacklists their frontiers and calls `decide` again for the same decision
+    without them."""
+
+    def __new__(cls, ids):
+        return super().__new__(cls, ids)
 
 
 def _fmax(a, b):
@@ -163,8 +173,8 @@ def _as_id(x, ids):
         i = operator.index(x)
     except TypeError:
         raise TypeError(
-            "decide() returned %r: expected a candidate id (int), a list of ids, goal(x, y) or None"
-            % (x,)
+            "decide() returned %r: expected a candidate id (int), a list of ids, goal(x, y), "
+            "drop(ids) or None" % (x,)
         ) from None
     if i not in ids:
         raise ValueError("decide() returned id %d, not a candidate of this decide message" % i)
@@ -177,6 +187,13 @@ def _reply_to_decide(result, d):
         return {"type": "stop"}
     if isinstance(result, goal):
         return {"type": "goal", "point": [result[0], result[1]]}
+    if isinstance(result, drop):
+        dropped = [_as_id(x, ids) for x in result]
+        if not dropped:
+            raise ValueError("decide() returned drop([]): drop at least one candidate")
+        if len(set(dropped)) != len(dropped):
+            raise ValueError("decide() returned a drop with a repeated id: %r" % (dropped,))
+        return {"type": "drop", "ids": dropped}
     if isinstance(result, (list, tuple)):
         ranked = [_as_id(x, ids) for x in result]
         if not ranked:

@@ -171,6 +171,34 @@ fn a_strategy_drives_to_points_of_its_own() {
     assert!(points >= 5, "{log}");
 }
 
+/// A strategy gives candidates up (drop replies): they are not offered again at the same place,
+/// the others are explored, and the run ends with the dropped frontiers left.
+#[test]
+fn a_strategy_drops_candidates_it_does_not_want() {
+    let dir = tempfile::tempdir().unwrap();
+    let command = python_command("tests/strategies/drops_small.py");
+    let s = explore(
+        &repo().join("../shared/maps/schools/Franch1.yaml"),
+        2,
+        "",
+        dir.path(),
+        &["--strategy-command", &command],
+    );
+    let log = read(dir.path().join("strategy-stderr.txt"));
+    let dropped: usize = log
+        .split("drops_small: dropped ")
+        .nth(1)
+        .and_then(|t| t.trim().parse().ok())
+        .unwrap_or_else(|| panic!("{log}"));
+    assert!(dropped >= 5, "{log}");
+    assert!(
+        s["blacklisted_goals"].as_u64().unwrap() >= dropped as u64,
+        "{s}"
+    );
+    assert!(s["explored_fraction"].as_f64().unwrap() >= 0.9, "{s}");
+    assert_ne!(s["end_reason"], "time limit", "{s}");
+}
+
 #[test]
 fn a_strategy_that_needs_the_layout_and_the_map_gets_them() {
     let dir = tempfile::tempdir().unwrap();

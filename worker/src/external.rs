@@ -882,6 +882,7 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         Reply::Choose(id) => format!("choose {id}"),
         Reply::Rank(ids) => format!("rank {ids:?}"),
         Reply::Goal(p) => format!("goal [{}, {}]", p.x, p.y),
+        Reply::Drop(ids) => format!("drop {ids:?}"),
         Reply::Stop => "stop".into(),
         Reply::Pass => "pass".into(),
         Reply::Fail => "failed".into(),
@@ -1056,7 +1057,8 @@ fn parse_reply(v: &Value, view: &DecisionView<'_>, what: &str) -> Result<Reply, 
                 quote_json(v)
             )),
         },
-        Some("rank") => {
+        Some(kind @ ("rank" | "drop")) => {
+            let verb = if kind == "rank" { "ranked" } else { "dropped" };
             let list = v.get("ids").and_then(Value::as_array);
             let parsed: Option<Vec<u64>> = list.and_then(|l| l.iter().map(Value::as_u64).collect());
             let Some(parsed) = parsed.filter(|p| !p.is_empty()) else {
@@ -1069,17 +1071,20 @@ fn parse_reply(v: &Value, view: &DecisionView<'_>, what: &str) -> Result<Reply, 
             for &id in &parsed {
                 if !offered(id) {
                     return Err(format!(
-                        "ranked candidate {id}, which {what} did not offer (it offered {})",
+                        "{verb} candidate {id}, which {what} did not offer (it offered {})",
                         ids()
                     ));
                 }
                 if !seen.insert(id) {
-                    return Err(format!("ranked candidate {id} twice in {what}"));
+                    return Err(format!("{verb} candidate {id} twice in {what}"));
                 }
             }
-            Ok(Reply::Rank(
-                parsed.into_iter().map(|i| i as usize).collect(),
-            ))
+            let ids = parsed.into_iter().map(|i| i as usize).collect();
+            Ok(if kind == "rank" {
+                Reply::Rank(ids)
+            } else {
+                Reply::Drop(ids)
+            })
         }
         Some("goal") => {
             let point = v.get("point").and_then(Value::as_array);
@@ -1094,7 +1099,7 @@ fn parse_reply(v: &Value, view: &DecisionView<'_>, what: &str) -> Result<Reply, 
         }
         Some("stop") => Ok(Reply::Stop),
         _ => Err(format!(
-            "answered {what} with {} (expected a choose, rank, goal or stop message)",
+            "answered {what} with {} (expected a choose, rank, goal, drop or stop message)",
             quote_json(v)
         )),
     }

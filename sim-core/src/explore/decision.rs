@@ -225,6 +225,18 @@ impl Explorer<'_> {
                 match self.ask_policy(&frontiers, &goals, &plan, &scores, asked) {
                     Answer::Stop => break None,
                     Answer::Nothing => break Some(None),
+                    Answer::Drop(ids) => {
+                        let frame = self.map.frame;
+                        for id in ids {
+                            let at = frame.world_from_cell(frontiers[id].candidate);
+                            self.blacklist.add(at, cfg.blacklist_radius_m);
+                            // Not offered again in this decision, nor by its last resorts
+                            // where the blacklist holds.
+                            scores[id].distance_m = None;
+                            goals[id] = None;
+                        }
+                        attempt += 1;
+                    }
                     Answer::Point(p) => {
                         if let Some((goal_cell, wps)) = self.point_goal(p) {
                             return self.set_point_goal(frontiers.len(), p, goal_cell, wps);
@@ -492,16 +504,17 @@ impl Explorer<'_> {
             self.strategy_compute_s += charged_s;
         }
         let shown = |id: &usize| views.iter().any(|v| v.id == *id);
+        // Candidates shown, each once.
+        let listed = |ids: &[usize]| {
+            !ids.is_empty()
+                && ids.iter().all(shown)
+                && ids.iter().collect::<std::collections::BTreeSet<_>>().len() == ids.len()
+        };
         match reply {
             Reply::Choose(id) if shown(&id) => Answer::One(id),
-            Reply::Rank(ids)
-                if !ids.is_empty()
-                    && ids.iter().all(shown)
-                    && ids.iter().collect::<std::collections::BTreeSet<_>>().len() == ids.len() =>
-            {
-                Answer::Ranked(ids)
-            }
+            Reply::Rank(ids) if listed(&ids) => Answer::Ranked(ids),
             Reply::Goal(p) if p.x.is_finite() && p.y.is_finite() => Answer::Point(p),
+            Reply::Drop(ids) if listed(&ids) => Answer::Drop(ids),
             Reply::Pass => Answer::Nothing,
             Reply::Stop => Answer::Stop,
             _ => {
@@ -583,6 +596,7 @@ pub(super) enum Answer {
     One(usize),
     Ranked(Vec<usize>),
     Point(Vec2),
+    Drop(Vec<usize>),
     Nothing,
     Stop,
 }

@@ -84,6 +84,12 @@ pub enum Reply {
     /// [`DecisionView::unreachable_goal`]); the [`MAX_UNREACHABLE_GOALS`]th such point in a
     /// decision counts as [`Reply::Pass`]. A point that is not finite is a failure.
     Goal(Vec2),
+    /// Give these candidates up (each frontier blacklisted within `blacklist_radius_m` of its
+    /// candidate cell for the rest of the run, as one that cannot be reached: the rest of a long
+    /// frontier may be offered again, with another candidate cell) and ask again without them
+    /// (the next attempt; when none is left, as [`Reply::Pass`]). An empty list, a repeated id
+    /// or one not shown is a failure.
+    Drop(Vec<usize>),
     /// None of these candidates: the decision goes on as when no candidate has a path (the
     /// explorer's last resorts, else the run ends).
     Pass,

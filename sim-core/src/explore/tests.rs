@@ -655,6 +655,9 @@ impl Policy for TestPolicy {
             }
             "goal-off-map" => Reply::Goal(off_map),
             "goal-nan" => Reply::Goal(Vec2::new(f64::NAN, 0.0)),
+            "drop-all" => Reply::Drop(view.candidates.iter().map(|c| c.id).collect()),
+            "drop-twice" => Reply::Drop(vec![best, best]),
+            "drop-none" => Reply::Drop(Vec::new()),
             other => panic!("{other}"),
         };
         (reply, self.charge_s)
@@ -703,6 +706,8 @@ fn a_policy_decides_how_the_run_goes_on() {
         ("not-offered", Some(0), None),
         ("rank-twice", Some(0), None),
         ("goal-nan", Some(0), None),
+        ("drop-twice", Some(0), None),
+        ("drop-none", Some(0), None),
     ];
     for (behaviour, decisions, end) in cases {
         let mut p = TestPolicy::new(behaviour, 0.0);
@@ -748,6 +753,28 @@ fn goal_points_without_a_path_count_as_a_pass() {
         p.told_unreachable,
         p.asked / MAX_UNREACHABLE_GOALS * (MAX_UNREACHABLE_GOALS - 1)
     );
+    assert!(p.ended.is_some());
+}
+
+#[test]
+fn dropped_candidates_are_given_up_for_the_run() {
+    // Every candidate dropped at every decision: each is blacklisted, none is driven to (the
+    // explorer's own closer looks aside), and the run ends with frontiers left.
+    let mut p = TestPolicy::new("drop-all", 0.0);
+    let r = run_with_policy(&mut p);
+    assert!(r.decisions.iter().all(|d| d.gain_m2 == 0.0));
+    assert!(
+        r.blacklisted_goals >= p.asked,
+        "{} < {}",
+        r.blacklisted_goals,
+        p.asked
+    );
+    assert!(
+        matches!(r.end_reason, EndReason::Stuck | EndReason::Unreachable),
+        "{:?}",
+        r.end_reason
+    );
+    assert!(r.explored_fraction < 0.9, "{}", r.explored_fraction);
     assert!(p.ended.is_some());
 }
 
