@@ -8,7 +8,7 @@ a strategy only decides:
 
     class Nearest(Strategy):
         name = "nearest"
-        needs = ()  # or ("layout_gain", "map")
+        needs = ()  # or ("layout_gain", "layout", "map")
 
         def decide(self, d):
             if d["time_s"] > 3600:
@@ -30,7 +30,7 @@ import unicodedata
 
 PROTOCOL = 1
 
-_NEEDS = ("layout_gain", "map")
+_NEEDS = ("layout_gain", "layout", "map")
 
 
 class Strategy:
@@ -39,7 +39,8 @@ class Strategy:
     #: Shown in floorcast's results: non-empty, at most 100 characters, no control characters.
     name = "unnamed"
     #: What floorcast should compute and send besides the baseline: "layout_gain" (the
-    #: candidates' `layout_gain_m2`), "map" (the decide messages' `map_changes`).
+    #: candidates' `layout_gain_m2`), "layout" (the predicted rooms, `layout`, when new, and
+    #: the candidates' `room`), "map" (the decide messages' `map_changes`).
     needs = ()
     #: The strategy's own parameters for the current run (the run message's `params`: a
     #: grid's `params` table, or `explore --strategy-params`); set before `new_run`.

@@ -219,6 +219,10 @@ fn a_strategy_that_needs_the_layout_and_the_map_gets_them() {
         log.contains(&format!("needs_everything: {replies} decisions")),
         "{log}"
     );
+    // Every layout made reached it, once, with its rooms.
+    let layouts = s["layouts_computed"].as_u64().unwrap();
+    assert!(log.contains(&format!(", {layouts} layouts, ")), "{log}");
+    assert!(!log.contains(", 0 rooms"), "{log}");
 }
 
 #[test]

@@ -100,6 +100,14 @@ impl LayoutRaster {
         self.room.get(c).is_some_and(|&k| k != NO_ROOM)
     }
 
+    /// The index (into the layout's rooms) of the room whose polygon holds the centre of `c`.
+    pub fn room_index(&self, c: Cell) -> Option<usize> {
+        self.room
+            .get(c)
+            .filter(|&&k| k != NO_ROOM)
+            .map(|&k| k as usize)
+    }
+
     /// Whether a candidate at `c` must fall back to the baseline gain.
     pub fn uses_baseline(&self, c: Cell) -> bool {
         match self.room.get(c) {

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""Test strategy: needs the layout gain and the map, keeps a local copy of the map from the
-decide messages' map_changes and checks every decide message against the contract; chooses as
-the built-in baseline does. At the end it writes to stderr
-`needs_everything: N decisions, K known cells` (N: decide messages answered)."""
+"""Test strategy: needs the layout gain, the layout and the map, keeps a local copy of the map
+from the decide messages' map_changes and the latest layout, and checks every decide message
+against the contract; chooses as the built-in baseline does. At the end it writes to stderr
+`needs_everything: N decisions, K known cells, L layouts, R rooms` (N: decide messages answered;
+L: layouts received; R: rooms in the last one)."""
 import os
 import sys
 
@@ -14,7 +15,7 @@ UNKNOWN, FREE, OCCUPIED = 0, 1, 2
 
 class NeedsEverything(Strategy):
     name = "needs-everything"
-    needs = ("layout_gain", "map")
+    needs = ("layout_gain", "layout", "map")
 
     def new_run(self, run):
         self.run = run
@@ -26,13 +27,28 @@ class NeedsEverything(Strategy):
         assert len(m["origin"]) == 2, m
         self.cells = bytearray(self.width * self.height)  # every cell starts unknown
         self.decides = 0
+        self.layouts = 0
+        self.layout = None
 
     def decide(self, d):
         assert d["candidates"], "an empty candidate list was sent"
+        if "layout" in d:
+            layout = d["layout"]
+            # A layout is sent once, when it is new.
+            assert self.layout is None or layout["number"] > self.layout["number"], layout["number"]
+            for r in layout["rooms"]:
+                assert len(r["polygon"]) >= 3 and all(len(p) == 2 for p in r["polygon"]), r
+                assert r["state"] in ("full", "partial", "open"), r
+                assert isinstance(r["predicted"], bool), r
+                assert r["area_m2"] > 0 and 0 <= r["unknown_area_m2"] <= r["area_m2"] + 1e-9, r
+            self.layout = layout
+            self.layouts += 1
         for c in d["candidates"]:
             assert "layout_gain_m2" in c, c
             g = c["layout_gain_m2"]
             assert g is None or isinstance(g, float), c
+            room = c["room"]
+            assert room is None or (self.layout is not None and 0 <= room < len(self.layout["rooms"])), c
         # The local map has the dimensions the run message announced.
         assert len(self.cells) == self.width * self.height == (
             self.run["map"]["width"] * self.run["map"]["height"]
@@ -54,7 +70,11 @@ class NeedsEverything(Strategy):
 
     def end_run(self, end):
         known = len(self.cells) - self.cells.count(UNKNOWN)
-        sys.stderr.write("needs_everything: %d decisions, %d known cells\n" % (self.decides, known))
+        rooms = len(self.layout["rooms"]) if self.layout else 0
+        sys.stderr.write(
+            "needs_everything: %d decisions, %d known cells, %d layouts, %d rooms\n"
+            % (self.decides, known, self.layouts, rooms)
+        )
         sys.stderr.flush()
 
 

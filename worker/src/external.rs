@@ -365,6 +365,7 @@ fn python_dir() -> Option<PathBuf> {
 pub struct Hello {
     pub name: String,
     pub needs_layout_gain: bool,
+    pub needs_layout: bool,
     pub needs_map: bool,
 }
 
@@ -413,6 +414,8 @@ pub struct ExternalStrategy {
     error: Option<String>,
     /// The map's cells as last sent (for `map_changes`).
     sent_map: Vec<Occupancy>,
+    /// The number of the last layout sent (0: none yet).
+    sent_layout: u64,
     charge: bool,
     compute_s: f64,
     replies: u64,
@@ -495,10 +498,12 @@ impl ExternalStrategy {
             hello: Hello {
                 name: String::new(),
                 needs_layout_gain: false,
+                needs_layout: false,
                 needs_map: false,
             },
             error: None,
             sent_map: Vec::new(),
+            sent_layout: 0,
             charge: false,
             compute_s: 0.0,
             replies: 0,
@@ -691,6 +696,9 @@ impl ExternalStrategy {
                 if self.hello.needs_layout_gain {
                     v["layout_gain_m2"] = json!(c.layout_gain_m2);
                 }
+                if self.hello.needs_layout {
+                    v["room"] = json!(c.room);
+                }
                 v
             })
             .collect();
@@ -704,6 +712,24 @@ impl ExternalStrategy {
         });
         if let Some(p) = view.unreachable_goal {
             msg["unreachable_goal"] = json!([p.x, p.y]);
+        }
+        if let Some(layout) = view.layout.filter(|l| l.number != self.sent_layout) {
+            self.sent_layout = layout.number;
+            let rooms: Vec<Value> = layout
+                .rooms
+                .iter()
+                .map(|r| {
+                    json!({
+                        "polygon": r.polygon.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>(),
+                        "state": r.state.as_str(),
+                        "predicted": r.predicted,
+                        "area_m2": r.area_m2,
+                        "observed_area_m2": r.observed_area_m2,
+                        "unknown_area_m2": r.unknown_area_m2,
+                    })
+                })
+                .collect();
+            msg["layout"] = json!({"number": layout.number, "rooms": rooms});
         }
         if self.hello.needs_map {
             let data = &view.map.data;
@@ -738,6 +764,7 @@ impl Policy for ExternalStrategy {
     fn needs(&self) -> Needs {
         Needs {
             layout_gain: self.hello.needs_layout_gain,
+            layout: self.hello.needs_layout,
         }
     }
 
@@ -812,6 +839,9 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
     if h.needs_layout_gain {
         needs.push("layout_gain");
     }
+    if h.needs_layout {
+        needs.push("layout");
+    }
     if h.needs_map {
         needs.push("map");
     }
@@ -862,6 +892,7 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
             straight_m: (point - start.position()).norm(),
             gain_m2,
             layout_gain_m2: h.needs_layout_gain.then_some(gain_m2 * 0.5),
+            room: h.needs_layout.then_some(0).filter(|_| x > 12),
         }
     };
     let three = [
@@ -869,6 +900,18 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         candidate(2, 23, 4, 2.3, 3.5),
         candidate(5, 1, 3, 2.0, 1.0),
     ];
+    // With the need "layout": one predicted room, the right half of the room, open.
+    let rooms = [sim_core::explore::RoomView {
+        polygon: [(2.6, 0.4), (4.8, 0.4), (4.8, 1.2), (2.6, 1.2)]
+            .iter()
+            .map(|&(x, y)| map.frame.origin_m + sim_core::Vec2::new(x, y))
+            .collect(),
+        state: sim_core::explore::RoomState::Open,
+        predicted: true,
+        area_m2: 1.76,
+        observed_area_m2: 1.6,
+        unknown_area_m2: 0.16,
+    }];
     let view = |decision, attempt, candidates| DecisionView {
         decision,
         attempt,
@@ -876,6 +919,10 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         pose: start,
         candidates,
         unreachable_goal: None,
+        layout: h.needs_layout.then_some(sim_core::explore::LayoutView {
+            number: 1,
+            rooms: &rooms,
+        }),
         map: &map,
     };
     let shown = |r: &Reply| match r {
@@ -1011,6 +1058,7 @@ fn parse_hello(v: &Value) -> Result<Hello, String> {
     let mut hello = Hello {
         name: name.to_string(),
         needs_layout_gain: false,
+        needs_layout: false,
         needs_map: false,
     };
     match v.get("needs") {
@@ -1019,10 +1067,11 @@ fn parse_hello(v: &Value) -> Result<Hello, String> {
             for n in needs {
                 match n.as_str() {
                     Some("layout_gain") => hello.needs_layout_gain = true,
+                    Some("layout") => hello.needs_layout = true,
                     Some("map") => hello.needs_map = true,
                     _ => {
                         return Err(format!(
-                            "needs {} (floorcast offers \"layout_gain\" and \"map\")",
+                            "needs {} (floorcast offers \"layout_gain\", \"layout\" and \"map\")",
                             quote_json(n)
                         ))
                     }

@@ -481,6 +481,10 @@ impl Explorer<'_> {
                 straight_m: (point - robot).norm(),
                 gain_m2: s.gain_m2,
                 layout_gain_m2,
+                room: match (&self.layout, self.policy_needs.layout) {
+                    (Some(l), true) => l.raster.room_index(f.candidate),
+                    _ => None,
+                },
             });
         }
         if views.is_empty() {
@@ -496,6 +500,14 @@ impl Explorer<'_> {
             pose: self.estimate,
             candidates: &views,
             unreachable_goal,
+            layout: self
+                .layout
+                .as_ref()
+                .filter(|_| self.policy_needs.layout)
+                .map(|l| LayoutView {
+                    number: l.number,
+                    rooms: &l.rooms,
+                }),
             map: &self.map.occupancy,
         };
         let (reply, charged_s) = self.policy.get().decide(&view);

@@ -8,7 +8,8 @@ impl Explorer<'_> {
     /// last one. Returns whether gains should use the layout now.
     pub(super) fn refresh_layout(&mut self) -> bool {
         let st = &self.cfg.strategy;
-        if !st.uses_layout() && !self.policy_needs.layout_gain {
+        let needs = self.policy_needs;
+        if !st.uses_layout() && !needs.layout_gain && !needs.layout {
             return false;
         }
         let cell_area = self.map.frame.cell_area_m2();
@@ -36,6 +37,8 @@ impl Explorer<'_> {
                     self.layout_trusted = true;
                 }
             }
+            // The rooms a policy is shown: only a layout predicted from the map.
+            let mut rooms = Vec::new();
             let mut raster = if st.layout_from_truth {
                 // The oracle: nothing to compute (and nothing to charge).
                 let to_map = MapToWorld::new(&self.estimate, &self.sim.true_pose());
@@ -52,6 +55,9 @@ impl Explorer<'_> {
                     self.compute_debt_s += charged_s;
                     self.layout_compute_s += charged_s;
                 }
+                if needs.layout {
+                    rooms = layout.rooms.iter().map(room_view).collect();
+                }
                 LayoutRaster::new(&layout, grid, st.max_wall_gap_m)
             };
             raster.through_openings = st.gain_through_openings;
@@ -64,12 +70,14 @@ impl Explorer<'_> {
                 })
                 .map(|(i, _)| i as u32)
                 .collect();
+            self.layouts_computed += 1;
             self.layout = Some(LayoutState {
                 raster,
                 known_cells_at: self.known_cells,
                 predicted_unknown,
+                rooms,
+                number: self.layouts_computed,
             });
-            self.layouts_computed += 1;
             // Cached gains were computed with the previous layout.
             self.gains.clear();
             self.room_gains.clear();
@@ -88,4 +96,24 @@ pub(super) struct LayoutState {
     pub(super) known_cells_at: usize,
     /// Cells unknown when the layout was made that it predicted inside a room.
     pub(super) predicted_unknown: Vec<u32>,
+    /// Its rooms as a policy that needs them sees them (else empty).
+    pub(super) rooms: Vec<RoomView>,
+    /// Layouts made in the run up to this one.
+    pub(super) number: u64,
+}
+
+/// A predicted room as a policy sees it.
+fn room_view(r: &crate::layout::LayoutRoom) -> RoomView {
+    RoomView {
+        polygon: r.polygon.vertices.clone(),
+        state: match r.label {
+            crate::layout::RoomLabel::Full => RoomState::Full,
+            crate::layout::RoomLabel::Partial => RoomState::Partial,
+            crate::layout::RoomLabel::Open => RoomState::Open,
+        },
+        predicted: r.predicted,
+        area_m2: r.area_m2,
+        observed_area_m2: r.observed_area_m2,
+        unknown_area_m2: r.unknown_area_m2,
+    }
 }

@@ -55,7 +55,8 @@ pub mod strategy;
 pub use crate::utility::UtilityDistance;
 pub use follow::{Command, FollowConfig, PathFollower};
 pub use policy::{
-    CandidateView, DecisionView, Needs, Policy, Reply, RunEnd, MAX_UNREACHABLE_GOALS,
+    CandidateView, DecisionView, LayoutView, Needs, Policy, Reply, RoomState, RoomView, RunEnd,
+    MAX_UNREACHABLE_GOALS,
 };
 pub use strategy::{EarlyStop, GainModel, Strategy};
 
@@ -646,6 +647,7 @@ pub fn explore_with<'a>(
         // The rule judges the paper's I(p) only when the strategy uses the layout.
         PolicySlot::BuiltIn(b) => Needs {
             layout_gain: b.needs().layout_gain && cfg.strategy.uses_layout(),
+            layout: false,
         },
     };
     let frame = map_frame(&building.bounds(), cfg.map_resolution_m);

@@ -19,6 +19,10 @@ pub struct Needs {
     /// The paper's `I(p)` inside the rooms of the layout predicted from the map
     /// ([`CandidateView::layout_gain_m2`]); the layout is rebuilt as for the layout strategies.
     pub layout_gain: bool,
+    /// The rooms of the layout predicted from the map ([`DecisionView::layout`]) and each
+    /// candidate's room ([`CandidateView::room`]); the layout is rebuilt as for the layout
+    /// strategies.
+    pub layout: bool,
 }
 
 /// One reachable frontier candidate.
@@ -44,6 +48,52 @@ pub struct CandidateView {
     /// The paper's `I(p)` inside the predicted rooms (m2), when the policy needs it and a
     /// layout exists.
     pub layout_gain_m2: Option<f64>,
+    /// The index into [`LayoutView::rooms`] of the predicted room holding the candidate, when
+    /// the policy needs the layout and a room holds it.
+    pub room: Option<usize>,
+}
+
+/// One room of the layout predicted from the map (never the building's true rooms).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RoomView {
+    /// The room's shape, prediction included (map frame, m, counter-clockwise).
+    pub polygon: Vec<Vec2>,
+    /// What the map shows of it: completely observed (no frontier in it), partially observed
+    /// and closed by wall lines, or open (its prediction reaches the known map's edge).
+    pub state: RoomState,
+    /// Whether the prediction added to what was observed.
+    pub predicted: bool,
+    /// Area (m2): the whole room, its observed part, and its cells still unknown.
+    pub area_m2: f64,
+    pub observed_area_m2: f64,
+    pub unknown_area_m2: f64,
+}
+
+/// How much of a room the map shows (the layout method's room label).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RoomState {
+    Full,
+    Partial,
+    Open,
+}
+
+impl RoomState {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RoomState::Full => "full",
+            RoomState::Partial => "partial",
+            RoomState::Open => "open",
+        }
+    }
+}
+
+/// The current layout as a policy sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct LayoutView<'a> {
+    /// Which layout this is: 1 for the run's first, counting up as it is rebuilt while the map
+    /// grows (a policy can keep what it derived from a layout until the number changes).
+    pub number: u64,
+    pub rooms: &'a [RoomView],
 }
 
 /// What a policy is shown at a decision.
@@ -62,6 +112,8 @@ pub struct DecisionView<'a> {
     pub candidates: &'a [CandidateView],
     /// The point of the previous attempt's [`Reply::Goal`] when no drivable path led there.
     pub unreachable_goal: Option<Vec2>,
+    /// The layout predicted from the map, when the policy needs it and one exists.
+    pub layout: Option<LayoutView<'a>>,
     /// The map as the robot has built it.
     pub map: &'a OccupancyGrid,
 }

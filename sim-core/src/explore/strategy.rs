@@ -197,6 +197,7 @@ impl Policy for BuiltInPolicy {
     fn needs(&self) -> Needs {
         Needs {
             layout_gain: self.early_stop != EarlyStop::Never,
+            layout: false,
         }
     }
 
