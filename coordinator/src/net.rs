@@ -234,6 +234,8 @@ fn serve(
     inbox: mpsc::Sender<Inbox>,
 ) -> Result<Listener, NetError> {
     let config = zenoh_config(cfg)?;
+    // The bench signature workers are checked against, made before any of them asks.
+    floorcast_worker::bench_signature();
     let rt = runtime()?;
     let c = cfg.campaign.clone();
     let buildings = plan
@@ -1008,6 +1010,17 @@ mod tests {
                 matches!(&r, Ok(Some(NextReply::Refused { reason })) if reason.contains("0.0.1")),
                 "{r:?}"
             );
+            // So is one of this version that computes differently (its bench signature).
+            let mut hello = Hello::this_build("odd", "h");
+            hello.bench = "0123456789abcdef0123".into();
+            let r =
+                ask::<NextReply>(&s, &k("ctl/next"), encode(&hello), Duration::from_secs(5)).await;
+            assert!(
+                matches!(&r, Ok(Some(NextReply::Refused { reason }))
+                    if reason.contains("computes differently")
+                        && reason.contains("0123456789abcdef…")),
+                "{r:?}"
+            );
             // Puts on the job keys are not queries: ignored.
             s.put(k("ctl/next"), "garbage").await.unwrap();
             s.put(k(&format!("ctl/submit/{job0}")), "garbage")
@@ -1021,6 +1034,10 @@ mod tests {
         assert_eq!(done, 2);
         assert!(
             log.iter().any(|l| l.contains("refused worker old")),
+            "{log:?}"
+        );
+        assert!(
+            log.iter().any(|l| l.contains("refused worker odd")),
             "{log:?}"
         );
         assert!(log.iter().any(|l| l.contains("rejected result")), "{log:?}");

@@ -104,6 +104,8 @@ pub struct Hello {
     pub floorcast_version: String,
     /// The run-summary format the worker writes ([`SUMMARY_VERSION`]).
     pub result_format: u32,
+    /// The worker's bench signature ([`floorcast_worker::bench_signature`]).
+    pub bench: String,
 }
 impl Message for Hello {
     const KIND: &'static str = "hello";
@@ -116,11 +118,13 @@ impl Hello {
             host: host.into(),
             floorcast_version: FLOORCAST_VERSION.into(),
             result_format: SUMMARY_VERSION,
+            bench: floorcast_worker::bench_signature().into(),
         }
     }
 
     /// Whether this coordinator can take results from the worker: the same floorcast version
-    /// and result format (job ids and summaries depend on both).
+    /// and result format (job ids and summaries depend on both), and the same bench signature
+    /// (the worker computes as the coordinator does).
     pub fn compatible(&self) -> Result<(), String> {
         if self.floorcast_version != FLOORCAST_VERSION || self.result_format != SUMMARY_VERSION {
             return Err(format!(
@@ -128,7 +132,30 @@ impl Hello {
                 self.worker, self.floorcast_version, self.result_format, FLOORCAST_VERSION, SUMMARY_VERSION
             ));
         }
+        let own = floorcast_worker::bench_signature();
+        if self.bench != own {
+            return Err(format!(
+                "worker '{}' computes differently: its bench signature is {}, the coordinator's {} (another build, compiler flags or platform); its runs would not match this grid's: build floorcast the same way on every machine",
+                self.worker,
+                clip_signature(&self.bench),
+                clip_signature(own)
+            ));
+        }
         Ok(())
+    }
+}
+
+/// A signature as shown in a message: its first 16 characters (a foreign one may be anything).
+fn clip_signature(s: &str) -> String {
+    let shown: String = s
+        .chars()
+        .take(16)
+        .map(|c| if c.is_control() { '?' } else { c })
+        .collect();
+    if s.chars().count() > 16 {
+        format!("{shown}…")
+    } else {
+        shown
     }
 }
 
@@ -582,7 +609,7 @@ mod tests {
             decode::<Hello>(&encode(&r)),
             Err(WireError::Kind { .. })
         ));
-        let extra = br#"{"format":"floorcast-wire","version":1,"kind":"hello","body":{"worker":"w","host":"h","floorcast_version":"x","result_format":1,"evil":true}}"#;
+        let extra = br#"{"format":"floorcast-wire","version":1,"kind":"hello","body":{"worker":"w","host":"h","floorcast_version":"x","result_format":1,"bench":"b","evil":true}}"#;
         assert!(matches!(
             decode::<Hello>(extra),
             Err(WireError::Body { .. })

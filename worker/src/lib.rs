@@ -99,6 +99,38 @@ pub struct JobOutput {
 /// The strategies this version implements.
 pub const STRATEGIES: &[&str] = sim_core::explore::Strategy::NAMES;
 
+/// This build's bench signature (fishtest's "bench"): the fingerprint of one short, fixed
+/// exploration (a generated 300 m2 school, `layout-es`, seed 1, 300 s simulated: mapping, scan
+/// matching, planning and the layout all take part). Machines that compute differently
+/// (another build, compiler flags or platform) give another signature, and their runs would
+/// not match: a coordinator refuses a worker whose signature differs from its own. Computed
+/// once per process (about 0.3 s).
+pub fn bench_signature() -> &'static str {
+    static SIGNATURE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    SIGNATURE.get_or_init(|| {
+        let building = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
+            seed: 20261125,
+            area_m2: 300.0,
+            kind: sim_core::generate::BuildingKind::School,
+            clutter: false,
+            rotation_rad: 0.0,
+            name: "bench".into(),
+        });
+        let settings = Settings {
+            time_limit_s: 300.0,
+            ..Settings::default()
+        };
+        let config = settings
+            .to_explore_config_for("layout-es")
+            .expect("the bench settings are valid");
+        let start = building
+            .default_start(settings.robot_radius_m)
+            .expect("the bench building has a start")
+            .0;
+        sim_core::explore::explore(&building, start, &config, 1, &mut |_| {}).fingerprint()
+    })
+}
+
 /// Checks everything about a job that can be checked before it runs (strategy, settings, rooms
 /// for the oracle strategies, the map's size against the cell budget, the start pose), so that
 /// callers can refuse a bad job before they create any output. Returns the config and the start.
