@@ -107,28 +107,31 @@ pub const STRATEGIES: &[&str] = sim_core::explore::Strategy::NAMES;
 /// once per process (about 0.3 s).
 pub fn bench_signature() -> &'static str {
     static SIGNATURE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
-    SIGNATURE.get_or_init(|| {
-        let building = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
-            seed: 20261125,
-            area_m2: 300.0,
-            kind: sim_core::generate::BuildingKind::School,
-            clutter: false,
-            rotation_rad: 0.0,
-            name: "bench".into(),
-        });
-        let settings = Settings {
-            time_limit_s: 300.0,
-            ..Settings::default()
-        };
-        let config = settings
-            .to_explore_config_for("layout-es")
-            .expect("the bench settings are valid");
-        let start = building
-            .default_start(settings.robot_radius_m)
-            .expect("the bench building has a start")
-            .0;
-        sim_core::explore::explore(&building, start, &config, 1, &mut |_| {}).fingerprint()
-    })
+    SIGNATURE.get_or_init(|| bench_run().fingerprint())
+}
+
+/// The bench exploration (see [`bench_signature`]).
+fn bench_run() -> sim_core::explore::RunResult {
+    let building = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
+        seed: 20261125,
+        area_m2: 300.0,
+        kind: sim_core::generate::BuildingKind::School,
+        clutter: false,
+        rotation_rad: 0.0,
+        name: "bench".into(),
+    });
+    let settings = Settings {
+        time_limit_s: 300.0,
+        ..Settings::default()
+    };
+    let config = settings
+        .to_explore_config_for("layout-es")
+        .expect("the bench settings are valid");
+    let start = building
+        .default_start(settings.robot_radius_m)
+        .expect("the bench building has a start")
+        .0;
+    sim_core::explore::explore(&building, start, &config, 1, &mut |_| {})
 }
 
 /// Checks everything about a job that can be checked before it runs (strategy, settings, rooms
@@ -356,6 +359,16 @@ fn bad_start_message(
 mod tests {
     use super::*;
     use sim_core::{Geometry, Polygon, Vec2};
+
+    #[test]
+    fn the_bench_signature_is_a_repeatable_run_that_exercises_the_layout() {
+        let r = bench_run();
+        assert!(r.layouts_computed > 0, "{}", r.layouts_computed);
+        assert!(r.decisions.len() >= 5, "{}", r.decisions.len());
+        assert!(r.explored_fraction > 0.3, "{}", r.explored_fraction);
+        assert_eq!(bench_signature(), r.fingerprint());
+        assert_eq!(bench_run().fingerprint(), r.fingerprint());
+    }
 
     fn box_building(start: Option<Pose>) -> Building {
         Building {
