@@ -42,7 +42,7 @@ impl Explorer<'_> {
             let mut raster = if st.layout_from_truth {
                 // The oracle: nothing to compute (and nothing to charge).
                 let to_map = MapToWorld::new(&self.estimate, &self.sim.true_pose());
-                LayoutRaster::exact(&true_layout(&self.rooms, &to_map), grid)
+                LayoutRaster::exact(&true_layout(&self.referee.rooms, &to_map), grid)
             } else {
                 let mut made = None;
                 let layout_cfg = &self.cfg.layout;

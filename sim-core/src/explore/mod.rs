@@ -433,25 +433,10 @@ struct Explorer<'a> {
     sim: Simulator,
     map: LogOddsMap,
     obstacles: ObstacleDistance,
-    /// Explorable free space of the building on the map grid (ground truth for the explored
-    /// area and the rooms left unexplored).
-    truth: Bitmap,
-    /// Free space connected to the start (ground truth for the map's quality).
-    free: Bitmap,
-    truth_cells: usize,
-    /// Truth-free cells observed, kept incrementally. Observed means free or occupied in the
-    /// map: a cell whose centre is free but which a wall surface crosses is rightly mapped
-    /// occupied, and the boundary rows of every room would otherwise cap the fraction near 97 %.
-    /// Building cells are credited through the map cells they were observed in: the map is drawn
-    /// at the estimated pose, so a heading error made early (e.g. turning where the laser sees no
-    /// wall) rotates everything mapped after it, and comparing map and building cell by cell
-    /// would count a consistent but rotated map as unexplored far from the start. See
-    /// [`Explorer::credit_explored`].
-    explored_cells: usize,
+    /// Ground truth and the run's score (see `referee`).
+    referee: Referee,
     /// Map cells observed (free or occupied) so far.
     known: Bitmap,
-    /// Building cells credited as observed (world frame).
-    explored: Bitmap,
     estimate: Pose,
     last_odometry: Pose,
     /// Odometry reading at the last map update.
@@ -499,9 +484,6 @@ struct Explorer<'a> {
     stopped_early: bool,
     start: Pose,
     snapshots: Vec<MapSnapshot>,
-    /// Ground-truth room polygons (for the "rooms never entered" report, and the layout of the
-    /// `layout-truth` oracle).
-    rooms: Vec<crate::geom::Polygon>,
     /// The map's frontier cells, updated with each map update.
     frontiers: FrontierTracker,
     /// The planning grid, brought up to date before each plan from the planning cells whose
@@ -676,12 +658,15 @@ pub fn explore_with<'a>(
         sim,
         map: LogOddsMap::new(frame),
         obstacles: ObstacleDistance::new(frame, cap_cells),
-        truth,
-        free,
-        truth_cells,
-        explored_cells: 0,
+        referee: Referee {
+            truth,
+            free,
+            truth_cells,
+            explored_cells: 0,
+            explored: Bitmap::filled(frame, false),
+            rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
+        },
         known: Bitmap::filled(frame, false),
-        explored: Bitmap::filled(frame, false),
         estimate: start,
         last_update_pose: start,
         last_update_time_s: f64::NEG_INFINITY,
@@ -716,7 +701,6 @@ pub fn explore_with<'a>(
         stopped_early: false,
         start,
         snapshots: Vec::new(),
-        rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
         frontiers: FrontierTracker::default(),
         coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
         coarse_dirty: Vec::new(),

@@ -6,6 +6,31 @@
 
 use super::*;
 
+/// What only the simulation knows: the building's ground truth on the map grid, and the
+/// explored area credited against it.
+pub(super) struct Referee {
+    /// Explorable free space of the building on the map grid (ground truth for the explored
+    /// area and the rooms left unexplored).
+    pub(super) truth: Bitmap,
+    /// Free space connected to the start (ground truth for the map's quality).
+    pub(super) free: Bitmap,
+    pub(super) truth_cells: usize,
+    /// Truth-free cells observed, kept incrementally. Observed means free or occupied in the
+    /// map: a cell whose centre is free but which a wall surface crosses is rightly mapped
+    /// occupied, and the boundary rows of every room would otherwise cap the fraction near 97 %.
+    /// Building cells are credited through the map cells they were observed in: the map is drawn
+    /// at the estimated pose, so a heading error made early (e.g. turning where the laser sees no
+    /// wall) rotates everything mapped after it, and comparing map and building cell by cell
+    /// would count a consistent but rotated map as unexplored far from the start. See
+    /// [`Explorer::credit_explored`].
+    pub(super) explored_cells: usize,
+    /// Building cells credited as observed (world frame).
+    pub(super) explored: Bitmap,
+    /// Ground-truth room polygons (for the "rooms never entered" report, and the layout of the
+    /// `layout-truth` oracle, its one door to the decision).
+    pub(super) rooms: Vec<crate::geom::Polygon>,
+}
+
 impl Explorer<'_> {
     /// Credits the building cells observed through map cell `i`, just observed from the current
     /// scan: the building cells near where the sensor saw it whose centres, brought into the map
@@ -19,26 +44,26 @@ impl Explorer<'_> {
         let frame = self.map.frame;
         for (j, n) in map_to_world.cells_near(&frame, frame.cell_of_index(i), REACH) {
             // Most neighbours are credited already: test that before transforming back.
-            if !self.explored.data[j]
+            if !self.referee.explored.data[j]
                 && map_to_world
                     .map_index_of(&frame, n)
                     .is_some_and(|k| self.known.data[k])
             {
-                self.explored.data[j] = true;
-                self.explored_cells += self.truth.data[j] as usize;
+                self.referee.explored.data[j] = true;
+                self.referee.explored_cells += self.referee.truth.data[j] as usize;
             }
         }
     }
 
     pub(super) fn explored_area_m2(&self) -> f64 {
-        self.explored_cells as f64 * self.map.frame.cell_area_m2()
+        self.referee.explored_cells as f64 * self.map.frame.cell_area_m2()
     }
 
     pub(super) fn explored_fraction(&self) -> f64 {
-        if self.truth_cells == 0 {
+        if self.referee.truth_cells == 0 {
             0.0
         } else {
-            self.explored_cells as f64 / self.truth_cells as f64
+            self.referee.explored_cells as f64 / self.referee.truth_cells as f64
         }
     }
 
@@ -130,7 +155,7 @@ impl Explorer<'_> {
         // Always close the curve with the final state.
         self.next_progress_s = f64::NEG_INFINITY;
         self.record_progress(on_progress);
-        let mut map_quality = map_quality(&self.map.occupancy, &self.free);
+        let mut map_quality = map_quality(&self.map.occupancy, &self.referee.free);
         // The map as a whole may sit rotated about the start (a heading error made before any
         // wall was in view); the best fit of the estimated trajectory onto the true one undoes
         // that, and the search around it takes out what remains of a rigid misplacement, so
@@ -143,7 +168,7 @@ impl Explorer<'_> {
         map_quality.occupied_precision_aligned =
             crate::mapping::alignment::aligned_occupied_precision(
                 &self.map.occupancy,
-                &self.free,
+                &self.referee.free,
                 &prior,
                 prior
                     .compose(&Pose::new(self.start.x_m, self.start.y_m, 0.0))
@@ -158,21 +183,23 @@ impl Explorer<'_> {
             layouts_computed: self.layouts_computed,
             layout_compute_s: self.layout_compute_s,
             strategy_compute_s: self.strategy_compute_s,
-            rooms_never_entered: (!self.rooms.is_empty()).then(|| {
-                self.rooms
+            rooms_never_entered: (!self.referee.rooms.is_empty()).then(|| {
+                self.referee
+                    .rooms
                     .iter()
                     .filter(|r| !self.trajectory.iter().any(|p| r.contains(p.position())))
                     .count()
             }),
-            rooms_unexplored: (!self.rooms.is_empty()).then(|| {
-                self.rooms
+            rooms_unexplored: (!self.referee.rooms.is_empty()).then(|| {
+                self.referee
+                    .rooms
                     .iter()
                     .filter(|r| {
                         let (mut free, mut explored) = (0usize, 0usize);
                         crate::building::for_cells_in_polygon(self.map.frame, r, |i| {
-                            if self.truth.data[i] {
+                            if self.referee.truth.data[i] {
                                 free += 1;
-                                explored += self.explored.data[i] as usize;
+                                explored += self.referee.explored.data[i] as usize;
                             }
                         });
                         free > 0 && 2 * explored < free
@@ -184,8 +211,9 @@ impl Explorer<'_> {
             exploration_time_s,
             total_time_s: self.sim.time_s(),
             explored_area_m2: self.explored_area_m2(),
-            free_area_m2: self.truth_cells as f64 * self.map.frame.cell_area_m2(),
-            unexplorable_free_m2: (self.free.count_true() - self.truth_cells) as f64
+            free_area_m2: self.referee.truth_cells as f64 * self.map.frame.cell_area_m2(),
+            unexplorable_free_m2: (self.referee.free.count_true() - self.referee.truth_cells)
+                as f64
                 * self.map.frame.cell_area_m2(),
             explored_fraction: self.explored_fraction(),
             path_length_m: self.sim.path_length_m(),
