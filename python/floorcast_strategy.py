@@ -182,6 +182,15 @@ def _as_id(x, ids):
     return i
 
 
+def _id_list(result, ids, what):
+    listed = [_as_id(x, ids) for x in result]
+    if not listed:
+        raise ValueError("decide() returned %s without ids (return None to stop)" % what)
+    if len(set(listed)) != len(listed):
+        raise ValueError("decide() returned %s with a repeated id: %r" % (what, listed))
+    return listed
+
+
 def _reply_to_decide(result, d):
     ids = {c["id"] for c in d["candidates"]}
     if result is None:
@@ -189,19 +198,9 @@ def _reply_to_decide(result, d):
     if isinstance(result, goal):
         return {"type": "goal", "point": [result[0], result[1]]}
     if isinstance(result, drop):
-        dropped = [_as_id(x, ids) for x in result]
-        if not dropped:
-            raise ValueError("decide() returned drop([]): drop at least one candidate")
-        if len(set(dropped)) != len(dropped):
-            raise ValueError("decide() returned a drop with a repeated id: %r" % (dropped,))
-        return {"type": "drop", "ids": dropped}
+        return {"type": "drop", "ids": _id_list(result, ids, "a drop")}
     if isinstance(result, (list, tuple)):
-        ranked = [_as_id(x, ids) for x in result]
-        if not ranked:
-            raise ValueError("decide() returned an empty ranking (return None to stop)")
-        if len(set(ranked)) != len(ranked):
-            raise ValueError("decide() returned a ranking with a repeated id: %r" % (ranked,))
-        return {"type": "rank", "ids": ranked}
+        return {"type": "rank", "ids": _id_list(result, ids, "a ranking")}
     return {"type": "choose", "id": _as_id(result, ids)}
 
 

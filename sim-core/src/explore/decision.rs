@@ -340,38 +340,29 @@ impl Explorer<'_> {
         wps: Vec<Vec2>,
         score: Option<CandidateScore>,
     ) -> bool {
-        let cfg = self.cfg;
         let frame = self.map.frame;
-        let now = self.sim.time_s();
-        self.follower = PathFollower::from(self.estimate.position(), wps);
-        let dist = self.follower.remaining_length_m(self.estimate.position());
-        self.decisions.push(Decision {
-            time_s: now,
-            pose: self.estimate,
+        let f = &frontiers[i];
+        let look_at = unknown_centroid(&self.map.occupancy, &f.cells)
+            .unwrap_or_else(|| frame.world_from_cell(f.candidate));
+        let look_dir = self
+            .cfg
+            .robust_frontiers
+            .then(|| unknown_side(&self.map.occupancy, &f.cells))
+            .flatten();
+        let target = Target {
+            cell: goal_cell,
+            candidate: f.candidate,
+            look_at,
+            look_dir,
+            frontier: f.cells.clone(),
+        };
+        let recorded = Recorded {
             goal: frame.world_from_cell(goal_cell),
             candidates: frontiers.len(),
             gain_m2: score.map_or(0.0, |s| s.gain_m2),
-            distance_m: score.map_or(dist, |s| s.distance_m.unwrap_or(0.0)),
-        });
-        let look_at = unknown_centroid(&self.map.occupancy, &frontiers[i].cells)
-            .unwrap_or_else(|| frame.world_from_cell(frontiers[i].candidate));
-        let look_dir = cfg
-            .robust_frontiers
-            .then(|| unknown_side(&self.map.occupancy, &frontiers[i].cells))
-            .flatten();
-        self.goal = Some(Goal {
-            cell: goal_cell,
-            candidate: frontiers[i].candidate,
-            look_at,
-            look_dir,
-            arrived: false,
-            frontier: frontiers[i].cells.clone(),
-            decided_at_s: now,
-            known_cells_at: self.known_cells,
-            best_distance_m: dist,
-            best_distance_at_s: now,
-        });
-        true
+            distance_m: score.map(|s| s.distance_m.unwrap_or(0.0)),
+        };
+        self.head_for(target, recorded, wps)
     }
 
     /// The goal cell and path for a policy's own goal point `p` (`Reply::Goal`): the nearest
@@ -406,24 +397,43 @@ impl Explorer<'_> {
         goal_cell: Cell,
         wps: Vec<Vec2>,
     ) -> bool {
+        let target = Target {
+            cell: goal_cell,
+            candidate: goal_cell,
+            look_at: p,
+            look_dir: None,
+            frontier: Vec::new(),
+        };
+        let recorded = Recorded {
+            goal: p,
+            candidates,
+            gain_m2: 0.0,
+            distance_m: None,
+        };
+        self.head_for(target, recorded, wps)
+    }
+
+    /// Follows `wps` to `target`, recording the decision (its distance, when `None`, the
+    /// path's length). Returns true.
+    fn head_for(&mut self, target: Target, recorded: Recorded, wps: Vec<Vec2>) -> bool {
         let now = self.sim.time_s();
         self.follower = PathFollower::from(self.estimate.position(), wps);
         let dist = self.follower.remaining_length_m(self.estimate.position());
         self.decisions.push(Decision {
             time_s: now,
             pose: self.estimate,
-            goal: p,
-            candidates,
-            gain_m2: 0.0,
-            distance_m: dist,
+            goal: recorded.goal,
+            candidates: recorded.candidates,
+            gain_m2: recorded.gain_m2,
+            distance_m: recorded.distance_m.unwrap_or(dist),
         });
         self.goal = Some(Goal {
-            cell: goal_cell,
-            candidate: goal_cell,
-            look_at: p,
-            look_dir: None,
+            cell: target.cell,
+            candidate: target.candidate,
+            look_at: target.look_at,
+            look_dir: target.look_dir,
             arrived: false,
-            frontier: Vec::new(),
+            frontier: target.frontier,
             decided_at_s: now,
             known_cells_at: self.known_cells,
             best_distance_m: dist,
@@ -611,6 +621,23 @@ pub(super) enum Answer {
     Drop(Vec<usize>),
     Nothing,
     Stop,
+}
+
+/// Where a goal leads (see `Goal`).
+struct Target {
+    cell: Cell,
+    candidate: Cell,
+    look_at: Vec2,
+    look_dir: Option<Vec2>,
+    frontier: Vec<Cell>,
+}
+
+/// What the decision record of a goal says besides its time and pose (see `Decision`).
+struct Recorded {
+    goal: Vec2,
+    candidates: usize,
+    gain_m2: f64,
+    distance_m: Option<f64>,
 }
 
 /// How a policy is asked within one decision: the attempt, whether a built-in strategy uses the
