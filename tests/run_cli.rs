@@ -284,3 +284,33 @@ fn layout_of_a_real_map_and_of_a_generated_building_with_truth() {
             .unwrap();
     assert!(a["matched_room_iou"].as_f64().unwrap() >= 0.8, "{a}");
 }
+
+/// Every grid shipped in `grids/` is valid and plans (its buildings found and read, its
+/// strategies known, its settings in range), as a user's first `run` would check it.
+#[test]
+fn every_shipped_grid_plans() {
+    let mut grids: Vec<_> = std::fs::read_dir(repo().join("grids"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    grids.sort();
+    assert!(grids.len() >= 10, "{grids:?}");
+    for g in grids {
+        let res = tempfile::tempdir().unwrap();
+        let o = run(&[
+            "run",
+            g.to_str().unwrap(),
+            "--summary",
+            "--results",
+            res.path().to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}: {}", g.display(), stderr(&o));
+        assert!(
+            stdout(&o).contains("jobs stored in"),
+            "{}: {}",
+            g.display(),
+            stdout(&o)
+        );
+    }
+}
