@@ -400,12 +400,18 @@ pub fn report(a: ReportArgs) -> Result<()> {
             s.upper
         );
     }
-    if let Some((dir, other)) = &against {
+    let cross = against.as_ref().map(|(dir, other)| {
         let gains = gains_against(&results, other, a.against_label.as_deref());
-        say_raw!("{}", render_against(&gains, &dir.display().to_string()));
+        (dir.display().to_string(), gains)
+    });
+    if let Some((dir, gains)) = &cross {
+        say_raw!("{}", render_against(gains, dir));
     }
     if let Some(path) = &a.json {
-        let v = floorcast_coordinator::table::report_json(&results, &reference, &tests);
+        let mut v = floorcast_coordinator::table::report_json(&results, &reference, &tests);
+        if let Some((dir, gains)) = &cross {
+            v["against"] = floorcast_coordinator::table::against_json(gains, dir);
+        }
         write_text(path, &(serde_json::to_string_pretty(&v)? + "\n"))
             .with_context(|| format!("cannot write {}", path.display()))?;
         say!("wrote {}", path.display());

@@ -178,6 +178,41 @@ fn report_against_pairs_runs_across_results_directories() {
         .unwrap()
         .to_string();
     assert_eq!(cell(against), paired_in_table, "{out}");
+    // The same comparison in the JSON report: the other directory, and per label the label it
+    // is compared with and the paired gain, equal to the table's comparison of the same store.
+    let json = dir.path().join("r.json");
+    let o = report(&[
+        a.to_str().unwrap(),
+        "--against-label",
+        "baseline",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["against"]["results"], a.to_str().unwrap());
+    let near = v["against"]["comparisons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["label"] == "near")
+        .unwrap_or_else(|| panic!("{v}"));
+    assert_eq!(near["against_label"], "baseline");
+    assert_eq!(near["pairs"], 2);
+    let overall = v["comparisons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["label"] == "near" && c["building"].is_null())
+        .unwrap_or_else(|| panic!("{v}"));
+    let close = |x: &serde_json::Value, y: &serde_json::Value| {
+        (x.as_f64().unwrap() - y.as_f64().unwrap()).abs() < 1e-9
+    };
+    assert!(
+        close(&near["mean_gain_pct"], &overall["mean_gain_pct"]),
+        "{near} {overall}"
+    );
     // A label the other store does not hold: one line naming it and the labels there.
     let o = report(&[b.to_str().unwrap(), "--against-label", "nope"]);
     assert_clean_failure(&o, &["--against-label", "nope", "baseline, near"]);

@@ -258,6 +258,26 @@ pub fn gains_against(
         .collect()
 }
 
+/// `report --against` in the JSON report: the other results directory as given and, per label,
+/// the label it is compared with and the paired gain (null without a shared run).
+pub fn against_json(gains: &[CrossGain], against: &str) -> serde_json::Value {
+    let comparisons: Vec<serde_json::Value> = gains
+        .iter()
+        .map(|g| {
+            serde_json::json!({
+                "label": g.label,
+                "against_label": g.against_label,
+                "pairs": g.gain.as_ref().map_or(0, |p| p.pairs),
+                "mean_gain_pct": g.gain.as_ref().and_then(|p| finite(p.mean_pct)),
+                "t_ci95_pct": g.gain.as_ref().and_then(|p| {
+                    Some([finite(p.mean_pct - p.ci95_pct)?, finite(p.mean_pct + p.ci95_pct)?])
+                }),
+            })
+        })
+        .collect();
+    serde_json::json!({ "results": against, "comparisons": comparisons })
+}
+
 /// The lines of `report --against`: per label, the label it is compared with and the paired
 /// gain with its 95 % interval.
 pub fn render_against(gains: &[CrossGain], against: &str) -> String {
