@@ -118,8 +118,8 @@ pub struct DecisionView<'a> {
     pub map: &'a OccupancyGrid,
 }
 
-/// Most [`Reply::Goal`] points without a drivable path in one decision; the next is taken as
-/// [`Reply::Pass`].
+/// How many [`Reply::Goal`] points without a drivable path one decision takes: the last of them
+/// counts as [`Reply::Pass`].
 pub const MAX_UNREACHABLE_GOALS: usize = 8;
 
 /// A policy's answer.
