@@ -892,6 +892,7 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
             straight_m: (point - start.position()).norm(),
             gain_m2,
             layout_gain_m2: h.needs_layout_gain.then_some(gain_m2 * 0.5),
+            // Room 0 below covers cells x >= 13 (2.6 m to 4.8 m at 0.2 m per cell).
             room: h.needs_layout.then_some(0).filter(|_| x > 12),
         }
     };
