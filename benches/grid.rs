@@ -20,13 +20,15 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
-use floorcast_coordinator::execute::{execute_wire, expected_row, failed_wire_row};
+use floorcast_coordinator::execute::expected_row;
 use floorcast_coordinator::grid::{Plan, PlannedJob};
 use floorcast_coordinator::inbox::RemoteWorkers;
-use floorcast_coordinator::net::{run_worker, NetConfig, WorkerOptions};
+use floorcast_coordinator::net::{join, NetConfig};
 use floorcast_coordinator::run::{run_plan, RunOptions};
 use floorcast_coordinator::store::{Store, StoredResult};
-use floorcast_coordinator::wire::WireJob;
+use floorcast_worker::execute::{execute_wire, failed_wire_row};
+use floorcast_worker::process::{run_worker, Executor, WorkerOptions};
+use floorcast_worker::wire::WireJob;
 use sim_core::Building;
 
 const ROLE: &str = "FLOORCAST_BENCH_WORKER";
@@ -169,25 +171,37 @@ fn worker_process(role: &str) {
     let [kind, endpoint, name] = parts[..] else {
         panic!("bad {ROLE}: {role}");
     };
-    let exec: Arc<floorcast_coordinator::net::Executor> = if kind == "trivial" {
-        Arc::new(|job: &WireJob, _: &Building, worker: &str| {
-            failed_wire_row(job, worker, "trivial benchmark job".into())
-        })
+    let trivial = |job: &WireJob, _: &Building, worker: &str| {
+        failed_wire_row(job, worker, "trivial benchmark job".into())
+    };
+    let exec: &Executor<'_> = if kind == "trivial" {
+        &trivial
     } else {
-        Arc::new(execute_wire)
+        &execute_wire
     };
-    let opts = WorkerOptions {
-        net: NetConfig {
-            listen: vec![],
-            connect: vec![endpoint.to_string()],
-            zenoh_config: None,
-            campaign: "bench".into(),
-        },
-        jobs: 1,
-        wait_s: 60.0,
-        name: Some(name.to_string()),
+    let net = NetConfig {
+        listen: vec![],
+        connect: vec![endpoint.to_string()],
+        zenoh_config: None,
+        campaign: "bench".into(),
     };
-    if let Err(e) = run_worker(&opts, exec, Arc::new(|_| {})) {
+    let outcome = join(&net, Some(name))
+        .map_err(|e| e.to_string())
+        .and_then(|link| {
+            let report = run_worker(
+                &link,
+                "bench",
+                WorkerOptions {
+                    jobs: 1,
+                    wait_s: 60.0,
+                },
+                exec,
+                &|_| {},
+            );
+            link.leave();
+            report.map_err(|e| e.to_string())
+        });
+    if let Err(e) = outcome {
         eprintln!("bench worker {name}: {e}");
         std::process::exit(1);
     }

@@ -1,12 +1,11 @@
 //! `floorcast worker`: joins a grid run by `floorcast run GRID --listen ...` on another machine
 //! (or through a zenoh router), runs jobs, returns results, leaves when the grid is done.
 
-use std::sync::Arc;
-
 use anyhow::Result;
 use clap::Args;
-use floorcast_coordinator::execute::execute_wire;
-use floorcast_coordinator::net::{run_worker, NetConfig, WorkerEvent, WorkerOptions};
+use floorcast_coordinator::net::{join, NetConfig};
+use floorcast_worker::execute::execute_wire;
+use floorcast_worker::process::{run_worker, WorkerEvent, WorkerOptions};
 
 use crate::cmd_run::NetArgs;
 
@@ -51,19 +50,14 @@ pub fn run(a: WorkerArgs) -> Result<()> {
     if jobs == 0 {
         anyhow::bail!("--jobs must be at least 1");
     }
-    let opts = WorkerOptions {
-        net: NetConfig {
-            listen: Vec::new(),
-            connect: a.connect.clone(),
-            zenoh_config: a.net.zenoh_config.clone(),
-            campaign: a.net.campaign.clone(),
-        },
-        jobs,
-        wait_s: a.wait_s,
-        name: a.name.clone(),
+    let net = NetConfig {
+        listen: Vec::new(),
+        connect: a.connect.clone(),
+        zenoh_config: a.net.zenoh_config.clone(),
+        campaign: a.net.campaign.clone(),
     };
     let quiet = a.quiet;
-    let events = Arc::new(move |e: WorkerEvent| {
+    let events = move |e: WorkerEvent| {
         if quiet {
             return;
         }
@@ -80,8 +74,20 @@ pub fn run(a: WorkerArgs) -> Result<()> {
             } => eprintln!("job {job}: {status} in {wall_time_s:.1} s, {reply}"),
             WorkerEvent::Note(n) => eprintln!("note: {n}"),
         }
-    });
-    let report = run_worker(&opts, Arc::new(execute_wire), events)?;
+    };
+    let link = join(&net, a.name.as_deref())?;
+    let report = run_worker(
+        &link,
+        &floorcast_coordinator::store::host_name(),
+        WorkerOptions {
+            jobs,
+            wait_s: a.wait_s,
+        },
+        &execute_wire,
+        &events,
+    );
+    link.leave();
+    let report = report?;
     say!(
         "grid complete: this worker ran {} jobs ({} stored, {} duplicates, {} rejected)",
         report.jobs_run,

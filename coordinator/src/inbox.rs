@@ -9,7 +9,7 @@ use tokio::sync::oneshot;
 
 use crate::grid::{Plan, PlannedJob};
 use crate::store::StoredResult;
-use crate::wire::{RenewReply, SubmitReply};
+use floorcast_worker::wire::{RenewReply, SubmitReply};
 
 /// What workers (embedded threads or the network bridge) tell the coordinator loop.
 #[derive(Debug)]

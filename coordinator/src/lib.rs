@@ -7,11 +7,14 @@
 //! - [`run`]: the coordinator loop; runs a plan with embedded worker threads and/or remote
 //!   workers through a transport its caller hands it.
 //! - [`inbox`]: the contract between workers and the loop (messages, the transport trait).
-//! - [`execute`]: runs one job (planned here or received from the network) into a store row.
-//! - [`net`]: the zenoh transport for remote workers and the worker process's loop (the only
-//!   module that knows zenoh). Modules depend one way: `net` on `inbox` and `execute`, `run` on
-//!   `inbox`, `execute` and `schedule`; `run` never names `net`.
-//! - [`wire`]: the versioned messages between coordinator and workers.
+//! - [`execute`]: runs one planned job here into a store row, and gives a planned job its wire
+//!   form for remote workers (which run it with `floorcast_worker::execute`).
+//! - [`net`]: the zenoh transport, both sides: the coordinator's queryables for remote workers,
+//!   and the link a worker process (`floorcast_worker::process`) asks through (the only module
+//!   that knows zenoh). Modules depend one way: `net` on `inbox` and `execute`, `run` on `inbox`,
+//!   `execute` and `schedule`; `run` never names `net`.
+//!
+//! The messages between coordinator and workers are `floorcast_worker::wire`'s.
 //! - [`table`]: the paper's Table 1 for a grid, the comparisons of `report` (and `--json`), and
 //!   CSV export.
 //! - [`stats`]: Wilcoxon, bootstrap, Holm, effect size of paired differences.
@@ -28,4 +31,3 @@ pub mod sequential;
 pub mod stats;
 pub mod store;
 pub mod table;
-pub mod wire;

@@ -14,29 +14,27 @@
 //!
 //! Delivery is at-least-once (a worker retries a submission until it is acknowledged; a job of a
 //! vanished worker is handed out again), so the coordinator deduplicates by job id. Every message
-//! is decoded and validated ([`crate::wire`]); a malformed or foreign one is logged and answered
+//! is decoded and validated ([`floorcast_worker::wire`]); a malformed or foreign one is logged and answered
 //! with an error, never trusted. Queries use `ConsolidationMode::None` (the default keeps one
 //! reply per key). zenoh needs tokio's multi-thread runtime; simulations run on blocking
 //! threads, never on the runtime's workers.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use sim_core::Building;
 use tokio::sync::oneshot;
 use zenoh::query::{ConsolidationMode, Query, QueryTarget};
 use zenoh::sample::SampleKind;
 use zenoh::Session;
 
-use crate::execute::{failed_wire_row, wire_job};
+use crate::execute::wire_job;
 use crate::grid::Plan;
 use crate::inbox::{Answer, Inbox, InboxSender, RemoteSession, RemoteWorkers, LOCAL};
-use crate::store::StoredResult;
-use crate::wire::{
+use floorcast_worker::process::Coordinator;
+use floorcast_worker::wire::{
     decode, encode, BuildingRequest, Hello, Message, NextReply, RenewReply, Renewal, Submission,
-    SubmitReply, WireBuilding, WireJob,
+    SubmitReply, WireBuilding,
 };
 
 /// Where and how to reach the other side.
@@ -63,14 +61,6 @@ pub enum NetError {
     Open(String),
     #[error("zenoh: {0}")]
     Zenoh(String),
-    #[error("the coordinator refused this worker: {0}")]
-    Refused(String),
-    #[error("no coordinator answered on {endpoints} (campaign '{campaign}') for {waited_s:.0} s: check that `floorcast run GRID --listen ...` runs there, the address, and the credentials/TLS settings of --zenoh-config")]
-    NoCoordinator {
-        endpoints: String,
-        campaign: String,
-        waited_s: f64,
-    },
 }
 
 fn zerr(e: impl std::fmt::Display) -> NetError {
@@ -461,60 +451,34 @@ async fn on_renew(ctx: Arc<Ctx>, q: Query) {
 }
 
 // ------------------------------------------------------------------------------------------
-// Worker side
+// Worker side: the link the worker process (`floorcast_worker::process`) asks through.
 
-/// How a remote worker runs.
-#[derive(Debug, Clone)]
-pub struct WorkerOptions {
-    pub net: NetConfig,
-    /// Jobs run at once (one per core is a good choice).
-    pub jobs: usize,
-    /// Give up when no coordinator answered for this long (0: wait forever).
-    pub wait_s: f64,
-    /// The worker's id (default: host, process id and zenoh id).
-    pub name: Option<String>,
+/// A worker's link to its coordinator over zenoh: joined with [`join`], left with
+/// [`ZenohLink::leave`]. Its liveliness token announces the worker (the coordinator requeues the
+/// jobs of a worker whose token disappears).
+pub struct ZenohLink {
+    rt: tokio::runtime::Runtime,
+    session: Session,
+    token: zenoh::liveliness::LivelinessToken,
+    campaign: String,
+    worker: String,
+    endpoints: String,
 }
 
-/// What a worker did, for its log.
-#[derive(Debug, Clone)]
-pub enum WorkerEvent {
-    Joined {
-        worker: String,
-    },
-    Started {
-        job: String,
-        what: String,
-    },
-    Finished {
-        job: String,
-        status: String,
-        wall_time_s: f64,
-        reply: String,
-    },
-    Note(String),
+impl std::fmt::Debug for ZenohLink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ZenohLink")
+            .field("campaign", &self.campaign)
+            .field("worker", &self.worker)
+            .field("endpoints", &self.endpoints)
+            .finish_non_exhaustive()
+    }
 }
 
-/// What a worker did in all.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct WorkerReport {
-    pub jobs_run: usize,
-    pub stored: usize,
-    pub duplicates: usize,
-    pub rejected: usize,
-}
-
-/// Runs `job` in `building` as worker `worker` (on a blocking thread) and returns its store row.
-pub type Executor = dyn Fn(&WireJob, &Building, &str) -> StoredResult + Send + Sync;
-/// Receives the worker's events (from the network threads).
-pub type EventSink = dyn Fn(WorkerEvent) + Send + Sync;
-
-/// Joins a grid: asks for jobs until the coordinator says the grid is done.
-pub fn run_worker(
-    opts: &WorkerOptions,
-    exec: Arc<Executor>,
-    events: Arc<EventSink>,
-) -> Result<WorkerReport, NetError> {
-    if let Some(n) = &opts.name {
+/// Opens a zenoh session as worker `name` (default: host, process id and zenoh id) and
+/// announces it.
+pub fn join(cfg: &NetConfig, name: Option<&str>) -> Result<ZenohLink, NetError> {
+    if let Some(n) = name {
         if !valid_chunk(n) || n.starts_with(LOCAL) {
             return Err(NetError::Option {
                 what: "--name".into(),
@@ -525,16 +489,15 @@ pub fn run_worker(
             });
         }
     }
-    let config = zenoh_config(&opts.net)?;
+    let config = zenoh_config(cfg)?;
     let rt = runtime()?;
-    let result = rt.block_on(async {
+    let joined = rt.block_on(async {
         let session = zenoh::open(config)
             .await
             .map_err(|e| NetError::Open(e.to_string()))?;
-        let host = crate::store::host_name();
-        let worker = opts.name.clone().unwrap_or_else(|| {
+        let worker = name.map(str::to_string).unwrap_or_else(|| {
             let zid = session.zid().to_string();
-            let host: String = host
+            let host: String = crate::store::host_name()
                 .chars()
                 .filter(|c| c.is_ascii_alphanumeric() || *c == '-')
                 .take(32)
@@ -543,102 +506,96 @@ pub fn run_worker(
         });
         let token = session
             .liveliness()
-            .declare_token(key(&opts.net.campaign, &format!("workers/{worker}")))
+            .declare_token(key(&cfg.campaign, &format!("workers/{worker}")))
             .await
             .map_err(zerr)?;
-        let shared = Arc::new(Slots {
-            session: session.clone(),
-            campaign: opts.net.campaign.clone(),
-            hello: Hello::this_build(&worker, &host),
-            exec,
-            events,
-            wait_s: opts.wait_s,
-            endpoints: opts.net.connect.join(", "),
-            last_contact: std::sync::Mutex::new(Instant::now()),
-            buildings: tokio::sync::Mutex::new(std::collections::BTreeMap::new()),
-            joined: AtomicBool::new(false),
-            run: AtomicUsize::new(0),
-            stored: AtomicUsize::new(0),
-            duplicates: AtomicUsize::new(0),
-            rejected: AtomicUsize::new(0),
-        });
-        let mut tasks = Vec::new();
-        for _ in 0..opts.jobs.max(1) {
-            tasks.push(tokio::spawn(slot(Arc::clone(&shared))));
-        }
-        let mut outcome = Ok(());
-        for t in tasks {
-            match t.await {
-                Ok(Ok(())) => {}
-                Ok(Err(e)) => {
-                    if outcome.is_ok() {
-                        outcome = Err(e);
-                    }
-                }
-                Err(e) => outcome = Err(zerr(e)),
-            }
-        }
-        drop(token);
-        let _ = tokio::time::timeout(Duration::from_secs(3), session.close()).await;
-        outcome.map(|()| WorkerReport {
-            jobs_run: shared.run.load(Ordering::SeqCst),
-            stored: shared.stored.load(Ordering::SeqCst),
-            duplicates: shared.duplicates.load(Ordering::SeqCst),
-            rejected: shared.rejected.load(Ordering::SeqCst),
-        })
+        Ok::<_, NetError>((session, token, worker))
     });
-    rt.shutdown_timeout(Duration::from_secs(1));
-    result
-}
-
-struct Slots {
-    session: Session,
-    campaign: String,
-    hello: Hello,
-    exec: Arc<Executor>,
-    events: Arc<EventSink>,
-    wait_s: f64,
-    endpoints: String,
-    last_contact: std::sync::Mutex<Instant>,
-    /// Buildings fetched so far, by content hash (checked).
-    buildings: tokio::sync::Mutex<std::collections::BTreeMap<String, Arc<Building>>>,
-    joined: AtomicBool,
-    run: AtomicUsize,
-    stored: AtomicUsize,
-    duplicates: AtomicUsize,
-    rejected: AtomicUsize,
-}
-
-impl Slots {
-    fn contact(&self) {
-        *self.last_contact.lock().expect("not poisoned") = Instant::now();
-        if !self.joined.swap(true, Ordering::SeqCst) {
-            (self.events)(WorkerEvent::Joined {
-                worker: self.hello.worker.clone(),
-            });
+    let (session, token, worker) = match joined {
+        Ok(j) => j,
+        Err(e) => {
+            rt.shutdown_timeout(Duration::from_secs(1));
+            return Err(e);
         }
+    };
+    Ok(ZenohLink {
+        rt,
+        session,
+        token,
+        campaign: cfg.campaign.clone(),
+        worker,
+        endpoints: cfg.connect.join(", "),
+    })
+}
+
+impl ZenohLink {
+    /// Withdraws the worker's token and closes the session.
+    pub fn leave(self) {
+        let ZenohLink {
+            rt, session, token, ..
+        } = self;
+        rt.block_on(async {
+            drop(token);
+            let _ = tokio::time::timeout(Duration::from_secs(3), session.close()).await;
+        });
+        rt.shutdown_timeout(Duration::from_secs(1));
     }
 
-    /// Fails when no coordinator answered for `wait_s`.
-    fn check_silence(&self) -> Result<(), NetError> {
-        let waited_s = self
-            .last_contact
-            .lock()
-            .expect("not poisoned")
-            .elapsed()
-            .as_secs_f64();
-        if self.wait_s > 0.0 && waited_s > self.wait_s {
-            return Err(NetError::NoCoordinator {
-                endpoints: if self.endpoints.is_empty() {
-                    "the configured endpoints".into()
-                } else {
-                    self.endpoints.clone()
-                },
-                campaign: self.campaign.clone(),
-                waited_s,
-            });
-        }
-        Ok(())
+    fn request<T: Message>(
+        &self,
+        key_rest: &str,
+        body: Vec<u8>,
+        timeout: Duration,
+    ) -> Result<Option<T>, String> {
+        let k = key(&self.campaign, key_rest);
+        self.rt.block_on(ask::<T>(&self.session, &k, body, timeout))
+    }
+}
+
+impl Coordinator for ZenohLink {
+    fn worker(&self) -> &str {
+        &self.worker
+    }
+
+    fn whereabouts(&self) -> String {
+        let endpoints = if self.endpoints.is_empty() {
+            "the configured endpoints"
+        } else {
+            &self.endpoints
+        };
+        format!("{endpoints} (campaign '{}')", self.campaign)
+    }
+
+    fn next(&self, hello: &Hello) -> Result<Option<NextReply>, String> {
+        self.request("ctl/next", encode(hello), Duration::from_secs(10))
+    }
+
+    fn building(
+        &self,
+        hash: &str,
+        request: &BuildingRequest,
+    ) -> Result<Option<WireBuilding>, String> {
+        self.request(
+            &format!("ctl/building/{hash}"),
+            encode(request),
+            Duration::from_secs(30),
+        )
+    }
+
+    fn renew(&self, job_id: &str, renewal: &Renewal) -> Result<Option<RenewReply>, String> {
+        self.request(
+            &format!("ctl/renew/{job_id}"),
+            encode(renewal),
+            Duration::from_secs(5),
+        )
+    }
+
+    fn submit(&self, job_id: &str, submission: &Submission) -> Result<Option<SubmitReply>, String> {
+        self.request(
+            &format!("ctl/submit/{job_id}"),
+            encode(submission),
+            Duration::from_secs(30),
+        )
     }
 }
 
@@ -671,159 +628,6 @@ async fn ask<T: Message>(
         });
     }
     out.transpose()
-}
-
-async fn slot(x: Arc<Slots>) -> Result<(), NetError> {
-    let next_key = key(&x.campaign, "ctl/next");
-    let mut backoff_ms = 100u64;
-    loop {
-        let reply = ask::<NextReply>(
-            &x.session,
-            &next_key,
-            encode(&x.hello),
-            Duration::from_secs(10),
-        )
-        .await;
-        match reply {
-            Ok(Some(NextReply::Job { job, lease_s })) => {
-                x.contact();
-                backoff_ms = 100;
-                run_one(&x, *job, lease_s).await?;
-            }
-            Ok(Some(NextReply::Wait { retry_ms })) => {
-                x.contact();
-                tokio::time::sleep(Duration::from_millis(retry_ms.clamp(10, 10_000))).await;
-            }
-            Ok(Some(NextReply::Done)) => return Ok(()),
-            Ok(Some(NextReply::Refused { reason })) => return Err(NetError::Refused(reason)),
-            Ok(None) => {
-                x.check_silence()?;
-                tokio::time::sleep(Duration::from_millis(backoff_ms)).await;
-                backoff_ms = (backoff_ms * 2).min(2000);
-            }
-            Err(e) => {
-                (x.events)(WorkerEvent::Note(e));
-                x.check_silence()?;
-                tokio::time::sleep(Duration::from_millis(1000)).await;
-            }
-        }
-    }
-}
-
-/// The building with content hash `hash`, fetched from the coordinator on first use (retried
-/// while the coordinator is away). `Ok(Err(_))`: the coordinator has no such building or sent a
-/// damaged one.
-async fn building(x: &Arc<Slots>, hash: &str) -> Result<Result<Arc<Building>, String>, NetError> {
-    let mut cache = x.buildings.lock().await;
-    if let Some(b) = cache.get(hash) {
-        return Ok(Ok(Arc::clone(b)));
-    }
-    let k = key(&x.campaign, &format!("ctl/building/{hash}"));
-    let body = encode(&BuildingRequest {
-        worker: x.hello.worker.clone(),
-    });
-    let mut backoff_ms = 100u64;
-    loop {
-        match ask::<WireBuilding>(&x.session, &k, body.clone(), Duration::from_secs(30)).await {
-            Ok(Some(w)) => {
-                x.contact();
-                return Ok(w.to_building(hash).map(|b| {
-                    let b = Arc::new(b);
-                    cache.insert(hash.to_string(), Arc::clone(&b));
-                    b
-                }));
-            }
-            Ok(None) => {}
-            Err(e) => return Ok(Err(e)),
-        }
-        x.check_silence()?;
-        tokio::time::sleep(Duration::from_millis(backoff_ms)).await;
-        backoff_ms = (backoff_ms * 2).min(2000);
-    }
-}
-
-async fn run_one(x: &Arc<Slots>, job: WireJob, lease_s: f64) -> Result<(), NetError> {
-    let id = job.job_id.clone();
-    (x.events)(WorkerEvent::Started {
-        job: id.clone(),
-        what: format!("{} {} seed {}", job.building_name, job.label, job.seed),
-    });
-    // Renew the lease while the job runs.
-    let renewer = {
-        let x = Arc::clone(x);
-        let id = id.clone();
-        let every = Duration::from_secs_f64((lease_s / 3.0).clamp(0.05, 600.0));
-        tokio::spawn(async move {
-            let k = key(&x.campaign, &format!("ctl/renew/{id}"));
-            let body = encode(&Renewal {
-                worker: x.hello.worker.clone(),
-            });
-            loop {
-                tokio::time::sleep(every).await;
-                if let Ok(Some(RenewReply::NotLeased)) =
-                    ask::<RenewReply>(&x.session, &k, body.clone(), Duration::from_secs(5)).await
-                {
-                    (x.events)(WorkerEvent::Note(format!(
-                        "job {id} was handed to another worker meanwhile; finishing it anyway"
-                    )));
-                    return;
-                }
-            }
-        })
-    };
-    let exec = Arc::clone(&x.exec);
-    let worker = x.hello.worker.clone();
-    let result = match building(x, &job.building_hash).await? {
-        Ok(b) => tokio::task::spawn_blocking(move || exec(&job, &b, &worker))
-            .await
-            .map_err(zerr)?,
-        Err(e) => failed_wire_row(&job, &worker, e),
-    };
-    renewer.abort();
-    x.run.fetch_add(1, Ordering::SeqCst);
-    let status = result.status.clone();
-    let wall_time_s = result.wall_time_s;
-    let body = encode(&Submission {
-        worker: x.hello.worker.clone(),
-        result,
-    });
-    let k = key(&x.campaign, &format!("ctl/submit/{id}"));
-    let mut backoff_ms = 100u64;
-    // Retry until acknowledged: the coordinator may be restarting.
-    let reply = loop {
-        match ask::<SubmitReply>(&x.session, &k, body.clone(), Duration::from_secs(30)).await {
-            Ok(Some(r)) => {
-                x.contact();
-                break r;
-            }
-            Ok(None) => {}
-            Err(e) => (x.events)(WorkerEvent::Note(format!("submitting job {id}: {e}"))),
-        }
-        x.check_silence()?;
-        tokio::time::sleep(Duration::from_millis(backoff_ms)).await;
-        backoff_ms = (backoff_ms * 2).min(2000);
-    };
-    let what = match &reply {
-        SubmitReply::Stored => {
-            x.stored.fetch_add(1, Ordering::SeqCst);
-            "stored".to_string()
-        }
-        SubmitReply::Duplicate => {
-            x.duplicates.fetch_add(1, Ordering::SeqCst);
-            "already stored (duplicate)".to_string()
-        }
-        SubmitReply::Rejected { reason } => {
-            x.rejected.fetch_add(1, Ordering::SeqCst);
-            format!("rejected: {reason}")
-        }
-    };
-    (x.events)(WorkerEvent::Finished {
-        job: id,
-        status,
-        wall_time_s,
-        reply: what,
-    });
-    Ok(())
 }
 
 /// Sends raw bytes as a query on `floorcast/v1/<campaign>/<key_rest>` through `connect` and
@@ -873,10 +677,14 @@ pub fn raw_exchange(
 mod tests {
     use std::path::Path;
 
+    use std::sync::atomic::AtomicBool;
+
     use super::*;
-    use crate::execute::{execute_wire, expected_row};
+    use crate::execute::expected_row;
     use crate::run::{run_plan, RunOptions};
     use crate::store::Store;
+    use floorcast_worker::execute::execute_wire;
+    use floorcast_worker::process::{run_worker, WorkerError, WorkerOptions, WorkerReport};
 
     fn plan(dir: &Path, seeds: &str) -> Plan {
         let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
@@ -925,17 +733,17 @@ mod tests {
         })
     }
 
-    fn worker(ep: &str, name: &str) -> Result<WorkerReport, NetError> {
-        run_worker(
-            &WorkerOptions {
-                net: net(vec![], vec![ep.to_string()]),
-                jobs: 1,
-                wait_s: 20.0,
-                name: Some(name.into()),
-            },
-            Arc::new(execute_wire),
-            Arc::new(|_| {}),
-        )
+    fn worker(ep: &str, name: Option<&str>, wait_s: f64) -> Result<WorkerReport, WorkerError> {
+        let link = join(&net(vec![], vec![ep.to_string()]), name).unwrap();
+        let report = run_worker(
+            &link,
+            "host",
+            WorkerOptions { jobs: 1, wait_s },
+            &execute_wire,
+            &|_| {},
+        );
+        link.leave();
+        report
     }
 
     #[test]
@@ -1028,7 +836,7 @@ mod tests {
                 .unwrap();
             s.close().await.unwrap();
         });
-        let report = worker(&ep, "w1").unwrap();
+        let report = worker(&ep, Some("w1"), 20.0).unwrap();
         assert_eq!(report.stored, 2);
         let (log, done) = coord.join().unwrap();
         assert_eq!(done, 2);
@@ -1049,19 +857,14 @@ mod tests {
     #[test]
     fn a_worker_without_coordinator_gives_up_with_a_clear_message() {
         let dir = tempfile::tempdir().unwrap();
-        let e = run_worker(
-            &WorkerOptions {
-                net: net(vec![], vec![endpoint(dir.path())]),
-                jobs: 1,
-                wait_s: 0.5,
-                name: None,
-            },
-            Arc::new(execute_wire),
-            Arc::new(|_| {}),
-        )
-        .unwrap_err();
-        assert!(matches!(e, NetError::NoCoordinator { .. }), "{e}");
+        let ep = endpoint(dir.path());
+        let e = worker(&ep, None, 0.5).unwrap_err();
+        assert!(matches!(e, WorkerError::NoCoordinator { .. }), "{e}");
         assert!(e.to_string().contains("floorcast run GRID --listen"));
+        assert!(
+            e.to_string().contains(&format!("{ep} (campaign 'test')")),
+            "{e}"
+        );
     }
 
     #[test]

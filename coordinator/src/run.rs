@@ -20,7 +20,7 @@ use crate::grid::{Plan, PlannedJob};
 use crate::inbox::{Answer, Inbox, InboxSender, RemoteWorkers, LOCAL};
 use crate::schedule::{Grant, Note, Renewal, RequeueReason, Scheduler, Verdict};
 use crate::store::{Store, StoreError, StoredResult};
-use crate::wire::{check_result, check_result_start, RenewReply, SubmitReply};
+use floorcast_worker::wire::{check_result, check_result_start, RenewReply, SubmitReply};
 
 /// Counts for a progress display.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

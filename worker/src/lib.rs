@@ -1,14 +1,24 @@
-//! Runs floorcast jobs: one exploration of a building with a strategy, a seed and settings,
-//! producing a versioned run record ([`record::RunSummary`]) plus the in-memory result.
+//! The worker: runs floorcast jobs, one exploration of a building with a strategy, a seed and
+//! settings, producing a versioned run record ([`record::RunSummary`]) plus the in-memory result,
+//! and the worker process that takes jobs from a coordinator.
+//!
+//! - [`run_job`]: one job, in memory; [`execute`]: one job into the row that identifies it.
+//! - [`process`]: the worker process's loop (ask, run, renew, submit), over a link to the
+//!   coordinator that the caller supplies (it knows no transport).
+//! - [`wire`]: the versioned messages between coordinator and workers, and the job row.
+//! - [`settings`], [`record`], [`external`]: the settings, the run record, external strategies.
 //!
 //! This crate measures wall time and knows the floorcast version; the simulation itself is
 //! `sim-core`'s and stays pure. It stores nothing (the binary and the coordinator store what it
 //! returns); the only processes and files it touches are an external strategy's
 //! ([`external`]: its program, a remote job's copy of its files, the Python module).
 
+pub mod execute;
 pub mod external;
+pub mod process;
 pub mod record;
 pub mod settings;
+pub mod wire;
 
 use std::time::Instant;
 
@@ -66,7 +76,7 @@ pub enum JobError {
     #[error("{}", bad_start_message(name, origin, pose, problem, *hint))]
     BadStart {
         name: String,
-        /// Where the pose came from, e.g. "the building file's [start]".
+        /// Where the pose came from, e.g. "the building file's \[start\]".
         origin: String,
         pose: Pose,
         problem: PoseProblem,

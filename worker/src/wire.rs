@@ -3,7 +3,7 @@
 //! Every message is a JSON object `{"format": "floorcast-wire", "version": 1, "kind": …, "body":
 //! …}`. [`decode`] checks the envelope before it trusts the body, so a foreign or malformed
 //! message becomes a [`WireError`] that names what was wrong (and is logged and dropped by the
-//! transport), never a panic. Nothing here knows zenoh: `net.rs` moves these bytes.
+//! transport), never a panic. Nothing here knows zenoh: `floorcast_coordinator::net` moves these bytes.
 //!
 //! A job names its building by content hash; a worker fetches each building once
 //! ([`BuildingRequest`] -> [`WireBuilding`]) and keeps it, so it needs no files. Floats cross
@@ -15,8 +15,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use sim_core::{Bitmap, Building, Door, Geometry, GridFrame, Polygon, Pose, Room, Vec2};
 
-use crate::store::StoredResult;
-use floorcast_worker::{RunSummary, Settings, FLOORCAST_VERSION, SUMMARY_VERSION};
+use crate::{RunSummary, Settings, FLOORCAST_VERSION, SUMMARY_VERSION};
 
 /// The value of every message's `format` key.
 pub const WIRE_FORMAT: &str = "floorcast-wire";
@@ -104,7 +103,7 @@ pub struct Hello {
     pub floorcast_version: String,
     /// The run-summary format the worker writes ([`SUMMARY_VERSION`]).
     pub result_format: u32,
-    /// The worker's bench signature ([`floorcast_worker::bench_signature`]).
+    /// The worker's bench signature ([`crate::bench_signature`]).
     pub bench: String,
 }
 impl Message for Hello {
@@ -118,7 +117,7 @@ impl Hello {
             host: host.into(),
             floorcast_version: FLOORCAST_VERSION.into(),
             result_format: SUMMARY_VERSION,
-            bench: floorcast_worker::bench_signature().into(),
+            bench: crate::bench_signature().into(),
         }
     }
 
@@ -132,7 +131,7 @@ impl Hello {
                 self.worker, self.floorcast_version, self.result_format, FLOORCAST_VERSION, SUMMARY_VERSION
             ));
         }
-        let own = floorcast_worker::bench_signature();
+        let own = crate::bench_signature();
         if self.bench != own {
             return Err(format!(
                 "worker '{}' computes differently: its bench signature is {}, the coordinator's {} (another build, compiler flags or platform); its runs would not match this grid's: build floorcast the same way on every machine",
@@ -216,7 +215,7 @@ pub struct WireProgram {
 
 impl WireProgram {
     /// The program with its files (read when the grid was planned).
-    pub fn new(p: &floorcast_worker::StrategyProgram, contents: &[(String, Vec<u8>)]) -> Self {
+    pub fn new(p: &crate::StrategyProgram, contents: &[(String, Vec<u8>)]) -> Self {
         let b64 = base64::engine::general_purpose::STANDARD;
         Self {
             command: p.command.clone(),
@@ -232,12 +231,9 @@ impl WireProgram {
     }
 
     /// Writes the files under `root` and returns the program to run, checked by hash.
-    pub fn materialize(
-        &self,
-        root: &std::path::Path,
-    ) -> Result<floorcast_worker::StrategyProgram, String> {
+    pub fn materialize(&self, root: &std::path::Path) -> Result<crate::StrategyProgram, String> {
         let b64 = base64::engine::general_purpose::STANDARD;
-        if self.contents.len() > floorcast_worker::external::MAX_PROGRAM_FILES {
+        if self.contents.len() > crate::external::MAX_PROGRAM_FILES {
             return Err(format!("the program has {} files", self.contents.len()));
         }
         let contents = self
@@ -249,7 +245,7 @@ impl WireProgram {
                     .map_err(|e| format!("file {n} is not base64: {e}"))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        floorcast_worker::StrategyProgram::materialize(
+        crate::StrategyProgram::materialize(
             self.command.clone(),
             self.files.clone(),
             &contents,
@@ -352,6 +348,28 @@ pub enum RenewReply {
 }
 impl Message for RenewReply {
     const KIND: &'static str = "renew-reply";
+}
+
+/// One job's row: what a worker submits and the coordinator stores (see `floorcast_coordinator::store`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StoredResult {
+    pub job_id: String,
+    pub grid: String,
+    pub building: String,
+    pub building_hash: String,
+    pub strategy: String,
+    pub label: String,
+    pub seed: u64,
+    pub settings_json: String,
+    /// `ok` or `failed`.
+    pub status: String,
+    pub error: Option<String>,
+    pub summary_json: Option<String>,
+    pub progress_csv: Option<String>,
+    pub worker: String,
+    pub wall_time_s: f64,
+    pub floorcast_version: String,
 }
 
 /// Checks that a submitted result is the result of the planned job it claims to be.
