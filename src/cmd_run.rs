@@ -54,6 +54,13 @@ pub struct RunArgs {
     /// lease runs out (a hung worker) goes back to the queue.
     #[arg(long, value_name = "S", default_value_t = 60.0)]
     lease_s: f64,
+    /// Fraction of remote workers' results, in [0, 1], that this machine runs again and
+    /// compares bit for bit (wall times aside), besides each worker's first result, which is
+    /// always checked; 0 checks none. A worker whose result differs gets no more jobs and its
+    /// results are discarded and run again. Jobs of external strategies and jobs that charge
+    /// compute time are not checked.
+    #[arg(long, value_name = "F", default_value_t = 0.05)]
+    verify_fraction: f64,
     /// Where results go (overrides the grid's `results`).
     #[arg(long, value_name = "DIR")]
     results: Option<PathBuf>,
@@ -121,6 +128,12 @@ pub fn run(a: RunArgs) -> Result<()> {
             max_jobs: a.max_jobs,
         },
     )?;
+    if !(0.0..=1.0).contains(&a.verify_fraction) {
+        anyhow::bail!(
+            "--verify-fraction: expected a fraction in [0, 1], got {}",
+            a.verify_fraction
+        );
+    }
     if !(a.lease_s.is_finite() && (1.0..=86_400.0).contains(&a.lease_s)) {
         anyhow::bail!(
             "--lease-s: expected seconds in [1, 86400], got {}",
@@ -176,6 +189,7 @@ pub fn run(a: RunArgs) -> Result<()> {
             }) as Arc<dyn RemoteWorkers>
         }),
         lease_s: a.lease_s,
+        verify_fraction: if networked { a.verify_fraction } else { 0.0 },
         ..RunOptions::default()
     };
     store.record_run(&provenance(
@@ -257,6 +271,18 @@ pub fn run(a: RunArgs) -> Result<()> {
                 counts.failed,
                 store.path().display()
             );
+            if networked {
+                say!(
+                    "checked: {}",
+                    match (counts.verified, counts.quarantined) {
+                        (0, _) => "no result of a remote worker was run again here (none came, or --verify-fraction 0)".to_string(),
+                        (n, 0) => format!("{n} results of remote workers run again here, all identical"),
+                        (n, q) => format!(
+                            "{n} results of remote workers run again here; {q} worker(s) computed differently, their results were discarded and run again (see the log above)"
+                        ),
+                    }
+                );
+            }
             say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
             let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
             print_sequential(&plan, &progress);

@@ -31,6 +31,14 @@ pub(crate) enum Inbox {
         job: String,
         reply: oneshot::Sender<RenewReply>,
     },
+    /// This machine re-ran `job`, whose result `worker` returned (see [`crate::verify`]):
+    /// `outcome` says whether the two are identical.
+    Verified {
+        job: String,
+        worker: String,
+        ours: Box<StoredResult>,
+        outcome: Result<(), String>,
+    },
     Joined(String),
     Left(String),
     /// Something to show the user (a refused worker, a dropped message).
@@ -43,6 +51,8 @@ pub(crate) enum Answer {
     Run(Box<PlannedJob>),
     Wait,
     Done,
+    /// The worker gets no more jobs (its results were found wrong): why.
+    Refused(String),
 }
 
 /// Prefix of embedded workers' ids (refused for remote workers: embedded workers' leases are

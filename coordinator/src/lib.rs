@@ -17,6 +17,7 @@
 //! The messages between coordinator and workers are `floorcast_worker::wire`'s.
 //! - [`table`]: the paper's Table 1 for a grid, the comparisons of `report` (and `--json`), and
 //!   CSV export.
+//! - [`verify`]: results of remote workers checked by running their jobs again here.
 //! - [`stats`]: Wilcoxon, bootstrap, Holm, effect size of paired differences.
 //! - [`sequential`]: the sequential test (GSPRT) that decides a comparison from paired runs,
 //!   and a sequential grid's progress.
@@ -31,3 +32,4 @@ pub mod sequential;
 pub mod stats;
 pub mod store;
 pub mod table;
+pub mod verify;

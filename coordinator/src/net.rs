@@ -389,6 +389,7 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
         },
         Answer::Wait => NextReply::Wait { retry_ms: 200 },
         Answer::Done => NextReply::Done,
+        Answer::Refused(reason) => NextReply::Refused { reason },
     };
     reply(&q, &msg).await;
 }
@@ -681,10 +682,11 @@ mod tests {
 
     use super::*;
     use crate::execute::expected_row;
-    use crate::run::{run_plan, RunOptions};
+    use crate::run::{run_plan, Counts, RunOptions};
     use crate::store::Store;
     use floorcast_worker::execute::execute_wire;
     use floorcast_worker::process::{run_worker, WorkerError, WorkerOptions, WorkerReport};
+    use floorcast_worker::wire::WireJob;
 
     fn plan(dir: &Path, seeds: &str) -> Plan {
         let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
@@ -708,8 +710,13 @@ mod tests {
         }
     }
 
-    /// Runs the coordinator of `plan` on a thread; returns its log when it finishes.
-    fn coordinator(plan: Plan, ep: String) -> std::thread::JoinHandle<(Vec<String>, usize)> {
+    /// Runs the coordinator of `plan` on a thread (checking each remote worker's first result
+    /// and `verify_fraction` of the others); returns its log and counts when it finishes.
+    fn coordinator(
+        plan: Plan,
+        ep: String,
+        verify_fraction: f64,
+    ) -> std::thread::JoinHandle<(Vec<String>, Counts)> {
         std::thread::spawn(move || {
             let store = Store::open(&plan.results_dir).unwrap();
             let opts = RunOptions {
@@ -718,6 +725,7 @@ mod tests {
                 lease_s: 30.0,
                 linger_s: 1.0,
                 executor: None,
+                verify_fraction,
             };
             let mut log = Vec::new();
             let (_, counts) = run_plan(
@@ -729,7 +737,7 @@ mod tests {
                 &mut |l| log.push(l.to_string()),
             )
             .unwrap();
-            (log, counts.done)
+            (log, counts)
         })
     }
 
@@ -753,7 +761,7 @@ mod tests {
         let job0 = p.jobs[0].id.clone();
         let results = p.results_dir.clone();
         let ep = endpoint(dir.path());
-        let coord = coordinator(p.clone(), ep.clone());
+        let coord = coordinator(p.clone(), ep.clone(), 0.0);
         // A raw zenoh session throws garbage at every key.
         let rt = runtime().unwrap();
         rt.block_on(async {
@@ -838,8 +846,8 @@ mod tests {
         });
         let report = worker(&ep, Some("w1"), 20.0).unwrap();
         assert_eq!(report.stored, 2);
-        let (log, done) = coord.join().unwrap();
-        assert_eq!(done, 2);
+        let (log, counts) = coord.join().unwrap();
+        assert_eq!(counts.done, 2);
         assert!(
             log.iter().any(|l| l.contains("refused worker old")),
             "{log:?}"
@@ -852,6 +860,62 @@ mod tests {
         let rows = Store::open(&results).unwrap().all().unwrap();
         assert_eq!(rows.len(), 2);
         assert!(rows.iter().all(|r| r.worker == "w1" && r.status == "ok"));
+    }
+
+    /// A worker whose results differ from the coordinator's re-run (here: one that adds a
+    /// thousandth to the explored fraction) is caught by the check of its first result: it is
+    /// refused, every result it returned is discarded, and an honest worker (whose first result
+    /// is checked too) runs those jobs again to the rows a local run gives.
+    #[test]
+    fn a_worker_that_alters_its_results_is_caught_and_its_jobs_run_again() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = plan(dir.path(), "[1, 2, 3]");
+        let ep = endpoint(dir.path());
+        // Each worker's first result checked, hardly any other.
+        let coord = coordinator(p.clone(), ep.clone(), 1e-9);
+        let tampered = |job: &WireJob, b: &sim_core::Building, w: &str| {
+            let mut r = execute_wire(job, b, w);
+            let mut v: serde_json::Value =
+                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            v["explored_fraction"] = (v["explored_fraction"].as_f64().unwrap() + 1e-3).into();
+            r.summary_json = Some(v.to_string());
+            r
+        };
+        let link = join(&net(vec![], vec![ep.clone()]), Some("forger")).unwrap();
+        let e = run_worker(
+            &link,
+            "host",
+            WorkerOptions {
+                jobs: 1,
+                wait_s: 20.0,
+            },
+            &tampered,
+            &|_| {},
+        )
+        .unwrap_err();
+        link.leave();
+        assert!(
+            matches!(&e, WorkerError::Refused(r) if r.contains("differed from the coordinator's re-run")),
+            "{e}"
+        );
+        worker(&ep, Some("honest"), 20.0).unwrap();
+        let (log, counts) = coord.join().unwrap();
+        assert_eq!((counts.done, counts.quarantined), (3, 1), "{log:?}");
+        assert!(counts.verified >= 2, "{counts:?}");
+        assert!(
+            log.iter()
+                .any(|l| l.contains("worker forger computes differently")
+                    && l.contains("summary field explored_fraction")),
+            "{log:?}"
+        );
+        let rows = Store::open(&p.results_dir).unwrap().all().unwrap();
+        assert_eq!(rows.len(), 3);
+        for r in &rows {
+            assert_ne!(r.worker, "forger");
+            let job = p.jobs.iter().find(|j| j.id == r.job_id).unwrap();
+            let local = crate::execute::execute(&p, job, "here");
+            assert_eq!(crate::verify::compare(r, &local), Ok(()), "{}", r.job_id);
+        }
     }
 
     #[test]

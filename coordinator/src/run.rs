@@ -33,6 +33,10 @@ pub struct Counts {
     pub resumed: usize,
     /// Remote workers connected now.
     pub remote_workers: usize,
+    /// Results of remote workers re-run here and compared ([`crate::verify`]).
+    pub verified: usize,
+    /// Remote workers whose results were found wrong (discarded and run again elsewhere).
+    pub quarantined: usize,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,6 +61,9 @@ pub struct RunOptions {
     pub linger_s: f64,
     /// What embedded workers run (benchmarks replace it with a trivial job).
     pub executor: Option<Arc<LocalExecutor>>,
+    /// The fraction of remote workers' results (besides each worker's first) re-run on this
+    /// machine and compared ([`crate::verify`]); 0 verifies none.
+    pub verify_fraction: f64,
 }
 
 impl std::fmt::Debug for RunOptions {
@@ -67,6 +74,7 @@ impl std::fmt::Debug for RunOptions {
             .field("lease_s", &self.lease_s)
             .field("linger_s", &self.linger_s)
             .field("executor", &self.executor.as_ref().map(|_| "custom"))
+            .field("verify_fraction", &self.verify_fraction)
             .finish()
     }
 }
@@ -79,6 +87,7 @@ impl Default for RunOptions {
             lease_s: 60.0,
             linger_s: 2.0,
             executor: None,
+            verify_fraction: 0.05,
         }
     }
 }
@@ -104,7 +113,8 @@ fn advance(
     jobs: &mut BTreeMap<String, PlannedJob>,
     on_log: &mut dyn FnMut(&str),
 ) -> Result<(), RunError> {
-    while !progress.finished && sched.batch_complete() {
+    // A batch counts once its results are verified (a verification may send jobs back).
+    while !progress.finished && sched.batch_complete() && sched.held() == 0 {
         let results = store.all()?;
         let before = progress.path.len();
         let next = progress.advance(plan, &results);
@@ -160,17 +170,20 @@ pub fn run_plan(
     let resumed = sched.done();
     let mut failed = 0usize;
     let mut remote: BTreeSet<String> = BTreeSet::new();
-    let counts = |s: &Scheduler, failed: usize, remote: usize| Counts {
+    let mut checks = Checks::default();
+    let counts = |s: &Scheduler, failed: usize, remote: usize, c: &Checks| Counts {
         total: s.total(),
         done: s.done(),
         running: s.running(),
         failed,
         resumed,
         remote_workers: remote,
+        verified: c.verified,
+        quarantined: c.refused.len(),
     };
-    on_progress(counts(&sched, failed, 0));
+    on_progress(counts(&sched, failed, 0, &checks));
     if sched.is_finished() {
-        return Ok((Outcome::Complete, counts(&sched, failed, 0)));
+        return Ok((Outcome::Complete, counts(&sched, failed, 0, &checks)));
     }
     let plan = Arc::new(plan.clone());
     let (inbox_tx, inbox) = mpsc::channel::<Inbox>();
@@ -189,6 +202,7 @@ pub fn run_plan(
     if let Some(l) = &listener {
         on_log(&format!("accepting remote workers: {}", l.describe()));
     }
+    let local_exec: Arc<LocalExecutor> = opts.executor.clone().unwrap_or_else(|| Arc::new(execute));
     let stop = Arc::new(AtomicBool::new(false));
     let mut handles = Vec::new();
     for w in 0..opts.workers {
@@ -196,11 +210,21 @@ pub fn run_plan(
         let tx = inbox_tx.clone();
         let plan = Arc::clone(&plan);
         let stop = Arc::clone(&stop);
-        let exec: Arc<LocalExecutor> = opts.executor.clone().unwrap_or_else(|| Arc::new(execute));
+        let exec = Arc::clone(&local_exec);
         handles.push(std::thread::spawn(move || {
             local_worker(&name, &plan, &tx, &stop, &*exec)
         }));
     }
+    let (verify_tx, verifier) = if listener.is_some() && opts.verify_fraction > 0.0 {
+        let (tx, rx) = mpsc::channel::<(PlannedJob, StoredResult, String)>();
+        let inbox = inbox_tx.clone();
+        let plan = Arc::clone(&plan);
+        let exec = Arc::clone(&local_exec);
+        let h = std::thread::spawn(move || verifier(&plan, &rx, &inbox, &*exec));
+        (Some(tx), Some(h))
+    } else {
+        (None, None)
+    };
     drop(inbox_tx);
     let t0 = Instant::now();
     let mut outcome = Outcome::Complete;
@@ -249,6 +273,16 @@ pub fn run_plan(
         let mut acks: Vec<(oneshot::Sender<SubmitReply>, SubmitReply)> = Vec::new();
         for msg in batch {
             match msg {
+                Inbox::Request { worker, reply } if checks.refused.contains_key(&worker) => {
+                    let _ = reply.send(Answer::Refused(checks.refused[&worker].clone()));
+                }
+                Inbox::Submit { worker, reply, .. } if checks.refused.contains_key(&worker) => {
+                    let reason = checks.refused[&worker].clone();
+                    let _ = reply.send(SubmitReply::Rejected { reason });
+                }
+                Inbox::Renew { worker, reply, .. } if checks.refused.contains_key(&worker) => {
+                    let _ = reply.send(RenewReply::NotLeased);
+                }
                 Inbox::Request { worker, reply } => {
                     let r = sched.request(worker, now);
                     notes.extend(r.notes);
@@ -283,8 +317,28 @@ pub fn run_plan(
                         let _ = reply.send(SubmitReply::Rejected { reason });
                         continue;
                     }
+                    // Chosen for a check: held (the grid does not finish) until it is done.
+                    let check = match (&verify_tx, jobs.get(&job_id)) {
+                        (Some(tx), Some(j))
+                            if !worker.starts_with(LOCAL)
+                                && crate::verify::verifiable(j, &result)
+                                && (checks.first_checked.insert(worker.clone())
+                                    || rand::random::<f64>() < opts.verify_fraction) =>
+                        {
+                            sched.hold(&job_id);
+                            Some((tx, j.clone()))
+                        }
+                        _ => None,
+                    };
                     let r = sched.submit(&job_id);
                     notes.extend(r.notes);
+                    if let Some((tx, j)) = check {
+                        if r.answer == Verdict::Store {
+                            let _ = tx.send((j, (*result).clone(), worker.clone()));
+                        } else {
+                            sched.release(&job_id);
+                        }
+                    }
                     match r.answer {
                         Verdict::Store => {
                             if result.status != "ok" {
@@ -317,6 +371,50 @@ pub fn run_plan(
                         Renewal::Renewed { .. } => RenewReply::Renewed,
                         Renewal::NotLeased => RenewReply::NotLeased,
                     });
+                }
+                Inbox::Verified {
+                    job,
+                    worker,
+                    ours,
+                    outcome,
+                } => {
+                    sched.release(&job);
+                    if checks.refused.contains_key(&worker) {
+                        continue; // its results are discarded already
+                    }
+                    match outcome {
+                        Ok(()) => checks.verified += 1,
+                        Err(why) if ours.status != "ok" => on_log(&format!(
+                            "job {job}: its re-run on this machine failed ({}), so {worker}'s result is kept unverified ({why})",
+                            ours.error.as_deref().unwrap_or("")
+                        )),
+                        Err(why) => {
+                            // The worker computes differently or forged its results: all of
+                            // them (stored, or of this batch) are discarded and run again,
+                            // but the job checked, whose row this machine's replaces.
+                            checks.verified += 1;
+                            let mut again = store.discard_worker(&worker)?;
+                            again.extend(
+                                to_store
+                                    .iter()
+                                    .filter(|r| r.worker == worker)
+                                    .map(|r| r.job_id.clone()),
+                            );
+                            to_store.retain(|r| r.worker != worker);
+                            again.retain(|j| *j != job);
+                            store.replace(&ours)?;
+                            sched.reopen(&again);
+                            notes.extend(sched.left(&worker));
+                            on_log(&format!(
+                                "worker {worker} computes differently or forged its results: in job {job} {why} (this machine's re-run); its other {} results are discarded and run again, and it gets no more jobs",
+                                again.len()
+                            ));
+                            checks.refused.insert(
+                                worker,
+                                format!("its result of job {job} differed from the coordinator's re-run ({why}); its results were discarded. Check that it runs the same floorcast build on a sound machine"),
+                            );
+                        }
+                    }
                 }
                 Inbox::Joined(w) => {
                     if remote.insert(w.clone()) {
@@ -358,21 +456,64 @@ pub fn run_plan(
         if sched.is_finished() && finished_at.is_none() {
             finished_at = Some(Instant::now());
         }
-        on_progress(counts(&sched, failed, remote.len()));
+        on_progress(counts(&sched, failed, remote.len(), &checks));
     }
     stop.store(true, Ordering::SeqCst);
     if let Some(l) = listener {
         l.close();
     }
+    drop(verify_tx);
     if outcome == Outcome::Complete {
         drop(inbox);
-        for h in handles {
+        for h in handles.into_iter().chain(verifier) {
             let _ = h.join();
         }
     }
     // On interruption, running simulations are abandoned (the process exits); their jobs are
     // not stored and run again next time.
-    Ok((outcome, counts(&sched, failed, remote.len())))
+    Ok((outcome, counts(&sched, failed, remote.len(), &checks)))
+}
+
+/// The checks of remote workers' results during a run.
+#[derive(Debug, Default)]
+struct Checks {
+    /// Workers whose first result went to a check.
+    first_checked: BTreeSet<String>,
+    /// Results checked.
+    verified: usize,
+    /// Workers whose results were found wrong, and what they are told.
+    refused: BTreeMap<String, String>,
+}
+
+/// Re-runs the jobs whose results it receives, one at a time, and tells the loop whether each
+/// is identical ([`crate::verify::compare`]).
+fn verifier(
+    plan: &Plan,
+    jobs: &mpsc::Receiver<(PlannedJob, StoredResult, String)>,
+    inbox: &mpsc::Sender<Inbox>,
+    exec: &LocalExecutor,
+) {
+    for (job, theirs, worker) in jobs {
+        let name = format!("{LOCAL}verifier");
+        let ours =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(plan, &job, &name)))
+                .unwrap_or_else(|p| {
+                    let mut row = expected_row(plan, &job, &name);
+                    row.status = "failed".into();
+                    row.error = Some(floorcast_worker::panic_message(&*p));
+                    row
+                });
+        let outcome = crate::verify::compare(&theirs, &ours);
+        let sent = inbox.send(Inbox::Verified {
+            job: job.id.clone(),
+            worker,
+            ours: Box::new(ours),
+            outcome,
+        });
+        if sent.is_err() {
+            return;
+        }
+    }
 }
 
 fn local_worker(
@@ -417,7 +558,7 @@ fn local_worker(
                 }
             }
             Ok(Answer::Wait) => std::thread::sleep(Duration::from_millis(50)),
-            Ok(Answer::Done) | Err(_) => return,
+            Ok(Answer::Done | Answer::Refused(_)) | Err(_) => return,
         }
     }
 }

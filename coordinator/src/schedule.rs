@@ -88,6 +88,9 @@ pub struct Scheduler {
     finished_announced: bool,
     /// More jobs may be added (a sequential grid between batches): workers wait, not leave.
     more_to_come: bool,
+    /// Stored jobs whose results are being verified: the grid is not finished before they are
+    /// released (they may be reopened).
+    held: BTreeSet<JobId>,
 }
 
 impl Scheduler {
@@ -110,6 +113,7 @@ impl Scheduler {
             workers: BTreeSet::new(),
             finished_announced: false,
             more_to_come: false,
+            held: BTreeSet::new(),
         }
     }
 
@@ -125,9 +129,9 @@ impl Scheduler {
     pub fn pending(&self) -> usize {
         self.pending.len()
     }
-    /// Every job is stored and no more will come.
+    /// Every job is stored, none is held and no more will come.
     pub fn is_finished(&self) -> bool {
-        self.batch_complete() && !self.more_to_come
+        self.batch_complete() && !self.more_to_come && self.held.is_empty()
     }
     /// Every job added so far is stored.
     pub fn batch_complete(&self) -> bool {
@@ -147,6 +151,30 @@ impl Scheduler {
                 } else {
                     self.pending.push_back(j);
                 }
+            }
+        }
+    }
+    /// Holds `job` (before its result is submitted): while its result is being verified, the
+    /// grid does not finish and workers wait instead of leaving.
+    pub fn hold(&mut self, job: &str) {
+        self.held.insert(job.to_string());
+    }
+    /// Releases a held job (its result verified, or not stored after all).
+    pub fn release(&mut self, job: &str) {
+        self.held.remove(job);
+    }
+    /// Jobs being verified.
+    pub fn held(&self) -> usize {
+        self.held.len()
+    }
+    /// Stored jobs whose results were discarded: back to the front of the queue (released if
+    /// held), to be run again.
+    pub fn reopen(&mut self, jobs: &[JobId]) {
+        for j in jobs.iter().rev() {
+            if self.done.remove(j) {
+                self.held.remove(j);
+                self.pending.push_front(j.clone());
+                self.finished_announced = false;
             }
         }
     }
@@ -282,6 +310,31 @@ mod tests {
 
     fn ids(n: usize) -> Vec<JobId> {
         (0..n).map(|i| format!("job{i:03}")).collect()
+    }
+
+    /// A held job keeps the grid open (workers wait); released, the grid finishes; a reopened
+    /// job is handed out again and finishes the grid once more.
+    #[test]
+    fn held_jobs_keep_the_grid_open_and_reopened_ones_run_again() {
+        let mut s = Scheduler::new(ids(2), &BTreeSet::new(), 60.0);
+        for _ in 0..2 {
+            let r = s.request("w1".into(), 0.0);
+            assert!(matches!(r.answer, Grant::Lease { .. }));
+        }
+        s.hold("job001");
+        assert_eq!(s.submit("job000").answer, Verdict::Store);
+        let r = s.submit("job001");
+        assert_eq!((r.answer, r.notes), (Verdict::Store, vec![]));
+        assert_eq!(s.held(), 1);
+        assert_eq!(s.request("w2".into(), 1.0).answer, Grant::Wait);
+        s.reopen(&["job000".to_string()]);
+        s.release("job001");
+        assert!(!s.is_finished());
+        let r = s.request("w2".into(), 1.0);
+        assert!(matches!(&r.answer, Grant::Lease { job, .. } if job == "job000"));
+        let r = s.submit("job000");
+        assert_eq!((r.answer, r.notes), (Verdict::Store, vec![Note::Finished]));
+        assert_eq!(s.request("w2".into(), 2.0).answer, Grant::Done);
     }
 
     #[test]

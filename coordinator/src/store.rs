@@ -228,10 +228,7 @@ impl Store {
         if rows.is_empty() {
             return Ok(0);
         }
-        let now = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map(|d| d.as_secs_f64())
-            .unwrap_or(0.0);
+        let now = unix_now_s();
         let tx = self.sql(self.conn.unchecked_transaction())?;
         let mut inserted = 0;
         for r in rows {
@@ -258,6 +255,32 @@ impl Store {
                 r.wall_time_s, r.floorcast_version, now
             ],
         ))
+    }
+
+    /// Deletes every row `worker` returned (its results were found wrong) in one transaction
+    /// and returns their job ids, so that they run again.
+    pub fn discard_worker(&self, worker: &str) -> Result<Vec<String>, StoreError> {
+        let tx = self.sql(self.conn.unchecked_transaction())?;
+        let ids = {
+            let mut st = self.sql(tx.prepare("SELECT job_id FROM results WHERE worker = ?1"))?;
+            let rows = self.sql(st.query_map([worker], |r| r.get::<_, String>(0)))?;
+            let mut ids = Vec::new();
+            for r in rows {
+                ids.push(self.sql(r)?);
+            }
+            ids
+        };
+        self.sql(tx.execute("DELETE FROM results WHERE worker = ?1", [worker]))?;
+        self.sql(tx.commit())?;
+        Ok(ids)
+    }
+
+    /// Stores `row`, replacing its job's row if one is stored.
+    pub fn replace(&self, row: &StoredResult) -> Result<(), StoreError> {
+        let tx = self.sql(self.conn.unchecked_transaction())?;
+        self.sql(tx.execute("DELETE FROM results WHERE job_id = ?1", [&row.job_id]))?;
+        self.insert_row(&tx, row, unix_now_s())?;
+        self.sql(tx.commit())
     }
 
     /// Ids of every stored job.
@@ -386,6 +409,14 @@ impl Store {
 }
 
 /// This machine's name (or "unknown").
+/// Seconds since the Unix epoch (when a row was stored).
+fn unix_now_s() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
 pub fn host_name() -> String {
     std::fs::read_to_string("/etc/hostname")
         .ok()

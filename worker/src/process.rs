@@ -331,15 +331,14 @@ fn run_one(x: &State<'_>, job: WireJob, lease_s: f64) -> Result<(), WorkerError>
 fn run_guarded(x: &State<'_>, job: &WireJob, building: &Building) -> StoredResult {
     std::panic::catch_unwind(AssertUnwindSafe(|| (x.exec)(job, building, x.worker())))
         .unwrap_or_else(|p| {
-            let what = p
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| p.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "no message".into());
             failed_wire_row(
                 job,
                 x.worker(),
-                format!("the job panicked on worker {} ({what}); this is a floorcast bug, please report it with the job", x.worker()),
+                format!(
+                    "the job panicked on worker {} (a bug in floorcast, please report it): {}",
+                    x.worker(),
+                    crate::panic_message(&*p)
+                ),
             )
         })
 }

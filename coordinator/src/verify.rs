@@ -1,0 +1,147 @@
+//! Results checked before they count. Runs are deterministic, so a result can be checked by
+//! running its job again: the coordinator re-runs, on its own machine, the first result each
+//! remote worker returns and then a random fraction of the others (`--verify-fraction`), and
+//! compares them bit for bit, wall times aside. A difference means the worker computes
+//! differently (another build, a broken machine) or forged its result: [`crate::run`] then
+//! discards every result of that worker, stores this machine's, runs the others again elsewhere
+//! and gives the worker no more jobs.
+//!
+//! Not verified: failed results (they are reported as failures anyway), jobs of external
+//! strategies (a program of the user's may not be deterministic) and jobs that charge compute
+//! time (their times depend on the machine).
+
+use crate::grid::PlannedJob;
+use crate::store::StoredResult;
+
+/// Summary fields that differ between identical runs (measured wall-clock times).
+const MEASURED: [&str; 3] = ["wall_time_s", "speedup", "strategy_compute_s"];
+
+/// Whether `result` of `job` can be checked by running it again.
+pub fn verifiable(job: &PlannedJob, result: &StoredResult) -> bool {
+    result.status == "ok" && job.program.is_none() && !job.settings.charge_compute
+}
+
+/// Compares a worker's row (`theirs`) with this machine's run of the same job (`ours`): the
+/// status, error, progress curve and every field of the summary but the measured times. The
+/// error names the first field that differs and both values.
+pub fn compare(theirs: &StoredResult, ours: &StoredResult) -> Result<(), String> {
+    let differ = |field: &str, a: &dyn std::fmt::Debug, b: &dyn std::fmt::Debug| {
+        Err(format!("{field} is {a:?} there and {b:?} here"))
+    };
+    if theirs.status != ours.status {
+        return differ("status", &theirs.status, &ours.status);
+    }
+    if theirs.error != ours.error {
+        return differ("error", &theirs.error, &ours.error);
+    }
+    let summary = |r: &StoredResult| -> Option<serde_json::Map<String, serde_json::Value>> {
+        let mut m: serde_json::Map<String, serde_json::Value> =
+            serde_json::from_str(r.summary_json.as_deref()?).ok()?;
+        for k in MEASURED {
+            m.remove(k);
+        }
+        Some(m)
+    };
+    match (summary(theirs), summary(ours)) {
+        (Some(a), Some(b)) => {
+            let keys: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+            for k in keys {
+                if a.get(k) != b.get(k) {
+                    return differ(&format!("summary field {k}"), &a.get(k), &b.get(k));
+                }
+            }
+        }
+        (a, b) if a.is_some() != b.is_some() => {
+            return differ("the summary", &a.map(|_| "present"), &b.map(|_| "present"))
+        }
+        _ => {}
+    }
+    if theirs.progress_csv != ours.progress_csv {
+        let (a, b) = (
+            theirs.progress_csv.as_deref().unwrap_or(""),
+            ours.progress_csv.as_deref().unwrap_or(""),
+        );
+        return Err(match a.lines().zip(b.lines()).position(|(x, y)| x != y) {
+            Some(i) => format!("the progress curve differs from its line {}", i + 1),
+            None => "the progress curve differs in length".into(),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::execute::execute;
+    use crate::execute::tests::small_plan;
+
+    /// A rerun of the same job is identical; a changed field, progress line or status is
+    /// named; measured times are not compared.
+    #[test]
+    fn a_rerun_matches_and_any_change_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = small_plan(dir.path(), "[1]", 10, "");
+        let job = &plan.jobs[0];
+        let ours = execute(&plan, job, "here");
+        let theirs = execute(&plan, job, "there");
+        assert!(verifiable(job, &theirs));
+        assert_eq!(compare(&theirs, &ours), Ok(()));
+        let edit = |f: &dyn Fn(&mut serde_json::Value)| {
+            let mut r = theirs.clone();
+            let mut v: serde_json::Value =
+                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            f(&mut v);
+            r.summary_json = Some(v.to_string());
+            r
+        };
+        let cases: Vec<(StoredResult, Option<&str>)> = vec![
+            (edit(&|v| v["wall_time_s"] = 99.0.into()), None),
+            (edit(&|v| v["speedup"] = 1.0.into()), None),
+            (
+                edit(&|v| v["explored_fraction"] = 0.5.into()),
+                Some("summary field explored_fraction"),
+            ),
+            (
+                edit(&|v| {
+                    v["path_length_m"] = (v["path_length_m"].as_f64().unwrap() + 1e-12).into()
+                }),
+                Some("summary field path_length_m"),
+            ),
+            (
+                edit(&|v| {
+                    v.as_object_mut().unwrap().remove("decisions");
+                }),
+                Some("summary field decisions"),
+            ),
+            (
+                StoredResult {
+                    progress_csv: theirs
+                        .progress_csv
+                        .as_ref()
+                        .map(|c| c.replacen("0.0,", "0.1,", 1)),
+                    ..theirs.clone()
+                },
+                Some("progress curve"),
+            ),
+            (
+                StoredResult {
+                    status: "failed".into(),
+                    ..theirs.clone()
+                },
+                Some("status"),
+            ),
+        ];
+        for (i, (row, want)) in cases.iter().enumerate() {
+            match (compare(row, &ours), want) {
+                (Ok(()), None) => {}
+                (Err(e), Some(w)) => assert!(e.contains(w), "case {i}: {e}"),
+                (got, _) => panic!("case {i}: {got:?}, expected {want:?}"),
+            }
+        }
+        let failed = StoredResult {
+            status: "failed".into(),
+            ..theirs.clone()
+        };
+        assert!(!verifiable(job, &failed));
+    }
+}
