@@ -85,11 +85,17 @@ pub struct ReportArgs {
     /// unreachable), start pose (start_x_m, start_y_m, start_theta_rad) and start_source.
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
-    /// Also draw charts into this directory: gains.png (the paired gain over baseline per
-    /// building with its 95 % confidence interval) and progress-<building>.png (the mean
-    /// explored fraction over time per strategy).
+    /// Also draw charts into this directory: times.png (the paper's Fig. 2: mean exploration
+    /// time per building and strategy, ± 1 standard deviation), gains.png (the paired gain over
+    /// the reference per building with its 95 % confidence interval) and
+    /// progress-<building>.png (the paper's Fig. 4: explored fraction over simulated time per
+    /// strategy, mean line, band from the least to the greatest run, rings at early stops).
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    /// Also write one offline HTML page with the report's tables and the charts of --plots
+    /// (inline SVG), e.g. report.html.
+    #[arg(long, value_name = "FILE")]
+    html: Option<PathBuf>,
     /// Picture format of the charts.
     #[arg(long, value_enum, default_value_t = Picture::Png)]
     picture: Picture,
@@ -396,13 +402,15 @@ pub fn report(a: ReportArgs) -> Result<()> {
             .unwrap_or_default(),
     };
     let t = floorcast_coordinator::table::table_against(&results, &[], Some(&reference));
-    say_raw!("{}", render_text(&t));
-    say_raw!("{}", render_ends(&t));
     let comparisons = floorcast_coordinator::table::comparisons(&results, &reference);
-    say_raw!(
-        "{}",
+    // What is printed, kept for --html.
+    let mut text = format!(
+        "{}{}{}",
+        render_text(&t),
+        render_ends(&t),
         floorcast_coordinator::table::render_comparisons(&comparisons)
     );
+    say_raw!("{}", text);
     // Sequential grids' decisions: each label's last test.
     let tests = store.tests()?;
     let mut last: std::collections::BTreeMap<
@@ -414,7 +422,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
     }
     for ((grid, _), t) in last {
         let s = &t.state;
-        say!(
+        let line = format!(
             "sequential grid '{grid}': {} against {}: {} after {} pairs (seeds 1-{}), LLR {:.2} in [{:.2}, {:.2}]",
             t.label,
             t.reference,
@@ -425,13 +433,18 @@ pub fn report(a: ReportArgs) -> Result<()> {
             s.lower,
             s.upper
         );
+        say!("{line}");
+        text.push_str(&line);
+        text.push('\n');
     }
     let cross = against.as_ref().map(|(dir, other)| {
         let gains = gains_against(&results, other, a.against_label.as_deref());
         (dir.display().to_string(), gains)
     });
     if let Some((dir, gains)) = &cross {
-        say_raw!("{}", render_against(gains, dir));
+        let against = render_against(gains, dir);
+        say_raw!("{}", against);
+        text.push_str(&against);
     }
     if let Some(path) = &a.json {
         let mut v = floorcast_coordinator::table::report_json(&results, &reference, &tests);
@@ -447,29 +460,44 @@ pub fn report(a: ReportArgs) -> Result<()> {
             .with_context(|| format!("cannot export to {}", csv.display()))?;
         say!("wrote {}", csv.display());
     }
-    if let Some(dir) = &a.plots {
-        let n = write_plots(&results, dir, a.picture.extension())?;
-        say!("wrote {n} charts to {}", dir.display());
+    if a.plots.is_some() || a.html.is_some() {
+        let charts = charts(&results, &reference);
+        if let Some(dir) = &a.plots {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create the chart directory {}", dir.display()))?;
+            for (name, fig) in &charts {
+                fig.save(dir.join(format!("{name}.{}", a.picture.extension())))?;
+            }
+            say!("wrote {} charts to {}", charts.len(), dir.display());
+        }
+        if let Some(path) = &a.html {
+            write_text(
+                path,
+                &report_html(&a.results, results.len(), &text, &charts),
+            )
+            .with_context(|| format!("cannot write {}", path.display()))?;
+            say!("wrote {}", path.display());
+        }
     }
     Ok(())
 }
 
-/// The charts of `report --plots`; returns how many were written.
-fn write_plots(
+/// The charts of a report, by file stem: `times` (the paper's Fig. 2: the mean exploration
+/// time per building and strategy, with one standard deviation over the runs that ended
+/// normally), `gains` (the paired gain over `reference` per building with its 95 % t interval)
+/// and `progress-<building>` (the paper's Fig. 4: the explored fraction over time per strategy,
+/// its mean, a band from the least to the greatest run, and rings where runs stopped early).
+fn charts(
     results: &[floorcast_coordinator::store::StoredResult],
-    dir: &std::path::Path,
-    ext: &str,
-) -> Result<usize> {
+    reference: &str,
+) -> Vec<(String, floorcast_render::Figure)> {
     use floorcast_render::chart::{series_color, Interval, IntervalChart, LineChart, Series};
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create the chart directory {}", dir.display()))?;
-    let t = table(results, &[]);
-    let reference = t.reference.clone().unwrap_or_default();
+    let t = floorcast_coordinator::table::table_against(results, &[], Some(reference));
     // One colour per strategy label in every chart.
     let order: Vec<String> = t.overall.iter().map(|r| r.label.clone()).collect();
     let color = |l: &str| series_color(order.iter().position(|o| o == l).unwrap_or(0));
     let labels: Vec<String> = order.iter().filter(|l| **l != reference).cloned().collect();
-    let interval = |rows: &[floorcast_coordinator::table::LabelRow], label: &str| {
+    let gain = |rows: &[floorcast_coordinator::table::LabelRow], label: &str| {
         let p = rows.iter().find(|r| r.label == label)?.paired?;
         Some(Interval {
             mean: p.mean_pct,
@@ -477,7 +505,32 @@ fn write_plots(
             hi: p.mean_pct + p.ci95_pct,
         })
     };
-    let mut categories: Vec<String> = t.per_building.keys().cloned().collect();
+    let time = |rows: &[floorcast_coordinator::table::LabelRow], label: &str| {
+        let s = rows.iter().find(|r| r.label == label)?.time;
+        (s.n > 0).then(|| {
+            let sd = if s.sd.is_finite() { s.sd } else { 0.0 };
+            Interval {
+                mean: s.mean,
+                lo: s.mean - sd,
+                hi: s.mean + sd,
+            }
+        })
+    };
+    let buildings: Vec<String> = t.per_building.keys().cloned().collect();
+    let times = IntervalChart {
+        title: "Exploration time per building (mean ± 1 sd over seeds)".into(),
+        y_label: "exploration time (s)".into(),
+        categories: buildings.clone(),
+        series: order
+            .iter()
+            .map(|l| {
+                let v = t.per_building.values().map(|rows| time(rows, l)).collect();
+                (l.clone(), color(l), v)
+            })
+            .collect(),
+        bars: true,
+    };
+    let mut categories = buildings;
     categories.push("all".into());
     let gains = IntervalChart {
         title: format!("Exploration time gain over {reference} (paired by seed, 95 % CI)"),
@@ -485,44 +538,74 @@ fn write_plots(
         series: labels
             .iter()
             .map(|l| {
-                let mut v: Vec<Option<Interval>> = t
-                    .per_building
-                    .values()
-                    .map(|rows| interval(rows, l))
-                    .collect();
-                v.push(interval(&t.overall, l));
+                let mut v: Vec<Option<Interval>> =
+                    t.per_building.values().map(|rows| gain(rows, l)).collect();
+                v.push(gain(&t.overall, l));
                 (l.clone(), color(l), v)
             })
             .collect(),
         categories,
+        bars: false,
     };
-    let mut written = 0;
-    let path = dir.join(format!("gains.{ext}"));
-    gains.figure().save(&path)?;
-    written += 1;
+    let mut out = vec![
+        ("times".to_string(), times.figure()),
+        ("gains".to_string(), gains.figure()),
+    ];
     for building in t.per_building.keys() {
-        let curves = floorcast_coordinator::table::mean_progress(results, building, &order, 400);
+        let curves = floorcast_coordinator::table::progress_curves(results, building, &order, 400);
         if curves.is_empty() {
             continue;
         }
         let chart = LineChart {
-            title: format!("{building}: mean explored fraction"),
+            title: format!("{building}: explored fraction (mean, range over seeds)"),
             x_label: "simulated time (s)".into(),
-            y_label: "explored".into(),
+            y_label: "explored fraction".into(),
             y_range: Some((0.0, 1.0)),
             series: curves
                 .into_iter()
-                .map(|(label, points)| Series {
-                    color: color(&label),
-                    label,
-                    points,
+                .map(|c| Series {
+                    color: color(&c.label),
+                    label: format!("{} ({} runs)", c.label, c.runs),
+                    points: c.points.iter().map(|p| (p.0, p.1)).collect(),
+                    band: c.points.iter().map(|p| (p.0, p.2, p.3)).collect(),
+                    marks: c.early_stops,
                 })
                 .collect(),
+            marks_label: "early stop".into(),
         };
-        chart
-            .figure()
-            .save(dir.join(format!("progress-{building}.{ext}")))?;
-        written += 1;
+        out.push((format!("progress-{building}"), chart.figure()));
     }
-    Ok(written)
+    out
+}
+
+/// `report --html`: one offline page with the report's text and its charts (inline SVG).
+fn report_html(
+    dir: &std::path::Path,
+    runs: usize,
+    text: &str,
+    charts: &[(String, floorcast_render::Figure)],
+) -> String {
+    let esc = |s: &str| {
+        s.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let mut html = format!(
+        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>floorcast report: {}</title>\n<style>body{{font-family:'DejaVu Sans',sans-serif;max-width:1250px;margin:2em auto;padding:0 1em}}pre{{font-size:12px;overflow-x:auto;background:#f6f6f6;padding:1em}}figure{{margin:2em 0}}svg{{max-width:100%;height:auto}}</style></head><body>\n<h1>floorcast report: {}</h1>\n<p>{runs} runs, floorcast {}. Made by <code>floorcast report {} --html</code>; the tables are those the command prints.</p>\n<h2>Tables</h2>\n<pre>{}</pre>\n<h2>Figures</h2>\n",
+        esc(&dir.display().to_string()),
+        esc(&dir.display().to_string()),
+        floorcast_worker::FLOORCAST_VERSION,
+        esc(&dir.display().to_string()),
+        esc(text)
+    );
+    for (name, fig) in charts {
+        html.push_str(&format!(
+            "<figure id=\"{}\">\n{}<figcaption>{}</figcaption></figure>\n",
+            esc(name),
+            fig.to_svg(),
+            esc(name)
+        ));
+    }
+    html.push_str("</body></html>\n");
+    html
 }

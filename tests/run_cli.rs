@@ -83,8 +83,10 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 1 + 6);
     assert!(text.starts_with("job_id,building,"));
-    // Charts: the gains and one progress chart per building, as SVG text naming the strategies.
+    // Charts: the times (Fig. 2), the gains and one progress chart per building (Fig. 4), as
+    // SVG text naming the strategies; the HTML page holds the printed tables and every chart.
     let plots = dir.path().join("plots");
+    let html = dir.path().join("report.html");
     let o = run(&[
         "report",
         res.to_str().unwrap(),
@@ -92,6 +94,8 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
         plots.to_str().unwrap(),
         "--picture",
         "svg",
+        "--html",
+        html.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let mut names: Vec<String> = std::fs::read_dir(&plots)
@@ -99,14 +103,28 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, ["gains.svg", "progress-small.svg"], "{names:?}");
+    assert_eq!(
+        names,
+        ["gains.svg", "progress-small.svg", "times.svg"],
+        "{names:?}"
+    );
     let progress = std::fs::read_to_string(plots.join("progress-small.svg")).unwrap();
     assert!(
-        progress.contains(">baseline<") && progress.contains(">near<"),
+        progress.contains(">baseline (3 runs)<") && progress.contains(">near (3 runs)<"),
         "{progress}"
     );
     let gains = std::fs::read_to_string(plots.join("gains.svg")).unwrap();
     assert!(gains.contains(">near<") && !gains.contains(">baseline<"));
+    let times = std::fs::read_to_string(plots.join("times.svg")).unwrap();
+    assert!(
+        times.contains(">baseline<") && times.contains(">exploration time (s)<"),
+        "{times}"
+    );
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert_eq!(page.matches("<svg").count(), 3);
+    let table = stdout(&o);
+    let first_row = table.lines().find(|l| l.contains("baseline")).unwrap();
+    assert!(page.contains(first_row), "the page holds the printed table");
 }
 
 #[test]

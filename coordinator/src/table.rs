@@ -853,16 +853,29 @@ pub fn render_ends(t: &Table) -> String {
     out
 }
 
-/// The mean explored fraction over time of each label's successful runs of `building`, on
-/// `samples` evenly spaced times from 0 to the end of the longest run (a run that has ended
-/// keeps its final fraction). Labels in `order` first, as in [`table`].
-pub fn mean_progress(
+/// One label's explored fraction over time on one building, over its successful runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProgressCurve {
+    pub label: String,
+    /// `(time_s, mean, least, greatest)` explored fraction over the runs at each sample time
+    /// (a run that has ended keeps its final fraction).
+    pub points: Vec<(f64, f64, f64, f64)>,
+    /// `(exploration_time_s, explored_fraction)` of each run that stopped early.
+    pub early_stops: Vec<(f64, f64)>,
+    pub runs: usize,
+}
+
+/// The explored fraction over time of each label's successful runs of `building` (mean, range
+/// and early stops: the paper's Fig. 4), on `samples` evenly spaced times from 0 to the end of
+/// the longest run. Labels in `order` first, as in [`table`].
+pub fn progress_curves(
     results: &[StoredResult],
     building: &str,
     order: &[String],
     samples: usize,
-) -> Vec<(String, Vec<(f64, f64)>)> {
-    let mut curves: BTreeMap<&str, Vec<Vec<(f64, f64)>>> = BTreeMap::new();
+) -> Vec<ProgressCurve> {
+    type Curves = (Vec<Vec<(f64, f64)>>, Vec<(f64, f64)>);
+    let mut curves: BTreeMap<&str, Curves> = BTreeMap::new();
     for r in results
         .iter()
         .filter(|r| r.building == building && r.status == "ok")
@@ -871,13 +884,24 @@ pub fn mean_progress(
             continue;
         };
         let curve: Vec<(f64, f64)> = progress_curve(csv).collect();
-        if !curve.is_empty() {
-            curves.entry(r.label.as_str()).or_default().push(curve);
+        if curve.is_empty() {
+            continue;
+        }
+        let entry = curves.entry(r.label.as_str()).or_default();
+        entry.0.push(curve);
+        if let Some(s) = r
+            .summary_json
+            .as_deref()
+            .and_then(|j| RunSummary::from_json(j).ok())
+        {
+            if s.stopped_early {
+                entry.1.push((s.exploration_time_s, s.explored_fraction));
+            }
         }
     }
     let end = curves
         .values()
-        .flatten()
+        .flat_map(|(runs, _)| runs)
         .filter_map(|c| c.last().map(|p| p.0))
         .fold(0.0f64, f64::max);
     let samples = samples.max(2);
@@ -894,22 +918,30 @@ pub fn mean_progress(
     labels
         .into_iter()
         .map(|label| {
-            let runs = &curves[label];
+            let (runs, early_stops) = &curves[label];
             let points = (0..samples)
                 .map(|k| {
                     let t = end * k as f64 / (samples - 1) as f64;
-                    let sum: f64 = runs
+                    let at: Vec<f64> = runs
                         .iter()
                         .map(|c| {
                             // The last sample at or before t (curves start at t = 0).
                             let i = c.partition_point(|p| p.0 <= t);
                             c[i.saturating_sub(1)].1
                         })
-                        .sum();
-                    (t, sum / runs.len() as f64)
+                        .collect();
+                    let mean = at.iter().sum::<f64>() / at.len() as f64;
+                    let least = at.iter().copied().fold(f64::INFINITY, f64::min);
+                    let greatest = at.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    (t, mean, least, greatest)
                 })
                 .collect();
-            (label.to_string(), points)
+            ProgressCurve {
+                label: label.to_string(),
+                points,
+                early_stops: early_stops.clone(),
+                runs: runs.len(),
+            }
         })
         .collect()
 }
@@ -1363,7 +1395,7 @@ mod tests {
     }
 
     #[test]
-    fn mean_progress_holds_the_final_fraction_of_runs_that_ended() {
+    fn progress_curves_hold_the_final_fraction_of_runs_that_ended_and_mark_early_stops() {
         let mut a = stored("b1", "baseline", 1, 4.0);
         a.progress_csv =
             Some("time_s,explored_area_m2,explored_fraction\n0,0,0\n2,5,0.5\n4,10,1\n".into());
@@ -1372,20 +1404,36 @@ mod tests {
             Some("time_s,explored_area_m2,explored_fraction\n0,0,0.2\n2,8,0.8\n".into());
         let mut c = stored("b1", "layout", 1, 2.0);
         c.progress_csv = Some("time_s,explored_area_m2,explored_fraction\n0,0,0\n2,1,1\n".into());
+        let mut summary: serde_json::Value =
+            serde_json::from_str(c.summary_json.as_deref().unwrap()).unwrap();
+        summary["stopped_early"] = true.into();
+        summary["explored_fraction"] = 0.97.into();
+        c.summary_json = Some(summary.to_string());
         let other = stored("b2", "baseline", 1, 1.0);
-        let curves = mean_progress(&[c, a, b, other], "b1", &["baseline".into()], 3);
-        let labels: Vec<&str> = curves.iter().map(|(l, _)| l.as_str()).collect();
+        let curves = progress_curves(&[c, a, b, other], "b1", &["baseline".into()], 3);
+        let labels: Vec<&str> = curves.iter().map(|c| c.label.as_str()).collect();
         assert_eq!(labels, ["baseline", "layout"]);
-        // t = 0, 2, 4: baseline (0 + 0.2) / 2, (0.5 + 0.8) / 2, (1 + 0.8) / 2.
-        let base: Vec<(f64, f64)> = curves[0].1.clone();
-        let want = [(0.0, 0.1), (2.0, 0.65), (4.0, 0.9)];
-        for (got, want) in base.iter().zip(want) {
+        // t = 0, 2, 4: baseline (0 + 0.2) / 2, (0.5 + 0.8) / 2, (1 + 0.8) / 2, with the range.
+        let want = [
+            (0.0, 0.1, 0.0, 0.2),
+            (2.0, 0.65, 0.5, 0.8),
+            (4.0, 0.9, 0.8, 1.0),
+        ];
+        for (got, want) in curves[0].points.iter().zip(want) {
+            let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
             assert!(
-                (got.0 - want.0).abs() < 1e-12 && (got.1 - want.1).abs() < 1e-12,
-                "{base:?}"
+                close(got.0, want.0)
+                    && close(got.1, want.1)
+                    && close(got.2, want.2)
+                    && close(got.3, want.3),
+                "{:?}",
+                curves[0].points
             );
         }
-        assert_eq!(curves[1].1[2], (4.0, 1.0));
-        assert!(mean_progress(&[], "b1", &[], 10).is_empty());
+        assert_eq!(curves[0].runs, 2);
+        assert!(curves[0].early_stops.is_empty());
+        assert_eq!(curves[1].points[2], (4.0, 1.0, 1.0, 1.0));
+        assert_eq!(curves[1].early_stops, [(2.0, 0.97)]);
+        assert!(progress_curves(&[], "b1", &[], 10).is_empty());
     }
 }

@@ -1,12 +1,14 @@
 //! Charts of experiment results, drawn on a [`Figure`] (so they save as SVG or PNG like every
-//! other figure): a line chart (explored fraction over time, one line per strategy) and an
-//! interval chart (a mean with its confidence interval per category and series).
+//! other figure): a line chart (explored fraction over time, one line per strategy, with a band
+//! of its spread and marks where runs stopped early: the paper's Fig. 4) and an interval chart
+//! (a mean with an interval per category and series, as points or as grouped bars: the paper's
+//! Fig. 2).
 //!
 //! Data go into a plotting box of fixed size in figure units; axes carry round tick values.
 
 use sim_core::{Aabb, Vec2};
 
-use crate::{Color, Figure, Style};
+use crate::{Anchor, Color, Figure, Style};
 
 /// Size of the plotting box in figure units, and the margins around it.
 const BOX_W: f64 = 10.0;
@@ -39,6 +41,10 @@ pub struct Series {
     pub color: Color,
     /// `(x, y)` in data units, in order of `x`.
     pub points: Vec<(f64, f64)>,
+    /// `(x, low, high)`: a band drawn under the line (e.g. the range over seeds); may be empty.
+    pub band: Vec<(f64, f64, f64)>,
+    /// `(x, y)` points marked on the line (e.g. where runs stopped early); may be empty.
+    pub marks: Vec<(f64, f64)>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -49,6 +55,8 @@ pub struct LineChart {
     /// Fixed y range; `None` fits the data.
     pub y_range: Option<(f64, f64)>,
     pub series: Vec<Series>,
+    /// The legend's name for the marks (e.g. "early stop"), shown when any series has marks.
+    pub marks_label: String,
 }
 
 /// One category's value of an [`IntervalChart`] series: a mean and its interval.
@@ -66,6 +74,8 @@ pub struct IntervalChart {
     pub categories: Vec<String>,
     /// Per series: its label, its colour and one optional interval per category.
     pub series: Vec<(String, Color, Vec<Option<Interval>>)>,
+    /// Bars from zero to the mean, grouped by category (else a point at the mean).
+    pub bars: bool,
 }
 
 /// A step between ticks of 1, 2 or 5 times a power of ten giving about `n` ticks over `span`.
@@ -83,6 +93,8 @@ fn tick_step(span: f64, n: f64) -> f64 {
 }
 
 fn tick_text(v: f64, step: f64) -> String {
+    // A tick at zero reached by adding steps is a rounding error away from it ("-0").
+    let v = if v.abs() < 1e-9 * step { 0.0 } else { v };
     if step >= 1.0 {
         format!("{v:.0}")
     } else if step >= 0.1 {
@@ -119,7 +131,13 @@ fn frame(
     while v <= y1 + 1e-9 * ys {
         let p = map(x0, v);
         fig.polyline(&[p, Vec2::new(BOX_W, p.y)], &grid);
-        fig.text(Vec2::new(-0.55, p.y), 12.0, Color::BLACK, &tick_text(v, ys));
+        fig.text_anchored(
+            Vec2::new(-0.12, p.y),
+            12.0,
+            Color::BLACK,
+            &tick_text(v, ys),
+            Anchor::End,
+        );
         v += ys;
     }
     if x_ticks {
@@ -143,27 +161,57 @@ fn frame(
         title,
     );
     fig.text(Vec2::new(BOX_W / 2.0, -0.75), 13.0, Color::BLACK, x_label);
-    let half = 0.5 * y_label.chars().count() as f64 * 11.0 / PX_PER_UNIT;
-    fig.text(
-        Vec2::new(-LEFT + 0.1 + half, BOX_H + 0.3),
+    fig.text_anchored(
+        Vec2::new(-LEFT + 0.1, BOX_H + 0.3),
         13.0,
         Color::BLACK,
         y_label,
+        Anchor::Start,
     );
     (fig, map)
 }
 
-fn legend(fig: &mut Figure, labels: &[(&str, Color)]) {
+/// The legend right of the box: a line of each colour and its label; then, with `marks`, a
+/// mark and its name.
+fn legend(fig: &mut Figure, labels: &[(&str, Color)], marks: Option<&str>) {
+    let y_of = |k: usize| BOX_H - 0.4 - 0.45 * k as f64;
     for (k, &(l, c)) in labels.iter().enumerate() {
-        let y = BOX_H - 0.4 - 0.45 * k as f64;
+        let y = y_of(k);
         fig.polyline(
             &[Vec2::new(BOX_W + 0.3, y), Vec2::new(BOX_W + 0.8, y)],
             &Style::stroke(c, 3.0),
         );
-        // Text is centred: shift by about half its width (12 px glyphs take ~10 px).
-        let half = 0.5 * l.chars().count() as f64 * 10.5 / PX_PER_UNIT;
-        fig.text(Vec2::new(BOX_W + 1.0 + half, y), 12.0, Color::BLACK, l);
+        fig.text_anchored(
+            Vec2::new(BOX_W + 1.0, y),
+            12.0,
+            Color::BLACK,
+            l,
+            Anchor::Start,
+        );
     }
+    if let Some(name) = marks {
+        let y = y_of(labels.len());
+        mark(fig, Vec2::new(BOX_W + 0.55, y), Color::DARK_GREY);
+        fig.text_anchored(
+            Vec2::new(BOX_W + 1.0, y),
+            12.0,
+            Color::BLACK,
+            name,
+            Anchor::Start,
+        );
+    }
+}
+
+/// A mark: a small ring.
+fn mark(fig: &mut Figure, at: Vec2, color: Color) {
+    fig.circle(
+        at,
+        0.075,
+        &Style {
+            fill: Some(Color::WHITE),
+            ..Style::stroke(color, 2.0)
+        },
+    );
 }
 
 impl LineChart {
@@ -191,21 +239,56 @@ impl LineChart {
             (y0, y1),
             true,
         );
+        let clamp = |y: f64| y.clamp(y0, y1);
+        // Bands first, under every line.
+        for s in &self.series {
+            let band: Vec<&(f64, f64, f64)> = s
+                .band
+                .iter()
+                .filter(|(x, lo, hi)| x.is_finite() && lo.is_finite() && hi.is_finite())
+                .collect();
+            if band.len() >= 2 {
+                let outline: Vec<Vec2> = band
+                    .iter()
+                    .map(|&&(x, lo, _)| map(x, clamp(lo)))
+                    .chain(band.iter().rev().map(|&&(x, _, hi)| map(x, clamp(hi))))
+                    .collect();
+                let c = s.color;
+                fig.polygon(
+                    &sim_core::Polygon::new(outline),
+                    &Style::fill(Color { a: 45, ..c }),
+                );
+            }
+        }
         for s in &self.series {
             let line: Vec<Vec2> = s
                 .points
                 .iter()
                 .filter(|(x, y)| x.is_finite() && y.is_finite())
-                .map(|&(x, y)| map(x, y.clamp(y0, y1)))
+                .map(|&(x, y)| map(x, clamp(y)))
                 .collect();
             fig.polyline(&line, &Style::stroke(s.color, 2.0));
+        }
+        for s in &self.series {
+            for &(x, y) in s
+                .marks
+                .iter()
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
+            {
+                mark(&mut fig, map(x, clamp(y)), s.color);
+            }
         }
         let labels: Vec<(&str, Color)> = self
             .series
             .iter()
             .map(|s| (s.label.as_str(), s.color))
             .collect();
-        legend(&mut fig, &labels);
+        let marked = self.series.iter().any(|s| !s.marks.is_empty());
+        legend(
+            &mut fig,
+            &labels,
+            marked.then_some(self.marks_label.as_str()),
+        );
         fig
     }
 }
@@ -224,7 +307,9 @@ impl IntervalChart {
             y1 = y1.max(v);
         }
         let pad = 0.05 * (y1 - y0).max(1e-9);
-        let (y0, y1) = (y0 - pad, y1 + pad);
+        // Bars stand on zero: no room below it unless a value is negative.
+        let below = if self.bars && y0 >= 0.0 { 0.0 } else { pad };
+        let (y0, y1) = (y0 - below, y1 + pad);
         let n = self.categories.len().max(1) as f64;
         let (mut fig, map) = frame(&self.title, "", &self.y_label, (0.0, n), (y0, y1), false);
         // The zero line.
@@ -248,7 +333,21 @@ impl IntervalChart {
                 };
                 let x = c as f64 + (k as f64 + 1.0) / (m + 1.0);
                 let color = *color;
-                let stroke = Style::stroke(color, 2.0);
+                if self.bars && i.mean.is_finite() {
+                    let w = 0.8 / (m + 1.0);
+                    let (a, b) = (map(x - w / 2.0, 0.0), map(x + w / 2.0, i.mean));
+                    fig.polygon(
+                        &sim_core::Polygon::rect(
+                            Vec2::new(a.x, a.y.min(b.y)),
+                            Vec2::new(b.x, a.y.max(b.y)),
+                        ),
+                        &Style::fill(Color { a: 170, ..color }),
+                    );
+                }
+                let stroke = Style::stroke(
+                    if self.bars { Color::BLACK } else { color },
+                    if self.bars { 1.2 } else { 2.0 },
+                );
                 if i.lo.is_finite() && i.hi.is_finite() {
                     fig.polyline(&[map(x, i.lo), map(x, i.hi)], &stroke);
                     for v in [i.lo, i.hi] {
@@ -259,7 +358,7 @@ impl IntervalChart {
                         );
                     }
                 }
-                if i.mean.is_finite() {
+                if i.mean.is_finite() && !self.bars {
                     fig.circle(map(x, i.mean), 0.07, &Style::fill(color));
                 }
             }
@@ -269,7 +368,7 @@ impl IntervalChart {
             .iter()
             .map(|(l, c, _)| (l.as_str(), *c))
             .collect();
-        legend(&mut fig, &labels);
+        legend(&mut fig, &labels, None);
         fig
     }
 }
@@ -284,6 +383,8 @@ mod tests {
         assert_eq!(tick_step(3000.0, 6.0), 500.0);
         assert_eq!(tick_step(40.0, 5.0), 10.0);
         assert_eq!(tick_step(0.0, 5.0), 1.0);
+        assert_eq!(tick_text(-1e-13, 0.2), "0.00".replace(".00", ".0"));
+        assert_eq!(tick_text(-5.0, 5.0), "-5");
     }
 
     #[test]
@@ -298,16 +399,25 @@ mod tests {
                     label: "baseline".into(),
                     color: series_color(0),
                     points: vec![(0.0, 0.0), (100.0, 0.5), (200.0, 1.0)],
+                    band: vec![(0.0, 0.0, 0.0), (100.0, 0.4, 0.6), (200.0, 1.0, 1.0)],
+                    marks: vec![],
                 },
                 Series {
                     label: "layout".into(),
                     color: series_color(1),
                     points: vec![(0.0, 0.0), (150.0, 1.0)],
+                    band: vec![],
+                    marks: vec![(150.0, 1.0)],
                 },
             ],
+            marks_label: "early stop".into(),
         };
         let svg = chart.figure().to_svg();
         assert!(svg.contains("baseline") && svg.contains("layout"));
+        assert!(
+            svg.contains(">early stop<"),
+            "the marks are named in the legend"
+        );
         let empty = LineChart {
             series: vec![],
             y_range: None,
@@ -330,9 +440,14 @@ mod tests {
                     None,
                 ],
             )],
+            bars: false,
         };
         let svg = bars.figure().to_svg();
         assert!(svg.contains(">a<") && svg.contains(">b<"), "{svg}");
         assert!(!bars.figure().to_png().is_empty());
+        let grouped = IntervalChart { bars: true, ..bars };
+        let points = grouped.clone().figure().items.len();
+        assert!(!grouped.figure().to_png().is_empty());
+        assert!(points > 0);
     }
 }

@@ -3,12 +3,11 @@
 //!
 //! A [`Figure`] is plain data: a list of items in drawing order. [`Figure::to_svg`] writes vector
 //! items as SVG elements and rasters (maps) as embedded base64 PNG images, so large maps stay
-//! small; [`Figure::to_png`] rasterises everything with tiny-skia. Labels in PNGs use a built-in
-//! 5x7 pixel font. This crate does no simulation; files are written only by [`Figure::save`].
+//! small; [`Figure::to_png`] rasterises everything with tiny-skia and draws labels anti-aliased
+//! in DejaVu Sans (embedded; SVGs ask for it by name, falling back to any sans-serif face). This crate does no simulation; files are written only by [`Figure::save`].
 
 mod building;
 pub mod chart;
-mod font;
 mod png;
 mod svg;
 
@@ -128,13 +127,25 @@ pub(crate) enum Item {
         radius_m: f64,
         style: Style,
     },
-    /// Text centred on `pos`.
+    /// Text on `pos`: vertically centred, horizontally as `anchor` says.
     Text {
         pos: Vec2,
         size_px: f64,
         color: Color,
         text: String,
+        anchor: Anchor,
     },
+}
+
+/// Which point of a text its position gives, horizontally.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Anchor {
+    /// The left end (text runs right from the position).
+    Start,
+    #[default]
+    Middle,
+    /// The right end.
+    End,
 }
 
 /// A figure: a world-space window, a scale, and items drawn in order.
@@ -314,13 +325,26 @@ impl Figure {
         self
     }
 
-    /// Text centred on `pos`.
+    /// Text centred on `pos`, `size_px` high (em).
     pub fn text(&mut self, pos: Vec2, size_px: f64, color: Color, text: &str) -> &mut Self {
+        self.text_anchored(pos, size_px, color, text, Anchor::Middle)
+    }
+
+    /// Text vertically centred on `pos`, its start, middle or end there.
+    pub fn text_anchored(
+        &mut self,
+        pos: Vec2,
+        size_px: f64,
+        color: Color,
+        text: &str,
+        anchor: Anchor,
+    ) -> &mut Self {
         self.items.push(Item::Text {
             pos,
             size_px,
             color,
             text: text.to_string(),
+            anchor,
         });
         self
     }

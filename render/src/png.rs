@@ -1,11 +1,14 @@
 //! PNG output: rasterisation with tiny-skia, encoding with `image`.
 
+use std::sync::OnceLock;
+
+use ab_glyph::{point, Font, FontRef, PxScale, ScaleFont};
 use tiny_skia::{
-    FillRule, FilterQuality, IntSize, Paint, PathBuilder, Pixmap, PixmapPaint, Stroke, StrokeDash,
-    Transform,
+    FillRule, FilterQuality, IntSize, Paint, PathBuilder, Pixmap, PixmapPaint,
+    PremultipliedColorU8, Stroke, StrokeDash, Transform,
 };
 
-use crate::{font, Color, Figure, Item, Style};
+use crate::{Anchor, Color, Figure, Item, Style};
 
 fn paint(c: Color) -> Paint<'static> {
     let mut p = Paint::default();
@@ -124,38 +127,89 @@ pub(crate) fn rasterise(fig: &Figure) -> Pixmap {
                 size_px,
                 color,
                 text,
-            } => draw_text(&mut pixmap, px(*pos), *size_px, *color, text),
+                anchor,
+            } => {
+                let (x, y) = px(*pos);
+                let w = text_width_px(text, *size_px) as f32;
+                let left = match anchor {
+                    Anchor::Start => x,
+                    Anchor::Middle => x - w / 2.0,
+                    Anchor::End => x - w,
+                };
+                draw_text(&mut pixmap, (left, y), *size_px, *color, text)
+            }
         }
     }
     pixmap
 }
 
-/// Text in the 5x7 font, centred on `(cx, cy)`, one font pixel per `size_px / 8` pixels.
-fn draw_text(pixmap: &mut Pixmap, (cx, cy): (f32, f32), size_px: f64, color: Color, text: &str) {
-    let scale = (size_px / 8.0).round().max(1.0) as f32;
-    let n = text.chars().count() as f32;
-    let width = (n * 6.0 - 1.0) * scale;
-    let x0 = (cx - width / 2.0).round();
-    let y0 = (cy - 3.5 * scale).round();
-    let mut pb = PathBuilder::new();
-    for (k, c) in text.chars().enumerate() {
-        let Some(g) = font::glyph(c) else { continue };
-        for (row, bits) in g.iter().enumerate() {
-            for col in 0..5 {
-                if bits & (0x10 >> col) != 0 {
-                    let x = x0 + (k as f32 * 6.0 + col as f32) * scale;
-                    let y = y0 + row as f32 * scale;
-                    if let Some(r) = tiny_skia::Rect::from_xywh(x, y, scale, scale) {
-                        pb.push_rect(r);
-                    }
-                }
-            }
+/// The face of every label: DejaVu Sans, parsed once.
+fn face() -> &'static FontRef<'static> {
+    static FACE: OnceLock<FontRef<'static>> = OnceLock::new();
+    FACE.get_or_init(|| {
+        FontRef::try_from_slice(dejavu::sans::regular()).expect("the embedded DejaVu Sans parses")
+    })
+}
+
+/// Width in pixels of `text` at `size_px` (advances and kerning).
+pub(crate) fn text_width_px(text: &str, size_px: f64) -> f64 {
+    let font = face().as_scaled(PxScale::from(size_px as f32));
+    let mut x = 0.0f32;
+    let mut prev = None;
+    for c in text.chars() {
+        let id = font.glyph_id(c);
+        if let Some(p) = prev {
+            x += font.kern(p, id);
         }
+        x += font.h_advance(id);
+        prev = Some(id);
     }
-    if let Some(path) = pb.finish() {
-        let mut p = paint(color);
-        p.anti_alias = false;
-        pixmap.fill_path(&path, &p, FillRule::Winding, Transform::identity(), None);
+    x as f64
+}
+
+/// Anti-aliased text in DejaVu Sans, `size_px` high (em), from `x0`, vertically centred on `cy`.
+fn draw_text(pixmap: &mut Pixmap, (x0, cy): (f32, f32), size_px: f64, color: Color, text: &str) {
+    let scale = PxScale::from(size_px as f32);
+    let font = face().as_scaled(scale);
+    // The middle of the capitals and the descenders' span on `cy`.
+    let baseline = cy + (font.ascent() + font.descent()) / 2.0;
+    let (w, h) = (pixmap.width() as i64, pixmap.height() as i64);
+    let stride = pixmap.width() as usize;
+    let pixels = pixmap.pixels_mut();
+    let mut x = 0.0f32;
+    let mut prev = None;
+    for c in text.chars() {
+        let id = font.glyph_id(c);
+        if let Some(p) = prev {
+            x += font.kern(p, id);
+        }
+        let glyph = id.with_scale_and_position(scale, point(x0 + x, baseline));
+        x += font.h_advance(id);
+        prev = Some(id);
+        let Some(outline) = face().outline_glyph(glyph) else {
+            continue; // a space
+        };
+        let bounds = outline.px_bounds();
+        outline.draw(|gx, gy, coverage| {
+            let px = bounds.min.x as i64 + gx as i64;
+            let py = bounds.min.y as i64 + gy as i64;
+            if px < 0 || py < 0 || px >= w || py >= h {
+                return;
+            }
+            let a = coverage.clamp(0.0, 1.0) * color.a as f32 / 255.0;
+            let dst = &mut pixels[py as usize * stride + px as usize];
+            // Source over, premultiplied.
+            let over = |s: u8, d: u8| (s as f32 * a + d as f32 * (1.0 - a)).round() as u8;
+            let blended = PremultipliedColorU8::from_rgba(
+                over(color.r, dst.red()),
+                over(color.g, dst.green()),
+                over(color.b, dst.blue()),
+                (255.0 * a + dst.alpha() as f32 * (1.0 - a)).round() as u8,
+            );
+            if let Some(c) = blended {
+                *dst = c;
+            }
+        });
     }
 }
 

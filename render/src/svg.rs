@@ -4,7 +4,7 @@ use std::fmt::Write;
 
 use base64::Engine;
 
-use crate::{Color, Figure, Item, Style};
+use crate::{Anchor, Color, Figure, Item, Style};
 
 fn color_attr(name: &str, c: Option<Color>) -> String {
     match c {
@@ -113,11 +113,17 @@ pub(crate) fn render(fig: &Figure) -> String {
                 size_px,
                 color,
                 text,
+                anchor,
             } => {
                 let (x, y) = px(*pos);
+                let anchor = match anchor {
+                    Anchor::Start => "start",
+                    Anchor::Middle => "middle",
+                    Anchor::End => "end",
+                };
                 let _ = writeln!(
                     out,
-                    "<text x=\"{x:.2}\" y=\"{y:.2}\" font-size=\"{size_px:.1}\" font-family=\"sans-serif\" text-anchor=\"middle\" dominant-baseline=\"central\"{}>{}</text>",
+                    "<text x=\"{x:.2}\" y=\"{y:.2}\" font-size=\"{size_px:.1}\" font-family=\"DejaVu Sans, sans-serif\" text-anchor=\"{anchor}\" dominant-baseline=\"central\"{}>{}</text>",
                     color_attr("fill", Some(*color)),
                     escape(text)
                 );

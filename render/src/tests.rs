@@ -125,3 +125,42 @@ fn building_figure_colours_rooms_and_marks_the_start() {
     let [r, g, _, _] = pixel(&png, x as u32, y as u32);
     assert!(r > 200 && g < 80);
 }
+
+/// Labels in PNGs are real type: anti-aliased (grey levels between ink and paper), as wide as
+/// the face's advances say, lower case distinct from upper case, and placed by their anchor.
+#[test]
+fn png_text_is_antialiased_type_placed_by_its_anchor() {
+    let ink_columns = |text: &str, anchor: Anchor| -> (Vec<u32>, bool) {
+        let mut fig = Figure::new(
+            Aabb {
+                min: Vec2::new(0.0, 0.0),
+                max: Vec2::new(40.0, 4.0),
+            },
+            10.0,
+        );
+        fig.text_anchored(Vec2::new(20.0, 2.0), 16.0, Color::BLACK, text, anchor);
+        let img = image::load_from_memory(&fig.to_png()).unwrap().to_rgba8();
+        let mut cols = Vec::new();
+        let mut grey = false;
+        for (x, _, p) in img.enumerate_pixels() {
+            if p.0[0] < 250 {
+                cols.push(x);
+            }
+            grey |= (40..200).contains(&p.0[0]);
+        }
+        cols.sort();
+        cols.dedup();
+        (cols, grey)
+    };
+    let (mid, grey) = ink_columns("Exploration time (s)", Anchor::Middle);
+    assert!(grey, "anti-aliased edges");
+    let (first, last) = (mid[0] as f64, *mid.last().unwrap() as f64);
+    let width = super::png::text_width_px("Exploration time (s)", 16.0);
+    assert!((last - first - width).abs() < 4.0, "{first}..{last} vs {width}");
+    assert!(((first + last) / 2.0 - 200.0).abs() < 3.0, "centred on x = 200 px");
+    let (start, _) = ink_columns("Exploration time (s)", Anchor::Start);
+    assert!((start[0] as f64 - 200.0).abs() < 3.0, "starts at x = 200 px");
+    let (end, _) = ink_columns("Exploration time (s)", Anchor::End);
+    assert!((*end.last().unwrap() as f64 - 200.0).abs() < 3.0, "ends at x = 200 px");
+    assert_ne!(ink_columns("abc", Anchor::Start), ink_columns("ABC", Anchor::Start));
+}
