@@ -20,15 +20,14 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
-use floorcast_coordinator::execute::expected_row;
 use floorcast_coordinator::grid::{Plan, PlannedJob};
 use floorcast_coordinator::inbox::RemoteWorkers;
 use floorcast_coordinator::net::{join, NetConfig};
 use floorcast_coordinator::run::{run_plan, RunOptions};
-use floorcast_coordinator::store::{Store, StoredResult};
-use floorcast_worker::execute::{execute_wire, failed_wire_row};
+use floorcast_coordinator::store::Store;
+use floorcast_worker::execute::execute_wire;
 use floorcast_worker::process::{run_worker, Executor, WorkerOptions};
-use floorcast_worker::wire::WireJob;
+use floorcast_worker::wire::{JobReport, WireJob};
 use sim_core::Building;
 
 const ROLE: &str = "FLOORCAST_BENCH_WORKER";
@@ -95,12 +94,8 @@ fn make_plan(dir: &Path, name: &str, seeds: usize, time_limit_s: u64) -> Plan {
     Plan::parse(&text, &dir.join("grid.toml"), Some(&dir.join(name))).expect("bench grid")
 }
 
-fn trivial_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
-    StoredResult {
-        status: "failed".into(),
-        error: Some("trivial benchmark job".into()),
-        ..expected_row(plan, job, worker)
-    }
+fn trivial_row(_: &Plan, _: &PlannedJob) -> JobReport {
+    JobReport::failed("trivial benchmark job")
 }
 
 /// Runs `plan` with `local` embedded trivial workers and `procs` worker processes of `role`;
@@ -173,9 +168,7 @@ fn worker_process(role: &str) {
     let [kind, endpoint, name] = parts[..] else {
         panic!("bad {ROLE}: {role}");
     };
-    let trivial = |job: &WireJob, _: &Building, worker: &str| {
-        failed_wire_row(job, worker, "trivial benchmark job".into())
-    };
+    let trivial = |_: &WireJob, _: &Building| JobReport::failed("trivial benchmark job");
     let exec: &Executor<'_> = if kind == "trivial" {
         &trivial
     } else {

@@ -1,9 +1,10 @@
-//! Running one planned job here (embedded workers) into the store row that identifies it, with
-//! its outcome, and a planned job's wire form for remote workers (which run it with
-//! [`floorcast_worker::execute::execute_wire`]).
+//! Running one planned job here (embedded workers), a planned job's wire form for remote workers
+//! (which run it with [`floorcast_worker::execute::execute_wire`]), and the store row of a job
+//! from its report: its identity always comes from the plan, never from the worker.
 
-use floorcast_worker::execute::{execute_job, wire_row};
-use floorcast_worker::wire::{WireJob, WireProgram, WireStart};
+use std::fmt::Write as _;
+
+use floorcast_worker::wire::{JobOutcome, JobReport, WireJob, WireProgram, WireStart};
 use floorcast_worker::{GivenStart, Job};
 
 use crate::grid::{Plan, PlannedJob};
@@ -38,35 +39,71 @@ pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
 
 /// The store row a planned job produces, before it ran (identity fields only).
 pub fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
-    wire_row(&wire_job(plan, job), worker)
+    let b = &plan.buildings[job.building];
+    StoredResult {
+        job_id: job.id.clone(),
+        grid: plan.name.clone(),
+        building: b.name.clone(),
+        building_hash: b.hash.clone(),
+        strategy: job.strategy.clone(),
+        label: job.label.clone(),
+        seed: job.seed,
+        settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
+        status: "ok".into(),
+        error: None,
+        summary_json: None,
+        progress_csv: None,
+        worker: worker.to_string(),
+        wall_time_s: 0.0,
+        floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
+    }
 }
 
-/// Runs one planned job and turns its outcome (success or a job error) into a store row.
-pub fn execute(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult {
+/// The store row of `job` as `worker` reported it (the report checked with
+/// [`floorcast_worker::wire::check_report`] if it came from the network).
+pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> StoredResult {
+    let mut row = expected_row(plan, job, worker);
+    row.wall_time_s = report.wall_time_s;
+    match &report.outcome {
+        JobOutcome::Ok { summary, progress } => {
+            row.summary_json = serde_json::to_string(summary).ok();
+            let mut csv = String::from("time_s,explored_area_m2,explored_fraction\n");
+            for [t, area, fraction] in progress {
+                let _ = writeln!(csv, "{t:.1},{area:.3},{fraction:.5}");
+            }
+            row.progress_csv = Some(csv);
+        }
+        JobOutcome::Failed { error } => {
+            row.status = "failed".into();
+            row.error = Some(error.clone());
+        }
+    }
+    row
+}
+
+/// Runs one planned job here and reports its outcome (success or a job error).
+pub fn execute(plan: &Plan, job: &PlannedJob) -> JobReport {
     let b = &plan.buildings[job.building];
-    execute_job(
-        expected_row(plan, job, worker),
-        &Job {
-            building: &b.building,
-            building_name: b.name.clone(),
-            strategy: job.strategy.clone(),
-            program: job.program.clone(),
-            seed: job.seed,
-            settings: job.settings.clone(),
-            start: job.start.as_ref().map(|s| GivenStart {
-                pose: s.pose,
-                source: s.source.clone(),
-            }),
-            snapshot_fractions: Vec::new(),
-        },
-    )
+    floorcast_worker::execute::report(&Job {
+        building: &b.building,
+        building_name: b.name.clone(),
+        strategy: job.strategy.clone(),
+        program: job.program.clone(),
+        seed: job.seed,
+        settings: job.settings.clone(),
+        start: job.start.as_ref().map(|s| GivenStart {
+            pose: s.pose,
+            source: s.source.clone(),
+        }),
+        snapshot_fractions: Vec::new(),
+    })
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
     use floorcast_worker::execute::execute_wire;
-    use floorcast_worker::wire::check_result_start;
+    use floorcast_worker::wire::check_report;
     use std::path::Path;
 
     /// A plan of `baseline` on the small building with `seeds`, `time_limit_s` and `extra`
@@ -81,9 +118,11 @@ pub(crate) mod tests {
     }
 
     /// A job of a grid with `[starts]` runs from its planned pose whether it runs here or on
-    /// a remote worker (through its wire form), and a result that started elsewhere is refused.
+    /// a remote worker (through its wire form), to the same row; a report that is not the
+    /// job's (started elsewhere, another seed, building, strategy, settings or version, numbers
+    /// that are not finite, a failure without a reason) is refused, naming what differs.
     #[test]
-    fn a_grid_start_crosses_the_wire_and_is_checked_on_return() {
+    fn a_grid_start_crosses_the_wire_and_reports_are_checked_on_return() {
         let dir = tempfile::tempdir().unwrap();
         let plan = small_plan(dir.path(), "[1]", 5, "[starts]\nrandom = 2\nseed = 3\n");
         assert_eq!(plan.jobs.len(), 2);
@@ -92,22 +131,70 @@ pub(crate) mod tests {
         let wire = wire_job(&plan, a);
         let wire: WireJob = serde_json::from_str(&serde_json::to_string(&wire).unwrap()).unwrap();
         let building = &plan.buildings[a.building].building;
-        let remote = execute_wire(&wire, building, "w");
-        let local = execute(&plan, a, "local");
+        let remote = execute_wire(&wire, building);
+        let remote: JobReport =
+            serde_json::from_str(&serde_json::to_string(&remote).unwrap()).unwrap();
+        let local = execute(&plan, a);
         for r in [&remote, &local] {
-            assert_eq!(r.status, "ok", "{:?}", r.error);
-            let s = floorcast_worker::RunSummary::from_json(r.summary_json.as_deref().unwrap())
-                .unwrap();
+            assert_eq!(r.status(), "ok", "{r:?}");
+            let JobOutcome::Ok { summary, .. } = &r.outcome else {
+                unreachable!()
+            };
             let planned = a.start.as_ref().unwrap();
             assert_eq!(
-                s.start.map(f64::to_bits),
+                summary.start.map(f64::to_bits),
                 [planned.pose.x_m, planned.pose.y_m, planned.pose.theta_rad].map(f64::to_bits)
             );
-            assert_eq!(s.start_source, "random");
-            assert!(check_result_start(r, wire.start.as_ref()).is_ok());
+            assert_eq!(summary.start_source, "random");
+            assert_eq!(check_report(r, &wire), Ok(()));
         }
-        // The other job's start is not this result's.
-        let e = check_result_start(&remote, wire_job(&plan, b).start.as_ref()).unwrap_err();
+        assert_eq!(
+            crate::verify::compare(&row(&plan, a, "w", &remote), &row(&plan, a, "l", &local)),
+            Ok(())
+        );
+        // The other job's start is not this report's.
+        let e = check_report(&remote, &wire_job(&plan, b)).unwrap_err();
         assert!(e.contains("the grid's job at"), "{e}");
+        let edit = |f: &dyn Fn(&mut JobReport)| {
+            let mut r = remote.clone();
+            f(&mut r);
+            r
+        };
+        let summary = |f: &dyn Fn(&mut floorcast_worker::RunSummary)| {
+            edit(&|r: &mut JobReport| {
+                if let JobOutcome::Ok { summary, .. } = &mut r.outcome {
+                    f(summary);
+                }
+            })
+        };
+        let cases: Vec<(JobReport, &str)> = vec![
+            (summary(&|s| s.seed += 1), "seed"),
+            (
+                summary(&|s| s.building_hash = "0".repeat(32)),
+                "building_hash",
+            ),
+            (summary(&|s| s.strategy = "layout".into()), "strategy"),
+            (summary(&|s| s.settings.alpha = 0.9), "settings"),
+            (
+                summary(&|s| s.floorcast_version = "0.0.1".into()),
+                "floorcast_version",
+            ),
+            (summary(&|s| s.version = 9), "format"),
+            (
+                edit(&|r| {
+                    if let JobOutcome::Ok { progress, .. } = &mut r.outcome {
+                        progress[1][2] = f64::NAN;
+                    }
+                }),
+                "progress sample",
+            ),
+            (edit(&|r| r.wall_time_s = f64::INFINITY), "wall_time_s"),
+            (JobReport::failed(" "), "without an error message"),
+        ];
+        for (report, what) in &cases {
+            let e = check_report(report, &wire).unwrap_err();
+            assert!(e.contains(what), "{what}: {e}");
+        }
+        assert_eq!(check_report(&JobReport::failed("boom"), &wire), Ok(()));
     }
 }

@@ -9,7 +9,7 @@ use tokio::sync::oneshot;
 
 use crate::grid::{Plan, PlannedJob};
 use crate::store::StoredResult;
-use floorcast_worker::wire::{RenewReply, SubmitReply};
+use floorcast_worker::wire::{JobReport, RenewReply, SubmitReply};
 
 /// What workers (embedded threads or the network bridge) tell the coordinator loop.
 #[derive(Debug)]
@@ -19,10 +19,11 @@ pub(crate) enum Inbox {
         worker: String,
         reply: oneshot::Sender<Answer>,
     },
-    /// A worker returns a result.
+    /// A worker reports what job `job_id` gave.
     Submit {
         worker: String,
-        result: Box<StoredResult>,
+        job_id: String,
+        report: Box<JobReport>,
         reply: oneshot::Sender<SubmitReply>,
     },
     /// A worker still runs `job`.

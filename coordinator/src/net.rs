@@ -400,17 +400,18 @@ async fn on_submit(ctx: Arc<Ctx>, q: Query) {
         Ok(s) => s,
         Err(e) => return refuse(&ctx, &q, "not a result", e.to_string()).await,
     };
-    if sub.result.job_id != job {
+    if sub.job_id != job {
         let why = format!(
             "result of job {} submitted on the key of job {job}",
-            sub.result.job_id
+            sub.job_id
         );
         return refuse(&ctx, &q, "mismatched result", why).await;
     }
     let (tx, rx) = oneshot::channel();
     let sent = ctx.inbox.send(Inbox::Submit {
         worker: sub.worker,
-        result: Box::new(sub.result),
+        job_id: sub.job_id,
+        report: Box::new(sub.report),
         reply: tx,
     });
     if let (Ok(()), Ok(a)) = (sent, rx.await) {
@@ -681,12 +682,12 @@ mod tests {
     use std::sync::atomic::AtomicBool;
 
     use super::*;
-    use crate::execute::expected_row;
+    use crate::execute::{execute, row};
     use crate::run::{run_plan, Counts, RunOptions};
     use crate::store::Store;
     use floorcast_worker::execute::execute_wire;
     use floorcast_worker::process::{run_worker, WorkerError, WorkerOptions, WorkerReport};
-    use floorcast_worker::wire::WireJob;
+    use floorcast_worker::wire::{JobOutcome, WireJob};
 
     fn plan(dir: &Path, seeds: &str) -> Plan {
         let small = Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
@@ -803,20 +804,25 @@ mod tests {
                 assert!(r.is_err(), "{key_rest}: {r:?}");
             }
             // A forged result: right key, wrong building hash -> rejected, not stored.
-            let mut forged = expected_row(&p, &p.jobs[0], "forger");
-            forged.building_hash = "0".repeat(32);
-            forged.summary_json = Some("{}".into());
+            let mut forged = execute(&p, &p.jobs[0]);
+            if let JobOutcome::Ok { summary, .. } = &mut forged.outcome {
+                summary.building_hash = "0".repeat(32);
+            }
             let r = ask::<SubmitReply>(
                 &s,
                 &k(&format!("ctl/submit/{job0}")),
                 encode(&Submission {
                     worker: "forger".into(),
-                    result: forged,
+                    job_id: job0.clone(),
+                    report: forged,
                 }),
                 Duration::from_secs(5),
             )
             .await;
-            assert!(matches!(r, Ok(Some(SubmitReply::Rejected { .. }))), "{r:?}");
+            assert!(
+                matches!(&r, Ok(Some(SubmitReply::Rejected { reason })) if reason.contains("building_hash")),
+                "{r:?}"
+            );
             // A worker of another version is refused with a reason.
             let mut hello = Hello::this_build("old", "h");
             hello.floorcast_version = "0.0.1".into();
@@ -873,12 +879,11 @@ mod tests {
         let ep = endpoint(dir.path());
         // Each worker's first result checked, hardly any other.
         let coord = coordinator(p.clone(), ep.clone(), 1e-9);
-        let tampered = |job: &WireJob, b: &sim_core::Building, w: &str| {
-            let mut r = execute_wire(job, b, w);
-            let mut v: serde_json::Value =
-                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
-            v["explored_fraction"] = (v["explored_fraction"].as_f64().unwrap() + 1e-3).into();
-            r.summary_json = Some(v.to_string());
+        let tampered = |job: &WireJob, b: &sim_core::Building| {
+            let mut r = execute_wire(job, b);
+            if let JobOutcome::Ok { summary, .. } = &mut r.outcome {
+                summary.explored_fraction += 1e-3;
+            }
             r
         };
         let link = join(&net(vec![], vec![ep.clone()]), Some("forger")).unwrap();
@@ -913,7 +918,7 @@ mod tests {
         for r in &rows {
             assert_ne!(r.worker, "forger");
             let job = p.jobs.iter().find(|j| j.id == r.job_id).unwrap();
-            let local = crate::execute::execute(&p, job, "here");
+            let local = row(&p, job, "here", &execute(&p, job));
             assert_eq!(crate::verify::compare(r, &local), Ok(()), "{}", r.job_id);
         }
     }

@@ -15,12 +15,12 @@ use std::time::{Duration, Instant};
 
 use tokio::sync::oneshot;
 
-use crate::execute::{execute, expected_row, wire_job};
+use crate::execute::{execute, row, wire_job};
 use crate::grid::{Plan, PlannedJob};
 use crate::inbox::{Answer, Inbox, InboxSender, RemoteWorkers, LOCAL};
 use crate::schedule::{Grant, Note, Renewal, RequeueReason, Scheduler, Verdict};
 use crate::store::{Store, StoreError, StoredResult};
-use floorcast_worker::wire::{check_result, check_result_start, RenewReply, SubmitReply};
+use floorcast_worker::wire::{check_report, JobReport, RenewReply, SubmitReply};
 
 /// Counts for a progress display.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,8 +45,8 @@ pub enum Outcome {
     Interrupted,
 }
 
-/// Runs one planned job on an embedded worker (default: [`execute`]).
-pub type LocalExecutor = dyn Fn(&Plan, &PlannedJob, &str) -> StoredResult + Send + Sync;
+/// Runs one planned job on an embedded worker or for a check (default: [`execute`]).
+pub type LocalExecutor = dyn Fn(&Plan, &PlannedJob) -> JobReport + Send + Sync;
 
 /// How to run a plan.
 #[derive(Clone)]
@@ -298,49 +298,49 @@ pub fn run_plan(
                 }
                 Inbox::Submit {
                     worker,
-                    result,
+                    job_id,
+                    report,
                     reply,
                 } => {
-                    let job_id = result.job_id.clone();
-                    let verdict = match jobs.get(&job_id) {
-                        Some(j) => {
-                            check_result(&result, &expected_row(&plan, j, "")).and_then(|()| {
-                                check_result_start(&result, wire_job(&plan, j).start.as_ref())
-                            })
-                        }
-                        None => Ok(()), // the scheduler rejects unknown jobs
+                    // The row's identity comes from the plan; the report is checked against
+                    // the job first.
+                    let result = match jobs.get(&job_id) {
+                        Some(j) => match check_report(&report, &wire_job(&plan, j)) {
+                            Ok(()) => Some(row(&plan, j, &worker, &report)),
+                            Err(reason) => {
+                                on_log(&format!(
+                                    "rejected result of job {job_id} from {worker}: {reason}"
+                                ));
+                                let _ = reply.send(SubmitReply::Rejected { reason });
+                                continue;
+                            }
+                        },
+                        None => None, // the scheduler rejects unknown jobs
                     };
-                    if let Err(reason) = verdict {
-                        on_log(&format!(
-                            "rejected result of job {job_id} from {worker}: {reason}"
-                        ));
-                        let _ = reply.send(SubmitReply::Rejected { reason });
-                        continue;
-                    }
                     // Chosen for a check: held (the grid does not finish) until it is done.
-                    let check = match (&verify_tx, jobs.get(&job_id)) {
-                        (Some(tx), Some(j))
+                    let check = match (&verify_tx, jobs.get(&job_id), &result) {
+                        (Some(tx), Some(j), Some(result))
                             if !worker.starts_with(LOCAL)
-                                && crate::verify::verifiable(j, &result)
+                                && crate::verify::verifiable(j, result)
                                 && (checks.first_checked.insert(worker.clone())
                                     || rand::random::<f64>() < opts.verify_fraction) =>
                         {
                             sched.hold(&job_id);
-                            Some((tx, j.clone()))
+                            Some((tx, j.clone(), result.clone()))
                         }
                         _ => None,
                     };
                     let r = sched.submit(&job_id);
                     notes.extend(r.notes);
-                    if let Some((tx, j)) = check {
+                    if let Some((tx, j, theirs)) = check {
                         if r.answer == Verdict::Store {
-                            let _ = tx.send((j, (*result).clone(), worker.clone()));
+                            let _ = tx.send((j, theirs, worker.clone()));
                         } else {
                             sched.release(&job_id);
                         }
                     }
-                    match r.answer {
-                        Verdict::Store => {
+                    match (r.answer, result) {
+                        (Verdict::Store, Some(result)) => {
                             if result.status != "ok" {
                                 failed += 1;
                                 on_log(&format!(
@@ -352,11 +352,11 @@ pub fn run_plan(
                                     result.error.as_deref().unwrap_or("")
                                 ));
                             }
-                            to_store.push(*result);
+                            to_store.push(result);
                             acks.push((reply, SubmitReply::Stored));
                         }
-                        Verdict::Duplicate => acks.push((reply, SubmitReply::Duplicate)),
-                        Verdict::Unknown => {
+                        (Verdict::Duplicate, _) => acks.push((reply, SubmitReply::Duplicate)),
+                        _ => {
                             let reason =
                                 format!("job {job_id} is not part of grid '{}'", plan.name);
                             on_log(&format!("rejected result from {worker}: {reason}"));
@@ -494,15 +494,12 @@ fn verifier(
     exec: &LocalExecutor,
 ) {
     for (job, theirs, worker) in jobs {
-        let name = format!("{LOCAL}verifier");
-        let ours =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(plan, &job, &name)))
-                .unwrap_or_else(|p| {
-                    let mut row = expected_row(plan, &job, &name);
-                    row.status = "failed".into();
-                    row.error = Some(floorcast_worker::panic_message(&*p));
-                    row
-                });
+        let ours = row(
+            plan,
+            &job,
+            &format!("{LOCAL}verifier"),
+            &run_guarded(plan, &job, exec),
+        );
         let outcome = crate::verify::compare(&theirs, &ours);
         let sent = inbox.send(Inbox::Verified {
             job: job.id.clone(),
@@ -514,6 +511,16 @@ fn verifier(
             return;
         }
     }
+}
+
+/// Runs a job here; a panicking job is a failed job, never a lost one (nor a dead worker).
+fn run_guarded(plan: &Plan, job: &PlannedJob, exec: &LocalExecutor) -> JobReport {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| exec(plan, job))).unwrap_or_else(|p| {
+        JobReport::failed(format!(
+            "the job panicked (a bug in floorcast, please report it): {}",
+            floorcast_worker::panic_message(&*p)
+        ))
+    })
 }
 
 fn local_worker(
@@ -534,23 +541,12 @@ fn local_worker(
         }
         match rx.blocking_recv() {
             Ok(Answer::Run(job)) => {
-                // A panicking job is a failed job, never a lost one (nor a dead worker).
-                let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    exec(plan, &job, name)
-                }))
-                .unwrap_or_else(|p| {
-                    let mut row = expected_row(plan, &job, name);
-                    row.status = "failed".into();
-                    row.error = Some(format!(
-                        "the job panicked (a bug in floorcast, please report it): {}",
-                        floorcast_worker::panic_message(&*p)
-                    ));
-                    row
-                });
+                let report = run_guarded(plan, &job, exec);
                 let (tx, rx) = oneshot::channel();
                 let submit = Inbox::Submit {
                     worker: name.to_string(),
-                    result: Box::new(result),
+                    job_id: job.id.clone(),
+                    report: Box::new(report),
                     reply: tx,
                 };
                 if inbox.send(submit).is_err() || rx.blocking_recv().is_err() {
@@ -575,11 +571,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let plan = small_plan(dir.path(), "[1, 2, 3, 4]", 10, "");
         let store = Store::open(&plan.results_dir).unwrap();
-        let exec: Arc<LocalExecutor> = Arc::new(|plan: &Plan, job: &PlannedJob, worker: &str| {
+        let exec: Arc<LocalExecutor> = Arc::new(|plan: &Plan, job: &PlannedJob| {
             if job.seed.is_multiple_of(2) {
                 panic!("boom at seed {}", job.seed);
             }
-            execute(plan, job, worker)
+            execute(plan, job)
         });
         let opts = RunOptions {
             workers: 2,

@@ -31,7 +31,26 @@ pub enum StoreError {
     Foreign { path: PathBuf, why: String },
 }
 
-pub use floorcast_worker::wire::StoredResult;
+/// One stored job: its identity (from the grid's plan), outcome and provenance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoredResult {
+    pub job_id: String,
+    pub grid: String,
+    pub building: String,
+    pub building_hash: String,
+    pub strategy: String,
+    pub label: String,
+    pub seed: u64,
+    pub settings_json: String,
+    /// `ok` or `failed`.
+    pub status: String,
+    pub error: Option<String>,
+    pub summary_json: Option<String>,
+    pub progress_csv: Option<String>,
+    pub worker: String,
+    pub wall_time_s: f64,
+    pub floorcast_version: String,
+}
 
 /// Where a grid run came from.
 #[derive(Debug, Clone, PartialEq)]

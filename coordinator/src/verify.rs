@@ -72,8 +72,8 @@ pub fn compare(theirs: &StoredResult, ours: &StoredResult) -> Result<(), String>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::execute::execute;
     use crate::execute::tests::small_plan;
+    use crate::execute::{execute, row};
 
     /// A rerun of the same job is identical; a changed field, progress line or status is
     /// named; measured times are not compared.
@@ -82,8 +82,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let plan = small_plan(dir.path(), "[1]", 10, "");
         let job = &plan.jobs[0];
-        let ours = execute(&plan, job, "here");
-        let theirs = execute(&plan, job, "there");
+        let ours = row(&plan, job, "here", &execute(&plan, job));
+        let theirs = row(&plan, job, "there", &execute(&plan, job));
         assert!(verifiable(job, &theirs));
         assert_eq!(compare(&theirs, &ours), Ok(()));
         let edit = |f: &dyn Fn(&mut serde_json::Value)| {

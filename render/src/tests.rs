@@ -156,11 +156,26 @@ fn png_text_is_antialiased_type_placed_by_its_anchor() {
     assert!(grey, "anti-aliased edges");
     let (first, last) = (mid[0] as f64, *mid.last().unwrap() as f64);
     let width = super::png::text_width_px("Exploration time (s)", 16.0);
-    assert!((last - first - width).abs() < 4.0, "{first}..{last} vs {width}");
-    assert!(((first + last) / 2.0 - 200.0).abs() < 3.0, "centred on x = 200 px");
+    assert!(
+        (last - first - width).abs() < 4.0,
+        "{first}..{last} vs {width}"
+    );
+    assert!(
+        ((first + last) / 2.0 - 200.0).abs() < 3.0,
+        "centred on x = 200 px"
+    );
     let (start, _) = ink_columns("Exploration time (s)", Anchor::Start);
-    assert!((start[0] as f64 - 200.0).abs() < 3.0, "starts at x = 200 px");
+    assert!(
+        (start[0] as f64 - 200.0).abs() < 3.0,
+        "starts at x = 200 px"
+    );
     let (end, _) = ink_columns("Exploration time (s)", Anchor::End);
-    assert!((*end.last().unwrap() as f64 - 200.0).abs() < 3.0, "ends at x = 200 px");
-    assert_ne!(ink_columns("abc", Anchor::Start), ink_columns("ABC", Anchor::Start));
+    assert!(
+        (*end.last().unwrap() as f64 - 200.0).abs() < 3.0,
+        "ends at x = 200 px"
+    );
+    assert_ne!(
+        ink_columns("abc", Anchor::Start),
+        ink_columns("ABC", Anchor::Start)
+    );
 }

@@ -16,9 +16,8 @@ use std::time::{Duration, Instant};
 
 use sim_core::Building;
 
-use crate::execute::failed_wire_row;
 use crate::wire::{
-    BuildingRequest, Hello, NextReply, RenewReply, Renewal, StoredResult, Submission, SubmitReply,
+    BuildingRequest, Hello, JobReport, NextReply, RenewReply, Renewal, Submission, SubmitReply,
     WireBuilding, WireJob,
 };
 
@@ -90,9 +89,9 @@ pub enum WorkerError {
     NoCoordinator { whereabouts: String, waited_s: f64 },
 }
 
-/// Runs `job` in `building` as worker `worker` and returns its row
-/// ([`crate::execute::execute_wire`] is the real one).
-pub type Executor<'a> = dyn Fn(&WireJob, &Building, &str) -> StoredResult + Send + Sync + 'a;
+/// Runs `job` in `building` and reports what it gave ([`crate::execute::execute_wire`] is the
+/// real one).
+pub type Executor<'a> = dyn Fn(&WireJob, &Building) -> JobReport + Send + Sync + 'a;
 /// Receives the worker's events (from its threads).
 pub type EventSink<'a> = dyn Fn(WorkerEvent) + Send + Sync + 'a;
 
@@ -278,18 +277,19 @@ fn run_one(x: &State<'_>, job: WireJob, lease_s: f64) -> Result<(), WorkerError>
         });
         let result = match building(x, &job.building_hash) {
             Ok(Ok(b)) => Ok(run_guarded(x, &job, &b)),
-            Ok(Err(e)) => Ok(failed_wire_row(&job, x.worker(), e)),
+            Ok(Err(e)) => Ok(JobReport::failed(format!("its building: {e}"))),
             Err(e) => Err(e),
         };
         drop(stop);
         result
     })?;
     x.run.fetch_add(1, Ordering::SeqCst);
-    let status = result.status.clone();
+    let status = result.status().to_string();
     let wall_time_s = result.wall_time_s;
     let submission = Submission {
         worker: x.worker().to_string(),
-        result,
+        job_id: id.clone(),
+        report: result,
     };
     let mut backoff_ms = 100u64;
     let reply = loop {
@@ -327,20 +327,15 @@ fn run_one(x: &State<'_>, job: WireJob, lease_s: f64) -> Result<(), WorkerError>
     Ok(())
 }
 
-/// Runs the job; a panic in it (a bug) becomes a failed row that says so, and the worker goes on.
-fn run_guarded(x: &State<'_>, job: &WireJob, building: &Building) -> StoredResult {
-    std::panic::catch_unwind(AssertUnwindSafe(|| (x.exec)(job, building, x.worker())))
-        .unwrap_or_else(|p| {
-            failed_wire_row(
-                job,
-                x.worker(),
-                format!(
-                    "the job panicked on worker {} (a bug in floorcast, please report it): {}",
-                    x.worker(),
-                    crate::panic_message(&*p)
-                ),
-            )
-        })
+/// Runs the job; a panic in it (a bug) becomes a failure that says so, and the worker goes on.
+fn run_guarded(x: &State<'_>, job: &WireJob, building: &Building) -> JobReport {
+    std::panic::catch_unwind(AssertUnwindSafe(|| (x.exec)(job, building))).unwrap_or_else(|p| {
+        JobReport::failed(format!(
+            "the job panicked on worker {} (a bug in floorcast, please report it): {}",
+            x.worker(),
+            crate::panic_message(&*p)
+        ))
+    })
 }
 
 #[cfg(test)]
@@ -348,7 +343,7 @@ mod tests {
     use std::collections::VecDeque;
 
     use super::*;
-    use crate::execute::wire_row;
+    use crate::wire::JobOutcome;
     use crate::Settings;
 
     /// A coordinator in memory: hands out `jobs`, ignores the first `silent_submits`
@@ -446,12 +441,12 @@ mod tests {
         }
     }
 
-    /// An executor that runs nothing: the job's identity row, `ok`, after 150 ms (half the
-    /// lease, so that leases get renewed), or a panic for seed 1.
-    fn exec(job: &WireJob, _: &Building, worker: &str) -> StoredResult {
+    /// An executor that runs nothing: a failure "not run" after 150 ms (half the lease, so
+    /// that leases get renewed), or a panic for seed 1.
+    fn exec(job: &WireJob, _: &Building) -> JobReport {
         std::thread::sleep(Duration::from_millis(150));
         assert_ne!(job.seed, 1, "a bug in the job");
-        wire_row(job, worker)
+        JobReport::failed("not run")
     }
 
     fn options(wait_s: f64) -> WorkerOptions {
@@ -485,16 +480,15 @@ mod tests {
         let ids: Vec<&str> = submitted.iter().map(|(id, _)| id.as_str()).collect();
         assert_eq!(ids, ["job0", "job1", "job2", "job3", "job4"]);
         for (id, s) in &submitted {
-            assert_eq!(&s.result.job_id, id);
+            assert_eq!(&s.job_id, id);
             assert_eq!(s.worker, "w");
-            let failed = s.result.status == "failed";
-            assert_eq!(failed, id == "job1", "{id}: {:?}", s.result.error);
+            let JobOutcome::Failed { error } = &s.report.outcome else {
+                panic!("{id}: {:?}", s.report);
+            };
+            let panicked = error.contains("panicked") && error.contains("a bug in the job");
+            assert_eq!(panicked, id == "job1", "{id}: {error}");
+            assert_eq!(error == "not run", id != "job1", "{id}: {error}");
         }
-        let error = submitted[1].1.result.error.as_deref().unwrap();
-        assert!(
-            error.contains("panicked") && error.contains("a bug in the job"),
-            "{error}"
-        );
         let events = events.into_inner().unwrap();
         let joined = events
             .iter()

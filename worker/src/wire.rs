@@ -1,6 +1,6 @@
 //! The messages coordinator and remote workers exchange, as versioned, validated types.
 //!
-//! Every message is a JSON object `{"format": "floorcast-wire", "version": 1, "kind": …, "body":
+//! Every message is a JSON object `{"format": "floorcast-wire", "version": 2, "kind": …, "body":
 //! …}`. [`decode`] checks the envelope before it trusts the body, so a foreign or malformed
 //! message becomes a [`WireError`] that names what was wrong (and is logged and dropped by the
 //! transport), never a panic. Nothing here knows zenoh: `floorcast_coordinator::net` moves these bytes.
@@ -20,7 +20,7 @@ use crate::{RunSummary, Settings, FLOORCAST_VERSION, SUMMARY_VERSION};
 /// The value of every message's `format` key.
 pub const WIRE_FORMAT: &str = "floorcast-wire";
 /// The protocol version this build speaks.
-pub const WIRE_VERSION: u32 = 1;
+pub const WIRE_VERSION: u32 = 2;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum WireError {
@@ -267,34 +267,118 @@ pub struct WireStart {
     pub source: String,
 }
 
-/// Checks that a submitted successful result started where its planned job starts: the
-/// summary's start pose bit for bit and its source (`planned` = `None`: the building's own
-/// start, which the job id's building hash already fixes).
-pub fn check_result_start(
-    result: &StoredResult,
-    planned: Option<&WireStart>,
-) -> Result<(), String> {
-    let (Some(planned), Some(summary)) = (planned, result.summary_json.as_deref()) else {
-        return Ok(());
-    };
-    let s = RunSummary::from_json(summary).map_err(|e| format!("summary: {e}"))?;
-    if s.start.map(f64::to_bits) != planned.pose.map(f64::to_bits)
-        || s.start_source != planned.source
-    {
-        return Err(format!(
-            "the run started at {:?} ({}), the grid's job at {:?} ({})",
-            s.start, s.start_source, planned.pose, planned.source
-        ));
-    }
-    Ok(())
-}
-
-/// A worker returns a result (`ctl/submit/<job_id>`).
+/// A worker returns what a job gave (`ctl/submit/<job_id>`); the coordinator makes the store's
+/// row from its own plan and this report, after [`check_report`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Submission {
     pub worker: String,
-    pub result: StoredResult,
+    pub job_id: String,
+    pub report: JobReport,
+}
+
+/// What running a job gave: its outcome and the wall time it took.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JobReport {
+    /// Wall-clock seconds (the only part that differs between identical runs).
+    pub wall_time_s: f64,
+    pub outcome: JobOutcome,
+}
+
+/// A job's outcome: its run record and progress, or the error that stopped it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "status", rename_all = "snake_case", deny_unknown_fields)]
+pub enum JobOutcome {
+    Ok {
+        summary: Box<RunSummary>,
+        /// `[time_s, explored_area_m2, explored_fraction]` samples over the run.
+        progress: Vec<[f64; 3]>,
+    },
+    Failed {
+        error: String,
+    },
+}
+
+impl JobReport {
+    /// A job that could not run (or failed), and why.
+    pub fn failed(error: impl Into<String>) -> Self {
+        Self {
+            wall_time_s: 0.0,
+            outcome: JobOutcome::Failed {
+                error: error.into(),
+            },
+        }
+    }
+
+    /// "ok" or "failed", as the store says it.
+    pub fn status(&self) -> &'static str {
+        match self.outcome {
+            JobOutcome::Ok { .. } => "ok",
+            JobOutcome::Failed { .. } => "failed",
+        }
+    }
+}
+
+/// Checks that a submitted report is what `job` can give: a run record of the job's building,
+/// strategy, seed, settings, start and this floorcast version, with finite numbers, or a
+/// failure that says why. The error names what differs.
+pub fn check_report(report: &JobReport, job: &WireJob) -> Result<(), String> {
+    if !(report.wall_time_s.is_finite() && report.wall_time_s >= 0.0) {
+        return Err(format!("wall_time_s is {}", report.wall_time_s));
+    }
+    let (summary, progress) = match &report.outcome {
+        JobOutcome::Failed { error } if error.trim().is_empty() => {
+            return Err("a failure without an error message".into())
+        }
+        JobOutcome::Failed { .. } => return Ok(()),
+        JobOutcome::Ok { summary, progress } => (summary, progress),
+    };
+    let differs = |what: &str, got: &dyn std::fmt::Debug, want: &dyn std::fmt::Debug| {
+        Err(format!(
+            "the summary's {what} is {got:?}, the grid's job has {want:?}"
+        ))
+    };
+    if summary.format != crate::SUMMARY_FORMAT || summary.version != SUMMARY_VERSION {
+        return differs(
+            "format",
+            &(&summary.format, summary.version),
+            &(crate::SUMMARY_FORMAT, SUMMARY_VERSION),
+        );
+    }
+    if summary.floorcast_version != FLOORCAST_VERSION {
+        return differs(
+            "floorcast_version",
+            &summary.floorcast_version,
+            &FLOORCAST_VERSION,
+        );
+    }
+    if summary.building_hash != job.building_hash {
+        return differs("building_hash", &summary.building_hash, &job.building_hash);
+    }
+    if summary.strategy != job.strategy {
+        return differs("strategy", &summary.strategy, &job.strategy);
+    }
+    if summary.seed != job.seed {
+        return differs("seed", &summary.seed, &job.seed);
+    }
+    if summary.settings != job.settings {
+        return Err("the summary's settings differ from the grid's".into());
+    }
+    if let Some(planned) = &job.start {
+        if summary.start.map(f64::to_bits) != planned.pose.map(f64::to_bits)
+            || summary.start_source != planned.source
+        {
+            return Err(format!(
+                "the run started at {:?} ({}), the grid's job at {:?} ({})",
+                summary.start, summary.start_source, planned.pose, planned.source
+            ));
+        }
+    }
+    if let Some(p) = progress.iter().find(|p| p.iter().any(|v| !v.is_finite())) {
+        return Err(format!("a progress sample is {p:?}"));
+    }
+    Ok(())
 }
 impl Message for Submission {
     const KIND: &'static str = "submission";
@@ -348,79 +432,6 @@ pub enum RenewReply {
 }
 impl Message for RenewReply {
     const KIND: &'static str = "renew-reply";
-}
-
-/// One job's row: what a worker submits and the coordinator stores (see `floorcast_coordinator::store`).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct StoredResult {
-    pub job_id: String,
-    pub grid: String,
-    pub building: String,
-    pub building_hash: String,
-    pub strategy: String,
-    pub label: String,
-    pub seed: u64,
-    pub settings_json: String,
-    /// `ok` or `failed`.
-    pub status: String,
-    pub error: Option<String>,
-    pub summary_json: Option<String>,
-    pub progress_csv: Option<String>,
-    pub worker: String,
-    pub wall_time_s: f64,
-    pub floorcast_version: String,
-}
-
-/// Checks that a submitted result is the result of the planned job it claims to be.
-pub fn check_result(result: &StoredResult, expected: &StoredResult) -> Result<(), String> {
-    let same = |what: &str, a: &str, b: &str| {
-        if a == b {
-            Ok(())
-        } else {
-            Err(format!("{what} is '{a}', the grid expects '{b}'"))
-        }
-    };
-    same("job_id", &result.job_id, &expected.job_id)?;
-    same(
-        "building_hash",
-        &result.building_hash,
-        &expected.building_hash,
-    )?;
-    same("strategy", &result.strategy, &expected.strategy)?;
-    same(
-        "floorcast_version",
-        &result.floorcast_version,
-        &expected.floorcast_version,
-    )?;
-    if result.seed != expected.seed {
-        return Err(format!(
-            "seed is {}, the grid expects {}",
-            result.seed, expected.seed
-        ));
-    }
-    if result.settings_json != expected.settings_json {
-        return Err("settings differ from the grid's".into());
-    }
-    match result.status.as_str() {
-        "ok" => {
-            let summary = result
-                .summary_json
-                .as_deref()
-                .ok_or("status 'ok' without a summary")?;
-            RunSummary::from_json(summary).map_err(|e| format!("summary: {e}"))?;
-        }
-        "failed" => {
-            if result.error.as_deref().unwrap_or("").is_empty() {
-                return Err("status 'failed' without an error message".into());
-            }
-        }
-        other => return Err(format!("status is '{other}', expected 'ok' or 'failed'")),
-    }
-    if !result.wall_time_s.is_finite() || result.wall_time_s < 0.0 {
-        return Err(format!("wall_time_s is {}", result.wall_time_s));
-    }
-    Ok(())
 }
 
 /// A building as it travels inside a job: exact, with rooms, doors and start.
@@ -627,11 +638,35 @@ mod tests {
             decode::<Hello>(&encode(&r)),
             Err(WireError::Kind { .. })
         ));
-        let extra = br#"{"format":"floorcast-wire","version":1,"kind":"hello","body":{"worker":"w","host":"h","floorcast_version":"x","result_format":1,"bench":"b","evil":true}}"#;
+        let extra = br#"{"format":"floorcast-wire","version":2,"kind":"hello","body":{"worker":"w","host":"h","floorcast_version":"x","result_format":1,"bench":"b","evil":true}}"#;
         assert!(matches!(
             decode::<Hello>(extra),
             Err(WireError::Body { .. })
         ));
+        // A typed outcome crosses as it is; one of another status, or with a field too many,
+        // is refused.
+        let sub = Submission {
+            worker: "w".into(),
+            job_id: "j".into(),
+            report: JobReport::failed("no start pose"),
+        };
+        assert_eq!(decode::<Submission>(&encode(&sub)).unwrap(), sub);
+        for body in [
+            r#"{"worker":"w","job_id":"j","report":{"wall_time_s":1.0,"outcome":{"status":"done","error":"x"}}}"#,
+            r#"{"worker":"w","job_id":"j","report":{"wall_time_s":1.0,"outcome":{"status":"failed","error":"x","extra":1}}}"#,
+            r#"{"worker":"w","job_id":"j","report":{"wall_time_s":1.0,"outcome":{"status":"ok","summary":{},"progress":[]}}}"#,
+        ] {
+            let msg = format!(
+                r#"{{"format":"floorcast-wire","version":2,"kind":"submission","body":{body}}}"#
+            );
+            assert!(
+                matches!(
+                    decode::<Submission>(msg.as_bytes()),
+                    Err(WireError::Body { .. })
+                ),
+                "{body}"
+            );
+        }
     }
 
     #[test]
