@@ -136,28 +136,102 @@ fn crosses_frontier(
         0
     };
     let reach = (FRONTIER_REACH_M / frame.resolution_m).ceil() as i32;
-    let frontier_near = |c: Cell| {
-        (-reach..=reach).any(|dy| {
-            (-reach..=reach).any(|dx| {
-                dx * dx + dy * dy <= reach * reach
-                    && is_frontier_cell(grid, Cell::new(c.x + dx, c.y + dy))
-            })
-        })
+    let mut edges: Vec<Vec<Cell>> = Vec::new();
+    for_closed_edge_cells(room, frame, |cells| edges.push(cells.to_vec()));
+    let Some(frontier_near) = FrontierNear::new(grid, edges.iter().flatten(), reach) else {
+        return false;
     };
     let mut crosses = false;
-    for_closed_edge_cells(room, frame, |cells| {
+    for cells in &edges {
         // Length of the current stretch of cells with no wall near and a frontier near.
         let mut run = 0usize;
         for c in cells {
-            if near_occupied(grid, *c) || !frontier_near(*c) {
+            if near_occupied(grid, *c) || !frontier_near.at(*c) {
                 run = 0;
                 continue;
             }
             run += 1;
             crosses |= run > max_gap;
         }
-    });
+    }
     crosses
+}
+
+/// Whether a frontier cell lies within `reach` cells (`dx² + dy² <= reach²`) of a cell, for the
+/// cells of a box: per row of the box (the cells' bounding box grown by `reach`), the horizontal
+/// distance to the nearest frontier cell of that row, so that a query reads `2 reach + 1` rows
+/// instead of testing every cell of the disk. Exactly the disk test, in a fraction of the time.
+struct FrontierNear {
+    x0: i32,
+    y0: i32,
+    width: usize,
+    reach: i32,
+    /// Horizontal distance in cells to the nearest frontier cell of the row (`u32::MAX`: none
+    /// within the box's row), row by row.
+    distance: Vec<u32>,
+}
+
+impl FrontierNear {
+    /// `None` without cells.
+    fn new<'a>(
+        grid: &OccupancyGrid,
+        cells: impl Iterator<Item = &'a Cell>,
+        reach: i32,
+    ) -> Option<Self> {
+        let (mut x0, mut y0, mut x1, mut y1) = (i32::MAX, i32::MAX, i32::MIN, i32::MIN);
+        for c in cells {
+            x0 = x0.min(c.x);
+            y0 = y0.min(c.y);
+            x1 = x1.max(c.x);
+            y1 = y1.max(c.y);
+        }
+        if x0 > x1 {
+            return None;
+        }
+        let (x0, y0, x1, y1) = (x0 - reach, y0 - reach, x1 + reach, y1 + reach);
+        let width = (x1 - x0 + 1) as usize;
+        let height = (y1 - y0 + 1) as usize;
+        let mut distance = vec![u32::MAX; width * height];
+        for (r, row) in distance.chunks_exact_mut(width).enumerate() {
+            let y = y0 + r as i32;
+            // Nearest frontier cell to the left, then to the right.
+            let mut last: Option<usize> = None;
+            for (k, d) in row.iter_mut().enumerate() {
+                if is_frontier_cell(grid, Cell::new(x0 + k as i32, y)) {
+                    last = Some(k);
+                }
+                if let Some(l) = last {
+                    *d = (k - l) as u32;
+                }
+            }
+            let mut next: Option<usize> = None;
+            for k in (0..width).rev() {
+                if row[k] == 0 {
+                    next = Some(k);
+                }
+                if let Some(n) = next {
+                    row[k] = row[k].min((n - k) as u32);
+                }
+            }
+        }
+        Some(Self {
+            x0,
+            y0,
+            width,
+            reach,
+            distance,
+        })
+    }
+
+    /// For a cell of the box (the cells it was made from).
+    fn at(&self, c: Cell) -> bool {
+        let col = (c.x - self.x0) as usize;
+        (-self.reach..=self.reach).any(|dy| {
+            let row = (c.y + dy - self.y0) as usize;
+            let d = self.distance[row * self.width + col];
+            d != u32::MAX && (d as i64).pow(2) + (dy as i64).pow(2) <= (self.reach as i64).pow(2)
+        })
+    }
 }
 
 /// Whether `c` or one of its 8-neighbours is occupied (an observed wall at `c`).
@@ -281,6 +355,37 @@ pub fn gap_closed_information_gain(
 mod tests {
     use super::*;
     use crate::gain::information_gain;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The row-distance test of a frontier within reach is the disk test, cell for cell,
+        /// on random maps (cells in and out of the grid, any reach).
+        #[test]
+        fn frontier_near_is_the_disk_test(
+            cells in proptest::collection::vec(0u8..3, 24 * 20),
+            reach in 0i32..7,
+            queries in proptest::collection::vec((-4i32..28, -4i32..24), 1..40),
+        ) {
+            let mut grid = OccupancyGrid::filled(
+                crate::grid::GridFrame::new(Vec2::zeros(), 0.05, 24, 20),
+                Occupancy::Unknown,
+            );
+            for (d, v) in grid.data.iter_mut().zip(&cells) {
+                *d = [Occupancy::Unknown, Occupancy::Free, Occupancy::Occupied][*v as usize];
+            }
+            let qs: Vec<Cell> = queries.iter().map(|&(x, y)| Cell::new(x, y)).collect();
+            let near = FrontierNear::new(&grid, qs.iter(), reach).unwrap();
+            for c in &qs {
+                let disk = (-reach..=reach).any(|dy| {
+                    (-reach..=reach).any(|dx| {
+                        dx * dx + dy * dy <= reach * reach
+                            && is_frontier_cell(&grid, Cell::new(c.x + dx, c.y + dy))
+                    })
+                });
+                prop_assert_eq!(near.at(*c), disk, "{:?}", c);
+            }
+        }
+    }
     use crate::geom::{Polygon, Vec2};
     use crate::layout::{LayoutRoom, RoomLabel};
 

@@ -61,15 +61,19 @@ impl Explorer<'_> {
                 LayoutRaster::new(&layout, grid, st.max_wall_gap_m)
             };
             raster.through_openings = st.gain_through_openings;
-            let predicted_unknown = grid
-                .data
-                .iter()
-                .enumerate()
-                .filter(|(i, s)| {
-                    **s == Occupancy::Unknown && raster.inside(self.map.frame.cell_of_index(*i))
-                })
-                .map(|(i, _)| i as u32)
-                .collect();
+            // Only the switch judges a layout by what it predicted (a scan of the whole map).
+            let predicted_unknown = if st.gain == GainModel::Switch {
+                grid.data
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, s)| {
+                        **s == Occupancy::Unknown && raster.inside(self.map.frame.cell_of_index(*i))
+                    })
+                    .map(|(i, _)| i as u32)
+                    .collect()
+            } else {
+                Vec::new()
+            };
             self.layouts_computed += 1;
             self.layout = Some(LayoutState {
                 raster,
@@ -94,7 +98,8 @@ impl Explorer<'_> {
 pub(super) struct LayoutState {
     pub(super) raster: LayoutRaster,
     pub(super) known_cells_at: usize,
-    /// Cells unknown when the layout was made that it predicted inside a room.
+    /// Cells unknown when the layout was made that it predicted inside a room (for the switch;
+    /// empty for other gains).
     pub(super) predicted_unknown: Vec<u32>,
     /// Its rooms as a policy that needs them sees them (else empty).
     pub(super) rooms: Vec<RoomView>,
