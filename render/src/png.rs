@@ -151,20 +151,28 @@ fn face() -> &'static FontRef<'static> {
     })
 }
 
-/// Width in pixels of `text` at `size_px` (advances and kerning).
-pub(crate) fn text_width_px(text: &str, size_px: f64) -> f64 {
+/// The glyphs of `text` at `size_px` and the pen position of each (advances and kerning),
+/// then the width of the whole text, in pixels.
+fn set_text(text: &str, size_px: f64) -> (Vec<(ab_glyph::GlyphId, f32)>, f32) {
     let font = face().as_scaled(PxScale::from(size_px as f32));
     let mut x = 0.0f32;
     let mut prev = None;
+    let mut glyphs = Vec::with_capacity(text.len());
     for c in text.chars() {
         let id = font.glyph_id(c);
         if let Some(p) = prev {
             x += font.kern(p, id);
         }
+        glyphs.push((id, x));
         x += font.h_advance(id);
         prev = Some(id);
     }
-    x as f64
+    (glyphs, x)
+}
+
+/// Width in pixels of `text` at `size_px`.
+pub(crate) fn text_width_px(text: &str, size_px: f64) -> f64 {
+    set_text(text, size_px).1 as f64
 }
 
 /// Anti-aliased text in DejaVu Sans, `size_px` high (em), from `x0`, vertically centred on `cy`.
@@ -176,16 +184,8 @@ fn draw_text(pixmap: &mut Pixmap, (x0, cy): (f32, f32), size_px: f64, color: Col
     let (w, h) = (pixmap.width() as i64, pixmap.height() as i64);
     let stride = pixmap.width() as usize;
     let pixels = pixmap.pixels_mut();
-    let mut x = 0.0f32;
-    let mut prev = None;
-    for c in text.chars() {
-        let id = font.glyph_id(c);
-        if let Some(p) = prev {
-            x += font.kern(p, id);
-        }
+    for (id, x) in set_text(text, size_px).0 {
         let glyph = id.with_scale_and_position(scale, point(x0 + x, baseline));
-        x += font.h_advance(id);
-        prev = Some(id);
         let Some(outline) = face().outline_glyph(glyph) else {
             continue; // a space
         };

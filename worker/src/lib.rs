@@ -365,6 +365,18 @@ fn bad_start_message(
     format!("{what} from {origin} {problem} in building {name}; {next}")
 }
 
+/// The repository's `buildings/small.toml`, for tests.
+#[cfg(test)]
+pub(crate) fn small_building() -> Building {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../buildings/small.toml"
+    ))
+    .unwrap();
+    floorcast_formats::building_toml::parse_building_toml(&text, std::path::Path::new("small.toml"))
+        .unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -406,16 +406,7 @@ mod tests {
     }
 
     fn fake(n_jobs: usize) -> Fake {
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../buildings/small.toml"
-        ))
-        .unwrap();
-        let b = floorcast_formats::building_toml::parse_building_toml(
-            &text,
-            std::path::Path::new("small.toml"),
-        )
-        .unwrap();
+        let b = crate::small_building();
         let jobs = (0..n_jobs)
             .map(|i| WireJob {
                 job_id: format!("job{i}"),

@@ -679,16 +679,7 @@ mod tests {
 
     #[test]
     fn buildings_cross_bit_exactly() {
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../buildings/small.toml"
-        ))
-        .unwrap();
-        let b = floorcast_formats::building_toml::parse_building_toml(
-            &text,
-            std::path::Path::new("small.toml"),
-        )
-        .unwrap();
+        let b = crate::small_building();
         let hash = b.content_hash();
         let wire = WireBuilding::from_building(&b);
         let back: WireBuilding =
