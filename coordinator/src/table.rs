@@ -532,6 +532,86 @@ pub struct Comparison {
     pub holm_p: Option<f64>,
     /// Cohen's d_z: the mean gain over its standard deviation.
     pub effect_size_dz: Option<f64>,
+    /// The other metrics, paired the same way over the successful runs (see [`METRICS`]).
+    pub metrics: BTreeMap<String, MetricGain>,
+}
+
+/// A paired comparison of one metric: per pair, the gain `(ref - x) / ref` in per cent for the
+/// metrics where lower is better, and `x - ref` in percentage points for the explored fraction.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct MetricGain {
+    pub pairs: usize,
+    pub mean: Option<f64>,
+    /// Student's t 95 % interval of the mean.
+    pub t_ci95: Option<[f64; 2]>,
+}
+
+/// The metrics compared besides the exploration time: name, and its value of a successful run
+/// (summary, progress CSV); all lower-is-better gains but the explored fraction's points.
+pub const METRICS: [&str; 6] = [
+    "time_to_90_s",
+    "time_to_95_s",
+    "time_to_99_s",
+    "unexplored_area_s",
+    "path_length_m",
+    "explored_fraction_points",
+];
+
+fn metric_of(name: &str, s: &RunSummary, progress_csv: &str) -> Option<f64> {
+    match name {
+        "time_to_90_s" => time_to_fraction(progress_csv, 0.90),
+        "time_to_95_s" => time_to_fraction(progress_csv, 0.95),
+        "time_to_99_s" => time_to_fraction(progress_csv, 0.99),
+        "unexplored_area_s" => unexplored_area_s(progress_csv),
+        "path_length_m" => Some(s.path_length_m),
+        "explored_fraction_points" => Some(s.explored_fraction * 100.0),
+        _ => None,
+    }
+}
+
+/// `name` of `label`'s successful runs in `subset` (those that have it), by pair key.
+fn metric_by_pair(subset: &[&StoredResult], label: &str, name: &str) -> BTreeMap<PairKey, f64> {
+    subset
+        .iter()
+        .filter(|r| r.label == label && r.status == "ok")
+        .filter_map(|r| {
+            let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
+            let v = metric_of(name, &s, r.progress_csv.as_deref().unwrap_or(""))?;
+            v.is_finite()
+                .then(|| ((r.building.clone(), r.seed, s.start.map(f64::to_bits)), v))
+        })
+        .collect()
+}
+
+/// The paired comparisons of every metric of [`METRICS`] of `label` with `reference`.
+fn metric_gains(
+    subset: &[&StoredResult],
+    label: &str,
+    reference: &str,
+) -> BTreeMap<String, MetricGain> {
+    METRICS
+        .iter()
+        .map(|name| {
+            let mine = metric_by_pair(subset, label, name);
+            let theirs = metric_by_pair(subset, reference, name);
+            let diffs: Vec<f64> = if *name == "explored_fraction_points" {
+                mine.iter()
+                    .filter_map(|(k, v)| Some(v - theirs.get(k)?))
+                    .collect()
+            } else {
+                paired_gains(&mine, &theirs)
+            };
+            let p = PairedGain::of(&diffs);
+            let gain = MetricGain {
+                pairs: diffs.len(),
+                mean: p.map(|p| p.mean_pct),
+                t_ci95: p
+                    .filter(|p| p.ci95_pct.is_finite())
+                    .map(|p| [p.mean_pct - p.ci95_pct, p.mean_pct + p.ci95_pct]),
+            };
+            (name.to_string(), gain)
+        })
+        .collect()
 }
 
 /// The comparisons of every label with `reference`, over all buildings and then per building,
@@ -576,6 +656,7 @@ pub fn comparisons(results: &[StoredResult], reference: &str) -> Vec<Comparison>
                 wilcoxon_p: crate::stats::wilcoxon_signed_rank_p(&gains),
                 holm_p: None,
                 effect_size_dz: crate::stats::effect_size_dz(&gains),
+                metrics: metric_gains(&subset, label, reference),
             });
         }
     }
@@ -1196,6 +1277,48 @@ mod tests {
             text.contains("+10.0 %") && !text.contains("gain '-'"),
             "{text}"
         );
+    }
+
+    /// The other metrics are paired like the time: a label whose path is 20 % shorter on every
+    /// seed and that explores 1 point less has those as its mean gains, with their pairs; times
+    /// to a fraction pair only the runs that reached it.
+    #[test]
+    fn other_metrics_are_paired_like_the_time() {
+        let run = |label: &str, seed: u64, path_m: f64, fraction: f64, progress: &str| {
+            let mut r = stored("a", label, seed, 100.0);
+            let mut v: serde_json::Value =
+                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            v["path_length_m"] = serde_json::json!(path_m);
+            v["explored_fraction"] = serde_json::json!(fraction);
+            r.summary_json = Some(v.to_string());
+            r.progress_csv = Some(format!(
+                "time_s,explored_area_m2,explored_fraction\n{progress}"
+            ));
+            r
+        };
+        let results = vec![
+            run("baseline", 1, 100.0, 1.0, "0,0,0\n50,9,0.9\n100,10,1\n"),
+            run("layout", 1, 80.0, 0.99, "0,0,0\n40,9,0.9\n100,10,0.99\n"),
+            run("baseline", 2, 200.0, 1.0, "0,0,0\n100,9,0.95\n"),
+            run("layout", 2, 160.0, 0.99, "0,0,0\n100,9,0.85\n"),
+        ];
+        let c = comparisons(&results, "baseline");
+        let overall = c
+            .iter()
+            .find(|c| c.label == "layout" && c.building.is_none())
+            .unwrap();
+        let m = &overall.metrics;
+        let close = |a: Option<f64>, b: f64| a.is_some_and(|a| (a - b).abs() < 1e-9);
+        assert_eq!(m["path_length_m"].pairs, 2);
+        assert!(close(m["path_length_m"].mean, 20.0), "{m:?}");
+        assert_eq!(m["path_length_m"].t_ci95, Some([20.0, 20.0]));
+        assert!(close(m["explored_fraction_points"].mean, -1.0), "{m:?}");
+        // Seed 1 reaches 90 % at 40 s against 50 s; seed 2's layout never does.
+        assert_eq!(m["time_to_90_s"].pairs, 1);
+        assert!(close(m["time_to_90_s"].mean, 20.0), "{m:?}");
+        assert_eq!(m["time_to_90_s"].t_ci95, None);
+        assert_eq!(m["time_to_99_s"].pairs, 1);
+        assert_eq!(m.len(), METRICS.len());
     }
 
     /// A stored run with its end class, explored fraction and start pose replaced.
