@@ -282,6 +282,7 @@ pub fn run(a: RunArgs) -> Result<()> {
                     "checked: {}",
                     match (counts.verified, counts.quarantined) {
                         (0, _) => "no result of a remote worker was run again here (none came, or --verify-fraction 0)".to_string(),
+                        (1, 0) => "1 result of a remote worker run again here, identical".to_string(),
                         (n, 0) => format!("{n} results of remote workers run again here, all identical"),
                         (n, q) => format!(
                             "{n} results of remote workers run again here; {q} worker(s) computed differently, their results were discarded and run again (see the log above)"

@@ -171,6 +171,11 @@ fn two_worker_processes_complete_a_grid() {
     assert!(okc, "{outc}");
     assert!(out1.contains("grid complete") && out2.contains("grid complete"));
     assert!(outc.contains("done: 6 jobs run now"), "{outc}");
+    // Each worker's first result was run again on the coordinator, and matched.
+    assert!(
+        outc.contains("checked: ") && outc.contains("run again here, all identical"),
+        "{outc}"
+    );
     let rows = assert_each_job_once(&res);
     // Both took part.
     assert!(rows.iter().any(|(_, w)| w == "w1") && rows.iter().any(|(_, w)| w == "w2"));
