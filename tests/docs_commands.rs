@@ -52,6 +52,7 @@ const NOT_RUN: &[(&str, Check)] = &[
     ("run grids/paper-alpha.toml", Check::LongGrid("grids/paper-alpha.toml", 90)),
     ("run grids/paper-clearance.toml", Check::LongGrid("grids/paper-clearance.toml", 90)),
     ("run grids/schools.toml", Check::LongGrid("grids/schools.toml", 99)),
+    ("run grids/paper-gaps.toml", Check::LongGrid("grids/paper-gaps.toml", 100)),
     ("run grids/starts.toml", Check::LongGrid("grids/starts.toml", 600)),
     (
         "run grids/paper.toml --listen tcp/0.0.0.0:7447 --workers 0",
@@ -93,8 +94,9 @@ const NOT_RUN: &[(&str, Check)] = &[
     ),
 ];
 
-/// At most this many printed commands may be left unrun.
-const MAX_NOT_RUN: usize = 21;
+/// At most this many printed commands may be left unrun (each reference grid's `run` line is
+/// one: they take minutes to hours and are planned instead).
+const MAX_NOT_RUN: usize = 22;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
