@@ -2,7 +2,8 @@
 //!
 //! `cargo run --release -p sim-core --example explore_bench -- [seed] [area_m2] [office|clutter|rot]...`
 //! prints, per run, the simulated time, the wall time, the speed-up (simulated seconds per wall
-//! second), exploration quality, and the pose error of the SLAM estimate. The baseline in the same
+//! second), exploration quality, the pose error of the SLAM estimate, the run's fingerprint and
+//! the process's peak memory (Linux). The baseline in the same
 //! run is real time (speed-up 1) and the same exploration with the odometry-only localization
 //! (no scan matching), which isolates the cost of the matcher (with `baseline`). Settings to
 //! try: `upd=D,R,T` (map update after D m, R rad or T s) and `redecide=S` (the re-decision
@@ -25,6 +26,20 @@ fn pose_errors(r: &RunResult) -> (f64, f64) {
         max_th = max_th.max(d.theta_rad.abs());
     }
     (max_xy, max_th.to_degrees())
+}
+
+/// The process's peak resident memory (`VmHWM` of `/proc/self/status`), in MB.
+fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb / 1024.0)
 }
 
 fn main() {
@@ -102,6 +117,10 @@ fn main() {
         // A fingerprint of the run (every pose, decision, progress sample and map cell), so
         // that a change meant to be only faster can be checked to leave the run bit-identical.
         println!("  fingerprint {}", r.fingerprint());
+        println!(
+            "  peak memory of the process so far {}",
+            peak_rss_mb().map_or("n/a (Linux only)".to_string(), |m| format!("{m:.0} MB"))
+        );
         if has("trace") {
             // Wrong occupied cells by their distance to solid space.
             let truth = building.reachable_free(r.map.frame, start.position());
