@@ -10,8 +10,25 @@ use floorcast_worker::{GivenStart, Job};
 use crate::grid::{Plan, PlannedJob};
 use crate::store::StoredResult;
 
-/// A planned job as it is handed to a remote worker.
+/// A planned job as it is handed to a remote worker: [`identity`] with its program's files.
 pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
+    WireJob {
+        program: job.program.as_ref().map(|p| {
+            let empty = Vec::new();
+            let contents = plan
+                .program_files
+                .get(&p.files_sha256)
+                .map_or(&empty, |c| c.as_ref());
+            WireProgram::new(p, contents)
+        }),
+        ..identity(plan, job)
+    }
+}
+
+/// A planned job's wire form without its program's files: what a report of it is checked
+/// against ([`floorcast_worker::wire::check_report`]), for every result, without encoding the
+/// files each time.
+pub fn identity(plan: &Plan, job: &PlannedJob) -> WireJob {
     let b = &plan.buildings[job.building];
     WireJob {
         job_id: job.id.clone(),
@@ -26,14 +43,7 @@ pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
             pose: [s.pose.x_m, s.pose.y_m, s.pose.theta_rad],
             source: s.source.clone(),
         }),
-        program: job.program.as_ref().map(|p| {
-            let empty = Vec::new();
-            let contents = plan
-                .program_files
-                .get(&p.files_sha256)
-                .map_or(&empty, |c| c.as_ref());
-            WireProgram::new(p, contents)
-        }),
+        program: None,
     }
 }
 

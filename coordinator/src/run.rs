@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use tokio::sync::oneshot;
 
-use crate::execute::{execute, row, wire_job};
+use crate::execute::{execute, identity, row};
 use crate::grid::{Plan, PlannedJob};
 use crate::inbox::{Answer, Inbox, InboxSender, RemoteWorkers, LOCAL};
 use crate::schedule::{Grant, Note, Renewal, RequeueReason, Scheduler, Verdict};
@@ -305,7 +305,7 @@ pub fn run_plan(
                     // The row's identity comes from the plan; the report is checked against
                     // the job first.
                     let result = match jobs.get(&job_id) {
-                        Some(j) => match check_report(&report, &wire_job(&plan, j)) {
+                        Some(j) => match check_report(&report, &identity(&plan, j)) {
                             Ok(()) => Some(row(&plan, j, &worker, &report)),
                             Err(reason) => {
                                 on_log(&format!(

@@ -383,7 +383,7 @@ mod tests {
         assert_eq!(tick_step(3000.0, 6.0), 500.0);
         assert_eq!(tick_step(40.0, 5.0), 10.0);
         assert_eq!(tick_step(0.0, 5.0), 1.0);
-        assert_eq!(tick_text(-1e-13, 0.2), "0.00".replace(".00", ".0"));
+        assert_eq!(tick_text(-1e-13, 0.2), "0.0");
         assert_eq!(tick_text(-5.0, 5.0), "-5");
     }
 
@@ -445,9 +445,26 @@ mod tests {
         let svg = bars.figure().to_svg();
         assert!(svg.contains(">a<") && svg.contains(">b<"), "{svg}");
         assert!(!bars.figure().to_png().is_empty());
-        let grouped = IntervalChart { bars: true, ..bars };
-        let points = grouped.clone().figure().items.len();
-        assert!(!grouped.figure().to_png().is_empty());
-        assert!(points > 0);
+        // As bars: the point at the mean becomes a filled bar (a closed path) from zero.
+        let grouped = IntervalChart {
+            bars: true,
+            ..bars.clone()
+        };
+        let circles = |f: &Figure| {
+            f.items
+                .iter()
+                .filter(|i| matches!(i, crate::Item::Circle { .. }))
+                .count()
+        };
+        let closed = |f: &Figure| {
+            f.items
+                .iter()
+                .filter(|i| matches!(i, crate::Item::Path { closed: true, .. }))
+                .count()
+        };
+        let (as_points, as_bars) = (bars.figure(), grouped.figure());
+        assert_eq!((circles(&as_points), circles(&as_bars)), (1, 0));
+        assert_eq!(closed(&as_bars), closed(&as_points) + 1);
+        assert!(!as_bars.to_png().is_empty());
     }
 }

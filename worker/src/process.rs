@@ -432,10 +432,11 @@ mod tests {
         }
     }
 
-    /// An executor that runs nothing: a failure "not run" after 150 ms (half the lease, so
-    /// that leases get renewed), or a panic for seed 1.
+    /// An executor that runs nothing: a failure "not run" after 250 ms (the lease is 300 ms
+    /// and renewed every 100 ms, so each job's lease is renewed at least once even on a busy
+    /// machine), or a panic for seed 1.
     fn exec(job: &WireJob, _: &Building) -> JobReport {
-        std::thread::sleep(Duration::from_millis(150));
+        std::thread::sleep(Duration::from_millis(250));
         assert_ne!(job.seed, 1, "a bug in the job");
         JobReport::failed("not run")
     }
