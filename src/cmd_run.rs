@@ -195,7 +195,8 @@ pub fn run(a: RunArgs) -> Result<()> {
             }) as Arc<dyn RemoteWorkers>
         }),
         lease_s: a.lease_s,
-        verify_fraction: if networked { a.verify_fraction } else { 0.0 },
+        // Without remote workers nothing is checked (`run_plan` starts no verifier).
+        verify_fraction: a.verify_fraction,
         ..RunOptions::default()
     };
     store.record_run(&provenance(

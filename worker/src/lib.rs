@@ -2,10 +2,11 @@
 //! settings, producing a versioned run record ([`record::RunSummary`]) plus the in-memory result,
 //! and the worker process that takes jobs from a coordinator.
 //!
-//! - [`run_job`]: one job, in memory; [`execute`]: one job into the row that identifies it.
+//! - [`run_job`]: one job, in memory; [`execute`]: one job into its report (the typed outcome a
+//!   worker returns).
 //! - [`process`]: the worker process's loop (ask, run, renew, submit), over a link to the
 //!   coordinator that the caller supplies (it knows no transport).
-//! - [`wire`]: the versioned messages between coordinator and workers, and the job row.
+//! - [`wire`]: the versioned messages between coordinator and workers.
 //! - [`settings`], [`record`], [`external`]: the settings, the run record, external strategies.
 //!
 //! This crate measures wall time and knows the floorcast version; the simulation itself is
