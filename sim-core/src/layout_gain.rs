@@ -14,7 +14,6 @@
 //! shapes of rooms seen through a door are often cut short by the wall lines of other rooms), so
 //! the explorer orders candidates by this gain and keeps the paper's `I(p)` for early stopping.
 
-use crate::frontier::detect::is_frontier_cell;
 use crate::gain::visible_area_indexed;
 use crate::grid::{Bitmap, Cell, Grid, Occupancy, OccupancyGrid};
 use crate::layout::{Layout, RoomLabel};
@@ -45,10 +44,29 @@ impl LayoutRaster {
     /// Rasterises `layout` on the frame of `grid`; walls close gaps of up to `max_wall_gap_m`.
     pub fn new(layout: &Layout, grid: &OccupancyGrid, max_wall_gap_m: f64) -> Self {
         let (walls, room) = Self::rasterise(layout, grid);
-        let open = layout
+        // The closed edges' cells of the rooms not open by their label, and one table of the
+        // frontier cells near all of them (a room's answers do not depend on the box it is
+        // read from, as long as the box holds the room's cells).
+        let edges: Vec<Option<Vec<Vec<Cell>>>> = layout
             .rooms
             .iter()
-            .map(|r| r.label == RoomLabel::Open || crosses_frontier(r, grid, max_wall_gap_m))
+            .map(|r| {
+                (r.label != RoomLabel::Open).then(|| {
+                    let mut edges = Vec::new();
+                    for_closed_edge_cells(r, grid.frame, |cells| edges.push(cells.to_vec()));
+                    edges
+                })
+            })
+            .collect();
+        let reach = (FRONTIER_REACH_M / grid.frame.resolution_m).ceil() as i32;
+        let near = FrontierNear::new(grid, edges.iter().flatten().flatten().flatten(), reach);
+        let open = edges
+            .iter()
+            .map(|e| match (e, &near) {
+                (None, _) => true,
+                (Some(e), Some(near)) => crosses_frontier(e, grid, max_wall_gap_m, near),
+                (Some(_), None) => false,
+            })
             .collect();
         let gap_walls = gap_walls(layout, grid, max_wall_gap_m);
         Self {
@@ -123,26 +141,21 @@ impl LayoutRaster {
 /// seeing into (e.g. a corridor cut near the end of the laser's reach by another room's wall
 /// line), so the room's frontier is open, as if the edge were on the box. An unseen stretch of
 /// wall next to the corner of a frontier (a room seen through its side) keeps the room closed.
+/// `edges` are the cells of the room's edges off the box ([`for_closed_edge_cells`]), and
+/// `frontier_near` was made for a box holding them, with a reach of [`FRONTIER_REACH_M`].
 fn crosses_frontier(
-    room: &crate::layout::LayoutRoom,
+    edges: &[Vec<Cell>],
     grid: &OccupancyGrid,
     max_gap_m: f64,
+    frontier_near: &FrontierNear,
 ) -> bool {
-    const FRONTIER_REACH_M: f64 = 0.5;
-    let frame = grid.frame;
     let max_gap = if max_gap_m.is_finite() && max_gap_m > 0.0 {
-        (max_gap_m / frame.resolution_m).ceil() as usize
+        (max_gap_m / grid.frame.resolution_m).ceil() as usize
     } else {
         0
     };
-    let reach = (FRONTIER_REACH_M / frame.resolution_m).ceil() as i32;
-    let mut edges: Vec<Vec<Cell>> = Vec::new();
-    for_closed_edge_cells(room, frame, |cells| edges.push(cells.to_vec()));
-    let Some(frontier_near) = FrontierNear::new(grid, edges.iter().flatten(), reach) else {
-        return false;
-    };
     let mut crosses = false;
-    for cells in &edges {
+    for cells in edges {
         // Length of the current stretch of cells with no wall near and a frontier near.
         let mut run = 0usize;
         for c in cells {
@@ -156,6 +169,10 @@ fn crosses_frontier(
     }
     crosses
 }
+
+/// How far a frontier may be from a room's edge for the edge to cross it (see
+/// [`crosses_frontier`]).
+const FRONTIER_REACH_M: f64 = 0.5;
 
 /// Whether a frontier cell lies within `reach` cells (`dx² + dy² <= reach²`) of a cell, for the
 /// cells of a box: per row of the box (the cells' bounding box grown by `reach`), the horizontal
@@ -192,26 +209,41 @@ impl FrontierNear {
         let width = (x1 - x0 + 1) as usize;
         let height = (y1 - y0 + 1) as usize;
         let mut distance = vec![u32::MAX; width * height];
-        for (r, row) in distance.chunks_exact_mut(width).enumerate() {
-            let y = y0 + r as i32;
-            // Nearest frontier cell to the left, then to the right.
-            let mut last: Option<usize> = None;
-            for (k, d) in row.iter_mut().enumerate() {
-                if is_frontier_cell(grid, Cell::new(x0 + k as i32, y)) {
-                    last = Some(k);
-                }
-                if let Some(l) = last {
-                    *d = (k - l) as u32;
-                }
+        let (w, h) = (grid.frame.width as i64, grid.frame.height as i64);
+        let data = &grid.data;
+        // `frontier::detect::is_frontier_cell`, with one bounds test for the cell.
+        let frontier = |x: i64, y: i64| -> bool {
+            if x < 0 || y < 0 || x >= w || y >= h {
+                return false;
             }
-            let mut next: Option<usize> = None;
-            for k in (0..width).rev() {
-                if row[k] == 0 {
-                    next = Some(k);
+            let i = (y * w + x) as usize;
+            let unknown = |j: usize| data[j] == Occupancy::Unknown;
+            data[i] == Occupancy::Free
+                && ((x > 0 && unknown(i - 1))
+                    || (x + 1 < w && unknown(i + 1))
+                    || (y > 0 && unknown(i - w as usize))
+                    || (y + 1 < h && unknown(i + w as usize)))
+        };
+        // Distances beyond the box are never read as within reach: `FAR` stands for none.
+        const FAR: i64 = u32::MAX as i64;
+        for (r, row) in distance.chunks_exact_mut(width).enumerate() {
+            let y = (y0 + r as i32) as i64;
+            // Nearest frontier cell to the left, then to the right.
+            let mut last = -FAR;
+            for (k, d) in row.iter_mut().enumerate() {
+                let k = k as i64;
+                if frontier(x0 as i64 + k, y) {
+                    last = k;
                 }
-                if let Some(n) = next {
-                    row[k] = row[k].min((n - k) as u32);
+                *d = (k - last).min(FAR) as u32;
+            }
+            let mut next = 2 * FAR;
+            for (k, d) in row.iter_mut().enumerate().rev() {
+                let k = k as i64;
+                if *d == 0 {
+                    next = k;
                 }
+                *d = (*d as i64).min(next - k).min(FAR) as u32;
             }
         }
         Some(Self {
@@ -354,6 +386,7 @@ pub fn gap_closed_information_gain(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frontier::detect::is_frontier_cell;
     use crate::gain::information_gain;
     use proptest::prelude::*;
 

@@ -81,17 +81,16 @@ impl Explorer<'_> {
             });
             let gain_m2 = if distance_m.is_some() {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
+                let (c, now) = (f.candidate, self.scans);
                 match (&self.layout, use_layout) {
                     (Some(l), true) if cfg.strategy.rank_by_predicted_rooms => {
-                        self.room_gains.gain(f.candidate, range_m, self.scans, || {
-                            layout_information_gain(grid, &l.raster, f.candidate, range_m)
-                        })
+                        layout_gain_cached(&mut self.gains, grid, &l.raster, c, range_m, now)
                     }
-                    (Some(l), true) => self.gains.gain(f.candidate, range_m, self.scans, || {
-                        gap_closed_information_gain(grid, &l.raster, f.candidate, range_m)
+                    (Some(l), true) => self.gains.gain(GainKind::GapClosed, c, range_m, now, || {
+                        gap_closed_information_gain(grid, &l.raster, c, range_m)
                     }),
-                    _ => self.gains.gain(f.candidate, range_m, self.scans, || {
-                        information_gain(grid, f.candidate, range_m)
+                    _ => self.gains.gain(GainKind::Plain, c, range_m, now, || {
+                        information_gain(grid, c, range_m)
                     }),
                 }
             } else {
@@ -474,9 +473,14 @@ impl Explorer<'_> {
             let layout_gain_m2 = match (&self.layout, layout_gain) {
                 (Some(l), true) => {
                     let grid = &self.map.occupancy;
-                    Some(self.room_gains.gain(f.candidate, range_m, self.scans, || {
-                        layout_information_gain(grid, &l.raster, f.candidate, range_m)
-                    }))
+                    Some(layout_gain_cached(
+                        &mut self.gains,
+                        grid,
+                        &l.raster,
+                        f.candidate,
+                        range_m,
+                        self.scans,
+                    ))
                 }
                 _ => None,
             };
@@ -711,4 +715,26 @@ pub(super) fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<V
         }
     }
     (n > 0).then(|| sum / n as f64)
+}
+
+/// The paper's `I(p)` ([`layout_information_gain`]) through the cache: a candidate the layout
+/// leaves with the plain gain (in a room with an open frontier, or outside every room) reads the
+/// plain gain, which a new layout does not make stale.
+pub(super) fn layout_gain_cached(
+    gains: &mut GainCache,
+    grid: &OccupancyGrid,
+    raster: &LayoutRaster,
+    p: Cell,
+    range_m: f64,
+    now: u64,
+) -> f64 {
+    if raster.uses_baseline(p) {
+        gains.gain(GainKind::Plain, p, range_m, now, || {
+            information_gain(grid, p, range_m)
+        })
+    } else {
+        gains.gain(GainKind::Rooms, p, range_m, now, || {
+            layout_information_gain(grid, raster, p, range_m)
+        })
+    }
 }

@@ -82,9 +82,8 @@ impl Explorer<'_> {
                 rooms,
                 number: self.layouts_computed,
             });
-            // Cached gains were computed with the previous layout.
-            self.gains.clear();
-            self.room_gains.clear();
+            // Cached layout gains were computed with the previous layout.
+            self.gains.clear_layout_gains();
         }
         match st.gain {
             GainModel::Baseline => false,

@@ -98,11 +98,10 @@ impl Explorer<'_> {
         self.walls_changed |= !flips.is_empty();
         self.obstacles.update(&self.map.occupancy, &flips);
         let free_changes = self.map.take_free_changes();
-        // (The room-bounded gains too: the layout they are computed with changes less often
-        // than the map, and clears them when it does.)
+        // (The layout gains too: the layout they are computed with changes less often than the
+        // map, and clears them when it does.)
         for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
             self.gains.touch(i, self.scans);
-            self.room_gains.touch(i, self.scans);
         }
         self.frontiers.update(
             &self.map.occupancy,

@@ -62,7 +62,7 @@ pub use strategy::{EarlyStop, GainModel, Strategy};
 
 use self::calibration::OdometryCalibration;
 use self::decision::*;
-use self::gain_cache::GainCache;
+use self::gain_cache::{GainCache, GainKind};
 use self::layout_state::*;
 use self::navigation::*;
 use self::referee::*;
@@ -456,9 +456,9 @@ struct Explorer<'a> {
     scans: u64,
     matches_accepted: u64,
     plans: u64,
+    /// Candidates' gains of every kind (the paper's room-bounded `I(p)` for ranking and early
+    /// stopping among them).
     gains: GainCache,
-    /// The paper's room-bounded `I(p)` of candidates, for early stopping.
-    room_gains: GainCache,
     next_progress_s: f64,
     /// Cells of the map that are known (free or occupied), counted from the map's own changes.
     known_cells: usize,
@@ -682,7 +682,6 @@ pub fn explore_with<'a>(
         matches_accepted: 0,
         plans: 0,
         gains: GainCache::new(frame),
-        room_gains: GainCache::new(frame),
         next_progress_s: 0.0,
         known_cells: 0,
         layout: None,
