@@ -132,9 +132,10 @@ pub fn known_box(grid: &OccupancyGrid) -> (Option<(Cell, Cell)>, usize) {
     // vector instructions; most of a map is unknown.)
     const K: usize = 64;
     let known_in = |cells: &[Occupancy]| {
+        // (At most `K` cells: the count fits a byte, so byte lanes add it.)
         cells
             .iter()
-            .fold(0usize, |n, s| n + (*s != Occupancy::Unknown) as usize)
+            .fold(0u8, |n, s| n + (*s != Occupancy::Unknown) as u8) as usize
     };
     for (y, row) in grid.data.chunks_exact(w).enumerate() {
         let Some((b, _)) = row.chunks(K).enumerate().find(|(_, c)| known_in(c) > 0) else {
