@@ -37,6 +37,8 @@ impl Explorer<'_> {
                     self.layout_trusted = true;
                 }
             }
+            // (Dropped before the next is made: two rasters of a large map are tens of MB.)
+            self.layout = None;
             // The rooms a policy is shown: only a layout predicted from the map.
             let mut rooms = Vec::new();
             let mut raster = if st.layout_from_truth {
