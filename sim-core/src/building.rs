@@ -569,11 +569,25 @@ pub fn explorable_free(
         frame,
         data: reachable.data.iter().map(|f| !f).collect(),
     };
-    let dist = distance_to(&solid);
     let need_cells = robot_radius_m / res + std::f64::consts::FRAC_1_SQRT_2;
+    // A cell is roomy when its distance to solid space, as `distance_to` gives it, is at least
+    // `need_cells`. Distances grow with squared distances (whole numbers of cells²), so that is
+    // when no solid cell lies nearer than the smallest squared distance whose distance is that
+    // much; the distance transform decides when that is beyond `MAX_WINDOW_SQ`.
+    let roomy_sq = (0..=MAX_WINDOW_SQ).find(|&d2| distance_of_sq(d2) >= need_cells);
     let roomy = Bitmap {
         frame,
-        data: dist.data.iter().map(|&d| d as f64 >= need_cells).collect(),
+        data: match roomy_sq {
+            Some(t) => within_sq(&solid, t.checked_sub(1))
+                .into_iter()
+                .map(|near| !near)
+                .collect(),
+            None => distance_to(&solid)
+                .data
+                .iter()
+                .map(|&d| d as f64 >= need_cells)
+                .collect(),
+        },
     };
     let start_cell = frame.cell_from_world(start);
     let seed = if roomy.get(start_cell) == Some(&true) {
@@ -598,15 +612,27 @@ pub fn explorable_free(
     };
     let drivable = flood_fill(&roomy, seed);
     // Seen from inside the disc: within the body's radius of a drivable cell.
-    let to_drivable = distance_to(&drivable);
     let body_cells = robot_radius_m / res;
-    let mut seen = Bitmap {
-        frame,
-        data: to_drivable
+    // As for `roomy`: the squared distances whose distances are at most `body_cells` are those
+    // up to the largest such (none when even 0 is not).
+    let within: Vec<bool> = if distance_of_sq(MAX_WINDOW_SQ) <= body_cells {
+        distance_to(&drivable)
             .data
             .iter()
+            .map(|&d| (d as f64) <= body_cells)
+            .collect()
+    } else {
+        let body_sq = (0..=MAX_WINDOW_SQ)
+            .take_while(|&d2| distance_of_sq(d2) <= body_cells)
+            .last();
+        within_sq(&drivable, body_sq)
+    };
+    let mut seen = Bitmap {
+        frame,
+        data: within
+            .iter()
             .zip(&reachable.data)
-            .map(|(&d, &f)| f && (d as f64) <= body_cells)
+            .map(|(&near, &f)| f && near)
             .collect(),
     };
     // Rays from the drivable region's boundary.
@@ -621,33 +647,318 @@ pub fn explorable_free(
             [a.cos() * range_cells, a.sin() * range_cells]
         })
         .collect();
+    // What a ray does on entering a cell, on the frame padded by a cell on every side (a ray
+    // stops at the frame's edge): pass on, stop before it, or mark it and stop (narrow).
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let pw = w + 2;
+    let mut class = vec![RAY_STOP; pw * (h + 2)];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            class[(y + 1) * pw + x + 1] = if !reachable.data[i] || drivable.data[i] {
+                RAY_STOP
+            } else if narrow.data[i] {
+                RAY_LAST
+            } else {
+                RAY_PASS
+            };
+        }
+    }
+    let mut marked = vec![false; class.len()];
+    let padded = |(dx, dy): (i32, i32)| dx as isize + dy as isize * pw as isize;
+    // Most directions walk the same way from every start (`uniform_walk`): their walks, as
+    // steps on the padded frame, grouped by the first step (in the order of
+    // `Cell::neighbours4`). A ray marks nothing unless its first step lands on a cell it may
+    // pass, so a start walks only the groups whose first cell is in the frame, reachable and
+    // not drivable.
+    let limit = frame.width.max(frame.height) as f64 + 1.0;
+    let mut by_step: [WalkTree; 4] = Default::default();
+    let mut keyed: Vec<usize> = Vec::new();
+    for (k, d) in dirs.iter().enumerate() {
+        match uniform_walk(*d, limit) {
+            Some(walk) => {
+                if let Some(&first) = walk.first() {
+                    let n = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                        .iter()
+                        .position(|&s| s == first)
+                        .expect("a walk steps to a 4-neighbour");
+                    by_step[n].insert(walk.into_iter().map(padded));
+                }
+            }
+            None => keyed.push(k),
+        }
+    }
+    let by_step = by_step.map(|t| t.preorder());
+    // The walk of the others from the centre of a cell depends only on the end point's offset
+    // from the start in cells and on the extent `b - a` `SegmentCells` computes (the start's
+    // fraction is always one half): each direction keeps the walks it has met under that key.
+    type Key = (i32, i32, u64, u64);
+    const WALKS_PER_DIRECTION: usize = 64;
+    let mut walks: Vec<Vec<(Key, Vec<isize>)>> = vec![Vec::new(); RAYS];
+    let mut steps = Vec::new();
     for i in 0..drivable.data.len() {
         if !drivable.data[i] {
             continue;
         }
         let c = frame.cell_of_index(i);
-        if c.neighbours4()
-            .iter()
-            .all(|&n| drivable.get(n) == Some(&true))
-        {
+        let open = c.neighbours4().map(|n| {
+            frame
+                .index(n)
+                .is_some_and(|j| reachable.data[j] && !drivable.data[j])
+        });
+        if !open.contains(&true) {
+            // Every ray stops at its first step (the region, solid space or the frame's edge).
             continue;
         }
-        let a = [c.x as f64 + 0.5, c.y as f64 + 0.5];
-        for d in &dirs {
-            let b = [a[0] + d[0], a[1] + d[1]];
-            for cell in crate::mapping::ray::SegmentCells::new(a, b).skip(1) {
-                let Some(j) = frame.index(cell) else { break };
-                if !reachable.data[j] || drivable.data[j] {
-                    break;
-                }
-                seen.data[j] = true;
-                if narrow.data[j] {
-                    break;
+        let start = (c.y as usize + 1) * pw + c.x as usize + 1;
+        for (group, _) in by_step.iter().zip(open).filter(|(_, o)| *o) {
+            // The walks' cells in preorder, each with the index past its subtree: a cell is
+            // entered when every cell before it on its walk was passed.
+            let mut n = 0;
+            while n < group.len() {
+                let (offset, past) = group[n];
+                let j = start.wrapping_add_signed(offset);
+                n = match class[j] {
+                    RAY_PASS => {
+                        marked[j] = true;
+                        n + 1
+                    }
+                    RAY_LAST => {
+                        marked[j] = true;
+                        past
+                    }
+                    _ => past,
+                };
+            }
+        }
+        for &k in &keyed {
+            let a = [c.x as f64 + 0.5, c.y as f64 + 0.5];
+            let b = [a[0] + dirs[k][0], a[1] + dirs[k][1]];
+            if !(b[0].is_finite() && b[1].is_finite()) {
+                // No cells at all.
+                continue;
+            }
+            let key = (
+                crate::geom::floor_i32(b[0]).wrapping_sub(c.x),
+                crate::geom::floor_i32(b[1]).wrapping_sub(c.y),
+                (b[0] - a[0]).to_bits(),
+                (b[1] - a[1]).to_bits(),
+            );
+            match walks[k].iter().find(|(kk, _)| *kk == key) {
+                Some((_, walk)) => mark_along(&class, &mut marked, start, walk),
+                None => {
+                    steps.clear();
+                    let mut prev = c;
+                    for cell in crate::mapping::ray::SegmentCells::new(a, b).skip(1) {
+                        steps.push(padded((cell.x - prev.x, cell.y - prev.y)));
+                        prev = cell;
+                    }
+                    mark_along(&class, &mut marked, start, &steps);
+                    if walks[k].len() < WALKS_PER_DIRECTION {
+                        walks[k].push((key, steps.clone()));
+                    }
                 }
             }
         }
     }
+    for y in 0..h {
+        for x in 0..w {
+            if marked[(y + 1) * pw + x + 1] {
+                seen.data[y * w + x] = true;
+            }
+        }
+    }
     seen
+}
+
+/// The largest squared distance (in cells²) [`within_sq`] is used for; beyond it
+/// [`explorable_free`] takes the distance transform.
+const MAX_WINDOW_SQ: u64 = 64 * 64;
+
+/// The distance (in cells) of a squared distance, rounded as [`distance_to`] rounds it.
+fn distance_of_sq(d2: u64) -> f64 {
+    (d2 as f64).sqrt() as f32 as f64
+}
+
+/// For every cell of `mask`'s frame (row-major), whether a true cell of `mask` lies at a
+/// squared distance (in cells², between centres) of at most `t` (none for `None`): the
+/// distance along its column to the nearest true cell, capped beyond `sqrt(t)`, then the
+/// nearest over the columns within `sqrt(t)`.
+fn within_sq(mask: &Bitmap, t: Option<u64>) -> Vec<bool> {
+    let (w, h) = (mask.frame.width as usize, mask.frame.height as usize);
+    let Some(t) = t.filter(|_| w * h > 0) else {
+        return vec![false; w * h];
+    };
+    // The largest r with r * r <= t.
+    let r = (0..=t).take_while(|&r| r * r <= t).last().unwrap_or(0) as usize;
+    let cap = r as u32 + 1;
+    // Down the columns, then up: the distance to the nearest true cell along the column.
+    let mut g: Vec<u32> = mask.data.iter().map(|&m| if m { 0 } else { cap }).collect();
+    for y in 1..h {
+        let (above, row) = g.split_at_mut(y * w);
+        for (v, &a) in row[..w].iter_mut().zip(&above[(y - 1) * w..]) {
+            *v = (*v).min(a + 1);
+        }
+    }
+    for y in (0..h - 1).rev() {
+        let (row, below) = g.split_at_mut((y + 1) * w);
+        for (v, &b) in row[y * w..].iter_mut().zip(&below[..w]) {
+            *v = (*v).min(b + 1);
+        }
+    }
+    // Squared, then along the rows: a true cell within `t` lies in a column `dx <= r` away.
+    for v in &mut g {
+        *v *= *v;
+    }
+    let mut out = vec![false; w * h];
+    for (row, near) in g.chunks_exact(w).zip(out.chunks_exact_mut(w)) {
+        for dx in 0..=r.min(w - 1) {
+            let limit = (t - (dx * dx) as u64) as u32;
+            for (n, &v) in near[..w - dx].iter_mut().zip(&row[dx..]) {
+                *n |= v <= limit;
+            }
+            for (n, &v) in near[dx..].iter_mut().zip(&row[..w - dx]) {
+                *n |= v <= limit;
+            }
+        }
+    }
+    out
+}
+
+/// What a ray of [`explorable_free`] does on entering a cell: pass on, stop before it, or mark
+/// it and stop.
+const RAY_PASS: u8 = 0;
+const RAY_STOP: u8 = 1;
+const RAY_LAST: u8 = 2;
+
+/// Marks the cells a ray from `start` enters by the steps of `walk` (index offsets on the
+/// frame of `class`), up to where `class` stops it.
+fn mark_along(class: &[u8], marked: &mut [bool], start: usize, walk: &[isize]) {
+    let mut j = start;
+    for &s in walk {
+        j = j.wrapping_add_signed(s);
+        match class[j] {
+            RAY_PASS => marked[j] = true,
+            RAY_LAST => {
+                marked[j] = true;
+                break;
+            }
+            _ => break,
+        }
+    }
+}
+
+/// Walks from one start merged where they share their first steps: a tree whose nodes are
+/// cells (index offsets from the start) and whose root is the start.
+#[derive(Debug, Default)]
+struct WalkTree {
+    /// Per node: its offset from the start and its children.
+    nodes: Vec<(isize, Vec<usize>)>,
+}
+
+impl WalkTree {
+    /// Adds the walk taking the steps `steps` (index offsets from cell to cell).
+    fn insert(&mut self, steps: impl IntoIterator<Item = isize>) {
+        if self.nodes.is_empty() {
+            self.nodes.push((0, Vec::new()));
+        }
+        let mut node = 0;
+        for step in steps {
+            let offset = self.nodes[node].0 + step;
+            node = match self.nodes[node]
+                .1
+                .iter()
+                .copied()
+                .find(|&c| self.nodes[c].0 == offset)
+            {
+                Some(c) => c,
+                None => {
+                    self.nodes.push((offset, Vec::new()));
+                    let c = self.nodes.len() - 1;
+                    self.nodes[node].1.push(c);
+                    c
+                }
+            };
+        }
+    }
+
+    /// The nodes below the root in preorder, each as its offset and the position past its
+    /// subtree in that order.
+    fn preorder(&self) -> Vec<(isize, usize)> {
+        let mut out: Vec<(isize, usize)> = Vec::new();
+        // (node, position of its entry in `out` once its subtree is done)
+        let mut stack: Vec<(usize, Option<usize>)> = self
+            .nodes
+            .first()
+            .map(|root| root.1.iter().rev().map(|&c| (c, None)).collect())
+            .unwrap_or_default();
+        while let Some((node, done)) = stack.pop() {
+            match done {
+                Some(at) => out[at].1 = out.len(),
+                None => {
+                    out.push((self.nodes[node].0, 0));
+                    stack.push((node, Some(out.len() - 1)));
+                    stack.extend(self.nodes[node].1.iter().rev().map(|&c| (c, None)));
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The walk of [`crate::mapping::ray::SegmentCells`] from the centre of a cell to that centre
+/// plus `d`, as the steps from cell to cell, when it is the same from the centre of every cell
+/// with coordinates from 0 to below `limit`; `None` when it may depend on the cell.
+///
+/// From the centre `a` of a cell, the walk ends at the cell of `a + d` and steps along the axis
+/// whose next cell boundary comes first: after `n` steps along an axis, the next boundary is
+/// `(n + 1/2) / |extent|` of the way along. With coordinates below 2^24 and extents below
+/// 10^6 cells, the rounding of `b = a + d`, of the extent `b - a` that `SegmentCells` computes
+/// and of its running sums changes the end point by less than 2^-28 cells and these fractions
+/// by less than 10^-8 of their size. So where every end coordinate `1/2 + d` is at least 10^-6
+/// from a whole number and every comparison differs by more than 10^-7 of the larger, the walk
+/// is the same from every cell. Ties (45 degrees) go to x in `SegmentCells` and are left to it.
+fn uniform_walk(d: [f64; 2], limit: f64) -> Option<Vec<(i32, i32)>> {
+    const MARGIN: f64 = 1e-6;
+    const RELATIVE: f64 = 1e-7;
+    const MAX_STEPS: f64 = 1e6;
+    let [dx, dy] = d;
+    if !(dx.is_finite()
+        && dy.is_finite()
+        && limit + dx.abs() + dy.abs() < (1u32 << 24) as f64
+        && dx.abs() + dy.abs() < MAX_STEPS)
+    {
+        return None;
+    }
+    // The end cell's offset from the start along an axis.
+    let end = |e: f64| {
+        let v = 0.5 + e;
+        let f = v.floor();
+        (v - f >= MARGIN && f + 1.0 - v >= MARGIN).then_some(f as i32)
+    };
+    let (ex, ey) = (end(dx)?, end(dy)?);
+    let (sx, sy) = (ex.signum(), ey.signum());
+    let (mut x, mut y) = (0, 0);
+    let mut walk = Vec::with_capacity((ex.unsigned_abs() + ey.unsigned_abs()) as usize);
+    while (x, y) != (ex, ey) {
+        let go_x = if x == ex {
+            false
+        } else if y == ey {
+            true
+        } else {
+            let tx = (x.unsigned_abs() as f64 + 0.5) / dx.abs();
+            let ty = (y.unsigned_abs() as f64 + 0.5) / dy.abs();
+            if (tx - ty).abs() <= RELATIVE * tx.max(ty) {
+                return None;
+            }
+            tx < ty
+        };
+        let step = if go_x { (sx, 0) } else { (0, sy) };
+        x += step.0;
+        y += step.1;
+        walk.push(step);
+    }
+    Some(walk)
 }
 
 /// The true cells of `free` in a gap of one or two cells: along the row or the column through
@@ -846,6 +1157,236 @@ mod tests {
         let free = rooms_with_opening(4);
         let reachable = flood_fill(&free, free.frame.cell_from_world(start));
         assert_eq!(explorable_free(&reachable, start, 0.5, 1.0), reachable);
+    }
+
+    /// [`explorable_free`] as it was before its rays were grouped by first step and their walks
+    /// shared: every ray from every boundary cell walked with `SegmentCells`.
+    fn explorable_free_oracle(
+        reachable: &Bitmap,
+        start: Vec2,
+        robot_radius_m: f64,
+        range_m: f64,
+    ) -> Bitmap {
+        let frame = reachable.frame;
+        let res = frame.resolution_m;
+        let solid = Bitmap {
+            frame,
+            data: reachable.data.iter().map(|f| !f).collect(),
+        };
+        let dist = distance_to(&solid);
+        let need_cells = robot_radius_m / res + std::f64::consts::FRAC_1_SQRT_2;
+        let roomy = Bitmap {
+            frame,
+            data: dist.data.iter().map(|&d| d as f64 >= need_cells).collect(),
+        };
+        let start_cell = frame.cell_from_world(start);
+        let seed = if roomy.get(start_cell) == Some(&true) {
+            Some(start_cell)
+        } else {
+            // The roomy cell nearest to the start (lowest index on ties).
+            let mut best: Option<(i64, usize)> = None;
+            for (i, &r) in roomy.data.iter().enumerate() {
+                if r {
+                    let c = frame.cell_of_index(i);
+                    let (dx, dy) = ((c.x - start_cell.x) as i64, (c.y - start_cell.y) as i64);
+                    let d = dx * dx + dy * dy;
+                    if best.is_none_or(|(bd, _)| d < bd) {
+                        best = Some((d, i));
+                    }
+                }
+            }
+            best.map(|(_, i)| frame.cell_of_index(i))
+        };
+        let Some(seed) = seed else {
+            return reachable.clone();
+        };
+        let drivable = flood_fill(&roomy, seed);
+        // Seen from inside the disc: within the body's radius of a drivable cell.
+        let to_drivable = distance_to(&drivable);
+        let body_cells = robot_radius_m / res;
+        let mut seen = Bitmap {
+            frame,
+            data: to_drivable
+                .data
+                .iter()
+                .zip(&reachable.data)
+                .map(|(&d, &f)| f && (d as f64) <= body_cells)
+                .collect(),
+        };
+        // Rays from the drivable region's boundary.
+        const RAYS: usize = 720;
+        // A ray sees a gap of one or two cells (the speckle of a scanned map) but not through it:
+        // it shows a glimpse, not a room.
+        let narrow = narrow_gaps(reachable);
+        let range_cells = range_m / res;
+        let dirs: Vec<[f64; 2]> = (0..RAYS)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / RAYS as f64;
+                [a.cos() * range_cells, a.sin() * range_cells]
+            })
+            .collect();
+        for i in 0..drivable.data.len() {
+            if !drivable.data[i] {
+                continue;
+            }
+            let c = frame.cell_of_index(i);
+            if c.neighbours4()
+                .iter()
+                .all(|&n| drivable.get(n) == Some(&true))
+            {
+                continue;
+            }
+            let a = [c.x as f64 + 0.5, c.y as f64 + 0.5];
+            for d in &dirs {
+                let b = [a[0] + d[0], a[1] + d[1]];
+                for cell in crate::mapping::ray::SegmentCells::new(a, b).skip(1) {
+                    let Some(j) = frame.index(cell) else { break };
+                    if !reachable.data[j] || drivable.data[j] {
+                        break;
+                    }
+                    seen.data[j] = true;
+                    if narrow.data[j] {
+                        break;
+                    }
+                }
+            }
+        }
+        seen
+    }
+
+    /// A `w` x `h` raster at `res` m per cell, free where `free` says, and a start at the
+    /// centre of the free cell `pick` (modulo the free cells), with the free cells 4-connected
+    /// to it.
+    fn reachable_from(w: u32, h: u32, res: f64, free: &[bool], pick: usize) -> (Bitmap, Vec2) {
+        let frame = GridFrame::new(Vec2::new(-1.3, 2.1), res, w, h);
+        let mask = Bitmap {
+            frame,
+            data: free.iter().copied().take(frame.len()).collect(),
+        };
+        let free_cells: Vec<usize> = (0..frame.len()).filter(|&i| mask.data[i]).collect();
+        let i = free_cells[pick % free_cells.len()];
+        let start = frame.world_from_cell(frame.cell_of_index(i));
+        (flood_fill(&mask, frame.cell_of_index(i)), start)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(128))]
+        /// Random rasters (mostly free, speckled with solid cells), any start, body and range
+        /// (down to less than a cell, where a ray's first step depends on rounding).
+        #[test]
+        fn explorable_free_equals_its_oracle_on_random_rasters(
+            free in proptest::collection::vec(proptest::bool::weighted(0.85), 48 * 40),
+            w in 8u32..48, h in 8u32..40, pick in 0usize..10_000,
+            res in proptest::prop_oneof![proptest::strategy::Just(0.05), 0.02f64..0.3],
+            radius in 0.0f64..0.3, range in proptest::prop_oneof![0.0f64..0.2, 0.0f64..4.0],
+        ) {
+            let mut free = free;
+            // At least one free cell to start from.
+            free[0] = true;
+            let (reachable, start) = reachable_from(w, h, res, &free, pick);
+            proptest::prop_assert_eq!(
+                explorable_free(&reachable, start, radius, range),
+                explorable_free_oracle(&reachable, start, radius, range)
+            );
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(32))]
+        /// Generated buildings at 0.05 m and 0.1 m, the explorer's body and a short laser.
+        #[test]
+        fn explorable_free_equals_its_oracle_on_generated_buildings(
+            seed in 0u64..1000, area in 60.0f64..250.0, office: bool,
+            res in proptest::prop_oneof![proptest::strategy::Just(0.05), proptest::strategy::Just(0.1)],
+            radius in 0.1f64..0.35, range in 0.5f64..6.0,
+        ) {
+            let b = crate::generate::generate(&crate::generate::GenerateConfig {
+                seed,
+                area_m2: area,
+                kind: if office {
+                    crate::generate::BuildingKind::Office
+                } else {
+                    crate::generate::BuildingKind::School
+                },
+                ..Default::default()
+            });
+            let start = b.default_start(0.2).unwrap().0.position();
+            let frame = GridFrame::covering(&b.bounds(), res, 1.0);
+            let reachable = b.reachable_free(frame, start);
+            let got = explorable_free(&reachable, start, radius, range);
+            proptest::prop_assert_eq!(&got, &explorable_free_oracle(&reachable, start, radius, range));
+            // More than the body's disc around the start: rays were cast.
+            proptest::prop_assert!(got.count_true() > 100);
+        }
+    }
+
+    /// The walks `uniform_walk` gives for every direction at ranges around half a cell, a cell
+    /// and the explorer's, from cells near the origin and far out, are `SegmentCells`'s.
+    #[test]
+    fn a_uniform_walk_is_the_walk_from_every_cell() {
+        let limit = 70_001.0;
+        let (mut sure, mut unsure) = (0, 0);
+        let ranges = [
+            0.3,
+            0.5,
+            0.5 + 1e-7,
+            std::f64::consts::FRAC_1_SQRT_2 - 1e-7,
+            1.0,
+            1.5,
+            7.3,
+            120.0,
+            2000.0,
+        ];
+        for range in ranges {
+            for k in 0..720 {
+                let a = k as f64 * std::f64::consts::TAU / 720.0;
+                let d = [a.cos() * range, a.sin() * range];
+                let Some(walk) = uniform_walk(d, limit) else {
+                    unsure += 1;
+                    continue;
+                };
+                sure += 1;
+                for (x, y) in [
+                    (0, 0),
+                    (1, 7),
+                    (13, 2),
+                    (1023, 1024),
+                    (4095, 3),
+                    (70_000, 69_999),
+                ] {
+                    let a = [x as f64 + 0.5, y as f64 + 0.5];
+                    let cells: Vec<Cell> =
+                        crate::mapping::ray::SegmentCells::new(a, [a[0] + d[0], a[1] + d[1]])
+                            .collect();
+                    let steps: Vec<(i32, i32)> = cells
+                        .windows(2)
+                        .map(|p| (p[1].x - p[0].x, p[1].y - p[0].y))
+                        .collect();
+                    assert_eq!(steps, walk, "range {range} k {k} from ({x}, {y})");
+                }
+            }
+        }
+        // About 45 degrees, or an end about a cell boundary: a few directions per range.
+        assert!((8..9 * 40).contains(&unsure), "{unsure}");
+        assert!(sure > 9 * 600, "{sure}");
+        assert_eq!(uniform_walk([1e30, 0.0], limit), None);
+        assert_eq!(uniform_walk([f64::NAN, 0.0], limit), None);
+        assert_eq!(uniform_walk([0.2, -0.3], limit), Some(vec![]));
+    }
+
+    /// `WalkTree` in preorder: shared first steps once, each node's skip past its subtree.
+    #[test]
+    fn a_walk_tree_merges_shared_first_steps() {
+        let mut t = WalkTree::default();
+        t.insert([1, 1, 10]);
+        t.insert([1, 1, -10]);
+        t.insert([1, 10]);
+        // Offsets 1, 2, 12, -8 (below 2), 11 (below 1).
+        assert_eq!(
+            t.preorder(),
+            vec![(1, 5), (2, 4), (12, 3), (-8, 4), (11, 5)]
+        );
+        assert!(WalkTree::default().preorder().is_empty());
     }
 
     fn two_rooms_vector() -> Building {

@@ -6,7 +6,7 @@
 //! separates a consistent map from a doubled or bent one; the raw overlap is kept alongside.
 
 use crate::geom::{Pose, Vec2};
-use crate::grid::{Bitmap, Occupancy, OccupancyGrid};
+use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
 
 /// Search range of [`aligned_occupied_precision`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,15 +43,9 @@ pub fn aligned_occupied_precision(
     cfg: &AlignmentConfig,
 ) -> (f64, Pose) {
     let frame = map.frame;
-    // Cells within one cell of solid space (outside the grid counts as solid).
-    let near_solid: Vec<bool> = (0..frame.len())
-        .map(|i| {
-            let c = frame.cell_of_index(i);
-            std::iter::once(c)
-                .chain(c.neighbours8())
-                .any(|n| truth_free.get(n) != Some(&true))
-        })
-        .collect();
+    // Cells within one cell of solid space (outside the grid counts as solid): solid space on
+    // the frame padded by a cell on every side, spread along the rows, then the columns.
+    let near_solid = near_solid(frame, truth_free);
     let cells: Vec<Vec2> = map
         .data
         .iter()
@@ -109,16 +103,45 @@ pub fn aligned_occupied_precision(
     // Coarse pass on a subsample, then the best few candidates on every cell.
     let stride = (occupied.len() / 4000).max(1);
     let mut scored: Vec<(usize, i32, i32, i32)> = Vec::new();
+    let (w, h) = (frame.width as i64, frame.height as i64);
+    let nl = (2 * nt + 1) as usize;
+    // Per lattice column (row), the cell column (row) of every point: a point's cell column
+    // depends only on the translation along x, so the lattice's points share them.
+    let mut columns: Vec<Vec<i64>> = vec![Vec::new(); nl];
+    let mut rows: Vec<Vec<i64>> = vec![Vec::new(); nl];
     for ir in -nr..=nr {
         // Rotated once per angle, translated per lattice point.
         let r = rotated(ir as f64 * cfg.rotation_step_rad, stride);
-        for iy in -nt..=nt {
-            for ix in -nt..=nt {
-                let (x_m, y_m) = (
-                    ix as f64 * cfg.translation_step_m,
-                    iy as f64 * cfg.translation_step_m,
-                );
-                scored.push((count(&r, x_m, y_m), ir, iy, ix));
+        for (n, it) in (-nt..=nt).enumerate() {
+            // As in `count`: the cell of `pivot + (x_m, y_m) + r`, one axis at a time.
+            let m = it as f64 * cfg.translation_step_m;
+            let (tx, ty) = (pivot.x + m, pivot.y + m);
+            columns[n].clear();
+            columns[n].extend(
+                r.iter()
+                    .map(|p| frame.cell_from_world(Vec2::new(tx + p.x, 0.0)).x as i64),
+            );
+            rows[n].clear();
+            rows[n].extend(r.iter().map(|p| {
+                let y = frame.cell_from_world(Vec2::new(0.0, ty + p.y)).y as i64;
+                // The row's first index, or -1 outside the frame.
+                if (0..h).contains(&y) {
+                    y * w
+                } else {
+                    -1
+                }
+            }));
+        }
+        for (ny, iy) in (-nt..=nt).enumerate() {
+            for (nx, ix) in (-nt..=nt).enumerate() {
+                let hits = rows[ny]
+                    .iter()
+                    .zip(&columns[nx])
+                    .filter(|&(&row, &x)| {
+                        row < 0 || !(0..w).contains(&x) || near_solid[(row + x) as usize]
+                    })
+                    .count();
+                scored.push((hits, ir, iy, ix));
             }
         }
     }
@@ -150,6 +173,25 @@ pub fn aligned_occupied_precision(
         }
     }
     (best.0 as f64 / occupied.len() as f64, best.1)
+}
+
+/// For every cell of `frame`, whether it or one of its 8 neighbours is not `true` in
+/// `truth_free` (looked up by cell; outside `truth_free`'s grid counts as solid).
+fn near_solid(frame: GridFrame, truth_free: &Bitmap) -> Vec<bool> {
+    let (w, h) = (frame.width as i32, frame.height as i32);
+    let solid = |x: i32, y: i32| truth_free.get(Cell::new(x, y)) != Some(&true);
+    // Rows -1..=h: solid at a cell or either of its neighbours along the row.
+    let row_near: Vec<bool> = (-1..=h)
+        .flat_map(|y| (0..w).map(move |x| solid(x - 1, y) || solid(x, y) || solid(x + 1, y)))
+        .collect();
+    let wu = w as usize;
+    (0..frame.len())
+        .map(|i| {
+            // Row y of the frame is row y + 1 of `row_near`.
+            let (x, y1) = (i % wu, i / wu + 1);
+            row_near[(y1 - 1) * wu + x] || row_near[y1 * wu + x] || row_near[(y1 + 1) * wu + x]
+        })
+        .collect()
 }
 
 /// The rigid motion `m` minimising the summed squared distances `|m(from[k]) - to[k]|`
@@ -184,6 +226,195 @@ mod tests {
     use crate::grid::{Grid, GridFrame};
 
     const ID: Pose = Pose::new(0.0, 0.0, 0.0);
+
+    /// [`aligned_occupied_precision`] as it was before `near_solid` was spread along rows and
+    /// columns and the coarse search shared the points' cells across the lattice.
+    fn aligned_occupied_precision_oracle(
+        map: &OccupancyGrid,
+        truth_free: &Bitmap,
+        prior: &Pose,
+        pivot: Vec2,
+        cfg: &AlignmentConfig,
+    ) -> (f64, Pose) {
+        let frame = map.frame;
+        // Cells within one cell of solid space (outside the grid counts as solid).
+        let near_solid: Vec<bool> = (0..frame.len())
+            .map(|i| {
+                let c = frame.cell_of_index(i);
+                std::iter::once(c)
+                    .chain(c.neighbours8())
+                    .any(|n| truth_free.get(n) != Some(&true))
+            })
+            .collect();
+        let cells: Vec<Vec2> = map
+            .data
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| **s == Occupancy::Occupied)
+            .map(|(i, _)| frame.world_from_cell(frame.cell_of_index(i)))
+            .collect();
+        if cells.is_empty() {
+            return (1.0, Pose::new(0.0, 0.0, 0.0));
+        }
+        let raw = cells
+            .iter()
+            .filter(|q| {
+                frame
+                    .index(frame.cell_from_world(**q))
+                    .is_none_or(|i| near_solid[i])
+            })
+            .count();
+        let occupied: Vec<Vec2> = cells
+            .iter()
+            .map(|p| prior.compose(&Pose::new(p.x, p.y, 0.0)).position() - pivot)
+            .collect();
+        // The points rotated by `theta_rad` (about the pivot), every `stride`-th.
+        let rotated = |theta_rad: f64, stride: usize| -> Vec<Vec2> {
+            let (s, c) = theta_rad.sin_cos();
+            occupied
+                .iter()
+                .step_by(stride)
+                .map(|p| Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y))
+                .collect()
+        };
+        // How many of the rotated points, translated by `(x_m, y_m)` (and back from the pivot),
+        // fall within one cell of solid space.
+        let count = |rotated: &[Vec2], x_m: f64, y_m: f64| -> usize {
+            let t = pivot + Vec2::new(x_m, y_m);
+            rotated
+                .iter()
+                .filter(|r| {
+                    frame
+                        .index(frame.cell_from_world(t + **r))
+                        .is_none_or(|i| near_solid[i])
+                })
+                .count()
+        };
+        let hits = |pose: &Pose| count(&rotated(pose.theta_rad, 1), pose.x_m, pose.y_m);
+        let steps = |max: f64, step: f64| {
+            if step > 0.0 && max > 0.0 {
+                (max / step).round() as i32
+            } else {
+                0
+            }
+        };
+        let nr = steps(cfg.max_rotation_rad, cfg.rotation_step_rad);
+        let nt = steps(cfg.max_translation_m, cfg.translation_step_m);
+        // Coarse pass on a subsample, then the best few candidates on every cell.
+        let stride = (occupied.len() / 4000).max(1);
+        let mut scored: Vec<(usize, i32, i32, i32)> = Vec::new();
+        for ir in -nr..=nr {
+            // Rotated once per angle, translated per lattice point.
+            let r = rotated(ir as f64 * cfg.rotation_step_rad, stride);
+            for iy in -nt..=nt {
+                for ix in -nt..=nt {
+                    let (x_m, y_m) = (
+                        ix as f64 * cfg.translation_step_m,
+                        iy as f64 * cfg.translation_step_m,
+                    );
+                    scored.push((count(&r, x_m, y_m), ir, iy, ix));
+                }
+            }
+        }
+        // Most hits first; ties to the smallest motion, then lattice order (deterministic).
+        scored.sort_by_key(|&(h, ir, iy, ix)| {
+            (
+                std::cmp::Reverse(h),
+                ir.abs() + iy.abs() + ix.abs(),
+                ir,
+                iy,
+                ix,
+            )
+        });
+        let identity = Pose::new(0.0, 0.0, 0.0);
+        let mut best = (hits(&identity), identity);
+        if raw > best.0 {
+            // Only with a prior: the map as it is overlaps better than the prior moves it.
+            best = (raw, identity);
+        }
+        for &(_, ir, iy, ix) in scored.iter().take(8) {
+            let pose = Pose::new(
+                ix as f64 * cfg.translation_step_m,
+                iy as f64 * cfg.translation_step_m,
+                ir as f64 * cfg.rotation_step_rad,
+            );
+            let h = hits(&pose);
+            if h > best.0 {
+                best = (h, pose);
+            }
+        }
+        (best.0 as f64 / occupied.len() as f64, best.1)
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// Random truths and maps (on frames of their own sizes), priors, pivots and searches.
+        #[test]
+        fn aligned_occupied_precision_equals_its_oracle(
+            truth in proptest::collection::vec(proptest::bool::weighted(0.8), 40 * 36),
+            occupied in proptest::collection::vec(proptest::bool::weighted(0.15), 40 * 36),
+            (tw, th, mw, mh) in (4u32..40, 4u32..36, 4u32..40, 4u32..36),
+            res in 0.02f64..0.2,
+            prior in (-0.5f64..0.5, -0.5f64..0.5, -0.2f64..0.2),
+            pivot in (-1.0f64..3.0, -1.0f64..3.0),
+            (rot, rot_step) in (0.0f64..0.05, proptest::prop_oneof![proptest::strategy::Just(0.0), 0.002f64..0.01]),
+            (tr, tr_step) in (0.0f64..0.4, proptest::prop_oneof![proptest::strategy::Just(0.0), 0.03f64..0.1]),
+        ) {
+            let truth_frame = GridFrame::new(Vec2::new(-0.3, 0.2), res, tw, th);
+            let truth = Bitmap { frame: truth_frame, data: truth[..truth_frame.len()].to_vec() };
+            let frame = GridFrame::new(Vec2::new(-0.3, 0.2), res, mw, mh);
+            let mut map = Grid::filled(frame, Occupancy::Unknown);
+            for (i, &o) in occupied[..frame.len()].iter().enumerate() {
+                if o {
+                    map.data[i] = Occupancy::Occupied;
+                }
+            }
+            let prior = Pose::new(prior.0, prior.1, prior.2);
+            let pivot = Vec2::new(pivot.0, pivot.1);
+            let cfg = AlignmentConfig {
+                max_rotation_rad: rot,
+                rotation_step_rad: rot_step,
+                max_translation_m: tr,
+                translation_step_m: tr_step,
+            };
+            let got = aligned_occupied_precision(&map, &truth, &prior, pivot, &cfg);
+            let want = aligned_occupied_precision_oracle(&map, &truth, &prior, pivot, &cfg);
+            proptest::prop_assert_eq!(got.0.to_bits(), want.0.to_bits());
+            proptest::prop_assert_eq!(got.1, want.1);
+            for (c, s) in [(cfg, "given"), (AlignmentConfig::default(), "default")] {
+                let got = aligned_occupied_precision(&map, &truth, &ID, pivot, &c);
+                let want = aligned_occupied_precision_oracle(&map, &truth, &ID, pivot, &c);
+                proptest::prop_assert_eq!(got.0.to_bits(), want.0.to_bits(), "{}", s);
+                proptest::prop_assert_eq!(got.1, want.1, "{}", s);
+            }
+        }
+    }
+
+    /// The room maps of the tests above, rotated and shifted within and beyond the search.
+    #[test]
+    fn aligned_occupied_precision_equals_its_oracle_on_rooms() {
+        let pivot = Vec2::new(1.0, 1.0);
+        let mut moved = 0;
+        for (k, motion) in [
+            Pose::new(0.0, 0.0, 0.0),
+            Pose::new(0.1, -0.05, 0.8f64.to_radians()),
+            Pose::new(-0.17, 0.22, -0.6f64.to_radians()),
+            Pose::new(0.3, 0.0, 3f64.to_radians()),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let (map, truth) = room_map(motion, pivot);
+            let got = aligned_occupied_precision(&map, &truth, &ID, pivot, &Default::default());
+            let want =
+                aligned_occupied_precision_oracle(&map, &truth, &ID, pivot, &Default::default());
+            assert_eq!(got.0.to_bits(), want.0.to_bits(), "{k}");
+            assert_eq!(got.1, want.1, "{k}");
+            moved += usize::from(got.1 != ID);
+        }
+        // The search moved the maps that were moved.
+        assert_eq!(moved, 3);
+    }
 
     #[test]
     fn fit_rigid_recovers_a_motion() {
