@@ -84,11 +84,80 @@ pub struct LogOddsMap {
     pub known_bounds: Option<(Cell, Cell)>,
     /// Total ternary changes since construction.
     pub total_cells_changed: u64,
-    /// Per cell, the mean of the hit points that fell in it (grid coordinates, cell units;
-    /// NaN where none), with their count: where in the cell the surface is, for sub-cell scan
-    /// matching.
-    pub surface: Vec<[f32; 2]>,
-    pub surface_hits: Vec<u16>,
+    /// Per cell, the mean of the hit points that fell in it, with their count: where in the
+    /// cell the surface is, for sub-cell scan matching.
+    surface: SurfacePoints,
+}
+
+/// Block side (cells) of [`SurfacePoints`], a power of two.
+const SURFACE_BLOCK: usize = 16;
+
+/// The mean hit point per cell (grid coordinates, cell units) and the number of hits averaged,
+/// stored by blocks of `SURFACE_BLOCK`² cells made at the block's first hit: a map's walls cross
+/// a small part of its blocks, and ten bytes per cell of a large map are tens of MB.
+#[derive(Debug, Clone, PartialEq)]
+struct SurfacePoints {
+    width: usize,
+    blocks_w: usize,
+    /// Per block: 1 + its index in `blocks`, or 0 before its first hit.
+    slot: Vec<u32>,
+    /// The blocks made, each `SURFACE_BLOCK`² cells in row-major order: (mean, hits).
+    blocks: Vec<([f32; 2], u16)>,
+}
+
+impl SurfacePoints {
+    fn new(frame: GridFrame) -> Self {
+        let (w, h) = (frame.width as usize, frame.height as usize);
+        let blocks_w = w.div_ceil(SURFACE_BLOCK);
+        Self {
+            width: w,
+            blocks_w,
+            slot: vec![0; blocks_w * h.div_ceil(SURFACE_BLOCK)],
+            blocks: Vec::new(),
+        }
+    }
+
+    /// The block of cell `c` (in the frame) and the cell's place in it.
+    #[inline]
+    fn locate(&self, c: Cell) -> (usize, usize) {
+        let (x, y) = (c.x as usize, c.y as usize);
+        let b = (y / SURFACE_BLOCK) * self.blocks_w + x / SURFACE_BLOCK;
+        (b, (y % SURFACE_BLOCK) * SURFACE_BLOCK + x % SURFACE_BLOCK)
+    }
+
+    /// The mean hit point of cell `c` (in the frame), if it has hits.
+    #[inline]
+    fn get(&self, c: Cell) -> Option<[f32; 2]> {
+        let (b, k) = self.locate(c);
+        let slot = self.slot[b] as usize;
+        if slot == 0 {
+            return None;
+        }
+        let (p, n) = self.blocks[(slot - 1) * SURFACE_BLOCK * SURFACE_BLOCK + k];
+        (n > 0).then_some(p)
+    }
+
+    /// Adds a hit point `q` (grid coordinates) to the running mean of cell `c` (in the frame).
+    #[inline]
+    fn add(&mut self, c: Cell, q: [f64; 2]) {
+        debug_assert!((c.x as usize) < self.width);
+        let (b, k) = self.locate(c);
+        if self.slot[b] == 0 {
+            let n = SURFACE_BLOCK * SURFACE_BLOCK;
+            self.blocks.resize(self.blocks.len() + n, ([f32::NAN; 2], 0));
+            self.slot[b] = (self.blocks.len() / n) as u32;
+        }
+        let at = (self.slot[b] as usize - 1) * SURFACE_BLOCK * SURFACE_BLOCK + k;
+        let (s, n) = &mut self.blocks[at];
+        if *n == 0 {
+            *s = [q[0] as f32, q[1] as f32];
+        } else {
+            let k = 1.0 / (*n as f32 + 1.0);
+            s[0] += (q[0] as f32 - s[0]) * k;
+            s[1] += (q[1] as f32 - s[1]) * k;
+        }
+        *n = n.saturating_add(1).min(1000);
+    }
 }
 
 impl LogOddsMap {
@@ -102,8 +171,7 @@ impl LogOddsMap {
             free_changes: Vec::new(),
             known_bounds: None,
             total_cells_changed: 0,
-            surface: vec![[f32::NAN; 2]; frame.len()],
-            surface_hits: vec![0; frame.len()],
+            surface: SurfacePoints::new(frame),
         }
     }
 
@@ -157,7 +225,7 @@ impl LogOddsMap {
                 if hit {
                     if c == end_cell {
                         self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
-                        self.add_surface(idx, end);
+                        self.surface.add(c, end);
                         continue;
                     }
                     // (A cell more than `guard_cells` cells from the end cell on either axis
@@ -194,7 +262,7 @@ impl LogOddsMap {
                                 + (c.y as f64 + 0.5 - p[1]) * dy)
                                 / len2)
                                 .clamp(0.0, 1.0);
-                            self.add_surface(idx, [p[0] + t * dx, p[1] + t * dy]);
+                            self.surface.add(c, [p[0] + t * dx, p[1] + t * dy]);
                         }
                         true
                     });
@@ -215,28 +283,13 @@ impl LogOddsMap {
         stats
     }
 
-    /// Adds a surface point (grid coordinates) to the running mean of cell `idx`.
-    #[inline]
-    fn add_surface(&mut self, idx: usize, q: [f64; 2]) {
-        let n = self.surface_hits[idx];
-        let s = &mut self.surface[idx];
-        if n == 0 {
-            *s = [q[0] as f32, q[1] as f32];
-        } else {
-            let k = 1.0 / (n as f32 + 1.0);
-            s[0] += (q[0] as f32 - s[0]) * k;
-            s[1] += (q[1] as f32 - s[1]) * k;
-        }
-        self.surface_hits[idx] = n.saturating_add(1).min(1000);
-    }
-
     /// The mean surface point of an occupied cell with hits, in world coordinates.
     pub fn surface_point(&self, c: Cell) -> Option<Vec2> {
         let i = self.frame.index(c)?;
-        if self.occupancy.data[i] != Occupancy::Occupied || self.surface_hits[i] == 0 {
+        if self.occupancy.data[i] != Occupancy::Occupied {
             return None;
         }
-        let s = self.surface[i];
+        let s = self.surface.get(c)?;
         Some(self.frame.origin_m + Vec2::new(s[0] as f64, s[1] as f64) * self.frame.resolution_m)
     }
 
@@ -338,6 +391,29 @@ mod tests {
 
     fn frame() -> GridFrame {
         GridFrame::new(Vec2::zeros(), 0.1, 40, 10)
+    }
+
+    #[test]
+    fn surface_points_are_kept_only_in_the_blocks_hit() {
+        // 200 x 200 cells: 13 x 13 blocks of 16.
+        let mut m = LogOddsMap::new(GridFrame::new(Vec2::zeros(), 0.1, 200, 200));
+        let pose = Pose::new(0.55, 0.55, 0.0);
+        m.insert_scan(&pose, &one_beam(3.0, 6.0), &LogOddsConfig::default());
+        let hit = Cell::new(35, 5);
+        assert_eq!(m.occupancy.get(hit), Some(&Occupancy::Occupied));
+        let p = m.surface_point(hit).expect("a surface point where the beam hit");
+        assert!((p.x - 3.55).abs() < 1e-6 && (p.y - 0.55).abs() < 1e-6, "{p:?}");
+        assert_eq!(m.surface.blocks.len(), SURFACE_BLOCK * SURFACE_BLOCK);
+        assert_eq!(m.surface.slot.iter().filter(|s| **s != 0).count(), 1);
+        // A cell of the same block without hits, and a free cell, have none.
+        assert_eq!(m.surface.get(Cell::new(34, 5)), None);
+        assert_eq!(m.surface_point(Cell::new(20, 5)), None);
+        // A second hit in another block makes one more block, the first keeps its point.
+        let turned = Pose::new(0.55, 0.55, std::f64::consts::FRAC_PI_2);
+        m.insert_scan(&turned, &one_beam(3.0, 6.0), &LogOddsConfig::default());
+        assert_eq!(m.surface.blocks.len(), 2 * SURFACE_BLOCK * SURFACE_BLOCK);
+        assert!(m.surface_point(Cell::new(5, 35)).is_some());
+        assert_eq!(m.surface_point(hit), Some(p));
     }
 
     #[test]
