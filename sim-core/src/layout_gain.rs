@@ -19,14 +19,17 @@ use crate::grid::{Bitmap, Cell, Grid, Occupancy, OccupancyGrid};
 use crate::layout::{Layout, RoomLabel};
 use crate::mapping::ray::{grid_from_world, walk_segment};
 
-const NO_ROOM: u32 = u32::MAX;
+/// In [`LayoutRaster`]'s room grid: no room (room `k` is stored as `k + 1`, so that a new grid
+/// is zeroed memory, which needs no filling).
+const NO_ROOM: u32 = 0;
 
 /// The layout rasterised on the map's grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LayoutRaster {
     /// Cells crossed by a layout wall.
     pub walls: Bitmap,
-    /// Index (into `layout.rooms`) of the room whose polygon holds the cell centre, or none.
+    /// 1 + the index (into `layout.rooms`) of the room whose polygon holds the cell centre, or
+    /// [`NO_ROOM`].
     room: Grid<u32>,
     /// Per room: its frontier is open.
     open: Vec<bool>,
@@ -97,8 +100,9 @@ impl LayoutRaster {
     fn rasterise(layout: &Layout, grid: &OccupancyGrid) -> (Bitmap, Grid<u32>) {
         let frame = grid.frame;
         let mut room = Grid::filled(frame, NO_ROOM);
+        debug_assert!(layout.rooms.len() < u32::MAX as usize);
         for (k, r) in layout.rooms.iter().enumerate() {
-            crate::building::for_cells_in_polygon(frame, &r.polygon, |i| room.data[i] = k as u32);
+            crate::building::for_cells_in_polygon(frame, &r.polygon, |i| room.data[i] = k as u32 + 1);
         }
         let mut walls = Bitmap::filled(frame, false);
         for r in &layout.rooms {
@@ -124,13 +128,13 @@ impl LayoutRaster {
         self.room
             .get(c)
             .filter(|&&k| k != NO_ROOM)
-            .map(|&k| k as usize)
+            .map(|&k| k as usize - 1)
     }
 
     /// Whether a candidate at `c` must fall back to the baseline gain.
     pub fn uses_baseline(&self, c: Cell) -> bool {
         match self.room.get(c) {
-            Some(&k) if k != NO_ROOM => self.open[k as usize],
+            Some(&k) if k != NO_ROOM => self.open[k as usize - 1],
             _ => true,
         }
     }
