@@ -232,13 +232,49 @@ impl FrontierNear {
         };
         // `FAR` stands for none.
         const FAR: i64 = u8::MAX as i64;
+        let mut flags = vec![false; width];
         for (r, row) in distance.chunks_exact_mut(width).enumerate() {
             let y = (y0 + r as i32) as i64;
+            // The row's frontier cells: the columns of the box in the frame, the inner ones
+            // (with both neighbours in the frame) as whole slices, which the compiler turns into
+            // vector instructions, the frame's first and last columns one by one.
+            flags.fill(false);
+            let (xa, xb) = ((x0 as i64).max(0), (x1 as i64).min(w - 1));
+            if (0..h).contains(&y) && xa <= xb {
+                let (ia, ib) = (xa.max(1), xb.min(w - 2));
+                for x in (xa..=xb).filter(|x| *x < ia || *x > ib) {
+                    flags[(x - x0 as i64) as usize] = frontier(x, y);
+                }
+                if ia <= ib {
+                    let (wu, yu) = (w as usize, y as usize);
+                    let at = |row: usize, dx: usize| {
+                        &data[row * wu + ia as usize + dx - 1..][..(ib - ia + 1) as usize]
+                    };
+                    // (A missing row above or below reads the row itself: a free cell is not
+                    // unknown.)
+                    let (up, down) = (yu.saturating_sub(1), (yu + 1).min(h as usize - 1));
+                    let (cell, left, right) = (at(yu, 1), at(yu, 0), at(yu, 2));
+                    let (above, below) = (at(up, 1), at(down, 1));
+                    let out = &mut flags[(ia - x0 as i64) as usize..][..cell.len()];
+                    let unknown = |o: &Occupancy| *o == Occupancy::Unknown;
+                    for (k, f) in out.iter_mut().enumerate() {
+                        *f = (cell[k] == Occupancy::Free)
+                            & (unknown(&left[k])
+                                | unknown(&right[k])
+                                | unknown(&above[k])
+                                | unknown(&below[k]));
+                    }
+                }
+            }
+            // (Most rows of the box have no frontier cell: `distance` is already none there.)
+            if !flags.iter().fold(false, |a, f| a | f) {
+                continue;
+            }
             // Nearest frontier cell to the left, then to the right.
             let mut last = -FAR;
-            for (k, d) in row.iter_mut().enumerate() {
+            for (k, (d, &f)) in row.iter_mut().zip(&flags).enumerate() {
                 let k = k as i64;
-                if frontier(x0 as i64 + k, y) {
+                if f {
                     last = k;
                 }
                 *d = (k - last).min(FAR) as u8;
