@@ -14,6 +14,7 @@
 //! shapes of rooms seen through a door are often cut short by the wall lines of other rooms), so
 //! the explorer orders candidates by this gain and keeps the paper's `I(p)` for early stopping.
 
+use crate::frontier::detect::frontier_row;
 use crate::gain::visible_area_indexed;
 use crate::grid::{Bitmap, Cell, Grid, Occupancy, OccupancyGrid};
 use crate::layout::{Layout, RoomLabel};
@@ -102,7 +103,9 @@ impl LayoutRaster {
         let mut room = Grid::filled(frame, NO_ROOM);
         debug_assert!(layout.rooms.len() < u32::MAX as usize);
         for (k, r) in layout.rooms.iter().enumerate() {
-            crate::building::for_cells_in_polygon(frame, &r.polygon, |i| room.data[i] = k as u32 + 1);
+            crate::building::for_cells_in_polygon(frame, &r.polygon, |i| {
+                room.data[i] = k as u32 + 1
+            });
         }
         let mut walls = Bitmap::filled(frame, false);
         for r in &layout.rooms {
@@ -216,55 +219,17 @@ impl FrontierNear {
         let height = (y1 - y0 + 1) as usize;
         let mut distance = vec![u8::MAX; width * height];
         let (w, h) = (grid.frame.width as i64, grid.frame.height as i64);
-        let data = &grid.data;
-        // `frontier::detect::is_frontier_cell`, with one bounds test for the cell.
-        let frontier = |x: i64, y: i64| -> bool {
-            if x < 0 || y < 0 || x >= w || y >= h {
-                return false;
-            }
-            let i = (y * w + x) as usize;
-            let unknown = |j: usize| data[j] == Occupancy::Unknown;
-            data[i] == Occupancy::Free
-                && ((x > 0 && unknown(i - 1))
-                    || (x + 1 < w && unknown(i + 1))
-                    || (y > 0 && unknown(i - w as usize))
-                    || (y + 1 < h && unknown(i + w as usize)))
-        };
         // `FAR` stands for none.
         const FAR: i64 = u8::MAX as i64;
         let mut flags = vec![false; width];
         for (r, row) in distance.chunks_exact_mut(width).enumerate() {
             let y = (y0 + r as i32) as i64;
-            // The row's frontier cells: the columns of the box in the frame, the inner ones
-            // (with both neighbours in the frame) as whole slices, which the compiler turns into
-            // vector instructions, the frame's first and last columns one by one.
+            // The row's frontier cells (only the box's columns in the frame can have any).
             flags.fill(false);
             let (xa, xb) = ((x0 as i64).max(0), (x1 as i64).min(w - 1));
             if (0..h).contains(&y) && xa <= xb {
-                let (ia, ib) = (xa.max(1), xb.min(w - 2));
-                for x in (xa..=xb).filter(|x| *x < ia || *x > ib) {
-                    flags[(x - x0 as i64) as usize] = frontier(x, y);
-                }
-                if ia <= ib {
-                    let (wu, yu) = (w as usize, y as usize);
-                    let at = |row: usize, dx: usize| {
-                        &data[row * wu + ia as usize + dx - 1..][..(ib - ia + 1) as usize]
-                    };
-                    // (A missing row above or below reads the row itself: a free cell is not
-                    // unknown.)
-                    let (up, down) = (yu.saturating_sub(1), (yu + 1).min(h as usize - 1));
-                    let (cell, left, right) = (at(yu, 1), at(yu, 0), at(yu, 2));
-                    let (above, below) = (at(up, 1), at(down, 1));
-                    let out = &mut flags[(ia - x0 as i64) as usize..][..cell.len()];
-                    let unknown = |o: &Occupancy| *o == Occupancy::Unknown;
-                    for (k, f) in out.iter_mut().enumerate() {
-                        *f = (cell[k] == Occupancy::Free)
-                            & (unknown(&left[k])
-                                | unknown(&right[k])
-                                | unknown(&above[k])
-                                | unknown(&below[k]));
-                    }
-                }
+                let out = &mut flags[(xa - x0 as i64) as usize..];
+                frontier_row(grid, y as usize, xa as usize, xb as usize, out);
             }
             // (Most rows of the box have no frontier cell: `distance` is already none there.)
             if !flags.iter().fold(false, |a, f| a | f) {
@@ -453,8 +418,8 @@ mod tests {
             );
             let known = if sparse { 0.01 } else { 0.6 };
             for d in grid.data.iter_mut() {
-                if rng.gen_bool(known) {
-                    *d = if rng.gen_bool(0.8) { Occupancy::Free } else { Occupancy::Occupied };
+                if rng.random_bool(known) {
+                    *d = if rng.random_bool(0.8) { Occupancy::Free } else { Occupancy::Occupied };
                 }
             }
             let qs: Vec<Cell> = queries

@@ -86,9 +86,11 @@ impl Explorer<'_> {
                     (Some(l), true) if cfg.strategy.rank_by_predicted_rooms => {
                         layout_gain_cached(&mut self.gains, grid, &l.raster, c, range_m, now)
                     }
-                    (Some(l), true) => self.gains.gain(GainKind::GapClosed, c, range_m, now, || {
-                        gap_closed_information_gain(grid, &l.raster, c, range_m)
-                    }),
+                    (Some(l), true) => {
+                        self.gains.gain(GainKind::GapClosed, c, range_m, now, || {
+                            gap_closed_information_gain(grid, &l.raster, c, range_m)
+                        })
+                    }
                     _ => self.gains.gain(GainKind::Plain, c, range_m, now, || {
                         information_gain(grid, c, range_m)
                     }),

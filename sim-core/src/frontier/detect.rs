@@ -350,6 +350,33 @@ pub fn is_frontier_cell(grid: &OccupancyGrid, c: Cell) -> bool {
             .any(|n| grid.is(*n, Occupancy::Unknown))
 }
 
+/// [`is_frontier_cell`] for the cells `xa..=xb` of row `y` (all in the grid), into `out` (one
+/// flag per cell, `out[0]` for `xa`). The cells whose both row neighbours are in the grid are
+/// read as whole slices, which the compiler turns into vector instructions; a map's first and
+/// last columns one by one.
+pub(crate) fn frontier_row(grid: &OccupancyGrid, y: usize, xa: usize, xb: usize, out: &mut [bool]) {
+    let (w, h) = (grid.width() as usize, grid.height() as usize);
+    debug_assert!(xa <= xb && xb < w && y < h && out.len() > xb - xa);
+    let (ia, ib) = (xa.max(1), xb.min(w.saturating_sub(2)));
+    for x in (xa..=xb).filter(|x| *x < ia || *x > ib) {
+        out[x - xa] = is_frontier_cell(grid, Cell::new(x as i32, y as i32));
+    }
+    if ia > ib {
+        return;
+    }
+    let n = ib - ia + 1;
+    let at = |row: usize, x: usize| &grid.data[row * w + x..][..n];
+    // (A missing row above or below reads the row itself: a free cell is not unknown.)
+    let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
+    let (cell, left, right) = (at(y, ia), at(y, ia - 1), at(y, ia + 1));
+    let (above, below) = (at(up, ia), at(down, ia));
+    let unknown = |o: &Occupancy| *o == Occupancy::Unknown;
+    for (k, f) in out[ia - xa..][..n].iter_mut().enumerate() {
+        *f = (cell[k] == Occupancy::Free)
+            & (unknown(&left[k]) | unknown(&right[k]) | unknown(&above[k]) | unknown(&below[k]));
+    }
+}
+
 const NEIGHBOURS8: [(i32, i32); 8] = [
     (1, 0),
     (-1, 0),
@@ -417,6 +444,39 @@ mod tests {
 
     fn grid(s: &str) -> OccupancyGrid {
         OccupancyGrid::from_ascii(s, 0.1)
+    }
+
+    proptest! {
+        /// A row's frontier flags are `is_frontier_cell`'s, on grids of any size (one or two
+        /// columns, one row), for any span of any row.
+        #[test]
+        fn frontier_row_is_is_frontier_cell(
+            width in 1usize..90,
+            height in 1usize..5,
+            cells in proptest::collection::vec(0u8..3, 90 * 5),
+            y in 0usize..5,
+            span in (0usize..90, 0usize..90),
+        ) {
+            let frame = crate::grid::GridFrame::new(
+                crate::geom::Vec2::zeros(),
+                0.1,
+                width as u32,
+                height as u32,
+            );
+            let mut g = OccupancyGrid::filled(frame, Occupancy::Unknown);
+            for (d, v) in g.data.iter_mut().zip(&cells) {
+                *d = [Occupancy::Unknown, Occupancy::Free, Occupancy::Occupied][*v as usize];
+            }
+            let y = y % height;
+            let (a, b) = (span.0 % width, span.1 % width);
+            let (xa, xb) = (a.min(b), a.max(b));
+            let mut out = vec![false; xb - xa + 1];
+            frontier_row(&g, y, xa, xb, &mut out);
+            let expected: Vec<bool> = (xa..=xb)
+                .map(|x| is_frontier_cell(&g, Cell::new(x as i32, y as i32)))
+                .collect();
+            prop_assert_eq!(out, expected);
+        }
     }
 
     #[test]

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use super::arrangement::{Arrangement, NO_FACE};
 use super::{LayoutConfig, LayoutDiagnostics, LayoutRoom, RoomLabel};
 use crate::geom::{Polygon, Vec2};
-use crate::grid::{Occupancy, OccupancyGrid};
+use crate::grid::OccupancyGrid;
 
 pub const NO_ROOM: u32 = u32::MAX;
 
@@ -44,28 +44,16 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
 /// indices, sorted per cluster). Only the box of the known cells is scanned.
 pub fn frontier_clusters(grid: &OccupancyGrid, min_cells: usize) -> Vec<Vec<usize>> {
     let f = grid.frame;
-    let (w, h) = (f.width as usize, f.height as usize);
+    let w = f.width as usize;
     let (Some((b0, b1)), _) = super::evidence::known_box(grid) else {
         return Vec::new();
     };
     let (x0, y0) = (b0.x as usize, b0.y as usize);
     let (bw, bh) = ((b1.x - b0.x + 1) as usize, (b1.y - b0.y + 1) as usize);
-    let unknown = |x: usize, y: usize| grid.data[y * w + x] == Occupancy::Unknown;
     // Frontier flags in box coordinates.
     let mut is_frontier = vec![false; bw * bh];
-    for by in 0..bh {
-        let y = y0 + by;
-        for bx in 0..bw {
-            let x = x0 + bx;
-            if grid.data[y * w + x] == Occupancy::Free
-                && ((x > 0 && unknown(x - 1, y))
-                    || (x + 1 < w && unknown(x + 1, y))
-                    || (y > 0 && unknown(x, y - 1))
-                    || (y + 1 < h && unknown(x, y + 1)))
-            {
-                is_frontier[by * bw + bx] = true;
-            }
-        }
+    for (by, row) in is_frontier.chunks_exact_mut(bw).enumerate() {
+        crate::frontier::detect::frontier_row(grid, y0 + by, x0, x0 + bw - 1, row);
     }
     let mut clusters = Vec::new();
     let mut stack = Vec::new();

@@ -144,7 +144,8 @@ impl SurfacePoints {
         let (b, k) = self.locate(c);
         if self.slot[b] == 0 {
             let n = SURFACE_BLOCK * SURFACE_BLOCK;
-            self.blocks.resize(self.blocks.len() + n, ([f32::NAN; 2], 0));
+            self.blocks
+                .resize(self.blocks.len() + n, ([f32::NAN; 2], 0));
             self.slot[b] = (self.blocks.len() / n) as u32;
         }
         let at = (self.slot[b] as usize - 1) * SURFACE_BLOCK * SURFACE_BLOCK + k;
@@ -401,8 +402,13 @@ mod tests {
         m.insert_scan(&pose, &one_beam(3.0, 6.0), &LogOddsConfig::default());
         let hit = Cell::new(35, 5);
         assert_eq!(m.occupancy.get(hit), Some(&Occupancy::Occupied));
-        let p = m.surface_point(hit).expect("a surface point where the beam hit");
-        assert!((p.x - 3.55).abs() < 1e-6 && (p.y - 0.55).abs() < 1e-6, "{p:?}");
+        let p = m
+            .surface_point(hit)
+            .expect("a surface point where the beam hit");
+        assert!(
+            (p.x - 3.55).abs() < 1e-6 && (p.y - 0.55).abs() < 1e-6,
+            "{p:?}"
+        );
         assert_eq!(m.surface.blocks.len(), SURFACE_BLOCK * SURFACE_BLOCK);
         assert_eq!(m.surface.slot.iter().filter(|s| **s != 0).count(), 1);
         // A cell of the same block without hits, and a free cell, have none.
