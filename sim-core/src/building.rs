@@ -589,25 +589,7 @@ pub fn explorable_free(
                 .collect(),
         },
     };
-    let start_cell = frame.cell_from_world(start);
-    let seed = if roomy.get(start_cell) == Some(&true) {
-        Some(start_cell)
-    } else {
-        // The roomy cell nearest to the start (lowest index on ties).
-        let mut best: Option<(i64, usize)> = None;
-        for (i, &r) in roomy.data.iter().enumerate() {
-            if r {
-                let c = frame.cell_of_index(i);
-                let (dx, dy) = ((c.x - start_cell.x) as i64, (c.y - start_cell.y) as i64);
-                let d = dx * dx + dy * dy;
-                if best.is_none_or(|(bd, _)| d < bd) {
-                    best = Some((d, i));
-                }
-            }
-        }
-        best.map(|(_, i)| frame.cell_of_index(i))
-    };
-    let Some(seed) = seed else {
+    let Some(seed) = drive_seed(&roomy, start) else {
         return reachable.clone();
     };
     let drivable = flood_fill(&roomy, seed);
@@ -769,6 +751,29 @@ pub fn explorable_free(
         }
     }
     seen
+}
+
+/// Where [`explorable_free`]'s drivable region grows from: the start's cell when the robot fits
+/// there, else the cell nearest to it where it fits (lowest index on ties); none when it fits
+/// nowhere.
+fn drive_seed(roomy: &Bitmap, start: Vec2) -> Option<Cell> {
+    let frame = roomy.frame;
+    let start_cell = frame.cell_from_world(start);
+    if roomy.get(start_cell) == Some(&true) {
+        return Some(start_cell);
+    }
+    let mut best: Option<(i64, usize)> = None;
+    for (i, &r) in roomy.data.iter().enumerate() {
+        if r {
+            let c = frame.cell_of_index(i);
+            let (dx, dy) = ((c.x - start_cell.x) as i64, (c.y - start_cell.y) as i64);
+            let d = dx * dx + dy * dy;
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, i));
+            }
+        }
+    }
+    best.map(|(_, i)| frame.cell_of_index(i))
 }
 
 /// The largest squared distance (in cells²) [`within_sq`] is used for; beyond it
@@ -1179,25 +1184,8 @@ mod tests {
             frame,
             data: dist.data.iter().map(|&d| d as f64 >= need_cells).collect(),
         };
-        let start_cell = frame.cell_from_world(start);
-        let seed = if roomy.get(start_cell) == Some(&true) {
-            Some(start_cell)
-        } else {
-            // The roomy cell nearest to the start (lowest index on ties).
-            let mut best: Option<(i64, usize)> = None;
-            for (i, &r) in roomy.data.iter().enumerate() {
-                if r {
-                    let c = frame.cell_of_index(i);
-                    let (dx, dy) = ((c.x - start_cell.x) as i64, (c.y - start_cell.y) as i64);
-                    let d = dx * dx + dy * dy;
-                    if best.is_none_or(|(bd, _)| d < bd) {
-                        best = Some((d, i));
-                    }
-                }
-            }
-            best.map(|(_, i)| frame.cell_of_index(i))
-        };
-        let Some(seed) = seed else {
+        // (Where the drivable region starts did not change: shared with the code under test.)
+        let Some(seed) = drive_seed(&roomy, start) else {
             return reachable.clone();
         };
         let drivable = flood_fill(&roomy, seed);
