@@ -618,17 +618,10 @@ pub fn explorable_free(
             .collect(),
     };
     // Rays from the drivable region's boundary.
-    const RAYS: usize = 720;
     // A ray sees a gap of one or two cells (the speckle of a scanned map) but not through it:
     // it shows a glimpse, not a room.
     let narrow = narrow_gaps(reachable);
-    let range_cells = range_m / res;
-    let dirs: Vec<[f64; 2]> = (0..RAYS)
-        .map(|k| {
-            let a = k as f64 * std::f64::consts::TAU / RAYS as f64;
-            [a.cos() * range_cells, a.sin() * range_cells]
-        })
-        .collect();
+    let dirs = ray_directions(range_m / res);
     // What a ray does on entering a cell, on the frame padded by a cell on every side (a ray
     // stops at the frame's edge): pass on, stop before it, or mark it and stop (narrow).
     let (w, h) = (frame.width as usize, frame.height as usize);
@@ -751,6 +744,19 @@ pub fn explorable_free(
         }
     }
     seen
+}
+
+/// How many rays [`explorable_free`] casts from each cell of the drivable region's boundary.
+const RAYS: usize = 720;
+
+/// The [`RAYS`] rays' extents (cells) for a range of `range_cells`, evenly spaced from angle 0.
+fn ray_directions(range_cells: f64) -> Vec<[f64; 2]> {
+    (0..RAYS)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / RAYS as f64;
+            [a.cos() * range_cells, a.sin() * range_cells]
+        })
+        .collect()
 }
 
 /// Where [`explorable_free`]'s drivable region grows from: the start's cell when the robot fits
@@ -1202,17 +1208,8 @@ mod tests {
                 .collect(),
         };
         // Rays from the drivable region's boundary.
-        const RAYS: usize = 720;
-        // A ray sees a gap of one or two cells (the speckle of a scanned map) but not through it:
-        // it shows a glimpse, not a room.
         let narrow = narrow_gaps(reachable);
-        let range_cells = range_m / res;
-        let dirs: Vec<[f64; 2]> = (0..RAYS)
-            .map(|k| {
-                let a = k as f64 * std::f64::consts::TAU / RAYS as f64;
-                [a.cos() * range_cells, a.sin() * range_cells]
-            })
-            .collect();
+        let dirs = ray_directions(range_m / res);
         for i in 0..drivable.data.len() {
             if !drivable.data[i] {
                 continue;
