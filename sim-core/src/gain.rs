@@ -70,34 +70,33 @@ thread_local! {
     static FAN: std::cell::RefCell<Option<RayFan>> = const { std::cell::RefCell::new(None) };
 }
 
-/// Flag of [`RayFan::bits`]: the cell's centre is within range.
-const IN_RANGE: u32 = 1 << 31;
+/// One cell of the fan: its offset from the centre, whether its centre is within range, the
+/// index just past its subtree, and its index in the square of the set of cells seen.
+#[derive(Debug, Clone, Copy)]
+struct FanNode {
+    dx: i16,
+    dy: i16,
+    in_range: bool,
+    end: u32,
+    seen_at: u32,
+    /// Row-major index offset in a frame `RayFan::offsets_width` cells wide.
+    offset: i32,
+}
 
 /// The rays of [`visible_area`] relative to the centre cell, as a prefix tree flattened in
 /// preorder: rays share their first cells, so a shared cell is tested once, and a blocking cell
 /// skips its whole subtree (every ray through it stops there). The cells visited are exactly
 /// those of walking every ray separately.
-///
-/// The nodes are stored as separate arrays, and a call reads only what it needs of each node
-/// (its index offset and its bit; its cell offset only where a predicate reads the cell or the
-/// square around `p` leaves the frame, its subtree's end only where it blocks): the fan of a 6 m
-/// range at 0.05 m has about 10^5 nodes, and reading them is most of the work.
 #[derive(Debug, Clone)]
 struct RayFan {
     r_cells: f64,
     half: i32,
-    /// Per node: its offset from the centre cell (the same length as `ends` and `hot`).
-    cells: Vec<(i16, i16)>,
-    /// Per node: the index just past its subtree.
-    ends: Vec<u32>,
-    /// Per node: its row-major index offset in a frame `offsets_width` cells wide, and its index
-    /// in the square of the set of cells seen, with [`IN_RANGE`] set when its centre is within range.
-    hot: Vec<(i32, u32)>,
+    nodes: Vec<FanNode>,
     /// One byte per cell of the `(2 half + 1)^2` square: 1 when counted in this call. (Bytes,
     /// not bits: consecutive nodes are neighbouring cells, whose bits would share a word, and
     /// each node's read would wait for the previous node's write.)
     seen: Vec<u8>,
-    /// The frame width the `offsets` are for (none yet).
+    /// The frame width the nodes' `offset`s are for (none yet).
     offsets_width: Option<u32>,
 }
 
@@ -136,35 +135,39 @@ impl RayFan {
         }
         // Flatten in preorder.
         let r2 = r_cells * r_cells;
-        let side = 2 * half + 1;
-        let (mut cells, mut ends, mut hot) = (Vec::new(), Vec::new(), Vec::new());
+        let mut nodes = Vec::with_capacity(offset.len());
         let mut stack: Vec<(u32, bool)> = vec![(0, false)];
         let mut open: Vec<usize> = Vec::new();
         while let Some((id, done)) = stack.pop() {
             if done {
                 let at = open.pop().expect("opened before closed");
-                ends[at] = cells.len() as u32;
+                let len = nodes.len() as u32;
+                let n: &mut FanNode = &mut nodes[at];
+                n.end = len;
                 continue;
             }
             let (dx, dy) = offset[id as usize];
             let d2 = (dx as i32 * dx as i32 + dy as i32 * dy as i32) as f64;
-            open.push(cells.len());
-            cells.push((dx, dy));
-            ends.push(0);
-            let bit = ((dy as i32 + half) * side + dx as i32 + half) as u32;
-            hot.push((0, if d2 <= r2 { bit | IN_RANGE } else { bit }));
+            open.push(nodes.len());
+            let side = 2 * half + 1;
+            nodes.push(FanNode {
+                dx,
+                dy,
+                in_range: d2 <= r2,
+                end: 0,
+                seen_at: ((dy as i32 + half) * side + dx as i32 + half) as u32,
+                offset: 0,
+            });
             stack.push((id, true));
             for &ch in children[id as usize].iter().rev() {
                 stack.push((ch, false));
             }
         }
-        let side = side as usize;
+        let side = (2 * half + 1) as usize;
         Self {
             r_cells,
             half,
-            cells,
-            ends,
-            hot,
+            nodes,
             seen: vec![0; side * side],
             offsets_width: None,
         }
@@ -181,8 +184,8 @@ impl RayFan {
         self.seen.fill(0);
         let w = frame.width as i32;
         if self.offsets_width != Some(frame.width) {
-            for (h, &(dx, dy)) in self.hot.iter_mut().zip(&self.cells) {
-                h.0 = dy as i32 * w + dx as i32;
+            for n in &mut self.nodes {
+                n.offset = n.dy as i32 * w + n.dx as i32;
             }
             self.offsets_width = Some(frame.width);
         }
@@ -191,51 +194,34 @@ impl RayFan {
         let h = self.half;
         let inside = p.x - h >= 0 && p.y - h >= 0 && p.x + h < w && p.y + h < frame.height as i32;
         let base = p.y as isize * w as isize + p.x as isize;
-        let (cells, ends, hot) = (&self.cells[..], &self.ends[..], &self.hot[..]);
-        let seen = &mut self.seen[..];
-        let cell = |i: usize| Cell::new(p.x + cells[i].0 as i32, p.y + cells[i].1 as i32);
         let mut count = 0usize;
-        // Counts node `i` (not blocked) when in range. Without branches: whether a cell was seen
-        // by an earlier ray, and whether it counts, are both close to coin flips (cells are
-        // crossed by about two rays; unknown and known cells meet along frontiers), so branches
-        // on them are mispredicted often. `counts` is a pure predicate: evaluating it for a cell
-        // already seen changes nothing.
-        let mut visit = |b: u32, c: Cell, idx: usize| {
-            if b & IN_RANGE != 0 {
-                let b = (b & !IN_RANGE) as usize;
-                let fresh = seen[b] == 0;
-                seen[b] = 1;
+        let mut i = 0usize;
+        while i < self.nodes.len() {
+            let n = self.nodes[i];
+            let c = Cell::new(p.x + n.dx as i32, p.y + n.dy as i32);
+            let idx = if inside {
+                (base + n.offset as isize) as usize
+            } else if frame.contains(c) {
+                c.y as usize * w as usize + c.x as usize
+            } else {
+                i = n.end as usize;
+                continue;
+            };
+            if blocks(c, idx) {
+                i = n.end as usize;
+                continue;
+            }
+            if n.in_range {
+                // Without branches: whether a cell was seen by an earlier ray, and whether it
+                // counts, are both close to coin flips (cells are crossed by about two rays;
+                // unknown and known cells meet along frontiers), so branches on them are
+                // mispredicted often. `counts` is a pure predicate: evaluating it for a cell
+                // already seen changes nothing.
+                let fresh = self.seen[n.seen_at as usize] == 0;
+                self.seen[n.seen_at as usize] = 1;
                 count += (fresh & counts(c, idx)) as usize;
             }
-        };
-        let n = hot.len();
-        let mut i = 0usize;
-        if inside {
-            while i < n {
-                let (offset, b) = hot[i];
-                let idx = (base + offset as isize) as usize;
-                if blocks(cell(i), idx) {
-                    i = ends[i] as usize;
-                    continue;
-                }
-                visit(b, cell(i), idx);
-                i += 1;
-            }
-        } else {
-            while i < n {
-                let c = cell(i);
-                if !frame.contains(c) {
-                    i = ends[i] as usize;
-                    continue;
-                }
-                let idx = c.y as usize * w as usize + c.x as usize;
-                if blocks(c, idx) {
-                    i = ends[i] as usize;
-                    continue;
-                }
-                visit(hot[i].1, c, idx);
-                i += 1;
-            }
+            i += 1;
         }
         count
     }
