@@ -138,29 +138,23 @@ pub fn known_box(grid: &OccupancyGrid) -> (Option<(Cell, Cell)>, usize) {
             .fold(0u8, |n, s| n + (*s != Occupancy::Unknown) as u8) as usize
     };
     for (y, row) in grid.data.chunks_exact(w).enumerate() {
-        let Some((b, _)) = row.chunks(K).enumerate().find(|(_, c)| known_in(c) > 0) else {
+        let n = row.chunks(K).map(known_in).sum::<usize>();
+        if n == 0 {
             continue;
-        };
-        let fx = b * K
-            + row[b * K..]
-                .iter()
-                .position(|s| *s != Occupancy::Unknown)
-                .expect("a known cell in the block");
-        let lb = row
+        }
+        let known = |s: &Occupancy| *s != Occupancy::Unknown;
+        let first = row
+            .chunks(K)
+            .position(|c| known_in(c) > 0)
+            .expect("a known block");
+        let last = row
             .chunks(K)
             .rposition(|c| known_in(c) > 0)
-            .expect("a known cell in the row");
-        let lx = lb * K
-            + row[lb * K..(lb * K + K).min(row.len())]
-                .iter()
-                .rposition(|s| *s != Occupancy::Unknown)
-                .expect("a known cell in the block");
-        known_cells += row
-            .chunks(K)
-            .skip(b)
-            .take(lb + 1 - b)
-            .map(known_in)
-            .sum::<usize>();
+            .expect("a known block");
+        let block = |b: usize| &row[b * K..(b * K + K).min(row.len())];
+        let fx = first * K + block(first).iter().position(known).expect("a known cell");
+        let lx = last * K + block(last).iter().rposition(known).expect("a known cell");
+        known_cells += n;
         x0 = x0.min(fx);
         x1 = x1.max(lx);
         y0 = y0.min(y);
