@@ -97,7 +97,6 @@ const SURFACE_BLOCK: usize = 16;
 /// a small part of its blocks, and ten bytes per cell of a large map are tens of MB.
 #[derive(Debug, Clone, PartialEq)]
 struct SurfacePoints {
-    width: usize,
     blocks_w: usize,
     /// Per block: 1 + its index in `blocks`, or 0 before its first hit.
     slot: Vec<u32>,
@@ -110,7 +109,6 @@ impl SurfacePoints {
         let (w, h) = (frame.width as usize, frame.height as usize);
         let blocks_w = w.div_ceil(SURFACE_BLOCK);
         Self {
-            width: w,
             blocks_w,
             slot: vec![0; blocks_w * h.div_ceil(SURFACE_BLOCK)],
             blocks: Vec::new(),
@@ -140,7 +138,6 @@ impl SurfacePoints {
     /// Adds a hit point `q` (grid coordinates) to the running mean of cell `c` (in the frame).
     #[inline]
     fn add(&mut self, c: Cell, q: [f64; 2]) {
-        debug_assert!((c.x as usize) < self.width);
         let (b, k) = self.locate(c);
         if self.slot[b] == 0 {
             let n = SURFACE_BLOCK * SURFACE_BLOCK;
