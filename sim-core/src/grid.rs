@@ -165,12 +165,14 @@ impl Bitmap {
 }
 
 /// The three states of a cell of an occupancy map.
+/// (One byte, with these values: masks of many cells are made from the bytes 8 at a time.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u8)]
 pub enum Occupancy {
     #[default]
-    Unknown,
-    Free,
-    Occupied,
+    Unknown = 0,
+    Free = 1,
+    Occupied = 2,
 }
 
 /// A ternary occupancy map: what the layout method and the frontier detector read.

@@ -14,9 +14,10 @@ use std::hash::{BuildHasherDefault, Hasher};
 #[allow(clippy::disallowed_types)]
 type FaceIndex = std::collections::HashMap<u64, u32, BuildHasherDefault<KeyHasher>>;
 
+use super::morphology::WindowMask;
 use super::{LayoutDiagnostics, WallLine};
 use crate::geom::Vec2;
-use crate::grid::{Bitmap, Cell, Occupancy, OccupancyGrid};
+use crate::grid::{Cell, Occupancy, OccupancyGrid};
 
 pub const NO_FACE: u32 = u32::MAX;
 /// The first four lines are the sides of the box: bottom, right, top, left.
@@ -66,11 +67,47 @@ pub struct Arrangement {
     pub lines: Vec<ArrLine>,
     pub faces: Vec<Face>,
     pub edges: Vec<Edge>,
-    /// Face of every grid cell (row-major), `NO_FACE` outside the box.
-    pub labels: Vec<u32>,
+    /// The face of every cell of the box, as runs of cells along rows.
+    labels: FaceRuns,
+}
+
+/// The faces of the cells of a box of the grid, as runs along its rows (a face is convex, so a
+/// row crosses it once; a few runs per row label millions of cells).
+#[derive(Debug, Clone, PartialEq)]
+struct FaceRuns {
+    /// Grid width, and the box's first and last cells.
+    width: usize,
+    c0: Cell,
+    c1: Cell,
+    /// Per row of the box, where its runs start in `runs` (one more entry than rows).
+    row_start: Vec<u32>,
+    /// (first cell's x, face), rows in order, each row's runs by x.
+    runs: Vec<(i32, u32)>,
+}
+
+impl FaceRuns {
+    fn face_of(&self, i: usize) -> u32 {
+        if self.width == 0 {
+            return NO_FACE;
+        }
+        let (x, y) = ((i % self.width) as i32, (i / self.width) as i32);
+        if x < self.c0.x || x > self.c1.x || y < self.c0.y || y > self.c1.y {
+            return NO_FACE;
+        }
+        let r = (y - self.c0.y) as usize;
+        let row = &self.runs[self.row_start[r] as usize..self.row_start[r + 1] as usize];
+        // The last run starting at or before x (every row's first run starts at the box's edge).
+        let k = row.partition_point(|run| run.0 <= x);
+        row[k - 1].1
+    }
 }
 
 impl Arrangement {
+    /// The face of the grid cell of index `i` (row-major), `NO_FACE` outside the box.
+    pub fn face_of(&self, i: usize) -> u32 {
+        self.labels.face_of(i)
+    }
+
     pub fn is_border(&self, tag: u32) -> bool {
         tag < BORDER_LINES
     }
@@ -165,7 +202,7 @@ pub fn build(
     bbox: (Cell, Cell),
     wall_lines: &[WallLine],
     doors: &[Vec<(f64, f64)>],
-    near_wall: &Bitmap,
+    near_wall: &WindowMask,
     margin_m: f64,
     trim_m: f64,
     diag: &mut LayoutDiagnostics,
@@ -260,7 +297,13 @@ pub fn build(
 
     // Label cells.
     let w = f.width as usize;
-    let mut labels = vec![NO_FACE; f.len()];
+    let mut labels = FaceRuns {
+        width: w,
+        c0,
+        c1,
+        row_start: Vec::with_capacity((c1.y - c0.y + 2).max(0) as usize),
+        runs: Vec::new(),
+    };
     let mut faces: Vec<Face> = Vec::new();
     let mut face_keys: Vec<u64> = Vec::new();
     let mut index: FaceIndex = FaceIndex::default();
@@ -273,6 +316,7 @@ pub fn build(
     let mut events: Vec<(i32, usize, i32)> = Vec::new();
     let x_of = |i: f64| (i - f.origin_m.x) / res - 0.5;
     for y in c0.y..=c1.y {
+        labels.row_start.push(labels.runs.len() as u32);
         let yc = f.origin_m.y + (y as f64 + 0.5) * res;
         let xc0 = f.origin_m.x + (c0.x as f64 + 0.5) * res;
         events.clear();
@@ -317,12 +361,9 @@ pub fn build(
             });
             let row = y as usize * w;
             let (a, b) = (row + x as usize, row + end as usize);
-            labels[a..b].fill(id);
-            // Two branch-free counts (vectorised) rather than a match per cell.
-            let run = &grid.data[a..b];
-            let free = run.iter().filter(|s| **s == Occupancy::Free).count() as u32;
-            let occ = run.iter().filter(|s| **s == Occupancy::Occupied).count() as u32;
-            let unk = run.len() as u32 - free - occ;
+            labels.runs.push((x, id));
+            let (free, occ) = count_free_occupied(&grid.data[a..b]);
+            let unk = (b - a) as u32 - free - occ;
             let face = &mut faces[id as usize];
             face.cells += (b - a) as u32;
             face.free += free;
@@ -331,6 +372,8 @@ pub fn build(
             x = end;
         }
     }
+
+    labels.row_start.push(labels.runs.len() as u32);
 
     // Face polygons.
     for (face, fk) in faces.iter_mut().zip(&face_keys) {
@@ -426,10 +469,24 @@ pub fn build(
     }
 }
 
+/// The free and the occupied cells of `cells`: two branch-free counts per block of cells short
+/// enough for byte counters, which the compiler vectorises 16 cells at a time.
+fn count_free_occupied(cells: &[Occupancy]) -> (u32, u32) {
+    let count = |block: &[Occupancy], state: Occupancy| {
+        block.iter().fold(0u8, |n, s| n + (*s == state) as u8) as u32
+    };
+    cells.chunks(255).fold((0, 0), |(free, occ), block| {
+        (
+            free + count(block, Occupancy::Free),
+            occ + count(block, Occupancy::Occupied),
+        )
+    })
+}
+
 /// Fraction of samples (one per cell length) along `a`-`b` (on the line of normal `n`) that fall
 /// on `near_wall` cells or in one of the line's door gaps.
 fn wall_coverage(
-    near_wall: &Bitmap,
+    near_wall: &WindowMask,
     a: Vec2,
     b: Vec2,
     n: Vec2,
@@ -450,9 +507,7 @@ fn wall_coverage(
     for k in 0..n {
         let p = a + (b - a) * ((k as f64 + 0.5) / n as f64);
         let t = u.dot(&p);
-        if near_wall.get(f.cell_from_world(p)) == Some(&true)
-            || doors.iter().any(|d| d.0 <= t && t <= d.1)
-        {
+        if near_wall.get(f.cell_from_world(p)) || doors.iter().any(|d| d.0 <= t && t <= d.1) {
             hits += 1;
         }
     }
@@ -485,7 +540,7 @@ mod tests {
             line(std::f64::consts::FRAC_PI_2, -4.0, 0),
             line(0.0, 6.0, 1),
         ];
-        let near = Bitmap::filled(g.frame, false);
+        let near = WindowMask::empty(g.frame);
         let arr = build(
             &g,
             (Cell::new(0, 0), Cell::new(9, 9)),
@@ -518,7 +573,7 @@ mod tests {
         let g = OccupancyGrid::from_ascii(&"..........\n".repeat(10), 1.0);
         // The diagonal y = x: direction pi/4, normal (-s, s), offset 0.
         let lines = [line(std::f64::consts::FRAC_PI_4, 0.0, 0)];
-        let near = Bitmap::filled(g.frame, false);
+        let near = WindowMask::empty(g.frame);
         let arr = build(
             &g,
             (Cell::new(0, 0), Cell::new(9, 9)),

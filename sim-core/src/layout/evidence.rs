@@ -1,9 +1,10 @@
 //! Wall evidence: occupied cells on the boundary of free space, each with the orientation of the
 //! local boundary, plus a mask of the cells near any occupied cell.
 
+use super::morphology::{dilate_reference, BitRows, WindowMask};
 use super::LayoutConfig;
 use crate::geom::Vec2;
-use crate::grid::{Bitmap, Cell, Occupancy, OccupancyGrid};
+use crate::grid::{Cell, Occupancy, OccupancyGrid};
 
 /// An occupied cell next to free space.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -19,7 +20,7 @@ pub struct BoundaryCell {
 pub struct WallEvidence {
     pub cells: Vec<BoundaryCell>,
     /// Cells within [`LayoutConfig::wall_tolerance_m`] (square neighbourhood) of an occupied cell.
-    pub near_wall: Bitmap,
+    pub near_wall: WindowMask,
     /// Inclusive cell box of the known (free or occupied) cells; `None` when there are none.
     pub known_box: Option<(Cell, Cell)>,
     pub known_cells: usize,
@@ -38,85 +39,193 @@ pub fn wall_evidence_in(
     (known_box, known_cells): (Option<(Cell, Cell)>, usize),
 ) -> WallEvidence {
     let f = grid.frame;
-    let (w, h) = (f.width as usize, f.height as usize);
-    let at = |x: isize, y: isize| -> Occupancy {
-        if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
-            Occupancy::Unknown
-        } else {
-            grid.data[y as usize * w + x as usize]
-        }
-    };
-    let is_free = |x: usize, y: usize| grid.data[y * w + x] == Occupancy::Free;
-    let mut cells = Vec::new();
-    let (bx0, by0, bx1, by1) = known_box.map_or((1, 1, 0, 0), |(a, b)| {
-        (a.x as usize, a.y as usize, b.x as usize, b.y as usize)
-    });
-    for y in by0..=by1 {
-        for x in bx0..=bx1 {
-            if grid.data[y * w + x] != Occupancy::Occupied {
-                continue;
-            }
-            let touches_free = (x > 0 && is_free(x - 1, y))
-                || (x + 1 < w && is_free(x + 1, y))
-                || (y > 0 && is_free(x, y - 1))
-                || (y + 1 < h && is_free(x, y + 1));
-            if !touches_free {
-                continue;
-            }
-            // In a 5x5 window: the first moment of the free cells (points to the free side of a
-            // wall edge) and the second moments of the occupied cells (the axis of a thin wall,
-            // which has free space on both sides and no free moment).
-            let (xi, yi) = (x as isize, y as isize);
-            let (mut gx, mut gy) = (0i32, 0i32);
-            let (mut n, mut sx, mut sy, mut sxx, mut syy, mut sxy) =
-                (0i32, 0i32, 0i32, 0i32, 0i32, 0i32);
-            for dy in -2..=2isize {
-                for dx in -2..=2isize {
-                    match at(xi + dx, yi + dy) {
-                        Occupancy::Free => {
-                            gx += dx as i32;
-                            gy += dy as i32;
-                        }
-                        Occupancy::Occupied => {
-                            let (dx, dy) = (dx as i32, dy as i32);
-                            n += 1;
-                            sx += dx;
-                            sy += dy;
-                            sxx += dx * dx;
-                            syy += dy * dy;
-                            sxy += dx * dy;
-                        }
-                        Occupancy::Unknown => {}
-                    }
-                }
-            }
-            let a = if gx * gx + gy * gy >= 25 {
-                (gy as f64).atan2(gx as f64)
-            } else {
-                let nf = n as f64;
-                let cxx = sxx as f64 - (sx * sx) as f64 / nf;
-                let cyy = syy as f64 - (sy * sy) as f64 / nf;
-                let cxy = sxy as f64 - (sx * sy) as f64 / nf;
-                if cxx == cyy && cxy == 0.0 {
-                    continue;
-                }
-                // Major axis of the occupied cells, turned to its normal.
-                0.5 * (2.0 * cxy).atan2(cxx - cyy) + std::f64::consts::FRAC_PI_2
-            };
-            let a = a.rem_euclid(std::f64::consts::PI);
-            cells.push(BoundaryCell {
-                p: f.world_from_cell(Cell::new(x as i32, y as i32)),
-                normal_rad: if a >= std::f64::consts::PI { 0.0 } else { a },
-            });
-        }
-    }
     let radius = (config.wall_tolerance_m / f.resolution_m).round().max(0.0) as usize;
-    let near_wall = dilate_occupied(grid, known_box, radius);
+    let Some(bbox) = known_box else {
+        return WallEvidence {
+            cells: Vec::new(),
+            near_wall: WindowMask::empty(f),
+            known_box,
+            known_cells,
+        };
+    };
+    // The box grown by the 5x5 window and by the dilation (cells past the grid are unknown).
+    let win = window(grid, bbox, radius.max(2));
+    let occupied = BitRows::from_grid(grid, win, |s| s == Occupancy::Occupied);
+    let free = BitRows::from_grid(grid, win, |s| s == Occupancy::Free);
+    let cells = boundary_cells(grid, bbox, win, &occupied, &free);
+    let near_wall = WindowMask::new(f, win.0, win.1, occupied.dilate(radius));
     WallEvidence {
         cells,
         near_wall,
         known_box,
         known_cells,
+    }
+}
+
+/// Per 5-bit row of a 5x5 window (bit `i` at `dx = i - 2`): the number of cells, and the sums of
+/// their `dx` and `dx^2`.
+const WINDOW_ROW: [(i32, i32, i32); 32] = {
+    let mut t = [(0, 0, 0); 32];
+    let mut m = 0;
+    while m < 32 {
+        let mut i = 0;
+        while i < 5 {
+            if m >> i & 1 == 1 {
+                let dx = i - 2;
+                t[m].0 += 1;
+                t[m].1 += dx;
+                t[m].2 += dx * dx;
+            }
+            i += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
+/// The five cells of row `y` of a mask starting `start` cells into the row (cells before the row
+/// or past it read false), bit `i` for cell `start + i`.
+fn five_at(bits: &BitRows, y: isize, start: isize) -> usize {
+    if y < 0 || y >= bits.height() as isize {
+        return 0;
+    }
+    let row = bits.row(y as usize);
+    let word = |k: usize| row.get(k).copied().unwrap_or(0);
+    let field = if start < 0 {
+        // (Only at the grid's first column.)
+        word(0) << (-start) as u32
+    } else {
+        let (k, o) = (start as usize / 64, start as u32 % 64);
+        let hi = if o > 59 { word(k + 1) << (64 - o) } else { 0 };
+        word(k) >> o | hi
+    };
+    (field & 31) as usize
+}
+
+/// The occupied cells of the box `bbox` that touch a free cell (4-neighbours), row by row, each
+/// with the orientation of its boundary. `occupied` and `free` are the grid's cells in `win`
+/// (the box grown by at least 2 cells, clamped to the grid).
+fn boundary_cells(
+    grid: &OccupancyGrid,
+    (b0, b1): (Cell, Cell),
+    (wx0, wy0, ww, _): (usize, usize, usize, usize),
+    occupied: &BitRows,
+    free: &BitRows,
+) -> Vec<BoundaryCell> {
+    let f = grid.frame;
+    let n = ww.div_ceil(64);
+    // The box's columns in the window, as a mask per word.
+    let (cx0, cx1) = (b0.x as usize - wx0, b1.x as usize - wx0);
+    let in_box = |k: usize| -> u64 {
+        let lo = (k * 64).max(cx0);
+        let hi = (k * 64 + 63).min(cx1);
+        if lo > hi {
+            0
+        } else {
+            let len = (hi - lo + 1) as u32;
+            let ones = if len == 64 {
+                u64::MAX
+            } else {
+                (1u64 << len) - 1
+            };
+            ones << (lo - k * 64)
+        }
+    };
+    let mut cells = Vec::new();
+    for y in b0.y as usize..=b1.y as usize {
+        let wy = y - wy0;
+        let occ = occupied.row(wy);
+        let fr = free.row(wy);
+        let empty: &[u64] = &[];
+        let above = if wy > 0 { free.row(wy - 1) } else { empty };
+        let below = if wy + 1 < free.height() {
+            free.row(wy + 1)
+        } else {
+            empty
+        };
+        for k in 0..n {
+            if occ[k] == 0 {
+                continue;
+            }
+            let word = |r: &[u64], k: usize| r.get(k).copied().unwrap_or(0);
+            // A free cell left, right, above or below.
+            let left = fr[k] << 1 | if k > 0 { fr[k - 1] >> 63 } else { 0 };
+            let right = fr[k] >> 1 | word(fr, k + 1) << 63;
+            let touches = left | right | word(above, k) | word(below, k);
+            let mut m = occ[k] & touches & in_box(k);
+            while m != 0 {
+                let cx = k * 64 + m.trailing_zeros() as usize;
+                m &= m - 1;
+                let mut moments = Moments::default();
+                for dy in -2..=2i32 {
+                    let (r, start) = (wy as isize + dy as isize, cx as isize - 2);
+                    let fr5 = WINDOW_ROW[five_at(free, r, start)];
+                    let oc5 = WINDOW_ROW[five_at(occupied, r, start)];
+                    moments.gx += fr5.1;
+                    moments.gy += dy * fr5.0;
+                    moments.n += oc5.0;
+                    moments.sx += oc5.1;
+                    moments.sy += dy * oc5.0;
+                    moments.sxx += oc5.2;
+                    moments.syy += dy * dy * oc5.0;
+                    moments.sxy += dy * oc5.1;
+                }
+                if let Some(normal_rad) = moments.normal_rad() {
+                    let c = Cell::new((wx0 + cx) as i32, y as i32);
+                    cells.push(BoundaryCell {
+                        p: f.world_from_cell(c),
+                        normal_rad,
+                    });
+                }
+            }
+        }
+    }
+    cells
+}
+
+/// In a 5x5 window around a boundary cell: the first moment of the free cells (points to the
+/// free side of a wall edge) and the second moments of the occupied cells (the axis of a thin
+/// wall, which has free space on both sides and no free moment). Offsets in cells.
+#[derive(Debug, Default, PartialEq, Eq)]
+struct Moments {
+    gx: i32,
+    gy: i32,
+    n: i32,
+    sx: i32,
+    sy: i32,
+    sxx: i32,
+    syy: i32,
+    sxy: i32,
+}
+
+impl Moments {
+    /// The orientation of the boundary normal in `[0, pi)`, `None` when the window has none.
+    fn normal_rad(&self) -> Option<f64> {
+        let Moments {
+            gx,
+            gy,
+            n,
+            sx,
+            sy,
+            sxx,
+            syy,
+            sxy,
+        } = *self;
+        let a = if gx * gx + gy * gy >= 25 {
+            (gy as f64).atan2(gx as f64)
+        } else {
+            let nf = n as f64;
+            let cxx = sxx as f64 - (sx * sx) as f64 / nf;
+            let cyy = syy as f64 - (sy * sy) as f64 / nf;
+            let cxy = sxy as f64 - (sx * sy) as f64 / nf;
+            if cxx == cyy && cxy == 0.0 {
+                return None;
+            }
+            // Major axis of the occupied cells, turned to its normal.
+            0.5 * (2.0 * cxy).atan2(cxx - cyy) + std::f64::consts::FRAC_PI_2
+        };
+        let a = a.rem_euclid(std::f64::consts::PI);
+        Some(if a >= std::f64::consts::PI { 0.0 } else { a })
     }
 }
 
@@ -186,143 +295,6 @@ fn window(grid: &OccupancyGrid, bbox: (Cell, Cell), margin: usize) -> (usize, us
     )
 }
 
-/// The cells of `grid` in the window, mapped by `pred`, row-major.
-fn window_mask(
-    grid: &OccupancyGrid,
-    (x0, y0, ww, wh): (usize, usize, usize, usize),
-    pred: impl Fn(Occupancy) -> bool,
-) -> Vec<bool> {
-    let w = grid.frame.width as usize;
-    let mut out = Vec::with_capacity(ww * wh);
-    for y in y0..y0 + wh {
-        out.extend(
-            grid.data[y * w + x0..y * w + x0 + ww]
-                .iter()
-                .map(|s| pred(*s)),
-        );
-    }
-    out
-}
-
-/// Occupied cells dilated by a square of half-side `radius` cells. Occupied cells are known, so
-/// only the known box (grown by the radius) is computed.
-fn dilate_occupied(grid: &OccupancyGrid, bbox: Option<(Cell, Cell)>, radius: usize) -> Bitmap {
-    let f = grid.frame;
-    let mut out = Bitmap::filled(f, false);
-    let Some(bbox) = bbox else {
-        return out;
-    };
-    let win = window(grid, bbox, radius);
-    let (x0, y0, ww, wh) = win;
-    let src = window_mask(grid, win, |s| s == Occupancy::Occupied);
-    let d = dilate(&src, ww, wh, radius);
-    let w = f.width as usize;
-    for (y, row) in d.chunks_exact(ww.max(1)).enumerate() {
-        out.data[(y0 + y) * w + x0..(y0 + y) * w + x0 + ww].copy_from_slice(row);
-    }
-    out
-}
-
-/// A row-major `w` x `h` mask dilated by a square of half-side `radius` cells (cells outside the
-/// mask are false). Separable; each axis is a few passes of shifted ORs over whole slices
-/// (radii 1, 2, 4...: a dilation by `R` followed by one by `{-s, 0, s}`, `s <= R + 1`, is one
-/// by `R + s`, also where the mask's edge clips it), which the compiler vectorises.
-pub fn dilate(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
-    let mut a = src.to_vec();
-    if radius == 0 || w == 0 || h == 0 {
-        return a;
-    }
-    let mut b = vec![false; a.len()];
-    // Rows.
-    let mut r = 0;
-    while r < radius {
-        let s = (r + 1).min(radius - r);
-        if s < w {
-            for (ra, rb) in a.chunks_exact(w).zip(b.chunks_exact_mut(w)) {
-                rb.copy_from_slice(ra);
-                or_shifted(rb, ra, s);
-            }
-            std::mem::swap(&mut a, &mut b);
-        } else {
-            for ra in a.chunks_exact_mut(w) {
-                let any = ra.iter().any(|v| *v);
-                ra.fill(any);
-            }
-        }
-        r += s;
-    }
-    // Columns: the same on the whole array with a shift of `s` rows.
-    let mut r = 0;
-    while r < radius {
-        let s = (r + 1).min(radius - r);
-        if s < h {
-            b.copy_from_slice(&a);
-            or_shifted(&mut b, &a, s * w);
-            std::mem::swap(&mut a, &mut b);
-        } else {
-            let mut any = vec![false; w];
-            for ra in a.chunks_exact(w) {
-                for (x, v) in any.iter_mut().zip(ra) {
-                    *x |= *v;
-                }
-            }
-            for ra in a.chunks_exact_mut(w) {
-                ra.copy_from_slice(&any);
-            }
-        }
-        r += s;
-    }
-    a
-}
-
-/// `dst[i] |= src[i - s] | src[i + s]` where those exist (`s < len`).
-fn or_shifted(dst: &mut [bool], src: &[bool], s: usize) {
-    let n = src.len();
-    for (d, v) in dst[s..].iter_mut().zip(&src[..n - s]) {
-        *d |= *v;
-    }
-    for (d, v) in dst[..n - s].iter_mut().zip(&src[s..]) {
-        *d |= *v;
-    }
-}
-
-/// The reference dilation (per cell, the last true cell before and after in each row, then in
-/// each column, over the whole mask): what [`dilate`] replaced; kept to check and benchmark it.
-pub fn dilate_reference(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
-    let mut rows = vec![false; w * h];
-    let mut line = Vec::new();
-    for y in 0..h {
-        dilate_1d(&src[y * w..(y + 1) * w], radius, &mut line);
-        rows[y * w..(y + 1) * w].copy_from_slice(&line);
-    }
-    let mut out = rows.clone();
-    let mut last = vec![usize::MAX; w];
-    for y in 0..h {
-        let row = &rows[y * w..(y + 1) * w];
-        for x in 0..w {
-            if row[x] {
-                last[x] = y;
-            }
-            if last[x] != usize::MAX && y - last[x] <= radius {
-                out[y * w + x] = true;
-            }
-        }
-    }
-    last.fill(usize::MAX);
-    for y in (0..h).rev() {
-        let row = &rows[y * w..(y + 1) * w];
-        for x in 0..w {
-            if row[x] {
-                last[x] = y;
-            }
-            if last[x] != usize::MAX && last[x] - y <= radius {
-                out[y * w + x] = true;
-            }
-        }
-    }
-    out
-}
-
 /// The cell radius of the opening of [`fill_thin_unknown`]; `None` when it is off.
 fn thin_radius(grid: &OccupancyGrid, max_thickness_m: f64) -> Option<usize> {
     let r = ((max_thickness_m / grid.frame.resolution_m - 1.0) / 2.0).ceil();
@@ -361,23 +333,31 @@ pub fn fill_thin_unknown_in(
     let win = window(grid, bbox, 2 * r + 2);
     let (x0, y0, ww, wh) = win;
     // Opening of the unknown cells: erode (dilate the complement), then dilate.
-    let known = window_mask(grid, win, |s| s != Occupancy::Unknown);
-    let mut eroded = dilate(&known, ww, wh, r);
-    eroded.iter_mut().for_each(|k| *k = !*k);
-    let opened = dilate(&eroded, ww, wh, r);
+    let known = BitRows::from_grid(grid, win, |s| s != Occupancy::Unknown);
+    let mut eroded = known.dilate(r);
+    eroded.invert();
+    let opened = eroded.dilate(r);
     let w = grid.frame.width as usize;
     let mut changed = 0;
-    for (y, row) in opened.chunks_exact(ww).enumerate() {
+    for y in 0..wh {
         let start = (y0 + y) * w + x0;
-        for (s, o) in out.data[start..start + ww].iter_mut().zip(row) {
-            if *s == Occupancy::Unknown && !o {
-                *s = Occupancy::Occupied;
+        let cells = &mut out.data[start..start + ww];
+        let (mut first, mut last) = (None, None);
+        for (k, (o, kn)) in opened.row(y).iter().zip(known.row(y)).enumerate() {
+            let outside = !o & opened.valid_bits(k);
+            if outside != 0 {
+                first.get_or_insert(k * 64 + outside.trailing_zeros() as usize);
+                last = Some(k * 64 + 63 - outside.leading_zeros() as usize);
+            }
+            // Unknown cells not in the opening are filled.
+            let mut fill = outside & !kn;
+            while fill != 0 {
+                cells[k * 64 + fill.trailing_zeros() as usize] = Occupancy::Occupied;
+                fill &= fill - 1;
                 changed += 1;
             }
         }
-        if let (Some(first), Some(last)) =
-            (row.iter().position(|o| !o), row.iter().rposition(|o| !o))
-        {
+        if let (Some(first), Some(last)) = (first, last) {
             // Cells not in the opening are known now (or were).
             let yy = (y0 + y) as i32;
             b0 = Cell::new(b0.x.min((x0 + first) as i32), b0.y.min(yy));
@@ -415,32 +395,6 @@ pub fn fill_thin_unknown_reference(
     (out, changed)
 }
 
-/// `out[i]` is true when some `src[j]` with `|i - j| <= radius` is.
-fn dilate_1d(src: &[bool], radius: usize, out: &mut Vec<bool>) {
-    let n = src.len();
-    out.clear();
-    out.resize(n, false);
-    // Distance to the last true on the left, then on the right.
-    let mut last: Option<usize> = None;
-    for i in 0..n {
-        if src[i] {
-            last = Some(i);
-        }
-        if last.is_some_and(|j| i - j <= radius) {
-            out[i] = true;
-        }
-    }
-    last = None;
-    for i in (0..n).rev() {
-        if src[i] {
-            last = Some(i);
-        }
-        if last.is_some_and(|j| j - i <= radius) {
-            out[i] = true;
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -474,6 +428,98 @@ mod tests {
                 )
             });
             prop_assert_eq!(known_box(&g), (expected, cells.len()));
+        }
+    }
+
+    /// The boundary cells as first written: a scan of every cell of the known box, reading the
+    /// 5x5 window cell by cell.
+    fn boundary_cells_reference(grid: &OccupancyGrid) -> Vec<BoundaryCell> {
+        let f = grid.frame;
+        let (w, h) = (f.width as isize, f.height as isize);
+        let at = |x: isize, y: isize| -> Occupancy {
+            if x < 0 || y < 0 || x >= w || y >= h {
+                Occupancy::Unknown
+            } else {
+                grid.data[(y * w + x) as usize]
+            }
+        };
+        let mut cells = Vec::new();
+        let Some((b0, b1)) = known_box(grid).0 else {
+            return cells;
+        };
+        for y in b0.y as isize..=b1.y as isize {
+            for x in b0.x as isize..=b1.x as isize {
+                if at(x, y) != Occupancy::Occupied {
+                    continue;
+                }
+                let free = |x, y| at(x, y) == Occupancy::Free;
+                if !(free(x - 1, y) || free(x + 1, y) || free(x, y - 1) || free(x, y + 1)) {
+                    continue;
+                }
+                let mut m = Moments::default();
+                for dy in -2..=2i32 {
+                    for dx in -2..=2i32 {
+                        match at(x + dx as isize, y + dy as isize) {
+                            Occupancy::Free => {
+                                m.gx += dx;
+                                m.gy += dy;
+                            }
+                            Occupancy::Occupied => {
+                                m.n += 1;
+                                m.sx += dx;
+                                m.sy += dy;
+                                m.sxx += dx * dx;
+                                m.syy += dy * dy;
+                                m.sxy += dx * dy;
+                            }
+                            Occupancy::Unknown => {}
+                        }
+                    }
+                }
+                if let Some(normal_rad) = m.normal_rad() {
+                    cells.push(BoundaryCell {
+                        p: f.world_from_cell(Cell::new(x as i32, y as i32)),
+                        normal_rad,
+                    });
+                }
+            }
+        }
+        cells
+    }
+
+    proptest! {
+        /// The boundary cells read from packed rows are the reference's, in the same order, and
+        /// the cells near a wall are the occupied cells dilated, on grids of any width (a word
+        /// and more), walls at the grid's edges included.
+        #[test]
+        fn wall_evidence_is_the_reference(
+            width in 1u32..140,
+            height in 1u32..12,
+            cells in proptest::collection::vec(0u8..6, 140 * 12),
+            tolerance_cells in 0usize..5,
+        ) {
+            let frame = crate::grid::GridFrame::new(Vec2::zeros(), 0.1, width, height);
+            let mut g = OccupancyGrid::filled(frame, Occupancy::Unknown);
+            for (s, c) in g.data.iter_mut().zip(&cells) {
+                // Half unknown, walls and free space in between.
+                *s = match c {
+                    0 | 1 => Occupancy::Free,
+                    2 => Occupancy::Occupied,
+                    _ => Occupancy::Unknown,
+                };
+            }
+            let config = LayoutConfig {
+                wall_tolerance_m: tolerance_cells as f64 * 0.1,
+                ..LayoutConfig::default()
+            };
+            let e = wall_evidence(&g, &config);
+            prop_assert_eq!(&e.cells, &boundary_cells_reference(&g));
+            let (w, h) = (width as usize, height as usize);
+            let occupied: Vec<bool> = g.data.iter().map(|s| *s == Occupancy::Occupied).collect();
+            let near = dilate_reference(&occupied, w, h, tolerance_cells);
+            for (i, want) in near.iter().enumerate() {
+                prop_assert_eq!(e.near_wall.get(frame.cell_of_index(i)), *want, "cell {}", i);
+            }
         }
     }
 
@@ -514,22 +560,6 @@ mod tests {
     }
 
     #[test]
-    fn fast_dilation_matches_the_reference() {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        for (w, h) in [(1, 1), (7, 3), (40, 33), (5, 60)] {
-            let src: Vec<bool> = (0..w * h).map(|_| rng.random_bool(0.03)).collect();
-            for radius in [0, 1, 2, 3, 4, 6, 7, 13, 80] {
-                assert_eq!(
-                    dilate(&src, w, h, radius),
-                    dilate_reference(&src, w, h, radius),
-                    "{w}x{h} r {radius}"
-                );
-            }
-        }
-    }
-
-    #[test]
     fn windowed_thin_fill_matches_the_whole_grid() {
         // A room with a grey wall band and a wide unknown region, inside a larger grid.
         let mut text = String::new();
@@ -553,12 +583,5 @@ mod tests {
         assert_eq!(na, nb);
         assert!(na >= 2 * 18, "{na}");
         assert_eq!(a, b);
-    }
-
-    #[test]
-    fn dilation_is_square() {
-        let mut out = Vec::new();
-        dilate_1d(&[false, false, true, false, false, false], 2, &mut out);
-        assert_eq!(out, vec![true, true, true, true, true, false]);
     }
 }

@@ -3,7 +3,9 @@
 //!
 //! The pipeline, one file per stage:
 //! 1. [`evidence`]: wall evidence: occupied cells that touch free space, with the orientation of
-//!    the local free/occupied boundary (a 5x5 gradient from an integral image).
+//!    the local free/occupied boundary (moments of the free and occupied cells of a 5x5 window);
+//!    thin unknown bands filled as walls. The masks are packed 64 cells to a word
+//!    ([`morphology`]): these stages pass over the whole known box at every layout.
 //! 2. [`directions`]: dominant wall directions (any angle, not only axis-aligned): a histogram of
 //!    boundary orientations, peaks, each refined by maximising the sharpness of the offsets.
 //!    [`lines`]: representative wall lines per direction: a 1D histogram of the offsets of the
@@ -28,6 +30,7 @@ pub mod arrangement;
 pub mod directions;
 pub mod evidence;
 pub mod lines;
+pub mod morphology;
 pub mod predict;
 pub mod rooms;
 pub mod synthetic;
@@ -285,7 +288,7 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
         trim_m,
         &mut diag,
     );
-    let mut plan = rooms::group_rooms(grid, &arr, config, &mut diag);
+    let mut plan = rooms::group_rooms(grid, Some(bbox), &arr, config, &mut diag);
     predict::predict_rooms(&arr, &mut plan, config, &mut diag);
     rooms::adopt_leftovers(grid, &arr, &mut plan, config);
     let rooms = rooms::room_polygons(grid, &arr, &plan, config, &mut diag);

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use super::arrangement::{Arrangement, NO_FACE};
 use super::{LayoutConfig, LayoutDiagnostics, LayoutRoom, RoomLabel};
 use crate::geom::{Polygon, Vec2};
-use crate::grid::OccupancyGrid;
+use crate::grid::{Cell, OccupancyGrid};
 
 pub const NO_ROOM: u32 = u32::MAX;
 
@@ -43,9 +43,19 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
 /// Frontier cells of `grid` grouped in 8-connected clusters of at least `min_cells` cells (grid
 /// indices, sorted per cluster). Only the box of the known cells is scanned.
 pub fn frontier_clusters(grid: &OccupancyGrid, min_cells: usize) -> Vec<Vec<usize>> {
+    frontier_clusters_in(grid, super::evidence::known_box(grid).0, min_cells)
+}
+
+/// [`frontier_clusters`] with the box of the known cells of `grid` given (from
+/// [`known_box`](super::evidence::known_box)).
+pub fn frontier_clusters_in(
+    grid: &OccupancyGrid,
+    known_box: Option<(Cell, Cell)>,
+    min_cells: usize,
+) -> Vec<Vec<usize>> {
     let f = grid.frame;
     let w = f.width as usize;
-    let (Some((b0, b1)), _) = super::evidence::known_box(grid) else {
+    let Some((b0, b1)) = known_box else {
         return Vec::new();
     };
     let (x0, y0) = (b0.x as usize, b0.y as usize);
@@ -57,7 +67,19 @@ pub fn frontier_clusters(grid: &OccupancyGrid, min_cells: usize) -> Vec<Vec<usiz
     }
     let mut clusters = Vec::new();
     let mut stack = Vec::new();
-    for start in 0..bw * bh {
+    // The frontier cells in order (blocks without one, most of the box, are passed over whole).
+    const BLOCK: usize = 64;
+    let flagged: Vec<usize> = is_frontier
+        .chunks(BLOCK)
+        .enumerate()
+        .filter(|(_, block)| block.iter().fold(false, |a, f| a | f))
+        .flat_map(|(b, block)| {
+            (0..block.len())
+                .filter(|k| block[*k])
+                .map(move |k| b * BLOCK + k)
+        })
+        .collect();
+    for start in flagged {
         if !is_frontier[start] {
             continue;
         }
@@ -92,6 +114,7 @@ pub fn frontier_clusters(grid: &OccupancyGrid, min_cells: usize) -> Vec<Vec<usiz
 /// Groups the inside faces into rooms and marks the partial ones.
 pub fn group_rooms(
     grid: &OccupancyGrid,
+    known_box: Option<(Cell, Cell)>,
     arr: &Arrangement,
     config: &LayoutConfig,
     diag: &mut LayoutDiagnostics,
@@ -99,14 +122,15 @@ pub fn group_rooms(
     let res = grid.frame.resolution_m;
     let nf = arr.faces.len();
     let min_cells = ((config.min_frontier_length_m / res).round() as usize).max(1);
-    let clusters = frontier_clusters(grid, min_cells);
+    let clusters = frontier_clusters_in(grid, known_box, min_cells);
     diag.frontier_clusters = clusters.len();
     diag.frontier_cells = clusters.iter().map(|c| c.len()).sum();
     let mut face_frontier = vec![0u32; nf];
     for c in &clusters {
         for &i in c {
-            if arr.labels[i] != NO_FACE {
-                face_frontier[arr.labels[i] as usize] += 1;
+            let fi = arr.face_of(i);
+            if fi != NO_FACE {
+                face_frontier[fi as usize] += 1;
             }
         }
     }
@@ -161,7 +185,7 @@ pub fn group_rooms(
     for c in &clusters {
         counts.clear();
         for &i in c {
-            let fi = arr.labels[i];
+            let fi = arr.face_of(i);
             if fi != NO_FACE && face_room[fi as usize] != NO_ROOM {
                 *counts.entry(face_room[fi as usize]).or_default() += 1;
             }
