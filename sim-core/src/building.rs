@@ -1076,12 +1076,22 @@ fn raster_boundary(solid: &Bitmap) -> Vec<Segment> {
 /// Sets every cell whose centre lies inside `poly` (even-odd rule) to `value`.
 pub fn fill_polygon(mask: &mut Bitmap, poly: &Polygon, value: bool) {
     let frame = mask.frame;
-    for_cells_in_polygon(frame, poly, |i| mask.data[i] = value);
+    for_runs_in_polygon(frame, poly, |run| mask.data[run].fill(value));
 }
 
 /// Calls `visit` with the row-major index of every cell of `f` whose centre lies inside `poly`
 /// (even-odd rule), touching only the polygon's rows.
 pub fn for_cells_in_polygon(f: GridFrame, poly: &Polygon, mut visit: impl FnMut(usize)) {
+    for_runs_in_polygon(f, poly, |run| run.for_each(&mut visit));
+}
+
+/// [`for_cells_in_polygon`] by runs: `visit` gets the row-major indices of each run of cells
+/// along a row, in the same order.
+pub fn for_runs_in_polygon(
+    f: GridFrame,
+    poly: &Polygon,
+    mut visit: impl FnMut(std::ops::Range<usize>),
+) {
     let n = poly.vertices.len();
     if n < 3 || f.is_empty() {
         return;
@@ -1109,8 +1119,8 @@ pub fn for_cells_in_polygon(f: GridFrame, poly: &Polygon, mut visit: impl FnMut(
             let cx0 = cx0.max(0);
             let cx1 = cx1.min(f.width as i64 - 1);
             let row = cy as usize * f.width as usize;
-            for cx in cx0..=cx1 {
-                visit(row + cx as usize);
+            if cx0 <= cx1 {
+                visit(row + cx0 as usize..row + cx1 as usize + 1);
             }
         }
     }

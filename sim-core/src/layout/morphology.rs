@@ -61,6 +61,31 @@ impl BitRows {
         out
     }
 
+    /// Sets row `y` from one bool per cell of the row.
+    pub fn set_row(&mut self, y: usize, cells: &[bool]) {
+        assert_eq!(cells.len(), self.width, "a row has width cells");
+        for (word, block) in self.row_mut(y).iter_mut().zip(cells.chunks(64)) {
+            *word = pack_bools(block);
+        }
+    }
+
+    /// Whether a cell of row `y` in columns `a..=b` (clamped to the mask) is true.
+    pub fn any_in(&self, y: usize, a: i64, b: i64) -> bool {
+        let (a, b) = (a.max(0), b.min(self.width as i64 - 1));
+        if y >= self.height || a > b {
+            return false;
+        }
+        let (a, b) = (a as usize, b as usize);
+        let row = self.row(y);
+        let (ka, kb) = (a / 64, b / 64);
+        (ka..=kb).any(|k| {
+            let lo = if k == ka { a % 64 } else { 0 };
+            let hi = if k == kb { b % 64 } else { 63 };
+            let mask = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+            row[k] & mask != 0
+        })
+    }
+
     /// Row-major, one bool per cell.
     pub fn to_bools(&self) -> Vec<bool> {
         (0..self.height)
@@ -189,6 +214,26 @@ fn pack<T>(cells: &[T], pred: impl Fn(&T) -> bool) -> u64 {
         .fold(0u64, |w, (i, c)| w | (pred(c) as u64) << i)
 }
 
+/// [`pack`] of bools, 8 at a time (a bool is a byte of 0 or 1).
+#[inline]
+fn pack_bools(cells: &[bool]) -> u64 {
+    let mut out = 0u64;
+    for (k, eight) in cells.chunks(8).enumerate() {
+        let mut bytes = [0u8; 8];
+        for (b, c) in bytes.iter_mut().zip(eight) {
+            *b = *c as u8;
+        }
+        out |= gather_low_bits(u64::from_le_bytes(bytes)) << (8 * k);
+    }
+    out
+}
+
+/// Bit `i`: the low bit of byte `i` of `x`, whose bytes are 0 or 1.
+#[inline(always)]
+fn gather_low_bits(x: u64) -> u64 {
+    x.wrapping_mul(0x0102_0408_1020_4080) >> 56
+}
+
 /// Which of the three states a mask selects, applied to the cells' bytes 8 at a time.
 struct StateSelect {
     /// Per state (by its byte value), whether it is selected.
@@ -237,7 +282,7 @@ impl StateSelect {
         let sel = (zero * self.table[0] as u64)
             | (one * self.table[1] as u64)
             | (two * self.table[2] as u64);
-        sel.wrapping_mul(0x0102_0408_1020_4080) >> 56
+        gather_low_bits(sel)
     }
 }
 
@@ -421,6 +466,31 @@ mod tests {
             let mut inverted = got.clone();
             inverted.invert();
             prop_assert_eq!(inverted.count_ones(), w * h - got.count_ones());
+        }
+    }
+
+    proptest! {
+        /// `any_in` is a scan of the cells, for any span (empty, past either end, across words);
+        /// `set_row` sets exactly the row's cells.
+        #[test]
+        fn any_in_is_a_scan(
+            w in 1usize..200,
+            density in 0.0f64..0.05,
+            a in -10i64..210,
+            len in -3i64..140,
+            seed in any::<u64>(),
+        ) {
+            use rand::{Rng, SeedableRng};
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let row: Vec<bool> = (0..w).map(|_| rng.random_bool(density)).collect();
+            let mut bits = BitRows::new(w, 2);
+            bits.set_row(1, &row);
+            prop_assert_eq!(bits.to_bools(), [vec![false; w], row.clone()].concat());
+            let b = a + len;
+            let want = (a.max(0)..=b.min(w as i64 - 1)).any(|x| row[x as usize]);
+            prop_assert_eq!(bits.any_in(1, a, b), want);
+            prop_assert!(!bits.any_in(0, a, b));
+            prop_assert!(!bits.any_in(2, a, b));
         }
     }
 
