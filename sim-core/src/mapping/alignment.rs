@@ -105,43 +105,62 @@ pub fn aligned_occupied_precision(
     let mut scored: Vec<(usize, i32, i32, i32)> = Vec::new();
     let (w, h) = (frame.width as i64, frame.height as i64);
     let nl = (2 * nt + 1) as usize;
-    // Per lattice column (row), the cell column (row) of every point: a point's cell column
-    // depends only on the translation along x, so the lattice's points share them.
-    let mut columns: Vec<Vec<i64>> = vec![Vec::new(); nl];
-    let mut rows: Vec<Vec<i64>> = vec![Vec::new(); nl];
+    // Per point, its cell column (row) for every lattice column (row): a point's cell column
+    // depends only on the translation along x, so the lattice's points share them; a point's
+    // cells for all the lattice are near one another, so the lattice's counts are summed one
+    // point at a time (integers: the order does not matter).
+    let mut columns: Vec<usize> = Vec::new();
+    let mut rows: Vec<usize> = Vec::new();
+    // `near_solid` with one more column and row, solid (outside the frame), as bytes.
+    let (wu, hu) = (w as usize, h as usize);
+    let mut padded = vec![1u8; (wu + 1) * (hu + 1)];
+    for (y, row) in near_solid.chunks_exact(wu.max(1)).enumerate().take(hu) {
+        for (p, n) in padded[y * (wu + 1)..y * (wu + 1) + wu].iter_mut().zip(row) {
+            *p = *n as u8;
+        }
+    }
+    let mut lattice_hits = vec![0u32; nl * nl];
     for ir in -nr..=nr {
         // Rotated once per angle, translated per lattice point.
         let r = rotated(ir as f64 * cfg.rotation_step_rad, stride);
-        for (n, it) in (-nt..=nt).enumerate() {
-            // As in `count`: the cell of `pivot + (x_m, y_m) + r`, one axis at a time.
-            let m = it as f64 * cfg.translation_step_m;
-            let (tx, ty) = (pivot.x + m, pivot.y + m);
-            columns[n].clear();
-            columns[n].extend(
-                r.iter()
-                    .map(|p| frame.cell_from_world(Vec2::new(tx + p.x, 0.0)).x as i64),
-            );
-            rows[n].clear();
-            rows[n].extend(r.iter().map(|p| {
+        columns.clear();
+        rows.clear();
+        for p in &r {
+            for it in -nt..=nt {
+                // As in `count`: the cell of `pivot + (x_m, y_m) + r`, one axis at a time.
+                let m = it as f64 * cfg.translation_step_m;
+                let (tx, ty) = (pivot.x + m, pivot.y + m);
+                // Indices into `padded`: a column or row outside the frame is its padding.
+                let x = frame.cell_from_world(Vec2::new(tx + p.x, 0.0)).x as i64;
+                columns.push((if (0..w).contains(&x) { x } else { w }) as usize);
                 let y = frame.cell_from_world(Vec2::new(0.0, ty + p.y)).y as i64;
-                // The row's first index, or -1 outside the frame.
-                if (0..h).contains(&y) {
-                    y * w
+                rows.push((if (0..h).contains(&y) { y } else { h }) as usize * (wu + 1));
+            }
+        }
+        lattice_hits.fill(0);
+        for (cols, rws) in columns.chunks_exact(nl).zip(rows.chunks_exact(nl)) {
+            // Usually the lattice's columns are consecutive cells of the frame (a translation
+            // step of one cell): each row's counts then add a slice (vectorised).
+            let (first, last) = (cols[0], cols[nl - 1]);
+            let consecutive = last == first + nl - 1
+                && last < wu
+                && cols.iter().enumerate().all(|(k, x)| *x == first + k);
+            for (&row, hits) in rws.iter().zip(lattice_hits.chunks_exact_mut(nl)) {
+                if consecutive {
+                    let cells = &padded[row + first..row + first + nl];
+                    for (n, c) in hits.iter_mut().zip(cells) {
+                        *n += *c as u32;
+                    }
                 } else {
-                    -1
+                    for (&x, n) in cols.iter().zip(hits.iter_mut()) {
+                        *n += padded[row + x] as u32;
+                    }
                 }
-            }));
+            }
         }
         for (ny, iy) in (-nt..=nt).enumerate() {
             for (nx, ix) in (-nt..=nt).enumerate() {
-                let hits = rows[ny]
-                    .iter()
-                    .zip(&columns[nx])
-                    .filter(|&(&row, &x)| {
-                        row < 0 || !(0..w).contains(&x) || near_solid[(row + x) as usize]
-                    })
-                    .count();
-                scored.push((hits, ir, iy, ix));
+                scored.push((lattice_hits[ny * nl + nx] as usize, ir, iy, ix));
             }
         }
     }
