@@ -21,8 +21,23 @@ const MIN_LOCAL_FRACTION: f64 = 0.12;
 
 /// Angular distance modulo pi.
 pub fn angle_diff_mod_pi(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(PI);
+    let d = rem_pi(a - b);
     d.min(PI - d)
+}
+
+/// `x.rem_euclid(PI)`, bit for bit, without its division (`fmod`) in the usual case of an
+/// angle within pi of 0: there `x % PI` is `x` exactly.
+#[inline]
+pub fn rem_pi(x: f64) -> f64 {
+    if x.abs() < PI {
+        if x < 0.0 {
+            x + PI
+        } else {
+            x
+        }
+    } else {
+        x.rem_euclid(PI)
+    }
 }
 
 /// Sharpness of the offsets of `pts` along the normal at angle `t`: the sum of squared counts of
@@ -203,6 +218,28 @@ mod tests {
             }
         }
         out
+    }
+
+    #[test]
+    fn rem_pi_is_rem_euclid() {
+        let special = [
+            0.0,
+            -0.0,
+            PI,
+            -PI,
+            PI.next_down(),
+            (-PI).next_up(),
+            1e-300,
+            -1e-300,
+            7.5,
+            -7.5,
+            f64::INFINITY,
+            f64::NAN,
+        ];
+        let sweep = (-2000..=2000).map(|k| k as f64 * 0.0037);
+        for x in special.into_iter().chain(sweep) {
+            assert_eq!(rem_pi(x).to_bits(), x.rem_euclid(PI).to_bits(), "{x}");
+        }
     }
 
     #[test]

@@ -132,6 +132,7 @@ fn boundary_cells(
         }
     };
     let mut cells = Vec::new();
+    let mut free_side = FreeSideNormals::new();
     for y in b0.y as usize..=b1.y as usize {
         let wy = y - wy0;
         let occ = occupied.row(wy);
@@ -170,7 +171,7 @@ fn boundary_cells(
                     moments.syy += dy * dy * oc5.0;
                     moments.sxy += dy * oc5.1;
                 }
-                if let Some(normal_rad) = moments.normal_rad() {
+                if let Some(normal_rad) = moments.normal_rad_with(&mut free_side) {
                     let c = Cell::new((wx0 + cx) as i32, y as i32);
                     cells.push(BoundaryCell {
                         p: f.world_from_cell(c),
@@ -211,21 +212,72 @@ impl Moments {
             syy,
             sxy,
         } = *self;
-        let a = if gx * gx + gy * gy >= 25 {
-            (gy as f64).atan2(gx as f64)
-        } else {
-            let nf = n as f64;
-            let cxx = sxx as f64 - (sx * sx) as f64 / nf;
-            let cyy = syy as f64 - (sy * sy) as f64 / nf;
-            let cxy = sxy as f64 - (sx * sy) as f64 / nf;
-            if cxx == cyy && cxy == 0.0 {
-                return None;
-            }
-            // Major axis of the occupied cells, turned to its normal.
-            0.5 * (2.0 * cxy).atan2(cxx - cyy) + std::f64::consts::FRAC_PI_2
-        };
-        let a = a.rem_euclid(std::f64::consts::PI);
-        Some(if a >= std::f64::consts::PI { 0.0 } else { a })
+        if gx * gx + gy * gy >= 25 {
+            return Some(free_side_normal(gx, gy));
+        }
+        let nf = n as f64;
+        let cxx = sxx as f64 - (sx * sx) as f64 / nf;
+        let cyy = syy as f64 - (sy * sy) as f64 / nf;
+        let cxy = sxy as f64 - (sx * sy) as f64 / nf;
+        if cxx == cyy && cxy == 0.0 {
+            return None;
+        }
+        // Major axis of the occupied cells, turned to its normal.
+        let a = 0.5 * (2.0 * cxy).atan2(cxx - cyy) + std::f64::consts::FRAC_PI_2;
+        Some(normal_in_half_turn(a))
+    }
+
+    /// [`Moments::normal_rad`], the angles of the free cells' moments (a few hundred possible
+    /// ones, most cells of a wall sharing a few) looked up in `free_side` once computed.
+    fn normal_rad_with(&self, free_side: &mut FreeSideNormals) -> Option<f64> {
+        if self.gx * self.gx + self.gy * self.gy < 25 {
+            return self.normal_rad();
+        }
+        Some(free_side.get(self.gx, self.gy))
+    }
+}
+
+/// The normal of a boundary given by the first moment `(gx, gy)` of the free cells, in `[0, pi)`.
+fn free_side_normal(gx: i32, gy: i32) -> f64 {
+    normal_in_half_turn((gy as f64).atan2(gx as f64))
+}
+
+/// An angle taken to `[0, pi)`.
+fn normal_in_half_turn(a: f64) -> f64 {
+    let a = super::directions::rem_pi(a);
+    if a >= std::f64::consts::PI {
+        0.0
+    } else {
+        a
+    }
+}
+
+/// [`free_side_normal`] of every first moment of a 5x5 window (each coordinate within
+/// `-MOMENT..=MOMENT`), computed when first asked for.
+struct FreeSideNormals {
+    /// NaN: not computed yet (a normal is never NaN).
+    table: Vec<f64>,
+}
+
+/// The largest first moment of a 5x5 window: 5 rows of offsets 1 and 2.
+const MOMENT: i32 = 15;
+
+impl FreeSideNormals {
+    fn new() -> Self {
+        let side = (2 * MOMENT + 1) as usize;
+        Self {
+            table: vec![f64::NAN; side * side],
+        }
+    }
+
+    fn get(&mut self, gx: i32, gy: i32) -> f64 {
+        let side = 2 * MOMENT + 1;
+        let i = ((gy + MOMENT) * side + gx + MOMENT) as usize;
+        let v = &mut self.table[i];
+        if v.is_nan() {
+            *v = free_side_normal(gx, gy);
+        }
+        *v
     }
 }
 

@@ -132,15 +132,34 @@ pub fn wall_lines_and_doors(
             peaks.push((centre, mass.max(support[i])));
         }
         peaks.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // The cells by offset: those near a line's offset are a run of them (`o - c` never
+        // decreases as `o` grows), found from where the offset would be sorted in.
+        let mut by_offset: Vec<u32> = (0..offs.len() as u32).collect();
+        by_offset.sort_by(|&a, &b| offs[a as usize].total_cmp(&offs[b as usize]));
         for (offset_m, support_m) in peaks {
             // Extent along the line of the cells that support it.
             let tol = config.min_line_separation_m / 2.0 + bin_m;
-            let mut ts: Vec<f64> = pts
-                .iter()
-                .zip(&offs)
-                .filter(|(_, o)| (*o - offset_m).abs() <= tol)
-                .map(|(p, _)| u.dot(p))
-                .collect();
+            let near = |k: usize| (offs[by_offset[k] as usize] - offset_m).abs() <= tol;
+            let at = by_offset.partition_point(|&k| offs[k as usize] < offset_m);
+            let mut ts: Vec<f64> = Vec::new();
+            let first = if at < by_offset.len() && near(at) {
+                Some(at)
+            } else if at > 0 && near(at - 1) {
+                Some(at - 1)
+            } else {
+                None
+            };
+            if let Some(k) = first {
+                let (mut a, mut b) = (k, k + 1);
+                while a > 0 && near(a - 1) {
+                    a -= 1;
+                }
+                while b < by_offset.len() && near(b) {
+                    b += 1;
+                }
+                // (Sorted below: the order they are gathered in does not matter.)
+                ts.extend(by_offset[a..b].iter().map(|&k| u.dot(&pts[k as usize])));
+            }
             if ts.is_empty() {
                 continue;
             }

@@ -362,12 +362,10 @@ impl WindowMask {
     }
 
     pub fn get(&self, c: Cell) -> bool {
-        c.x >= 0
-            && c.y >= 0
-            && (c.x as usize)
-                .checked_sub(self.x0)
-                .zip((c.y as usize).checked_sub(self.y0))
-                .is_some_and(|(x, y)| self.bits.get(x, y))
+        // (A cell left of or above the window wraps to a column or row far past it.)
+        let x = (c.x as i64 - self.x0 as i64) as usize;
+        let y = (c.y as i64 - self.y0 as i64) as usize;
+        self.bits.get(x, y)
     }
 
     pub fn count_true(&self) -> usize {
