@@ -16,7 +16,7 @@
 
 use crate::frontier::detect::frontier_row;
 use crate::gain::visible_area_indexed;
-use crate::grid::{Bitmap, Cell, Grid, Occupancy, OccupancyGrid};
+use crate::grid::{Bitmap, Cell, Occupancy, OccupancyGrid};
 use crate::layout::morphology::BitRows;
 use crate::layout::{Layout, RoomLabel};
 use crate::mapping::ray::{grid_from_world, walk_segment};
@@ -32,7 +32,7 @@ pub struct LayoutRaster {
     pub walls: Bitmap,
     /// 1 + the index (into `layout.rooms`) of the room whose polygon holds the cell centre, or
     /// [`NO_ROOM`].
-    room: Grid<u32>,
+    room: RoomGrid,
     /// Per room: its frontier is open.
     open: Vec<bool>,
     /// Unknown cells of a layout wall that close a short gap in an observed wall.
@@ -99,15 +99,9 @@ impl LayoutRaster {
     }
 
     /// The cells crossed by room edges, and the room holding each cell centre.
-    fn rasterise(layout: &Layout, grid: &OccupancyGrid) -> (Bitmap, Grid<u32>) {
+    fn rasterise(layout: &Layout, grid: &OccupancyGrid) -> (Bitmap, RoomGrid) {
         let frame = grid.frame;
-        let mut room = Grid::filled(frame, NO_ROOM);
-        debug_assert!(layout.rooms.len() < u32::MAX as usize);
-        for (k, r) in layout.rooms.iter().enumerate() {
-            crate::building::for_runs_in_polygon(frame, &r.polygon, |run| {
-                room.data[run].fill(k as u32 + 1)
-            });
-        }
+        let room = RoomGrid::new(frame, &layout.rooms);
         let mut walls = Bitmap::filled(frame, false);
         for r in &layout.rooms {
             for e in r.polygon.edges() {
@@ -124,22 +118,121 @@ impl LayoutRaster {
 
     /// Whether the cell lies in a predicted room.
     pub fn inside(&self, c: Cell) -> bool {
-        self.room.get(c).is_some_and(|&k| k != NO_ROOM)
+        self.room.get(c) != NO_ROOM
     }
 
     /// The index (into the layout's rooms) of the room whose polygon holds the centre of `c`.
     pub fn room_index(&self, c: Cell) -> Option<usize> {
-        self.room
-            .get(c)
-            .filter(|&&k| k != NO_ROOM)
-            .map(|&k| k as usize - 1)
+        let k = self.room.get(c);
+        (k != NO_ROOM).then(|| k as usize - 1)
     }
 
     /// Whether a candidate at `c` must fall back to the baseline gain.
     pub fn uses_baseline(&self, c: Cell) -> bool {
         match self.room.get(c) {
-            Some(&k) if k != NO_ROOM => self.open[k as usize - 1],
-            _ => true,
+            NO_ROOM => true,
+            k => self.open[k as usize - 1],
+        }
+    }
+}
+
+/// The room holding each cell centre (1 + its index, or [`NO_ROOM`]) over the box of the rooms:
+/// two bytes a cell when there are fewer than 65535 rooms (as good as always), else four.
+#[derive(Debug, Clone, PartialEq)]
+enum RoomGrid {
+    Narrow(RoomCells<u16>),
+    Wide(RoomCells<u32>),
+}
+
+impl RoomGrid {
+    fn new(frame: crate::grid::GridFrame, rooms: &[crate::layout::LayoutRoom]) -> Self {
+        if rooms.len() < u16::MAX as usize {
+            RoomGrid::Narrow(RoomCells::new(frame, rooms))
+        } else {
+            RoomGrid::Wide(RoomCells::new(frame, rooms))
+        }
+    }
+
+    #[inline]
+    fn get(&self, c: Cell) -> u32 {
+        match self {
+            RoomGrid::Narrow(r) => r.get(c),
+            RoomGrid::Wide(r) => r.get(c),
+        }
+    }
+}
+
+/// [`RoomGrid`]'s cells, row-major over a box of the frame (cells outside it hold no room).
+#[derive(Debug, Clone, PartialEq)]
+struct RoomCells<T> {
+    x0: i64,
+    y0: i64,
+    width: usize,
+    height: usize,
+    data: Vec<T>,
+}
+
+impl<T: Copy + Default + TryFrom<usize> + Into<u32>> RoomCells<T> {
+    /// Room `k` of `rooms` is stored as `k + 1`, which must fit `T`.
+    fn new(frame: crate::grid::GridFrame, rooms: &[crate::layout::LayoutRoom]) -> Self {
+        // The box of the cells whose centres the rooms' boxes hold, a cell wider on every side
+        // (rounding), within the frame.
+        let res = frame.resolution_m;
+        let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
+        for r in rooms.iter().filter(|r| r.polygon.vertices.len() >= 3) {
+            let bb = r.polygon.aabb();
+            let cell = |v: f64, o: f64| ((v - o) / res - 0.5).clamp(-1e15, 1e15);
+            x0 = x0.min(cell(bb.min.x, frame.origin_m.x).floor() as i64 - 1);
+            y0 = y0.min(cell(bb.min.y, frame.origin_m.y).floor() as i64 - 1);
+            x1 = x1.max(cell(bb.max.x, frame.origin_m.x).ceil() as i64 + 1);
+            y1 = y1.max(cell(bb.max.y, frame.origin_m.y).ceil() as i64 + 1);
+        }
+        let (x0, y0) = (x0.max(0), y0.max(0));
+        let (x1, y1) = (
+            x1.min(frame.width as i64 - 1),
+            y1.min(frame.height as i64 - 1),
+        );
+        let (width, height) = if x0 <= x1 && y0 <= y1 {
+            ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize)
+        } else {
+            (0, 0)
+        };
+        let mut data = vec![T::default(); width * height];
+        let fw = frame.width as usize;
+        for (k, r) in rooms.iter().enumerate() {
+            let Ok(value) = T::try_from(k + 1) else {
+                break;
+            };
+            crate::building::for_runs_in_polygon(frame, &r.polygon, |run| {
+                // A run lies in one row of the frame; clipped to the box (it always is inside).
+                let y = (run.start / fw) as i64;
+                let (xa, xb) = ((run.start % fw) as i64, (run.end - 1) % fw);
+                let (xa, xb) = (xa.max(x0), (xb as i64).min(x1));
+                if y < y0 || y > y1 || xa > xb {
+                    return;
+                }
+                let row = (y - y0) as usize * width;
+                data[row + (xa - x0) as usize..=row + (xb - x0) as usize].fill(value);
+            });
+        }
+        Self {
+            x0,
+            y0,
+            width,
+            height,
+            data,
+        }
+    }
+
+    #[inline]
+    fn get(&self, c: Cell) -> u32 {
+        // (A cell left of or above the box wraps to a column or row far past it.)
+        let x = (c.x as i64 - self.x0) as usize;
+        let y = (c.y as i64 - self.y0) as usize;
+        if x < self.width && y < self.height {
+            self.data[y * self.width + x].into()
+        } else {
+            NO_ROOM
         }
     }
 }
@@ -163,7 +256,6 @@ fn crosses_frontier(
     } else {
         0
     };
-    let mut crosses = false;
     for cells in edges {
         // Length of the current stretch of cells with no wall near and a frontier near.
         let mut run = 0usize;
@@ -173,10 +265,12 @@ fn crosses_frontier(
                 continue;
             }
             run += 1;
-            crosses |= run > max_gap;
+            if run > max_gap {
+                return true;
+            }
         }
     }
-    crosses
+    false
 }
 
 /// How far a frontier may be from a room's edge for the edge to cross it (see
@@ -388,6 +482,54 @@ mod tests {
     use crate::frontier::detect::is_frontier_cell;
     use crate::gain::information_gain;
     use proptest::prelude::*;
+
+    proptest! {
+        /// The room grid (over the rooms' box, two or four bytes a cell) answers as the room
+        /// polygons filled into the whole frame, later rooms over earlier ones, for every cell of
+        /// the frame and around it, with rooms partly or wholly off the frame.
+        #[test]
+        fn room_grid_is_the_rooms_filled_into_the_frame(
+            (w, h) in (1u32..60, 1u32..40),
+            rects in proptest::collection::vec(
+                (-1.0f64..4.0, -1.0f64..3.0, 0.0f64..2.5, 0.0f64..2.0, any::<bool>()),
+                0..8,
+            ),
+        ) {
+            let frame = crate::grid::GridFrame::new(Vec2::new(0.02, -0.03), 0.05, w, h);
+            let rooms: Vec<LayoutRoom> = rects
+                .iter()
+                .enumerate()
+                .map(|(k, &(x, y, dx, dy, triangle))| {
+                    let mut r = room(k as u32, (x, y), (x + dx, y + dy), RoomLabel::Full);
+                    if triangle {
+                        r.polygon = Polygon::new(vec![
+                            Vec2::new(x, y),
+                            Vec2::new(x + dx, y),
+                            Vec2::new(x, y + dy),
+                        ]);
+                    }
+                    r
+                })
+                .collect();
+            let mut want = vec![NO_ROOM; frame.len()];
+            for (k, r) in rooms.iter().enumerate() {
+                crate::building::for_cells_in_polygon(frame, &r.polygon, |i| {
+                    want[i] = k as u32 + 1
+                });
+            }
+            let narrow = RoomCells::<u16>::new(frame, &rooms);
+            let wide = RoomCells::<u32>::new(frame, &rooms);
+            for y in -2..h as i32 + 2 {
+                for x in -2..w as i32 + 2 {
+                    let c = Cell::new(x, y);
+                    let expected = frame.index(c).map_or(NO_ROOM, |i| want[i]);
+                    prop_assert_eq!(narrow.get(c), expected, "{:?}", c);
+                    prop_assert_eq!(wide.get(c), expected, "{:?}", c);
+                }
+            }
+            prop_assert_eq!(RoomGrid::new(frame, &rooms), RoomGrid::Narrow(narrow));
+        }
+    }
 
     proptest! {
         /// The row-distance test of a frontier within reach is the disk test, cell for cell,
