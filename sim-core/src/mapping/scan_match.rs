@@ -142,13 +142,15 @@ pub fn match_scan(
     if points.is_empty() || field.frame.is_empty() {
         return rejected(0.0, 0, false);
     }
-    let (mut pose, mut iterations) = gauss_newton(field, map, prior, prior, &points, cfg);
+    let mut fits = SurfaceFits::new();
+    let (mut pose, mut iterations) =
+        gauss_newton(field, map, &mut fits, prior, prior, &points, cfg);
     let (mut score, mut near) = evaluate(field, &pose, &points, cfg);
     let mut searched = false;
     if score < cfg.search_below_score {
         searched = true;
         let start = correlative_search(field, prior, &points, cfg);
-        let (p2, it2) = gauss_newton(field, map, prior, &start, &points, cfg);
+        let (p2, it2) = gauss_newton(field, map, &mut fits, prior, &start, &points, cfg);
         iterations += it2;
         let (s2, n2) = evaluate(field, &p2, &points, cfg);
         if s2 > score {
@@ -178,6 +180,7 @@ pub fn match_scan(
 fn gauss_newton(
     field: &ObstacleDistance,
     map: &LogOddsMap,
+    fits: &mut SurfaceFits,
     prior: &Pose,
     start: &Pose,
     points: &[Vec2],
@@ -185,7 +188,7 @@ fn gauss_newton(
 ) -> (Pose, u32) {
     // Levenberg-Marquardt: a step that raises the cost is undone and the damping raised.
     let mut x = Vector3::new(start.x_m, start.y_m, start.theta_rad);
-    let (mut h, mut g, mut cost) = normal_equations(field, map, prior, &x, points, cfg);
+    let (mut h, mut g, mut cost) = normal_equations(field, map, fits, prior, &x, points, cfg);
     let mut lambda = 1e-4;
     let mut iterations = 0;
     while iterations < cfg.max_iterations {
@@ -198,7 +201,8 @@ fn gauss_newton(
             break;
         }
         let x_new = x + step;
-        let (h_new, g_new, cost_new) = normal_equations(field, map, prior, &x_new, points, cfg);
+        let (h_new, g_new, cost_new) =
+            normal_equations(field, map, fits, prior, &x_new, points, cfg);
         if cost_new <= cost {
             (x, h, g, cost) = (x_new, h_new, g_new, cost_new);
             lambda = (lambda * 0.1).max(1e-6);
@@ -219,6 +223,7 @@ fn gauss_newton(
 fn normal_equations(
     field: &ObstacleDistance,
     map: &LogOddsMap,
+    fits: &mut SurfaceFits,
     prior: &Pose,
     x: &Vector3<f64>,
     points: &[Vec2],
@@ -244,7 +249,7 @@ fn normal_equations(
     let (s, c) = x[2].sin_cos();
     for p in points {
         let q = Vec2::new(x[0] + c * p.x - s * p.y, x[1] + s * p.x + c * p.y);
-        let (r, grad) = match surface_residual(map, q) {
+        let (r, grad) = match fits.residual(map, q) {
             Some(v) => v,
             None => {
                 let (d_cells, grad) = field.sample(q);
@@ -265,66 +270,136 @@ fn normal_equations(
     (h, g, cost)
 }
 
-/// Signed distance from `q` to the surface near it and its gradient (unit). The mean hit points
-/// of the occupied cells around `q`'s cell (3 x 3) are fitted with a line (principal axis); when
-/// they lie on one, the distance is to that line, otherwise (a corner, a single point) to the
-/// nearest of them. `None` when no occupied cell with hits is next to `q`'s cell.
-fn surface_residual(map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
-    let c0 = map.frame.cell_from_world(q);
-    let mut pts = [Vec2::zeros(); 9];
-    let mut n = 0;
-    for dy in -1..=1 {
-        for dx in -1..=1 {
-            if let Some(a) = map.surface_point(Cell::new(c0.x + dx, c0.y + dy)) {
-                pts[n] = a;
-                n += 1;
+/// Around a cell: the signed distance of a point `q` in it to the surface near it and its
+/// gradient (unit). The mean hit points of the occupied cells around the cell (3 x 3) are fitted
+/// with a line (principal axis); when they lie on one, the distance is to that line, otherwise
+/// (a corner, a single point) to the nearest of them. The fit depends on the cell only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum SurfaceFit {
+    /// No occupied cell with hits around.
+    Nothing,
+    /// The mean hit points lie on the line through `mean` of normal `nrm`.
+    Line { mean: Vec2, nrm: Vec2 },
+    /// A corner or a single point: the nearest mean hit point, found for each point.
+    Points,
+}
+
+impl SurfaceFit {
+    /// The mean hit points around `c0` (3 x 3), in row order, and their number.
+    fn points(map: &LogOddsMap, c0: Cell) -> ([Vec2; 9], usize) {
+        let mut pts = [Vec2::zeros(); 9];
+        let mut n = 0;
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                if let Some(a) = map.surface_point(Cell::new(c0.x + dx, c0.y + dy)) {
+                    pts[n] = a;
+                    n += 1;
+                }
+            }
+        }
+        (pts, n)
+    }
+
+    fn of(map: &LogOddsMap, c0: Cell) -> Self {
+        let (pts, n) = Self::points(map, c0);
+        if n == 0 {
+            return SurfaceFit::Nothing;
+        }
+        let pts = &pts[..n];
+        let res = map.frame.resolution_m;
+        if n >= 2 {
+            let mean = pts.iter().fold(Vec2::zeros(), |s, p| s + p) / n as f64;
+            let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+            for p in pts {
+                let d = p - mean;
+                sxx += d.x * d.x;
+                sxy += d.x * d.y;
+                syy += d.y * d.y;
+            }
+            let (sxx, sxy, syy) = (sxx / n as f64, sxy / n as f64, syy / n as f64);
+            let half_tr = 0.5 * (sxx + syy);
+            let disc = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
+            let (l_max, l_min) = (half_tr + disc, half_tr - disc);
+            // A line: spread along it (at least ~a third of a cell), almost none across.
+            if l_max >= (0.15 * res).powi(2) && l_min <= (0.3 * res).powi(2) {
+                // Eigenvector of the larger eigenvalue is the line's direction.
+                let t = if sxy.abs() > 1e-15 {
+                    Vec2::new(l_max - syy, sxy)
+                } else if sxx >= syy {
+                    Vec2::new(1.0, 0.0)
+                } else {
+                    Vec2::new(0.0, 1.0)
+                };
+                let nrm = Vec2::new(-t.y, t.x) / t.norm();
+                return SurfaceFit::Line { mean, nrm };
+            }
+        }
+        SurfaceFit::Points
+    }
+
+    /// The residual of `q` (in the cell the fit was made for).
+    fn residual(&self, map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
+        match *self {
+            SurfaceFit::Nothing => None,
+            SurfaceFit::Line { mean, nrm } => {
+                let r = nrm.dot(&(q - mean));
+                Some(if r < 0.0 { (-r, -nrm) } else { (r, nrm) })
+            }
+            SurfaceFit::Points => {
+                let (pts, n) = Self::points(map, map.frame.cell_from_world(q));
+                let a = pts[..n]
+                    .iter()
+                    .copied()
+                    .min_by(|a, b| (a - q).norm_squared().total_cmp(&(b - q).norm_squared()))?;
+                let d = q - a;
+                let r = d.norm();
+                Some(if r > 1e-9 {
+                    (r, d / r)
+                } else {
+                    (0.0, Vec2::zeros())
+                })
             }
         }
     }
-    if n == 0 {
-        return None;
+}
+
+/// The surface fits of the cells a scan's points fall in, kept while the scan is matched (the
+/// map does not change meanwhile; a scan's points fall in the same cells from one step of the
+/// optimisation to the next). Direct-mapped: a cell whose slot another holds is fitted again.
+struct SurfaceFits {
+    slots: Vec<(Cell, SurfaceFit)>,
+}
+
+/// Slots of [`SurfaceFits`] (a power of two).
+const SURFACE_FIT_SLOTS: usize = 1024;
+
+impl SurfaceFits {
+    fn new() -> Self {
+        Self::with_slots(SURFACE_FIT_SLOTS)
     }
-    let pts = &pts[..n];
-    let res = map.frame.resolution_m;
-    if n >= 2 {
-        let mean = pts.iter().fold(Vec2::zeros(), |s, p| s + p) / n as f64;
-        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
-        for p in pts {
-            let d = p - mean;
-            sxx += d.x * d.x;
-            sxy += d.x * d.y;
-            syy += d.y * d.y;
-        }
-        let (sxx, sxy, syy) = (sxx / n as f64, sxy / n as f64, syy / n as f64);
-        let half_tr = 0.5 * (sxx + syy);
-        let disc = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
-        let (l_max, l_min) = (half_tr + disc, half_tr - disc);
-        // A line: spread along it (at least ~a third of a cell), almost none across.
-        if l_max >= (0.15 * res).powi(2) && l_min <= (0.3 * res).powi(2) {
-            // Eigenvector of the larger eigenvalue is the line's direction.
-            let t = if sxy.abs() > 1e-15 {
-                Vec2::new(l_max - syy, sxy)
-            } else if sxx >= syy {
-                Vec2::new(1.0, 0.0)
-            } else {
-                Vec2::new(0.0, 1.0)
-            };
-            let nrm = Vec2::new(-t.y, t.x) / t.norm();
-            let r = nrm.dot(&(q - mean));
-            return Some(if r < 0.0 { (-r, -nrm) } else { (r, nrm) });
+
+    /// With `n` slots (a power of two).
+    fn with_slots(n: usize) -> Self {
+        Self {
+            // (The fit of a cell far off any frame: no point, and any point's cell it stands for
+            // at first has none either.)
+            slots: vec![(Cell::new(i32::MIN, i32::MIN), SurfaceFit::Nothing); n],
         }
     }
-    let a = pts
-        .iter()
-        .copied()
-        .min_by(|a, b| (a - q).norm_squared().total_cmp(&(b - q).norm_squared()))?;
-    let d = q - a;
-    let r = d.norm();
-    Some(if r > 1e-9 {
-        (r, d / r)
-    } else {
-        (0.0, Vec2::zeros())
-    })
+
+    /// The residual of `q` and its gradient; `None` when no occupied cell with hits is next to
+    /// `q`'s cell.
+    #[inline]
+    fn residual(&mut self, map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
+        let c0 = map.frame.cell_from_world(q);
+        let k = (c0.x as u32).wrapping_mul(0x9e37_79b9) ^ (c0.y as u32).wrapping_mul(0x85eb_ca6b);
+        let mask = self.slots.len() - 1;
+        let slot = &mut self.slots[(k >> 16) as usize & mask];
+        if slot.0 != c0 {
+            *slot = (c0, SurfaceFit::of(map, c0));
+        }
+        slot.1.residual(map, q)
+    }
 }
 
 /// (inlier fraction, number of points near the map).
@@ -481,6 +556,116 @@ mod tests {
             map.insert_scan(p, &world.scan(p), &LogOddsConfig::default());
         }
         (ObstacleDistance::from_grid(&map.occupancy, 8), map)
+    }
+
+    /// The residual as first written, cell by cell for every point.
+    fn surface_residual_reference(map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
+        let c0 = map.frame.cell_from_world(q);
+        let mut pts = [Vec2::zeros(); 9];
+        let mut n = 0;
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                if let Some(a) = map.surface_point(Cell::new(c0.x + dx, c0.y + dy)) {
+                    pts[n] = a;
+                    n += 1;
+                }
+            }
+        }
+        if n == 0 {
+            return None;
+        }
+        let pts = &pts[..n];
+        let res = map.frame.resolution_m;
+        if n >= 2 {
+            let mean = pts.iter().fold(Vec2::zeros(), |s, p| s + p) / n as f64;
+            let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+            for p in pts {
+                let d = p - mean;
+                sxx += d.x * d.x;
+                sxy += d.x * d.y;
+                syy += d.y * d.y;
+            }
+            let (sxx, sxy, syy) = (sxx / n as f64, sxy / n as f64, syy / n as f64);
+            let half_tr = 0.5 * (sxx + syy);
+            let disc = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
+            let (l_max, l_min) = (half_tr + disc, half_tr - disc);
+            if l_max >= (0.15 * res).powi(2) && l_min <= (0.3 * res).powi(2) {
+                let t = if sxy.abs() > 1e-15 {
+                    Vec2::new(l_max - syy, sxy)
+                } else if sxx >= syy {
+                    Vec2::new(1.0, 0.0)
+                } else {
+                    Vec2::new(0.0, 1.0)
+                };
+                let nrm = Vec2::new(-t.y, t.x) / t.norm();
+                let r = nrm.dot(&(q - mean));
+                return Some(if r < 0.0 { (-r, -nrm) } else { (r, nrm) });
+            }
+        }
+        let a = pts
+            .iter()
+            .copied()
+            .min_by(|a, b| (a - q).norm_squared().total_cmp(&(b - q).norm_squared()))?;
+        let d = q - a;
+        let r = d.norm();
+        Some(if r > 1e-9 {
+            (r, d / r)
+        } else {
+            (0.0, Vec2::zeros())
+        })
+    }
+
+    #[test]
+    fn kept_surface_fits_give_the_residuals_computed_afresh() {
+        // A mapped room (walls, a box's corners, a partial wall's end); points near its walls and
+        // all over it and off the frame, each cell asked many times (more cells than slots: slots
+        // are shared).
+        let world = room();
+        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
+        let poses: Vec<Pose> = (0..6)
+            .map(|k| {
+                Pose::new(
+                    1.5 + 0.9 * k as f64,
+                    1.0 + 0.7 * (k % 4) as f64,
+                    0.9 * k as f64,
+                )
+            })
+            .collect();
+        let (_, map) = build_map(&world, frame, &poses);
+        // Many slots (as in a match) and few (cells evicting one another all the time).
+        let mut many = SurfaceFits::new();
+        let mut few = SurfaceFits::with_slots(4);
+        let (mut near_line, mut near_points) = (0, 0);
+        for round in 0..3 {
+            for k in 0..20_000 {
+                let u = ((k * 7919 + round * 104_729) % 20_011) as f64 / 20_011.0;
+                let v = ((k * 6271 + round * 3) % 19_997) as f64 / 19_997.0;
+                let b = world.0[k % world.0.len()];
+                let q = if k % 4 == 0 {
+                    Vec2::new(-1.5 + 11.0 * u, -1.5 + 9.0 * v)
+                } else {
+                    Vec2::new(
+                        b[0] - 0.15 + u * (b[2] - b[0] + 0.3),
+                        b[1] - 0.15 + v * (b[3] - b[1] + 0.3),
+                    )
+                };
+                let bits = |v: Option<(f64, Vec2)>| {
+                    v.map(|(r, g)| (r.to_bits(), g.x.to_bits(), g.y.to_bits()))
+                };
+                let want = bits(surface_residual_reference(&map, q));
+                assert_eq!(bits(many.residual(&map, q)), want, "{q:?}");
+                assert_eq!(bits(few.residual(&map, q)), want, "{q:?}");
+                match SurfaceFit::of(&map, map.frame.cell_from_world(q)) {
+                    SurfaceFit::Line { .. } => near_line += 1,
+                    SurfaceFit::Points => near_points += 1,
+                    SurfaceFit::Nothing => {}
+                }
+            }
+        }
+        assert!(
+            near_line > 1000 && near_points > 100,
+            "{near_line} {near_points}"
+        );
     }
 
     #[test]
