@@ -23,8 +23,8 @@ use clap::{Parser, Subcommand};
 struct Cli {
     /// Most grid cells a map or building may need (its 0.05 m exploration grid over its extent
     /// plus a margin of 15 % of its longer side, 1 to 8 m, on each side; an image's pixels, a Stage floor plan's raster); a larger one is
-    /// refused before anything is allocated. Raise it for very large buildings (about 30 bytes of
-    /// memory per cell while exploring, 35 with a layout strategy).
+    /// refused before anything is allocated. Raise it for very large buildings (about 22 bytes of
+    /// memory per cell while exploring, 27 with a layout strategy).
     #[arg(long, global = true, value_name = "CELLS", default_value_t = floorcast_formats::limits::DEFAULT_MAX_CELLS, value_parser = clap::value_parser!(u64).range(1..=4_000_000_000))]
     max_cells: u64,
     #[command(subcommand)]

@@ -213,30 +213,31 @@ pub fn frontiers_where(
 /// of [`detect_frontiers`] on the same grid.
 #[derive(Debug, Clone, Default)]
 pub struct FrontierTracker {
-    /// Per cell: whether it is a frontier cell.
-    is_frontier: Vec<bool>,
+    /// Per cell: [`FRONTIER`] when it is a frontier cell, plus [`LABELLED`] while the component
+    /// search has reached it (never between calls). One byte for both: the search reads both
+    /// for every neighbour of every frontier cell, scattered over the whole map.
+    state: Vec<u8>,
     /// Every frontier cell, possibly with cells that stopped being one and repeats (pruned at
     /// each detection).
     cells: Vec<u32>,
-    /// Scratch labels for the component search (all false between calls).
-    labelled: Vec<bool>,
-    /// Scratch: position of a cell in the component being measured (`u32::MAX` between calls).
-    slot: Vec<u32>,
     /// The frontiers of the last detection (sorted cell indices, middle cell) by their first
     /// cell: most frontiers are unchanged between two decisions, and their middle cells (two
     /// searches through the frontier) are taken from here. Looked up only, never iterated.
     middles: LookupMap<usize, (Vec<usize>, usize)>,
 }
 
+/// [`FrontierTracker::state`]: a frontier cell.
+const FRONTIER: u8 = 1;
+/// [`FrontierTracker::state`]: reached by the component search.
+const LABELLED: u8 = 2;
+
 impl FrontierTracker {
     /// A tracker of `grid`'s frontier cells, from a full scan of the grid.
     pub fn new(grid: &OccupancyGrid) -> Self {
         let n = grid.data.len();
         let mut t = Self {
-            is_frontier: vec![false; n],
+            state: vec![0; n],
             cells: Vec::new(),
-            labelled: vec![false; n],
-            slot: vec![u32::MAX; n],
             middles: Default::default(),
         };
         t.update(grid, 0..n as u32);
@@ -246,7 +247,7 @@ impl FrontierTracker {
     /// Brings the frontier cells up to date after the cells at `changed` (row-major indices of
     /// `grid`, in any order, repeats allowed) changed state. A grid of another size starts over.
     pub fn update(&mut self, grid: &OccupancyGrid, changed: impl IntoIterator<Item = u32>) {
-        if grid.data.len() != self.is_frontier.len() {
+        if grid.data.len() != self.state.len() {
             *self = Self::new(grid);
             return;
         }
@@ -261,10 +262,10 @@ impl FrontierTracker {
                 }
                 let j = (ny * w + nx) as usize;
                 let now = is_frontier_cell(grid, Cell::new(nx as i32, ny as i32));
-                if now && !self.is_frontier[j] {
+                if now && self.state[j] & FRONTIER == 0 {
                     self.cells.push(j as u32);
                 }
-                self.is_frontier[j] = now;
+                self.state[j] = (self.state[j] & !FRONTIER) | if now { FRONTIER } else { 0 };
             }
         }
     }
@@ -272,8 +273,8 @@ impl FrontierTracker {
     /// The frontiers of `grid` (which must be the grid of the last update), as
     /// [`detect_frontiers`] finds them.
     pub fn detect(&mut self, grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
-        let is_frontier = &self.is_frontier;
-        self.cells.retain(|&i| is_frontier[i as usize]);
+        let state = &self.state;
+        self.cells.retain(|&i| state[i as usize] & FRONTIER != 0);
         self.cells.sort_unstable();
         self.cells.dedup();
         let w = grid.width() as i64;
@@ -283,25 +284,25 @@ impl FrontierTracker {
         let mut middles = LookupMap::default();
         for k in 0..self.cells.len() {
             let start = self.cells[k] as usize;
-            if self.labelled[start] {
+            if self.state[start] & LABELLED != 0 {
                 continue;
             }
             let mut comp: Vec<usize> = vec![start];
-            self.labelled[start] = true;
+            self.state[start] |= LABELLED;
             queue.clear();
-            queue.push_back(start);
-            while let Some(i) = queue.pop_front() {
-                let (x, y) = ((i as i64) % w, (i as i64) / w);
+            // (Each cell queued with its column and row: no division per cell.)
+            queue.push_back((start as i64 % w, start as i64 / w));
+            while let Some((x, y)) = queue.pop_front() {
                 for (dx, dy) in NEIGHBOURS8 {
                     let (nx, ny) = (x + dx as i64, y + dy as i64);
                     if nx < 0 || ny < 0 || nx >= w || ny >= h {
                         continue;
                     }
                     let j = (ny * w + nx) as usize;
-                    if self.is_frontier[j] && !self.labelled[j] {
-                        self.labelled[j] = true;
+                    if self.state[j] == FRONTIER {
+                        self.state[j] |= LABELLED;
                         comp.push(j);
-                        queue.push_back(j);
+                        queue.push_back((nx, ny));
                     }
                 }
             }
@@ -311,19 +312,9 @@ impl FrontierTracker {
             comp.sort_unstable();
             let middle = match self.middles.get(&comp[0]) {
                 Some((cells, middle)) if *cells == comp => *middle,
-                _ => {
-                    for (k, &i) in comp.iter().enumerate() {
-                        self.slot[i] = k as u32;
-                    }
-                    let slot = &self.slot;
-                    let middle = middle_cell_by(&comp, w as usize, |i| {
-                        slot.get(i).filter(|k| **k != u32::MAX).map(|k| *k as usize)
-                    });
-                    for &i in &comp {
-                        self.slot[i] = u32::MAX;
-                    }
-                    middle
-                }
+                // (A cell's place in the sorted component by binary search: no array over the
+                // whole map.)
+                _ => middle_cell(&comp, w as usize),
             };
             let to_cell = |i: usize| grid.frame.cell_of_index(i);
             frontiers.push(Frontier {
@@ -334,7 +325,7 @@ impl FrontierTracker {
             middles.insert(comp[0], (comp, middle));
         }
         for &i in &self.cells {
-            self.labelled[i as usize] = false;
+            self.state[i as usize] &= !LABELLED;
         }
         self.middles = middles;
         frontiers
