@@ -228,8 +228,9 @@ impl Explorer<'_> {
             .collect();
         far_dirty.sort_unstable();
         far_dirty.dedup();
-        self.far
-            .recompute(self.map.frame, &far_dirty, traversable, extra);
+        // (From the planning grid, just brought up to date: 4 of its cells per distance cell
+        // rather than 16 map cells, each a traversability test.)
+        self.far.recompute_from(&self.coarse, &far_dirty);
         for &i in &self.coarse_dirty {
             self.coarse_dirty_mark[i as usize] = false;
         }

@@ -142,6 +142,38 @@ impl CoarseCosts {
     }
 }
 
+impl CoarseCosts {
+    /// [`CoarseCosts::recompute`] of the cells at `cells` from `finer`, a grid of the same map
+    /// with a factor dividing this one's that is up to date: a cell's map cells are exactly those
+    /// of the `k x k` cells of `finer` under it (`k` the ratio of the factors), so it is blocked
+    /// when they all are, else their largest cost (1 + the largest extra cost of a traversable
+    /// map cell, clamped alike). Reads `k^2` cells instead of `factor^2` map cells.
+    pub fn recompute_from(&mut self, finer: &CoarseCosts, cells: &[u32]) {
+        assert!(
+            self.factor.is_multiple_of(finer.factor) && self.frame.origin_m == finer.frame.origin_m,
+            "a finer grid of the same map"
+        );
+        let k = (self.factor / finer.factor) as i32;
+        let w = self.frame.width as usize;
+        for &i in cells {
+            let i = i as usize;
+            if i >= self.frame.len() {
+                continue;
+            }
+            let (cx, cy) = ((i % w) as i32, (i / w) as i32);
+            let mut cost = 0u8;
+            for dy in 0..k {
+                for dx in 0..k {
+                    let f = Cell::new(cx * k + dx, cy * k + dy);
+                    cost = cost.max(finer.padded[finer.padded_index(f)]);
+                }
+            }
+            let p = self.padded_index(Cell::new(cx, cy));
+            self.padded[p] = cost;
+        }
+    }
+}
+
 /// The cost of one planning cell: 0 if none of its map cells is traversable, else 1 + the
 /// largest extra cost of its traversable cells (clamped to 254).
 fn cell_cost(
@@ -177,6 +209,48 @@ fn cell_cost(
 mod tests {
     use super::*;
     use crate::geom::Vec2;
+
+    proptest::proptest! {
+        /// A coarser grid recomputed from an up-to-date finer one equals one recomputed from the
+        /// map, on maps of any size (not a multiple of either factor) after any changes.
+        #[test]
+        fn recomputed_from_a_finer_grid_is_recomputed_from_the_map(
+            (w, h) in (1u32..40, 1u32..30),
+            trav in proptest::collection::vec(proptest::bool::weighted(0.6), 40 * 30),
+            extra in proptest::collection::vec(0u32..300, 40 * 30),
+            changed in proptest::collection::vec(0u32..1200, 0..60),
+        ) {
+            let fine = GridFrame::new(Vec2::new(0.3, -0.2), 0.05, w, h);
+            let n = fine.len();
+            let before = |i: usize| trav[i] && !i.is_multiple_of(3);
+            let after = |i: usize| trav[i];
+            let cost = |i: usize| extra[i];
+            let all = (Cell::new(0, 0), Cell::new(w as i32 - 1, h as i32 - 1));
+            let mut plan = coarse_costs(fine, 2, all.0, all.1, before, cost);
+            let mut far = coarse_costs(fine, 4, all.0, all.1, before, cost);
+            // The planning cells over the changed map cells (all of them: `before` and `after`
+            // differ on every third), and the distance cells over those.
+            let changed: Vec<u32> = changed.iter().map(|c| c % n as u32).collect();
+            let dirty = |g: &CoarseCosts| {
+                let mut d: Vec<u32> = (0..n as u32)
+                    .filter(|i| i.is_multiple_of(3) || changed.contains(i))
+                    .map(|i| {
+                        let c = g.coarse_of(fine.cell_of_index(i as usize));
+                        g.frame.index(c).map_or(u32::MAX, |k| k as u32)
+                    })
+                    .collect();
+                d.sort_unstable();
+                d.dedup();
+                d
+            };
+            let (plan_dirty, far_dirty) = (dirty(&plan), dirty(&far));
+            plan.recompute(fine, &plan_dirty, after, cost);
+            let mut want = far.clone();
+            want.recompute(fine, &far_dirty, after, cost);
+            far.recompute_from(&plan, &far_dirty);
+            proptest::prop_assert_eq!(far, want);
+        }
+    }
 
     #[test]
     fn a_planning_cell_is_passable_when_any_of_its_cells_is() {
