@@ -312,9 +312,10 @@ impl FrontierTracker {
             comp.sort_unstable();
             let middle = match self.middles.get(&comp[0]) {
                 Some((cells, middle)) if *cells == comp => *middle,
-                // (A cell's place in the sorted component by binary search: no array over the
-                // whole map.)
-                _ => middle_cell(&comp, w as usize),
+                // (A cell's place in the component from a table over the component's box, not
+                // over the whole map; by binary search when the box is much larger than the
+                // component, a long diagonal chain.)
+                _ => middle_cell_boxed(&comp, w as usize),
             };
             let to_cell = |i: usize| grid.frame.cell_of_index(i);
             frontiers.push(Frontier {
@@ -381,11 +382,46 @@ const NEIGHBOURS8: [(i32, i32); 8] = [
 
 /// The middle of a chain given as sorted box indices (row width `bw`).
 fn middle_cell(comp: &[usize], bw: usize) -> usize {
-    middle_cell_by(comp, bw, |i| comp.binary_search(&i).ok())
+    middle_cell_by(comp, bw, |i, _, _| comp.binary_search(&i).ok())
 }
 
-/// [`middle_cell`] with `pos` giving the position in `comp` of a cell index (`None` if absent).
-fn middle_cell_by(comp: &[usize], bw: usize, pos: impl Fn(usize) -> Option<usize>) -> usize {
+/// [`middle_cell`], finding cells in `comp` through a table of positions over its bounding box
+/// when that box is at most a few times larger than the component.
+fn middle_cell_boxed(comp: &[usize], bw: usize) -> usize {
+    let (mut x0, mut x1) = (usize::MAX, 0);
+    let (y0, y1) = (comp[0] / bw, comp[comp.len() - 1] / bw);
+    for &i in comp {
+        x0 = x0.min(i % bw);
+        x1 = x1.max(i % bw);
+    }
+    let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
+    if w * h > 64 * comp.len() + 4096 {
+        return middle_cell(comp, bw);
+    }
+    let mut slot = vec![u32::MAX; w * h];
+    let local = |x: usize, y: usize| {
+        (x >= x0 && x <= x1 && y >= y0 && y <= y1).then(|| (y - y0) * w + x - x0)
+    };
+    for (k, &i) in comp.iter().enumerate() {
+        if let Some(j) = local(i % bw, i / bw) {
+            slot[j] = k as u32;
+        }
+    }
+    middle_cell_by(comp, bw, |_, x, y| {
+        local(x as usize, y as usize)
+            .map(|j| slot[j])
+            .filter(|k| *k != u32::MAX)
+            .map(|k| k as usize)
+    })
+}
+
+/// [`middle_cell`] with `pos` giving the position in `comp` of a cell, given by its index, column
+/// and row (`None` if absent).
+fn middle_cell_by(
+    comp: &[usize],
+    bw: usize,
+    pos: impl Fn(usize, i64, i64) -> Option<usize>,
+) -> usize {
     let n = comp.len();
     // BFS inside the component; returns (depth, parent) per member and the farthest member
     // (first in BFS order among the deepest).
@@ -407,7 +443,7 @@ fn middle_cell_by(comp: &[usize], bw: usize, pos: impl Fn(usize) -> Option<usize
                 if nx < 0 || ny < 0 || nx >= bw as i64 {
                     continue;
                 }
-                if let Some(m) = pos(ny as usize * bw + nx as usize) {
+                if let Some(m) = pos(ny as usize * bw + nx as usize, nx, ny) {
                     if depth[m] == u32::MAX {
                         depth[m] = depth[k] + 1;
                         parent[m] = k as u32;

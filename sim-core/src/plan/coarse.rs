@@ -129,20 +129,12 @@ impl CoarseCosts {
         traversable: impl Fn(usize) -> bool,
         extra: impl Fn(usize) -> u32,
     ) {
-        let w = self.frame.width as usize;
-        for &i in cells {
-            let i = i as usize;
-            if i >= self.frame.len() {
-                continue;
-            }
-            let (cx, cy) = ((i % w) as i32, (i / w) as i32);
-            let p = self.padded_index(Cell::new(cx, cy));
-            self.padded[p] = cell_cost(fine, self.factor, cx, cy, &traversable, &extra);
-        }
+        let factor = self.factor;
+        self.set_cells(cells, |cx, cy| {
+            cell_cost(fine, factor, cx, cy, &traversable, &extra)
+        });
     }
-}
 
-impl CoarseCosts {
     /// [`CoarseCosts::recompute`] of the cells at `cells` from `finer`, a grid of the same map
     /// with a factor dividing this one's that is up to date: a cell's map cells are exactly those
     /// of the `k x k` cells of `finer` under it (`k` the ratio of the factors), so it is blocked
@@ -154,6 +146,20 @@ impl CoarseCosts {
             "a finer grid of the same map"
         );
         let k = (self.factor / finer.factor) as i32;
+        self.set_cells(cells, |cx, cy| {
+            let under = (0..k).flat_map(|dy| (0..k).map(move |dx| (dx, dy)));
+            under
+                .map(|(dx, dy)| {
+                    finer.padded[finer.padded_index(Cell::new(cx * k + dx, cy * k + dy))]
+                })
+                .max()
+                .unwrap_or(0)
+        });
+    }
+
+    /// Sets the cells at `cells` (row-major indices; out-of-range ones are ignored) to `cost` of
+    /// their column and row.
+    fn set_cells(&mut self, cells: &[u32], cost: impl Fn(i32, i32) -> u8) {
         let w = self.frame.width as usize;
         for &i in cells {
             let i = i as usize;
@@ -161,15 +167,8 @@ impl CoarseCosts {
                 continue;
             }
             let (cx, cy) = ((i % w) as i32, (i / w) as i32);
-            let mut cost = 0u8;
-            for dy in 0..k {
-                for dx in 0..k {
-                    let f = Cell::new(cx * k + dx, cy * k + dy);
-                    cost = cost.max(finer.padded[finer.padded_index(f)]);
-                }
-            }
             let p = self.padded_index(Cell::new(cx, cy));
-            self.padded[p] = cost;
+            self.padded[p] = cost(cx, cy);
         }
     }
 }
