@@ -330,13 +330,7 @@ impl FrontierNear {
         }
         let r2 = reach as i64 * reach as i64;
         let half_width = (-reach..=reach)
-            .map(|dy| {
-                let rest = r2 - dy as i64 * dy as i64;
-                (0..=reach as i64)
-                    .take_while(|x| x * x <= rest)
-                    .last()
-                    .unwrap_or(0)
-            })
+            .map(|dy| (r2 - dy as i64 * dy as i64).isqrt())
             .collect();
         Some(Self {
             x0,
@@ -532,9 +526,9 @@ mod tests {
     }
 
     proptest! {
-        /// The row-distance test of a frontier within reach is the disk test, cell for cell,
-        /// on random maps (cells in and out of the grid, any reach; rows of a few cells to
-        /// longer than the distances stored, with few frontier cells far apart).
+        /// The test of a frontier within reach on the frontier bits is the disk test, cell for
+        /// cell, on random maps (cells in and out of the grid, any reach; rows of a few cells to
+        /// several words, with few frontier cells far apart).
         #[test]
         fn frontier_near_is_the_disk_test(
             width in 1i32..700,

@@ -139,27 +139,21 @@ pub fn wall_lines_and_doors(
         for (offset_m, support_m) in peaks {
             // Extent along the line of the cells that support it.
             let tol = config.min_line_separation_m / 2.0 + bin_m;
-            let near = |k: usize| (offs[by_offset[k] as usize] - offset_m).abs() <= tol;
-            let at = by_offset.partition_point(|&k| offs[k as usize] < offset_m);
-            let mut ts: Vec<f64> = Vec::new();
-            let first = if at < by_offset.len() && near(at) {
-                Some(at)
-            } else if at > 0 && near(at - 1) {
-                Some(at - 1)
-            } else {
-                None
-            };
-            if let Some(k) = first {
-                let (mut a, mut b) = (k, k + 1);
-                while a > 0 && near(a - 1) {
-                    a -= 1;
-                }
-                while b < by_offset.len() && near(b) {
-                    b += 1;
-                }
-                // (Sorted below: the order they are gathered in does not matter.)
-                ts.extend(by_offset[a..b].iter().map(|&k| u.dot(&pts[k as usize])));
-            }
+            let near = |o: f64| (o - offset_m).abs() <= tol;
+            // Below the run: lower than the offset and not near; up to its end: lower or near.
+            let a = by_offset.partition_point(|&k| {
+                let o = offs[k as usize];
+                o < offset_m && !near(o)
+            });
+            let b = by_offset.partition_point(|&k| {
+                let o = offs[k as usize];
+                o < offset_m || near(o)
+            });
+            // (Sorted below: the order they are gathered in does not matter.)
+            let mut ts: Vec<f64> = by_offset[a..b]
+                .iter()
+                .map(|&k| u.dot(&pts[k as usize]))
+                .collect();
             if ts.is_empty() {
                 continue;
             }

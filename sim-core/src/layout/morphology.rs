@@ -31,11 +31,8 @@ impl BitRows {
     pub fn from_bools(src: &[bool], width: usize, height: usize) -> Self {
         assert_eq!(src.len(), width * height, "the mask must be width x height");
         let mut out = Self::new(width, height);
-        for y in 0..height {
-            let row = &src[y * width..(y + 1) * width];
-            for (word, cells) in out.row_mut(y).iter_mut().zip(row.chunks(64)) {
-                *word = pack(cells, |b| *b);
-            }
+        for (y, row) in src.chunks_exact(width.max(1)).enumerate().take(height) {
+            out.set_row(y, row);
         }
         out
     }
@@ -205,16 +202,7 @@ impl BitRows {
     }
 }
 
-/// The bits of up to 64 cells, cell `i` in bit `i`.
-#[inline]
-fn pack<T>(cells: &[T], pred: impl Fn(&T) -> bool) -> u64 {
-    cells
-        .iter()
-        .enumerate()
-        .fold(0u64, |w, (i, c)| w | (pred(c) as u64) << i)
-}
-
-/// [`pack`] of bools, 8 at a time (a bool is a byte of 0 or 1).
+/// The bits of up to 64 bools, bool `i` in bit `i`, 8 at a time (a bool is a byte of 0 or 1).
 #[inline]
 fn pack_bools(cells: &[bool]) -> u64 {
     let mut out = 0u64;

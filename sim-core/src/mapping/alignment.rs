@@ -120,16 +120,20 @@ pub fn aligned_occupied_precision(
         }
     }
     let mut lattice_hits = vec![0u32; nl * nl];
+    // As in `count`: the cell of `pivot + (x_m, y_m) + r`, one axis at a time, per lattice step.
+    let shifts: Vec<(f64, f64)> = (-nt..=nt)
+        .map(|it| {
+            let m = it as f64 * cfg.translation_step_m;
+            (pivot.x + m, pivot.y + m)
+        })
+        .collect();
     for ir in -nr..=nr {
         // Rotated once per angle, translated per lattice point.
         let r = rotated(ir as f64 * cfg.rotation_step_rad, stride);
         columns.clear();
         rows.clear();
         for p in &r {
-            for it in -nt..=nt {
-                // As in `count`: the cell of `pivot + (x_m, y_m) + r`, one axis at a time.
-                let m = it as f64 * cfg.translation_step_m;
-                let (tx, ty) = (pivot.x + m, pivot.y + m);
+            for &(tx, ty) in &shifts {
                 // Indices into `padded`: a column or row outside the frame is its padding.
                 let x = frame.cell_from_world(Vec2::new(tx + p.x, 0.0)).x as i64;
                 columns.push((if (0..w).contains(&x) { x } else { w }) as usize);
@@ -141,10 +145,8 @@ pub fn aligned_occupied_precision(
         for (cols, rws) in columns.chunks_exact(nl).zip(rows.chunks_exact(nl)) {
             // Usually the lattice's columns are consecutive cells of the frame (a translation
             // step of one cell): each row's counts then add a slice (vectorised).
-            let (first, last) = (cols[0], cols[nl - 1]);
-            let consecutive = last == first + nl - 1
-                && last < wu
-                && cols.iter().enumerate().all(|(k, x)| *x == first + k);
+            let first = cols[0];
+            let consecutive = cols.iter().enumerate().all(|(k, x)| *x == first + k);
             for (&row, hits) in rws.iter().zip(lattice_hits.chunks_exact_mut(nl)) {
                 if consecutive {
                     let cells = &padded[row + first..row + first + nl];

@@ -337,8 +337,8 @@ impl SurfaceFit {
         SurfaceFit::Points
     }
 
-    /// The residual of `q` (in the cell the fit was made for).
-    fn residual(&self, map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
+    /// The residual of `q`, in the cell `c0` the fit was made for.
+    fn residual(&self, map: &LogOddsMap, c0: Cell, q: Vec2) -> Option<(f64, Vec2)> {
         match *self {
             SurfaceFit::Nothing => None,
             SurfaceFit::Line { mean, nrm } => {
@@ -346,7 +346,7 @@ impl SurfaceFit {
                 Some(if r < 0.0 { (-r, -nrm) } else { (r, nrm) })
             }
             SurfaceFit::Points => {
-                let (pts, n) = Self::points(map, map.frame.cell_from_world(q));
+                let (pts, n) = Self::points(map, c0);
                 let a = pts[..n]
                     .iter()
                     .copied()
@@ -398,7 +398,7 @@ impl SurfaceFits {
         if slot.0 != c0 {
             *slot = (c0, SurfaceFit::of(map, c0));
         }
-        slot.1.residual(map, q)
+        slot.1.residual(map, c0, q)
     }
 }
 
