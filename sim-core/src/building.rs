@@ -284,10 +284,28 @@ impl Building {
                 frame,
                 data: solid.data.iter().map(|s| !s).collect(),
             },
-            Geometry::Raster { .. } => {
+            Geometry::Raster { solid } => {
+                // `is_free` of every centre: the raster column of a centre depends on its
+                // column only, and its row on its row, so each is found once.
+                let sf = solid.frame;
+                let column: Vec<Option<usize>> = (0..frame.width as i32)
+                    .map(|x| {
+                        let c = sf.cell_from_world(frame.world_from_cell(Cell::new(x, 0)));
+                        (c.x >= 0 && (c.x as u32) < sf.width).then_some(c.x as usize)
+                    })
+                    .collect();
                 let mut m = Bitmap::filled(frame, false);
-                for i in 0..frame.len() {
-                    m.data[i] = self.is_free(frame.world_from_cell(frame.cell_of_index(i)));
+                let w = frame.width as usize;
+                for y in 0..frame.height as i32 {
+                    let r = sf.cell_from_world(frame.world_from_cell(Cell::new(0, y))).y;
+                    if r < 0 || r as u32 >= sf.height {
+                        continue;
+                    }
+                    let raster_row =
+                        &solid.data[r as usize * sf.width as usize..][..sf.width as usize];
+                    for (f, c) in m.data[y as usize * w..][..w].iter_mut().zip(&column) {
+                        *f = c.is_some_and(|c| !raster_row[c]);
+                    }
                 }
                 m
             }
@@ -671,21 +689,20 @@ pub fn explorable_free(
     const WALKS_PER_DIRECTION: usize = 64;
     let mut walks: Vec<Vec<(Key, Vec<isize>)>> = vec![Vec::new(); RAYS];
     let mut steps = Vec::new();
-    for i in 0..drivable.data.len() {
-        if !drivable.data[i] {
+    // (Row by row: no division per cell. A neighbour is open when a ray may enter it: in the
+    // frame, reachable and not drivable, as `class` says.)
+    for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
+        if !drivable.data[y * w + x] {
             continue;
         }
-        let c = frame.cell_of_index(i);
-        let open = c.neighbours4().map(|n| {
-            frame
-                .index(n)
-                .is_some_and(|j| reachable.data[j] && !drivable.data[j])
-        });
+        let c = Cell::new(x as i32, y as i32);
+        let start = (y + 1) * pw + x + 1;
+        // In `Cell::neighbours4`'s order: +x, -x, +y, -y.
+        let open = [start + 1, start - 1, start + pw, start - pw].map(|j| class[j] != RAY_STOP);
         if !open.contains(&true) {
             // Every ray stops at its first step (the region, solid space or the frame's edge).
             continue;
         }
-        let start = (c.y as usize + 1) * pw + c.x as usize + 1;
         for (group, _) in by_step.iter().zip(open).filter(|(_, o)| *o) {
             // The walks' cells in preorder, each with the index past its subtree: a cell is
             // entered when every cell before it on its walk was passed.
@@ -802,29 +819,55 @@ fn within_sq(mask: &Bitmap, t: Option<u64>) -> Vec<bool> {
     };
     // The largest r with r * r <= t.
     let r = (0..=t).take_while(|&r| r * r <= t).last().unwrap_or(0) as usize;
-    let cap = r as u32 + 1;
+    // (In 16-bit lanes when the squared distances fit, twice as many per vector instruction as
+    // 32-bit ones: the same comparisons of the same whole numbers.)
+    if (r as u64 + 1).pow(2) <= u16::MAX as u64 && t <= u16::MAX as u64 {
+        within_sq_in::<u16>(mask, w, h, t, r)
+    } else {
+        within_sq_in::<u32>(mask, w, h, t, r)
+    }
+}
+
+/// The whole numbers [`within_sq`] computes in.
+trait Lane:
+    Copy + Ord + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> + TryFrom<u64>
+{
+    fn of(v: u64) -> Self {
+        Self::try_from(v).ok().expect("checked to fit")
+    }
+}
+impl Lane for u16 {}
+impl Lane for u32 {}
+
+fn within_sq_in<T: Lane>(mask: &Bitmap, w: usize, h: usize, t: u64, r: usize) -> Vec<bool> {
+    let cap = T::of(r as u64 + 1);
+    let (zero, one) = (T::of(0), T::of(1));
     // Down the columns, then up: the distance to the nearest true cell along the column.
-    let mut g: Vec<u32> = mask.data.iter().map(|&m| if m { 0 } else { cap }).collect();
+    let mut g: Vec<T> = mask
+        .data
+        .iter()
+        .map(|&m| if m { zero } else { cap })
+        .collect();
     for y in 1..h {
         let (above, row) = g.split_at_mut(y * w);
         for (v, &a) in row[..w].iter_mut().zip(&above[(y - 1) * w..]) {
-            *v = (*v).min(a + 1);
+            *v = (*v).min(a + one);
         }
     }
     for y in (0..h - 1).rev() {
         let (row, below) = g.split_at_mut((y + 1) * w);
         for (v, &b) in row[y * w..].iter_mut().zip(&below[..w]) {
-            *v = (*v).min(b + 1);
+            *v = (*v).min(b + one);
         }
     }
     // Squared, then along the rows: a true cell within `t` lies in a column `dx <= r` away.
     for v in &mut g {
-        *v *= *v;
+        *v = *v * *v;
     }
     let mut out = vec![false; w * h];
     for (row, near) in g.chunks_exact(w).zip(out.chunks_exact_mut(w)) {
         for dx in 0..=r.min(w - 1) {
-            let limit = (t - (dx * dx) as u64) as u32;
+            let limit = T::of(t - (dx * dx) as u64);
             for (n, &v) in near[..w - dx].iter_mut().zip(&row[dx..]) {
                 *n |= v <= limit;
             }
@@ -977,22 +1020,27 @@ fn uniform_walk(d: [f64; 2], limit: f64) -> Option<Vec<(i32, i32)>> {
 /// walk 4-connected, so they never pass between cells that touch only at a corner.
 fn narrow_gaps(free: &Bitmap) -> Bitmap {
     let frame = free.frame;
-    let is_free = |c: Cell| free.get(c).copied().unwrap_or(false);
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    // The mask with two false cells around it, so that every cell's neighbours up to two cells
+    // away along its row and column are plain offsets. A cell is in a gap along a line when
+    // the free cells next to it on that line, on both sides and up to two away, number at most
+    // one: neither neighbour free, or one free with the cell beyond it not.
+    let pw = w + 4;
+    let mut padded = vec![false; pw * (h + 4)];
+    for y in 0..h {
+        padded[(y + 2) * pw + 2..][..w].copy_from_slice(&free.data[y * w..][..w]);
+    }
+    let at = |k: usize| &padded[k..];
     let mut out = Bitmap::filled(frame, false);
-    for i in 0..free.data.len() {
-        if !free.data[i] {
-            continue;
+    for y in 0..h {
+        let c = (y + 2) * pw + 2;
+        let (l2, l1, r1, r2) = (at(c - 2), at(c - 1), at(c + 1), at(c + 2));
+        let (d2, d1, u1, u2) = (at(c - 2 * pw), at(c - pw), at(c + pw), at(c + 2 * pw));
+        let gap = |a2: bool, a1: bool, b1: bool, b2: bool| (!a1 | !a2) & (!b1 | !b2) & !(a1 & b1);
+        for (x, o) in out.data[y * w..][..w].iter_mut().enumerate() {
+            *o =
+                padded[c + x] & (gap(l2[x], l1[x], r1[x], r2[x]) | gap(d2[x], d1[x], u1[x], u2[x]));
         }
-        let c = frame.cell_of_index(i);
-        out.data[i] = [(1, 0), (0, 1)].iter().any(|&(dx, dy)| {
-            // Free cells in a row through `c` along (dx, dy), counting up to 3.
-            let run = |sign: i32| {
-                (1..=2)
-                    .take_while(|&k| is_free(Cell::new(c.x + sign * k * dx, c.y + sign * k * dy)))
-                    .count()
-            };
-            1 + run(1) + run(-1) <= 2
-        });
     }
     out
 }
@@ -1004,16 +1052,34 @@ pub fn flood_fill(mask: &Bitmap, seed: Cell) -> Bitmap {
     if mask.get(seed) != Some(&true) {
         return out;
     }
-    let mut stack = vec![seed];
-    out.set(seed, true);
-    while let Some(c) = stack.pop() {
-        for n in c.neighbours4() {
-            if let Some(i) = frame.index(n) {
-                if mask.data[i] && !out.data[i] {
-                    out.data[i] = true;
-                    stack.push(n);
-                }
+    // On the frame padded by a cell that is never filled, so that a cell's four neighbours are
+    // plain offsets. (Which cells are filled does not depend on the order they are reached.)
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let pw = w + 2;
+    let mut open = vec![false; pw * (h + 2)];
+    for y in 0..h {
+        open[(y + 1) * pw + 1..][..w].copy_from_slice(&mask.data[y * w..][..w]);
+    }
+    let first = (seed.y as usize + 1) * pw + seed.x as usize + 1;
+    open[first] = false;
+    let mut stack = vec![first];
+    while let Some(i) = stack.pop() {
+        for j in [i + 1, i - 1, i + pw, i - pw] {
+            if open[j] {
+                open[j] = false;
+                stack.push(j);
             }
+        }
+    }
+    // Filled: the cells of the mask no longer open.
+    for y in 0..h {
+        let row = &open[(y + 1) * pw + 1..][..w];
+        for ((o, &m), &still) in out.data[y * w..][..w]
+            .iter_mut()
+            .zip(&mask.data[y * w..])
+            .zip(row)
+        {
+            *o = m & !still;
         }
     }
     out
@@ -1023,17 +1089,26 @@ pub fn flood_fill(mask: &Bitmap, seed: Cell) -> Bitmap {
 fn raster_boundary(solid: &Bitmap) -> Vec<Segment> {
     let f = solid.frame;
     let (w, h) = (f.width as i32, f.height as i32);
-    let is_solid = |x: i32, y: i32| solid.get(Cell::new(x, y)).copied().unwrap_or(true);
+    let wu = w as usize;
+    // Rows -1..=h, outside the grid solid: row y of the grid is `rows[y + 1]`.
+    let all_solid = vec![true; wu];
+    let row = |y: i32| -> &[bool] {
+        if y < 0 || y >= h {
+            &all_solid
+        } else {
+            &solid.data[y as usize * wu..][..wu]
+        }
+    };
     let corner = |x: i32, y: i32| f.origin_m + Vec2::new(x as f64, y as f64) * f.resolution_m;
     let mut out = Vec::new();
     // Horizontal edges on the line y (between rows y-1 and y). Orientation matters for merging:
     // a run continues only while the same side is solid.
     for y in 0..=h {
+        let (below_row, above_row) = (row(y - 1), row(y));
         let mut run: Option<(i32, bool)> = None;
         for x in 0..=w {
             let edge = if x < w {
-                let below = is_solid(x, y - 1);
-                let above = is_solid(x, y);
+                let (below, above) = (below_row[x as usize], above_row[x as usize]);
                 (below != above).then_some(below)
             } else {
                 None
@@ -1049,27 +1124,33 @@ fn raster_boundary(solid: &Bitmap) -> Vec<Segment> {
             }
         }
     }
-    for x in 0..=w {
-        let mut run: Option<(i32, bool)> = None;
-        for y in 0..=h {
+    // Vertical edges on the line x (between columns x-1 and x), column after column, each from
+    // the bottom up: found row by row (the rows are contiguous), each column's runs kept apart.
+    let mut runs: Vec<Option<(i32, bool)>> = vec![None; wu + 1];
+    let mut columns: Vec<Vec<Segment>> = vec![Vec::new(); wu + 1];
+    for y in 0..=h {
+        let r = row(y);
+        for x in 0..=w {
             let edge = if y < h {
-                let left = is_solid(x - 1, y);
-                let right = is_solid(x, y);
+                let left = x > 0 && r[x as usize - 1] || x == 0;
+                let right = x == w || r[x as usize];
                 (left != right).then_some(left)
             } else {
                 None
             };
-            match (run, edge) {
+            let run = &mut runs[x as usize];
+            match (*run, edge) {
                 (Some((_, o)), Some(e)) if o == e => {}
                 (Some((y0, _)), e) => {
-                    out.push(Segment::new(corner(x, y0), corner(x, y)));
-                    run = e.map(|e| (y, e));
+                    columns[x as usize].push(Segment::new(corner(x, y0), corner(x, y)));
+                    *run = e.map(|e| (y, e));
                 }
-                (None, Some(e)) => run = Some((y, e)),
+                (None, Some(e)) => *run = Some((y, e)),
                 (None, None) => {}
             }
         }
     }
+    out.extend(columns.into_iter().flatten());
     out
 }
 
@@ -1180,6 +1261,136 @@ mod tests {
         assert_eq!(explorable_free(&reachable, start, 0.5, 1.0), reachable);
     }
 
+    /// [`raster_boundary`] as first written: every edge looked up by cell, columns scanned one
+    /// by one.
+    fn raster_boundary_reference(solid: &Bitmap) -> Vec<Segment> {
+        let f = solid.frame;
+        let (w, h) = (f.width as i32, f.height as i32);
+        let is_solid = |x: i32, y: i32| solid.get(Cell::new(x, y)).copied().unwrap_or(true);
+        let corner = |x: i32, y: i32| f.origin_m + Vec2::new(x as f64, y as f64) * f.resolution_m;
+        let mut out = Vec::new();
+        for y in 0..=h {
+            let mut run: Option<(i32, bool)> = None;
+            for x in 0..=w {
+                let edge = if x < w {
+                    let below = is_solid(x, y - 1);
+                    let above = is_solid(x, y);
+                    (below != above).then_some(below)
+                } else {
+                    None
+                };
+                match (run, edge) {
+                    (Some((_, o)), Some(e)) if o == e => {}
+                    (Some((x0, _)), e) => {
+                        out.push(Segment::new(corner(x0, y), corner(x, y)));
+                        run = e.map(|e| (x, e));
+                    }
+                    (None, Some(e)) => run = Some((x, e)),
+                    (None, None) => {}
+                }
+            }
+        }
+        for x in 0..=w {
+            let mut run: Option<(i32, bool)> = None;
+            for y in 0..=h {
+                let edge = if y < h {
+                    let left = is_solid(x - 1, y);
+                    let right = is_solid(x, y);
+                    (left != right).then_some(left)
+                } else {
+                    None
+                };
+                match (run, edge) {
+                    (Some((_, o)), Some(e)) if o == e => {}
+                    (Some((y0, _)), e) => {
+                        out.push(Segment::new(corner(x, y0), corner(x, y)));
+                        run = e.map(|e| (y, e));
+                    }
+                    (None, Some(e)) => run = Some((y, e)),
+                    (None, None) => {}
+                }
+            }
+        }
+        out
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// The same segments in the same order (the laser's BVH is built from them in order).
+        #[test]
+        fn raster_boundary_equals_its_first_form(
+            cells in proptest::collection::vec(proptest::bool::weighted(0.4), 24 * 20),
+            w in 0u32..24, h in 0u32..20, res in 0.01f64..1.0, ox in -5.0f64..5.0,
+        ) {
+            let frame = GridFrame::new(Vec2::new(ox, -ox / 3.0), res, w, h);
+            let solid = Bitmap { frame, data: cells[..frame.len()].to_vec() };
+            proptest::prop_assert_eq!(raster_boundary(&solid), raster_boundary_reference(&solid));
+        }
+    }
+
+    /// [`flood_fill`] as first written: cells on a stack, each neighbour looked up by cell.
+    fn flood_fill_reference(mask: &Bitmap, seed: Cell) -> Bitmap {
+        let frame = mask.frame;
+        let mut out = Bitmap::filled(frame, false);
+        if mask.get(seed) != Some(&true) {
+            return out;
+        }
+        let mut stack = vec![seed];
+        out.set(seed, true);
+        while let Some(c) = stack.pop() {
+            for n in c.neighbours4() {
+                if let Some(i) = frame.index(n) {
+                    if mask.data[i] && !out.data[i] {
+                        out.data[i] = true;
+                        stack.push(n);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// [`narrow_gaps`] as first written: the runs counted cell by cell.
+    fn narrow_gaps_reference(free: &Bitmap) -> Bitmap {
+        let frame = free.frame;
+        let is_free = |c: Cell| free.get(c).copied().unwrap_or(false);
+        let mut out = Bitmap::filled(frame, false);
+        for i in 0..free.data.len() {
+            if !free.data[i] {
+                continue;
+            }
+            let c = frame.cell_of_index(i);
+            out.data[i] = [(1, 0), (0, 1)].iter().any(|&(dx, dy)| {
+                let run = |sign: i32| {
+                    (1..=2)
+                        .take_while(|&k| {
+                            is_free(Cell::new(c.x + sign * k * dx, c.y + sign * k * dy))
+                        })
+                        .count()
+                };
+                1 + run(1) + run(-1) <= 2
+            });
+        }
+        out
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// Flood fill and narrow gaps on masks of every density and shape (one row or column
+        /// included), from any seed, in or out of the mask.
+        #[test]
+        fn flood_fill_and_narrow_gaps_equal_their_first_forms(
+            cells in proptest::collection::vec(proptest::bool::weighted(0.6), 24 * 20),
+            w in 1u32..24, h in 1u32..20, sx in -1i32..25, sy in -1i32..21,
+        ) {
+            let frame = GridFrame::new(Vec2::zeros(), 0.1, w, h);
+            let mask = Bitmap { frame, data: cells[..frame.len()].to_vec() };
+            let seed = Cell::new(sx, sy);
+            proptest::prop_assert_eq!(flood_fill(&mask, seed), flood_fill_reference(&mask, seed));
+            proptest::prop_assert_eq!(narrow_gaps(&mask), narrow_gaps_reference(&mask));
+        }
+    }
+
     /// [`explorable_free`] as it was before its rays were grouped by first step and their walks
     /// shared: every ray from every boundary cell walked with `SegmentCells`.
     fn explorable_free_oracle(
@@ -1204,7 +1415,7 @@ mod tests {
         let Some(seed) = drive_seed(&roomy, start) else {
             return reachable.clone();
         };
-        let drivable = flood_fill(&roomy, seed);
+        let drivable = flood_fill_reference(&roomy, seed);
         // Seen from inside the disc: within the body's radius of a drivable cell.
         let to_drivable = distance_to(&drivable);
         let body_cells = robot_radius_m / res;
@@ -1218,7 +1429,7 @@ mod tests {
                 .collect(),
         };
         // Rays from the drivable region's boundary.
-        let narrow = narrow_gaps(reachable);
+        let narrow = narrow_gaps_reference(reachable);
         let dirs = ray_directions(range_m / res);
         for i in 0..drivable.data.len() {
             if !drivable.data[i] {
@@ -1312,6 +1523,36 @@ mod tests {
             proptest::prop_assert_eq!(&got, &explorable_free_oracle(&reachable, start, radius, range));
             // More than the body's disc around the start: rays were cast.
             proptest::prop_assert!(got.count_true() > 100);
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(128))]
+        /// A raster's free mask on another frame (offset, finer, coarser, larger or smaller than
+        /// the raster) is `is_free` of every cell centre.
+        #[test]
+        fn raster_free_mask_on_another_frame_is_is_free_of_every_centre(
+            solid in proptest::collection::vec(proptest::bool::weighted(0.3), 30 * 20),
+            w in 1u32..30, h in 1u32..20,
+            res in proptest::prop_oneof![proptest::strategy::Just(0.05), 0.01f64..0.5],
+            fres in proptest::prop_oneof![proptest::strategy::Just(0.05), 0.01f64..0.5],
+            ox in -2.0f64..2.0, oy in -2.0f64..2.0, fw in 0u32..60, fh in 0u32..40,
+        ) {
+            let frame = GridFrame::new(Vec2::new(0.3, -0.7), res, w, h);
+            let b = Building {
+                name: "r".into(),
+                geometry: Geometry::Raster {
+                    solid: Bitmap { frame, data: solid[..frame.len()].to_vec() },
+                },
+                rooms: vec![],
+                doors: vec![],
+                start: None,
+            };
+            let other = GridFrame::new(Vec2::new(0.3 + ox, -0.7 + oy), fres, fw, fh);
+            let expected: Vec<bool> = (0..other.len())
+                .map(|i| b.is_free(other.world_from_cell(other.cell_of_index(i))))
+                .collect();
+            proptest::prop_assert_eq!(b.free_mask(other).data, expected);
         }
     }
 

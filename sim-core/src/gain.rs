@@ -106,9 +106,13 @@ impl RayFan {
         // One ray per cell of arc at full range, so every cell at range is crossed by a ray.
         let n_rays = ((std::f64::consts::TAU * r_cells).ceil() as usize).max(8);
         let start = [0.5, 0.5];
-        // Trie: per node its offset and children.
+        // Trie: per node its offset and its children, as a list in the order they were added
+        // (first child, next sibling; the last child to append to), in flat arrays.
+        const NONE: u32 = u32::MAX;
         let mut offset: Vec<(i16, i16)> = vec![(0, 0)];
-        let mut children: Vec<Vec<u32>> = vec![Vec::new()];
+        let mut first_child: Vec<u32> = vec![NONE];
+        let mut last_child: Vec<u32> = vec![NONE];
+        let mut next_sibling: Vec<u32> = vec![NONE];
         for k in 0..n_rays {
             let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
             let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
@@ -120,24 +124,34 @@ impl RayFan {
                     return true;
                 }
                 let o = (c.x as i16, c.y as i16);
-                node = match children[node].iter().find(|&&ch| offset[ch as usize] == o) {
-                    Some(&ch) => ch as usize,
-                    None => {
-                        let id = offset.len();
-                        offset.push(o);
-                        children.push(Vec::new());
-                        children[node].push(id as u32);
-                        id
+                let mut ch = first_child[node];
+                while ch != NONE && offset[ch as usize] != o {
+                    ch = next_sibling[ch as usize];
+                }
+                node = if ch != NONE {
+                    ch as usize
+                } else {
+                    let id = offset.len() as u32;
+                    offset.push(o);
+                    first_child.push(NONE);
+                    last_child.push(NONE);
+                    next_sibling.push(NONE);
+                    match last_child[node] {
+                        NONE => first_child[node] = id,
+                        last => next_sibling[last as usize] = id,
                     }
+                    last_child[node] = id;
+                    id as usize
                 };
                 true
             });
         }
-        // Flatten in preorder.
+        // Flatten in preorder (children in the order they were added).
         let r2 = r_cells * r_cells;
         let mut nodes = Vec::with_capacity(offset.len());
         let mut stack: Vec<(u32, bool)> = vec![(0, false)];
         let mut open: Vec<usize> = Vec::new();
+        let mut children: Vec<u32> = Vec::new();
         while let Some((id, done)) = stack.pop() {
             if done {
                 let at = open.pop().expect("opened before closed");
@@ -159,7 +173,13 @@ impl RayFan {
                 offset: 0,
             });
             stack.push((id, true));
-            for &ch in children[id as usize].iter().rev() {
+            children.clear();
+            let mut ch = first_child[id as usize];
+            while ch != NONE {
+                children.push(ch);
+                ch = next_sibling[ch as usize];
+            }
+            for &ch in children.iter().rev() {
                 stack.push((ch, false));
             }
         }
@@ -307,6 +327,74 @@ mod tests {
                 |c| g.is(c, Occupancy::Unknown),
             );
             prop_assert_eq!(fast, slow);
+        }
+    }
+
+    /// The fan as first built: a vector of children per node, found by a linear search.
+    fn fan_nodes_reference(r_cells: f64) -> Vec<(i16, i16, bool, u32, u32)> {
+        let half = r_cells.ceil() as i32 + 1;
+        let n_rays = ((std::f64::consts::TAU * r_cells).ceil() as usize).max(8);
+        let start = [0.5, 0.5];
+        let mut offset: Vec<(i16, i16)> = vec![(0, 0)];
+        let mut children: Vec<Vec<u32>> = vec![Vec::new()];
+        for k in 0..n_rays {
+            let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
+            let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
+            let mut node = 0usize;
+            let mut first = true;
+            walk_segment(start, end, |c| {
+                if first {
+                    first = false;
+                    return true;
+                }
+                let o = (c.x as i16, c.y as i16);
+                node = match children[node].iter().find(|&&ch| offset[ch as usize] == o) {
+                    Some(&ch) => ch as usize,
+                    None => {
+                        let id = offset.len();
+                        offset.push(o);
+                        children.push(Vec::new());
+                        children[node].push(id as u32);
+                        id
+                    }
+                };
+                true
+            });
+        }
+        let r2 = r_cells * r_cells;
+        let mut nodes: Vec<(i16, i16, bool, u32, u32)> = Vec::new();
+        let mut stack: Vec<(u32, bool)> = vec![(0, false)];
+        let mut open: Vec<usize> = Vec::new();
+        while let Some((id, done)) = stack.pop() {
+            if done {
+                let at = open.pop().unwrap();
+                nodes[at].3 = nodes.len() as u32;
+                continue;
+            }
+            let (dx, dy) = offset[id as usize];
+            let d2 = (dx as i32 * dx as i32 + dy as i32 * dy as i32) as f64;
+            open.push(nodes.len());
+            let side = 2 * half + 1;
+            let seen_at = ((dy as i32 + half) * side + dx as i32 + half) as u32;
+            nodes.push((dx, dy, d2 <= r2, 0, seen_at));
+            stack.push((id, true));
+            for &ch in children[id as usize].iter().rev() {
+                stack.push((ch, false));
+            }
+        }
+        nodes
+    }
+
+    #[test]
+    fn the_fan_is_the_tree_first_built() {
+        for r_cells in [0.3, 1.0, 2.5, 7.77, 40.0, 120.0, 121.3] {
+            let fan = RayFan::new(r_cells);
+            let nodes: Vec<_> = fan
+                .nodes
+                .iter()
+                .map(|n| (n.dx, n.dy, n.in_range, n.end, n.seen_at))
+                .collect();
+            assert_eq!(nodes, fan_nodes_reference(r_cells), "r_cells {r_cells}");
         }
     }
 

@@ -113,14 +113,18 @@ impl Explorer<'_> {
         self.mark_planning_cells(&flips, &free_changes);
         // A cell never goes back to unknown, and every change from unknown is in one of the
         // two lists.
-        let map_to_world = MapToWorld::new(&self.estimate, &self.sim.true_pose());
+        let mut fresh = std::mem::take(&mut self.fresh_known);
+        fresh.clear();
         for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
             let i = i as usize;
             if !self.known.data[i] && self.map.occupancy.data[i] != Occupancy::Unknown {
                 self.known.data[i] = true;
-                self.credit_explored(i, &map_to_world);
+                fresh.push(i);
             }
         }
+        let map_to_world = MapToWorld::new(&self.estimate, &self.sim.true_pose());
+        self.credit_explored(&fresh, &map_to_world);
+        self.fresh_known = fresh;
         self.mark_travelled(self.last_update_pose.position(), self.estimate.position());
         self.last_update_pose = self.estimate;
         self.update_odometry = odo_pose;

@@ -437,6 +437,8 @@ struct Explorer<'a> {
     referee: Referee,
     /// Map cells observed (free or occupied) so far.
     known: Bitmap,
+    /// The map cells the last update made known (a buffer kept between updates).
+    fresh_known: Vec<usize>,
     estimate: Pose,
     last_odometry: Pose,
     /// Odometry reading at the last map update.
@@ -664,9 +666,12 @@ pub fn explore_with<'a>(
             truth_cells,
             explored_cells: 0,
             explored: Bitmap::filled(frame, false),
+            untestable: Bitmap::filled(frame, false),
+            untestable_list: Vec::new(),
             rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
         },
         known: Bitmap::filled(frame, false),
+        fresh_known: Vec::new(),
         estimate: start,
         last_update_pose: start,
         last_update_time_s: f64::NEG_INFINITY,

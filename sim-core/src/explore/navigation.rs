@@ -219,15 +219,14 @@ impl Explorer<'_> {
             self.far.frame.width as usize,
             self.far.frame.height as usize,
         );
-        let mut far_dirty: Vec<u32> = self
+        // (Unsorted, with repeats: recomputing a cell is idempotent, and cheaper than sorting.)
+        let far_dirty: Vec<u32> = self
             .coarse_dirty
             .iter()
             .map(|&i| ((i as usize % cw) / k, (i as usize / cw) / k))
             .filter(|&(x, y)| x < fw && y < fh)
             .map(|(x, y)| (y * fw + x) as u32)
             .collect();
-        far_dirty.sort_unstable();
-        far_dirty.dedup();
         // (From the planning grid, just brought up to date: 4 of its cells per distance cell
         // rather than 16 map cells, each a traversability test.)
         self.far.recompute_from(&self.coarse, &far_dirty);
