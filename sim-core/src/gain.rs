@@ -70,18 +70,22 @@ thread_local! {
     static FAN: std::cell::RefCell<Option<RayFan>> = const { std::cell::RefCell::new(None) };
 }
 
-/// One cell of the fan: its offset from the centre, whether its centre is within range, the
-/// index just past its subtree, and its index in the square of the set of cells seen.
+/// One cell of the fan: the index just past its subtree, its index in the square of the set of
+/// cells seen with whether its centre is within range, and its row-major index offset from the
+/// centre. (12 bytes: the fan is read whole for every gain; the cell's offset in cells is in
+/// [`RayFan::cells`], read only where a predicate needs the cell or the square leaves the map.)
 #[derive(Debug, Clone, Copy)]
 struct FanNode {
-    dx: i16,
-    dy: i16,
-    in_range: bool,
     end: u32,
-    seen_at: u32,
+    /// The index in the square of cells seen, and [`IN_RANGE`] when the cell's centre is
+    /// within range.
+    seen: u32,
     /// Row-major index offset in a frame `RayFan::offsets_width` cells wide.
     offset: i32,
 }
+
+/// [`FanNode::seen`]'s flag: the cell's centre is within range.
+const IN_RANGE: u32 = 1 << 31;
 
 /// The rays of [`visible_area`] relative to the centre cell, as a prefix tree flattened in
 /// preorder: rays share their first cells, so a shared cell is tested once, and a blocking cell
@@ -92,6 +96,8 @@ struct RayFan {
     r_cells: f64,
     half: i32,
     nodes: Vec<FanNode>,
+    /// Per node, its cell's offset from the centre (`dx`, `dy`).
+    cells: Vec<(i16, i16)>,
     /// One byte per cell of the `(2 half + 1)^2` square: 1 when counted in this call. (Bytes,
     /// not bits: consecutive nodes are neighbouring cells, whose bits would share a word, and
     /// each node's read would wait for the previous node's write.)
@@ -149,6 +155,7 @@ impl RayFan {
         // Flatten in preorder (children in the order they were added).
         let r2 = r_cells * r_cells;
         let mut nodes = Vec::with_capacity(offset.len());
+        let mut cells = Vec::with_capacity(offset.len());
         let mut stack: Vec<(u32, bool)> = vec![(0, false)];
         let mut open: Vec<usize> = Vec::new();
         let mut children: Vec<u32> = Vec::new();
@@ -164,14 +171,13 @@ impl RayFan {
             let d2 = (dx as i32 * dx as i32 + dy as i32 * dy as i32) as f64;
             open.push(nodes.len());
             let side = 2 * half + 1;
+            let seen_at = ((dy as i32 + half) * side + dx as i32 + half) as u32;
             nodes.push(FanNode {
-                dx,
-                dy,
-                in_range: d2 <= r2,
                 end: 0,
-                seen_at: ((dy as i32 + half) * side + dx as i32 + half) as u32,
+                seen: seen_at | if d2 <= r2 { IN_RANGE } else { 0 },
                 offset: 0,
             });
+            cells.push((dx, dy));
             stack.push((id, true));
             children.clear();
             let mut ch = first_child[id as usize];
@@ -188,6 +194,7 @@ impl RayFan {
             r_cells,
             half,
             nodes,
+            cells,
             seen: vec![0; side * side],
             offsets_width: None,
         }
@@ -204,8 +211,8 @@ impl RayFan {
         self.seen.fill(0);
         let w = frame.width as i32;
         if self.offsets_width != Some(frame.width) {
-            for n in &mut self.nodes {
-                n.offset = n.dy as i32 * w + n.dx as i32;
+            for (n, &(dx, dy)) in self.nodes.iter_mut().zip(&self.cells) {
+                n.offset = dy as i32 * w + dx as i32;
             }
             self.offsets_width = Some(frame.width);
         }
@@ -218,7 +225,8 @@ impl RayFan {
         let mut i = 0usize;
         while i < self.nodes.len() {
             let n = self.nodes[i];
-            let c = Cell::new(p.x + n.dx as i32, p.y + n.dy as i32);
+            let (dx, dy) = self.cells[i];
+            let c = Cell::new(p.x + dx as i32, p.y + dy as i32);
             let idx = if inside {
                 (base + n.offset as isize) as usize
             } else if frame.contains(c) {
@@ -231,14 +239,15 @@ impl RayFan {
                 i = n.end as usize;
                 continue;
             }
-            if n.in_range {
+            if n.seen & IN_RANGE != 0 {
                 // Without branches: whether a cell was seen by an earlier ray, and whether it
                 // counts, are both close to coin flips (cells are crossed by about two rays;
                 // unknown and known cells meet along frontiers), so branches on them are
                 // mispredicted often. `counts` is a pure predicate: evaluating it for a cell
                 // already seen changes nothing.
-                let fresh = self.seen[n.seen_at as usize] == 0;
-                self.seen[n.seen_at as usize] = 1;
+                let at = (n.seen & !IN_RANGE) as usize;
+                let fresh = self.seen[at] == 0;
+                self.seen[at] = 1;
                 count += (fresh & counts(c, idx)) as usize;
             }
             i += 1;
@@ -392,7 +401,8 @@ mod tests {
             let nodes: Vec<_> = fan
                 .nodes
                 .iter()
-                .map(|n| (n.dx, n.dy, n.in_range, n.end, n.seen_at))
+                .zip(&fan.cells)
+                .map(|(n, &(dx, dy))| (dx, dy, n.seen & IN_RANGE != 0, n.end, n.seen & !IN_RANGE))
                 .collect();
             assert_eq!(nodes, fan_nodes_reference(r_cells), "r_cells {r_cells}");
         }

@@ -158,6 +158,16 @@ impl SurfacePoints {
     }
 }
 
+/// A beam of [`LogOddsMap::insert_scan`]: whether it hit, its end point and cell, and the guard
+/// around the end (cells, and squared cells) within which no miss is recorded.
+struct Beam {
+    hit: bool,
+    end: [f64; 2],
+    end_cell: Cell,
+    guard_cells: i32,
+    guard2: f64,
+}
+
 impl LogOddsMap {
     /// An all-unknown map over `frame`.
     pub fn new(frame: GridFrame) -> Self {
@@ -206,6 +216,31 @@ impl LogOddsMap {
             let end_cell = Cell::new(floor_i32(end[0]), floor_i32(end[1]));
             bmin = Cell::new(bmin.x.min(end_cell.x), bmin.y.min(end_cell.y));
             bmax = Cell::new(bmax.x.max(end_cell.x), bmax.y.max(end_cell.y));
+            let inside = |c: Cell| c.x >= 0 && c.y >= 0 && c.x < w && c.y < h;
+            if inside(Cell::new(floor_i32(start[0]), floor_i32(start[1]))) && inside(end_cell) {
+                // The usual beam, from a cell of the map to a cell of the map: no cell needs a
+                // bounds test, and the end cell is the last.
+                let beam = Beam {
+                    hit,
+                    end,
+                    end_cell,
+                    guard_cells,
+                    guard2,
+                };
+                let last = SegmentCells::new(start, end)
+                    .for_each_indexed(w, |c, idx| self.beam_cell(&beam, c, idx, cfg, &mut stats));
+                if let Some((c, idx)) = last {
+                    if hit {
+                        self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
+                        self.surface.add(c, end);
+                    } else {
+                        self.update_cell(idx, cfg.miss_l, cfg, &mut stats);
+                    }
+                }
+                self.fill_gap(hit, prev_hit, end, end_cell, fill2, cfg, &mut stats);
+                prev_hit = hit.then_some(end);
+                continue;
+            }
             let mut was_inside = false;
             let mut clipped = false;
             // (A loop, not `walk_segment`'s closure: this body runs for every cell of every
@@ -240,32 +275,7 @@ impl LogOddsMap {
             if clipped {
                 stats.beams_clipped += 1;
             }
-            if let (true, Some(p)) = (hit && cfg.hit_gap_fill_m > 0.0, prev_hit) {
-                let (dx, dy) = (end[0] - p[0], end[1] - p[1]);
-                if dx * dx + dy * dy <= fill2 {
-                    let p_cell = Cell::new(floor_i32(p[0]), floor_i32(p[1]));
-                    let len2 = (dx * dx + dy * dy).max(1e-12);
-                    walk_segment(p, end, |c| {
-                        if c != p_cell
-                            && c != end_cell
-                            && c.x >= 0
-                            && c.y >= 0
-                            && c.x < w
-                            && c.y < h
-                        {
-                            let idx = c.y as usize * w as usize + c.x as usize;
-                            self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
-                            // The surface point: the segment's point nearest the cell centre.
-                            let t = (((c.x as f64 + 0.5 - p[0]) * dx
-                                + (c.y as f64 + 0.5 - p[1]) * dy)
-                                / len2)
-                                .clamp(0.0, 1.0);
-                            self.surface.add(c, [p[0] + t * dx, p[1] + t * dy]);
-                        }
-                        true
-                    });
-                }
-            }
+            self.fill_gap(hit, prev_hit, end, end_cell, fill2, cfg, &mut stats);
             prev_hit = hit.then_some(end);
         }
         let clamp = |c: Cell| Cell::new(c.x.clamp(0, w - 1), c.y.clamp(0, h - 1));
@@ -279,6 +289,69 @@ impl LogOddsMap {
         });
         self.total_cells_changed += stats.cells_changed as u64;
         stats
+    }
+
+    /// A cell of a beam in the map before its end cell: missed, unless the beam hit and the
+    /// cell lies within the guard around the end.
+    #[inline(always)]
+    fn beam_cell(
+        &mut self,
+        beam: &Beam,
+        c: Cell,
+        idx: usize,
+        cfg: &LogOddsConfig,
+        stats: &mut InsertStats,
+    ) {
+        if beam.hit {
+            let e = beam.end_cell;
+            let near =
+                (c.x - e.x).abs() <= beam.guard_cells && (c.y - e.y).abs() <= beam.guard_cells;
+            let (ddx, ddy) = (
+                c.x as f64 + 0.5 - beam.end[0],
+                c.y as f64 + 0.5 - beam.end[1],
+            );
+            if near && ddx * ddx + ddy * ddy < beam.guard2 {
+                return;
+            }
+        }
+        self.update_cell(idx, cfg.miss_l, cfg, stats);
+    }
+
+    /// Between the previous beam's end `prev_hit` and this one's (`end`, in `end_cell`), both
+    /// hits closer than the fill distance (`fill2`, squared cells): marks the cells between
+    /// them hit, with the segment's point nearest each cell centre as its surface point.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn fill_gap(
+        &mut self,
+        hit: bool,
+        prev_hit: Option<[f64; 2]>,
+        end: [f64; 2],
+        end_cell: Cell,
+        fill2: f64,
+        cfg: &LogOddsConfig,
+        stats: &mut InsertStats,
+    ) {
+        let (w, h) = (self.frame.width as i32, self.frame.height as i32);
+        if let (true, Some(p)) = (hit && cfg.hit_gap_fill_m > 0.0, prev_hit) {
+            let (dx, dy) = (end[0] - p[0], end[1] - p[1]);
+            if dx * dx + dy * dy <= fill2 {
+                let p_cell = Cell::new(floor_i32(p[0]), floor_i32(p[1]));
+                let len2 = (dx * dx + dy * dy).max(1e-12);
+                walk_segment(p, end, |c| {
+                    if c != p_cell && c != end_cell && c.x >= 0 && c.y >= 0 && c.x < w && c.y < h {
+                        let idx = c.y as usize * w as usize + c.x as usize;
+                        self.update_cell(idx, cfg.hit_l, cfg, stats);
+                        // The surface point: the segment's point nearest the cell centre.
+                        let t = (((c.x as f64 + 0.5 - p[0]) * dx + (c.y as f64 + 0.5 - p[1]) * dy)
+                            / len2)
+                            .clamp(0.0, 1.0);
+                        self.surface.add(c, [p[0] + t * dx, p[1] + t * dy]);
+                    }
+                    true
+                });
+            }
+        }
     }
 
     /// The mean surface point of an occupied cell with hits, in world coordinates.

@@ -93,6 +93,58 @@ fn axis(a: f64, b: f64, c: i32) -> (i32, f64, f64) {
     (step, t_delta, t_max)
 }
 
+impl SegmentCells {
+    /// The cells the iterator gives, each with its row-major index in a frame `w` cells wide, for
+    /// a segment whose first and last cells lie in that frame (then every cell does: the walk
+    /// stays in their box): `visit` gets every cell but the last, which is returned (`None`
+    /// when there are no cells). Steps on both axes while both have some left (one comparison
+    /// per step), then on the one left, the index kept by adding.
+    #[inline(always)]
+    pub fn for_each_indexed(
+        self,
+        w: i32,
+        mut visit: impl FnMut(Cell, usize),
+    ) -> Option<(Cell, usize)> {
+        if !self.first {
+            return None;
+        }
+        let (sx, sy) = (self.step_x, self.step_y);
+        let row = sy as isize * w as isize;
+        let (mut cx, mut cy) = (self.cx, self.cy);
+        let mut idx = cy as isize * w as isize + cx as isize;
+        let (mut nx, mut ny) = (self.ex.abs_diff(cx), self.ey.abs_diff(cy));
+        let (mut tx, mut ty) = (self.t_max_x, self.t_max_y);
+        // Each step visits the cell it leaves.
+        while nx > 0 && ny > 0 {
+            visit(Cell::new(cx, cy), idx as usize);
+            if tx <= ty {
+                cx += sx;
+                idx += sx as isize;
+                tx += self.t_delta_x;
+                nx -= 1;
+            } else {
+                cy += sy;
+                idx += row;
+                ty += self.t_delta_y;
+                ny -= 1;
+            }
+        }
+        while nx > 0 {
+            visit(Cell::new(cx, cy), idx as usize);
+            cx += sx;
+            idx += sx as isize;
+            nx -= 1;
+        }
+        while ny > 0 {
+            visit(Cell::new(cx, cy), idx as usize);
+            cy += sy;
+            idx += row;
+            ny -= 1;
+        }
+        Some((Cell::new(cx, cy), idx as usize))
+    }
+}
+
 impl Iterator for SegmentCells {
     type Item = Cell;
 
@@ -168,6 +220,28 @@ mod tests {
         }
         assert_eq!(cells([1.5, 1.5], [1.7, 1.2]), vec![(1, 1)]);
         assert!(cells([f64::NAN, 0.0], [1.0, 1.0]).is_empty());
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
+        /// The indexed walk visits the iterator's cells, with their indices, and returns the last.
+        #[test]
+        fn the_indexed_walk_is_the_walk(
+            a in (0.0f64..40.0, 0.0f64..30.0), b in (0.0f64..40.0, 0.0f64..30.0),
+            snap in 0u8..4,
+        ) {
+            // Ends on cell corners and edges too (ties between the axes).
+            let q = |v: f64| match snap { 0 => v, 1 => v.round(), 2 => (v * 2.0).round() / 2.0, _ => v.floor() + 0.5 };
+            let (a, b) = ([q(a.0), q(a.1)], [q(b.0), q(b.1)]);
+            let w = 41;
+            let want: Vec<(Cell, usize)> = SegmentCells::new(a, b)
+                .map(|c| (c, (c.y * w + c.x) as usize))
+                .collect();
+            let mut got = Vec::new();
+            let last = SegmentCells::new(a, b).for_each_indexed(w, |c, i| got.push((c, i)));
+            got.extend(last);
+            proptest::prop_assert_eq!(&got, &want);
+        }
     }
 
     #[test]
