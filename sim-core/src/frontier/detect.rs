@@ -244,10 +244,7 @@ impl FrontierTracker {
         // cell: the first update of a run scans a map that is nearly all unknown.)
         let w = grid.width() as usize;
         let mut row = vec![false; w];
-        for y in 0..grid.height() as usize {
-            if w == 0 {
-                break;
-            }
+        for y in (0..grid.height() as usize).filter(|_| w > 0) {
             frontier_row(grid, y, 0, w - 1, &mut row);
             for (x, &f) in row.iter().enumerate() {
                 if f {

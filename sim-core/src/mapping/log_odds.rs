@@ -193,7 +193,8 @@ impl LogOddsMap {
         let w = self.frame.width as i32;
         let h = self.frame.height as i32;
         let inv_res = 1.0 / self.frame.resolution_m;
-        let mut bmin = Cell::new(floor_i32(start[0]), floor_i32(start[1]));
+        let start_cell = Cell::new(floor_i32(start[0]), floor_i32(start[1]));
+        let mut bmin = start_cell;
         let mut bmax = bmin;
         let guard2 = cfg.hit_guard_cells * cfg.hit_guard_cells;
         let guard_cells = if cfg.hit_guard_cells.is_finite() {
@@ -204,6 +205,8 @@ impl LogOddsMap {
         let fill2 = (cfg.hit_gap_fill_m * inv_res).powi(2);
         // The previous beam's end (grid coordinates) when it was a hit.
         let mut prev_hit: Option<[f64; 2]> = None;
+        let inside = |c: Cell| c.x >= 0 && c.y >= 0 && c.x < w && c.y < h;
+        let start_inside = inside(start_cell);
         for i in 0..scan.ranges_m.len() {
             let range_m = scan.ranges_m[i];
             if !range_m.is_finite() {
@@ -216,8 +219,7 @@ impl LogOddsMap {
             let end_cell = Cell::new(floor_i32(end[0]), floor_i32(end[1]));
             bmin = Cell::new(bmin.x.min(end_cell.x), bmin.y.min(end_cell.y));
             bmax = Cell::new(bmax.x.max(end_cell.x), bmax.y.max(end_cell.y));
-            let inside = |c: Cell| c.x >= 0 && c.y >= 0 && c.x < w && c.y < h;
-            if inside(Cell::new(floor_i32(start[0]), floor_i32(start[1]))) && inside(end_cell) {
+            if start_inside && inside(end_cell) {
                 // The usual beam, from a cell of the map to a cell of the map: no cell needs a
                 // bounds test, and the end cell is the last.
                 let beam = Beam {
