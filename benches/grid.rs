@@ -122,6 +122,8 @@ fn timed_run(plan: &Plan, local: usize, role: Option<&str>, procs: usize) -> f64
         executor: Some(Arc::new(trivial_row)),
         // The coordinator's own re-runs would add to what is measured.
         verify_fraction: 0.0,
+        // Every job alone: what is measured is the coordinator and the scaling.
+        share: false,
     };
     let mut children: Vec<Child> = Vec::new();
     if let Some(role) = role {

@@ -61,6 +61,15 @@ pub struct RunArgs {
     /// compute time are not checked.
     #[arg(long, value_name = "F", default_value_t = 0.05)]
     verify_fraction: f64,
+    /// Run every job alone. By default this machine's workers run jobs that share their
+    /// beginning together: strategies that differ only in their early stop (`layout`,
+    /// `layout-es`, `layout-aes`; `layout-gaps` and `layout-gaps-es`; `layout-truth` and
+    /// `layout-truth-es`) on the same building, seed, start and settings make the same choices
+    /// until one stops or drops a candidate, so one exploration serves them up to there. Each
+    /// result is the one made alone; its wall time is the shared part up to where it went alone
+    /// plus its own. Remote workers always run jobs alone.
+    #[arg(long)]
+    no_share: bool,
     /// Where results go (overrides the grid's `results`).
     #[arg(long, value_name = "DIR")]
     results: Option<PathBuf>,
@@ -197,6 +206,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         lease_s: a.lease_s,
         // Without remote workers nothing is checked (`run_plan` starts no verifier).
         verify_fraction: a.verify_fraction,
+        share: !a.no_share,
         ..RunOptions::default()
     };
     store.record_run(&provenance(

@@ -93,8 +93,20 @@ pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> S
 
 /// Runs one planned job here and reports its outcome (success or a job error).
 pub fn execute(plan: &Plan, job: &PlannedJob) -> JobReport {
+    floorcast_worker::execute::report(&spec(plan, job))
+}
+
+/// [`execute`] for jobs that share their beginning (see `run::partners`): run together, one
+/// report each, in their order.
+pub fn execute_shared(plan: &Plan, jobs: &[PlannedJob]) -> Vec<JobReport> {
+    let specs: Vec<Job<'_>> = jobs.iter().map(|j| spec(plan, j)).collect();
+    floorcast_worker::execute::reports_shared(&specs)
+}
+
+/// What a job runs, for the worker crate.
+pub(crate) fn spec<'p>(plan: &'p Plan, job: &PlannedJob) -> Job<'p> {
     let b = &plan.buildings[job.building];
-    floorcast_worker::execute::report(&Job {
+    Job {
         building: &b.building,
         building_name: b.name.clone(),
         strategy: job.strategy.clone(),
@@ -106,7 +118,7 @@ pub fn execute(plan: &Plan, job: &PlannedJob) -> JobReport {
             source: s.source.clone(),
         }),
         snapshot_fractions: Vec::new(),
-    })
+    }
 }
 
 #[cfg(test)]

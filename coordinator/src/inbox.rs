@@ -50,6 +50,9 @@ pub(crate) enum Inbox {
 #[derive(Debug)]
 pub(crate) enum Answer {
     Run(Box<PlannedJob>),
+    /// Run these jobs together, the runs sharing their beginning (embedded workers only; see
+    /// `run::partners`).
+    RunShared(Vec<PlannedJob>),
     Wait,
     Done,
     /// The worker gets no more jobs (its results were found wrong): why.

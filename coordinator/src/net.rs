@@ -387,6 +387,15 @@ async fn on_next(ctx: Arc<Ctx>, q: Query) {
             job: Box::new(wire_job(&ctx.plan, &job)),
             lease_s: ctx.lease_s,
         },
+        // (Only embedded workers are given jobs to run together; should a remote one be, it
+        // runs the first and the others' leases run out and they are handed out again.)
+        Answer::RunShared(jobs) => match jobs.first() {
+            Some(job) => NextReply::Job {
+                job: Box::new(wire_job(&ctx.plan, job)),
+                lease_s: ctx.lease_s,
+            },
+            None => NextReply::Wait { retry_ms: 200 },
+        },
         Answer::Wait => NextReply::Wait { retry_ms: 200 },
         Answer::Done => NextReply::Done,
         Answer::Refused(reason) => NextReply::Refused { reason },
@@ -727,6 +736,7 @@ mod tests {
                 linger_s: 1.0,
                 executor: None,
                 verify_fraction,
+                share: true,
             };
             let mut log = Vec::new();
             let (_, counts) = run_plan(

@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use tokio::sync::oneshot;
 
-use crate::execute::{execute, identity, row};
+use crate::execute::{execute, execute_shared, identity, row};
 use crate::grid::{Plan, PlannedJob};
 use crate::inbox::{Answer, Inbox, InboxSender, RemoteWorkers, LOCAL};
 use crate::schedule::{Grant, Note, Renewal, RequeueReason, Scheduler, Verdict};
@@ -64,6 +64,10 @@ pub struct RunOptions {
     /// The fraction of remote workers' results (besides each worker's first) re-run on this
     /// machine and compared ([`crate::verify`]); 0 verifies none.
     pub verify_fraction: f64,
+    /// Embedded workers run jobs that share their beginning together ([`partners`]): each
+    /// result is the one made alone, in less time. Off: every job alone (its wall time all its
+    /// own). Ignored with a custom `executor`.
+    pub share: bool,
 }
 
 impl std::fmt::Debug for RunOptions {
@@ -75,6 +79,7 @@ impl std::fmt::Debug for RunOptions {
             .field("linger_s", &self.linger_s)
             .field("executor", &self.executor.as_ref().map(|_| "custom"))
             .field("verify_fraction", &self.verify_fraction)
+            .field("share", &self.share)
             .finish()
     }
 }
@@ -88,6 +93,7 @@ impl Default for RunOptions {
             linger_s: 2.0,
             executor: None,
             verify_fraction: 0.05,
+            share: true,
         }
     }
 }
@@ -202,6 +208,8 @@ pub fn run_plan(
     if let Some(l) = &listener {
         on_log(&format!("accepting remote workers: {}", l.describe()));
     }
+    let share = opts.share && opts.executor.is_none();
+    let mut share_keys: BTreeMap<String, Option<String>> = BTreeMap::new();
     let local_exec: Arc<LocalExecutor> = opts.executor.clone().unwrap_or_else(|| Arc::new(execute));
     let stop = Arc::new(AtomicBool::new(false));
     let mut handles = Vec::new();
@@ -284,10 +292,24 @@ pub fn run_plan(
                     let _ = reply.send(RenewReply::NotLeased);
                 }
                 Inbox::Request { worker, reply } => {
-                    let r = sched.request(worker, now);
+                    let local = worker.starts_with(LOCAL);
+                    let r = sched.request(worker.clone(), now);
                     notes.extend(r.notes);
                     let answer = match r.answer {
                         Grant::Lease { job, .. } => match jobs.get(&job) {
+                            Some(j) if local && share => {
+                                let mut group = vec![j.clone()];
+                                for p in partners(&plan, j, &jobs, &mut share_keys) {
+                                    if sched.claim(&worker, &p, now) {
+                                        group.push(jobs[&p].clone());
+                                    }
+                                }
+                                if group.len() > 1 {
+                                    Answer::RunShared(group)
+                                } else {
+                                    Answer::Run(Box::new(group.remove(0)))
+                                }
+                            }
                             Some(j) => Answer::Run(Box::new(j.clone())),
                             None => Answer::Wait,
                         },
@@ -523,6 +545,47 @@ fn run_guarded(plan: &Plan, job: &PlannedJob, exec: &LocalExecutor) -> JobReport
     })
 }
 
+/// Hands a local worker's report to the loop; false when the loop is gone.
+fn submit(name: &str, inbox: &mpsc::Sender<Inbox>, job_id: &str, report: JobReport) -> bool {
+    let (tx, rx) = oneshot::channel();
+    let submit = Inbox::Submit {
+        worker: name.to_string(),
+        job_id: job_id.to_string(),
+        report: Box::new(report),
+        reply: tx,
+    };
+    inbox.send(submit).is_ok() && rx.blocking_recv().is_ok()
+}
+
+/// The jobs that can run together with `job` (`floorcast_worker::run_jobs_shared`): built-in
+/// strategies that differ from its own in the early stop only (`layout`, `layout-es`,
+/// `layout-aes`...), on the same building, seed, start and settings, in plan order. `keys`
+/// caches each job's `share_key`.
+fn partners(
+    plan: &Plan,
+    job: &PlannedJob,
+    jobs: &BTreeMap<String, PlannedJob>,
+    keys: &mut BTreeMap<String, Option<String>>,
+) -> Vec<String> {
+    let mut key = |j: &PlannedJob| {
+        keys.entry(j.id.clone())
+            .or_insert_with(|| floorcast_worker::share_key(&crate::execute::spec(plan, j)))
+            .clone()
+    };
+    let Some(mine) = key(job) else {
+        return Vec::new();
+    };
+    let same_run = |j: &PlannedJob| {
+        j.id != job.id && j.building == job.building && j.seed == job.seed && j.start == job.start
+    };
+    let candidates: Vec<&PlannedJob> = jobs.values().filter(|j| same_run(j)).collect();
+    candidates
+        .into_iter()
+        .filter(|j| key(j).as_ref() == Some(&mine))
+        .map(|j| j.id.clone())
+        .collect()
+}
+
 fn local_worker(
     name: &str,
     plan: &Plan,
@@ -542,15 +605,25 @@ fn local_worker(
         match rx.blocking_recv() {
             Ok(Answer::Run(job)) => {
                 let report = run_guarded(plan, &job, exec);
-                let (tx, rx) = oneshot::channel();
-                let submit = Inbox::Submit {
-                    worker: name.to_string(),
-                    job_id: job.id.clone(),
-                    report: Box::new(report),
-                    reply: tx,
-                };
-                if inbox.send(submit).is_err() || rx.blocking_recv().is_err() {
+                if !submit(name, inbox, &job.id, report) {
                     return;
+                }
+            }
+            Ok(Answer::RunShared(jobs)) => {
+                let reports = std::panic::catch_unwind(|| execute_shared(plan, &jobs))
+                    .unwrap_or_else(|p| {
+                        let why = format!(
+                            "the job panicked (a bug in floorcast, please report it): {}",
+                            floorcast_worker::panic_message(&*p)
+                        );
+                        jobs.iter()
+                            .map(|_| JobReport::failed(why.clone()))
+                            .collect()
+                    });
+                for (job, report) in jobs.iter().zip(reports) {
+                    if !submit(name, inbox, &job.id, report) {
+                        return;
+                    }
                 }
             }
             Ok(Answer::Wait) => std::thread::sleep(Duration::from_millis(50)),
@@ -604,6 +677,61 @@ mod tests {
                 failed,
                 "{r:?}"
             );
+        }
+    }
+
+    /// Jobs that share their beginning (`layout`, `layout-es`, `layout-aes` on one building,
+    /// seed and start) run together by one embedded worker store what they store when each runs
+    /// alone (`--no-share`), field by field but the measured times; `baseline` runs alone.
+    #[test]
+    fn jobs_run_together_store_what_they_store_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let small =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../buildings/small.toml");
+        let text = format!(
+            "format = \"floorcast-grid\"\nversion = 1\nname = \"s\"\nbuildings = [\"{}\"]\nseeds = [1, 2, 3]\n[[strategies]]\nname = \"baseline\"\n[[strategies]]\nname = \"layout-es\"\n[[strategies]]\nname = \"layout\"\n[[strategies]]\nname = \"layout-aes\"\n",
+            small.display()
+        );
+        let mut rows = Vec::new();
+        for share in [true, false] {
+            let results = dir.path().join(format!("r-{share}"));
+            let plan = Plan::parse(&text, &dir.path().join("grid.toml"), Some(&results)).unwrap();
+            let store = Store::open(&plan.results_dir).unwrap();
+            let opts = RunOptions {
+                workers: 2,
+                share,
+                ..RunOptions::default()
+            };
+            let (outcome, counts) = run_plan(
+                &plan,
+                &store,
+                &opts,
+                &AtomicBool::new(false),
+                &mut |_| {},
+                &mut |_| {},
+            )
+            .unwrap();
+            assert_eq!(outcome, Outcome::Complete);
+            assert_eq!((counts.done, counts.failed), (12, 0));
+            let mut all = store.all().unwrap();
+            all.sort_by(|a, b| a.job_id.cmp(&b.job_id));
+            rows.push(all);
+        }
+        assert_eq!(rows[0].len(), rows[1].len());
+        for (together, alone) in rows[0].iter().zip(&rows[1]) {
+            assert_eq!(together.job_id, alone.job_id);
+            assert_eq!(together.status, "ok", "{together:?}");
+            crate::verify::compare(together, alone)
+                .unwrap_or_else(|e| panic!("{} {}: {e}", together.strategy, together.seed));
+        }
+        // Together: one worker ran each seed's three layout jobs.
+        for seed in 1..=3 {
+            let workers: BTreeSet<&str> = rows[0]
+                .iter()
+                .filter(|r| r.seed == seed && r.strategy.starts_with("layout"))
+                .map(|r| r.worker.as_str())
+                .collect();
+            assert_eq!(workers.len(), 1, "seed {seed}: {workers:?}");
         }
     }
 }

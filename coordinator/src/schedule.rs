@@ -221,6 +221,24 @@ impl Scheduler {
         self.reply(answer, notes)
     }
 
+    /// Leases `job` to `worker` too if it is still waiting (a job that shares its beginning with
+    /// one the worker was just given: see `run::partners`). Returns whether it did.
+    pub fn claim(&mut self, worker: &str, job: &str, now_s: f64) -> bool {
+        let Some(k) = self.pending.iter().position(|j| j == job) else {
+            return false;
+        };
+        let job = self.pending.remove(k).expect("found");
+        let deadline_s = now_s + self.lease_s;
+        self.leased.insert(
+            job,
+            Lease {
+                worker: worker.to_string(),
+                deadline_s,
+            },
+        );
+        true
+    }
+
     /// A worker returns the result of `job`.
     pub fn submit(&mut self, job: &str) -> Reply<Verdict> {
         let answer = if !self.all.contains(job) {
@@ -422,6 +440,8 @@ mod tests {
         Leave(u8),
         Renew(u8),
         Tick(u8),
+        /// A worker also takes a waiting job (one sharing its beginning with its own).
+        Claim(u8, u8),
     }
 
     fn step() -> impl Strategy<Value = Step> {
@@ -431,12 +451,13 @@ mod tests {
             1 => (0u8..4).prop_map(Step::Leave),
             2 => (0u8..4).prop_map(Step::Renew),
             1 => (0u8..30).prop_map(Step::Tick),
+            2 => (0u8..4, 0u8..12).prop_map(|(w, j)| Step::Claim(w, j)),
         ]
     }
 
     proptest! {
-        /// Under any interleaving of requests, results, departures and lease expiries, every job
-        /// is stored exactly once, and the grid completes once workers keep working.
+        /// Under any interleaving of requests, claims, results, departures and lease expiries,
+        /// every job is stored exactly once, and the grid completes once workers keep working.
         #[test]
         fn every_job_is_stored_exactly_once(n in 1usize..12, steps in proptest::collection::vec(step(), 0..200)) {
             let mut s = Scheduler::new(ids(n), &BTreeSet::new(), 20.0);
@@ -468,6 +489,12 @@ mod tests {
                         }
                     }
                     Step::Tick(dt) => { now += dt as f64; s.tick(now); }
+                    Step::Claim(w, j) => {
+                        let job = format!("job{:03}", j as usize % n);
+                        if s.claim(&format!("w{w}"), &job, now) {
+                            held.entry(w).or_default().push(job);
+                        }
+                    }
                 }
             }
             // Then the other workers hang (their leases expire) and one reliable worker drains

@@ -7,7 +7,7 @@ use std::time::Instant;
 use sim_core::{Building, Pose};
 
 use crate::wire::{JobOutcome, JobReport, WireJob};
-use crate::{run_job, GivenStart, Job};
+use crate::{run_job, run_jobs_shared, GivenStart, Job, JobError, JobOutput};
 
 /// Runs a job received from the network (see [`crate::process`]) in its building (already
 /// checked against the job's building hash).
@@ -50,7 +50,28 @@ pub fn execute_wire(job: &WireJob, building: &Building) -> JobReport {
 /// Runs `spec` and reports its outcome (success or the job's error) and wall time.
 pub fn report(spec: &Job<'_>) -> JobReport {
     let t = Instant::now();
-    let outcome = match run_job(spec, &mut |_| {}) {
+    let outcome = outcome(run_job(spec, &mut |_| {}));
+    JobReport {
+        wall_time_s: t.elapsed().as_secs_f64(),
+        outcome,
+    }
+}
+
+/// [`report`] for each of `specs`, run together where they can share their beginning
+/// ([`run_jobs_shared`]); each report's wall time is its run's share.
+pub fn reports_shared(specs: &[Job<'_>]) -> Vec<JobReport> {
+    run_jobs_shared(specs)
+        .into_iter()
+        .map(|(r, wall_time_s)| JobReport {
+            wall_time_s,
+            outcome: outcome(r),
+        })
+        .collect()
+}
+
+/// A job's outcome as reported.
+fn outcome(r: Result<JobOutput, JobError>) -> JobOutcome {
+    match r {
         Ok(out) => JobOutcome::Ok {
             progress: out
                 .result
@@ -63,9 +84,5 @@ pub fn report(spec: &Job<'_>) -> JobReport {
         Err(e) => JobOutcome::Failed {
             error: e.to_string(),
         },
-    };
-    JobReport {
-        wall_time_s: t.elapsed().as_secs_f64(),
-        outcome,
     }
 }

@@ -288,6 +288,98 @@ pub fn run_job(
     })
 }
 
+/// Whether a job's run can share its beginning with runs of other strategies (see
+/// [`run_jobs_shared`]): a built-in strategy, compute not charged (charged runs depend on the
+/// machine). Returns the settings the shared runs must have in common: the job's explore
+/// settings with the strategy's early stop left out, as text, so that jobs with equal keys (and
+/// the same building, seed and start) can run together.
+pub fn share_key(job: &Job<'_>) -> Option<String> {
+    if job.program.is_some() || job.settings.charge_compute {
+        return None;
+    }
+    let mut config = job.settings.to_explore_config_for(&job.strategy).ok()?;
+    config.strategy.early_stop = sim_core::explore::strategy::EarlyStop::Never;
+    config.snapshot_fractions = job.snapshot_fractions.clone();
+    Some(format!("{config:?}"))
+}
+
+/// Whether a job's strategy has no early stop (it leads a shared run: it runs longest).
+fn runs_to_the_end(job: &Job<'_>) -> bool {
+    job.settings
+        .to_explore_config_for(&job.strategy)
+        .is_ok_and(|c| c.strategy.early_stop == sim_core::explore::strategy::EarlyStop::Never)
+}
+
+/// [`run_job`] for each of `jobs`, with the wall time each took. Jobs of the same building,
+/// seed, start and [`share_key`] (strategies that differ in their early stop only: `layout`,
+/// `layout-es`, `layout-aes`) run as one exploration for as long as their choices agree
+/// ([`sim_core::explore::explore_shared`]): each result is the one the job makes alone, and
+/// its wall time is the shared part up to where it went alone plus its own. Any other jobs, or
+/// any that fails its checks, run one by one.
+pub fn run_jobs_shared(jobs: &[Job<'_>]) -> Vec<(Result<JobOutput, JobError>, f64)> {
+    let alone = |job: &Job<'_>| {
+        let t = Instant::now();
+        let r = run_job(job, &mut |_| {});
+        (r, t.elapsed().as_secs_f64())
+    };
+    let key = jobs.first().and_then(share_key);
+    let together = jobs.len() >= 2
+        && key.is_some()
+        && jobs.iter().all(|j| {
+            std::ptr::eq(j.building, jobs[0].building)
+                && j.seed == jobs[0].seed
+                && j.start == jobs[0].start
+                && share_key(j) == key
+        });
+    let checked: Vec<_> = jobs.iter().map(check_job).collect();
+    if !together || checked.iter().any(|c| c.is_err()) {
+        return jobs.iter().map(alone).collect();
+    }
+    let checked: Vec<_> = checked.into_iter().map(|c| c.expect("checked")).collect();
+    let start = checked[0].1;
+    // The one without an early stop leads (it runs longest); the others follow in their order.
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    order.sort_by_key(|&i| !runs_to_the_end(&jobs[i]));
+    let configs: Vec<_> = order.iter().map(|&i| checked[i].0.clone()).collect();
+    if !sim_core::explore::can_share(&configs) || checked.iter().any(|c| c.1 != start) {
+        return jobs.iter().map(alone).collect();
+    }
+    let t0 = Instant::now();
+    let mut clock = || t0.elapsed().as_secs_f64();
+    let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        sim_core::explore::explore_shared(
+            jobs[0].building,
+            start,
+            &configs,
+            jobs[0].seed,
+            &mut |_| {},
+            &mut clock,
+        )
+    }));
+    let made = match made {
+        Ok(m) => m,
+        Err(p) => {
+            let e = panic_message(&*p);
+            return jobs
+                .iter()
+                .map(|_| (Err(JobError::Panicked(e.clone())), 0.0))
+                .collect();
+        }
+    };
+    let mut out: Vec<Option<(Result<JobOutput, JobError>, f64)>> =
+        (0..jobs.len()).map(|_| None).collect();
+    for (&i, (result, wall_s)) in order.iter().zip(made) {
+        let summary = RunSummary::new(&jobs[i], &result, &checked[i].2, wall_s);
+        let output = JobOutput {
+            summary,
+            result,
+            strategy_stderr: None,
+        };
+        out[i] = Some((Ok(output), wall_s));
+    }
+    out.into_iter().map(|o| o.expect("every job run")).collect()
+}
+
 /// The message of a caught panic.
 pub fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = p.downcast_ref::<&str>() {

@@ -454,14 +454,66 @@ impl Explorer<'_> {
         scores: &[CandidateScore],
         asked: Asked,
     ) -> Answer {
-        let Asked {
-            attempt,
-            use_layout,
-            unreachable_goal,
-        } = asked;
         // A built-in strategy's rule weighs the layout's gain only while it uses the layout.
-        let layout_gain = self.policy_needs.layout_gain
-            && (use_layout || matches!(self.policy, PolicySlot::External(_)));
+        let needs = self.policy_needs;
+        let use_layout = asked.use_layout || matches!(self.policy, PolicySlot::External(_));
+        let views = self.candidate_views(frontiers, goals, plan, scores, needs, use_layout);
+        if views.is_empty() {
+            return Answer::Nothing;
+        }
+        if asked.attempt == 0 {
+            self.policy_decisions += 1;
+        }
+        let view = decision_view(
+            &views,
+            &asked,
+            needs,
+            self.policy_decisions - 1,
+            self.sim.time_s(),
+            self.estimate,
+            self.layout.as_ref(),
+            &self.map.occupancy,
+        );
+        let (reply, charged_s) = self.policy.get().decide(&view);
+        if charged_s.is_finite() && charged_s > 0.0 {
+            self.compute_debt_s += charged_s;
+            self.strategy_compute_s += charged_s;
+        }
+        // The runs sharing this one's beginning are asked the same (see `shared`).
+        self.ask_members(frontiers, goals, plan, scores, &asked, &reply);
+        let shown = |id: &usize| views.iter().any(|v| v.id == *id);
+        // Candidates shown, each once.
+        let listed = |ids: &[usize]| {
+            !ids.is_empty()
+                && ids.iter().all(shown)
+                && ids.iter().collect::<std::collections::BTreeSet<_>>().len() == ids.len()
+        };
+        match reply {
+            Reply::Choose(id) if shown(&id) => Answer::One(id),
+            Reply::Rank(ids) if listed(&ids) => Answer::Ranked(ids),
+            Reply::Goal(p) if p.x.is_finite() && p.y.is_finite() => Answer::Point(p),
+            Reply::Drop(ids) if listed(&ids) => Answer::Drop(ids),
+            Reply::Pass => Answer::Nothing,
+            Reply::Stop => Answer::Stop,
+            _ => {
+                self.policy_failed = true;
+                Answer::Nothing
+            }
+        }
+    }
+
+    /// The candidates a policy with `needs` is shown: those with a distance and a goal, with the
+    /// layout's gain when it needs it and `use_layout` holds.
+    pub(super) fn candidate_views(
+        &mut self,
+        frontiers: &[Frontier],
+        goals: &[Option<Cell>],
+        plan: &Plan,
+        scores: &[CandidateScore],
+        needs: Needs,
+        use_layout: bool,
+    ) -> Vec<CandidateView> {
+        let layout_gain = needs.layout_gain && use_layout;
         let frame = self.map.frame;
         let robot = self.estimate.position();
         let range_m = self.cfg.sim.laser.max_range_m;
@@ -497,59 +549,33 @@ impl Explorer<'_> {
                 straight_m: (point - robot).norm(),
                 gain_m2: s.gain_m2,
                 layout_gain_m2,
-                room: match (&self.layout, self.policy_needs.layout) {
+                room: match (&self.layout, needs.layout) {
                     (Some(l), true) => l.raster.room_index(f.candidate),
                     _ => None,
                 },
             });
         }
-        if views.is_empty() {
-            return Answer::Nothing;
-        }
-        if attempt == 0 {
-            self.policy_decisions += 1;
-        }
-        let view = DecisionView {
-            decision: self.policy_decisions - 1,
-            attempt,
-            time_s: self.sim.time_s(),
-            pose: self.estimate,
-            candidates: &views,
-            unreachable_goal,
-            layout: self
-                .layout
-                .as_ref()
-                .filter(|_| self.policy_needs.layout)
-                .map(|l| LayoutView {
-                    number: l.number,
-                    rooms: &l.rooms,
-                }),
-            map: &self.map.occupancy,
-        };
-        let (reply, charged_s) = self.policy.get().decide(&view);
-        if charged_s.is_finite() && charged_s > 0.0 {
-            self.compute_debt_s += charged_s;
-            self.strategy_compute_s += charged_s;
-        }
-        let shown = |id: &usize| views.iter().any(|v| v.id == *id);
-        // Candidates shown, each once.
-        let listed = |ids: &[usize]| {
-            !ids.is_empty()
-                && ids.iter().all(shown)
-                && ids.iter().collect::<std::collections::BTreeSet<_>>().len() == ids.len()
-        };
-        match reply {
-            Reply::Choose(id) if shown(&id) => Answer::One(id),
-            Reply::Rank(ids) if listed(&ids) => Answer::Ranked(ids),
-            Reply::Goal(p) if p.x.is_finite() && p.y.is_finite() => Answer::Point(p),
-            Reply::Drop(ids) if listed(&ids) => Answer::Drop(ids),
-            Reply::Pass => Answer::Nothing,
-            Reply::Stop => Answer::Stop,
-            _ => {
-                self.policy_failed = true;
-                Answer::Nothing
-            }
-        }
+        views
+    }
+
+    /// The decision as a policy with `needs` sees it, with `views` for its candidates. (Of
+    /// the explorer's fields, not of `self`: the policy is borrowed beside it.)
+    pub(super) fn decision_view<'v>(
+        &'v self,
+        views: &'v [CandidateView],
+        asked: &Asked,
+        needs: Needs,
+    ) -> DecisionView<'v> {
+        decision_view(
+            views,
+            asked,
+            needs,
+            self.policy_decisions - 1,
+            self.sim.time_s(),
+            self.estimate,
+            self.layout.as_ref(),
+            &self.map.occupancy,
+        )
     }
 
     /// The last rung of `decide_planned`'s ladder: a closer look at a frontier that the distance
@@ -644,6 +670,33 @@ struct Recorded {
     candidates: usize,
     gain_m2: f64,
     distance_m: Option<f64>,
+}
+
+/// The decision as a policy with `needs` sees it (see `Explorer::decision_view`).
+#[allow(clippy::too_many_arguments)]
+fn decision_view<'v>(
+    views: &'v [CandidateView],
+    asked: &Asked,
+    needs: Needs,
+    decision: usize,
+    time_s: f64,
+    pose: Pose,
+    layout: Option<&'v LayoutState>,
+    map: &'v OccupancyGrid,
+) -> DecisionView<'v> {
+    DecisionView {
+        decision,
+        attempt: asked.attempt,
+        time_s,
+        pose,
+        candidates: views,
+        unreachable_goal: asked.unreachable_goal,
+        layout: layout.filter(|_| needs.layout).map(|l| LayoutView {
+            number: l.number,
+            rooms: &l.rooms,
+        }),
+        map,
+    }
 }
 
 /// How a policy is asked within one decision: the attempt, whether a built-in strategy uses the

@@ -96,6 +96,7 @@ impl Explorer<'_> {
 }
 
 /// The last layout and what is needed to judge it.
+#[derive(Clone)]
 pub(super) struct LayoutState {
     pub(super) raster: LayoutRaster,
     pub(super) known_cells_at: usize,

@@ -50,6 +50,7 @@ mod localization;
 mod navigation;
 pub mod policy;
 mod referee;
+mod shared;
 pub mod strategy;
 
 pub use crate::utility::UtilityDistance;
@@ -66,6 +67,7 @@ use self::gain_cache::{GainCache, GainKind};
 use self::layout_state::*;
 use self::navigation::*;
 use self::referee::*;
+pub use self::shared::{can_share, explore_shared};
 use crate::building::Building;
 use crate::frontier::blacklist::Blacklist;
 use crate::frontier::detect::{
@@ -510,8 +512,11 @@ struct Explorer<'a> {
     /// search is confined to first (all false between searches).
     astar: AStar,
     corridor: Vec<bool>,
+    /// The runs sharing this one's beginning (see `shared`), when it leads them.
+    shared: Option<Box<shared::Shared<'a>>>,
 }
 
+#[derive(Clone)]
 struct Goal {
     /// Where the robot drives: the candidate, or the nearest traversable cell to it.
     cell: Cell,
@@ -614,6 +619,17 @@ pub fn explore_with<'a>(
     on_progress: &mut dyn FnMut(&ProgressSample),
     hooks: Hooks<'a>,
 ) -> RunResult {
+    new_explorer(building, start, cfg, seed, hooks).run(on_progress)
+}
+
+/// The state of a run at its start.
+fn new_explorer<'a>(
+    building: &Building,
+    start: Pose,
+    cfg: &'a ExploreConfig,
+    seed: u64,
+    hooks: Hooks<'a>,
+) -> Explorer<'a> {
     let Hooks {
         layout_cost,
         policy,
@@ -628,11 +644,7 @@ pub fn explore_with<'a>(
     };
     let policy_needs = match &policy {
         PolicySlot::External(p) => p.needs(),
-        // The rule judges the paper's I(p) only when the strategy uses the layout.
-        PolicySlot::BuiltIn(b) => Needs {
-            layout_gain: b.needs().layout_gain && cfg.strategy.uses_layout(),
-            layout: false,
-        },
+        PolicySlot::BuiltIn(b) => built_in_needs(b, cfg),
     };
     let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
     let free = building.reachable_free(frame, start.position());
@@ -648,7 +660,7 @@ pub fn explore_with<'a>(
             .max(8)
             .max((cfg.frontier_clearance_m / cfg.map_resolution_m).ceil() as u32 + 1);
     let sim = Simulator::new(building, start, &cfg.sim, seed);
-    let ex = Explorer {
+    Explorer {
         cfg,
         seed,
         last_odometry: sim.odometry(),
@@ -717,15 +729,32 @@ pub fn explore_with<'a>(
         frontier_cells_left: 0,
         astar: AStar::default(),
         corridor: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
-    };
-    ex.run(on_progress)
+        shared: None,
+    }
+}
+
+/// What a built-in strategy's rule needs: the paper's I(p) only when the strategy uses the
+/// layout.
+fn built_in_needs(policy: &strategy::BuiltInPolicy, cfg: &ExploreConfig) -> Needs {
+    Needs {
+        layout_gain: policy.needs().layout_gain && cfg.strategy.uses_layout(),
+        layout: false,
+    }
 }
 
 impl Explorer<'_> {
     fn run(mut self, on_progress: &mut dyn FnMut(&ProgressSample)) -> RunResult {
+        let end_reason = self.explore_until_end(on_progress);
+        self.conclude(end_reason, on_progress)
+    }
+
+    /// The run loop: sensing, deciding and driving until exploration ends.
+    fn explore_until_end(&mut self, on_progress: &mut dyn FnMut(&ProgressSample)) -> EndReason {
         let cfg = self.cfg;
         let end_reason;
         loop {
+            // (Runs sharing this one's beginning keep a copy of it now and then: see `shared`.)
+            self.checkpoint_if_due();
             self.sense();
             self.record_progress(on_progress);
             if self.sim.time_s() >= cfg.time_limit_s {
@@ -743,6 +772,16 @@ impl Explorer<'_> {
             self.wait_for_compute(on_progress);
             self.drive();
         }
+        end_reason
+    }
+
+    /// What follows exploration: the policy told, the way home if asked for, the result.
+    fn conclude(
+        mut self,
+        end_reason: EndReason,
+        on_progress: &mut dyn FnMut(&ProgressSample),
+    ) -> RunResult {
+        let cfg = self.cfg;
         let exploration_time_s = self.sim.time_s();
         let end = RunEnd {
             reason: end_reason,

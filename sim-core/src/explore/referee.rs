@@ -8,6 +8,7 @@ use super::*;
 
 /// What only the simulation knows: the building's ground truth on the map grid, and the
 /// explored area credited against it.
+#[derive(Clone)]
 pub(super) struct Referee {
     /// Explorable free space of the building on the map grid (ground truth for the explored
     /// area and the rooms left unexplored).

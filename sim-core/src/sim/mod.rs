@@ -46,7 +46,7 @@ const STREAM_LASER: u64 = 2;
 
 /// The simulated world and robot. Advance it with [`Simulator::step`]; read the laser with
 /// [`Simulator::scan`] and the odometry with [`Simulator::odometry`].
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct Simulator {
     config: SimConfig,
     walls: Walls,

@@ -44,6 +44,28 @@ pub(super) struct RobotBody {
     theta_rad: f64,
 }
 
+/// A copy of the body in its world. The physics pipeline holds only scratch buffers (rapier's
+/// own note), so the copy gets a new one; a copied run is bit-identical to the original
+/// (`explore::shared`'s tests).
+impl Clone for RobotBody {
+    fn clone(&self) -> Self {
+        Self {
+            pipeline: PhysicsPipeline::new(),
+            params: self.params,
+            islands: self.islands.clone(),
+            broad_phase: self.broad_phase.clone(),
+            narrow_phase: self.narrow_phase.clone(),
+            bodies: self.bodies.clone(),
+            colliders: self.colliders.clone(),
+            impulse_joints: self.impulse_joints.clone(),
+            multibody_joints: self.multibody_joints.clone(),
+            ccd: self.ccd.clone(),
+            handle: self.handle,
+            theta_rad: self.theta_rad,
+        }
+    }
+}
+
 impl std::fmt::Debug for RobotBody {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("RobotBody")
