@@ -464,17 +464,12 @@ impl Explorer<'_> {
         if asked.attempt == 0 {
             self.policy_decisions += 1;
         }
-        let view = decision_view(
-            &views,
-            &asked,
-            needs,
-            self.policy_decisions - 1,
-            self.sim.time_s(),
-            self.estimate,
-            self.layout.as_ref(),
-            &self.map.occupancy,
-        );
-        let (reply, charged_s) = self.policy.get().decide(&view);
+        // (The policy is taken out while it looks at the view, which borrows the explorer.)
+        let placeholder = strategy::BuiltInPolicy::new(strategy::EarlyStop::Never, 0.0, 0.0);
+        let mut policy = std::mem::replace(&mut self.policy, PolicySlot::BuiltIn(placeholder));
+        let view = self.decision_view(&views, &asked, needs);
+        let (reply, charged_s) = policy.get().decide(&view);
+        self.policy = policy;
         if charged_s.is_finite() && charged_s > 0.0 {
             self.compute_debt_s += charged_s;
             self.strategy_compute_s += charged_s;
@@ -558,24 +553,30 @@ impl Explorer<'_> {
         views
     }
 
-    /// The decision as a policy with `needs` sees it, with `views` for its candidates. (Of
-    /// the explorer's fields, not of `self`: the policy is borrowed beside it.)
+    /// The decision as a policy with `needs` sees it, with `views` for its candidates.
     pub(super) fn decision_view<'v>(
         &'v self,
         views: &'v [CandidateView],
         asked: &Asked,
         needs: Needs,
     ) -> DecisionView<'v> {
-        decision_view(
-            views,
-            asked,
-            needs,
-            self.policy_decisions - 1,
-            self.sim.time_s(),
-            self.estimate,
-            self.layout.as_ref(),
-            &self.map.occupancy,
-        )
+        DecisionView {
+            decision: self.policy_decisions - 1,
+            attempt: asked.attempt,
+            time_s: self.sim.time_s(),
+            pose: self.estimate,
+            candidates: views,
+            unreachable_goal: asked.unreachable_goal,
+            layout: self
+                .layout
+                .as_ref()
+                .filter(|_| needs.layout)
+                .map(|l| LayoutView {
+                    number: l.number,
+                    rooms: &l.rooms,
+                }),
+            map: &self.map.occupancy,
+        }
     }
 
     /// The last rung of `decide_planned`'s ladder: a closer look at a frontier that the distance
@@ -670,33 +671,6 @@ struct Recorded {
     candidates: usize,
     gain_m2: f64,
     distance_m: Option<f64>,
-}
-
-/// The decision as a policy with `needs` sees it (see `Explorer::decision_view`).
-#[allow(clippy::too_many_arguments)]
-fn decision_view<'v>(
-    views: &'v [CandidateView],
-    asked: &Asked,
-    needs: Needs,
-    decision: usize,
-    time_s: f64,
-    pose: Pose,
-    layout: Option<&'v LayoutState>,
-    map: &'v OccupancyGrid,
-) -> DecisionView<'v> {
-    DecisionView {
-        decision,
-        attempt: asked.attempt,
-        time_s,
-        pose,
-        candidates: views,
-        unreachable_goal: asked.unreachable_goal,
-        layout: layout.filter(|_| needs.layout).map(|l| LayoutView {
-            number: l.number,
-            rooms: &l.rooms,
-        }),
-        map,
-    }
 }
 
 /// How a policy is asked within one decision: the attempt, whether a built-in strategy uses the
