@@ -3,7 +3,8 @@
 //! and the worker process that takes jobs from a coordinator.
 //!
 //! - [`run_job`]: one job, in memory; [`execute`]: one job into its report (the typed outcome a
-//!   worker returns).
+//!   worker returns); [`run_jobs_shared`]: jobs that share their beginning (the same building,
+//!   seed, start and [`share_key`]) run as one exploration where they agree.
 //! - [`process`]: the worker process's loop (ask, run, renew, submit), over a link to the
 //!   coordinator that the caller supplies (it knows no transport).
 //! - [`wire`]: the versioned messages between coordinator and workers.
