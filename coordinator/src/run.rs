@@ -559,7 +559,7 @@ fn submit(name: &str, inbox: &mpsc::Sender<Inbox>, job_id: &str, report: JobRepo
 
 /// The jobs that can run together with `job` (`floorcast_worker::run_jobs_shared`): built-in
 /// strategies that differ from its own in the early stop only (`layout`, `layout-es`,
-/// `layout-aes`...), on the same building, seed, start and settings, in plan order. `keys`
+/// `layout-aes`...), on the same building, seed, start and settings, in job-id order. `keys`
 /// caches each job's `share_key`.
 fn partners(
     plan: &Plan,
@@ -578,10 +578,8 @@ fn partners(
     let same_run = |j: &PlannedJob| {
         j.id != job.id && j.building == job.building && j.seed == job.seed && j.start == job.start
     };
-    let candidates: Vec<&PlannedJob> = jobs.values().filter(|j| same_run(j)).collect();
-    candidates
-        .into_iter()
-        .filter(|j| key(j).as_ref() == Some(&mine))
+    jobs.values()
+        .filter(|j| same_run(j) && key(j).as_ref() == Some(&mine))
         .map(|j| j.id.clone())
         .collect()
 }
