@@ -2,8 +2,7 @@
 
 use std::sync::Arc;
 
-use parry2d::math::{Isometry, Point as PPoint, Vector as PVector};
-use parry2d::query::{Ray, RayCast};
+use parry2d::math::Point as PPoint;
 use parry2d::shape::{Polyline, SharedShape};
 use rand::Rng;
 use rand_distr::{Distribution, Normal};
@@ -48,17 +47,23 @@ impl LaserConfig {
             .then(|| Normal::new(0.0, self.range_noise_sd_m).ok())
             .flatten();
         let origin = pose.position();
-        let ranges_m = (0..n)
+        let first_rad = pose.theta_rad + angle_min;
+        let dirs: Vec<Vec2> = (0..n)
             .map(|i| {
-                let a = pose.theta_rad + angle_min + i as f64 * inc;
-                match walls.cast(origin, Vec2::new(a.cos(), a.sin()), self.max_range_m) {
-                    Some(r) => {
-                        let e = noise.map_or(0.0, |d| d.sample(rng));
-                        // A noisy hit never reads as "no hit".
-                        (r + e).clamp(0.0, self.max_range_m * (1.0 - 1e-9))
-                    }
-                    None => self.max_range_m,
+                let a = first_rad + i as f64 * inc;
+                Vec2::new(a.cos(), a.sin())
+            })
+            .collect();
+        let ranges_m = walls
+            .cast_fan(origin, first_rad, inc, &dirs, self.max_range_m)
+            .into_iter()
+            .map(|hit| match hit {
+                Some(r) => {
+                    let e = noise.map_or(0.0, |d| d.sample(rng));
+                    // A noisy hit never reads as "no hit".
+                    (r + e).clamp(0.0, self.max_range_m * (1.0 - 1e-9))
                 }
+                None => self.max_range_m,
             })
             .collect();
         Scan {
@@ -70,44 +75,203 @@ impl LaserConfig {
     }
 }
 
-/// The building's walls as one parry2d polyline (a segment soup under a BVH).
+/// The building's walls: their segments under a uniform grid, for the laser, and as one parry2d
+/// polyline, for the robot's collisions.
+///
+/// The laser casts a scan's beams together ([`Walls::cast_fan`]): every segment within range of
+/// the origin is found once through the grid and tested against the beams its angular extent
+/// covers (with a margin), in `f64`. A beam's range is the least distance at which it crosses a
+/// segment, whatever the order the segments are tested in, so it is the same as testing every
+/// segment of the building ([`cast_exhaustive`]).
 #[derive(Clone)]
 pub struct Walls {
     shape: Option<Arc<Polyline>>,
-    segments: usize,
+    index: Arc<WallIndex>,
 }
 
 impl std::fmt::Debug for Walls {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Walls")
-            .field("segments", &self.segments)
+            .field("segments", &self.index.segments.len())
             .finish()
+    }
+}
+
+/// The segments and, per grid cell, the segments whose bounding box overlaps it.
+#[derive(Debug, Default)]
+struct WallIndex {
+    segments: Vec<Segment>,
+    /// Per segment: the grid cells of its bounding box, `[x0, y0, x1, y1]` inclusive.
+    boxes: Vec<[i32; 4]>,
+    origin: Vec2,
+    cell_m: f64,
+    width: i32,
+    height: i32,
+    /// Segment ids of cell `i` (row-major): `ids[starts[i]..starts[i + 1]]`.
+    starts: Vec<u32>,
+    ids: Vec<u32>,
+}
+
+/// Most cells of the wall grid (cells grow beyond 1 m to stay under it).
+const MAX_GRID_CELLS: f64 = 1_000_000.0;
+
+/// Angle (rad) added on both sides of a segment's angular extent when choosing the beams to test
+/// against it: far more than the rounding of the angles, far less than a beam's spacing.
+const BEAM_MARGIN_RAD: f64 = 1e-6;
+
+impl WallIndex {
+    fn new(segments: &[Segment]) -> Self {
+        let finite = |s: &Segment| {
+            s.a.x.is_finite() && s.a.y.is_finite() && s.b.x.is_finite() && s.b.y.is_finite()
+        };
+        let segments: Vec<Segment> = segments.iter().copied().filter(finite).collect();
+        if segments.is_empty() {
+            return Self::default();
+        }
+        let (mut lo, mut hi) = (segments[0].a, segments[0].a);
+        for s in &segments {
+            for p in [s.a, s.b] {
+                lo = Vec2::new(lo.x.min(p.x), lo.y.min(p.y));
+                hi = Vec2::new(hi.x.max(p.x), hi.y.max(p.y));
+            }
+        }
+        let (ex, ey) = ((hi.x - lo.x).max(1.0), (hi.y - lo.y).max(1.0));
+        let cell_m = (ex * ey / MAX_GRID_CELLS).sqrt().max(1.0);
+        let width = (ex / cell_m).floor() as i32 + 1;
+        let height = (ey / cell_m).floor() as i32 + 1;
+        let mut index = Self {
+            segments,
+            boxes: Vec::new(),
+            origin: lo,
+            cell_m,
+            width,
+            height,
+            starts: Vec::new(),
+            ids: Vec::new(),
+        };
+        index.boxes = index
+            .segments
+            .iter()
+            .map(|s| {
+                let [x0, y0] = index.cell_of(Vec2::new(s.a.x.min(s.b.x), s.a.y.min(s.b.y)));
+                let [x1, y1] = index.cell_of(Vec2::new(s.a.x.max(s.b.x), s.a.y.max(s.b.y)));
+                [x0, y0, x1, y1]
+            })
+            .collect();
+        let cells = (width * height) as usize;
+        let mut counts = vec![0u32; cells + 1];
+        for b in &index.boxes {
+            for y in b[1]..=b[3] {
+                for x in b[0]..=b[2] {
+                    counts[(y * width + x) as usize + 1] += 1;
+                }
+            }
+        }
+        for i in 0..cells {
+            counts[i + 1] += counts[i];
+        }
+        let mut next = counts.clone();
+        let mut ids = vec![0u32; counts[cells] as usize];
+        for (k, b) in index.boxes.iter().enumerate() {
+            for y in b[1]..=b[3] {
+                for x in b[0]..=b[2] {
+                    let c = (y * width + x) as usize;
+                    ids[next[c] as usize] = k as u32;
+                    next[c] += 1;
+                }
+            }
+        }
+        index.starts = counts;
+        index.ids = ids;
+        index
+    }
+
+    /// The grid cell of `p`, clamped to the grid.
+    fn cell_of(&self, p: Vec2) -> [i32; 2] {
+        let f =
+            |v: f64, o: f64, n: i32| (((v - o) / self.cell_m).floor().max(0.0) as i32).min(n - 1);
+        [
+            f(p.x, self.origin.x, self.width),
+            f(p.y, self.origin.y, self.height),
+        ]
+    }
+}
+
+/// Where the ray from the origin along `d` crosses the segment from `a` to `a + e` (`a` relative
+/// to the origin), if at a distance in `[0, max_range_m]`: `t` with `t d = a + s e`, `s` in
+/// `[0, 1]` (parallel segments are never crossed).
+#[inline]
+fn crossing(a: Vec2, e: Vec2, cross_ae: f64, d: Vec2, max_range_m: f64) -> Option<f64> {
+    let den = d.x * e.y - d.y * e.x;
+    let sn = a.x * d.y - a.y * d.x;
+    let (s_ok, t_ok) = if den > 0.0 {
+        (sn >= 0.0 && sn <= den, cross_ae >= 0.0)
+    } else if den < 0.0 {
+        (sn <= 0.0 && sn >= den, cross_ae <= 0.0)
+    } else {
+        (false, false)
+    };
+    if !(s_ok && t_ok) {
+        return None;
+    }
+    let t = cross_ae / den;
+    (t <= max_range_m).then_some(t)
+}
+
+/// The definition [`Walls::cast_fan`] implements: every segment tested against every beam.
+pub fn cast_exhaustive(
+    segments: &[Segment],
+    origin: Vec2,
+    dirs: &[Vec2],
+    max_range_m: f64,
+) -> Vec<Option<f64>> {
+    dirs.iter()
+        .map(|&d| {
+            segments
+                .iter()
+                .filter_map(|s| {
+                    let (a, e) = (s.a - origin, s.b - s.a);
+                    crossing(a, e, a.x * e.y - a.y * e.x, d, max_range_m)
+                })
+                .reduce(f64::min)
+        })
+        .collect()
+}
+
+/// `v` in `(-pi, pi]`.
+fn wrap_pi(v: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let w = v - TAU * (v / TAU).round();
+    if w <= -PI {
+        w + TAU
+    } else if w > PI {
+        w - TAU
+    } else {
+        w
     }
 }
 
 impl Walls {
     pub fn new(segments: &[Segment]) -> Self {
-        if segments.is_empty() {
-            return Self {
-                shape: None,
-                segments: 0,
-            };
+        let index = Arc::new(WallIndex::new(segments));
+        if index.segments.is_empty() {
+            return Self { shape: None, index };
         }
-        let mut vertices = Vec::with_capacity(segments.len() * 2);
-        let mut indices = Vec::with_capacity(segments.len());
-        for (i, s) in segments.iter().enumerate() {
+        let mut vertices = Vec::with_capacity(index.segments.len() * 2);
+        let mut indices = Vec::with_capacity(index.segments.len());
+        for (i, s) in index.segments.iter().enumerate() {
             vertices.push(PPoint::new(s.a.x as f32, s.a.y as f32));
             vertices.push(PPoint::new(s.b.x as f32, s.b.y as f32));
             indices.push([2 * i as u32, 2 * i as u32 + 1]);
         }
         Self {
             shape: Some(Arc::new(Polyline::new(vertices, Some(indices)))),
-            segments: segments.len(),
+            index,
         }
     }
 
     pub fn segment_count(&self) -> usize {
-        self.segments
+        self.index.segments.len()
     }
 
     pub(super) fn shared_shape(&self) -> Option<SharedShape> {
@@ -117,13 +281,203 @@ impl Walls {
     /// Distance along the unit direction `dir` from `origin` to the first wall, if within
     /// `max_range_m`.
     pub fn cast(&self, origin: Vec2, dir: Vec2, max_range_m: f64) -> Option<f64> {
-        let shape = self.shape.as_ref()?;
-        let ray = Ray::new(
-            PPoint::new(origin.x as f32, origin.y as f32),
-            PVector::new(dir.x as f32, dir.y as f32),
+        self.cast_fan(origin, dir.y.atan2(dir.x), 0.0, &[dir], max_range_m)[0]
+    }
+
+    /// The distances from `origin` to the first wall along each of `dirs` (unit vectors), if
+    /// within `max_range_m`. Beam `i` must point at about `first_rad + i * increment_rad`
+    /// (within a microradian; the angles only choose which segments to test against a beam).
+    pub fn cast_fan(
+        &self,
+        origin: Vec2,
+        first_rad: f64,
+        increment_rad: f64,
+        dirs: &[Vec2],
+        max_range_m: f64,
+    ) -> Vec<Option<f64>> {
+        let mut best = vec![f64::INFINITY; dirs.len()];
+        let ix = &*self.index;
+        let ok = |v: f64| v.is_finite();
+        if ix.segments.is_empty()
+            || dirs.is_empty()
+            || !(ok(origin.x) && ok(origin.y) && ok(first_rad) && ok(increment_rad))
+            || !(max_range_m >= 0.0 && max_range_m.is_finite())
+        {
+            return vec![None; dirs.len()];
+        }
+        let n = dirs.len();
+        let r = max_range_m;
+        let [qx0, qy0] = ix.cell_of(origin - Vec2::new(r, r));
+        let [qx1, qy1] = ix.cell_of(origin + Vec2::new(r, r));
+        // (A segment within range touches the square around the origin; one clamped to the
+        // grid's edge cells is tested, and rejected by its distance, if it does not.)
+        let reach2 = {
+            let reach = r * (1.0 + 1e-9) + 1e-9;
+            reach * reach
+        };
+        for cy in qy0..=qy1 {
+            for cx in qx0..=qx1 {
+                let c = (cy * ix.width + cx) as usize;
+                for &k in &ix.ids[ix.starts[c] as usize..ix.starts[c + 1] as usize] {
+                    let b = ix.boxes[k as usize];
+                    // Each segment once: in the first of its cells in the square.
+                    if cx != b[0].max(qx0) || cy != b[1].max(qy0) {
+                        continue;
+                    }
+                    let s = ix.segments[k as usize];
+                    let (a, e) = (s.a - origin, s.b - s.a);
+                    let l2 = e.dot(&e);
+                    let u = if l2 > 0.0 {
+                        (-a.dot(&e) / l2).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                    if (a + e * u).norm_squared() > reach2 {
+                        continue;
+                    }
+                    let cross_ae = a.x * e.y - a.y * e.x;
+                    let mut test = |i: usize| {
+                        if let Some(t) = crossing(a, e, cross_ae, dirs[i], max_range_m) {
+                            best[i] = best[i].min(t);
+                        }
+                    };
+                    let b_rel = a + e;
+                    if n == 1 || increment_rad <= 0.0 || a.norm() < 1e-12 || b_rel.norm() < 1e-12 {
+                        (0..n).for_each(&mut test);
+                        continue;
+                    }
+                    // The beams within the angle the segment spans seen from the origin (less
+                    // than half a turn), measured from the first beam.
+                    let pa = wrap_pi(a.y.atan2(a.x) - first_rad);
+                    let pb = wrap_pi(b_rel.y.atan2(b_rel.x) - first_rad);
+                    let span = wrap_pi(pb - pa);
+                    let lo = if span >= 0.0 { pa } else { pb };
+                    for turn in [-1.0, 0.0, 1.0] {
+                        let lo = lo + turn * std::f64::consts::TAU;
+                        let i0 = ((lo - BEAM_MARGIN_RAD) / increment_rad).ceil().max(0.0);
+                        let i1 = ((lo + span.abs() + BEAM_MARGIN_RAD) / increment_rad)
+                            .floor()
+                            .min((n - 1) as f64);
+                        if i0 <= i1 {
+                            (i0 as usize..=i1 as usize).for_each(&mut test);
+                        }
+                    }
+                }
+            }
+        }
+        best.into_iter()
+            .map(|t| t.is_finite().then_some(t))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use parry2d::math::{Isometry, Vector as PVector};
+    use parry2d::query::{Ray, RayCast};
+    use proptest::prelude::*;
+
+    fn segment() -> impl Strategy<Value = Segment> {
+        // Axis-aligned walls on a 0.05 m lattice (as rasters and generated buildings have them),
+        // and slanted ones anywhere.
+        prop_oneof![
+            (0i32..400, 0i32..400, -80i32..80, any::<bool>()).prop_map(|(x, y, l, vertical)| {
+                let a = Vec2::new(x as f64 * 0.05, y as f64 * 0.05);
+                let d = l as f64 * 0.05;
+                let b = if vertical {
+                    a + Vec2::new(0.0, d)
+                } else {
+                    a + Vec2::new(d, 0.0)
+                };
+                Segment::new(a, b)
+            }),
+            (0.0..20.0f64, 0.0..20.0f64, -5.0..5.0f64, -5.0..5.0f64).prop_map(|(x, y, dx, dy)| {
+                Segment::new(Vec2::new(x, y), Vec2::new(x + dx, y + dy))
+            }),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// The fan finds, for every beam, what testing every segment finds, to the bit; and
+        /// what parry2d's BVH finds, to its `f32` precision, wherever no two walls are as close
+        /// along the beam as that precision (the one the simulator used up to 0.6.0).
+        #[test]
+        fn fan_is_every_segment_tested(
+            segments in proptest::collection::vec(segment(), 1..60),
+            ox in -2.0..22.0f64,
+            oy in -2.0..22.0f64,
+            first in -10.0..10.0f64,
+            fov_deg in 1.0..=360.0f64,
+            beams in 2usize..400,
+            range in 0.5..30.0f64,
+        ) {
+            let walls = Walls::new(&segments);
+            let origin = Vec2::new(ox, oy);
+            let inc = fov_deg.to_radians() / (beams - 1) as f64;
+            let dirs: Vec<Vec2> = (0..beams)
+                .map(|i| {
+                    let a = first + i as f64 * inc;
+                    Vec2::new(a.cos(), a.sin())
+                })
+                .collect();
+            let fan = walls.cast_fan(origin, first, inc, &dirs, range);
+            let all = cast_exhaustive(&segments, origin, &dirs, range);
+            prop_assert_eq!(&fan, &all);
+            let shape = walls.shape.as_ref().expect("walls");
+            for (i, d) in dirs.iter().enumerate() {
+                let ray = Ray::new(
+                    PPoint::new(origin.x as f32, origin.y as f32),
+                    PVector::new(d.x as f32, d.y as f32),
+                );
+                let parry = shape
+                    .cast_ray(&Isometry::identity(), &ray, range as f32, false)
+                    .map(|t| t as f64);
+                // Beams that graze a wall, pass near a wall's end or end near the range may
+                // differ (f32 rounding); the rest must agree.
+                let doubtful = segments.iter().any(|s| {
+                    let (a, e) = (s.a - origin, s.b - s.a);
+                    let grown = Segment::new(s.a - e * 1e-3, s.b + e * 1e-3);
+                    let (ga, ge) = (grown.a - origin, grown.b - grown.a);
+                    let cross = |a: Vec2, e: Vec2, r: f64| crossing(a, e, a.x * e.y - a.y * e.x, *d, r);
+                    let grazing = (d.x * e.y - d.y * e.x).abs() < 0.05 * e.norm();
+                    cross(ga, ge, range + 1e-2).is_some()
+                        && (grazing || cross(a, e, range - 1e-2).is_none())
+                });
+                if !doubtful {
+                    match (fan[i], parry) {
+                        (Some(a), Some(b)) => prop_assert!((a - b).abs() < 1e-3, "beam {i}: {a} vs {b}"),
+                        (a, b) => prop_assert_eq!(a.is_some(), b.is_some(), "beam {}", i),
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn odd_inputs_give_no_hits_rather_than_panics() {
+        let walls = Walls::new(&[Segment::new(Vec2::new(1.0, -1.0), Vec2::new(1.0, 1.0))]);
+        let d = [Vec2::new(1.0, 0.0)];
+        assert_eq!(
+            walls.cast_fan(Vec2::zeros(), 0.0, 0.0, &d, 5.0),
+            vec![Some(1.0)]
         );
-        shape
-            .cast_ray(&Isometry::identity(), &ray, max_range_m as f32, false)
-            .map(|t| t as f64)
+        assert_eq!(walls.cast_fan(Vec2::zeros(), 0.0, 0.0, &d, 0.5), vec![None]);
+        assert_eq!(
+            walls.cast_fan(Vec2::new(f64::NAN, 0.0), 0.0, 0.0, &d, 5.0),
+            vec![None]
+        );
+        assert_eq!(
+            walls.cast_fan(Vec2::zeros(), 0.0, 0.0, &d, f64::INFINITY),
+            vec![None]
+        );
+        assert_eq!(
+            walls.cast(Vec2::new(0.0, 0.5), Vec2::new(1.0, 0.0), 5.0),
+            Some(1.0)
+        );
+        let none = Walls::new(&[]);
+        assert_eq!(none.cast(Vec2::zeros(), Vec2::new(1.0, 0.0), 5.0), None);
     }
 }

@@ -8,7 +8,7 @@ mod laser;
 mod odometry;
 mod robot;
 
-pub use laser::{LaserConfig, Walls};
+pub use laser::{cast_exhaustive, LaserConfig, Walls};
 pub use odometry::{Odometry, OdometryConfig};
 pub use robot::RobotConfig;
 
