@@ -374,7 +374,8 @@ early_stop_cases! {
     /// wedge of free cells too thin to drive, whose frontier's goal could not be reached, so the
     /// rule summed the other frontiers' gains and stopped at 96.7 % explored (54.7 m² left).
     /// The unreachable frontiers now get their reachable part before the rule ends the run.
-    early_stop_modern_office_layout_es_random_start: "layout-es", 1, "6.375,32.225,-126.92072186924302";
+    /// (Seed 2 since 0.7.0, whose laser changed the runs: seed 1's now ends complete.)
+    early_stop_modern_office_layout_es_random_start: "layout-es", 2, "6.375,32.225,-126.92072186924302";
     early_stop_modern_office_layout_aes_random_start: "layout-aes", 1, "6.375,32.225,-126.92072186924302";
 }
 
