@@ -1,4 +1,4 @@
-//! The laser: rays cast with parry2d against the building's wall boundary.
+//! The laser: a scan's beams cast together against the building's wall segments within range.
 
 use std::sync::Arc;
 

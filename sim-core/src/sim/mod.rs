@@ -1,5 +1,6 @@
 //! The simulated robot in a building: a rapier2d body that cannot pass through walls, a 2D laser
-//! cast with parry2d, and odometry with Stage's proportional error model.
+//! cast against the wall segments (the nearest crossing in `f64`), and odometry with Stage's
+//! proportional error model.
 //!
 //! All randomness comes from the seed given to [`Simulator::new`]; separate streams feed the
 //! odometry error and the laser noise, so changing the beam count does not change the odometry.
