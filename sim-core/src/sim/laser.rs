@@ -119,6 +119,8 @@ const MAX_GRID_CELLS: f64 = 1_000_000.0;
 /// against it: far more than the error of [`atan2_approx`] and the rounding of the angles, far
 /// less than a beam's spacing.
 const BEAM_MARGIN_RAD: f64 = 1e-3;
+// (Well above three times the approximation's bound, 3e-4 rad.)
+const _: () = assert!(3.0 * 3e-4 < BEAM_MARGIN_RAD);
 
 /// `y.atan2(x)` within 3e-4 rad (a polynomial on the octant; tested against `atan2`), for
 /// choosing beams only: the beams a segment is tested against may be a few more than it spans.
@@ -504,7 +506,6 @@ mod tests {
             worst = worst.max((atan2_approx(y, x) - f64::atan2(y, x)).abs());
         }
         assert!(worst < 3e-4, "{worst}");
-        assert!(3e-4 * 3.0 < BEAM_MARGIN_RAD);
     }
 
     #[test]
