@@ -380,6 +380,13 @@ impl Walls {
                     let pa = wrap_pi(atan2_approx(a.y, a.x) - first_rad);
                     let pb = wrap_pi(atan2_approx(b_rel.y, b_rel.x) - first_rad);
                     let span = wrap_pi(pb - pa);
+                    // Nearly half a turn (a long wall passing close by): should the approximate
+                    // angles' errors not cancel (they do for opposite directions), they could
+                    // pick the other side; every beam is tested instead.
+                    if span.abs() > std::f64::consts::PI - 0.01 {
+                        (0..n).for_each(&mut test);
+                        continue;
+                    }
                     let lo = if span >= 0.0 { pa } else { pb };
                     for turn in [-1.0, 0.0, 1.0] {
                         let lo = lo + turn * std::f64::consts::TAU;
@@ -506,6 +513,35 @@ mod tests {
             worst = worst.max((atan2_approx(y, x) - f64::atan2(y, x)).abs());
         }
         assert!(worst < 3e-4, "{worst}");
+    }
+
+    /// Walls that span nearly half a turn seen from the origin (long, passing close by), at
+    /// every heading: the approximate angles must not pick the wrong side of them.
+    #[test]
+    fn long_walls_close_by_are_found() {
+        for k in 0..360 {
+            let th = (k as f64).to_radians();
+            let (c, s) = (th.cos(), th.sin());
+            let rot = |x: f64, y: f64| Vec2::new(c * x - s * y, s * x + c * y);
+            let segments = [
+                Segment::new(rot(-20000.0, 0.2), rot(20000.0, 0.2)),
+                Segment::new(rot(0.21, -30000.0), rot(0.21, 1.0)),
+                Segment::new(rot(-5000.0, -0.25), rot(4000.0, -0.25)),
+            ];
+            let walls = Walls::new(&segments);
+            for (first, beams) in [(th - 0.3, 181usize), (th + 1.0, 7), (th - 3.0, 361)] {
+                let inc = std::f64::consts::TAU / (beams - 1) as f64;
+                let dirs: Vec<Vec2> = (0..beams)
+                    .map(|i| {
+                        let a = first + i as f64 * inc;
+                        Vec2::new(a.cos(), a.sin())
+                    })
+                    .collect();
+                let fan = walls.cast_fan(Vec2::zeros(), first, inc, &dirs, 6.0);
+                assert_eq!(fan, cast_exhaustive(&segments, Vec2::zeros(), &dirs, 6.0));
+                assert!(fan.iter().any(|t| t.is_some()));
+            }
+        }
     }
 
     #[test]
