@@ -221,11 +221,14 @@ impl RayFan {
         let h = self.half;
         let inside = p.x - h >= 0 && p.y - h >= 0 && p.x + h < w && p.y + h < frame.height as i32;
         let base = p.y as isize * w as isize + p.x as isize;
+        // (The slices held apart, so that the stores to `seen` cannot make the compiler read
+        // the vectors' addresses and lengths again from `self` for every node.)
+        let (nodes, cells, seen) = (&self.nodes[..], &self.cells[..], &mut self.seen[..]);
         let mut count = 0usize;
         let mut i = 0usize;
-        while i < self.nodes.len() {
-            let n = self.nodes[i];
-            let (dx, dy) = self.cells[i];
+        while i < nodes.len() {
+            let n = nodes[i];
+            let (dx, dy) = cells[i];
             let c = Cell::new(p.x + dx as i32, p.y + dy as i32);
             let idx = if inside {
                 (base + n.offset as isize) as usize
@@ -246,8 +249,8 @@ impl RayFan {
                 // mispredicted often. `counts` is a pure predicate: evaluating it for a cell
                 // already seen changes nothing.
                 let at = (n.seen & !IN_RANGE) as usize;
-                let fresh = self.seen[at] == 0;
-                self.seen[at] = 1;
+                let fresh = seen[at] == 0;
+                seen[at] = 1;
                 count += (fresh & counts(c, idx)) as usize;
             }
             i += 1;
@@ -259,12 +262,14 @@ impl RayFan {
 /// The baseline `I(p)`: unknown area visible from `p` through the map, unknown treated as free,
 /// occupied cells blocking.
 pub fn information_gain(grid: &OccupancyGrid, p: Cell, range_m: f64) -> f64 {
+    // (The cells as a slice: the predicates then read them without going through `grid`.)
+    let data = &grid.data[..];
     visible_area_indexed(
         &grid.frame,
         p,
         range_m,
-        |_, i| grid.data[i] == Occupancy::Occupied,
-        |_, i| grid.data[i] == Occupancy::Unknown,
+        |_, i| data[i] == Occupancy::Occupied,
+        |_, i| data[i] == Occupancy::Unknown,
     )
 }
 

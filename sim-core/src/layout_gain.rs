@@ -395,6 +395,8 @@ pub fn layout_information_gain(
     if raster.uses_baseline(p) {
         return crate::gain::information_gain(grid, p, range_m);
     }
+    // (The cells as a slice: the predicates then read them without going through `grid`.)
+    let data = &grid.data[..];
     visible_area_indexed(
         &grid.frame,
         p,
@@ -402,14 +404,13 @@ pub fn layout_information_gain(
         // A candidate lies on the frontier, often right on the edge of its room's polygon: the
         // layout walls touching its own cell must not hide everything from it.
         |c, i| {
-            grid.data[i] == Occupancy::Occupied
+            data[i] == Occupancy::Occupied
                 || (raster.walls.get(c) == Some(&true)
                     && !(raster.through_openings
-                        && (grid.data[i] == Occupancy::Free
-                            || raster.gap_walls.get(c) == Some(&true)))
+                        && (data[i] == Occupancy::Free || raster.gap_walls.get(c) == Some(&true)))
                     && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
         },
-        |c, i| grid.data[i] == Occupancy::Unknown && (raster.through_openings || raster.inside(c)),
+        |c, i| data[i] == Occupancy::Unknown && (raster.through_openings || raster.inside(c)),
     )
 }
 
@@ -457,16 +458,18 @@ pub fn gap_closed_information_gain(
     p: Cell,
     range_m: f64,
 ) -> f64 {
+    // (The cells as a slice: the predicates then read them without going through `grid`.)
+    let data = &grid.data[..];
     visible_area_indexed(
         &grid.frame,
         p,
         range_m,
         |c, i| {
-            grid.data[i] == Occupancy::Occupied
+            data[i] == Occupancy::Occupied
                 || (raster.gap_walls.get(c) == Some(&true)
                     && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
         },
-        |_, i| grid.data[i] == Occupancy::Unknown,
+        |_, i| data[i] == Occupancy::Unknown,
     )
 }
 

@@ -97,12 +97,10 @@ impl std::fmt::Debug for Walls {
     }
 }
 
-/// The segments and, per grid cell, the segments whose bounding box overlaps it.
+/// The segments and, per grid cell, the segments that touch it.
 #[derive(Debug, Default)]
 struct WallIndex {
     segments: Vec<Segment>,
-    /// Per segment: the grid cells of its bounding box, `[x0, y0, x1, y1]` inclusive.
-    boxes: Vec<[i32; 4]>,
     origin: Vec2,
     cell_m: f64,
     width: i32,
@@ -114,6 +112,11 @@ struct WallIndex {
 
 /// Most cells of the wall grid (cells grow beyond 1 m to stay under it).
 const MAX_GRID_CELLS: f64 = 1_000_000.0;
+
+/// Most (segment, cell) entries of the wall grid (4 bytes each): with more (many long walls
+/// crossing a large building), the cells are made larger until the entries fit. Counted before
+/// anything is allocated.
+const MAX_ENTRIES: u64 = 16_000_000;
 
 /// Angle (rad) added on both sides of a segment's angular extent when choosing the beams to test
 /// against it: far more than the error of [`atan2_approx`] and the rounding of the angles, far
@@ -150,6 +153,12 @@ fn atan2_approx(y: f64, x: f64) -> f64 {
 
 impl WallIndex {
     fn new(segments: &[Segment]) -> Self {
+        Self::with_limit(segments, MAX_ENTRIES)
+    }
+
+    /// The index with at most `max_entries` entries, or the coarsest grid (one cell) if even
+    /// that has more.
+    fn with_limit(segments: &[Segment], max_entries: u64) -> Self {
         let finite = |s: &Segment| {
             s.a.x.is_finite() && s.a.y.is_finite() && s.b.x.is_finite() && s.b.y.is_finite()
         };
@@ -165,54 +174,87 @@ impl WallIndex {
             }
         }
         let (ex, ey) = ((hi.x - lo.x).max(1.0), (hi.y - lo.y).max(1.0));
-        let cell_m = (ex * ey / MAX_GRID_CELLS).sqrt().max(1.0);
-        let width = (ex / cell_m).floor() as i32 + 1;
-        let height = (ey / cell_m).floor() as i32 + 1;
-        let mut index = Self {
-            segments,
-            boxes: Vec::new(),
-            origin: lo,
-            cell_m,
-            width,
-            height,
-            starts: Vec::new(),
-            ids: Vec::new(),
-        };
-        index.boxes = index
-            .segments
-            .iter()
-            .map(|s| {
-                let [x0, y0] = index.cell_of(Vec2::new(s.a.x.min(s.b.x), s.a.y.min(s.b.y)));
-                let [x1, y1] = index.cell_of(Vec2::new(s.a.x.max(s.b.x), s.a.y.max(s.b.y)));
-                [x0, y0, x1, y1]
-            })
-            .collect();
-        let cells = (width * height) as usize;
-        let mut counts = vec![0u32; cells + 1];
-        for b in &index.boxes {
-            for y in b[1]..=b[3] {
-                for x in b[0]..=b[2] {
-                    counts[(y * width + x) as usize + 1] += 1;
+        let mut cell_m = (ex * ey / MAX_GRID_CELLS).sqrt().max(1.0);
+        let mut index = loop {
+            let width = (ex / cell_m).floor() as i32 + 1;
+            let height = (ey / cell_m).floor() as i32 + 1;
+            let index = Self {
+                segments: Vec::new(),
+                origin: lo,
+                cell_m,
+                width,
+                height,
+                starts: Vec::new(),
+                ids: Vec::new(),
+            };
+            let mut entries = 0u64;
+            for s in &segments {
+                index.cells_of(s, |x0, x1, _| entries += (x1 - x0 + 1) as u64);
+                if entries > max_entries {
+                    break;
                 }
             }
+            if entries <= max_entries || (width == 1 && height == 1) {
+                break index;
+            }
+            cell_m *= 2.0;
+        };
+        let cells = (index.width * index.height) as usize;
+        let mut counts = vec![0u32; cells + 1];
+        for s in &segments {
+            index.cells_of(s, |x0, x1, y| {
+                for x in x0..=x1 {
+                    counts[(y * index.width + x) as usize + 1] += 1;
+                }
+            });
         }
         for i in 0..cells {
             counts[i + 1] += counts[i];
         }
         let mut next = counts.clone();
         let mut ids = vec![0u32; counts[cells] as usize];
-        for (k, b) in index.boxes.iter().enumerate() {
-            for y in b[1]..=b[3] {
-                for x in b[0]..=b[2] {
-                    let c = (y * width + x) as usize;
+        for (k, s) in segments.iter().enumerate() {
+            index.cells_of(s, |x0, x1, y| {
+                for x in x0..=x1 {
+                    let c = (y * index.width + x) as usize;
                     ids[next[c] as usize] = k as u32;
                     next[c] += 1;
                 }
-            }
+            });
         }
+        index.segments = segments;
         index.starts = counts;
         index.ids = ids;
         index
+    }
+
+    /// The grid cells segment `s` touches, as runs `x0..=x1` of row `y`, row by row: per row, the
+    /// cells of the part of the segment within the row's band, both widened by a millionth of a
+    /// cell so that rounding loses none (a cell or two more do no harm: the laser's answer does
+    /// not depend on the segments tested beyond those in range). Every point of `s` lies in one
+    /// of them ([`Self::cell_of`]).
+    fn cells_of(&self, s: &Segment, mut run: impl FnMut(i32, i32, i32)) {
+        let eps = self.cell_m * 1e-6;
+        let [_, y0] = self.cell_of(Vec2::new(0.0, s.a.y.min(s.b.y) - eps));
+        let [_, y1] = self.cell_of(Vec2::new(0.0, s.a.y.max(s.b.y) + eps));
+        let dy = s.b.y - s.a.y;
+        for y in y0..=y1 {
+            let (band_lo, band_hi) = (
+                self.origin.y + y as f64 * self.cell_m - eps,
+                self.origin.y + (y + 1) as f64 * self.cell_m + eps,
+            );
+            let (xa, xb) = if dy == 0.0 {
+                (s.a.x, s.b.x)
+            } else {
+                let ta = ((band_lo - s.a.y) / dy).clamp(0.0, 1.0);
+                let tb = ((band_hi - s.a.y) / dy).clamp(0.0, 1.0);
+                let x = |t: f64| s.a.x + t * (s.b.x - s.a.x);
+                (x(ta), x(tb))
+            };
+            let [x0, _] = self.cell_of(Vec2::new(xa.min(xb) - eps, 0.0));
+            let [x1, _] = self.cell_of(Vec2::new(xa.max(xb) + eps, 0.0));
+            run(x0, x1, y);
+        }
     }
 
     /// The grid cell of `p`, clamped to the grid.
@@ -224,6 +266,14 @@ impl WallIndex {
             f(p.y, self.origin.y, self.height),
         ]
     }
+}
+
+thread_local! {
+    /// Per segment: the cast that last tested it (a segment is tested once per cast, however
+    /// many cells of the query square hold it), and the last cast's number. Kept per thread
+    /// between casts; the numbers of different indexes' casts never coincide.
+    static TESTED: std::cell::RefCell<(Vec<u32>, u32)> =
+        const { std::cell::RefCell::new((Vec::new(), 0)) };
 }
 
 /// Where the ray from the origin along `d` crosses the segment from `a` to `a + e` (`a` relative
@@ -344,67 +394,80 @@ impl Walls {
             let reach = r * (1.0 + 1e-9) + 1e-9;
             reach * reach
         };
-        for cy in qy0..=qy1 {
-            for cx in qx0..=qx1 {
-                let c = (cy * ix.width + cx) as usize;
-                for &k in &ix.ids[ix.starts[c] as usize..ix.starts[c + 1] as usize] {
-                    let b = ix.boxes[k as usize];
-                    // Each segment once: in the first of its cells in the square.
-                    if cx != b[0].max(qx0) || cy != b[1].max(qy0) {
-                        continue;
-                    }
-                    let s = ix.segments[k as usize];
-                    let (a, e) = (s.a - origin, s.b - s.a);
-                    let l2 = e.dot(&e);
-                    let u = if l2 > 0.0 {
-                        (-a.dot(&e) / l2).clamp(0.0, 1.0)
-                    } else {
-                        0.0
-                    };
-                    if (a + e * u).norm_squared() > reach2 {
-                        continue;
-                    }
-                    let cross_ae = a.x * e.y - a.y * e.x;
-                    let mut test = |i: usize| {
-                        if let Some(t) = crossing(a, e, cross_ae, dirs[i], max_range_m) {
-                            best[i] = best[i].min(t);
+        TESTED.with(|t| {
+            let mut t = t.borrow_mut();
+            let (tested, last) = &mut *t;
+            if tested.len() < ix.segments.len() {
+                tested.resize(ix.segments.len(), 0);
+            }
+            if *last == u32::MAX {
+                tested.fill(0);
+                *last = 0;
+            }
+            *last += 1;
+            let cast = *last;
+            for cy in qy0..=qy1 {
+                for cx in qx0..=qx1 {
+                    let c = (cy * ix.width + cx) as usize;
+                    for &k in &ix.ids[ix.starts[c] as usize..ix.starts[c + 1] as usize] {
+                        // Each segment once, in the first of its cells in the square.
+                        if tested[k as usize] == cast {
+                            continue;
                         }
-                    };
-                    let b_rel = a + e;
-                    if n == 1
-                        || increment_rad <= 0.0
-                        || a.norm_squared() < 1e-24
-                        || b_rel.norm_squared() < 1e-24
-                    {
-                        (0..n).for_each(&mut test);
-                        continue;
-                    }
-                    // The beams within the angle the segment spans seen from the origin (less
-                    // than half a turn), measured from the first beam.
-                    let pa = wrap_pi(atan2_approx(a.y, a.x) - first_rad);
-                    let pb = wrap_pi(atan2_approx(b_rel.y, b_rel.x) - first_rad);
-                    let span = wrap_pi(pb - pa);
-                    // Nearly half a turn (a long wall passing close by): should the approximate
-                    // angles' errors not cancel (they do for opposite directions), they could
-                    // pick the other side; every beam is tested instead.
-                    if span.abs() > std::f64::consts::PI - 0.01 {
-                        (0..n).for_each(&mut test);
-                        continue;
-                    }
-                    let lo = if span >= 0.0 { pa } else { pb };
-                    for turn in [-1.0, 0.0, 1.0] {
-                        let lo = lo + turn * std::f64::consts::TAU;
-                        let i0 = ((lo - BEAM_MARGIN_RAD) / increment_rad).ceil().max(0.0);
-                        let i1 = ((lo + span.abs() + BEAM_MARGIN_RAD) / increment_rad)
-                            .floor()
-                            .min((n - 1) as f64);
-                        if i0 <= i1 {
-                            (i0 as usize..=i1 as usize).for_each(&mut test);
+                        tested[k as usize] = cast;
+                        let s = ix.segments[k as usize];
+                        let (a, e) = (s.a - origin, s.b - s.a);
+                        let l2 = e.dot(&e);
+                        let u = if l2 > 0.0 {
+                            (-a.dot(&e) / l2).clamp(0.0, 1.0)
+                        } else {
+                            0.0
+                        };
+                        if (a + e * u).norm_squared() > reach2 {
+                            continue;
+                        }
+                        let cross_ae = a.x * e.y - a.y * e.x;
+                        let mut test = |i: usize| {
+                            if let Some(t) = crossing(a, e, cross_ae, dirs[i], max_range_m) {
+                                best[i] = best[i].min(t);
+                            }
+                        };
+                        let b_rel = a + e;
+                        if n == 1
+                            || increment_rad <= 0.0
+                            || a.norm_squared() < 1e-24
+                            || b_rel.norm_squared() < 1e-24
+                        {
+                            (0..n).for_each(&mut test);
+                            continue;
+                        }
+                        // The beams within the angle the segment spans seen from the origin (less
+                        // than half a turn), measured from the first beam.
+                        let pa = wrap_pi(atan2_approx(a.y, a.x) - first_rad);
+                        let pb = wrap_pi(atan2_approx(b_rel.y, b_rel.x) - first_rad);
+                        let span = wrap_pi(pb - pa);
+                        // Nearly half a turn (a long wall passing close by): should the approximate
+                        // angles' errors not cancel (they do for opposite directions), they could
+                        // pick the other side; every beam is tested instead.
+                        if span.abs() > std::f64::consts::PI - 0.01 {
+                            (0..n).for_each(&mut test);
+                            continue;
+                        }
+                        let lo = if span >= 0.0 { pa } else { pb };
+                        for turn in [-1.0, 0.0, 1.0] {
+                            let lo = lo + turn * std::f64::consts::TAU;
+                            let i0 = ((lo - BEAM_MARGIN_RAD) / increment_rad).ceil().max(0.0);
+                            let i1 = ((lo + span.abs() + BEAM_MARGIN_RAD) / increment_rad)
+                                .floor()
+                                .min((n - 1) as f64);
+                            if i0 <= i1 {
+                                (i0 as usize..=i1 as usize).for_each(&mut test);
+                            }
                         }
                     }
                 }
             }
-        }
+        });
         best.into_iter()
             .map(|t| t.is_finite().then_some(t))
             .collect()
@@ -453,6 +516,7 @@ mod tests {
             fov_deg in 1.0..=360.0f64,
             beams in 2usize..400,
             range in 0.5..30.0f64,
+            limit in 0u64..300,
         ) {
             let walls = Walls::new(&segments);
             let origin = Vec2::new(ox, oy);
@@ -466,6 +530,12 @@ mod tests {
             let fan = walls.cast_fan(origin, first, inc, &dirs, range);
             let all = cast_exhaustive(&segments, origin, &dirs, range);
             prop_assert_eq!(&fan, &all);
+            // The same through a grid coarsened to fit a budget of entries.
+            let coarse = Walls {
+                shape: None,
+                index: Arc::new(WallIndex::with_limit(&segments, limit)),
+            };
+            prop_assert_eq!(&coarse.cast_fan(origin, first, inc, &dirs, range), &all);
             let shape = walls.shape.as_ref().expect("walls");
             for (i, d) in dirs.iter().enumerate() {
                 let ray = Ray::new(
@@ -492,6 +562,48 @@ mod tests {
                 };
                 prop_assert!(doubtful || agree, "beam {}: {:?} vs {:?}", i, fan[i], parry);
             }
+        }
+    }
+
+    fn long_segment() -> impl Strategy<Value = Segment> {
+        (
+            -50.0..450.0f64,
+            -50.0..450.0f64,
+            -400.0..400.0f64,
+            -400.0..400.0f64,
+        )
+            .prop_map(|(x, y, dx, dy)| Segment::new(Vec2::new(x, y), Vec2::new(x + dx, y + dy)))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// Every point of a segment lies in a grid cell that holds the segment, and a segment is
+        /// held by about the cells it crosses (not every cell of its bounding box: a building of
+        /// long diagonal walls keeps a small index), within the budget of entries when one is
+        /// set that the grid can meet.
+        #[test]
+        fn segments_are_in_the_cells_they_cross(
+            segments in proptest::collection::vec(prop_oneof![segment(), long_segment()], 1..40),
+            limit in prop_oneof![Just(MAX_ENTRIES), 0u64..2000],
+        ) {
+            let ix = WallIndex::with_limit(&segments, limit);
+            for (k, s) in ix.segments.iter().enumerate() {
+                for i in 0..=64 {
+                    let p = s.a + (s.b - s.a) * (i as f64 / 64.0);
+                    let [x, y] = ix.cell_of(p);
+                    let c = (y * ix.width + x) as usize;
+                    let held = &ix.ids[ix.starts[c] as usize..ix.starts[c + 1] as usize];
+                    prop_assert!(held.contains(&(k as u32)), "segment {} point {} cell {:?}", k, i, (x, y));
+                }
+            }
+            let crossed: f64 = ix
+                .segments
+                .iter()
+                .map(|s| ((s.b.x - s.a.x).abs() + (s.b.y - s.a.y).abs()) / ix.cell_m + 4.0)
+                .sum();
+            prop_assert!(ix.ids.len() as f64 <= 3.0 * crossed, "{} entries for {}", ix.ids.len(), crossed);
+            prop_assert!(ix.ids.len() as u64 <= limit || ix.width * ix.height == 1);
         }
     }
 
