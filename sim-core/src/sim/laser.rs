@@ -317,6 +317,39 @@ pub fn cast_exhaustive(
         .collect()
 }
 
+/// `v` in `(-2 pi, 2 pi]` (a difference of two angles in `[-pi, pi]`) brought to about
+/// `(-pi, pi]` by one turn at most, without the library's rounding (only the beams a segment is
+/// tested against depend on it, with a margin, and beams are tried a turn either way).
+#[inline]
+fn wrap_once(v: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    if v > PI {
+        v - TAU
+    } else if v <= -PI {
+        v + TAU
+    } else {
+        v
+    }
+}
+
+/// The beams `ceil(x0)..=floor(x1)` of `0..n` (`n > 0`), if any, by conversions to integers
+/// rather than the library's `ceil` and `floor` (function calls on the baseline x86-64).
+#[inline]
+fn beam_range(x0: f64, x1: f64, n: usize) -> Option<(usize, usize)> {
+    let last = (n - 1) as f64;
+    if !(x1 >= 0.0 && x0 <= last) {
+        return None;
+    }
+    let i0 = if x0 <= 0.0 {
+        0
+    } else {
+        let t = x0 as usize;
+        t + usize::from((t as f64) < x0)
+    };
+    let i1 = if x1 >= last { n - 1 } else { x1 as usize };
+    (i0 <= i1).then_some((i0, i1))
+}
+
 /// `v` in `(-pi, pi]`.
 fn wrap_pi(v: f64) -> f64 {
     use std::f64::consts::{PI, TAU};
@@ -385,6 +418,7 @@ impl Walls {
             return vec![None; dirs.len()];
         }
         let n = dirs.len();
+        let first_wrapped = wrap_pi(first_rad);
         let r = max_range_m;
         let [qx0, qy0] = ix.cell_of(origin - Vec2::new(r, r));
         let [qx1, qy1] = ix.cell_of(origin + Vec2::new(r, r));
@@ -443,9 +477,9 @@ impl Walls {
                         }
                         // The beams within the angle the segment spans seen from the origin (less
                         // than half a turn), measured from the first beam.
-                        let pa = wrap_pi(atan2_approx(a.y, a.x) - first_rad);
-                        let pb = wrap_pi(atan2_approx(b_rel.y, b_rel.x) - first_rad);
-                        let span = wrap_pi(pb - pa);
+                        let pa = wrap_once(atan2_approx(a.y, a.x) - first_wrapped);
+                        let pb = wrap_once(atan2_approx(b_rel.y, b_rel.x) - first_wrapped);
+                        let span = wrap_once(pb - pa);
                         // Nearly half a turn (a long wall passing close by): should the approximate
                         // angles' errors not cancel (they do for opposite directions), they could
                         // pick the other side; every beam is tested instead.
@@ -456,12 +490,12 @@ impl Walls {
                         let lo = if span >= 0.0 { pa } else { pb };
                         for turn in [-1.0, 0.0, 1.0] {
                             let lo = lo + turn * std::f64::consts::TAU;
-                            let i0 = ((lo - BEAM_MARGIN_RAD) / increment_rad).ceil().max(0.0);
-                            let i1 = ((lo + span.abs() + BEAM_MARGIN_RAD) / increment_rad)
-                                .floor()
-                                .min((n - 1) as f64);
-                            if i0 <= i1 {
-                                (i0 as usize..=i1 as usize).for_each(&mut test);
+                            if let Some((i0, i1)) = beam_range(
+                                (lo - BEAM_MARGIN_RAD) / increment_rad,
+                                (lo + span.abs() + BEAM_MARGIN_RAD) / increment_rad,
+                                n,
+                            ) {
+                                (i0..=i1).for_each(&mut test);
                             }
                         }
                     }
@@ -604,6 +638,48 @@ mod tests {
                 .sum();
             prop_assert!(ix.ids.len() as f64 <= 3.0 * crossed, "{} entries for {}", ix.ids.len(), crossed);
             prop_assert!(ix.ids.len() as u64 <= limit || ix.width * ix.height == 1);
+        }
+    }
+
+    #[test]
+    fn beam_range_is_ceil_to_floor_clipped() {
+        let definition = |x0: f64, x1: f64, n: usize| {
+            let i0 = x0.ceil().max(0.0);
+            let i1 = x1.floor().min((n - 1) as f64);
+            (i0 <= i1).then_some((i0 as usize, i1 as usize))
+        };
+        let xs = [
+            f64::NEG_INFINITY,
+            -1e300,
+            -3.5,
+            -1.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            1e-300,
+            0.5,
+            1.0,
+            1.0 + f64::EPSILON,
+            2.999_999_999,
+            3.0,
+            7.25,
+            179.0,
+            179.5,
+            180.0,
+            180.000_001,
+            1e300,
+            f64::INFINITY,
+        ];
+        for n in [1, 2, 4, 181, 1000] {
+            for &x0 in &xs {
+                for &x1 in &xs {
+                    assert_eq!(
+                        beam_range(x0, x1, n),
+                        definition(x0, x1, n),
+                        "{x0} {x1} {n}"
+                    );
+                }
+            }
         }
     }
 
