@@ -125,6 +125,16 @@ const BEAM_MARGIN_RAD: f64 = 1e-3;
 // (Well above three times the approximation's bound, 3e-4 rad.)
 const _: () = assert!(3.0 * 3e-4 < BEAM_MARGIN_RAD);
 
+/// Angle (rad) added on both sides of a grid cell's angular extent when asking whether a beam
+/// points into it ([`WallIndex::cell_faces_a_beam`]): more than a segment's margin and the
+/// approximate angles' errors of both, so that every segment tested against a beam is still
+/// found in some cell.
+const CELL_MARGIN_RAD: f64 = 0.01;
+const _: () = assert!(BEAM_MARGIN_RAD + 4.0 * 3e-4 < CELL_MARGIN_RAD);
+
+/// Cells holding fewer segments are searched without asking whether a beam points into them.
+const CULL_MIN_SEGMENTS: usize = 4;
+
 /// `y.atan2(x)` within 3e-4 rad (a polynomial on the octant; tested against `atan2`), for
 /// choosing beams only: the beams a segment is tested against may be a few more than it spans.
 #[inline]
@@ -255,6 +265,51 @@ impl WallIndex {
             let [x1, _] = self.cell_of(Vec2::new(xa.max(xb) + eps, 0.0));
             run(x0, x1, y);
         }
+    }
+
+    /// Whether any beam of a fan (`n` beams from `first_wrapped`, every `increment_rad`) points
+    /// into grid cell `(cx, cy)` seen from `origin`, within [`CELL_MARGIN_RAD`]; true for a cell
+    /// the origin is in or near. A cell no beam points into holds no part of a segment that a
+    /// beam could cross (the parts it crosses lie in cells a beam points into, which hold the
+    /// segment too): the fan skips it, and casts the same segments against the same beams.
+    fn cell_faces_a_beam(
+        &self,
+        cx: i32,
+        cy: i32,
+        origin: Vec2,
+        first_wrapped: f64,
+        increment_rad: f64,
+        n: usize,
+    ) -> bool {
+        let x0 = self.origin.x + cx as f64 * self.cell_m - origin.x;
+        let y0 = self.origin.y + cy as f64 * self.cell_m - origin.y;
+        let (x1, y1) = (x0 + self.cell_m, y0 + self.cell_m);
+        // Within a twentieth of a cell of it (or in it), the corners' angles could span nearly
+        // half a turn or more; farther, less than 169 degrees.
+        let near = 0.05 * self.cell_m;
+        if x0 - near <= 0.0 && x1 + near >= 0.0 && y0 - near <= 0.0 && y1 + near >= 0.0 {
+            return true;
+        }
+        // The corners' angles from the first beam; the cell spans less than half a turn, so
+        // the smallest arc holding them is the one between the least and greatest turn from the
+        // first corner.
+        let a0 = wrap_once(atan2_approx(y0, x0) - first_wrapped);
+        let (mut lo, mut hi) = (0.0f64, 0.0f64);
+        for (x, y) in [(x1, y0), (x0, y1), (x1, y1)] {
+            let d = wrap_once(wrap_once(atan2_approx(y, x) - first_wrapped) - a0);
+            lo = lo.min(d);
+            hi = hi.max(d);
+        }
+        [-1.0, 0.0, 1.0].into_iter().any(|turn| {
+            let lo = a0 + lo + turn * std::f64::consts::TAU;
+            let hi = a0 + hi + turn * std::f64::consts::TAU;
+            beam_range(
+                (lo - CELL_MARGIN_RAD) / increment_rad,
+                (hi + CELL_MARGIN_RAD) / increment_rad,
+                n,
+            )
+            .is_some()
+        })
     }
 
     /// The grid cell of `p`, clamped to the grid.
@@ -440,9 +495,27 @@ impl Walls {
             }
             *last += 1;
             let cast = *last;
+            let cull = n > 1 && increment_rad > 0.0;
             for cy in qy0..=qy1 {
                 for cx in qx0..=qx1 {
                     let c = (cy * ix.width + cx) as usize;
+                    let held = (ix.starts[c + 1] - ix.starts[c]) as usize;
+                    // (Asked only of a cell of several segments: the question costs about as
+                    // much as two segments; a raster's cells hold tens of short ones.)
+                    if held == 0
+                        || (cull
+                            && held >= CULL_MIN_SEGMENTS
+                            && !ix.cell_faces_a_beam(
+                                cx,
+                                cy,
+                                origin,
+                                first_wrapped,
+                                increment_rad,
+                                n,
+                            ))
+                    {
+                        continue;
+                    }
                     for &k in &ix.ids[ix.starts[c] as usize..ix.starts[c + 1] as usize] {
                         // Each segment once, in the first of its cells in the square.
                         if tested[k as usize] == cast {
@@ -596,6 +669,49 @@ mod tests {
                 };
                 prop_assert!(doubtful || agree, "beam {}: {:?} vs {:?}", i, fan[i], parry);
             }
+        }
+    }
+
+    /// A raster's staircase: short axis-aligned segments on a 0.05 m lattice in an 8 m square.
+    fn short_segment() -> impl Strategy<Value = Segment> {
+        (0i32..160, 0i32..160, -6i32..6, any::<bool>()).prop_map(|(x, y, l, vertical)| {
+            let a = Vec2::new(x as f64 * 0.05, y as f64 * 0.05);
+            let d = l as f64 * 0.05;
+            let b = if vertical {
+                a + Vec2::new(0.0, d)
+            } else {
+                a + Vec2::new(d, 0.0)
+            };
+            Segment::new(a, b)
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// On dense short segments (cells of many, which the fan may skip when no beam points
+        /// into them), the fan still finds what testing every segment finds, to the bit.
+        #[test]
+        fn fan_on_dense_segments_is_every_segment_tested(
+            segments in proptest::collection::vec(short_segment(), 50..400),
+            ox in -1.0..9.0f64,
+            oy in -1.0..9.0f64,
+            first in -10.0..10.0f64,
+            fov_deg in 1.0..=360.0f64,
+            beams in 2usize..400,
+            range in 0.5..12.0f64,
+        ) {
+            let walls = Walls::new(&segments);
+            let origin = Vec2::new(ox, oy);
+            let inc = fov_deg.to_radians() / (beams - 1) as f64;
+            let dirs: Vec<Vec2> = (0..beams)
+                .map(|i| {
+                    let a = first + i as f64 * inc;
+                    Vec2::new(a.cos(), a.sin())
+                })
+                .collect();
+            let fan = walls.cast_fan(origin, first, inc, &dirs, range);
+            prop_assert_eq!(fan, cast_exhaustive(&segments, origin, &dirs, range));
         }
     }
 
