@@ -48,6 +48,14 @@ const CASES: &[(&str, &str, &str, u64)] = &[
         "baseline",
         1,
     ),
+    // A real map with doorways the planning grid finds too narrow: decisions whose best
+    // candidates have no path (the memo of what a failed search reached, `waypoints_to`).
+    (
+        "intel-map-baseline-1",
+        "../shared/maps/radish/intel_map.yaml",
+        "baseline",
+        1,
+    ),
 ];
 
 fn fingerprint(building: &Path, strategy: &str, seed: u64) -> String {

@@ -83,7 +83,7 @@ use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::ray::{grid_from_world, walk_segment};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
 use crate::plan::coarse::CoarseCosts;
-use crate::plan::dijkstra::{dijkstra_padded, AStar, CostField};
+use crate::plan::dijkstra::{dijkstra_padded, padded_index, AStar, CostField};
 use crate::plan::inflate::{nearest_by, Traversability};
 use crate::plan::waypoints::waypoints_by;
 use crate::sim::{SimConfig, Simulator};
@@ -512,6 +512,13 @@ struct Explorer<'a> {
     /// search is confined to first (all false between searches).
     astar: AStar,
     corridor: Vec<bool>,
+    /// Bumped whenever the planning grid (`coarse`) changes.
+    planning_generation: u64,
+    /// The planning cells reachable from a start, as a search of the whole planning grid that
+    /// failed found them, with the grid's generation and the start: a goal not among them has
+    /// no path either (a decision whose best candidates lie beyond a gap too narrow for the
+    /// planning grid asks for many).
+    unreachable_memo: Option<UnreachableMemo>,
     /// The runs sharing this one's beginning (see `shared`), when it leads them.
     shared: Option<Box<shared::Shared<'a>>>,
 }
@@ -729,8 +736,19 @@ fn new_explorer<'a>(
         frontier_cells_left: 0,
         astar: AStar::default(),
         corridor: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
+        planning_generation: 0,
+        unreachable_memo: None,
         shared: None,
     }
+}
+
+/// See [`Explorer::unreachable_memo`].
+#[derive(Debug, Clone)]
+struct UnreachableMemo {
+    generation: u64,
+    start: Cell,
+    /// One bit per cell of the padded planning grid: reachable from `start`.
+    reached: Vec<u64>,
 }
 
 /// What a built-in strategy's rule needs: the paper's I(p) only when the strategy uses the

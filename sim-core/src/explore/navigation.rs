@@ -212,6 +212,7 @@ impl Explorer<'_> {
         let extra = |j: usize| table[((obstacles[j] * STEPS_PER_CELL) as usize).min(last)];
         self.coarse
             .recompute(self.map.frame, &self.coarse_dirty, traversable, extra);
+        self.planning_generation += 1;
         // The distance grid's cells covering the changed planning cells.
         let k = (DISTANCE_FACTOR / PLAN_FACTOR) as usize;
         let (cw, fw, fh) = (
@@ -272,6 +273,21 @@ impl Explorer<'_> {
         let near = &self.coarse;
         let goal = near.passable_near(c, TARGET_SEARCH_CELLS)?;
         let (start, k) = (plan.near_start, (DISTANCE_FACTOR / PLAN_FACTOR) as i32);
+        // A goal that a failed search of the whole grid from this start did not reach.
+        let generation = self.planning_generation;
+        if let Some(m) = self
+            .unreachable_memo
+            .as_ref()
+            .filter(|m| m.generation == generation && m.start == start)
+        {
+            let i = padded_index(&near.frame, goal);
+            if m.reached
+                .get(i / 64)
+                .is_none_or(|w| w & (1 << (i % 64)) == 0)
+            {
+                return None;
+            }
+        }
         let mut found = None;
         if let Some(far_path) = plan.far_path(c) {
             let frame = plan.far.frame;
@@ -300,9 +316,29 @@ impl Explorer<'_> {
         }
         let (path, _) = match found {
             Some(p) => p,
-            None => self
-                .astar
-                .path(near.frame, start, near.padded(), MAX_EXTRA, goal)?,
+            None => {
+                let mut reached = Vec::new();
+                let found = self.astar.path_or_reached(
+                    near.frame,
+                    start,
+                    near.padded(),
+                    MAX_EXTRA,
+                    goal,
+                    &mut reached,
+                );
+                if found.is_none() && !reached.is_empty() {
+                    let mut bits = vec![0u64; near.padded().len().div_ceil(64)];
+                    for i in reached {
+                        bits[i as usize / 64] |= 1 << (i % 64);
+                    }
+                    self.unreachable_memo = Some(UnreachableMemo {
+                        generation,
+                        start,
+                        reached: bits,
+                    });
+                }
+                found?
+            }
         };
         Some(waypoints_by(&path, &near.frame, |n| near.passable(n)))
     }

@@ -193,6 +193,8 @@ impl<'a> Explorer<'a> {
             frontier_cells_left: self.frontier_cells_left,
             astar: self.astar.clone(),
             corridor: self.corridor.clone(),
+            planning_generation: self.planning_generation,
+            unreachable_memo: self.unreachable_memo.clone(),
             shared: None,
         }
     }

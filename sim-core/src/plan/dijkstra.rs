@@ -310,6 +310,12 @@ pub struct AStar {
     buckets: Vec<Vec<u32>>,
 }
 
+/// The index of `c` (in `frame`) in a grid of `frame` padded by one cell on every side, as
+/// [`dijkstra_padded`] and [`AStar`] take them.
+pub fn padded_index(frame: &GridFrame, c: Cell) -> usize {
+    (c.y as usize + 1) * (frame.width as usize + 2) + c.x as usize + 1
+}
+
 impl AStar {
     /// The path (start and goal included) and its cost in metres (extra costs included), or
     /// `None` when `goal` cannot be reached.
@@ -324,6 +330,31 @@ impl AStar {
         self.path_within(frame, start, enter, max_extra, goal, |_| true)
     }
 
+    /// [`AStar::path`]; when `goal` cannot be reached, `reached` (cleared first) holds every
+    /// cell that can, by index in the padded frame ([`padded_index`]): the search went
+    /// everywhere it could, and another goal not among them cannot be reached either. (Empty
+    /// when there was no search: a start or goal outside the frame.)
+    pub fn path_or_reached<T: Copy + Into<u32>>(
+        &mut self,
+        frame: GridFrame,
+        start: Cell,
+        enter: &[T],
+        max_extra: u32,
+        goal: Cell,
+        reached: &mut Vec<u32>,
+    ) -> Option<(Vec<Cell>, f64)> {
+        reached.clear();
+        self.search_within(
+            frame,
+            start,
+            enter,
+            max_extra,
+            goal,
+            |_| true,
+            Some(reached),
+        )
+    }
+
     /// [`AStar::path`] through the cells for which `allowed` holds only (the start excepted),
     /// e.g. a corridor around a path found on a coarser grid.
     pub fn path_within<T: Copy + Into<u32>>(
@@ -334,6 +365,20 @@ impl AStar {
         max_extra: u32,
         goal: Cell,
         allowed: impl Fn(Cell) -> bool,
+    ) -> Option<(Vec<Cell>, f64)> {
+        self.search_within(frame, start, enter, max_extra, goal, allowed, None)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn search_within<T: Copy + Into<u32>>(
+        &mut self,
+        frame: GridFrame,
+        start: Cell,
+        enter: &[T],
+        max_extra: u32,
+        goal: Cell,
+        allowed: impl Fn(Cell) -> bool,
+        reached: Option<&mut Vec<u32>>,
     ) -> Option<(Vec<Cell>, f64)> {
         let (w, h) = (frame.width as usize, frame.height as usize);
         let pw = w + 2;
@@ -366,6 +411,10 @@ impl AStar {
             path.reverse();
             (path, cost as f64 * frame.resolution_m / STRAIGHT as f64)
         });
+        if let (None, Some(reached)) = (&result, reached) {
+            // Every cell the search gave a cost to, and no other, can be reached.
+            reached.extend_from_slice(&self.touched);
+        }
         for &i in &self.touched {
             self.cost[i as usize] = UNREACHED;
             self.parent[i as usize] = 255;
@@ -558,6 +607,43 @@ mod tests {
                     cost += if dx != 0 && dy != 0 { DIAGONAL } else { STRAIGHT } + entry - 1;
                 }
                 proptest::prop_assert_eq!(cost as f64 * 0.1 / STRAIGHT as f64, distance_m);
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// A failed search reports every cell that can be reached from the start and no other
+        /// (the cells Dijkstra gives a cost to), whatever goal it looked for; a search that
+        /// finds its goal reports none, and gives the path `path` gives.
+        #[test]
+        fn a_failed_search_reports_every_reachable_cell(
+            cells in proptest::collection::vec((proptest::bool::weighted(0.6), 0u8..6), 23 * 17),
+            sx in 0i32..23, sy in 0i32..17, gx in 0i32..23, gy in 0i32..17,
+        ) {
+            let (w, h) = (23usize, 17usize);
+            let frame = GridFrame::new(crate::geom::Vec2::zeros(), 0.1, w as u32, h as u32);
+            let mut padded = vec![0u8; (w + 2) * (h + 2)];
+            for (i, c) in cells.iter().enumerate() {
+                if c.0 {
+                    padded[(i / w + 1) * (w + 2) + i % w + 1] = 1 + c.1;
+                }
+            }
+            let (start, goal) = (Cell::new(sx, sy), Cell::new(gx, gy));
+            let d = dijkstra_padded(frame, start, &padded, 5, &[]);
+            let mut astar = AStar::default();
+            let mut reached = vec![7];
+            let got = astar.path_or_reached(frame, start, &padded, 5, goal, &mut reached);
+            proptest::prop_assert_eq!(&got, &AStar::default().path(frame, start, &padded, 5, goal));
+            if got.is_some() {
+                proptest::prop_assert!(reached.is_empty());
+            } else {
+                reached.sort_unstable();
+                let want: Vec<u32> = (0..h as i32)
+                    .flat_map(|y| (0..w as i32).map(move |x| Cell::new(x, y)))
+                    .filter(|c| d.distance_m(*c).is_some())
+                    .map(|c| padded_index(&frame, c) as u32)
+                    .collect();
+                proptest::prop_assert_eq!(reached, want);
             }
         }
     }
