@@ -654,14 +654,19 @@ mod tests {
                     .map(|t| t as f64);
                 // Beams that graze a wall, pass near a wall's end or end near the range may
                 // differ (f32 rounding); the rest must agree.
+                // (Near a wall's end: the beam crosses the wall grown by a thousandth of its
+                // length at both ends, but not the wall shrunk by as much.)
                 let doubtful = segments.iter().any(|s| {
-                    let (a, e) = (s.a - origin, s.b - s.a);
+                    let e = s.b - s.a;
                     let grown = Segment::new(s.a - e * 1e-3, s.b + e * 1e-3);
-                    let (ga, ge) = (grown.a - origin, grown.b - grown.a);
-                    let cross = |a: Vec2, e: Vec2, r: f64| crossing(a, e, a.x * e.y - a.y * e.x, *d, r);
+                    let shrunk = Segment::new(s.a + e * 1e-3, s.b - e * 1e-3);
+                    let cross = |s: &Segment, r: f64| {
+                        let (a, e) = (s.a - origin, s.b - s.a);
+                        crossing(a, e, a.x * e.y - a.y * e.x, *d, r)
+                    };
                     let grazing = (d.x * e.y - d.y * e.x).abs() < 0.05 * e.norm();
-                    cross(ga, ge, range + 1e-2).is_some()
-                        && (grazing || cross(a, e, range - 1e-2).is_none())
+                    cross(&grown, range + 1e-2).is_some()
+                        && (grazing || cross(&shrunk, range - 1e-2).is_none())
                 });
                 let agree = match (fan[i], parry) {
                     (Some(a), Some(b)) => (a - b).abs() < 1e-3,
