@@ -495,6 +495,8 @@ struct Explorer<'a> {
     coarse: CoarseCosts,
     coarse_dirty: Vec<u32>,
     coarse_dirty_mark: Vec<bool>,
+    /// Per cell of `far`: listed among the cells to recompute (all false between updates).
+    far_dirty_mark: Vec<bool>,
     /// How permissive path planning is (see `decide_planned`'s last resorts).
     planning: Planning,
     /// Map cells the robot's estimated centre passed through (the segments between its poses at
@@ -728,6 +730,7 @@ fn new_explorer<'a>(
         coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
         coarse_dirty: Vec::new(),
         coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
+        far_dirty_mark: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
         planning: Planning::WithMargin,
         travelled: Bitmap::filled(frame, false),
         far: CoarseCosts::blocked(frame, DISTANCE_FACTOR),

@@ -220,14 +220,25 @@ impl Explorer<'_> {
             self.far.frame.width as usize,
             self.far.frame.height as usize,
         );
-        // (Unsorted, with repeats: recomputing a cell is idempotent, and cheaper than sorting.)
-        let far_dirty: Vec<u32> = self
+        // (Each once: the planning cells under a distance cell are usually dirty together, and
+        // recomputing it once per planning cell did the work four times. The order does not
+        // matter: each cell's cost depends on the planning grid only.)
+        let mut far_dirty: Vec<u32> = Vec::new();
+        for (x, y) in self
             .coarse_dirty
             .iter()
             .map(|&i| ((i as usize % cw) / k, (i as usize / cw) / k))
             .filter(|&(x, y)| x < fw && y < fh)
-            .map(|(x, y)| (y * fw + x) as u32)
-            .collect();
+        {
+            let f = y * fw + x;
+            if !self.far_dirty_mark[f] {
+                self.far_dirty_mark[f] = true;
+                far_dirty.push(f as u32);
+            }
+        }
+        for &f in &far_dirty {
+            self.far_dirty_mark[f as usize] = false;
+        }
         // (From the planning grid, just brought up to date: 4 of its cells per distance cell
         // rather than 16 map cells, each a traversability test.)
         self.far.recompute_from(&self.coarse, &far_dirty);

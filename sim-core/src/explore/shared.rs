@@ -185,6 +185,7 @@ impl<'a> Explorer<'a> {
             coarse: self.coarse.clone(),
             coarse_dirty: self.coarse_dirty.clone(),
             coarse_dirty_mark: self.coarse_dirty_mark.clone(),
+            far_dirty_mark: self.far_dirty_mark.clone(),
             planning: self.planning,
             travelled: self.travelled.clone(),
             far: self.far.clone(),
