@@ -573,6 +573,18 @@ mod tests {
         }
     }
 
+    /// A `w` x `h` grid at 0.1 m, padded: a cell passable (entry cost `1 + extra`) or not.
+    fn padded_grid(cells: &[(bool, u8)], w: usize, h: usize) -> (GridFrame, Vec<u8>) {
+        let frame = GridFrame::new(crate::geom::Vec2::zeros(), 0.1, w as u32, h as u32);
+        let mut padded = vec![0u8; (w + 2) * (h + 2)];
+        for (i, &(passable, extra)) in cells.iter().enumerate() {
+            if passable {
+                padded[(i / w + 1) * (w + 2) + i % w + 1] = 1 + extra;
+            }
+        }
+        (frame, padded)
+    }
+
     proptest::proptest! {
         #[test]
         fn a_star_finds_the_cost_dijkstra_finds(
@@ -580,13 +592,7 @@ mod tests {
             sx in 0i32..23, sy in 0i32..17, gx in 0i32..23, gy in 0i32..17,
         ) {
             let (w, h) = (23usize, 17usize);
-            let frame = GridFrame::new(crate::geom::Vec2::zeros(), 0.1, w as u32, h as u32);
-            let mut padded = vec![0u8; (w + 2) * (h + 2)];
-            for (i, c) in cells.iter().enumerate() {
-                if c.0 {
-                    padded[(i / w + 1) * (w + 2) + i % w + 1] = 1 + c.1;
-                }
-            }
+            let (frame, padded) = padded_grid(&cells, w, h);
             let (start, goal) = (Cell::new(sx, sy), Cell::new(gx, gy));
             let d = dijkstra_padded(frame, start, &padded, 5, &[]);
             // One search object for two searches: the second must not see the first's state.
@@ -621,13 +627,7 @@ mod tests {
             sx in 0i32..23, sy in 0i32..17, gx in 0i32..23, gy in 0i32..17,
         ) {
             let (w, h) = (23usize, 17usize);
-            let frame = GridFrame::new(crate::geom::Vec2::zeros(), 0.1, w as u32, h as u32);
-            let mut padded = vec![0u8; (w + 2) * (h + 2)];
-            for (i, c) in cells.iter().enumerate() {
-                if c.0 {
-                    padded[(i / w + 1) * (w + 2) + i % w + 1] = 1 + c.1;
-                }
-            }
+            let (frame, padded) = padded_grid(&cells, w, h);
             let (start, goal) = (Cell::new(sx, sy), Cell::new(gx, gy));
             let d = dijkstra_padded(frame, start, &padded, 5, &[]);
             let mut astar = AStar::default();

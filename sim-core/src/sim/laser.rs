@@ -588,20 +588,23 @@ mod tests {
     use parry2d::query::{Ray, RayCast};
     use proptest::prelude::*;
 
+    /// An axis-aligned wall from lattice point `(x, y)` (0.05 m apart), `l` lattice steps long.
+    fn lattice_segment((x, y, l, vertical): (i32, i32, i32, bool)) -> Segment {
+        let a = Vec2::new(x as f64 * 0.05, y as f64 * 0.05);
+        let d = l as f64 * 0.05;
+        let b = if vertical {
+            a + Vec2::new(0.0, d)
+        } else {
+            a + Vec2::new(d, 0.0)
+        };
+        Segment::new(a, b)
+    }
+
     fn segment() -> impl Strategy<Value = Segment> {
         // Axis-aligned walls on a 0.05 m lattice (as rasters and generated buildings have them),
         // and slanted ones anywhere.
         prop_oneof![
-            (0i32..400, 0i32..400, -80i32..80, any::<bool>()).prop_map(|(x, y, l, vertical)| {
-                let a = Vec2::new(x as f64 * 0.05, y as f64 * 0.05);
-                let d = l as f64 * 0.05;
-                let b = if vertical {
-                    a + Vec2::new(0.0, d)
-                } else {
-                    a + Vec2::new(d, 0.0)
-                };
-                Segment::new(a, b)
-            }),
+            (0i32..400, 0i32..400, -80i32..80, any::<bool>()).prop_map(lattice_segment),
             (0.0..20.0f64, 0.0..20.0f64, -5.0..5.0f64, -5.0..5.0f64).prop_map(|(x, y, dx, dy)| {
                 Segment::new(Vec2::new(x, y), Vec2::new(x + dx, y + dy))
             }),
@@ -627,13 +630,7 @@ mod tests {
         ) {
             let walls = Walls::new(&segments);
             let origin = Vec2::new(ox, oy);
-            let inc = fov_deg.to_radians() / (beams - 1) as f64;
-            let dirs: Vec<Vec2> = (0..beams)
-                .map(|i| {
-                    let a = first + i as f64 * inc;
-                    Vec2::new(a.cos(), a.sin())
-                })
-                .collect();
+            let (inc, dirs) = fan_dirs(first, fov_deg, beams);
             let fan = walls.cast_fan(origin, first, inc, &dirs, range);
             let all = cast_exhaustive(&segments, origin, &dirs, range);
             prop_assert_eq!(&fan, &all);
@@ -677,18 +674,21 @@ mod tests {
         }
     }
 
+    /// A fan of `beams` unit directions over `fov_deg` from `first` (rad), and its increment.
+    fn fan_dirs(first: f64, fov_deg: f64, beams: usize) -> (f64, Vec<Vec2>) {
+        let inc = fov_deg.to_radians() / (beams - 1) as f64;
+        let dirs = (0..beams)
+            .map(|i| {
+                let a = first + i as f64 * inc;
+                Vec2::new(a.cos(), a.sin())
+            })
+            .collect();
+        (inc, dirs)
+    }
+
     /// A raster's staircase: short axis-aligned segments on a 0.05 m lattice in an 8 m square.
     fn short_segment() -> impl Strategy<Value = Segment> {
-        (0i32..160, 0i32..160, -6i32..6, any::<bool>()).prop_map(|(x, y, l, vertical)| {
-            let a = Vec2::new(x as f64 * 0.05, y as f64 * 0.05);
-            let d = l as f64 * 0.05;
-            let b = if vertical {
-                a + Vec2::new(0.0, d)
-            } else {
-                a + Vec2::new(d, 0.0)
-            };
-            Segment::new(a, b)
-        })
+        (0i32..160, 0i32..160, -6i32..6, any::<bool>()).prop_map(lattice_segment)
     }
 
     proptest! {
@@ -708,13 +708,7 @@ mod tests {
         ) {
             let walls = Walls::new(&segments);
             let origin = Vec2::new(ox, oy);
-            let inc = fov_deg.to_radians() / (beams - 1) as f64;
-            let dirs: Vec<Vec2> = (0..beams)
-                .map(|i| {
-                    let a = first + i as f64 * inc;
-                    Vec2::new(a.cos(), a.sin())
-                })
-                .collect();
+            let (inc, dirs) = fan_dirs(first, fov_deg, beams);
             let fan = walls.cast_fan(origin, first, inc, &dirs, range);
             prop_assert_eq!(fan, cast_exhaustive(&segments, origin, &dirs, range));
         }
