@@ -245,8 +245,8 @@ impl WallIndex {
     /// of them ([`Self::cell_of`]).
     fn cells_of(&self, s: &Segment, mut run: impl FnMut(i32, i32, i32)) {
         let eps = self.cell_m * 1e-6;
-        let [_, y0] = self.cell_of(Vec2::new(0.0, s.a.y.min(s.b.y) - eps));
-        let [_, y1] = self.cell_of(Vec2::new(0.0, s.a.y.max(s.b.y) + eps));
+        let y0 = self.row_of(s.a.y.min(s.b.y) - eps);
+        let y1 = self.row_of(s.a.y.max(s.b.y) + eps);
         let dy = s.b.y - s.a.y;
         for y in y0..=y1 {
             let (band_lo, band_hi) = (
@@ -261,9 +261,11 @@ impl WallIndex {
                 let x = |t: f64| s.a.x + t * (s.b.x - s.a.x);
                 (x(ta), x(tb))
             };
-            let [x0, _] = self.cell_of(Vec2::new(xa.min(xb) - eps, 0.0));
-            let [x1, _] = self.cell_of(Vec2::new(xa.max(xb) + eps, 0.0));
-            run(x0, x1, y);
+            run(
+                self.column_of(xa.min(xb) - eps),
+                self.column_of(xa.max(xb) + eps),
+                y,
+            );
         }
     }
 
@@ -300,26 +302,24 @@ impl WallIndex {
             lo = lo.min(d);
             hi = hi.max(d);
         }
-        [-1.0, 0.0, 1.0].into_iter().any(|turn| {
-            let lo = a0 + lo + turn * std::f64::consts::TAU;
-            let hi = a0 + hi + turn * std::f64::consts::TAU;
-            beam_range(
-                (lo - CELL_MARGIN_RAD) / increment_rad,
-                (hi + CELL_MARGIN_RAD) / increment_rad,
-                n,
-            )
+        beams_in_arc(a0 + lo, a0 + hi, CELL_MARGIN_RAD, increment_rad, n)
+            .next()
             .is_some()
-        })
     }
 
     /// The grid cell of `p`, clamped to the grid.
     fn cell_of(&self, p: Vec2) -> [i32; 2] {
-        let f =
-            |v: f64, o: f64, n: i32| (((v - o) / self.cell_m).floor().max(0.0) as i32).min(n - 1);
-        [
-            f(p.x, self.origin.x, self.width),
-            f(p.y, self.origin.y, self.height),
-        ]
+        [self.column_of(p.x), self.row_of(p.y)]
+    }
+
+    /// The grid column of abscissa `x`, clamped to the grid.
+    fn column_of(&self, x: f64) -> i32 {
+        (((x - self.origin.x) / self.cell_m).floor().max(0.0) as i32).min(self.width - 1)
+    }
+
+    /// The grid row of ordinate `y`, clamped to the grid.
+    fn row_of(&self, y: f64) -> i32 {
+        (((y - self.origin.y) / self.cell_m).floor().max(0.0) as i32).min(self.height - 1)
     }
 }
 
@@ -403,6 +403,27 @@ fn beam_range(x0: f64, x1: f64, n: usize) -> Option<(usize, usize)> {
     };
     let i1 = if x1 >= last { n - 1 } else { x1 as usize };
     (i0 <= i1).then_some((i0, i1))
+}
+
+/// The beams (`n` of them, every `increment_rad` from the first) pointing within `margin` of the
+/// arc from `lo` to `hi` (radians from the first beam, `lo <= hi`, `lo` in about `(-pi, pi]`),
+/// as ranges of beam indices: the arc taken as it is and a turn either way.
+#[inline]
+fn beams_in_arc(
+    lo: f64,
+    hi: f64,
+    margin: f64,
+    increment_rad: f64,
+    n: usize,
+) -> impl Iterator<Item = (usize, usize)> {
+    [-1.0, 0.0, 1.0].into_iter().filter_map(move |turn| {
+        let shift = turn * std::f64::consts::TAU;
+        beam_range(
+            (lo + shift - margin) / increment_rad,
+            (hi + shift + margin) / increment_rad,
+            n,
+        )
+    })
 }
 
 /// `v` in `(-pi, pi]`.
@@ -561,15 +582,10 @@ impl Walls {
                             continue;
                         }
                         let lo = if span >= 0.0 { pa } else { pb };
-                        for turn in [-1.0, 0.0, 1.0] {
-                            let lo = lo + turn * std::f64::consts::TAU;
-                            if let Some((i0, i1)) = beam_range(
-                                (lo - BEAM_MARGIN_RAD) / increment_rad,
-                                (lo + span.abs() + BEAM_MARGIN_RAD) / increment_rad,
-                                n,
-                            ) {
-                                (i0..=i1).for_each(&mut test);
-                            }
+                        let arc =
+                            beams_in_arc(lo, lo + span.abs(), BEAM_MARGIN_RAD, increment_rad, n);
+                        for (i0, i1) in arc {
+                            (i0..=i1).for_each(&mut test);
                         }
                     }
                 }
