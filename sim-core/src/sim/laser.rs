@@ -108,6 +108,9 @@ struct WallIndex {
     /// Segment ids of cell `i` (row-major): `ids[starts[i]..starts[i + 1]]`.
     starts: Vec<u32>,
     ids: Vec<u32>,
+    /// Per cell: whether every segment in it is axis-aligned (rasters' walls are), so that a
+    /// beam crosses them where its computed distance says ([`WallIndex::cell_is_hidden`]).
+    aligned: Vec<bool>,
 }
 
 /// Most cells of the wall grid (cells grow beyond 1 m to stay under it).
@@ -134,6 +137,11 @@ const _: () = assert!(BEAM_MARGIN_RAD + 4.0 * 3e-4 < CELL_MARGIN_RAD);
 
 /// Cells holding fewer segments are searched without asking whether a beam points into them.
 const CULL_MIN_SEGMENTS: usize = 4;
+
+/// How much nearer (m) than a cell every beam pointing into it must have found a wall for the
+/// cell to be skipped ([`WallIndex::cell_is_hidden`]): far more than the rounding of the
+/// distances.
+const HIDDEN_MARGIN_M: f64 = 1e-6;
 
 /// `y.atan2(x)` within 3e-4 rad (a polynomial on the octant; tested against `atan2`), for
 /// choosing beams only: the beams a segment is tested against may be a few more than it spans.
@@ -196,6 +204,7 @@ impl WallIndex {
                 height,
                 starts: Vec::new(),
                 ids: Vec::new(),
+                aligned: Vec::new(),
             };
             let mut entries = 0u64;
             for s in &segments {
@@ -223,18 +232,22 @@ impl WallIndex {
         }
         let mut next = counts.clone();
         let mut ids = vec![0u32; counts[cells] as usize];
+        let mut aligned = vec![true; cells];
         for (k, s) in segments.iter().enumerate() {
+            let along_axis = s.a.x == s.b.x || s.a.y == s.b.y;
             index.cells_of(s, |x0, x1, y| {
                 for x in x0..=x1 {
                     let c = (y * index.width + x) as usize;
                     ids[next[c] as usize] = k as u32;
                     next[c] += 1;
+                    aligned[c] &= along_axis;
                 }
             });
         }
         index.segments = segments;
         index.starts = counts;
         index.ids = ids;
+        index.aligned = aligned;
         index
     }
 
@@ -269,28 +282,21 @@ impl WallIndex {
         }
     }
 
-    /// Whether any beam of a fan (`n` beams from `first_wrapped`, every `increment_rad`) points
-    /// into grid cell `(cx, cy)` seen from `origin`, within [`CELL_MARGIN_RAD`]; true for a cell
-    /// the origin is in or near. A cell no beam points into holds no part of a segment that a
-    /// beam could cross (the parts it crosses lie in cells a beam points into, which hold the
-    /// segment too): the fan skips it, and casts the same segments against the same beams.
-    fn cell_faces_a_beam(
-        &self,
-        cx: i32,
-        cy: i32,
-        origin: Vec2,
-        first_wrapped: f64,
-        increment_rad: f64,
-        n: usize,
-    ) -> bool {
-        let x0 = self.origin.x + cx as f64 * self.cell_m - origin.x;
-        let y0 = self.origin.y + cy as f64 * self.cell_m - origin.y;
+    /// The arc of directions (radians from the first beam of a fan, `lo <= hi`, as for
+    /// [`beams_in_arc`]) that a grid cell, whose lower corner is at `(x0, y0)` from the origin,
+    /// spans; `None` for a cell the origin is in or near (every beam may point into it).
+    /// A cell no beam points into (within [`CELL_MARGIN_RAD`] of its arc) holds no part of a
+    /// segment that a beam could cross (the parts it crosses lie in cells a beam points into,
+    /// which hold the segment too): the fan skips it, and casts the same segments against the
+    /// same beams.
+    #[inline]
+    fn cell_arc(&self, (x0, y0): (f64, f64), first_wrapped: f64) -> Option<(f64, f64)> {
         let (x1, y1) = (x0 + self.cell_m, y0 + self.cell_m);
         // Within a twentieth of a cell of it (or in it), the corners' angles could span nearly
         // half a turn or more; farther, less than 169 degrees.
         let near = 0.05 * self.cell_m;
         if x0 - near <= 0.0 && x1 + near >= 0.0 && y0 - near <= 0.0 && y1 + near >= 0.0 {
-            return true;
+            return None;
         }
         // The corners' angles from the first beam; the cell spans less than half a turn, so
         // the smallest arc holding them is the one between the least and greatest turn from the
@@ -302,9 +308,42 @@ impl WallIndex {
             lo = lo.min(d);
             hi = hi.max(d);
         }
-        beams_in_arc(a0 + lo, a0 + hi, CELL_MARGIN_RAD, increment_rad, n)
-            .next()
-            .is_some()
+        Some((a0 + lo, a0 + hi))
+    }
+
+    /// Whether every beam of `beams` (ranges of indices) has already found a wall nearer than
+    /// grid cell `c` (whose lower corner is at `(x0, y0)` from the origin) by a micrometre, and
+    /// the cell's segments are all axis-aligned: then no segment in the cell can bring a beam
+    /// nearer, and the cell is skipped without changing the scan.
+    ///
+    /// Why: with an axis-aligned segment (one of the direction's components exactly 0), each
+    /// cross product of [`crossing`] is one rounded product, so the computed distance `t` is
+    /// within a few ulps of the distance to where the beam meets the segment's line, and the
+    /// test of where along the segment rounds by a few ulps of the distances involved (at most
+    /// 1e-9 m for coordinates within 1000 km), whatever the beam's angle to the segment: the
+    /// point at `t` lies in one of the segment's cells (grown by a millionth of a cell), at least
+    /// as far as that cell. A segment that would set a beam's distance is thus in a cell nearer
+    /// than that distance, which is not skipped. (A slanted segment's crossing rounds by the
+    /// distance over the beam's sine to it, unbounded for a beam nearly along it: cells holding
+    /// one are searched.)
+    fn cell_is_hidden(
+        &self,
+        c: usize,
+        (x0, y0): (f64, f64),
+        mut beams: impl Iterator<Item = (usize, usize)>,
+        best: &[f64],
+    ) -> bool {
+        if !self.aligned[c] {
+            return false;
+        }
+        let (x1, y1) = (x0 + self.cell_m, y0 + self.cell_m);
+        let (dx, dy) = (x0.max(-x1).max(0.0), y0.max(-y1).max(0.0));
+        let distance = (dx * dx + dy * dy).sqrt();
+        beams.all(|(i0, i1)| {
+            best[i0..=i1]
+                .iter()
+                .all(|&b| b + HIDDEN_MARGIN_M < distance)
+        })
     }
 
     /// The grid cell of `p`, clamped to the grid.
@@ -329,6 +368,12 @@ thread_local! {
     /// between casts; the numbers of different indexes' casts never coincide.
     static TESTED: std::cell::RefCell<(Vec<u32>, u32)> =
         const { std::cell::RefCell::new((Vec::new(), 0)) };
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Cells skipped as hidden ([`WallIndex::cell_is_hidden`]), counted for the tests.
+    static HIDDEN_CELLS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
 }
 
 /// Where the ray from the origin along `d` crosses the segment from `a` to `a + e` (`a` relative
@@ -517,25 +562,54 @@ impl Walls {
             *last += 1;
             let cast = *last;
             let cull = n > 1 && increment_rad > 0.0;
-            for cy in qy0..=qy1 {
-                for cx in qx0..=qx1 {
+            // The square's rows outwards from the origin's (its row, the one below, above, two
+            // below, ...), and each row's cells outwards from the origin's column: the cells
+            // between a cell and the origin come before it, so that the walls nearby are found
+            // before the cells they hide are reached.
+            let [ox, oy] = ix.cell_of(origin);
+            let (rx, ry) = ((ox - qx0).max(qx1 - ox), (oy - qy0).max(qy1 - oy));
+            for t in 0..=2 * ry {
+                // (Row `oy`, then `oy - 1`, `oy + 1`, `oy - 2`, ...)
+                let cy = if t % 2 == 1 {
+                    oy - (t + 1) / 2
+                } else {
+                    oy + t / 2
+                };
+                if cy < qy0 || cy > qy1 {
+                    continue;
+                }
+                for u in 0..=2 * rx {
+                    let cx = if u % 2 == 1 {
+                        ox - (u + 1) / 2
+                    } else {
+                        ox + u / 2
+                    };
+                    if cx < qx0 || cx > qx1 {
+                        continue;
+                    }
                     let c = (cy * ix.width + cx) as usize;
                     let held = (ix.starts[c + 1] - ix.starts[c]) as usize;
+                    if held == 0 {
+                        continue;
+                    }
                     // (Asked only of a cell of several segments: the question costs about as
                     // much as two segments; a raster's cells hold tens of short ones.)
-                    if held == 0
-                        || (cull
-                            && held >= CULL_MIN_SEGMENTS
-                            && !ix.cell_faces_a_beam(
-                                cx,
-                                cy,
-                                origin,
-                                first_wrapped,
-                                increment_rad,
-                                n,
-                            ))
-                    {
-                        continue;
+                    if cull && held >= CULL_MIN_SEGMENTS {
+                        let corner = (
+                            ix.origin.x + cx as f64 * ix.cell_m - origin.x,
+                            ix.origin.y + cy as f64 * ix.cell_m - origin.y,
+                        );
+                        if let Some((lo, hi)) = ix.cell_arc(corner, first_wrapped) {
+                            let beams = || beams_in_arc(lo, hi, CELL_MARGIN_RAD, increment_rad, n);
+                            if beams().next().is_none() {
+                                continue;
+                            }
+                            if ix.cell_is_hidden(c, corner, beams(), &best) {
+                                #[cfg(test)]
+                                HIDDEN_CELLS.with(|h| h.set(h.get() + 1));
+                                continue;
+                            }
+                        }
                     }
                     for &k in &ix.ids[ix.starts[c] as usize..ix.starts[c + 1] as usize] {
                         // Each segment once, in the first of its cells in the square.
@@ -730,6 +804,38 @@ mod tests {
         }
     }
 
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// Where beams run along the lattice's lines or within a hair of them (the robot on a
+        /// wall's line, facing along an axis), and the cells hidden behind the walls nearby are
+        /// skipped, the fan still finds what testing every segment finds.
+        #[test]
+        fn fan_along_the_lattice_is_every_segment_tested(
+            segments in proptest::collection::vec(short_segment(), 50..400),
+            (ix, iy) in (0i32..160, 0i32..160),
+            (fx, fy) in (0.0..1.0f64, 0.0..1.0f64),
+            on_line in 0usize..3,
+            quarter in -4i32..4,
+            nudge in prop_oneof![Just(0.0), Just(1e-12), Just(-1e-9), -1e-3..1e-3f64],
+            range in 0.5..12.0f64,
+        ) {
+            // On a lattice point, on a lattice line, or anywhere in a lattice cell.
+            let (dx, dy) = match on_line {
+                0 => (0.0, 0.0),
+                1 => (fx * 0.05, 0.0),
+                _ => (fx * 0.05, fy * 0.05),
+            };
+            let origin = Vec2::new(ix as f64 * 0.05 + dx, iy as f64 * 0.05 + dy);
+            // The default laser (181 beams over half a turn) with its first beam along an axis.
+            let first = quarter as f64 * std::f64::consts::FRAC_PI_2 + nudge;
+            let (inc, dirs) = fan_dirs(first, 180.0, 181);
+            let walls = Walls::new(&segments);
+            let fan = walls.cast_fan(origin, first, inc, &dirs, range);
+            prop_assert_eq!(fan, cast_exhaustive(&segments, origin, &dirs, range));
+        }
+    }
+
     fn long_segment() -> impl Strategy<Value = Segment> {
         (
             -50.0..450.0f64,
@@ -864,6 +970,43 @@ mod tests {
                 assert!(fan.iter().any(|t| t.is_some()));
             }
         }
+    }
+
+    /// Beams along the lattice's lines and within a hair of them, from a point on a wall's
+    /// line, with walls on that line behind a wall that hides their cell from every beam
+    /// pointing into it: the fan finds what testing every segment finds.
+    #[test]
+    fn walls_on_a_beams_line_behind_a_wall_are_as_tested() {
+        let at = |i: i32| i as f64 * 0.05;
+        let origin = Vec2::new(at(20), at(20));
+        // A long wall across the beams ahead at x = 1.5 m, then, in one cell behind it, short
+        // walls on the origin's line y = 1 m and beside it.
+        let mut segments = vec![Segment::new(Vec2::new(1.5, 0.0), Vec2::new(1.5, 2.0))];
+        for k in 0..6 {
+            for y in [19, 20, 22] {
+                segments.push(Segment::new(
+                    Vec2::new(at(60 + k), at(y)),
+                    Vec2::new(at(61 + k), at(y)),
+                ));
+            }
+        }
+        let walls = Walls::new(&segments);
+        let hidden_before = HIDDEN_CELLS.with(|h| h.get());
+        for quarter in -4..4 {
+            for nudge in [0.0, 1e-15, -1e-15, 1e-9, -1e-9] {
+                let first = quarter as f64 * std::f64::consts::FRAC_PI_2 + nudge;
+                let (inc, dirs) = fan_dirs(first, 180.0, 181);
+                let fan = walls.cast_fan(origin, first, inc, &dirs, 6.0);
+                let all = cast_exhaustive(&segments, origin, &dirs, 6.0);
+                assert_eq!(fan, all, "first beam {quarter} quarters + {nudge} rad");
+            }
+        }
+        // (The cell of short walls behind the long one was skipped, facing it.)
+        assert!(HIDDEN_CELLS.with(|h| h.get()) > hidden_before);
+        // (Facing +x, the middle beam meets the long wall.)
+        let (inc, dirs) = fan_dirs(-std::f64::consts::FRAC_PI_2, 180.0, 181);
+        let fan = walls.cast_fan(origin, -std::f64::consts::FRAC_PI_2, inc, &dirs, 6.0);
+        assert_eq!(fan[90], Some(0.5));
     }
 
     #[test]
