@@ -96,7 +96,10 @@ impl Explorer<'_> {
         self.known_cells += stats.cells_discovered;
         let flips = self.map.take_occupied_flips();
         self.walls_changed |= !flips.is_empty();
-        self.obstacles.update(&self.map.occupancy, &flips);
+        let mut distance_changes = std::mem::take(&mut self.distance_changes);
+        distance_changes.clear();
+        self.obstacles
+            .update_reporting(&self.map.occupancy, &flips, &mut distance_changes);
         let free_changes = self.map.take_free_changes();
         // (The layout gains too: the layout they are computed with changes less often than the
         // map, and clears them when it does.)
@@ -110,7 +113,8 @@ impl Explorer<'_> {
                 .chain(free_changes.iter().map(|(i, _)| i))
                 .copied(),
         );
-        self.mark_planning_cells(&flips, &free_changes);
+        self.mark_planning_cells(&flips, &distance_changes, &free_changes);
+        self.distance_changes = distance_changes;
         // A cell never goes back to unknown, and every change from unknown is in one of the
         // two lists.
         let mut fresh = std::mem::take(&mut self.fresh_known);
@@ -133,9 +137,9 @@ impl Explorer<'_> {
         self.estimated_trajectory.push(self.estimate);
     }
 
-    /// Marks the map cells on the segment `from`-`to` (world) travelled. They count only while
-    /// planning the way the robot came (`Planning::Travelled`, which recomputes every planning
-    /// cell when it is set), so only then are the new ones' planning cells marked for recomputing.
+    /// Marks the map cells on the segment `from`-`to` (world) travelled. They count only when
+    /// planning the way the robot came (`Planning::Travelled`), so only that level's grids
+    /// (in use or kept) have the new ones' planning cells marked for recomputing.
     pub(super) fn mark_travelled(&mut self, from: Vec2, to: Vec2) {
         let frame = self.map.frame;
         let mut new = Vec::new();
@@ -153,8 +157,10 @@ impl Explorer<'_> {
                 true
             },
         );
-        if self.planning == Planning::Travelled && !new.is_empty() {
-            self.mark_planning_cells(&[], &new);
+        if !new.is_empty() {
+            self.mark_planning_cells_at(new.iter().map(|&(i, _)| i), |level| {
+                level == Planning::Travelled
+            });
         }
     }
 }

@@ -495,6 +495,9 @@ struct Explorer<'a> {
     coarse: CoarseCosts,
     coarse_dirty: Vec<u32>,
     coarse_dirty_mark: Vec<bool>,
+    /// The map cells whose obstacle distance the last map update changed (kept for its
+    /// allocation).
+    distance_changes: Vec<u32>,
     /// Per cell of `far`: listed among the cells to recompute (all false between updates).
     far_dirty_mark: Vec<bool>,
     /// How permissive path planning is (see `decide_planned`'s last resorts).
@@ -504,6 +507,12 @@ struct Explorer<'a> {
     travelled: Bitmap,
     /// The coarser grid the candidates' distances are searched on, updated with `coarse`.
     far: CoarseCosts,
+    /// The planning and distance grids of the planning levels used before and not in use now,
+    /// with the planning cells to recompute before one is used again (marked with every map
+    /// update, as `coarse_dirty`): a relaxed plan lasts one decision, and recomputing every
+    /// planning cell at each change of level was most of the grids' upkeep on maps with
+    /// passages narrow for the robot.
+    parked: Vec<navigation::ParkedGrids>,
     /// Whether a cell became or stopped being occupied since the path was last checked.
     walls_changed: bool,
     /// `known_cells` when goals given up were last given another chance (see `forgive`).
@@ -730,10 +739,12 @@ fn new_explorer<'a>(
         coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
         coarse_dirty: Vec::new(),
         coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
+        distance_changes: Vec::new(),
         far_dirty_mark: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
         planning: Planning::WithMargin,
         travelled: Bitmap::filled(frame, false),
         far: CoarseCosts::blocked(frame, DISTANCE_FACTOR),
+        parked: Vec::new(),
         walls_changed: false,
         forgiven_at: None,
         frontier_cells_left: 0,

@@ -103,49 +103,100 @@ impl Explorer<'_> {
         }
     }
 
-    /// Plans at `level` from now on (every planning cell is recomputed when it changes).
+    /// Plans at `level` from now on: with its grids as last used, brought up to date with the
+    /// map cells changed since (or, the first time, every planning cell recomputed); the grids
+    /// of the level left are kept for its next use.
     pub(super) fn set_planning(&mut self, level: Planning) {
         if self.planning == level {
             return;
         }
+        let left = self.planning;
         self.planning = level;
-        for (i, m) in self.coarse_dirty_mark.iter_mut().enumerate() {
-            if !*m {
-                *m = true;
-                self.coarse_dirty.push(i as u32);
+        self.planning_generation += 1;
+        let restored = match self.parked.iter().position(|p| p.level == level) {
+            Some(k) => self.parked.swap_remove(k),
+            None => {
+                let mut fresh = ParkedGrids {
+                    level,
+                    coarse: self.coarse.clone(),
+                    far: self.far.clone(),
+                    dirty: self.coarse_dirty.clone(),
+                    dirty_mark: self.coarse_dirty_mark.clone(),
+                };
+                for (i, m) in fresh.dirty_mark.iter_mut().enumerate() {
+                    if !*m {
+                        *m = true;
+                        fresh.dirty.push(i as u32);
+                    }
+                }
+                fresh
             }
-        }
+        };
+        let parked = ParkedGrids {
+            level: left,
+            coarse: std::mem::replace(&mut self.coarse, restored.coarse),
+            far: std::mem::replace(&mut self.far, restored.far),
+            dirty: std::mem::replace(&mut self.coarse_dirty, restored.dirty),
+            dirty_mark: std::mem::replace(&mut self.coarse_dirty_mark, restored.dirty_mark),
+        };
+        self.parked.push(parked);
     }
 
-    /// Marks the planning cells that a map update may have changed: those of cells whose state
-    /// changed and, around cells that became or stopped being occupied, those within the reach
-    /// of the obstacle distance field (which decides traversability and the wall cost).
-    pub(super) fn mark_planning_cells(&mut self, flips: &[u32], free_changes: &[(u32, bool)]) {
+    /// Marks the planning cells that a map update may have changed, in the grids of every
+    /// planning level: those of the cells whose state changed (`flips`: became or stopped being
+    /// occupied; `free_changes`) or whose obstacle distance changed (`distance_changes`, which
+    /// decides traversability and the wall cost). A planning cell's cost depends on its map
+    /// cells' states, obstacle distances and travelled marks only.
+    pub(super) fn mark_planning_cells(
+        &mut self,
+        flips: &[u32],
+        distance_changes: &[u32],
+        free_changes: &[(u32, bool)],
+    ) {
+        let cells = flips
+            .iter()
+            .chain(distance_changes)
+            .chain(free_changes.iter().map(|(i, _)| i));
+        self.mark_planning_cells_at(cells.copied(), |_| true);
+    }
+
+    /// Marks the planning cells of the map cells `cells` (row-major indices) in the grids of
+    /// the planning levels `at` accepts.
+    pub(super) fn mark_planning_cells_at(
+        &mut self,
+        cells: impl Iterator<Item = u32>,
+        at: impl Fn(Planning) -> bool,
+    ) {
         let frame = self.map.frame;
         let f = self.coarse.factor as i32;
         let (cw, ch) = (
             self.coarse.frame.width as i32,
             self.coarse.frame.height as i32,
         );
-        let mut mark = |x0: i32, y0: i32, x1: i32, y1: i32| {
-            for cy in y0.div_euclid(f).max(0)..=y1.div_euclid(f).min(ch - 1) {
-                for cx in x0.div_euclid(f).max(0)..=x1.div_euclid(f).min(cw - 1) {
-                    let i = (cy * cw + cx) as usize;
-                    if !self.coarse_dirty_mark[i] {
-                        self.coarse_dirty_mark[i] = true;
-                        self.coarse_dirty.push(i as u32);
-                    }
-                }
+        let mark = |marks: &mut [bool], dirty: &mut Vec<u32>, i: usize| {
+            if !marks[i] {
+                marks[i] = true;
+                dirty.push(i as u32);
             }
         };
-        let reach = self.obstacles.cap_cells as i32 + 1;
-        for &i in flips {
+        let current = at(self.planning);
+        let parked: Vec<usize> = (0..self.parked.len())
+            .filter(|&k| at(self.parked[k].level))
+            .collect();
+        for i in cells {
             let c = frame.cell_of_index(i as usize);
-            mark(c.x - reach, c.y - reach, c.x + reach, c.y + reach);
-        }
-        for &(i, _) in free_changes {
-            let c = frame.cell_of_index(i as usize);
-            mark(c.x, c.y, c.x, c.y);
+            let (cx, cy) = (c.x.div_euclid(f), c.y.div_euclid(f));
+            if cx < 0 || cy < 0 || cx >= cw || cy >= ch {
+                continue;
+            }
+            let i = (cy * cw + cx) as usize;
+            if current {
+                mark(&mut self.coarse_dirty_mark, &mut self.coarse_dirty, i);
+            }
+            for &k in &parked {
+                let p = &mut self.parked[k];
+                mark(&mut p.dirty_mark, &mut p.dirty, i);
+            }
         }
     }
 
@@ -160,6 +211,8 @@ impl Explorer<'_> {
     /// radius starts from the nearest passable cell (it then first drives out).
     pub(super) fn plan(&mut self, targets: &[Cell]) -> Plan {
         self.refresh_planning_grids();
+        #[cfg(test)]
+        self.check_planning_grids();
         let radius_m = self.inflation_m();
         let robot = self.map.frame.cell_from_world(self.estimate.position());
         let start_on = |grid: &CoarseCosts| start_cell(grid, robot, radius_m);
@@ -177,41 +230,60 @@ impl Explorer<'_> {
         }
     }
 
+    /// With [`PLANNING_CHECKS`] on, asserts that the planning and distance grids in use are
+    /// those computed from the whole map, and counts it for the level.
+    #[cfg(test)]
+    fn check_planning_grids(&self) {
+        if PLANNING_CHECKS.with(|c| c.get()).is_none() {
+            return;
+        }
+        use crate::plan::coarse::coarse_costs;
+        let travelled = (self.planning == Planning::Travelled).then_some(&self.travelled.data[..]);
+        let costs = PlanningCosts::new(
+            &self.map.occupancy,
+            &self.obstacles,
+            travelled,
+            self.inflation_m(),
+        );
+        let frame = self.map.frame;
+        let last = Cell::new(frame.width as i32 - 1, frame.height as i32 - 1);
+        let whole = |factor| {
+            coarse_costs(
+                frame,
+                factor,
+                Cell::new(0, 0),
+                last,
+                |i| costs.traversable(i),
+                |j| costs.extra(j),
+            )
+        };
+        assert_eq!(self.coarse, whole(PLAN_FACTOR), "{:?}", self.planning);
+        assert_eq!(self.far, whole(DISTANCE_FACTOR), "{:?}", self.planning);
+        PLANNING_CHECKS.with(|c| {
+            let mut n = c.get().expect("on");
+            n[self.planning as usize] += 1;
+            c.set(Some(n));
+        });
+    }
+
     /// Brings the planning and distance grids up to date with the map.
     pub(super) fn refresh_planning_grids(&mut self) {
         if self.coarse_dirty.is_empty() {
             return;
         }
-        const WALL_BAND_M: f64 = 0.3;
-        let radius_m = self.inflation_m();
-        // Not `self.traversability()`: the planning grid below is updated while this borrows
-        // only the map and the obstacle field.
-        let trav = Traversability::new(&self.map.occupancy, &self.obstacles, radius_m);
-        let travelled = (self.planning == Planning::Travelled).then_some(&self.travelled.data);
-        let occupancy = &self.map.occupancy.data;
-        let traversable = |i: usize| {
-            trav.at_index(i) || travelled.is_some_and(|t| t[i] && occupancy[i] == Occupancy::Free)
-        };
-        let res = self.map.frame.resolution_m;
-        let obstacles = &self.obstacles.data;
-        // The extra cost by obstacle distance, tabulated in steps of 1/8 cell (the field is
-        // capped, so the table is small) instead of evaluated per cell.
-        const STEPS_PER_CELL: f32 = 8.0;
-        let table: Vec<u32> = (0..=(self.obstacles.cap_cells as usize * 8 + 1))
-            .map(|k| {
-                let d_cells = k as f64 / STEPS_PER_CELL as f64;
-                let beyond = (d_cells * res - radius_m) / WALL_BAND_M;
-                if beyond >= 1.0 {
-                    0
-                } else {
-                    (MAX_EXTRA as f64 * (1.0 - beyond.max(0.0))).round() as u32
-                }
-            })
-            .collect();
-        let last = table.len() - 1;
-        let extra = |j: usize| table[((obstacles[j] * STEPS_PER_CELL) as usize).min(last)];
-        self.coarse
-            .recompute(self.map.frame, &self.coarse_dirty, traversable, extra);
+        let travelled = (self.planning == Planning::Travelled).then_some(&self.travelled.data[..]);
+        let costs = PlanningCosts::new(
+            &self.map.occupancy,
+            &self.obstacles,
+            travelled,
+            self.inflation_m(),
+        );
+        self.coarse.recompute(
+            self.map.frame,
+            &self.coarse_dirty,
+            |i| costs.traversable(i),
+            |j| costs.extra(j),
+        );
         self.planning_generation += 1;
         // The distance grid's cells covering the changed planning cells.
         let k = (DISTANCE_FACTOR / PLAN_FACTOR) as usize;
@@ -438,6 +510,83 @@ pub(super) fn far_search_cells() -> i32 {
         DISTANCE_FACTOR as i32,
     );
     (cells + f - 1) / f
+}
+
+/// What a planning cell's cost is computed from, per map cell (row-major index): whether the
+/// robot's centre may be there at the planning level, and the extra cost of passing close to
+/// walls.
+struct PlanningCosts<'a> {
+    trav: Traversability<'a>,
+    /// The cells travelled, when they count as traversable (free ones).
+    travelled: Option<&'a [bool]>,
+    occupancy: &'a [Occupancy],
+    obstacles: &'a [f32],
+    /// The extra cost by obstacle distance, in steps of 1/8 cell (the field is capped, so the
+    /// table is small) instead of evaluated per cell.
+    table: Vec<u32>,
+}
+
+impl<'a> PlanningCosts<'a> {
+    const STEPS_PER_CELL: f32 = 8.0;
+
+    fn new(
+        grid: &'a OccupancyGrid,
+        obstacles: &'a ObstacleDistance,
+        travelled: Option<&'a [bool]>,
+        radius_m: f64,
+    ) -> Self {
+        const WALL_BAND_M: f64 = 0.3;
+        let res = grid.frame.resolution_m;
+        let table = (0..=(obstacles.cap_cells as usize * 8 + 1))
+            .map(|k| {
+                let d_cells = k as f64 / Self::STEPS_PER_CELL as f64;
+                let beyond = (d_cells * res - radius_m) / WALL_BAND_M;
+                if beyond >= 1.0 {
+                    0
+                } else {
+                    (MAX_EXTRA as f64 * (1.0 - beyond.max(0.0))).round() as u32
+                }
+            })
+            .collect();
+        Self {
+            trav: Traversability::new(grid, obstacles, radius_m),
+            travelled,
+            occupancy: &grid.data,
+            obstacles: &obstacles.data,
+            table,
+        }
+    }
+
+    fn traversable(&self, i: usize) -> bool {
+        self.trav.at_index(i)
+            || self
+                .travelled
+                .is_some_and(|t| t[i] && self.occupancy[i] == Occupancy::Free)
+    }
+
+    fn extra(&self, j: usize) -> u32 {
+        let last = self.table.len() - 1;
+        self.table[((self.obstacles[j] * Self::STEPS_PER_CELL) as usize).min(last)]
+    }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// When on (`Some`), every plan asserts that the grids it uses are those computed from the
+    /// whole map, counted per planning level.
+    pub(super) static PLANNING_CHECKS: std::cell::Cell<Option<[u64; 3]>> =
+        const { std::cell::Cell::new(None) };
+}
+
+/// The grids of a planning level not in use (see `Explorer::parked`).
+#[derive(Debug, Clone)]
+pub(super) struct ParkedGrids {
+    pub(super) level: Planning,
+    coarse: CoarseCosts,
+    far: CoarseCosts,
+    /// The planning cells to recompute before the grids are used again, each marked.
+    dirty: Vec<u32>,
+    dirty_mark: Vec<bool>,
 }
 
 /// How permissive path planning is: the rungs of `decide_planned`'s last resorts, in order.

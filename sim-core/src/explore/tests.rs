@@ -472,6 +472,50 @@ fn a_room_seen_through_a_slit_ends_with_frontiers_unreachable() {
     assert!(r.explored_fraction >= 0.97, "{}", r.explored_fraction);
 }
 
+/// The planning grids a plan uses equal those computed from the whole map, at every planning
+/// level, as levels are left and taken up again with map updates in between (the grids of a
+/// level not in use are kept and brought up to date when it is used again).
+#[test]
+fn planning_grids_kept_between_levels_are_those_of_the_whole_map() {
+    use super::navigation::PLANNING_CHECKS;
+    let w = |a: (f64, f64), b: (f64, f64)| {
+        Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
+    };
+    // A room left by a door (0.47 m) the robot fits through only without the safety margin,
+    // into a larger room of two halves joined by a slit narrower than the robot: the robot plans
+    // without the margin to leave the first room, maps the second with the margin again, tries
+    // every level for the frontiers beyond the slit, and the run ends asking whether it could
+    // leave the way it came.
+    let b = Building {
+        name: "door-and-slit".into(),
+        geometry: Geometry::Vector {
+            outline: Polygon::rect(Vec2::new(-0.1, -0.1), Vec2::new(15.1, 6.1)),
+            solids: vec![
+                w((0.0, 0.0), (15.0, 0.0)),
+                w((15.0, 0.0), (15.0, 6.0)),
+                w((15.0, 6.0), (0.0, 6.0)),
+                w((0.0, 6.0), (0.0, 0.0)),
+                w((3.0, 0.0), (3.0, 2.665)),
+                w((3.0, 3.335), (3.0, 6.0)),
+                w((9.0, 0.0), (9.0, 2.875)),
+                w((9.0, 3.125 + 0.2), (9.0, 6.0)),
+            ],
+        },
+        rooms: vec![],
+        doors: vec![],
+        start: Some(Pose::new(1.5, 3.0, 0.0)),
+    };
+    let cfg = ExploreConfig {
+        localization: Localization::GroundTruth,
+        ..ExploreConfig::default()
+    };
+    PLANNING_CHECKS.with(|c| c.set(Some([0; 3])));
+    let r = explore(&b, b.start.unwrap(), &cfg, 1, &mut |_| {});
+    let checks = PLANNING_CHECKS.with(|c| c.replace(None)).expect("on");
+    assert_eq!(r.end_reason, EndReason::Unreachable);
+    assert!(checks.iter().all(|&n| n > 0), "{checks:?}");
+}
+
 /// The first scan of a robot in a large room facing +x: the boundary behind the 180-degree
 /// laser is one chain through the robot (the diameter), whose unknown side lies right behind
 /// it. Its middle is the robot's own cell and the centre of its unknown cells is 0.05 m away,

@@ -159,6 +159,52 @@ impl ObstacleDistance {
         }
     }
 
+    /// [`ObstacleDistance::update`], pushing to `changed` the row-major indices of the cells
+    /// whose distance it changed (some possibly more than once): only cells within the cap of a
+    /// flipped cell can change (the others are at least the cap from it), so their values
+    /// are kept before the update and compared after. Every cell if the frame changed.
+    pub fn update_reporting(
+        &mut self,
+        grid: &OccupancyGrid,
+        flips: &[u32],
+        changed: &mut Vec<u32>,
+    ) {
+        if grid.frame != self.frame {
+            self.update(grid, flips);
+            changed.extend(0..self.data.len() as u32);
+            return;
+        }
+        let (w, h) = (self.frame.width as i32, self.frame.height as i32);
+        // The discs' rows in the grid, as (first index, length), and their values before.
+        let mut spans: Vec<(usize, usize)> = Vec::new();
+        for &i in flips {
+            if i as usize >= self.data.len() {
+                continue;
+            }
+            let c = self.frame.cell_of_index(i as usize);
+            for (dy, dx0, ds) in &self.disc_rows {
+                let (y, x0) = (c.y + dy, c.x + dx0);
+                let (x_from, x_to) = (x0.max(0), (x0 + ds.len() as i32).min(w));
+                if y >= 0 && y < h && x_from < x_to {
+                    spans.push(((y * w + x_from) as usize, (x_to - x_from) as usize));
+                }
+            }
+        }
+        let before: Vec<f32> = spans
+            .iter()
+            .flat_map(|&(at, n)| self.data[at..at + n].iter().copied())
+            .collect();
+        self.update(grid, flips);
+        let mut old = before.iter();
+        for &(at, n) in &spans {
+            for (k, (&new, &was)) in self.data[at..at + n].iter().zip(old.by_ref()).enumerate() {
+                if new != was {
+                    changed.push((at + k) as u32);
+                }
+            }
+        }
+    }
+
     /// Distance (cells) of a cell; the cap outside the grid.
     pub fn get(&self, c: Cell) -> f32 {
         self.frame
@@ -311,7 +357,7 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(512))]
         /// Batches of flips (walls appearing and vanishing together, as a scan's do) leave the
-        /// same bits as the removals handled one by one.
+        /// same bits as the removals handled one by one, and report the cells they changed.
         #[test]
         fn batched_removals_equal_one_by_one(
             w in 1i32..48, h in 1i32..40, cap in 1u32..7,
@@ -340,9 +386,18 @@ mod tests {
                         flips.push(frame.index(c).unwrap() as u32);
                     }
                 }
-                new.update(&grid, &flips);
+                let before = new.data.clone();
+                let mut changed = Vec::new();
+                new.update_reporting(&grid, &flips, &mut changed);
                 update_reference(&mut old, &grid, &flips);
                 prop_assert_eq!(&new.data, &old.data);
+                // The cells reported are those whose distance changed.
+                changed.sort_unstable();
+                changed.dedup();
+                let differ: Vec<u32> = (0..before.len() as u32)
+                    .filter(|&i| before[i as usize] != new.data[i as usize])
+                    .collect();
+                prop_assert_eq!(changed, differ);
             }
         }
     }
