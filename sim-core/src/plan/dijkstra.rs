@@ -299,7 +299,8 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
 /// found by A* (octile distance as the heuristic, consistent with the step costs, so the cost
 /// is the one Dijkstra finds; among paths of equal cost it may pick another). Its buffers are
 /// kept between searches and only the cells a search touched are reset, so a short path costs
-/// little however large the grid. An unreachable goal costs a search of everything reachable.
+/// little however large the grid. An unreachable goal costs a search of everything reachable
+/// (in [`AStar::path_or_reached`], of the smaller of the parts of the start and of the goal).
 #[derive(Debug, Clone, Default)]
 pub struct AStar {
     /// Per padded cell: cost units from the start (`u32::MAX` = not reached) and the step that
@@ -308,6 +309,10 @@ pub struct AStar {
     parent: Vec<u8>,
     touched: Vec<u32>,
     buckets: Vec<Vec<u32>>,
+    /// Per padded cell, for [`AStar::connected`]: 0, or which flood reached it (1 from the
+    /// start, 2 from the goal); and each flood's cells in the order reached.
+    flooded: Vec<u8>,
+    floods: [Vec<u32>; 2],
 }
 
 /// The index of `c` (in `frame`) in a grid of `frame` padded by one cell on every side, as
@@ -330,10 +335,13 @@ impl AStar {
         self.path_within(frame, start, enter, max_extra, goal, |_| true)
     }
 
-    /// [`AStar::path`]; when `goal` cannot be reached, `reached` (cleared first) holds every
-    /// cell that can, by index in the padded frame ([`padded_index`]): the search went
-    /// everywhere it could, and another goal not among them cannot be reached either. (Empty
-    /// when there was no search: a start or goal outside the frame.)
+    /// [`AStar::path`], the search run only once floods from both ends have met
+    /// ([`AStar::connected`]: an unreachable goal in a small part of the grid, beyond a gap too
+    /// narrow, costs that part rather than everything reachable). When `goal` cannot be
+    /// reached, `reached` (cleared first) holds every cell that can, by index in the padded
+    /// frame ([`padded_index`]), when the start's flood went everywhere it could (another goal
+    /// not among them cannot be reached either); otherwise it is empty (the goal's part was
+    /// the smaller, or a start or goal lies outside the frame).
     pub fn path_or_reached<T: Copy + Into<u32>>(
         &mut self,
         frame: GridFrame,
@@ -344,6 +352,12 @@ impl AStar {
         reached: &mut Vec<u32>,
     ) -> Option<(Vec<Cell>, f64)> {
         reached.clear();
+        if frame.contains(start)
+            && frame.contains(goal)
+            && !self.connected(frame, enter, start, goal, reached)
+        {
+            return None;
+        }
         self.search_within(
             frame,
             start,
@@ -353,6 +367,85 @@ impl AStar {
             |_| true,
             Some(reached),
         )
+    }
+
+    /// Whether a path (of the search's steps) leads from `start` to `goal` (both in `frame`), by
+    /// two breadth-first floods taking turns, one from each: they meet, or one of them runs
+    /// out of cells having gone through its part of the grid, at about twice the cost of the
+    /// smaller part. When the start's runs out, `reached` gets its cells: every cell reachable
+    /// from the start (as the search's). Steps are symmetric (a diagonal one needs the same
+    /// two cells beside it both ways); the start is left even when blocked (as by the search),
+    /// and the goal's flood meets the start's in the cells the start's first steps reach.
+    fn connected<T: Copy + Into<u32>>(
+        &mut self,
+        frame: GridFrame,
+        enter: &[T],
+        start: Cell,
+        goal: Cell,
+        reached: &mut Vec<u32>,
+    ) -> bool {
+        let pw = frame.width as usize + 2;
+        let np = pw * (frame.height as usize + 2);
+        assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
+        if self.flooded.len() != np {
+            self.flooded = vec![0; np];
+        }
+        let pad = |c: Cell| (c.y as usize + 1) * pw + c.x as usize + 1;
+        let (si, gi) = (pad(start), pad(goal));
+        if si == gi {
+            return true;
+        }
+        let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * pw as isize + dx as isize);
+        let open = |j: usize| Into::<u32>::into(enter[j]);
+        let [mut from_start, mut from_goal] = std::mem::take(&mut self.floods);
+        from_start.clear();
+        from_goal.clear();
+        self.flooded[si] = 1;
+        from_start.push(si as u32);
+        self.flooded[gi] = 2;
+        from_goal.push(gi as u32);
+        let mut heads = [0usize; 2];
+        let met = 'flood: loop {
+            for (side, head) in heads.iter_mut().enumerate() {
+                let (flood, mark) = if side == 0 {
+                    (&mut from_start, 1u8)
+                } else {
+                    (&mut from_goal, 2u8)
+                };
+                let Some(&i) = flood.get(*head) else {
+                    if side == 0 {
+                        reached.extend_from_slice(flood);
+                    }
+                    break 'flood false;
+                };
+                *head += 1;
+                let i = i as usize;
+                // (Every cell flooded is inside the frame: its neighbours are in the padding at
+                // worst.)
+                let at = |k: usize| open((i as isize + offsets[k]) as usize);
+                let pass: [u32; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
+                let ok = allowed_steps(&pass);
+                for k in 0..8 {
+                    if !ok[k] {
+                        continue;
+                    }
+                    let j = (i as isize + offsets[k]) as usize;
+                    match self.flooded[j] {
+                        0 => {
+                            self.flooded[j] = mark;
+                            flood.push(j as u32);
+                        }
+                        m if m != mark => break 'flood true,
+                        _ => {}
+                    }
+                }
+            }
+        };
+        for &i in from_start.iter().chain(&from_goal) {
+            self.flooded[i as usize] = 0;
+        }
+        self.floods = [from_start, from_goal];
+        met
     }
 
     /// [`AStar::path`] through the cells for which `allowed` holds only (the start excepted),
@@ -618,9 +711,10 @@ mod tests {
     }
 
     proptest::proptest! {
-        /// A failed search reports every cell that can be reached from the start and no other
-        /// (the cells Dijkstra gives a cost to), whatever goal it looked for; a search that
-        /// finds its goal reports none, and gives the path `path` gives.
+        /// A search gives the path `path` gives (none exactly when the goal cannot be reached);
+        /// a failed one reports every cell that can be reached from the start and no other (the
+        /// cells Dijkstra gives a cost to), or nothing when the goal's part of the grid was the
+        /// smaller; one that finds its goal reports none.
         #[test]
         fn a_failed_search_reports_every_reachable_cell(
             cells in proptest::collection::vec((proptest::bool::weighted(0.6), 0u8..6), 23 * 17),
@@ -634,17 +728,17 @@ mod tests {
             let mut reached = vec![7];
             let got = astar.path_or_reached(frame, start, &padded, 5, goal, &mut reached);
             proptest::prop_assert_eq!(&got, &AStar::default().path(frame, start, &padded, 5, goal));
-            if got.is_some() {
-                proptest::prop_assert!(reached.is_empty());
-            } else {
-                reached.sort_unstable();
-                let want: Vec<u32> = (0..h as i32)
-                    .flat_map(|y| (0..w as i32).map(move |x| Cell::new(x, y)))
-                    .filter(|c| d.distance_m(*c).is_some())
-                    .map(|c| padded_index(&frame, c) as u32)
-                    .collect();
-                proptest::prop_assert_eq!(reached, want);
-            }
+            proptest::prop_assert_eq!(got.is_some(), d.distance_m(goal).is_some() && cells[goal.y as usize * w + goal.x as usize].0 || start == goal);
+            reached.sort_unstable();
+            let want: Vec<u32> = (0..h as i32)
+                .flat_map(|y| (0..w as i32).map(move |x| Cell::new(x, y)))
+                .filter(|c| d.distance_m(*c).is_some())
+                .map(|c| padded_index(&frame, c) as u32)
+                .collect();
+            proptest::prop_assert!(
+                reached.is_empty() || (got.is_none() && reached == want),
+                "{:?}", reached
+            );
         }
     }
 
@@ -672,6 +766,49 @@ mod tests {
         for w in path.windows(2) {
             assert!((w[0].x - w[1].x).abs() <= 1 && (w[0].y - w[1].y).abs() <= 1);
         }
+    }
+
+    /// A goal beyond a wall: whichever side is the smaller part, no path; the cells reachable
+    /// from the start are reported when the start's part is the smaller.
+    #[test]
+    fn an_unreachable_goal_costs_the_smaller_part() {
+        let t = trav(
+            "
+            .#.........
+            .#.........
+            ##.........",
+        );
+        let frame = t.frame;
+        let mut padded = vec![0u8; (frame.width as usize + 2) * (frame.height as usize + 2)];
+        for y in 0..frame.height as i32 {
+            for x in 0..frame.width as i32 {
+                let c = Cell::new(x, y);
+                padded[padded_index(&frame, c)] = u8::from(t.get(c) == Some(&true));
+            }
+        }
+        // (The first row drawn is the top one, y = 2.)
+        let (pocket, open) = (Cell::new(0, 2), Cell::new(8, 1));
+        let mut astar = AStar::default();
+        let mut reached = Vec::new();
+        // From the pocket (two cells): its flood runs out first and reports them.
+        assert_eq!(
+            astar.path_or_reached(frame, pocket, &padded, 5, open, &mut reached),
+            None
+        );
+        reached.sort_unstable();
+        let want: Vec<u32> = [Cell::new(0, 1), Cell::new(0, 2)]
+            .map(|c| padded_index(&frame, c) as u32)
+            .into();
+        assert_eq!(reached, want);
+        // From the open side: the pocket's flood runs out first, nothing reported.
+        assert_eq!(
+            astar.path_or_reached(frame, open, &padded, 5, pocket, &mut reached),
+            None
+        );
+        assert!(reached.is_empty());
+        // Within the open side: the path.
+        let path = astar.path_or_reached(frame, open, &padded, 5, Cell::new(2, 0), &mut reached);
+        assert_eq!(path.map(|(p, _)| *p.last().unwrap()), Some(Cell::new(2, 0)));
     }
 
     #[test]
