@@ -230,6 +230,17 @@ impl Explorer<'_> {
         }
     }
 
+    /// What the planning cells' costs are computed from at the current planning level.
+    fn planning_costs(&self) -> PlanningCosts<'_> {
+        let travelled = (self.planning == Planning::Travelled).then_some(&self.travelled.data[..]);
+        PlanningCosts::new(
+            &self.map.occupancy,
+            &self.obstacles,
+            travelled,
+            self.inflation_m(),
+        )
+    }
+
     /// With [`PLANNING_CHECKS`] on, asserts that the planning and distance grids in use are
     /// those computed from the whole map, and counts it for the level.
     #[cfg(test)]
@@ -238,13 +249,7 @@ impl Explorer<'_> {
             return;
         }
         use crate::plan::coarse::coarse_costs;
-        let travelled = (self.planning == Planning::Travelled).then_some(&self.travelled.data[..]);
-        let costs = PlanningCosts::new(
-            &self.map.occupancy,
-            &self.obstacles,
-            travelled,
-            self.inflation_m(),
-        );
+        let costs = self.planning_costs();
         let frame = self.map.frame;
         let last = Cell::new(frame.width as i32 - 1, frame.height as i32 - 1);
         let whole = |factor| {
@@ -271,19 +276,17 @@ impl Explorer<'_> {
         if self.coarse_dirty.is_empty() {
             return;
         }
-        let travelled = (self.planning == Planning::Travelled).then_some(&self.travelled.data[..]);
-        let costs = PlanningCosts::new(
-            &self.map.occupancy,
-            &self.obstacles,
-            travelled,
-            self.inflation_m(),
-        );
-        self.coarse.recompute(
+        // (The grid taken out while the costs read the rest.)
+        let empty = GridFrame::new(self.map.frame.origin_m, 1.0, 0, 0);
+        let mut coarse = std::mem::replace(&mut self.coarse, CoarseCosts::blocked(empty, 1));
+        let costs = self.planning_costs();
+        coarse.recompute(
             self.map.frame,
             &self.coarse_dirty,
             |i| costs.traversable(i),
             |j| costs.extra(j),
         );
+        self.coarse = coarse;
         self.planning_generation += 1;
         // The distance grid's cells covering the changed planning cells.
         let k = (DISTANCE_FACTOR / PLAN_FACTOR) as usize;

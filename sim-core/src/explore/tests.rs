@@ -3,13 +3,37 @@ use crate::building::Geometry;
 use crate::geom::Polygon;
 use crate::utility::best_candidate;
 
+/// A wall 0.2 m thick from `a` to `b` (its ends grown by half its thickness).
+fn wall(a: (f64, f64), b: (f64, f64)) -> Polygon {
+    Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
+}
+
+/// A building of `solids` within the rectangle from `lo` to `hi`, without rooms or doors,
+/// started at `start`.
+fn walled(
+    name: &str,
+    lo: (f64, f64),
+    hi: (f64, f64),
+    solids: Vec<Polygon>,
+    start: Pose,
+) -> Building {
+    Building {
+        name: name.into(),
+        geometry: Geometry::Vector {
+            outline: Polygon::rect(Vec2::new(lo.0, lo.1), Vec2::new(hi.0, hi.1)),
+            solids,
+        },
+        rooms: vec![],
+        doors: vec![],
+        start: Some(start),
+    }
+}
+
 /// A corridor (2 m wide) with `n` rooms of 5 x 4 m on each side, 1 m doors, outer walls.
 pub(crate) fn corridor_building(n: usize) -> Building {
     let len = 5.0 * n as f64;
     let h = 4.0 + 2.0 + 4.0;
-    let w = |a: (f64, f64), b: (f64, f64)| {
-        Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
-    };
+    let w = wall;
     let mut solids = vec![
         w((0.0, 0.0), (len, 0.0)),
         w((len, 0.0), (len, h)),
@@ -431,9 +455,7 @@ fn goals_given_up_get_another_chance_before_the_run_ends() {
 /// must say so ("frontiers unreachable", the frontier cells left counted), not "complete".
 #[test]
 fn a_room_seen_through_a_slit_ends_with_frontiers_unreachable() {
-    let w = |a: (f64, f64), b: (f64, f64)| {
-        Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
-    };
+    let w = wall;
     let solids = vec![
         w((0.0, 0.0), (12.0, 0.0)),
         w((12.0, 0.0), (12.0, 6.0)),
@@ -443,16 +465,13 @@ fn a_room_seen_through_a_slit_ends_with_frontiers_unreachable() {
         w((6.0, 0.0), (6.0, 2.875)),
         w((6.0, 3.125 + 0.2), (6.0, 6.0)),
     ];
-    let b = Building {
-        name: "slit".into(),
-        geometry: Geometry::Vector {
-            outline: Polygon::rect(Vec2::new(-0.1, -0.1), Vec2::new(12.1, 6.1)),
-            solids,
-        },
-        rooms: vec![],
-        doors: vec![],
-        start: Some(Pose::new(3.0, 3.0, 0.0)),
-    };
+    let b = walled(
+        "slit",
+        (-0.1, -0.1),
+        (12.1, 6.1),
+        solids,
+        Pose::new(3.0, 3.0, 0.0),
+    );
     let cfg = ExploreConfig {
         localization: Localization::GroundTruth,
         ..ExploreConfig::default()
@@ -478,33 +497,24 @@ fn a_room_seen_through_a_slit_ends_with_frontiers_unreachable() {
 #[test]
 fn planning_grids_kept_between_levels_are_those_of_the_whole_map() {
     use super::navigation::PLANNING_CHECKS;
-    let w = |a: (f64, f64), b: (f64, f64)| {
-        Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
-    };
+    let w = wall;
     // A room left by a door (0.47 m) the robot fits through only without the safety margin,
     // into a larger room of two halves joined by a slit narrower than the robot: the robot plans
     // without the margin to leave the first room, maps the second with the margin again, tries
     // every level for the frontiers beyond the slit, and the run ends asking whether it could
     // leave the way it came.
-    let b = Building {
-        name: "door-and-slit".into(),
-        geometry: Geometry::Vector {
-            outline: Polygon::rect(Vec2::new(-0.1, -0.1), Vec2::new(15.1, 6.1)),
-            solids: vec![
-                w((0.0, 0.0), (15.0, 0.0)),
-                w((15.0, 0.0), (15.0, 6.0)),
-                w((15.0, 6.0), (0.0, 6.0)),
-                w((0.0, 6.0), (0.0, 0.0)),
-                w((3.0, 0.0), (3.0, 2.665)),
-                w((3.0, 3.335), (3.0, 6.0)),
-                w((9.0, 0.0), (9.0, 2.875)),
-                w((9.0, 3.125 + 0.2), (9.0, 6.0)),
-            ],
-        },
-        rooms: vec![],
-        doors: vec![],
-        start: Some(Pose::new(1.5, 3.0, 0.0)),
-    };
+    let solids = vec![
+        w((0.0, 0.0), (15.0, 0.0)),
+        w((15.0, 0.0), (15.0, 6.0)),
+        w((15.0, 6.0), (0.0, 6.0)),
+        w((0.0, 6.0), (0.0, 0.0)),
+        w((3.0, 0.0), (3.0, 2.665)),
+        w((3.0, 3.335), (3.0, 6.0)),
+        w((9.0, 0.0), (9.0, 2.875)),
+        w((9.0, 3.125 + 0.2), (9.0, 6.0)),
+    ];
+    let start = Pose::new(1.5, 3.0, 0.0);
+    let b = walled("door-and-slit", (-0.1, -0.1), (15.1, 6.1), solids, start);
     let cfg = ExploreConfig {
         localization: Localization::GroundTruth,
         ..ExploreConfig::default()
@@ -609,19 +619,15 @@ fn robust_frontiers_explore_completely() {
 /// map ran off the grid and seed 5 ended at 94 % with frontiers left at the grid's edge.
 #[test]
 fn a_hall_larger_than_the_laser_explores_completely_from_its_door() {
-    let w = |a: (f64, f64), b: (f64, f64)| {
-        Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
-    };
-    let b = Building {
-        name: "hall".into(),
-        geometry: Geometry::Vector {
-            outline: Polygon::rect(Vec2::new(0.0, 0.0), Vec2::new(30.0, 20.0)),
-            solids: vec![w((15.0, 0.0), (15.0, 9.0)), w((15.0, 10.5), (15.0, 20.0))],
-        },
-        rooms: vec![],
-        doors: vec![],
-        start: Some(Pose::new(15.0, 9.75, 0.0)),
-    };
+    let w = wall;
+    let solids = vec![w((15.0, 0.0), (15.0, 9.0)), w((15.0, 10.5), (15.0, 20.0))];
+    let b = walled(
+        "hall",
+        (0.0, 0.0),
+        (30.0, 20.0),
+        solids,
+        Pose::new(15.0, 9.75, 0.0),
+    );
     for seed in 1..=5 {
         let r = explore(
             &b,

@@ -471,6 +471,16 @@ fn beams_in_arc(
     })
 }
 
+/// The `t`-th of `o`, `o - 1`, `o + 1`, `o - 2`, `o + 2`, ...
+#[inline]
+fn outwards(o: i32, t: i32) -> i32 {
+    if t % 2 == 1 {
+        o - (t + 1) / 2
+    } else {
+        o + t / 2
+    }
+}
+
 /// `v` in `(-pi, pi]`.
 fn wrap_pi(v: f64) -> f64 {
     use std::f64::consts::{PI, TAU};
@@ -569,21 +579,12 @@ impl Walls {
             let [ox, oy] = ix.cell_of(origin);
             let (rx, ry) = ((ox - qx0).max(qx1 - ox), (oy - qy0).max(qy1 - oy));
             for t in 0..=2 * ry {
-                // (Row `oy`, then `oy - 1`, `oy + 1`, `oy - 2`, ...)
-                let cy = if t % 2 == 1 {
-                    oy - (t + 1) / 2
-                } else {
-                    oy + t / 2
-                };
+                let cy = outwards(oy, t);
                 if cy < qy0 || cy > qy1 {
                     continue;
                 }
                 for u in 0..=2 * rx {
-                    let cx = if u % 2 == 1 {
-                        ox - (u + 1) / 2
-                    } else {
-                        ox + u / 2
-                    };
+                    let cx = outwards(ox, u);
                     if cx < qx0 || cx > qx1 {
                         continue;
                     }
