@@ -20,8 +20,9 @@
 //! at every decision with `candidate_from_reachable_part`), and if none of those can be reached
 //! either, the decision is made again with paths planned without the safety margin, and then
 //! once more through the free map cells the robot has travelled as well (`Planning`, set with
-//! `Explorer::set_planning` for that decision only; every planning cell is recomputed when it
-//! switches). Every run ends in one [`EndReason`] (`Explorer::classify_end`).
+//! `Explorer::set_planning` for that decision only; each level's planning grids are kept while
+//! another is in use and brought up to date when it is used again). Every run ends in one
+//! [`EndReason`] (`Explorer::classify_end`).
 //!
 //! The explored area credits, whenever cells become known, the building cells around where the
 //! sensor saw them whose centres, moved into the map by the pose error of that moment, fall in a
