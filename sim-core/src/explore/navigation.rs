@@ -115,22 +115,14 @@ impl Explorer<'_> {
         self.planning_generation += 1;
         let restored = match self.parked.iter().position(|p| p.level == level) {
             Some(k) => self.parked.swap_remove(k),
-            None => {
-                let mut fresh = ParkedGrids {
-                    level,
-                    coarse: self.coarse.clone(),
-                    far: self.far.clone(),
-                    dirty: self.coarse_dirty.clone(),
-                    dirty_mark: self.coarse_dirty_mark.clone(),
-                };
-                for (i, m) in fresh.dirty_mark.iter_mut().enumerate() {
-                    if !*m {
-                        *m = true;
-                        fresh.dirty.push(i as u32);
-                    }
-                }
-                fresh
-            }
+            // (Every planning cell to recompute: the order does not matter.)
+            None => ParkedGrids {
+                level,
+                coarse: self.coarse.clone(),
+                far: self.far.clone(),
+                dirty: (0..self.coarse_dirty_mark.len() as u32).collect(),
+                dirty_mark: vec![true; self.coarse_dirty_mark.len()],
+            },
         };
         let parked = ParkedGrids {
             level: left,
@@ -180,9 +172,6 @@ impl Explorer<'_> {
             }
         };
         let current = at(self.planning);
-        let parked: Vec<usize> = (0..self.parked.len())
-            .filter(|&k| at(self.parked[k].level))
-            .collect();
         for i in cells {
             let c = frame.cell_of_index(i as usize);
             let (cx, cy) = (c.x.div_euclid(f), c.y.div_euclid(f));
@@ -193,8 +182,7 @@ impl Explorer<'_> {
             if current {
                 mark(&mut self.coarse_dirty_mark, &mut self.coarse_dirty, i);
             }
-            for &k in &parked {
-                let p = &mut self.parked[k];
+            for p in self.parked.iter_mut().filter(|p| at(p.level)) {
                 mark(&mut p.dirty_mark, &mut p.dirty, i);
             }
         }

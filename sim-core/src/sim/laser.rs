@@ -129,7 +129,7 @@ const BEAM_MARGIN_RAD: f64 = 1e-3;
 const _: () = assert!(3.0 * 3e-4 < BEAM_MARGIN_RAD);
 
 /// Angle (rad) added on both sides of a grid cell's angular extent when asking whether a beam
-/// points into it ([`WallIndex::cell_faces_a_beam`]): more than a segment's margin and the
+/// points into it ([`WallIndex::cell_arc`]): more than a segment's margin and the
 /// approximate angles' errors of both, so that every segment tested against a beam is still
 /// found in some cell.
 const CELL_MARGIN_RAD: f64 = 0.01;
