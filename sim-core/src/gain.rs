@@ -10,7 +10,8 @@
 //! Implementation: the 360-degree rays are stored as a prefix tree of cell offsets, built once per
 //! range, so the cells that rays share near `p` are tested once, and a blocked cell skips every ray
 //! through it. Between decisions, `explore::gain_cache` reuses a candidate's gain while the map
-//! within range of it is unchanged.
+//! is unchanged where its rays went ([`CellsRead`]: the boxes of the cells they read, kept where
+//! each ray stopped, not at every cell).
 
 use crate::grid::{Cell, GridFrame, Occupancy, OccupancyGrid};
 use crate::mapping::ray::walk_segment;
@@ -37,18 +38,54 @@ pub fn visible_area_indexed(
     blocks: impl Fn(Cell, usize) -> bool,
     counts: impl Fn(Cell, usize) -> bool,
 ) -> f64 {
+    visible_area_read(frame, p, range_m, blocks, counts).0
+}
+
+/// A box of cells, corners included (it may reach outside the frame).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CellBox {
+    pub min: Cell,
+    pub max: Cell,
+}
+
+/// Where the cells lie whose predicates a visible area read: in the union of four boxes, one
+/// per quadrant around the centre cell `p` (each holds `p`). The area stays the same while no
+/// cell in them changes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CellsRead {
+    pub boxes: [CellBox; 4],
+}
+
+impl CellsRead {
+    /// Only the cell `c`.
+    pub fn of(c: Cell) -> Self {
+        Self {
+            boxes: [CellBox { min: c, max: c }; 4],
+        }
+    }
+}
+
+/// [`visible_area_indexed`] and where the cells it read lie ([`CellsRead`]).
+pub fn visible_area_read(
+    frame: &GridFrame,
+    p: Cell,
+    range_m: f64,
+    blocks: impl Fn(Cell, usize) -> bool,
+    counts: impl Fn(Cell, usize) -> bool,
+) -> (f64, CellsRead) {
+    let nothing = (0.0, CellsRead::of(p));
     if !frame.contains(p) || range_m.is_nan() || range_m <= 0.0 {
-        return 0.0;
+        return nothing;
     }
     let pi = p.y as usize * frame.width as usize + p.x as usize;
     if blocks(p, pi) {
-        return 0.0;
+        return nothing;
     }
     let r_cells = range_m / frame.resolution_m;
     if !r_cells.is_finite() || r_cells > MAX_FAN_CELLS {
-        return 0.0;
+        return nothing;
     }
-    let count = FAN.with(|cache| match cache.try_borrow_mut() {
+    let (count, read) = FAN.with(|cache| match cache.try_borrow_mut() {
         Ok(mut cache) => {
             if cache.as_ref().is_none_or(|f| f.r_cells != r_cells) {
                 *cache = Some(RayFan::new(r_cells));
@@ -59,7 +96,7 @@ pub fn visible_area_indexed(
         // Only reachable if a predicate itself computes a visible area.
         Err(_) => RayFan::new(r_cells).count(frame, p, &blocks, &counts),
     });
-    count as f64 * frame.cell_area_m2()
+    (count as f64 * frame.cell_area_m2(), read)
 }
 
 /// Ranges beyond this many cells are refused (the fan's offsets are `i16`).
@@ -200,14 +237,15 @@ impl RayFan {
         }
     }
 
-    /// Cells visible from `p` (not blocked, in range) that satisfy `counts`, each once.
+    /// Cells visible from `p` (not blocked, in range) that satisfy `counts`, each once; and
+    /// where the cells read lie.
     fn count(
         &mut self,
         frame: &GridFrame,
         p: Cell,
         blocks: &impl Fn(Cell, usize) -> bool,
         counts: &impl Fn(Cell, usize) -> bool,
-    ) -> usize {
+    ) -> (usize, CellsRead) {
         self.seen.fill(0);
         let w = frame.width as i32;
         if self.offsets_width != Some(frame.width) {
@@ -224,6 +262,17 @@ impl RayFan {
         // (The slices held apart, so that the stores to `seen` cannot make the compiler read
         // the vectors' addresses and lengths again from `self` for every node.)
         let (nodes, cells, seen) = (&self.nodes[..], &self.cells[..], &mut self.seen[..]);
+        // The cells read lie on the rays walked, each from the centre to where it stopped: a
+        // blocking cell (or one outside the frame), or a leaf. A ray's cells lie in the box of
+        // its first and last (the walk is monotonic on both axes), so the boxes of the centre
+        // and these ends, one per quadrant of the end, hold them all; they are kept at the ends
+        // only, not at every node.
+        let mut boxes = [((0i16, 0i16), (0i16, 0i16)); 4];
+        let mut end_at = |(dx, dy): (i16, i16)| {
+            let (lo, hi) = &mut boxes[(dx < 0) as usize | ((dy < 0) as usize) << 1];
+            *lo = (lo.0.min(dx), lo.1.min(dy));
+            *hi = (hi.0.max(dx), hi.1.max(dy));
+        };
         let mut count = 0usize;
         let mut i = 0usize;
         while i < nodes.len() {
@@ -235,12 +284,17 @@ impl RayFan {
             } else if frame.contains(c) {
                 c.y as usize * w as usize + c.x as usize
             } else {
+                end_at(cells[i]);
                 i = n.end as usize;
                 continue;
             };
             if blocks(c, idx) {
+                end_at(cells[i]);
                 i = n.end as usize;
                 continue;
+            }
+            if n.end as usize == i + 1 {
+                end_at(cells[i]);
             }
             if n.seen & IN_RANGE != 0 {
                 // Without branches: whether a cell was seen by an earlier ray, and whether it
@@ -255,16 +309,28 @@ impl RayFan {
             }
             i += 1;
         }
-        count
+        let at = |(dx, dy): (i16, i16)| Cell::new(p.x + dx as i32, p.y + dy as i32);
+        let read = CellsRead {
+            boxes: boxes.map(|(lo, hi)| CellBox {
+                min: at(lo),
+                max: at(hi),
+            }),
+        };
+        (count, read)
     }
 }
 
 /// The baseline `I(p)`: unknown area visible from `p` through the map, unknown treated as free,
 /// occupied cells blocking.
 pub fn information_gain(grid: &OccupancyGrid, p: Cell, range_m: f64) -> f64 {
+    information_gain_read(grid, p, range_m).0
+}
+
+/// [`information_gain`] and where the cells it read lie ([`CellsRead`]).
+pub fn information_gain_read(grid: &OccupancyGrid, p: Cell, range_m: f64) -> (f64, CellsRead) {
     // (The cells as a slice: the predicates then read them without going through `grid`.)
     let data = &grid.data[..];
-    visible_area_indexed(
+    visible_area_read(
         &grid.frame,
         p,
         range_m,
@@ -341,6 +407,70 @@ mod tests {
                 |c| g.is(c, Occupancy::Unknown),
             );
             prop_assert_eq!(fast, slow);
+            // Every cell whose predicates were asked lies in a box of the cells read, and each
+            // box holds `p`.
+            let asked = std::cell::RefCell::new(std::collections::BTreeSet::new());
+            let (area, read) = visible_area_read(
+                &g.frame,
+                p,
+                range,
+                |c, _| {
+                    asked.borrow_mut().insert(c);
+                    g.is(c, Occupancy::Occupied)
+                },
+                |c, _| {
+                    asked.borrow_mut().insert(c);
+                    g.is(c, Occupancy::Unknown)
+                },
+            );
+            prop_assert_eq!(area, fast);
+            let holds = |b: &CellBox, c: Cell| {
+                (b.min.x..=b.max.x).contains(&c.x) && (b.min.y..=b.max.y).contains(&c.y)
+            };
+            for c in asked.into_inner() {
+                prop_assert!(read.boxes.iter().any(|b| holds(b, c)), "{:?} not in {:?}", c, read);
+            }
+            prop_assert!(read.boxes.iter().all(|b| holds(b, p)));
+        }
+    }
+
+    #[test]
+    fn the_cells_read_from_inside_a_room_are_the_room() {
+        // A closed room 8 x 5 cells inside (x 2..=9, y 2..=6) in a 30 x 20 unknown map; from
+        // any cell of it, the cells read are the room and its walls, whatever the range.
+        let frame = GridFrame::new(crate::geom::Vec2::zeros(), 0.1, 30, 20);
+        let mut g = OccupancyGrid::filled(frame, Occupancy::Unknown);
+        for y in 1..=7 {
+            for x in 1..=10 {
+                let wall = x == 1 || x == 10 || y == 1 || y == 7;
+                g.set(
+                    Cell::new(x, y),
+                    if wall {
+                        Occupancy::Occupied
+                    } else {
+                        Occupancy::Free
+                    },
+                );
+            }
+        }
+        let walls = CellBox {
+            min: Cell::new(1, 1),
+            max: Cell::new(10, 7),
+        };
+        for p in [Cell::new(2, 2), Cell::new(5, 4), Cell::new(9, 6)] {
+            for range in [0.3, 1.0, 3.0] {
+                let (area, read) = information_gain_read(&g, p, range);
+                assert_eq!(area, 0.0);
+                for b in read.boxes {
+                    assert!(
+                        b.min.x >= walls.min.x
+                            && b.min.y >= walls.min.y
+                            && b.max.x <= walls.max.x
+                            && b.max.y <= walls.max.y,
+                        "{p:?} {range}: {b:?}"
+                    );
+                }
+            }
         }
     }
 

@@ -15,7 +15,7 @@
 //! the explorer orders candidates by this gain and keeps the paper's `I(p)` for early stopping.
 
 use crate::frontier::detect::frontier_row;
-use crate::gain::visible_area_indexed;
+use crate::gain::{visible_area_read, CellsRead};
 use crate::grid::{Bitmap, Cell, Occupancy, OccupancyGrid};
 use crate::layout::morphology::BitRows;
 use crate::layout::{Layout, RoomLabel};
@@ -392,12 +392,22 @@ pub fn layout_information_gain(
     p: Cell,
     range_m: f64,
 ) -> f64 {
+    layout_information_gain_read(grid, raster, p, range_m).0
+}
+
+/// [`layout_information_gain`] and where the map cells it read lie ([`CellsRead`]).
+pub fn layout_information_gain_read(
+    grid: &OccupancyGrid,
+    raster: &LayoutRaster,
+    p: Cell,
+    range_m: f64,
+) -> (f64, CellsRead) {
     if raster.uses_baseline(p) {
-        return crate::gain::information_gain(grid, p, range_m);
+        return crate::gain::information_gain_read(grid, p, range_m);
     }
     // (The cells as a slice: the predicates then read them without going through `grid`.)
     let data = &grid.data[..];
-    visible_area_indexed(
+    visible_area_read(
         &grid.frame,
         p,
         range_m,
@@ -458,9 +468,19 @@ pub fn gap_closed_information_gain(
     p: Cell,
     range_m: f64,
 ) -> f64 {
+    gap_closed_information_gain_read(grid, raster, p, range_m).0
+}
+
+/// [`gap_closed_information_gain`] and where the map cells it read lie ([`CellsRead`]).
+pub fn gap_closed_information_gain_read(
+    grid: &OccupancyGrid,
+    raster: &LayoutRaster,
+    p: Cell,
+    range_m: f64,
+) -> (f64, CellsRead) {
     // (The cells as a slice: the predicates then read them without going through `grid`.)
     let data = &grid.data[..];
-    visible_area_indexed(
+    visible_area_read(
         &grid.frame,
         p,
         range_m,

@@ -88,11 +88,11 @@ impl Explorer<'_> {
                     }
                     (Some(l), true) => {
                         self.gains.gain(GainKind::GapClosed, c, range_m, now, || {
-                            gap_closed_information_gain(grid, &l.raster, c, range_m)
+                            gap_closed_information_gain_read(grid, &l.raster, c, range_m)
                         })
                     }
                     _ => self.gains.gain(GainKind::Plain, c, range_m, now, || {
-                        information_gain(grid, c, range_m)
+                        information_gain_read(grid, c, range_m)
                     }),
                 }
             } else {
@@ -759,11 +759,11 @@ pub(super) fn layout_gain_cached(
 ) -> f64 {
     if raster.uses_baseline(p) {
         gains.gain(GainKind::Plain, p, range_m, now, || {
-            information_gain(grid, p, range_m)
+            information_gain_read(grid, p, range_m)
         })
     } else {
         gains.gain(GainKind::Rooms, p, range_m, now, || {
-            layout_information_gain(grid, raster, p, range_m)
+            layout_information_gain_read(grid, raster, p, range_m)
         })
     }
 }

@@ -74,11 +74,13 @@ use crate::frontier::blacklist::Blacklist;
 use crate::frontier::detect::{
     frontiers_where, is_frontier_cell, Frontier, FrontierConfig, FrontierTracker,
 };
-use crate::gain::information_gain;
+use crate::gain::{information_gain, information_gain_read};
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
 use crate::layout::reconstruct_layout;
-use crate::layout_gain::{gap_closed_information_gain, layout_information_gain, LayoutRaster};
+use crate::layout_gain::{
+    gap_closed_information_gain_read, layout_information_gain_read, LayoutRaster,
+};
 use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::ray::{grid_from_world, walk_segment};
