@@ -526,6 +526,60 @@ fn planning_grids_kept_between_levels_are_those_of_the_whole_map() {
     assert!(checks.iter().all(|&n| n > 0), "{checks:?}");
 }
 
+/// The cells the robot travels while another planning level is in use are marked in the kept
+/// grids of `Planning::Travelled`: planning the way it came again uses them. (The travelled
+/// cells matter where the map shows free cells the robot's body does not fit at, here a strip
+/// along a wall.)
+#[test]
+fn cells_travelled_while_the_travelled_grids_are_kept_are_planned_with() {
+    use super::navigation::{Planning, PLANNING_CHECKS};
+    let w = wall;
+    let solids = vec![
+        w((0.0, 0.0), (6.0, 0.0)),
+        w((6.0, 0.0), (6.0, 4.0)),
+        w((6.0, 4.0), (0.0, 4.0)),
+        w((0.0, 4.0), (0.0, 0.0)),
+    ];
+    let start = Pose::new(1.5, 2.0, -0.5);
+    let b = walled("strip", (-0.1, -0.1), (6.1, 4.1), solids, start);
+    let cfg = ExploreConfig {
+        localization: Localization::GroundTruth,
+        ..ExploreConfig::default()
+    };
+    let hooks = Hooks {
+        layout_cost: None,
+        policy: None,
+    };
+    let mut e = new_explorer(&b, start, &cfg, 1, hooks);
+    e.sense();
+    PLANNING_CHECKS.with(|c| c.set(Some([0; 3])));
+    e.set_planning(Planning::Travelled);
+    e.plan(&[]);
+    let before = e.coarse.clone();
+    e.set_planning(Planning::WithMargin);
+    e.plan(&[]);
+    // Along the wall, 0.1-0.15 m from its face: free in the map, closer than the robot's
+    // radius (0.2 m).
+    let (from, to) = (Vec2::new(2.5, 0.22), Vec2::new(4.5, 0.22));
+    let frame = e.map.frame;
+    let free_unfit = (0..=40)
+        .map(|k| frame.cell_from_world(from + (to - from) * (k as f64 / 40.0)))
+        .filter(|&c| e.map.occupancy.is(c, Occupancy::Free) && !e.traversability().at(c))
+        .count();
+    assert!(free_unfit >= 20, "{free_unfit}");
+    e.mark_travelled(from, to);
+    e.plan(&[]);
+    e.set_planning(Planning::Travelled);
+    // (The plan checks its grids against those computed from the whole map.)
+    e.plan(&[]);
+    let checks = PLANNING_CHECKS.with(|c| c.replace(None)).expect("on");
+    assert_eq!(checks, [2, 0, 2]);
+    assert_ne!(
+        e.coarse, before,
+        "the travelled strip changed no planning cell"
+    );
+}
+
 /// The first scan of a robot in a large room facing +x: the boundary behind the 180-degree
 /// laser is one chain through the robot (the diameter), whose unknown side lies right behind
 /// it. Its middle is the robot's own cell and the centre of its unknown cells is 0.05 m away,
