@@ -101,8 +101,55 @@ pub fn nearest_traversable(trav: &Bitmap, c: Cell, radius_cells: i32) -> Option<
     nearest_by(c, radius_cells, |n| trav.get(n) == Some(&true))
 }
 
-/// [`nearest_traversable`] with any traversability test.
+/// [`nearest_traversable`] with any traversability test (which must be pure: the cells are
+/// tested nearest first, and the search stops at the first traversable one).
 pub fn nearest_by(c: Cell, radius_cells: i32, traversable: impl Fn(Cell) -> bool) -> Option<Cell> {
+    if !(0..=MAX_ORDERED_RADIUS).contains(&radius_cells) {
+        return nearest_by_scan(c, radius_cells, traversable);
+    }
+    let at = |&(dx, dy): &(i32, i32)| Cell::new(c.x + dx, c.y + dy);
+    NEAREST_FIRST.with(|tables| match tables.try_borrow_mut() {
+        Ok(mut tables) => {
+            let k = match tables.iter().position(|(r, _)| *r == radius_cells) {
+                Some(k) => k,
+                None => {
+                    tables.push((radius_cells, offsets_nearest_first(radius_cells)));
+                    tables.len() - 1
+                }
+            };
+            tables[k].1.iter().map(at).find(|&n| traversable(n))
+        }
+        // Only reachable if the test itself searches for a nearest cell.
+        Err(_) => nearest_by_scan(c, radius_cells, traversable),
+    })
+}
+
+/// Radii (cells) up to which [`nearest_by`] keeps the offsets in the order it tests them.
+const MAX_ORDERED_RADIUS: i32 = 64;
+
+/// Per radius used, the offsets within it nearest first (see [`offsets_nearest_first`]).
+type NearestFirst = Vec<(i32, Vec<(i32, i32)>)>;
+
+thread_local! {
+    static NEAREST_FIRST: std::cell::RefCell<NearestFirst> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The offsets within `radius_cells` (Euclidean), nearest first, ties in row-major order: the
+/// first traversable one is the cell [`nearest_by_scan`] finds.
+fn offsets_nearest_first(radius_cells: i32) -> Vec<(i32, i32)> {
+    let r = radius_cells;
+    let mut offsets: Vec<(i32, i32)> = (-r..=r)
+        .flat_map(|dy| (-r..=r).map(move |dx| (dx, dy)))
+        .filter(|&(dx, dy)| dx * dx + dy * dy <= r * r)
+        .collect();
+    offsets.sort_by_key(|&(dx, dy)| (dx * dx + dy * dy, dy, dx));
+    offsets
+}
+
+/// [`nearest_by`] by testing every cell of the box around `c`, in row-major order, keeping the
+/// first of the least distance.
+fn nearest_by_scan(c: Cell, radius_cells: i32, traversable: impl Fn(Cell) -> bool) -> Option<Cell> {
     let mut best: Option<(i32, Cell)> = None;
     for dy in -radius_cells..=radius_cells {
         for dx in -radius_cells..=radius_cells {
@@ -147,5 +194,34 @@ mod tests {
         assert_eq!((d.width(), d.height()), (4, 2));
         // Coarse row 1 covers fine rows 2-3: free at fine x = 1..=7, so coarse x = 1, 2, 3.
         assert_eq!(d.count_true(), 3);
+    }
+
+    proptest::proptest! {
+        /// Nearest first is the scan of the whole box: the same cell (ties in row-major order),
+        /// or none; on sparse and dense grids, from cells inside, on the edge of and outside the
+        /// grid, with radii below and above the table's limit.
+        #[test]
+        fn nearest_first_is_the_scan(
+            bits in proptest::collection::vec(proptest::bool::weighted(0.08), 30 * 20),
+            x in -5i32..35, y in -5i32..25, r in -1i32..16, wide in proptest::bool::ANY,
+        ) {
+            let r = if wide { r + MAX_ORDERED_RADIUS - 8 } else { r };
+            let test = |n: Cell| {
+                (0..30).contains(&n.x) && (0..20).contains(&n.y) && bits[(n.y * 30 + n.x) as usize]
+            };
+            let c = Cell::new(x, y);
+            proptest::prop_assert_eq!(nearest_by(c, r, test), nearest_by_scan(c, r, test));
+        }
+    }
+
+    #[test]
+    fn ties_go_to_the_first_in_row_major_order() {
+        // Four cells at distance 2 (up, left, right, down): the lowest row's, then the left.
+        let on = [(5, 3), (3, 5), (7, 5), (5, 7)];
+        let test = |n: Cell| on.contains(&(n.x, n.y));
+        assert_eq!(nearest_by(Cell::new(5, 5), 3, test), Some(Cell::new(5, 3)));
+        let test = |n: Cell| on[1..].contains(&(n.x, n.y));
+        assert_eq!(nearest_by(Cell::new(5, 5), 3, test), Some(Cell::new(3, 5)));
+        assert_eq!(nearest_by(Cell::new(5, 5), 1, test), None);
     }
 }
