@@ -180,14 +180,23 @@ mod tests {
     use super::*;
     use crate::geom::Vec2;
 
-    /// Cells read anywhere near the tests' candidates.
-    fn whole() -> CellsRead {
-        CellsRead {
-            boxes: [CellBox {
-                min: Cell::new(-1000, -1000),
-                max: Cell::new(1000, 1000),
-            }; 4],
-        }
+    /// The gain `value` of `p`, unless one is kept, as computed by a fan whose cells read are
+    /// anywhere near (any change within range makes it stale).
+    fn near(
+        cache: &mut GainCache,
+        kind: GainKind,
+        p: Cell,
+        range_m: f64,
+        now: u64,
+        value: f64,
+    ) -> f64 {
+        let whole = CellBox {
+            min: Cell::new(-1000, -1000),
+            max: Cell::new(1000, 1000),
+        };
+        cache.gain(kind, p, range_m, now, || {
+            (value, CellsRead { boxes: [whole; 4] })
+        })
     }
 
     #[test]
@@ -195,30 +204,15 @@ mod tests {
         let frame = GridFrame::new(Vec2::zeros(), 0.05, 400, 100);
         let mut cache = GainCache::new(frame);
         let p = Cell::new(20, 20);
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 1.0, 1, || (5.0, whole())),
-            5.0
-        );
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 1.0, 2, || (7.0, whole())),
-            5.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 1.0, 1, 5.0), 5.0);
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 1.0, 2, 7.0), 5.0);
         // A change far away (x = 300 cells = 15 m) keeps the cached value.
         cache.touch(frame.index(Cell::new(300, 20)).unwrap() as u32, 3);
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 1.0, 3, || (7.0, whole())),
-            5.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 1.0, 3, 7.0), 5.0);
         // A change within range invalidates it.
         cache.touch(frame.index(Cell::new(30, 25)).unwrap() as u32, 4);
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 1.0, 4, || (7.0, whole())),
-            7.0
-        );
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 1.0, 5, || (9.0, whole())),
-            7.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 1.0, 4, 7.0), 7.0);
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 1.0, 5, 9.0), 7.0);
     }
 
     #[test]
@@ -227,27 +221,18 @@ mod tests {
         let mut cache = GainCache::new(frame);
         // Range 2 m = 40 cells (42 with the margin) around (8, 8).
         let p = Cell::new(8, 8);
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 2.0, 1, || (5.0, whole())),
-            5.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 2.0, 1, 5.0), 5.0);
         // (49, 49) is 58 cells away, in the block (48..56)^2 that a square around the range
         // covers but the range does not reach.
         cache.touch(frame.index(Cell::new(49, 49)).unwrap() as u32, 2);
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 2.0, 2, || (7.0, whole())),
-            5.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 2.0, 2, 7.0), 5.0);
         // (48, 8), in the same row of blocks, is 40 cells away: within range.
         cache.touch(frame.index(Cell::new(48, 8)).unwrap() as u32, 3);
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 2.0, 3, || (7.0, whole())),
-            7.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 2.0, 3, 7.0), 7.0);
     }
 
     #[test]
-    fn a_change_within_range_outside_the_cells_read_keeps_the_gain() {
+    fn boxes_outside_the_frame_are_read_as_far_as_it_goes() {
         // Boxes reaching outside the frame, or lying wholly outside it, are read as far as the
         // frame goes (none of the frame, no block at all).
         for frame in [
@@ -269,6 +254,10 @@ mod tests {
                 expected
             );
         }
+    }
+
+    #[test]
+    fn a_change_within_range_outside_the_cells_read_keeps_the_gain() {
         let frame = GridFrame::new(Vec2::zeros(), 0.05, 200, 200);
         let mut cache = GainCache::new(frame);
         // Range 2 m = 40 cells around (100, 100); the gain read a room east of it (the cells
@@ -309,38 +298,17 @@ mod tests {
             .into_iter()
             .enumerate()
         {
-            assert_eq!(
-                cache.gain(kind, p, 1.0, 1, || (k as f64, whole())),
-                k as f64
-            );
+            assert_eq!(near(&mut cache, kind, p, 1.0, 1, k as f64), k as f64);
         }
         // Kinds do not share values.
-        assert_eq!(
-            cache.gain(GainKind::Rooms, p, 1.0, 2, || (9.0, whole())),
-            2.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Rooms, p, 1.0, 2, 9.0), 2.0);
         cache.clear_layout_gains();
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 1.0, 3, || (9.0, whole())),
-            0.0
-        );
-        assert_eq!(
-            cache.gain(GainKind::GapClosed, p, 1.0, 3, || (9.0, whole())),
-            9.0
-        );
-        assert_eq!(
-            cache.gain(GainKind::Rooms, p, 1.0, 3, || (8.0, whole())),
-            8.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 1.0, 3, 9.0), 0.0);
+        assert_eq!(near(&mut cache, GainKind::GapClosed, p, 1.0, 3, 9.0), 9.0);
+        assert_eq!(near(&mut cache, GainKind::Rooms, p, 1.0, 3, 8.0), 8.0);
         // A change within range invalidates every kind.
         cache.touch(frame.index(Cell::new(52, 50)).unwrap() as u32, 4);
-        assert_eq!(
-            cache.gain(GainKind::Plain, p, 1.0, 4, || (7.0, whole())),
-            7.0
-        );
-        assert_eq!(
-            cache.gain(GainKind::Rooms, p, 1.0, 4, || (6.0, whole())),
-            6.0
-        );
+        assert_eq!(near(&mut cache, GainKind::Plain, p, 1.0, 4, 7.0), 7.0);
+        assert_eq!(near(&mut cache, GainKind::Rooms, p, 1.0, 4, 6.0), 6.0);
     }
 }

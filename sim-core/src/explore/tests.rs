@@ -8,6 +8,16 @@ fn wall(a: (f64, f64), b: (f64, f64)) -> Polygon {
     Polygon::thick_segment(Vec2::new(a.0, a.1), Vec2::new(b.0, b.1), 0.2)
 }
 
+/// The four walls of the rectangle from the origin to `(x, y)`.
+fn outer_walls(x: f64, y: f64) -> Vec<Polygon> {
+    vec![
+        wall((0.0, 0.0), (x, 0.0)),
+        wall((x, 0.0), (x, y)),
+        wall((x, y), (0.0, y)),
+        wall((0.0, y), (0.0, 0.0)),
+    ]
+}
+
 /// A building of `solids` within the rectangle from `lo` to `hi`, without rooms or doors,
 /// started at `start`.
 fn walled(
@@ -34,12 +44,7 @@ pub(crate) fn corridor_building(n: usize) -> Building {
     let len = 5.0 * n as f64;
     let h = 4.0 + 2.0 + 4.0;
     let w = wall;
-    let mut solids = vec![
-        w((0.0, 0.0), (len, 0.0)),
-        w((len, 0.0), (len, h)),
-        w((len, h), (0.0, h)),
-        w((0.0, h), (0.0, 0.0)),
-    ];
+    let mut solids = outer_walls(len, h);
     for side in [4.0, 6.0] {
         for i in 0..n {
             let x0 = 5.0 * i as f64;
@@ -456,15 +461,12 @@ fn goals_given_up_get_another_chance_before_the_run_ends() {
 #[test]
 fn a_room_seen_through_a_slit_ends_with_frontiers_unreachable() {
     let w = wall;
-    let solids = vec![
-        w((0.0, 0.0), (12.0, 0.0)),
-        w((12.0, 0.0), (12.0, 6.0)),
-        w((12.0, 6.0), (0.0, 6.0)),
-        w((0.0, 6.0), (0.0, 0.0)),
+    let mut solids = outer_walls(12.0, 6.0);
+    solids.extend([
         // The wall between the rooms, with a 0.25 m slit (the robot's diameter is larger).
         w((6.0, 0.0), (6.0, 2.875)),
         w((6.0, 3.125 + 0.2), (6.0, 6.0)),
-    ];
+    ]);
     let b = walled(
         "slit",
         (-0.1, -0.1),
@@ -503,16 +505,13 @@ fn planning_grids_kept_between_levels_are_those_of_the_whole_map() {
     // without the margin to leave the first room, maps the second with the margin again, tries
     // every level for the frontiers beyond the slit, and the run ends asking whether it could
     // leave the way it came.
-    let solids = vec![
-        w((0.0, 0.0), (15.0, 0.0)),
-        w((15.0, 0.0), (15.0, 6.0)),
-        w((15.0, 6.0), (0.0, 6.0)),
-        w((0.0, 6.0), (0.0, 0.0)),
+    let mut solids = outer_walls(15.0, 6.0);
+    solids.extend([
         w((3.0, 0.0), (3.0, 2.665)),
         w((3.0, 3.335), (3.0, 6.0)),
         w((9.0, 0.0), (9.0, 2.875)),
         w((9.0, 3.125 + 0.2), (9.0, 6.0)),
-    ];
+    ]);
     let start = Pose::new(1.5, 3.0, 0.0);
     let b = walled("door-and-slit", (-0.1, -0.1), (15.1, 6.1), solids, start);
     let cfg = ExploreConfig {
@@ -533,13 +532,7 @@ fn planning_grids_kept_between_levels_are_those_of_the_whole_map() {
 #[test]
 fn cells_travelled_while_the_travelled_grids_are_kept_are_planned_with() {
     use super::navigation::{Planning, PLANNING_CHECKS};
-    let w = wall;
-    let solids = vec![
-        w((0.0, 0.0), (6.0, 0.0)),
-        w((6.0, 0.0), (6.0, 4.0)),
-        w((6.0, 4.0), (0.0, 4.0)),
-        w((0.0, 4.0), (0.0, 0.0)),
-    ];
+    let solids = outer_walls(6.0, 4.0);
     let start = Pose::new(1.5, 2.0, -0.5);
     let b = walled("strip", (-0.1, -0.1), (6.1, 4.1), solids, start);
     let cfg = ExploreConfig {
