@@ -26,19 +26,7 @@ pub fn visible_area(
     blocks: impl Fn(Cell) -> bool,
     counts: impl Fn(Cell) -> bool,
 ) -> f64 {
-    visible_area_indexed(frame, p, range_m, |c, _| blocks(c), |c, _| counts(c))
-}
-
-/// [`visible_area`] with predicates that are also given the cell's row-major index in `frame`
-/// (so that they can read a grid without a bounds test on the cell).
-pub fn visible_area_indexed(
-    frame: &GridFrame,
-    p: Cell,
-    range_m: f64,
-    blocks: impl Fn(Cell, usize) -> bool,
-    counts: impl Fn(Cell, usize) -> bool,
-) -> f64 {
-    visible_area_read(frame, p, range_m, blocks, counts).0
+    visible_area_read(frame, p, range_m, |c, _| blocks(c), |c, _| counts(c)).0
 }
 
 /// A box of cells, corners included (it may reach outside the frame).
@@ -65,7 +53,9 @@ impl CellsRead {
     }
 }
 
-/// [`visible_area_indexed`] and where the cells it read lie ([`CellsRead`]).
+/// [`visible_area`], with predicates that are also given the cell's row-major index in `frame`
+/// (so that they can read a grid without a bounds test on the cell), and where the cells it
+/// read lie ([`CellsRead`]).
 pub fn visible_area_read(
     frame: &GridFrame,
     p: Cell,
@@ -284,17 +274,17 @@ impl RayFan {
             } else if frame.contains(c) {
                 c.y as usize * w as usize + c.x as usize
             } else {
-                end_at(cells[i]);
+                end_at((dx, dy));
                 i = n.end as usize;
                 continue;
             };
             if blocks(c, idx) {
-                end_at(cells[i]);
+                end_at((dx, dy));
                 i = n.end as usize;
                 continue;
             }
             if n.end as usize == i + 1 {
-                end_at(cells[i]);
+                end_at((dx, dy));
             }
             if n.seen & IN_RANGE != 0 {
                 // Without branches: whether a cell was seen by an earlier ray, and whether it

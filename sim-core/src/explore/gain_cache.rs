@@ -149,20 +149,20 @@ impl GainCache {
         let r2 = r as i64 * r as i64;
         let group = BLOCK_CELLS * GROUP_BLOCKS;
         for gy in by0 / GROUP_BLOCKS..=by1 / GROUP_BLOCKS {
-            let ggy = gap(p.y, gy * group, group);
+            let gdy = gap(p.y, gy * group, group);
             for gx in bx0 / GROUP_BLOCKS..=bx1 / GROUP_BLOCKS {
-                let ggx = gap(p.x, gx * group, group);
+                let gdx = gap(p.x, gx * group, group);
                 if self.group_stamps[(gy * self.groups_w + gx) as usize] <= at
-                    || ggx * ggx + ggy * ggy > r2
+                    || gdx * gdx + gdy * gdy > r2
                 {
                     continue;
                 }
                 let (ys, xs) = (gy * GROUP_BLOCKS, gx * GROUP_BLOCKS);
                 for by in by0.max(ys)..=by1.min(ys + GROUP_BLOCKS - 1) {
-                    let gy = gap(p.y, by * BLOCK_CELLS, BLOCK_CELLS);
+                    let dy = gap(p.y, by * BLOCK_CELLS, BLOCK_CELLS);
                     for bx in bx0.max(xs)..=bx1.min(xs + GROUP_BLOCKS - 1) {
-                        let gx = gap(p.x, bx * BLOCK_CELLS, BLOCK_CELLS);
-                        if gx * gx + gy * gy <= r2
+                        let dx = gap(p.x, bx * BLOCK_CELLS, BLOCK_CELLS);
+                        if dx * dx + dy * dy <= r2
                             && self.stamps[(by * self.blocks_w + bx) as usize] > at
                         {
                             return true;
