@@ -366,6 +366,57 @@ impl LogOddsMap {
         Some(self.frame.origin_m + Vec2::new(s[0] as f64, s[1] as f64) * self.frame.resolution_m)
     }
 
+    /// The surface points ([`LogOddsMap::surface_point`]) of the 3 x 3 cells around `c0`, in row
+    /// order, into `out`; returns how many. Read in place when the nine cells lie in the frame
+    /// and in one block of the surface store (most cells), else cell by cell.
+    pub fn surface_points_around(&self, c0: Cell, out: &mut [Vec2; 9]) -> usize {
+        const B: i32 = SURFACE_BLOCK as i32;
+        let (w, h) = (self.frame.width as i32, self.frame.height as i32);
+        let (kx, ky) = (c0.x.rem_euclid(B), c0.y.rem_euclid(B));
+        let mut n = 0;
+        if c0.x >= 1
+            && c0.y >= 1
+            && c0.x + 1 < w
+            && c0.y + 1 < h
+            && (1..B - 1).contains(&kx)
+            && (1..B - 1).contains(&ky)
+        {
+            let (x, y) = (c0.x as usize, c0.y as usize);
+            let b = (y / SURFACE_BLOCK) * self.surface.blocks_w + x / SURFACE_BLOCK;
+            let slot = self.surface.slot[b] as usize;
+            if slot == 0 {
+                return 0; // (no hit in the block)
+            }
+            let block = &self.surface.blocks[(slot - 1) * SURFACE_BLOCK * SURFACE_BLOCK..];
+            let occupancy = &self.occupancy.data[..];
+            for dy in -1..=1 {
+                let row = (c0.y + dy) as usize * w as usize;
+                let k_row = (ky + dy) as usize * SURFACE_BLOCK;
+                for dx in -1..=1 {
+                    if occupancy[row + (c0.x + dx) as usize] != Occupancy::Occupied {
+                        continue;
+                    }
+                    let (s, hits) = block[k_row + (kx + dx) as usize];
+                    if hits > 0 {
+                        out[n] = self.frame.origin_m
+                            + Vec2::new(s[0] as f64, s[1] as f64) * self.frame.resolution_m;
+                        n += 1;
+                    }
+                }
+            }
+            return n;
+        }
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                if let Some(a) = self.surface_point(Cell::new(c0.x + dx, c0.y + dy)) {
+                    out[n] = a;
+                    n += 1;
+                }
+            }
+        }
+        n
+    }
+
     #[inline(always)]
     fn update_cell(
         &mut self,
@@ -464,6 +515,39 @@ mod tests {
 
     fn frame() -> GridFrame {
         GridFrame::new(Vec2::zeros(), 0.1, 40, 10)
+    }
+
+    #[test]
+    fn surface_points_around_a_cell_are_those_of_its_nine_cells() {
+        // A frame whose sides are not whole blocks; beams of many lengths from a few poses hit
+        // cells everywhere, some blocks never. Every cell, on the frame's edges, on the blocks'
+        // edges and off the frame, as each of its nine cells gives it.
+        let frame = GridFrame::new(Vec2::new(-0.31, 0.17), 0.1, 45, 37);
+        let mut m = LogOddsMap::new(frame);
+        for (k, (x, y)) in [(0.5, 0.6), (3.9, 3.3), (2.2, 1.4)].into_iter().enumerate() {
+            let scan = Scan {
+                angle_min_rad: 0.1 * k as f64,
+                angle_increment_rad: 0.37,
+                max_range_m: 6.0,
+                ranges_m: (0..40).map(|i| 0.4 + (i * 7 % 23) as f64 * 0.11).collect(),
+            };
+            m.insert_scan(&Pose::new(x, y, 0.0), &scan, &LogOddsConfig::default());
+        }
+        let mut seen = 0;
+        for y in -2..frame.height as i32 + 2 {
+            for x in -2..frame.width as i32 + 2 {
+                let c0 = Cell::new(x, y);
+                let want: Vec<Vec2> = (-1..=1)
+                    .flat_map(|dy| (-1..=1).map(move |dx| Cell::new(x + dx, y + dy)))
+                    .filter_map(|c| m.surface_point(c))
+                    .collect();
+                let mut out = [Vec2::zeros(); 9];
+                let n = m.surface_points_around(c0, &mut out);
+                assert_eq!(&out[..n], &want[..], "{c0:?}");
+                seen += n;
+            }
+        }
+        assert!(seen > 100, "{seen}");
     }
 
     #[test]

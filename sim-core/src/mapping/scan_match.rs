@@ -142,21 +142,23 @@ pub fn match_scan(
     if points.is_empty() || field.frame.is_empty() {
         return rejected(0.0, 0, false);
     }
-    let mut fits = SurfaceFits::new();
-    let (mut pose, mut iterations) =
-        gauss_newton(field, map, &mut fits, prior, prior, &points, cfg);
-    let (mut score, mut near) = evaluate(field, &pose, &points, cfg);
-    let mut searched = false;
-    if score < cfg.search_below_score {
-        searched = true;
-        let start = correlative_search(field, prior, &points, cfg);
-        let (p2, it2) = gauss_newton(field, map, &mut fits, prior, &start, &points, cfg);
-        iterations += it2;
-        let (s2, n2) = evaluate(field, &p2, &points, cfg);
-        if s2 > score {
-            (pose, score, near) = (p2, s2, n2);
+    let (pose, score, near, iterations, searched) = FITS.with_borrow_mut(|fits| {
+        fits.begin();
+        let (mut pose, mut iterations) = gauss_newton(field, map, fits, prior, prior, &points, cfg);
+        let (mut score, mut near) = evaluate(field, &pose, &points, cfg);
+        let mut searched = false;
+        if score < cfg.search_below_score {
+            searched = true;
+            let start = correlative_search(field, prior, &points, cfg);
+            let (p2, it2) = gauss_newton(field, map, fits, prior, &start, &points, cfg);
+            iterations += it2;
+            let (s2, n2) = evaluate(field, &p2, &points, cfg);
+            if s2 > score {
+                (pose, score, near) = (p2, s2, n2);
+            }
         }
-    }
+        (pose, score, near, iterations, searched)
+    });
     let d = prior.between(&pose);
     let ok = score >= cfg.min_score
         && near >= cfg.min_points
@@ -280,33 +282,18 @@ enum SurfaceFit {
     Nothing,
     /// The mean hit points lie on the line through `mean` of normal `nrm`.
     Line { mean: Vec2, nrm: Vec2 },
-    /// A corner or a single point: the nearest mean hit point, found for each point.
+    /// A corner or a single point: the nearest of the mean hit points (kept beside the fit)
+    /// is found for each point.
     Points,
 }
 
 impl SurfaceFit {
-    /// The mean hit points around `c0` (3 x 3), in row order, and their number.
-    fn points(map: &LogOddsMap, c0: Cell) -> ([Vec2; 9], usize) {
-        let mut pts = [Vec2::zeros(); 9];
-        let mut n = 0;
-        for dy in -1..=1 {
-            for dx in -1..=1 {
-                if let Some(a) = map.surface_point(Cell::new(c0.x + dx, c0.y + dy)) {
-                    pts[n] = a;
-                    n += 1;
-                }
-            }
-        }
-        (pts, n)
-    }
-
-    fn of(map: &LogOddsMap, c0: Cell) -> Self {
-        let (pts, n) = Self::points(map, c0);
+    /// The fit of the mean hit points `pts` around a cell (in row order).
+    fn of_points(pts: &[Vec2], res: f64) -> Self {
+        let n = pts.len();
         if n == 0 {
             return SurfaceFit::Nothing;
         }
-        let pts = &pts[..n];
-        let res = map.frame.resolution_m;
         if n >= 2 {
             let mean = pts.iter().fold(Vec2::zeros(), |s, p| s + p) / n as f64;
             let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
@@ -337,8 +324,8 @@ impl SurfaceFit {
         SurfaceFit::Points
     }
 
-    /// The residual of `q`, in the cell `c0` the fit was made for.
-    fn residual(&self, map: &LogOddsMap, c0: Cell, q: Vec2) -> Option<(f64, Vec2)> {
+    /// The residual of `q`, with `pts` the mean hit points the fit was made of.
+    fn residual(&self, pts: &[Vec2], q: Vec2) -> Option<(f64, Vec2)> {
         match *self {
             SurfaceFit::Nothing => None,
             SurfaceFit::Line { mean, nrm } => {
@@ -346,8 +333,7 @@ impl SurfaceFit {
                 Some(if r < 0.0 { (-r, -nrm) } else { (r, nrm) })
             }
             SurfaceFit::Points => {
-                let (pts, n) = Self::points(map, c0);
-                let a = pts[..n]
+                let a = pts
                     .iter()
                     .copied()
                     .min_by(|a, b| (a - q).norm_squared().total_cmp(&(b - q).norm_squared()))?;
@@ -363,15 +349,35 @@ impl SurfaceFit {
     }
 }
 
+/// A slot of [`SurfaceFits`]: the cell, the match it was fitted in, its fit, and the mean hit
+/// points around it (the first `n`).
+#[derive(Debug, Clone, Copy)]
+struct FitSlot {
+    cell: Cell,
+    generation: u64,
+    fit: SurfaceFit,
+    n: u8,
+    pts: [Vec2; 9],
+}
+
 /// The surface fits of the cells a scan's points fall in, kept while the scan is matched (the
 /// map does not change meanwhile; a scan's points fall in the same cells from one step of the
 /// optimisation to the next). Direct-mapped: a cell whose slot another holds is fitted again.
+/// The slots are kept from one match to the next (the thread's [`FITS`]) but serve only the
+/// match they were filled in (its `generation`): nothing needs clearing.
 struct SurfaceFits {
-    slots: Vec<(Cell, SurfaceFit)>,
+    generation: u64,
+    slots: Vec<FitSlot>,
 }
 
 /// Slots of [`SurfaceFits`] (a power of two).
 const SURFACE_FIT_SLOTS: usize = 1024;
+
+thread_local! {
+    /// The slots of the thread's matches.
+    static FITS: std::cell::RefCell<SurfaceFits> =
+        std::cell::RefCell::new(SurfaceFits::new());
+}
 
 impl SurfaceFits {
     fn new() -> Self {
@@ -380,11 +386,23 @@ impl SurfaceFits {
 
     /// With `n` slots (a power of two).
     fn with_slots(n: usize) -> Self {
+        let empty = FitSlot {
+            cell: Cell::new(i32::MIN, i32::MIN),
+            generation: 0,
+            fit: SurfaceFit::Nothing,
+            n: 0,
+            pts: [Vec2::zeros(); 9],
+        };
         Self {
-            // (The fit of a cell far off any frame: no point, and any point's cell it stands for
-            // at first has none either.)
-            slots: vec![(Cell::new(i32::MIN, i32::MIN), SurfaceFit::Nothing); n],
+            // (No slot serves generation 0's match: `begin` is called before any.)
+            generation: 0,
+            slots: vec![empty; n],
         }
+    }
+
+    /// Starts a match (the map may have changed since the last): every slot is stale.
+    fn begin(&mut self) {
+        self.generation += 1;
     }
 
     /// The residual of `q` and its gradient; `None` when no occupied cell with hits is next to
@@ -395,10 +413,14 @@ impl SurfaceFits {
         let k = (c0.x as u32).wrapping_mul(0x9e37_79b9) ^ (c0.y as u32).wrapping_mul(0x85eb_ca6b);
         let mask = self.slots.len() - 1;
         let slot = &mut self.slots[(k >> 16) as usize & mask];
-        if slot.0 != c0 {
-            *slot = (c0, SurfaceFit::of(map, c0));
+        if slot.cell != c0 || slot.generation != self.generation {
+            let n = map.surface_points_around(c0, &mut slot.pts);
+            slot.cell = c0;
+            slot.generation = self.generation;
+            slot.n = n as u8;
+            slot.fit = SurfaceFit::of_points(&slot.pts[..n], map.frame.resolution_m);
         }
-        slot.1.residual(map, c0, q)
+        slot.fit.residual(&slot.pts[..slot.n as usize], q)
     }
 }
 
@@ -619,46 +641,53 @@ mod tests {
     fn kept_surface_fits_give_the_residuals_computed_afresh() {
         // A mapped room (walls, a box's corners, a partial wall's end); points near its walls and
         // all over it and off the frame, each cell asked many times (more cells than slots: slots
-        // are shared).
+        // are shared). Then more scans change the map: a new match's fits are made afresh.
         let world = room();
         let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
-        let poses: Vec<Pose> = (0..6)
+        let poses: Vec<Pose> = (0..9)
             .map(|k| {
                 Pose::new(
-                    1.5 + 0.9 * k as f64,
+                    1.5 + 0.6 * k as f64,
                     1.0 + 0.7 * (k % 4) as f64,
                     0.9 * k as f64,
                 )
             })
             .collect();
-        let (_, map) = build_map(&world, frame, &poses);
         // Many slots (as in a match) and few (cells evicting one another all the time).
         let mut many = SurfaceFits::new();
         let mut few = SurfaceFits::with_slots(4);
         let (mut near_line, mut near_points) = (0, 0);
-        for round in 0..3 {
-            for k in 0..20_000 {
-                let u = ((k * 7919 + round * 104_729) % 20_011) as f64 / 20_011.0;
-                let v = ((k * 6271 + round * 3) % 19_997) as f64 / 19_997.0;
-                let b = world.0[k % world.0.len()];
-                let q = if k % 4 == 0 {
-                    Vec2::new(-1.5 + 11.0 * u, -1.5 + 9.0 * v)
-                } else {
-                    Vec2::new(
-                        b[0] - 0.15 + u * (b[2] - b[0] + 0.3),
-                        b[1] - 0.15 + v * (b[3] - b[1] + 0.3),
-                    )
-                };
-                let bits = |v: Option<(f64, Vec2)>| {
-                    v.map(|(r, g)| (r.to_bits(), g.x.to_bits(), g.y.to_bits()))
-                };
-                let want = bits(surface_residual_reference(&map, q));
-                assert_eq!(bits(many.residual(&map, q)), want, "{q:?}");
-                assert_eq!(bits(few.residual(&map, q)), want, "{q:?}");
-                match SurfaceFit::of(&map, map.frame.cell_from_world(q)) {
-                    SurfaceFit::Line { .. } => near_line += 1,
-                    SurfaceFit::Points => near_points += 1,
-                    SurfaceFit::Nothing => {}
+        for (m, mapped) in [3, 6, 9].into_iter().enumerate() {
+            let (_, map) = build_map(&world, frame, &poses[..mapped]);
+            many.begin();
+            few.begin();
+            for round in 0..3 {
+                for k in 0..10_000 {
+                    let u = ((k * 7919 + round * 104_729 + m) % 20_011) as f64 / 20_011.0;
+                    let v = ((k * 6271 + round * 3 + m) % 19_997) as f64 / 19_997.0;
+                    let b = world.0[k % world.0.len()];
+                    let q = if k % 4 == 0 {
+                        Vec2::new(-1.5 + 11.0 * u, -1.5 + 9.0 * v)
+                    } else {
+                        Vec2::new(
+                            b[0] - 0.15 + u * (b[2] - b[0] + 0.3),
+                            b[1] - 0.15 + v * (b[3] - b[1] + 0.3),
+                        )
+                    };
+                    let bits = |v: Option<(f64, Vec2)>| {
+                        v.map(|(r, g)| (r.to_bits(), g.x.to_bits(), g.y.to_bits()))
+                    };
+                    let want = bits(surface_residual_reference(&map, q));
+                    assert_eq!(bits(many.residual(&map, q)), want, "{mapped} scans, {q:?}");
+                    assert_eq!(bits(few.residual(&map, q)), want, "{mapped} scans, {q:?}");
+                    let mut pts = [Vec2::zeros(); 9];
+                    let c0 = map.frame.cell_from_world(q);
+                    let n = map.surface_points_around(c0, &mut pts);
+                    match SurfaceFit::of_points(&pts[..n], map.frame.resolution_m) {
+                        SurfaceFit::Line { .. } => near_line += 1,
+                        SurfaceFit::Points => near_points += 1,
+                        SurfaceFit::Nothing => {}
+                    }
                 }
             }
         }
