@@ -18,9 +18,6 @@ pub struct ObstacleDistance {
     /// The disc of radius `cap_cells` (cells with `dx^2 + dy^2 < cap^2`) by rows:
     /// `(dy, first dx, distances)`, for stamping a row at a time.
     disc_rows: Vec<(i32, i32, Vec<f32>)>,
-    /// For `ry` in `-cap..=cap` (index `ry + cap`): the disc's half width in that row, the
-    /// largest `r` with `r^2 + ry^2 < cap^2` (-1 if none).
-    half_widths: Vec<i32>,
 }
 
 impl ObstacleDistance {
@@ -50,7 +47,6 @@ impl ObstacleDistance {
             cap_cells: cap as u32,
             data: vec![cap as f32; frame.len()],
             disc_rows,
-            half_widths,
         }
     }
 
@@ -96,64 +92,76 @@ impl ObstacleDistance {
         removed.sort_unstable();
         removed.dedup();
         let cap = self.cap_cells as i32;
-        let w = self.frame.width as i32;
-        let h = self.frame.height as i32;
-        // Reset the disc around every removed obstacle, keeping per row the hull of the cells
-        // reset in it; then restamp, once each, the obstacles that can reach a reset cell
-        // (within twice the cap of a removed one), limited to those hulls. A cell of a hull that
-        // was not reset already holds at most every obstacle's distance, and a reset cell gets
-        // the least distance of every obstacle within the cap, as from the exact transform: the
-        // result does not depend on the order of the removals or of the stamps.
-        let y_lo = (removed.iter().map(|c| c.y).min().unwrap_or(0) - cap).max(0);
-        let y_hi = (removed.iter().map(|c| c.y).max().unwrap_or(0) + cap).min(h - 1);
-        if y_lo > y_hi {
-            return;
-        }
-        let mut hull = vec![(i32::MAX, i32::MIN); (y_hi - y_lo + 1) as usize];
-        for &c in &removed {
-            for (dy, dx0, ds) in &self.disc_rows {
-                let y = c.y + dy;
-                let x0 = c.x + dx0;
-                let (x_from, x_to) = (x0.max(0), (x0 + ds.len() as i32).min(w));
-                if y >= 0 && y < h && x_from < x_to {
-                    let row = (y * w) as usize;
-                    self.data[row + x_from as usize..row + x_to as usize].fill(cap as f32);
-                    let span = &mut hull[(y - y_lo) as usize];
-                    *span = (span.0.min(x_from), span.1.max(x_to));
+        let (w, h) = (self.frame.width as i32, self.frame.height as i32);
+        // Every cell of a removed obstacle's disc gets the distance to its nearest obstacle
+        // within the cap, computed afresh from the grid: an obstacle within the cap of a cell
+        // lies within `reach` cells of it on each axis (dx^2 < cap^2), so within twice that of
+        // the removed one. First, per column near it, the vertical distance from each row of
+        // the disc to the column's nearest obstacle (`col2`, squared; `cap2` for none within
+        // reach); then per cell the least squared distance over the columns within reach. Its
+        // square root is what stamping every obstacle would have left, bit for bit (the square
+        // root and the conversion to `f32` are monotonic), and the cells outside the discs keep
+        // their values: no obstacle they are within the cap of has gone. A cell in several
+        // discs is computed more than once, to the same value.
+        let (reach, cap2) = (cap - 1, cap * cap);
+        let mut col2: Vec<i32> = Vec::new();
+        let mut last: Vec<i32> = Vec::new();
+        for &r in &removed {
+            let (x0, x1) = ((r.x - 2 * reach).max(0), (r.x + 2 * reach).min(w - 1));
+            let (y0, y1) = ((r.y - reach).max(0), (r.y + reach).min(h - 1));
+            if x0 > x1 || y0 > y1 {
+                continue;
+            }
+            let nx = (x1 - x0 + 1) as usize;
+            col2.clear();
+            col2.resize((y1 - y0 + 1) as usize * nx, cap2);
+            // Downwards (the nearest obstacle at or above), then upwards (at or below).
+            let (top, bottom) = ((y0 - reach).max(0), (y1 + reach).min(h - 1));
+            for down in [true, false] {
+                last.clear();
+                last.resize(nx, if down { i32::MIN / 2 } else { i32::MAX / 2 });
+                for k in 0..=(if down { y1 - top } else { bottom - y0 }) {
+                    let y = if down { top + k } else { bottom - k };
+                    let row = &grid.data[(y * w + x0) as usize..(y * w + x1) as usize + 1];
+                    for (l, s) in last.iter_mut().zip(row) {
+                        if *s == Occupancy::Occupied {
+                            *l = y;
+                        }
+                    }
+                    if y < y0 || y > y1 {
+                        continue;
+                    }
+                    let out = &mut col2[(y - y0) as usize * nx..(y - y0 + 1) as usize * nx];
+                    for (o, &l) in out.iter_mut().zip(&last) {
+                        let d = (y - l).abs();
+                        if d <= reach {
+                            *o = (*o).min(d * d);
+                        }
+                    }
                 }
             }
-        }
-        // The rows and columns within twice the cap of a removed obstacle, merged per row, so
-        // that each obstacle in them is met once.
-        let mut windows: Vec<(i32, i32, i32)> =
-            Vec::with_capacity(removed.len() * (4 * cap as usize + 1));
-        for &c in &removed {
-            for oy in (c.y - 2 * cap).max(0)..=(c.y + 2 * cap).min(h - 1) {
-                windows.push((oy, (c.x - 2 * cap).max(0), (c.x + 2 * cap).min(w - 1)));
-            }
-        }
-        windows.sort_unstable();
-        let hull_of = |y: i32| match hull.get((y - y_lo) as usize) {
-            Some(&(lo, hi)) if y >= y_lo && lo < hi => (lo, hi),
-            _ => (0, 0),
-        };
-        let mut k = 0;
-        while k < windows.len() {
-            let (oy, x_from, mut x_to) = windows[k];
-            k += 1;
-            while k < windows.len() && windows[k].0 == oy && windows[k].1 <= x_to + 1 {
-                x_to = x_to.max(windows[k].2);
-                k += 1;
-            }
-            for ox in x_from..=x_to {
-                if grid.data[(oy * w + ox) as usize] == Occupancy::Occupied {
-                    stamp_rows(
-                        &mut self.data,
-                        w,
-                        &self.disc_rows,
-                        Cell::new(ox, oy),
-                        hull_of,
-                    );
+            for (dy, dx0, ds) in &self.disc_rows {
+                let y = r.y + dy;
+                let (x_from, x_to) = ((r.x + dx0).max(0), (r.x + dx0 + ds.len() as i32).min(w));
+                if y < 0 || y >= h || x_from >= x_to {
+                    continue;
+                }
+                let cols = &col2[(y - y0) as usize * nx..(y - y0 + 1) as usize * nx];
+                for x in x_from..x_to {
+                    let (c0, c1) = ((x - reach).max(x0), (x + reach).min(x1));
+                    let mut best = cap2;
+                    for (k, &v) in cols[(c0 - x0) as usize..=(c1 - x0) as usize]
+                        .iter()
+                        .enumerate()
+                    {
+                        let dx = c0 + k as i32 - x;
+                        best = best.min(v + dx * dx);
+                    }
+                    self.data[(y * w + x) as usize] = if best < cap2 {
+                        (best as f32).sqrt()
+                    } else {
+                        cap as f32
+                    };
                 }
             }
         }
@@ -342,13 +350,19 @@ mod tests {
                     if grid.data[(oy * w + ox) as usize] != Occupancy::Occupied {
                         continue;
                     }
-                    let half_widths = &f.half_widths;
-                    stamp_rows(&mut f.data, w, &f.disc_rows, Cell::new(ox, oy), |y| {
-                        match half_widths.get((y - c.y + cap) as usize) {
-                            Some(&half) => (c.x - half, c.x + half + 1),
+                    // (The disc of `c`'s row `y`: its half width is minus its first dx.)
+                    let half_of =
+                        |y: i32| f.disc_rows.iter().find(|r| r.0 == y - c.y).map(|r| -r.1);
+                    stamp_rows(
+                        &mut f.data,
+                        w,
+                        &f.disc_rows,
+                        Cell::new(ox, oy),
+                        |y| match half_of(y) {
+                            Some(half) => (c.x - half, c.x + half + 1),
                             None => (0, 0),
-                        }
-                    });
+                        },
+                    );
                 }
             }
         }
