@@ -240,7 +240,9 @@ fn normal_equations(
         1.0 / cfg.prior_sigma_xy_m.powi(2),
         1.0 / cfg.prior_sigma_theta_rad.powi(2),
     );
-    let mut h = Matrix3::from_diagonal(&prior_info);
+    // H's upper triangle (row by row; H is symmetric: `j[a] * j[b]` is `j[b] * j[a]`, bit for
+    // bit), each entry summed in point order as `h += j * j^T * w` would.
+    let mut hu = [prior_info[0], 0.0, 0.0, prior_info[1], 0.0, prior_info[2]];
     let e = Vector3::new(
         x[0] - prior.x_m,
         x[1] - prior.y_m,
@@ -266,9 +268,19 @@ fn normal_equations(
         let dq_dtheta = Vec2::new(-s * p.x - c * p.y, c * p.x - s * p.y);
         let j = Vector3::new(grad.x, grad.y, grad.dot(&dq_dtheta));
         let w = inv_var / (1.0 + r * r / c2);
-        h += j * j.transpose() * w;
+        for (k, (a, b)) in [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]
+            .into_iter()
+            .enumerate()
+        {
+            hu[k] += j[a] * j[b] * w;
+        }
         g += j * (w * r);
     }
+    let h = Matrix3::new(
+        hu[0], hu[1], hu[2], //
+        hu[1], hu[3], hu[4], //
+        hu[2], hu[4], hu[5],
+    );
     (h, g, cost)
 }
 
@@ -695,6 +707,103 @@ mod tests {
             near_line > 1000 && near_points > 100,
             "{near_line} {near_points}"
         );
+    }
+
+    /// [`normal_equations`] as first written: `H` summed as whole matrices, `j * j^T * w`.
+    fn normal_equations_reference(
+        field: &ObstacleDistance,
+        map: &LogOddsMap,
+        prior: &Pose,
+        x: &Vector3<f64>,
+        points: &[Vec2],
+        cfg: &ScanMatchConfig,
+    ) -> (Matrix3<f64>, Vector3<f64>, f64) {
+        let res = field.frame.resolution_m;
+        let cap_m = field.cap_cells as f64 * res;
+        let inv_var = 1.0 / (cfg.point_sigma_m * cfg.point_sigma_m);
+        let c2 = cfg.robust_scale_m * cfg.robust_scale_m;
+        let prior_info = Vector3::new(
+            1.0 / cfg.prior_sigma_xy_m.powi(2),
+            1.0 / cfg.prior_sigma_xy_m.powi(2),
+            1.0 / cfg.prior_sigma_theta_rad.powi(2),
+        );
+        let mut h = Matrix3::from_diagonal(&prior_info);
+        let e = Vector3::new(
+            x[0] - prior.x_m,
+            x[1] - prior.y_m,
+            wrap_angle(x[2] - prior.theta_rad),
+        );
+        let mut g = prior_info.component_mul(&e);
+        let mut cost = 0.5 * e.dot(&prior_info.component_mul(&e));
+        let (s, c) = x[2].sin_cos();
+        for p in points {
+            let q = Vec2::new(x[0] + c * p.x - s * p.y, x[1] + s * p.x + c * p.y);
+            let (r, grad) = match surface_residual_reference(map, q) {
+                Some(v) => v,
+                None => {
+                    let (d_cells, grad) = field.sample(q);
+                    (d_cells * res, grad * res)
+                }
+            };
+            cost += 0.5 * inv_var * c2 * (r.min(cap_m) * r.min(cap_m) / c2).ln_1p();
+            if r.abs() >= cap_m - 0.5 * res {
+                continue;
+            }
+            let dq_dtheta = Vec2::new(-s * p.x - c * p.y, c * p.x - s * p.y);
+            let j = Vector3::new(grad.x, grad.y, grad.dot(&dq_dtheta));
+            let w = inv_var / (1.0 + r * r / c2);
+            h += j * j.transpose() * w;
+            g += j * (w * r);
+        }
+        (h, g, cost)
+    }
+
+    #[test]
+    fn normal_equations_are_the_whole_matrices_summed() {
+        // The room mapped from a few poses; a scan from others, its points at poses around
+        // where it was taken (near the walls, off them, some off the map).
+        let world = room();
+        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
+        let poses: Vec<Pose> = (0..5)
+            .map(|k| {
+                Pose::new(
+                    1.5 + 0.9 * k as f64,
+                    1.2 + 0.6 * (k % 3) as f64,
+                    0.7 * k as f64,
+                )
+            })
+            .collect();
+        let (field, map) = build_map(&world, frame, &poses);
+        let cfg = ScanMatchConfig::default();
+        let mut fits = SurfaceFits::new();
+        let mut informed = 0;
+        for k in 0..40 {
+            let at = Pose::new(
+                1.2 + 0.15 * k as f64,
+                0.8 + 0.11 * (k % 9) as f64,
+                0.4 * k as f64,
+            );
+            let scan = world.scan(&at);
+            let points: Vec<Vec2> = (0..scan.ranges_m.len())
+                .filter(|&i| scan.is_hit(i))
+                .map(|i| {
+                    let a = scan.beam_angle_rad(i);
+                    Vec2::new(a.cos(), a.sin()) * scan.ranges_m[i]
+                })
+                .collect();
+            fits.begin();
+            for d in [0.0, 0.02, -0.07, 0.3] {
+                let x = Vector3::new(at.x_m + d, at.y_m - 0.5 * d, at.theta_rad + d);
+                let got = normal_equations(&field, &map, &mut fits, &at, &x, &points, &cfg);
+                let want = normal_equations_reference(&field, &map, &at, &x, &points, &cfg);
+                let bits = |(h, g, c): (Matrix3<f64>, Vector3<f64>, f64)| {
+                    (h.map(f64::to_bits), g.map(f64::to_bits), c.to_bits())
+                };
+                assert_eq!(bits(got), bits(want), "pose {k}, offset {d}");
+                informed += (got.0 != Matrix3::from_diagonal(&got.0.diagonal())) as usize;
+            }
+        }
+        assert!(informed > 100, "{informed}");
     }
 
     #[test]
