@@ -123,15 +123,15 @@ pub fn match_scan(
             grid.get(cell).is_some_and(|o| *o != Occupancy::Unknown)
         })
     };
-    let points: Vec<Vec2> = (0..scan.ranges_m.len())
-        .step_by(stride)
-        .filter(|&i| scan.is_hit(i) && scan.ranges_m[i].is_finite() && scan.ranges_m[i] > 0.0)
-        .map(|i| {
-            let a = scan.beam_angle_rad(i);
-            Vec2::new(a.cos(), a.sin()) * scan.ranges_m[i]
-        })
-        .filter(|p| observed(*p))
-        .collect();
+    let points: Vec<Vec2> = BEAM_DIRECTIONS.with_borrow_mut(|dirs| {
+        let dirs = dirs.of(scan);
+        (0..scan.ranges_m.len())
+            .step_by(stride)
+            .filter(|&i| scan.is_hit(i) && scan.ranges_m[i].is_finite() && scan.ranges_m[i] > 0.0)
+            .map(|i| dirs[i] * scan.ranges_m[i])
+            .filter(|p| observed(*p))
+            .collect()
+    });
     let rejected = |score, iterations, searched| MatchResult {
         pose: *prior,
         score,
@@ -282,6 +282,41 @@ fn normal_equations(
         hu[2], hu[4], hu[5],
     );
     (h, g, cost)
+}
+
+/// The unit vectors of a scan's beams in the sensor's frame, `(cos a, sin a)` of each beam's
+/// angle, kept for the scans of the same angles (a run's laser): the same values as computed
+/// afresh, without a sine and a cosine per beam and scan.
+#[derive(Default)]
+struct BeamDirections {
+    /// The first beam's angle and the increment (their bits) and the number of beams.
+    key: (u64, u64, usize),
+    dirs: Vec<Vec2>,
+}
+
+impl BeamDirections {
+    fn of(&mut self, scan: &Scan) -> &[Vec2] {
+        let key = (
+            scan.angle_min_rad.to_bits(),
+            scan.angle_increment_rad.to_bits(),
+            scan.ranges_m.len(),
+        );
+        if self.key != key || self.dirs.len() != key.2 {
+            self.dirs.clear();
+            self.dirs.extend((0..key.2).map(|i| {
+                let a = scan.beam_angle_rad(i);
+                Vec2::new(a.cos(), a.sin())
+            }));
+            self.key = key;
+        }
+        &self.dirs
+    }
+}
+
+thread_local! {
+    /// The beams' unit vectors of the thread's last scan matched.
+    static BEAM_DIRECTIONS: std::cell::RefCell<BeamDirections> =
+        std::cell::RefCell::new(BeamDirections::default());
 }
 
 /// Around a cell: the signed distance of a point `q` in it to the surface near it and its
@@ -804,6 +839,48 @@ mod tests {
             }
         }
         assert!(informed > 100, "{informed}");
+    }
+
+    #[test]
+    fn beam_directions_kept_are_those_computed_afresh() {
+        // Scans of other angles and other numbers of beams in turn, and back: each time the
+        // bits of (cos a, sin a) of every beam.
+        let scan = |first: f64, step: f64, n: usize| Scan {
+            angle_min_rad: first,
+            angle_increment_rad: step,
+            max_range_m: 6.0,
+            ranges_m: vec![1.0; n],
+        };
+        let mut kept = BeamDirections::default();
+        for s in [
+            scan(-1.5, 0.017, 181),
+            scan(-1.5, 0.017, 181),
+            scan(-1.5, 0.017, 90),
+            scan(-1.5, 0.0171, 90),
+            scan(0.25, 0.0171, 90),
+            scan(-1.5, 0.017, 181),
+            scan(0.0, 0.0, 3),
+            scan(0.0, 0.0, 0),
+        ] {
+            let want: Vec<(u64, u64)> = (0..s.ranges_m.len())
+                .map(|i| {
+                    let a = s.beam_angle_rad(i);
+                    (a.cos().to_bits(), a.sin().to_bits())
+                })
+                .collect();
+            let got: Vec<(u64, u64)> = kept
+                .of(&s)
+                .iter()
+                .map(|d| (d.x.to_bits(), d.y.to_bits()))
+                .collect();
+            assert_eq!(
+                got,
+                want,
+                "{} beams from {}",
+                s.ranges_m.len(),
+                s.angle_min_rad
+            );
+        }
     }
 
     #[test]
