@@ -578,14 +578,14 @@ impl SettingInfo {
                 if words.contains(&w.as_str()) {
                     Ok(())
                 } else if self.name == "localization" {
-                    Err(SettingsError::Localization(w.clone()))
+                    Err(SettingsError::Localization(shown(w)))
                 } else if self.name == "utility_distance" {
-                    Err(SettingsError::UtilityDistance(w.clone()))
+                    Err(SettingsError::UtilityDistance(shown(w)))
                 } else {
                     Err(SettingsError::Type {
                         field: self.name.to_string(),
                         expected: expected(),
-                        got: format!("'{w}'"),
+                        got: format!("'{}'", shown(w)),
                     })
                 }
             }
@@ -635,10 +635,10 @@ pub fn settings_from_map(
     map: &serde_json::Map<String, serde_json::Value>,
 ) -> Result<Settings, SettingsError> {
     for (k, v) in map {
-        let info = setting_info(k).ok_or_else(|| SettingsError::Unknown { field: k.clone() })?;
+        let info = setting_info(k).ok_or_else(|| SettingsError::Unknown { field: shown(k) })?;
         if !info.type_ok(v) {
             return Err(SettingsError::Type {
-                field: k.clone(),
+                field: shown(k),
                 expected: info.kind.describe(info.unit),
                 got: describe_json(v),
             });
@@ -669,6 +669,12 @@ pub fn settings_from_json_text(text: &str) -> Result<Settings, SettingsError> {
             describe_json(&other)
         ))),
     }
+}
+
+/// A name or word from the file as a message shows it: escaped (a key written `"a\nb"` is shown
+/// `a\nb`, not broken over two lines).
+fn shown(s: &str) -> String {
+    s.escape_debug().to_string()
 }
 
 fn one_line(s: &str) -> String {
@@ -781,8 +787,7 @@ impl Settings {
     /// with this file's thresholds.
     pub fn to_explore_config_for(&self, name: &str) -> Result<ExploreConfig, SettingsError> {
         let mut c = self.to_explore_config()?;
-        let mut st =
-            Strategy::by_name(name).ok_or_else(|| SettingsError::Strategy(name.to_string()))?;
+        let mut st = Strategy::by_name(name).ok_or_else(|| SettingsError::Strategy(shown(name)))?;
         st.layout_update_m2 = c.strategy.layout_update_m2;
         st.max_wall_gap_m = c.strategy.max_wall_gap_m;
         st.gain_through_openings = c.strategy.gain_through_openings;
@@ -1195,6 +1200,19 @@ mod tests {
             ),
             (r#"{"map_resolution_m": 0}"#, &["settings.map_resolution_m"]),
             (r#"{"alpha": null}"#, &["settings.alpha", "null"]),
+            // Names and words with escapes are shown escaped, on one line.
+            (
+                r#"{"localizatio\n": 1}"#,
+                &["settings.localizatio\\n: unknown setting"],
+            ),
+            (
+                r#"{"localization": "od\nometry"}"#,
+                &["settings.localization", "'od\\nometry'"],
+            ),
+            (
+                r#"{"utility_distance": "path\r"}"#,
+                &["settings.utility_distance", "'path\\r'"],
+            ),
         ];
         for (text, words) in cases {
             let r = settings_from_json_text(text);
