@@ -252,53 +252,12 @@ impl RayFan {
         // (The slices held apart, so that the stores to `seen` cannot make the compiler read
         // the vectors' addresses and lengths again from `self` for every node.)
         let (nodes, cells, seen) = (&self.nodes[..], &self.cells[..], &mut self.seen[..]);
-        // The cells read lie on the rays walked, each from the centre to where it stopped: a
-        // blocking cell (or one outside the frame), or a leaf. A ray's cells lie in the box of
-        // its first and last (the walk is monotonic on both axes), so the boxes of the centre
-        // and these ends, one per quadrant of the end, hold them all; they are kept at the ends
-        // only, not at every node.
-        let mut boxes = [((0i16, 0i16), (0i16, 0i16)); 4];
-        let mut end_at = |(dx, dy): (i16, i16)| {
-            let (lo, hi) = &mut boxes[(dx < 0) as usize | ((dy < 0) as usize) << 1];
-            *lo = (lo.0.min(dx), lo.1.min(dy));
-            *hi = (hi.0.max(dx), hi.1.max(dy));
+        // (Two loops, one per answer to `inside`: the test is not made per node.)
+        let (count, boxes) = if inside {
+            walk::<true>(nodes, cells, seen, frame, p, base, blocks, counts)
+        } else {
+            walk::<false>(nodes, cells, seen, frame, p, base, blocks, counts)
         };
-        let mut count = 0usize;
-        let mut i = 0usize;
-        while i < nodes.len() {
-            let n = nodes[i];
-            let (dx, dy) = cells[i];
-            let c = Cell::new(p.x + dx as i32, p.y + dy as i32);
-            let idx = if inside {
-                (base + n.offset as isize) as usize
-            } else if frame.contains(c) {
-                c.y as usize * w as usize + c.x as usize
-            } else {
-                end_at((dx, dy));
-                i = n.end as usize;
-                continue;
-            };
-            if blocks(c, idx) {
-                end_at((dx, dy));
-                i = n.end as usize;
-                continue;
-            }
-            if n.end as usize == i + 1 {
-                end_at((dx, dy));
-            }
-            if n.seen & IN_RANGE != 0 {
-                // Without branches: whether a cell was seen by an earlier ray, and whether it
-                // counts, are both close to coin flips (cells are crossed by about two rays;
-                // unknown and known cells meet along frontiers), so branches on them are
-                // mispredicted often. `counts` is a pure predicate: evaluating it for a cell
-                // already seen changes nothing.
-                let at = (n.seen & !IN_RANGE) as usize;
-                let fresh = seen[at] == 0;
-                seen[at] = 1;
-                count += (fresh & counts(c, idx)) as usize;
-            }
-            i += 1;
-        }
         let at = |(dx, dy): (i16, i16)| Cell::new(p.x + dx as i32, p.y + dy as i32);
         let read = CellsRead {
             boxes: boxes.map(|(lo, hi)| CellBox {
@@ -308,6 +267,75 @@ impl RayFan {
         };
         (count, read)
     }
+}
+
+/// Per quadrant of a ray's end (see [`walk`]): the least and the greatest offsets from the
+/// centre of the ends in it.
+type QuadrantBoxes = [((i16, i16), (i16, i16)); 4];
+
+/// [`RayFan::count`]'s walk of the fan from `p` (the node at `i` in cell `cells[i]` from `p`),
+/// with `INSIDE` whether the whole square around `p` lies in the frame (a node's index is then
+/// `base` plus its offset, with no bounds test). The cells read lie on the rays walked, each
+/// from the centre to where it stopped: a blocking cell (or one outside the frame), or a leaf.
+/// A ray's cells lie in the box of its first and last (the walk is monotonic on both axes), so
+/// the boxes of the centre and these ends, one per quadrant of the end, hold them all; they are
+/// kept at the ends only, not at every node. Returns the count and the boxes (offsets from `p`).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn walk<const INSIDE: bool>(
+    nodes: &[FanNode],
+    cells: &[(i16, i16)],
+    seen: &mut [u8],
+    frame: &GridFrame,
+    p: Cell,
+    base: isize,
+    blocks: &impl Fn(Cell, usize) -> bool,
+    counts: &impl Fn(Cell, usize) -> bool,
+) -> (usize, QuadrantBoxes) {
+    let w = frame.width as i32;
+    let mut boxes: QuadrantBoxes = [((0i16, 0i16), (0i16, 0i16)); 4];
+    let mut end_at = |(dx, dy): (i16, i16)| {
+        let (lo, hi) = &mut boxes[(dx < 0) as usize | ((dy < 0) as usize) << 1];
+        *lo = (lo.0.min(dx), lo.1.min(dy));
+        *hi = (hi.0.max(dx), hi.1.max(dy));
+    };
+    let mut count = 0usize;
+    let mut i = 0usize;
+    while i < nodes.len() {
+        let n = nodes[i];
+        let (dx, dy) = cells[i];
+        let c = Cell::new(p.x + dx as i32, p.y + dy as i32);
+        let idx = if INSIDE {
+            (base + n.offset as isize) as usize
+        } else if frame.contains(c) {
+            c.y as usize * w as usize + c.x as usize
+        } else {
+            end_at((dx, dy));
+            i = n.end as usize;
+            continue;
+        };
+        if blocks(c, idx) {
+            end_at((dx, dy));
+            i = n.end as usize;
+            continue;
+        }
+        if n.end as usize == i + 1 {
+            end_at((dx, dy));
+        }
+        if n.seen & IN_RANGE != 0 {
+            // Without branches: whether a cell was seen by an earlier ray, and whether it
+            // counts, are both close to coin flips (cells are crossed by about two rays;
+            // unknown and known cells meet along frontiers), so branches on them are
+            // mispredicted often. `counts` is a pure predicate: evaluating it for a cell
+            // already seen changes nothing.
+            let at = (n.seen & !IN_RANGE) as usize;
+            let fresh = seen[at] == 0;
+            seen[at] = 1;
+            count += (fresh & counts(c, idx)) as usize;
+        }
+        i += 1;
+    }
+    (count, boxes)
 }
 
 /// The baseline `I(p)`: unknown area visible from `p` through the map, unknown treated as free,
