@@ -627,6 +627,24 @@ mod tests {
         (ObstacleDistance::from_grid(&map.occupancy, 8), map)
     }
 
+    /// The frame the room is mapped in.
+    fn room_frame() -> GridFrame {
+        GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160)
+    }
+
+    /// Eight poses the room is mapped from, across it, turning.
+    fn room_mapping_poses() -> Vec<Pose> {
+        (0..8)
+            .map(|k| {
+                Pose::new(
+                    1.5 + 0.6 * k as f64,
+                    1.2 + 0.3 * (k % 3) as f64,
+                    0.8 * k as f64,
+                )
+            })
+            .collect()
+    }
+
     /// The residual as first written, cell by cell for every point.
     fn surface_residual_reference(map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
         let c0 = map.frame.cell_from_world(q);
@@ -690,7 +708,7 @@ mod tests {
         // all over it and off the frame, each cell asked many times (more cells than slots: slots
         // are shared). Then more scans change the map: a new match's fits are made afresh.
         let world = room();
-        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
+        let frame = room_frame();
         let poses: Vec<Pose> = (0..9)
             .map(|k| {
                 Pose::new(
@@ -798,17 +816,7 @@ mod tests {
         // The room mapped from a few poses; a scan from others, its points at poses around
         // where it was taken (near the walls, off them, some off the map).
         let world = room();
-        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
-        let poses: Vec<Pose> = (0..5)
-            .map(|k| {
-                Pose::new(
-                    1.5 + 0.9 * k as f64,
-                    1.2 + 0.6 * (k % 3) as f64,
-                    0.7 * k as f64,
-                )
-            })
-            .collect();
-        let (field, map) = build_map(&world, frame, &poses);
+        let (field, map) = build_map(&world, room_frame(), &room_mapping_poses());
         let cfg = ScanMatchConfig::default();
         let mut fits = SurfaceFits::new();
         let mut informed = 0;
@@ -886,17 +894,8 @@ mod tests {
     #[test]
     fn recovers_perturbed_pose_in_a_room() {
         let world = room();
-        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
-        let mapping_poses: Vec<Pose> = (0..8)
-            .map(|k| {
-                Pose::new(
-                    1.5 + 0.6 * k as f64,
-                    1.2 + 0.3 * (k % 3) as f64,
-                    0.8 * k as f64,
-                )
-            })
-            .collect();
-        let (field, grid) = build_map(&world, frame, &mapping_poses);
+        let frame = room_frame();
+        let (field, grid) = build_map(&world, frame, &room_mapping_poses());
         let truths = [
             Pose::new(2.0, 1.0, 0.3),
             Pose::new(4.5, 3.5, 2.0),
@@ -953,7 +952,7 @@ mod tests {
     #[test]
     fn rejects_without_map_or_when_the_scan_does_not_fit() {
         let world = room();
-        let frame = GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160);
+        let frame = room_frame();
         let empty = ObstacleDistance::new(frame, 8);
         let prior = Pose::new(2.0, 1.0, 0.3);
         let r = match_scan(
