@@ -362,49 +362,46 @@ impl LogOddsMap {
         if self.occupancy.data[i] != Occupancy::Occupied {
             return None;
         }
-        let s = self.surface.get(c)?;
-        Some(self.frame.origin_m + Vec2::new(s[0] as f64, s[1] as f64) * self.frame.resolution_m)
+        self.surface.get(c).map(|s| self.surface_world(s))
+    }
+
+    /// A mean hit point as kept (grid coordinates, `f32`) in world coordinates.
+    #[inline]
+    fn surface_world(&self, s: [f32; 2]) -> Vec2 {
+        self.frame.origin_m + Vec2::new(s[0] as f64, s[1] as f64) * self.frame.resolution_m
     }
 
     /// The surface points ([`LogOddsMap::surface_point`]) of the 3 x 3 cells around `c0`, in row
     /// order, into `out`; returns how many. Read in place when the nine cells lie in the frame
     /// and in one block of the surface store (most cells), else cell by cell.
     pub fn surface_points_around(&self, c0: Cell, out: &mut [Vec2; 9]) -> usize {
-        const B: i32 = SURFACE_BLOCK as i32;
+        const B: usize = SURFACE_BLOCK;
         let (w, h) = (self.frame.width as i32, self.frame.height as i32);
-        let (kx, ky) = (c0.x.rem_euclid(B), c0.y.rem_euclid(B));
         let mut n = 0;
-        if c0.x >= 1
-            && c0.y >= 1
-            && c0.x + 1 < w
-            && c0.y + 1 < h
-            && (1..B - 1).contains(&kx)
-            && (1..B - 1).contains(&ky)
-        {
-            let (x, y) = (c0.x as usize, c0.y as usize);
-            let b = (y / SURFACE_BLOCK) * self.surface.blocks_w + x / SURFACE_BLOCK;
-            let slot = self.surface.slot[b] as usize;
-            if slot == 0 {
-                return 0; // (no hit in the block)
-            }
-            let block = &self.surface.blocks[(slot - 1) * SURFACE_BLOCK * SURFACE_BLOCK..];
-            let occupancy = &self.occupancy.data[..];
-            for dy in -1..=1 {
-                let row = (c0.y + dy) as usize * w as usize;
-                let k_row = (ky + dy) as usize * SURFACE_BLOCK;
-                for dx in -1..=1 {
-                    if occupancy[row + (c0.x + dx) as usize] != Occupancy::Occupied {
-                        continue;
-                    }
-                    let (s, hits) = block[k_row + (kx + dx) as usize];
-                    if hits > 0 {
-                        out[n] = self.frame.origin_m
-                            + Vec2::new(s[0] as f64, s[1] as f64) * self.frame.resolution_m;
-                        n += 1;
+        if c0.x >= 1 && c0.y >= 1 && c0.x + 1 < w && c0.y + 1 < h {
+            let (b, k) = self.surface.locate(c0);
+            if (1..B - 1).contains(&(k % B)) && (1..B - 1).contains(&(k / B)) {
+                let slot = self.surface.slot[b] as usize;
+                if slot == 0 {
+                    return 0; // (no hit in the block)
+                }
+                let block = &self.surface.blocks[(slot - 1) * B * B..slot * B * B];
+                let at = c0.y as usize * w as usize + c0.x as usize;
+                for dy in -1..=1isize {
+                    for dx in -1..=1isize {
+                        let i = (at as isize + dy * w as isize + dx) as usize;
+                        if self.occupancy.data[i] != Occupancy::Occupied {
+                            continue;
+                        }
+                        let (s, hits) = block[(k as isize + dy * B as isize + dx) as usize];
+                        if hits > 0 {
+                            out[n] = self.surface_world(s);
+                            n += 1;
+                        }
                     }
                 }
+                return n;
             }
-            return n;
         }
         for dy in -1..=1 {
             for dx in -1..=1 {
