@@ -188,9 +188,13 @@ fn gauss_newton(
     points: &[Vec2],
     cfg: &ScanMatchConfig,
 ) -> (Pose, u32) {
-    // Levenberg-Marquardt: a step that raises the cost is undone and the damping raised.
+    // Levenberg-Marquardt: a step that raises the cost is undone and the damping raised. A
+    // step's cost decides; its normal equations are formed only for a step kept and followed
+    // by another (not for a step undone, nor for the last).
+    let mut terms = Vec::with_capacity(points.len());
     let mut x = Vector3::new(start.x_m, start.y_m, start.theta_rad);
-    let (mut h, mut g, mut cost) = normal_equations(field, map, fits, prior, &x, points, cfg);
+    let mut cost = residuals(field, map, fits, prior, &x, points, cfg, &mut terms);
+    let (mut h, mut g) = normal_equations(&terms, prior, &x, cfg);
     let mut lambda = 1e-4;
     let mut iterations = 0;
     while iterations < cfg.max_iterations {
@@ -203,14 +207,16 @@ fn gauss_newton(
             break;
         }
         let x_new = x + step;
-        let (h_new, g_new, cost_new) =
-            normal_equations(field, map, fits, prior, &x_new, points, cfg);
+        let cost_new = residuals(field, map, fits, prior, &x_new, points, cfg, &mut terms);
         if cost_new <= cost {
-            (x, h, g, cost) = (x_new, h_new, g_new, cost_new);
+            (x, cost) = (x_new, cost_new);
             lambda = (lambda * 0.1).max(1e-6);
-            if step[0].hypot(step[1]) < cfg.convergence_m && step[2].abs() < cfg.convergence_m {
+            if step[0].hypot(step[1]) < cfg.convergence_m && step[2].abs() < cfg.convergence_m
+                || iterations == cfg.max_iterations
+            {
                 break;
             }
+            (h, g) = normal_equations(&terms, prior, &x, cfg);
         } else {
             lambda *= 10.0;
             if lambda > 1e4 {
@@ -221,8 +227,37 @@ fn gauss_newton(
     (Pose::new(x[0], x[1], wrap_angle(x[2])), iterations)
 }
 
-/// Gauss-Newton normal equations `(H, g)` and robust cost at pose `x`, prior included.
-fn normal_equations(
+/// A point's term in the normal equations: the point (in the sensor's frame), its distance to
+/// the map's surface and that distance's gradient (in the map's frame).
+#[derive(Debug, Clone, Copy)]
+struct Term {
+    p: Vec2,
+    r: f64,
+    grad: Vec2,
+}
+
+/// The prior's information (inverse variances of x, y and theta).
+fn prior_information(cfg: &ScanMatchConfig) -> Vector3<f64> {
+    Vector3::new(
+        1.0 / cfg.prior_sigma_xy_m.powi(2),
+        1.0 / cfg.prior_sigma_xy_m.powi(2),
+        1.0 / cfg.prior_sigma_theta_rad.powi(2),
+    )
+}
+
+/// The pose `x`'s difference to the prior (the angle wrapped).
+fn prior_error(prior: &Pose, x: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(
+        x[0] - prior.x_m,
+        x[1] - prior.y_m,
+        wrap_angle(x[2] - prior.theta_rad),
+    )
+}
+
+/// The robust cost at pose `x`, prior included; `terms` gets the terms of the points that
+/// inform the normal equations (those closer to the map than the field's cap), in point order.
+#[allow(clippy::too_many_arguments)]
+fn residuals(
     field: &ObstacleDistance,
     map: &LogOddsMap,
     fits: &mut SurfaceFits,
@@ -230,27 +265,17 @@ fn normal_equations(
     x: &Vector3<f64>,
     points: &[Vec2],
     cfg: &ScanMatchConfig,
-) -> (Matrix3<f64>, Vector3<f64>, f64) {
+    terms: &mut Vec<Term>,
+) -> f64 {
     let res = field.frame.resolution_m;
     let cap_m = field.cap_cells as f64 * res;
     let inv_var = 1.0 / (cfg.point_sigma_m * cfg.point_sigma_m);
     let c2 = cfg.robust_scale_m * cfg.robust_scale_m;
-    let prior_info = Vector3::new(
-        1.0 / cfg.prior_sigma_xy_m.powi(2),
-        1.0 / cfg.prior_sigma_xy_m.powi(2),
-        1.0 / cfg.prior_sigma_theta_rad.powi(2),
-    );
-    // H's upper triangle (row by row; H is symmetric: `j[a] * j[b]` is `j[b] * j[a]`, bit for
-    // bit), each entry summed in point order as `h += j * j^T * w` would.
-    let mut hu = [prior_info[0], 0.0, 0.0, prior_info[1], 0.0, prior_info[2]];
-    let e = Vector3::new(
-        x[0] - prior.x_m,
-        x[1] - prior.y_m,
-        wrap_angle(x[2] - prior.theta_rad),
-    );
-    let mut g = prior_info.component_mul(&e);
+    let prior_info = prior_information(cfg);
+    let e = prior_error(prior, x);
     let mut cost = 0.5 * e.dot(&prior_info.component_mul(&e));
     let (s, c) = x[2].sin_cos();
+    terms.clear();
     for p in points {
         let q = Vec2::new(x[0] + c * p.x - s * p.y, x[1] + s * p.x + c * p.y);
         let (r, grad) = match fits.residual(map, q) {
@@ -265,6 +290,28 @@ fn normal_equations(
         if r.abs() >= cap_m - 0.5 * res {
             continue;
         }
+        terms.push(Term { p: *p, r, grad });
+    }
+    cost
+}
+
+/// Gauss-Newton normal equations `(H, g)` at pose `x`, prior included, of the points' `terms`
+/// there ([`residuals`]).
+fn normal_equations(
+    terms: &[Term],
+    prior: &Pose,
+    x: &Vector3<f64>,
+    cfg: &ScanMatchConfig,
+) -> (Matrix3<f64>, Vector3<f64>) {
+    let inv_var = 1.0 / (cfg.point_sigma_m * cfg.point_sigma_m);
+    let c2 = cfg.robust_scale_m * cfg.robust_scale_m;
+    let prior_info = prior_information(cfg);
+    // H's upper triangle (row by row; H is symmetric: `j[a] * j[b]` is `j[b] * j[a]`, bit for
+    // bit), each entry summed in point order as `h += j * j^T * w` would.
+    let mut hu = [prior_info[0], 0.0, 0.0, prior_info[1], 0.0, prior_info[2]];
+    let mut g = prior_info.component_mul(&prior_error(prior, x));
+    let (s, c) = x[2].sin_cos();
+    for &Term { p, r, grad } in terms {
         let dq_dtheta = Vec2::new(-s * p.x - c * p.y, c * p.x - s * p.y);
         let j = Vector3::new(grad.x, grad.y, grad.dot(&dq_dtheta));
         let w = inv_var / (1.0 + r * r / c2);
@@ -281,7 +328,7 @@ fn normal_equations(
         hu[1], hu[3], hu[4], //
         hu[2], hu[4], hu[5],
     );
-    (h, g, cost)
+    (h, g)
 }
 
 /// The unit vectors of a scan's beams in the sensor's frame, `(cos a, sin a)` of each beam's
@@ -396,15 +443,15 @@ impl SurfaceFit {
     }
 }
 
-/// A slot of [`SurfaceFits`]: the cell, the match it was fitted in, its fit, and the mean hit
-/// points around it (the first `n`).
+/// A slot of [`SurfaceFits`]: the cell, the match it was fitted in, its fit, and how many mean
+/// hit points around the cell it was made of (kept beside the slots: a line's residual, most
+/// residuals, reads only the slot).
 #[derive(Debug, Clone, Copy)]
 struct FitSlot {
     cell: Cell,
     generation: u64,
     fit: SurfaceFit,
     n: u8,
-    pts: [Vec2; 9],
 }
 
 /// The surface fits of the cells a scan's points fall in, kept while the scan is matched (the
@@ -415,6 +462,8 @@ struct FitSlot {
 struct SurfaceFits {
     generation: u64,
     slots: Vec<FitSlot>,
+    /// The mean hit points of each slot's fit (the first `n`).
+    points: Vec<[Vec2; 9]>,
 }
 
 /// Slots of [`SurfaceFits`] (a power of two).
@@ -438,12 +487,12 @@ impl SurfaceFits {
             generation: 0,
             fit: SurfaceFit::Nothing,
             n: 0,
-            pts: [Vec2::zeros(); 9],
         };
         Self {
             // (No slot serves generation 0's match: `begin` is called before any.)
             generation: 0,
             slots: vec![empty; n],
+            points: vec![[Vec2::zeros(); 9]; n],
         }
     }
 
@@ -459,15 +508,17 @@ impl SurfaceFits {
         let c0 = map.frame.cell_from_world(q);
         let k = (c0.x as u32).wrapping_mul(0x9e37_79b9) ^ (c0.y as u32).wrapping_mul(0x85eb_ca6b);
         let mask = self.slots.len() - 1;
-        let slot = &mut self.slots[(k >> 16) as usize & mask];
+        let i = (k >> 16) as usize & mask;
+        let slot = &mut self.slots[i];
+        let pts = &mut self.points[i];
         if slot.cell != c0 || slot.generation != self.generation {
-            let n = map.surface_points_around(c0, &mut slot.pts);
+            let n = map.surface_points_around(c0, pts);
             slot.cell = c0;
             slot.generation = self.generation;
             slot.n = n as u8;
-            slot.fit = SurfaceFit::of_points(&slot.pts[..n], map.frame.resolution_m);
+            slot.fit = SurfaceFit::of_points(&pts[..n], map.frame.resolution_m);
         }
-        slot.fit.residual(&slot.pts[..slot.n as usize], q)
+        slot.fit.residual(&pts[..slot.n as usize], q)
     }
 }
 
@@ -837,7 +888,10 @@ mod tests {
             fits.begin();
             for d in [0.0, 0.02, -0.07, 0.3] {
                 let x = Vector3::new(at.x_m + d, at.y_m - 0.5 * d, at.theta_rad + d);
-                let got = normal_equations(&field, &map, &mut fits, &at, &x, &points, &cfg);
+                let mut terms = Vec::new();
+                let cost = residuals(&field, &map, &mut fits, &at, &x, &points, &cfg, &mut terms);
+                let (h, g) = normal_equations(&terms, &at, &x, &cfg);
+                let got = (h, g, cost);
                 let want = normal_equations_reference(&field, &map, &at, &x, &points, &cfg);
                 let bits = |(h, g, c): (Matrix3<f64>, Vector3<f64>, f64)| {
                     (h.map(f64::to_bits), g.map(f64::to_bits), c.to_bits())
