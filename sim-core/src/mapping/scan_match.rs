@@ -143,7 +143,7 @@ pub fn match_scan(
         return rejected(0.0, 0, false);
     }
     let (pose, score, near, iterations, searched) = FITS.with_borrow_mut(|fits| {
-        fits.begin();
+        fits.begin(points.len());
         let (mut pose, mut iterations) = gauss_newton(field, map, fits, prior, prior, &points, cfg);
         let (mut score, mut near) = evaluate(field, &pose, &points, cfg);
         let mut searched = false;
@@ -276,9 +276,9 @@ fn residuals(
     let mut cost = 0.5 * e.dot(&prior_info.component_mul(&e));
     let (s, c) = x[2].sin_cos();
     terms.clear();
-    for p in points {
+    for (k, p) in points.iter().enumerate() {
         let q = Vec2::new(x[0] + c * p.x - s * p.y, x[1] + s * p.x + c * p.y);
-        let (r, grad) = match fits.residual(map, q) {
+        let (r, grad) = match fits.residual_of_point(map, k, q) {
             Some(v) => v,
             None => {
                 let (d_cells, grad) = field.sample(q);
@@ -464,7 +464,13 @@ struct SurfaceFits {
     slots: Vec<FitSlot>,
     /// The mean hit points of each slot's fit (the first `n`).
     points: Vec<[Vec2; 9]>,
+    /// Per point of the match's scan, the cell it last fell in and that cell's fit, unless a
+    /// corner's (which needs its points): read in point order, where the slots are scattered.
+    last: Vec<(Cell, SurfaceFit)>,
 }
+
+/// A cell no point falls in: [`SurfaceFits`]'s points before their first.
+const NO_CELL: Cell = Cell::new(i32::MIN, i32::MIN);
 
 /// Slots of [`SurfaceFits`] (a power of two).
 const SURFACE_FIT_SLOTS: usize = 1024;
@@ -483,7 +489,7 @@ impl SurfaceFits {
     /// With `n` slots (a power of two).
     fn with_slots(n: usize) -> Self {
         let empty = FitSlot {
-            cell: Cell::new(i32::MIN, i32::MIN),
+            cell: NO_CELL,
             generation: 0,
             fit: SurfaceFit::Nothing,
             n: 0,
@@ -493,32 +499,59 @@ impl SurfaceFits {
             generation: 0,
             slots: vec![empty; n],
             points: vec![[Vec2::zeros(); 9]; n],
+            last: Vec::new(),
         }
     }
 
-    /// Starts a match (the map may have changed since the last): every slot is stale.
-    fn begin(&mut self) {
+    /// Starts a match of `points` points (the map may have changed since the last): every
+    /// slot is stale, no point has a cell yet.
+    fn begin(&mut self, points: usize) {
         self.generation += 1;
+        self.last.clear();
+        self.last.resize(points, (NO_CELL, SurfaceFit::Nothing));
+    }
+
+    /// [`Self::residual`] of the match's point `k` at `q`: its last cell's fit when `q` is still
+    /// in that cell.
+    #[inline]
+    fn residual_of_point(&mut self, map: &LogOddsMap, k: usize, q: Vec2) -> Option<(f64, Vec2)> {
+        let c0 = map.frame.cell_from_world(q);
+        let (cell, fit) = self.last[k];
+        if cell == c0 && fit != SurfaceFit::Points {
+            return fit.residual(&[], q);
+        }
+        let i = self.slot_of(map, c0);
+        let (fit, n) = (self.slots[i].fit, self.slots[i].n as usize);
+        self.last[k] = (c0, fit);
+        fit.residual(&self.points[i][..n], q)
     }
 
     /// The residual of `q` and its gradient; `None` when no occupied cell with hits is next to
     /// `q`'s cell.
     #[inline]
+    #[cfg(test)]
     fn residual(&mut self, map: &LogOddsMap, q: Vec2) -> Option<(f64, Vec2)> {
-        let c0 = map.frame.cell_from_world(q);
+        let i = self.slot_of(map, map.frame.cell_from_world(q));
+        let slot = &self.slots[i];
+        slot.fit.residual(&self.points[i][..slot.n as usize], q)
+    }
+
+    /// The slot of cell `c0`, fitted for this match.
+    #[inline]
+    fn slot_of(&mut self, map: &LogOddsMap, c0: Cell) -> usize {
         let k = (c0.x as u32).wrapping_mul(0x9e37_79b9) ^ (c0.y as u32).wrapping_mul(0x85eb_ca6b);
         let mask = self.slots.len() - 1;
         let i = (k >> 16) as usize & mask;
         let slot = &mut self.slots[i];
-        let pts = &mut self.points[i];
         if slot.cell != c0 || slot.generation != self.generation {
+            let pts = &mut self.points[i];
             let n = map.surface_points_around(c0, pts);
             slot.cell = c0;
             slot.generation = self.generation;
             slot.n = n as u8;
             slot.fit = SurfaceFit::of_points(&pts[..n], map.frame.resolution_m);
         }
-        slot.fit.residual(&pts[..slot.n as usize], q)
+        i
     }
 }
 
@@ -678,6 +711,17 @@ mod tests {
         (ObstacleDistance::from_grid(&map.occupancy, 8), map)
     }
 
+    /// A scan's hit points in the sensor's frame, every beam that hit.
+    fn hit_points(scan: &Scan) -> Vec<Vec2> {
+        (0..scan.ranges_m.len())
+            .filter(|&i| scan.is_hit(i))
+            .map(|i| {
+                let a = scan.beam_angle_rad(i);
+                Vec2::new(a.cos(), a.sin()) * scan.ranges_m[i]
+            })
+            .collect()
+    }
+
     /// The frame the room is mapped in.
     fn room_frame() -> GridFrame {
         GridFrame::new(Vec2::new(-1.013, -0.987), 0.05, 200, 160)
@@ -775,8 +819,8 @@ mod tests {
         let (mut near_line, mut near_points) = (0, 0);
         for (m, mapped) in [3, 6, 9].into_iter().enumerate() {
             let (_, map) = build_map(&world, frame, &poses[..mapped]);
-            many.begin();
-            few.begin();
+            many.begin(0);
+            few.begin(0);
             for round in 0..3 {
                 for k in 0..10_000 {
                     let u = ((k * 7919 + round * 104_729 + m) % 20_011) as f64 / 20_011.0;
@@ -810,6 +854,54 @@ mod tests {
         assert!(
             near_line > 1000 && near_points > 100,
             "{near_line} {near_points}"
+        );
+    }
+
+    #[test]
+    fn residuals_by_point_are_those_of_their_cells() {
+        // A scan's points at poses a step apart, as in a match (most stay in their cell, some
+        // cross into the next), against the residuals computed afresh; the room mapped from
+        // more poses for each next match. Both ways through are taken: a point's last cell and
+        // fit, and the slots (a new cell, or a corner's fit).
+        let world = room();
+        let poses = room_mapping_poses();
+        let mut fits = SurfaceFits::new();
+        let (mut kept, mut looked_up) = (0, 0);
+        for mapped in [2, 5, 8] {
+            let (_, map) = build_map(&world, room_frame(), &poses[..mapped]);
+            for at in &poses {
+                let scan = world.scan(at);
+                let points = hit_points(&scan);
+                fits.begin(points.len());
+                for step in 0..6 {
+                    let d = 0.004 * step as f64;
+                    let (s, c) = (at.theta_rad + 0.3 * d).sin_cos();
+                    for (k, p) in points.iter().enumerate() {
+                        let q = Vec2::new(
+                            at.x_m + d + c * p.x - s * p.y,
+                            at.y_m - d + s * p.x + c * p.y,
+                        );
+                        let (cell, fit) = fits.last[k];
+                        if cell == map.frame.cell_from_world(q) && fit != SurfaceFit::Points {
+                            kept += 1;
+                        } else {
+                            looked_up += 1;
+                        }
+                        let bits = |v: Option<(f64, Vec2)>| {
+                            v.map(|(r, g)| (r.to_bits(), g.x.to_bits(), g.y.to_bits()))
+                        };
+                        assert_eq!(
+                            bits(fits.residual_of_point(&map, k, q)),
+                            bits(surface_residual_reference(&map, q)),
+                            "{mapped} poses mapped, point {k} at {q:?}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            kept > 10 * 1000 && looked_up > 2 * 1000,
+            "{kept} {looked_up}"
         );
     }
 
@@ -878,14 +970,8 @@ mod tests {
                 0.4 * k as f64,
             );
             let scan = world.scan(&at);
-            let points: Vec<Vec2> = (0..scan.ranges_m.len())
-                .filter(|&i| scan.is_hit(i))
-                .map(|i| {
-                    let a = scan.beam_angle_rad(i);
-                    Vec2::new(a.cos(), a.sin()) * scan.ranges_m[i]
-                })
-                .collect();
-            fits.begin();
+            let points = hit_points(&scan);
+            fits.begin(points.len());
             for d in [0.0, 0.02, -0.07, 0.3] {
                 let x = Vector3::new(at.x_m + d, at.y_m - 0.5 * d, at.theta_rad + d);
                 let mut terms = Vec::new();
