@@ -905,7 +905,8 @@ mod tests {
         );
     }
 
-    /// [`normal_equations`] as first written: `H` summed as whole matrices, `j * j^T * w`.
+    /// [`residuals`] and [`normal_equations`] as first written, in one pass over the points:
+    /// the cost, and `H` summed as whole matrices, `j * j^T * w`.
     fn normal_equations_reference(
         field: &ObstacleDistance,
         map: &LogOddsMap,
