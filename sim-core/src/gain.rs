@@ -64,7 +64,9 @@ pub fn visible_area_read(
     counts: impl Fn(Cell, usize) -> bool,
 ) -> (f64, CellsRead) {
     let nothing = (0.0, CellsRead::of(p));
-    if !frame.contains(p) || range_m.is_nan() || range_m <= 0.0 {
+    // (A frame wider or taller than `i32::MAX` cells has cells no `Cell` names.)
+    let narrow = frame.width <= i32::MAX as u32 && frame.height <= i32::MAX as u32;
+    if !narrow || !frame.contains(p) || range_m.is_nan() || range_m <= 0.0 {
         return nothing;
     }
     let pi = p.y as usize * frame.width as usize + p.x as usize;
@@ -244,8 +246,8 @@ impl RayFan {
             }
             self.offsets_width = Some(frame.width);
         }
-        // When the whole square around `p` lies in the frame, a node's index is a fixed offset
-        // from `p`'s and no node needs a bounds test.
+        // A node's index is a fixed offset from `p`'s; when the whole square around `p` lies in
+        // the frame, no node needs the frame test.
         let h = self.half;
         let inside = p.x - h >= 0 && p.y - h >= 0 && p.x + h < w && p.y + h < frame.height as i32;
         let base = p.y as isize * w as isize + p.x as isize;
@@ -274,12 +276,13 @@ impl RayFan {
 type QuadrantBoxes = [((i16, i16), (i16, i16)); 4];
 
 /// [`RayFan::count`]'s walk of the fan from `p` (the node at `i` in cell `cells[i]` from `p`),
-/// with `INSIDE` whether the whole square around `p` lies in the frame (a node's index is then
-/// `base` plus its offset, with no bounds test). The cells read lie on the rays walked, each
-/// from the centre to where it stopped: a blocking cell (or one outside the frame), or a leaf.
-/// A ray's cells lie in the box of its first and last (the walk is monotonic on both axes), so
-/// the boxes of the centre and these ends, one per quadrant of the end, hold them all; they are
-/// kept at the ends only, not at every node. Returns the count and the boxes (offsets from `p`).
+/// with `INSIDE` whether the whole square around `p` lies in the frame (no cell then needs the
+/// frame test; a node's index is `base` plus its offset either way). The cells read lie on the
+/// rays walked, each from the centre to where it stopped: a blocking cell (or one outside the
+/// frame), or a leaf. A ray's cells lie in the box of its first and last (the walk is monotonic
+/// on both axes), so the boxes of the centre and these ends, one per quadrant of the end, hold
+/// them all; they are kept at the ends only, not at every node. Returns the count and the boxes
+/// (offsets from `p`).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn walk<const INSIDE: bool>(
@@ -292,7 +295,6 @@ fn walk<const INSIDE: bool>(
     blocks: &impl Fn(Cell, usize) -> bool,
     counts: &impl Fn(Cell, usize) -> bool,
 ) -> (usize, QuadrantBoxes) {
-    let w = frame.width as i32;
     let mut boxes: QuadrantBoxes = [((0i16, 0i16), (0i16, 0i16)); 4];
     let mut end_at = |(dx, dy): (i16, i16)| {
         let (lo, hi) = &mut boxes[(dx < 0) as usize | ((dy < 0) as usize) << 1];
@@ -305,10 +307,12 @@ fn walk<const INSIDE: bool>(
         let n = nodes[i];
         let (dx, dy) = cells[i];
         let c = Cell::new(p.x + dx as i32, p.y + dy as i32);
-        let idx = if INSIDE {
+        // (When the square leaves the frame, a cell in the frame still has its index at its
+        // node's offset from `base`. The frame test: two unsigned comparisons, without branches,
+        // a negative coordinate wrapping to above any width or height the fan takes.)
+        let in_frame = || ((c.x as u32) < frame.width) & ((c.y as u32) < frame.height);
+        let idx = if INSIDE || in_frame() {
             (base + n.offset as isize) as usize
-        } else if frame.contains(c) {
-            c.y as usize * w as usize + c.x as usize
         } else {
             end_at((dx, dy));
             i = n.end as usize;

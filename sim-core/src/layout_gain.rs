@@ -14,6 +14,8 @@
 //! shapes of rooms seen through a door are often cut short by the wall lines of other rooms), so
 //! the explorer orders candidates by this gain and keeps the paper's `I(p)` for early stopping.
 
+use std::borrow::Cow;
+
 use crate::frontier::detect::frontier_row;
 use crate::gain::{visible_area_read, CellsRead};
 use crate::grid::{Bitmap, Cell, Occupancy, OccupancyGrid};
@@ -385,6 +387,21 @@ fn for_closed_edge_cells(
     }
 }
 
+/// A bitmap of the raster as cells of `grid`'s frame, row-major: its own cells when it covers
+/// that frame (as when rasterised from this map), so that a predicate reads a cell by its
+/// index with no frame test; else copied cell by cell onto the frame.
+fn cells_on<'a>(bits: &'a Bitmap, grid: &OccupancyGrid) -> Cow<'a, [bool]> {
+    if bits.frame == grid.frame && bits.data.len() == grid.data.len() {
+        return Cow::Borrowed(&bits.data[..]);
+    }
+    let w = (grid.frame.width as usize).max(1);
+    Cow::Owned(
+        (0..grid.data.len())
+            .map(|i| bits.get(Cell::new((i % w) as i32, (i / w) as i32)) == Some(&true))
+            .collect(),
+    )
+}
+
 /// `I(p)` with the layout, in square metres (see the module doc).
 pub fn layout_information_gain(
     grid: &OccupancyGrid,
@@ -407,6 +424,10 @@ pub fn layout_information_gain_read(
     }
     // (The cells as a slice: the predicates then read them without going through `grid`.)
     let data = &grid.data[..];
+    let (walls, gap_walls) = (
+        cells_on(&raster.walls, grid),
+        cells_on(&raster.gap_walls, grid),
+    );
     visible_area_read(
         &grid.frame,
         p,
@@ -415,9 +436,8 @@ pub fn layout_information_gain_read(
         // layout walls touching its own cell must not hide everything from it.
         |c, i| {
             data[i] == Occupancy::Occupied
-                || (raster.walls.get(c) == Some(&true)
-                    && !(raster.through_openings
-                        && (data[i] == Occupancy::Free || raster.gap_walls.get(c) == Some(&true)))
+                || (walls[i]
+                    && !(raster.through_openings && (data[i] == Occupancy::Free || gap_walls[i]))
                     && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
         },
         |c, i| data[i] == Occupancy::Unknown && (raster.through_openings || raster.inside(c)),
@@ -480,14 +500,14 @@ pub fn gap_closed_information_gain_read(
 ) -> (f64, CellsRead) {
     // (The cells as a slice: the predicates then read them without going through `grid`.)
     let data = &grid.data[..];
+    let gap_walls = cells_on(&raster.gap_walls, grid);
     visible_area_read(
         &grid.frame,
         p,
         range_m,
         |c, i| {
             data[i] == Occupancy::Occupied
-                || (raster.gap_walls.get(c) == Some(&true)
-                    && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
+                || (gap_walls[i] && (c.x - p.x).abs().max((c.y - p.y).abs()) > 1)
         },
         |_, i| data[i] == Occupancy::Unknown,
     )
@@ -688,6 +708,34 @@ mod tests {
         // Seen from a corner of the room, the doorway is hidden by the wall: nothing either way.
         let q = Cell::new(14, 14);
         assert!(layout_information_gain(&g, &r, q, 6.0) < 0.1);
+    }
+
+    #[test]
+    fn a_raster_on_another_frame_is_read_by_cell() {
+        // The gains read a raster made on the map's frame by cell index; a raster on another
+        // frame (here moved by 1 m, the same cells) is read cell by cell: the same gains.
+        let (g, layout) = room_with_doorway();
+        let mut r = LayoutRaster::new(&layout, &g, 1.0);
+        let mut moved = r.clone();
+        moved.walls.frame.origin_m.x += 1.0;
+        moved.gap_walls.frame.origin_m.x += 1.0;
+        assert!(r.gap_walls.count_true() > 0);
+        let mut walls_hid_something = false;
+        for through in [false, true] {
+            r.through_openings = through;
+            moved.through_openings = through;
+            for (x, y) in [(13, 10), (14, 14), (6, 6), (10, 12), (14, 9)] {
+                let p = Cell::new(x, y);
+                let by_index = layout_information_gain_read(&g, &r, p, 6.0);
+                assert_eq!(by_index, layout_information_gain_read(&g, &moved, p, 6.0));
+                walls_hid_something |= by_index.0 < information_gain(&g, p, 6.0);
+                assert_eq!(
+                    gap_closed_information_gain_read(&g, &r, p, 6.0),
+                    gap_closed_information_gain_read(&g, &moved, p, 6.0)
+                );
+            }
+        }
+        assert!(walls_hid_something);
     }
 
     #[test]

@@ -71,6 +71,8 @@ struct Node {
     enter: u16,
     /// Index into the step table of the step that entered the cell (255 = none).
     parent: u8,
+    /// A target of the search not yet settled (in the record's spare byte: no array of its own).
+    target: bool,
 }
 
 impl CostField {
@@ -208,6 +210,7 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
         cost: UNREACHED,
         enter: 0,
         parent: 255,
+        target: false,
     };
     let mut field = CostField {
         frame,
@@ -224,13 +227,12 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
     }
     let pad = |c: Cell| (c.y as usize + 1) * pw + c.x as usize + 1;
     let si = pad(start);
-    // Targets still to settle, marked per cell.
-    let mut is_target = vec![false; if targets.is_empty() { 0 } else { np }];
+    // Targets still to settle, marked in their cells (unmarked as they settle).
     let mut targets_left = 0usize;
     for c in targets.iter().filter(|c| frame.contains(**c)) {
-        let i = pad(*c);
-        if !is_target[i] {
-            is_target[i] = true;
+        let n = &mut field.nodes[pad(*c)];
+        if !n.target {
+            n.target = true;
             targets_left += 1;
         }
     }
@@ -250,7 +252,8 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
             if nodes[i].cost != current {
                 continue; // stale entry
             }
-            if targets_left > 0 && is_target[i] {
+            if nodes[i].target {
+                nodes[i].target = false;
                 targets_left -= 1;
                 if targets_left == 0 {
                     field.complete = false;
@@ -291,6 +294,12 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
             }
         }
         current += 1;
+    }
+    // (Targets never reached are left unmarked too: the field says nothing of its targets.)
+    if targets_left > 0 {
+        for c in targets.iter().filter(|c| frame.contains(**c)) {
+            nodes[pad(*c)].target = false;
+        }
     }
     field
 }
