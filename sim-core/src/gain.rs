@@ -100,9 +100,10 @@ thread_local! {
 }
 
 /// One cell of the fan: the index just past its subtree, its index in the square of the set of
-/// cells seen with whether its centre is within range, and its row-major index offset from the
-/// centre. (12 bytes: the fan is read whole for every gain; the cell's offset in cells is in
-/// [`RayFan::cells`], read only where a predicate needs the cell or the square leaves the map.)
+/// cells seen with whether its centre is within range, its row-major index offset from the
+/// centre, and its offset in cells. (16 bytes, all in one record: the walk reads the offset in
+/// cells where a ray ends, a predicate needs the cell or the square leaves the map; from an
+/// array of its own it cost the loop another pointer to keep, and the fan's bytes are the same.)
 #[derive(Debug, Clone, Copy)]
 struct FanNode {
     end: u32,
@@ -111,6 +112,8 @@ struct FanNode {
     seen: u32,
     /// Row-major index offset in a frame `RayFan::offsets_width` cells wide.
     offset: i32,
+    /// The cell's offset from the centre (`dx`, `dy`).
+    cell: (i16, i16),
 }
 
 /// [`FanNode::seen`]'s flag: the cell's centre is within range.
@@ -125,8 +128,6 @@ struct RayFan {
     r_cells: f64,
     half: i32,
     nodes: Vec<FanNode>,
-    /// Per node, its cell's offset from the centre (`dx`, `dy`).
-    cells: Vec<(i16, i16)>,
     /// One byte per cell of the `(2 half + 1)^2` square: 1 when counted in this call. (Bytes,
     /// not bits: consecutive nodes are neighbouring cells, whose bits would share a word, and
     /// each node's read would wait for the previous node's write.)
@@ -184,7 +185,6 @@ impl RayFan {
         // Flatten in preorder (children in the order they were added).
         let r2 = r_cells * r_cells;
         let mut nodes = Vec::with_capacity(offset.len());
-        let mut cells = Vec::with_capacity(offset.len());
         let mut stack: Vec<(u32, bool)> = vec![(0, false)];
         let mut open: Vec<usize> = Vec::new();
         let mut children: Vec<u32> = Vec::new();
@@ -205,8 +205,8 @@ impl RayFan {
                 end: 0,
                 seen: seen_at | if d2 <= r2 { IN_RANGE } else { 0 },
                 offset: 0,
+                cell: (dx, dy),
             });
-            cells.push((dx, dy));
             stack.push((id, true));
             children.clear();
             let mut ch = first_child[id as usize];
@@ -223,7 +223,6 @@ impl RayFan {
             r_cells,
             half,
             nodes,
-            cells,
             seen: vec![0; side * side],
             offsets_width: None,
         }
@@ -241,7 +240,8 @@ impl RayFan {
         self.seen.fill(0);
         let w = frame.width as i32;
         if self.offsets_width != Some(frame.width) {
-            for (n, &(dx, dy)) in self.nodes.iter_mut().zip(&self.cells) {
+            for n in self.nodes.iter_mut() {
+                let (dx, dy) = n.cell;
                 n.offset = dy as i32 * w + dx as i32;
             }
             self.offsets_width = Some(frame.width);
@@ -253,12 +253,12 @@ impl RayFan {
         let base = p.y as isize * w as isize + p.x as isize;
         // (The slices held apart, so that the stores to `seen` cannot make the compiler read
         // the vectors' addresses and lengths again from `self` for every node.)
-        let (nodes, cells, seen) = (&self.nodes[..], &self.cells[..], &mut self.seen[..]);
+        let (nodes, seen) = (&self.nodes[..], &mut self.seen[..]);
         // (Two loops, one per answer to `inside`: the test is not made per node.)
         let (count, boxes) = if inside {
-            walk::<true>(nodes, cells, seen, frame, p, base, blocks, counts)
+            walk::<true>(nodes, seen, frame, p, base, blocks, counts)
         } else {
-            walk::<false>(nodes, cells, seen, frame, p, base, blocks, counts)
+            walk::<false>(nodes, seen, frame, p, base, blocks, counts)
         };
         let at = |(dx, dy): (i16, i16)| Cell::new(p.x + dx as i32, p.y + dy as i32);
         let read = CellsRead {
@@ -275,7 +275,7 @@ impl RayFan {
 /// centre of the ends in it.
 type QuadrantBoxes = [((i16, i16), (i16, i16)); 4];
 
-/// [`RayFan::count`]'s walk of the fan from `p` (the node at `i` in cell `cells[i]` from `p`),
+/// [`RayFan::count`]'s walk of the fan from `p`,
 /// with `INSIDE` whether the whole square around `p` lies in the frame (no cell then needs the
 /// frame test; a node's index is `base` plus its offset either way). The cells read lie on the
 /// rays walked, each from the centre to where it stopped: a blocking cell (or one outside the
@@ -287,7 +287,6 @@ type QuadrantBoxes = [((i16, i16), (i16, i16)); 4];
 #[inline(always)]
 fn walk<const INSIDE: bool>(
     nodes: &[FanNode],
-    cells: &[(i16, i16)],
     seen: &mut [u8],
     frame: &GridFrame,
     p: Cell,
@@ -305,7 +304,7 @@ fn walk<const INSIDE: bool>(
     let mut i = 0usize;
     while i < nodes.len() {
         let n = nodes[i];
-        let (dx, dy) = cells[i];
+        let (dx, dy) = n.cell;
         let c = Cell::new(p.x + dx as i32, p.y + dy as i32);
         // (When the square leaves the frame, a cell in the frame still has its index at its
         // node's offset from `base`. The frame test: two unsigned comparisons, without branches,
@@ -558,8 +557,10 @@ mod tests {
             let nodes: Vec<_> = fan
                 .nodes
                 .iter()
-                .zip(&fan.cells)
-                .map(|(n, &(dx, dy))| (dx, dy, n.seen & IN_RANGE != 0, n.end, n.seen & !IN_RANGE))
+                .map(|n| {
+                    let (dx, dy) = n.cell;
+                    (dx, dy, n.seen & IN_RANGE != 0, n.end, n.seen & !IN_RANGE)
+                })
                 .collect();
             assert_eq!(nodes, fan_nodes_reference(r_cells), "r_cells {r_cells}");
         }
