@@ -346,7 +346,7 @@ impl Explorer<'_> {
     pub(super) fn waypoints_to(&mut self, plan: &Plan, c: Cell) -> Option<Vec<Vec2>> {
         let near = &self.coarse;
         let goal = near.passable_near(c, TARGET_SEARCH_CELLS)?;
-        let (start, k) = (plan.near_start, (DISTANCE_FACTOR / PLAN_FACTOR) as i32);
+        let start = plan.near_start;
         // A goal that a failed search of the whole grid from this start did not reach.
         let generation = self.planning_generation;
         if let Some(m) = self
@@ -381,7 +381,7 @@ impl Explorer<'_> {
                 self.astar
                     .path_within(near.frame, start, near.padded(), MAX_EXTRA, goal, |n| {
                         frame
-                            .index(Cell::new(n.x.div_euclid(k), n.y.div_euclid(k)))
+                            .index(Cell::new(n.x >> FAR_SHIFT, n.y >> FAR_SHIFT))
                             .is_some_and(|i| corridor[i])
                     });
             for i in marked {
@@ -488,6 +488,15 @@ pub(super) const PLAN_FACTOR: u32 = 2;
 /// The grid connects whatever the planning grid connects (a cell is passable when any of its
 /// map cells is traversable), so no candidate reachable by a path is lost.
 pub(super) const DISTANCE_FACTOR: u32 = 4;
+
+/// Planning cells per side of a distance cell, as a shift: a planning cell's distance cell is
+/// its coordinates shifted right (arithmetically: `div_euclid` by the power of two, without
+/// the division's fix-ups for negative values, in A*'s test of every neighbour).
+const FAR_SHIFT: u32 = (DISTANCE_FACTOR / PLAN_FACTOR).trailing_zeros();
+const _: () = assert!(
+    DISTANCE_FACTOR.is_multiple_of(PLAN_FACTOR)
+        && (DISTANCE_FACTOR / PLAN_FACTOR).is_power_of_two()
+);
 
 /// How far (planning cells) a goal may be moved to reach a passable planning cell.
 pub(super) const TARGET_SEARCH_CELLS: i32 = 4;
@@ -646,5 +655,18 @@ pub(super) fn look_vector(goal: &Goal, estimate: &Pose, robust: bool) -> Vec2 {
     match goal.look_dir {
         Some(d) if robust && to.norm() <= 0.3 => d,
         _ => to,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_planning_cell_shifted_is_in_its_distance_cell() {
+        let k = (DISTANCE_FACTOR / PLAN_FACTOR) as i32;
+        for n in [i32::MIN, -9, -5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 7, i32::MAX] {
+            assert_eq!(n >> FAR_SHIFT, n.div_euclid(k), "{n}");
+        }
     }
 }
