@@ -64,7 +64,9 @@ pub fn visible_area_read(
     counts: impl Fn(Cell, usize) -> bool,
 ) -> (f64, CellsRead) {
     let nothing = (0.0, CellsRead::of(p));
-    // (A frame wider or taller than `i32::MAX` cells has cells no `Cell` names.)
+    // (The fan's frame test takes a negative coordinate, cast unsigned, for one beyond the
+    // frame: a frame wider or taller than `i32::MAX` cells, some of whose cells no `Cell` can
+    // name, shows nothing.)
     let narrow = frame.width <= i32::MAX as u32 && frame.height <= i32::MAX as u32;
     if !narrow || !frame.contains(p) || range_m.is_nan() || range_m <= 0.0 {
         return nothing;
@@ -275,14 +277,13 @@ impl RayFan {
 /// centre of the ends in it.
 type QuadrantBoxes = [((i16, i16), (i16, i16)); 4];
 
-/// [`RayFan::count`]'s walk of the fan from `p`,
-/// with `INSIDE` whether the whole square around `p` lies in the frame (no cell then needs the
-/// frame test; a node's index is `base` plus its offset either way). The cells read lie on the
-/// rays walked, each from the centre to where it stopped: a blocking cell (or one outside the
-/// frame), or a leaf. A ray's cells lie in the box of its first and last (the walk is monotonic
-/// on both axes), so the boxes of the centre and these ends, one per quadrant of the end, hold
-/// them all; they are kept at the ends only, not at every node. Returns the count and the boxes
-/// (offsets from `p`).
+/// [`RayFan::count`]'s walk of the fan from `p`, with `INSIDE` whether the whole square around
+/// `p` lies in the frame (no cell then needs the frame test; a node's index is `base` plus its
+/// offset either way). The cells read lie on the rays walked, each from the centre to where it
+/// stopped: a blocking cell (or one outside the frame), or a leaf. A ray's cells lie in the box
+/// of its first and last (the walk is monotonic on both axes), so the boxes of the centre and
+/// these ends, one per quadrant of the end, hold them all; they are kept at the ends only, not
+/// at every node. Returns the count and the boxes (offsets from `p`).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn walk<const INSIDE: bool>(
