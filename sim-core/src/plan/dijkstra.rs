@@ -729,6 +729,33 @@ mod tests {
     }
 
     proptest::proptest! {
+        /// A search with targets stops once it has settled them all, with their costs those of
+        /// the search without; one that settles everything reachable (a target it cannot reach)
+        /// is the search without targets, record for record (its targets' marks cleared).
+        #[test]
+        fn a_search_with_targets_is_the_search_without_at_its_targets(
+            (cells, start, goal) in search_case(0.6),
+            more in proptest::collection::vec((0i32..23, 0i32..17), 0..4),
+        ) {
+            let (w, h) = (23usize, 17usize);
+            let (frame, padded) = padded_grid(&cells, w, h);
+            let all = dijkstra_padded(frame, start, &padded, 5, &[]);
+            let mut targets: Vec<Cell> = more.into_iter().map(|(x, y)| Cell::new(x, y)).collect();
+            targets.push(goal);
+            let some = dijkstra_padded(frame, start, &padded, 5, &targets);
+            let reachable = targets.iter().all(|c| all.distance_m(*c).is_some());
+            proptest::prop_assert_eq!(some.is_complete(), !reachable);
+            if reachable {
+                for c in &targets {
+                    proptest::prop_assert_eq!(some.distance_m(*c), all.distance_m(*c));
+                }
+            } else {
+                proptest::prop_assert_eq!(&some, &all);
+            }
+        }
+    }
+
+    proptest::proptest! {
         /// A search gives the path `path` gives (none exactly when the goal cannot be reached);
         /// a failed one reports every cell that can be reached from the start and no other (the
         /// cells Dijkstra gives a cost to), or nothing when the goal's part of the grid was the
