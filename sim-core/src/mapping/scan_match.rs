@@ -427,10 +427,7 @@ impl SurfaceFit {
                 Some(if r < 0.0 { (-r, -nrm) } else { (r, nrm) })
             }
             SurfaceFit::Points => {
-                let a = pts
-                    .iter()
-                    .copied()
-                    .min_by(|a, b| (a - q).norm_squared().total_cmp(&(b - q).norm_squared()))?;
+                let a = nearest_point(pts, q)?;
                 let d = q - a;
                 let r = d.norm();
                 Some(if r > 1e-9 {
@@ -441,6 +438,24 @@ impl SurfaceFit {
             }
         }
     }
+}
+
+/// The first of `pts` nearest `q` (by squared distance, as `min_by` with `total_cmp` orders
+/// them), `None` if there are none. The points are finite (mean hit points), so the squared
+/// distances are all numbers `>= 0`, where `total_cmp` is `<`, or (`q` not finite) all the same
+/// infinity or NaN, where both keep the first: a plain loop, without the total order's bit
+/// manipulations.
+#[inline]
+fn nearest_point(pts: &[Vec2], q: Vec2) -> Option<Vec2> {
+    let (&first, rest) = pts.split_first()?;
+    let (mut best, mut best_d2) = (first, (first - q).norm_squared());
+    for &a in rest {
+        let d2 = (a - q).norm_squared();
+        if d2 < best_d2 {
+            (best, best_d2) = (a, d2);
+        }
+    }
+    Some(best)
 }
 
 /// A slot of [`SurfaceFits`]: the cell, the match it was fitted in, its fit, and how many mean
@@ -629,6 +644,34 @@ mod tests {
     use super::*;
     use crate::grid::GridFrame;
     use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+
+        /// The nearest of a corner's points is the one `min_by` with `total_cmp` picks: the first
+        /// of those equally near (points on a coarse lattice, `q` often halfway between two), and
+        /// for a `q` not finite.
+        #[test]
+        fn nearest_point_is_min_by_total_cmp(
+            pts in proptest::collection::vec((-4i32..4, -4i32..4), 0..10),
+            q in (-40i32..40, -40i32..40),
+            odd in 0usize..4,
+        ) {
+            let pts: Vec<Vec2> =
+                pts.iter().map(|&(x, y)| Vec2::new(x as f64 * 0.25, y as f64 * 0.25)).collect();
+            let q = match odd {
+                0 => Vec2::new(f64::NAN, q.1 as f64),
+                1 => Vec2::new(-f64::NAN, f64::INFINITY),
+                _ => Vec2::new(q.0 as f64 * 0.125, q.1 as f64 * 0.125),
+            };
+            let reference = pts
+                .iter()
+                .copied()
+                .min_by(|a, b| (a - q).norm_squared().total_cmp(&(b - q).norm_squared()));
+            let bits = |v: Option<Vec2>| v.map(|p| (p.x.to_bits(), p.y.to_bits()));
+            proptest::prop_assert_eq!(bits(nearest_point(&pts, q)), bits(reference));
+        }
+    }
 
     /// A world of axis-aligned boxes, ray cast exactly.
     struct BoxWorld(Vec<[f64; 4]>);

@@ -450,22 +450,24 @@ fn beam_range(x0: f64, x1: f64, n: usize) -> Option<(usize, usize)> {
     (i0 <= i1).then_some((i0, i1))
 }
 
-/// The beams (`n` of them, every `increment_rad` from the first) pointing within `margin` of the
-/// arc from `lo` to `hi` (radians from the first beam, `lo <= hi`, `lo` in about `(-pi, pi]`),
-/// as ranges of beam indices: the arc taken as it is and a turn either way.
+/// The beams (`n` of them, `beams_per_rad` a radian from the first: the increment's reciprocal)
+/// pointing within `margin` of the arc from `lo` to `hi` (radians from the first beam,
+/// `lo <= hi`, `lo` in about `(-pi, pi]`), as ranges of beam indices: the arc taken as it is and
+/// a turn either way. (A product rather than a quotient by the increment: the two differ by an
+/// ulp or so, far inside the margin.)
 #[inline]
 fn beams_in_arc(
     lo: f64,
     hi: f64,
     margin: f64,
-    increment_rad: f64,
+    beams_per_rad: f64,
     n: usize,
 ) -> impl Iterator<Item = (usize, usize)> {
     [-1.0, 0.0, 1.0].into_iter().filter_map(move |turn| {
         let shift = turn * std::f64::consts::TAU;
         beam_range(
-            (lo + shift - margin) / increment_rad,
-            (hi + shift + margin) / increment_rad,
+            (lo + shift - margin) * beams_per_rad,
+            (hi + shift + margin) * beams_per_rad,
             n,
         )
     })
@@ -572,6 +574,7 @@ impl Walls {
             *last += 1;
             let cast = *last;
             let cull = n > 1 && increment_rad > 0.0;
+            let beams_per_rad = 1.0 / increment_rad;
             // The square's rows outwards from the origin's (its row, the one below, above, two
             // below, ...), and each row's cells outwards from the origin's column: the cells
             // between a cell and the origin come before it, so that the walls nearby are found
@@ -601,7 +604,7 @@ impl Walls {
                             ix.origin.y + cy as f64 * ix.cell_m - origin.y,
                         );
                         if let Some((lo, hi)) = ix.cell_arc(corner, first_wrapped) {
-                            let beams = || beams_in_arc(lo, hi, CELL_MARGIN_RAD, increment_rad, n);
+                            let beams = || beams_in_arc(lo, hi, CELL_MARGIN_RAD, beams_per_rad, n);
                             if beams().next().is_none() {
                                 continue;
                             }
@@ -620,16 +623,24 @@ impl Walls {
                         tested[k as usize] = cast;
                         let s = ix.segments[k as usize];
                         let (a, e) = (s.a - origin, s.b - s.a);
+                        // Out of reach: the segment's nearest point to the origin (an end, or
+                        // the foot of the perpendicular, `|a x e|^2 / |e|^2` away squared) is
+                        // farther than the range (and the margin of `reach2`, far above any
+                        // rounding). Without a quotient: a segment kept needlessly is crossed
+                        // beyond the range, if at all.
                         let l2 = e.dot(&e);
-                        let u = if l2 > 0.0 {
-                            (-a.dot(&e) / l2).clamp(0.0, 1.0)
+                        let along = -a.dot(&e);
+                        let cross_ae = a.x * e.y - a.y * e.x;
+                        let out_of_reach = if along <= 0.0 || !(l2 > 0.0) {
+                            a.norm_squared() > reach2
+                        } else if along >= l2 {
+                            (a + e).norm_squared() > reach2
                         } else {
-                            0.0
+                            cross_ae * cross_ae > reach2 * l2
                         };
-                        if (a + e * u).norm_squared() > reach2 {
+                        if out_of_reach {
                             continue;
                         }
-                        let cross_ae = a.x * e.y - a.y * e.x;
                         let mut test = |i: usize| {
                             if let Some(t) = crossing(a, e, cross_ae, dirs[i], max_range_m) {
                                 best[i] = best[i].min(t);
@@ -658,7 +669,7 @@ impl Walls {
                         }
                         let lo = if span >= 0.0 { pa } else { pb };
                         let arc =
-                            beams_in_arc(lo, lo + span.abs(), BEAM_MARGIN_RAD, increment_rad, n);
+                            beams_in_arc(lo, lo + span.abs(), BEAM_MARGIN_RAD, beams_per_rad, n);
                         for (i0, i1) in arc {
                             (i0..=i1).for_each(&mut test);
                         }
