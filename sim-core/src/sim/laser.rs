@@ -631,7 +631,7 @@ impl Walls {
                         let l2 = e.dot(&e);
                         let along = -a.dot(&e);
                         let cross_ae = a.x * e.y - a.y * e.x;
-                        let out_of_reach = if along <= 0.0 || !(l2 > 0.0) {
+                        let out_of_reach = if along <= 0.0 || l2 <= 0.0 {
                             a.norm_squared() > reach2
                         } else if along >= l2 {
                             (a + e).norm_squared() > reach2
