@@ -287,7 +287,10 @@ impl FrontierTracker {
     pub fn detect(&mut self, grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
         let state = &self.state;
         self.cells.retain(|&i| state[i as usize] & FRONTIER != 0);
-        self.cells.sort_unstable();
+        // (The stable sort, whose result is the same for integers: the list is the last
+        // detection's, sorted, with the cells that became frontier cells since appended, and
+        // it merges such runs rather than sorting the whole list again.)
+        self.cells.sort();
         self.cells.dedup();
         let w = grid.width() as i64;
         let h = grid.height() as i64;
