@@ -50,14 +50,20 @@ fn sharpness(pts: &[Vec2], t: f64, bin_m: f64, buf: &mut SharpnessBuffers) -> f6
     offs.clear();
     offs.extend(pts.iter().map(|p| p.x * cb + p.y * sb));
     // The lowest and highest offsets, in four lanes (the least and the greatest of the values
-    // do not depend on the order they are compared in).
+    // do not depend on the order they are compared in). By comparisons, which compile to the
+    // processor's min and max, rather than `f64::min` and `max`, whose NaN rule costs a few
+    // more instructions. A lane never holds a NaN (it takes a value only when the value
+    // compares below or above it), so a NaN offset is passed over as `min` passes it over; a
+    // lane may differ from `min`'s only in the sign of a zero, which changes no bin and no sum
+    // below (an offset from the lowest is then 0 or -0, its fraction 0 or -0, added to sums
+    // that are never -0).
     let (mut lo4, mut hi4) = ([f64::INFINITY; 4], [f64::NEG_INFINITY; 4]);
     let quads = offs.chunks_exact(4);
     let rest = quads.remainder();
     for q in quads {
         for k in 0..4 {
-            lo4[k] = lo4[k].min(q[k]);
-            hi4[k] = hi4[k].max(q[k]);
+            lo4[k] = if q[k] < lo4[k] { q[k] } else { lo4[k] };
+            hi4[k] = if q[k] > hi4[k] { q[k] } else { hi4[k] };
         }
     }
     let (lo, hi) = rest.iter().fold(
