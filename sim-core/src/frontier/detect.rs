@@ -297,6 +297,7 @@ impl FrontierTracker {
         let mut frontiers = Vec::new();
         let mut queue = VecDeque::new();
         let mut middles = LookupMap::default();
+        let offsets = NEIGHBOURS8.map(|(dx, dy)| dy as i64 * w + dx as i64);
         for k in 0..self.cells.len() {
             let start = self.cells[k] as usize;
             if self.state[start] & LABELLED != 0 {
@@ -308,12 +309,18 @@ impl FrontierTracker {
             // (Each cell queued with its column and row: no division per cell.)
             queue.push_back((start as i64 % w, start as i64 / w));
             while let Some((x, y)) = queue.pop_front() {
-                for (dx, dy) in NEIGHBOURS8 {
+                // (A cell off the map's edge has all eight neighbours in the map: they are
+                // found by their index offsets, without the bounds tests.)
+                let interior = x > 0 && y > 0 && x < w - 1 && y < h - 1;
+                for (k, (dx, dy)) in NEIGHBOURS8.into_iter().enumerate() {
                     let (nx, ny) = (x + dx as i64, y + dy as i64);
-                    if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                    let j = if interior {
+                        ((y * w + x) + offsets[k]) as usize
+                    } else if nx < 0 || ny < 0 || nx >= w || ny >= h {
                         continue;
-                    }
-                    let j = (ny * w + nx) as usize;
+                    } else {
+                        (ny * w + nx) as usize
+                    };
                     if self.state[j] == FRONTIER {
                         self.state[j] |= LABELLED;
                         comp.push(j);
