@@ -268,7 +268,7 @@ impl FrontierTracker {
         let (data, wu) = (&grid.data[..], w as usize);
         let unknown = |j: usize| data[j] == Occupancy::Unknown;
         for i in changed {
-            // (In u32, whose division is the quicker: a row-major index fits, as does the width.)
+            // (In u32: a row-major index fits, as does the width.)
             let w32 = (w as u32).max(1);
             let (x, y) = ((i % w32) as i64, (i / w32) as i64);
             if x >= 2 && y >= 2 && x < w - 2 && y < h - 2 {
