@@ -267,32 +267,25 @@ impl FrontierTracker {
         let h = grid.height() as i64;
         let (data, wu) = (&grid.data[..], w as usize);
         let unknown = |j: usize| data[j] == Occupancy::Unknown;
+        // (In u32: a row-major index fits, as does the width.)
+        let w32 = (w as u32).max(1);
         for i in changed {
-            // (In u32: a row-major index fits, as does the width.)
-            let w32 = (w as u32).max(1);
             let (x, y) = ((i % w32) as i64, (i / w32) as i64);
-            if x >= 2 && y >= 2 && x < w - 2 && y < h - 2 {
-                // Two cells or more from the map's edge: the five cells and their 4-neighbours
-                // all lie in the map, found by their index offsets without bounds tests (the
-                // same cells in the same order as below).
-                let i = i as usize;
-                for j in [i, i + 1, i - 1, i + wu, i - wu] {
-                    let now = data[j] == Occupancy::Free
-                        && (unknown(j + 1) || unknown(j - 1) || unknown(j + wu) || unknown(j - wu));
-                    if now && self.state[j] & FRONTIER == 0 {
-                        self.cells.push(j as u32);
-                    }
-                    self.state[j] = (self.state[j] & !FRONTIER) | if now { FRONTIER } else { 0 };
-                }
-                continue;
-            }
+            // Two cells or more from the map's edge, the five cells and their 4-neighbours all
+            // lie in the map: read by their indices, without bounds tests.
+            let interior = x >= 2 && y >= 2 && x < w - 2 && y < h - 2;
             for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)] {
                 let (nx, ny) = (x + dx, y + dy);
-                if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                if !interior && (nx < 0 || ny < 0 || nx >= w || ny >= h) {
                     continue;
                 }
                 let j = (ny * w + nx) as usize;
-                let now = is_frontier_cell(grid, Cell::new(nx as i32, ny as i32));
+                let now = if interior {
+                    data[j] == Occupancy::Free
+                        && (unknown(j + 1) || unknown(j - 1) || unknown(j + wu) || unknown(j - wu))
+                } else {
+                    is_frontier_cell(grid, Cell::new(nx as i32, ny as i32))
+                };
                 if now && self.state[j] & FRONTIER == 0 {
                     self.cells.push(j as u32);
                 }
@@ -316,7 +309,6 @@ impl FrontierTracker {
         let mut frontiers = Vec::new();
         let mut queue = VecDeque::new();
         let mut middles = LookupMap::default();
-        let offsets = NEIGHBOURS8.map(|(dx, dy)| dy as i64 * w + dx as i64);
         for k in 0..self.cells.len() {
             let start = self.cells[k] as usize;
             if self.state[start] & LABELLED != 0 {
@@ -328,18 +320,15 @@ impl FrontierTracker {
             // (Each cell queued with its column and row: no division per cell.)
             queue.push_back((start as i64 % w, start as i64 / w));
             while let Some((x, y)) = queue.pop_front() {
-                // (A cell off the map's edge has all eight neighbours in the map: they are
-                // found by their index offsets, without the bounds tests.)
+                // (A cell off the map's edge has all eight neighbours in the map: no bounds
+                // tests for them.)
                 let interior = x > 0 && y > 0 && x < w - 1 && y < h - 1;
-                for (k, (dx, dy)) in NEIGHBOURS8.into_iter().enumerate() {
+                for (dx, dy) in NEIGHBOURS8 {
                     let (nx, ny) = (x + dx as i64, y + dy as i64);
-                    let j = if interior {
-                        ((y * w + x) + offsets[k]) as usize
-                    } else if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                    if !interior && (nx < 0 || ny < 0 || nx >= w || ny >= h) {
                         continue;
-                    } else {
-                        (ny * w + nx) as usize
-                    };
+                    }
+                    let j = (ny * w + nx) as usize;
                     if self.state[j] == FRONTIER {
                         self.state[j] |= LABELLED;
                         comp.push(j);
