@@ -212,19 +212,29 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
         parent: 255,
         target: false,
     };
+    if !frame.contains(start) {
+        return CostField {
+            frame,
+            start,
+            nodes: vec![unreached; np],
+            complete: true,
+        };
+    }
+    // (Clamped, so that a grid breaking the `max_extra` promise cannot overrun the bucket ring.
+    // The records made from the grid in one pass, not filled and then given their entry costs:
+    // a search that stops at a near target costs little more than this.)
     let mut field = CostField {
         frame,
         start,
-        nodes: vec![unreached; np],
+        nodes: enter
+            .iter()
+            .map(|&e| Node {
+                enter: Into::<u32>::into(e).min(max_extra + 1) as u16,
+                ..unreached
+            })
+            .collect(),
         complete: true,
     };
-    if !frame.contains(start) {
-        return field;
-    }
-    // (Clamped, so that a grid breaking the `max_extra` promise cannot overrun the bucket ring.)
-    for (n, &e) in field.nodes.iter_mut().zip(enter) {
-        n.enter = Into::<u32>::into(e).min(max_extra + 1) as u16;
-    }
     let pad = |c: Cell| (c.y as usize + 1) * pw + c.x as usize + 1;
     let si = pad(start);
     // Targets still to settle, marked in their cells (unmarked as they settle).
