@@ -91,6 +91,7 @@ use crate::plan::inflate::{nearest_by, Traversability};
 use crate::plan::waypoints::waypoints_by;
 use crate::sim::{SimConfig, Simulator};
 use crate::utility::CandidateScore;
+use std::sync::Arc;
 
 /// Where the map's poses come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -508,8 +509,10 @@ struct Explorer<'a> {
     /// Map cells the robot's estimated centre passed through (the segments between its poses at
     /// map updates): its body fitted there, whatever the map shows now.
     travelled: Bitmap,
-    /// The coarser grid the candidates' distances are searched on, updated with `coarse`.
-    far: CoarseCosts,
+    /// The coarser grid the candidates' distances are searched on, updated with `coarse`. Shared
+    /// with the plans made on it (a plan lasts while the map stands still; the grid is copied
+    /// only when it changes while a plan or a parked level still holds it).
+    far: Arc<CoarseCosts>,
     /// The planning and distance grids of the planning levels used before and not in use now,
     /// with the planning cells to recompute before one is used again (marked with every map
     /// update, as `coarse_dirty`): a relaxed plan lasts one decision, and recomputing every
@@ -746,7 +749,7 @@ fn new_explorer<'a>(
         far_dirty_mark: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
         planning: Planning::WithMargin,
         travelled: Bitmap::filled(frame, false),
-        far: CoarseCosts::blocked(frame, DISTANCE_FACTOR),
+        far: Arc::new(CoarseCosts::blocked(frame, DISTANCE_FACTOR)),
         parked: Vec::new(),
         walls_changed: false,
         forgiven_at: None,

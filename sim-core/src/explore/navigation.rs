@@ -204,7 +204,7 @@ impl Explorer<'_> {
         let radius_m = self.inflation_m();
         let robot = self.map.frame.cell_from_world(self.estimate.position());
         let start_on = |grid: &CoarseCosts| start_cell(grid, robot, radius_m);
-        let far = self.far.clone();
+        let far = Arc::clone(&self.far);
         let start = start_on(&far);
         let far_targets: Vec<Cell> = targets
             .iter()
@@ -251,7 +251,7 @@ impl Explorer<'_> {
             )
         };
         assert_eq!(self.coarse, whole(PLAN_FACTOR), "{:?}", self.planning);
-        assert_eq!(self.far, whole(DISTANCE_FACTOR), "{:?}", self.planning);
+        assert_eq!(*self.far, whole(DISTANCE_FACTOR), "{:?}", self.planning);
         PLANNING_CHECKS.with(|c| {
             let mut n = c.get().expect("on");
             n[self.planning as usize] += 1;
@@ -304,7 +304,7 @@ impl Explorer<'_> {
         }
         // (From the planning grid, just brought up to date: 4 of its cells per distance cell
         // rather than 16 map cells, each a traversability test.)
-        self.far.recompute_from(&self.coarse, &far_dirty);
+        Arc::make_mut(&mut self.far).recompute_from(&self.coarse, &far_dirty);
         for &i in &self.coarse_dirty {
             self.coarse_dirty_mark[i as usize] = false;
         }
@@ -583,7 +583,7 @@ thread_local! {
 pub(super) struct ParkedGrids {
     pub(super) level: Planning,
     coarse: CoarseCosts,
-    far: CoarseCosts,
+    far: Arc<CoarseCosts>,
     /// The planning cells to recompute before the grids are used again, each marked.
     dirty: Vec<u32>,
     dirty_mark: Vec<bool>,
@@ -614,7 +614,7 @@ impl Planning {
 /// The distances to the candidates, and what is needed to find the path to one of them.
 pub(super) struct Plan {
     /// The distance grid and the search over it.
-    pub(super) far: CoarseCosts,
+    pub(super) far: Arc<CoarseCosts>,
     pub(super) field: CostField,
     /// The robot's cell on the planning grid.
     pub(super) near_start: Cell,
