@@ -309,12 +309,16 @@ impl FrontierTracker {
         let mut frontiers = Vec::new();
         let mut queue = VecDeque::new();
         let mut middles = LookupMap::default();
+        // (One list for the components in turn, copied at its length for those kept: a list
+        // made and grown for each component was most of a run's allocations.)
+        let mut comp: Vec<usize> = Vec::new();
         for k in 0..self.cells.len() {
             let start = self.cells[k] as usize;
             if self.state[start] & LABELLED != 0 {
                 continue;
             }
-            let mut comp: Vec<usize> = vec![start];
+            comp.clear();
+            comp.push(start);
             self.state[start] |= LABELLED;
             queue.clear();
             // (Each cell queued with its column and row: no division per cell.)
@@ -353,7 +357,7 @@ impl FrontierTracker {
                 candidate: to_cell(middle),
                 cells: comp.iter().map(|&i| to_cell(i)).collect(),
             });
-            middles.insert(comp[0], (comp, middle));
+            middles.insert(comp[0], (comp.clone(), middle));
         }
         for &i in &self.cells {
             self.state[i as usize] &= !LABELLED;
