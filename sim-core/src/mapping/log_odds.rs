@@ -158,12 +158,12 @@ impl SurfacePoints {
     }
 }
 
-/// A beam of [`LogOddsMap::insert_scan`]: whether it hit, its end point and cell, and the guard
-/// around the end (cells, and squared cells) within which no miss is recorded.
+/// A beam of [`LogOddsMap::insert_scan`]: whether it hit, its end point, and the guard around
+/// the end (cells, and squared cells) within which no miss is recorded.
 struct Beam {
     hit: bool,
     end: [f64; 2],
-    end_cell: Cell,
+    /// Not negative.
     guard_cells: i32,
     guard2: f64,
 }
@@ -225,12 +225,12 @@ impl LogOddsMap {
                 let beam = Beam {
                     hit,
                     end,
-                    end_cell,
                     guard_cells,
                     guard2,
                 };
-                let last = SegmentCells::new(start, end)
-                    .for_each_indexed(w, |c, idx| self.beam_cell(&beam, c, idx, cfg, &mut stats));
+                let last = SegmentCells::new(start, end).for_each_indexed(w, |c, idx, nx, ny| {
+                    self.beam_cell(&beam, c, idx, (nx, ny), cfg, &mut stats)
+                });
                 if let Some((c, idx)) = last {
                     if hit {
                         self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
@@ -293,21 +293,21 @@ impl LogOddsMap {
         stats
     }
 
-    /// A cell of a beam in the map before its end cell: missed, unless the beam hit and the
-    /// cell lies within the guard around the end.
+    /// A cell of a beam in the map before its end cell, `from_end` columns and rows from it:
+    /// missed, unless the beam hit and the cell lies within the guard around the end.
     #[inline(always)]
     fn beam_cell(
         &mut self,
         beam: &Beam,
         c: Cell,
         idx: usize,
+        from_end: (u32, u32),
         cfg: &LogOddsConfig,
         stats: &mut InsertStats,
     ) {
         if beam.hit {
-            let e = beam.end_cell;
-            let near =
-                (c.x - e.x).abs() <= beam.guard_cells && (c.y - e.y).abs() <= beam.guard_cells;
+            let g = beam.guard_cells as u32;
+            let near = from_end.0 <= g && from_end.1 <= g;
             let (ddx, ddy) = (
                 c.x as f64 + 0.5 - beam.end[0],
                 c.y as f64 + 0.5 - beam.end[1],

@@ -97,13 +97,15 @@ impl SegmentCells {
     /// The cells the iterator gives, each with its row-major index in a frame `w` cells wide, for
     /// a segment whose first and last cells lie in that frame (then every cell does: the walk
     /// stays in their box): `visit` gets every cell but the last, which is returned (`None`
-    /// when there are no cells). Steps on both axes while both have some left (one comparison
-    /// per step), then on the one left, the index kept by adding.
+    /// when there are no cells), and the steps left from it on each axis (its distance from the
+    /// last cell in columns and in rows: the walk moves toward the last cell on both). Steps on
+    /// both axes while both have some left (one comparison per step), then on the one left, the
+    /// index kept by adding.
     #[inline(always)]
     pub fn for_each_indexed(
         self,
         w: i32,
-        mut visit: impl FnMut(Cell, usize),
+        mut visit: impl FnMut(Cell, usize, u32, u32),
     ) -> Option<(Cell, usize)> {
         if !self.first {
             return None;
@@ -116,7 +118,7 @@ impl SegmentCells {
         let (mut tx, mut ty) = (self.t_max_x, self.t_max_y);
         // Each step visits the cell it leaves.
         while nx > 0 && ny > 0 {
-            visit(Cell::new(cx, cy), idx as usize);
+            visit(Cell::new(cx, cy), idx as usize, nx, ny);
             if tx <= ty {
                 cx += sx;
                 idx += sx as isize;
@@ -130,13 +132,13 @@ impl SegmentCells {
             }
         }
         while nx > 0 {
-            visit(Cell::new(cx, cy), idx as usize);
+            visit(Cell::new(cx, cy), idx as usize, nx, 0);
             cx += sx;
             idx += sx as isize;
             nx -= 1;
         }
         while ny > 0 {
-            visit(Cell::new(cx, cy), idx as usize);
+            visit(Cell::new(cx, cy), idx as usize, 0, ny);
             cy += sy;
             idx += row;
             ny -= 1;
@@ -224,7 +226,8 @@ mod tests {
 
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
-        /// The indexed walk visits the iterator's cells, with their indices, and returns the last.
+        /// The indexed walk visits the iterator's cells, with their indices and their distances
+        /// from the last cell on each axis, and returns the last.
         #[test]
         fn the_indexed_walk_is_the_walk(
             a in (0.0f64..40.0, 0.0f64..30.0), b in (0.0f64..40.0, 0.0f64..30.0),
@@ -234,12 +237,14 @@ mod tests {
             let q = |v: f64| match snap { 0 => v, 1 => v.round(), 2 => (v * 2.0).round() / 2.0, _ => v.floor() + 0.5 };
             let (a, b) = ([q(a.0), q(a.1)], [q(b.0), q(b.1)]);
             let w = 41;
-            let want: Vec<(Cell, usize)> = SegmentCells::new(a, b)
-                .map(|c| (c, (c.y * w + c.x) as usize))
+            let e = Cell::new(b[0].floor() as i32, b[1].floor() as i32);
+            let want: Vec<(Cell, usize, u32, u32)> = SegmentCells::new(a, b)
+                .map(|c| (c, (c.y * w + c.x) as usize, c.x.abs_diff(e.x), c.y.abs_diff(e.y)))
                 .collect();
             let mut got = Vec::new();
-            let last = SegmentCells::new(a, b).for_each_indexed(w, |c, i| got.push((c, i)));
-            got.extend(last);
+            let last = SegmentCells::new(a, b)
+                .for_each_indexed(w, |c, i, nx, ny| got.push((c, i, nx, ny)));
+            got.extend(last.map(|(c, i)| (c, i, 0, 0)));
             proptest::prop_assert_eq!(&got, &want);
         }
     }
