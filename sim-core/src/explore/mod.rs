@@ -511,7 +511,7 @@ struct Explorer<'a> {
     travelled: Bitmap,
     /// The coarser grid the candidates' distances are searched on, updated with `coarse`. Shared
     /// with the plans made on it (a plan lasts while the map stands still; the grid is copied
-    /// only when it changes while a plan or a parked level still holds it).
+    /// only when it changes while a plan, a parked level or a snapshot still holds it).
     far: Arc<CoarseCosts>,
     /// The planning and distance grids of the planning levels used before and not in use now,
     /// with the planning cells to recompute before one is used again (marked with every map
