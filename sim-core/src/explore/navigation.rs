@@ -160,7 +160,10 @@ impl Explorer<'_> {
         at: impl Fn(Planning) -> bool,
     ) {
         let frame = self.map.frame;
-        let f = self.coarse.factor as i32;
+        // (The constant, not the grid's field: a division by 2 is a shift, by a field a
+        // division per cell.)
+        debug_assert_eq!(self.coarse.factor, PLAN_FACTOR);
+        let f = PLAN_FACTOR as i32;
         let (cw, ch) = (
             self.coarse.frame.width as i32,
             self.coarse.frame.height as i32,
