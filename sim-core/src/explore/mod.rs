@@ -86,7 +86,9 @@ use crate::mapping::log_odds::{LogOddsConfig, LogOddsMap};
 use crate::mapping::ray::{grid_from_world, walk_segment};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
 use crate::plan::coarse::CoarseCosts;
-use crate::plan::dijkstra::{dijkstra_padded, padded_index, AStar, CostField};
+use crate::plan::dijkstra::{
+    dijkstra_padded, dijkstra_padded_within, padded_index, AStar, CostField,
+};
 use crate::plan::inflate::{nearest_by, Traversability};
 use crate::plan::waypoints::waypoints_by;
 use crate::sim::{SimConfig, Simulator};

@@ -213,11 +213,39 @@ impl Explorer<'_> {
             .iter()
             .filter_map(|c| far.passable_near(*c, far_search_cells()))
             .collect();
-        let field = dijkstra_padded(far.frame, start, far.padded(), MAX_EXTRA, &far_targets);
+        let window = self.far_window();
+        let field = dijkstra_padded_within(
+            far.frame,
+            start,
+            far.padded(),
+            MAX_EXTRA,
+            &far_targets,
+            window,
+        );
         Plan {
             far,
             field,
             near_start: start_on(&self.coarse),
+        }
+    }
+
+    /// The distance grid's cells that can be passable: those under the box of the map's cells
+    /// observed so far (a passable cell covers a traversable map cell, which is free, or one
+    /// travelled and free). The whole grid before the first scan.
+    fn far_window(&self) -> (Cell, Cell) {
+        let f = DISTANCE_FACTOR as i32;
+        match self.map.known_bounds {
+            Some((lo, hi)) => (
+                Cell::new(lo.x.div_euclid(f), lo.y.div_euclid(f)),
+                Cell::new(hi.x.div_euclid(f), hi.y.div_euclid(f)),
+            ),
+            None => (
+                Cell::new(0, 0),
+                Cell::new(
+                    self.far.frame.width as i32 - 1,
+                    self.far.frame.height as i32 - 1,
+                ),
+            ),
         }
     }
 
@@ -255,6 +283,18 @@ impl Explorer<'_> {
         };
         assert_eq!(self.coarse, whole(PLAN_FACTOR), "{:?}", self.planning);
         assert_eq!(*self.far, whole(DISTANCE_FACTOR), "{:?}", self.planning);
+        // Every passable cell of the distance grid lies in the window its searches take.
+        let (lo, hi) = self.far_window();
+        for y in 0..self.far.frame.height as i32 {
+            for x in 0..self.far.frame.width as i32 {
+                let c = Cell::new(x, y);
+                let inside = x >= lo.x && y >= lo.y && x <= hi.x && y <= hi.y;
+                assert!(
+                    inside || !self.far.passable(c),
+                    "{c:?} outside {lo:?}-{hi:?}"
+                );
+            }
+        }
         PLANNING_CHECKS.with(|c| {
             let mut n = c.get().expect("on");
             n[self.planning as usize] += 1;

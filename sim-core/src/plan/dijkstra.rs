@@ -11,7 +11,8 @@
 //! searches the planning grid as stored, padded by one blocked cell so that no neighbour needs a
 //! bounds check, and stops once every target cell is settled; each cell has one record (cost, entry
 //! cost, parent), and the eight relaxations of an expansion are tested together as a bit mask
-//! before any is applied. [`AStar`] (octile heuristic) finds the path to the one chosen goal on the
+//! before any is applied. [`dijkstra_padded_within`] makes records only for a window of the grid
+//! known to hold every passable cell (the part of a building observed so far). [`AStar`] (octile heuristic) finds the path to the one chosen goal on the
 //! fine grid, first inside a corridor around the coarse path; its buffers are kept between searches
 //! and only the cells a search touched are reset.
 
@@ -54,7 +55,10 @@ fn allowed_steps(pass: &[u32; 8]) -> [bool; 8] {
 pub struct CostField {
     pub frame: GridFrame,
     pub start: Cell,
-    /// Per cell of the frame padded by one cell on every side (row-major, `frame.width + 2`
+    /// The part of the frame searched (see [`dijkstra_padded_within`]): its first cell and its
+    /// width and height. A cell of the frame outside it is unreachable.
+    window: (Cell, usize, usize),
+    /// Per cell of the window padded by one cell on every side (row-major, `window.1 + 2`
     /// wide). One array of small records rather than one array per field: a search touches a
     /// cell's cost, entry cost and parent together, and the wavefront visits cells far apart.
     nodes: Vec<Node>,
@@ -82,11 +86,12 @@ impl CostField {
         self.complete
     }
 
-    /// Index of `c` in the padded arrays, `None` outside the frame.
+    /// Index of `c` in the padded arrays, `None` outside the window.
     fn padded_index(&self, c: Cell) -> Option<usize> {
-        self.frame
-            .contains(c)
-            .then(|| (c.y as usize + 1) * (self.frame.width as usize + 2) + c.x as usize + 1)
+        let (lo, ww, wh) = self.window;
+        let (x, y) = (c.x as i64 - lo.x as i64, c.y as i64 - lo.y as i64);
+        (x >= 0 && y >= 0 && (x as usize) < ww && (y as usize) < wh)
+            .then(|| (y as usize + 1) * (ww + 2) + x as usize + 1)
     }
 
     /// Cost of reaching `c` in metres (extra costs included), `None` if unreachable.
@@ -201,6 +206,30 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
     max_extra: u32,
     targets: &[Cell],
 ) -> CostField {
+    let last = Cell::new(frame.width as i32 - 1, frame.height as i32 - 1);
+    dijkstra_padded_within(
+        frame,
+        start,
+        enter,
+        max_extra,
+        targets,
+        (Cell::new(0, 0), last),
+    )
+}
+
+/// [`dijkstra_padded`] searching only the cells of `window` (its least and greatest corner
+/// cells), which must hold every passable cell of the grid: the search is then the same, and
+/// costs nothing for the cells outside (a grid of a building's bounding box, of which a search
+/// early in a run reaches a small part). A window that does not hold the start and every
+/// target in the frame is taken to be the whole frame.
+pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
+    frame: GridFrame,
+    start: Cell,
+    enter: &[T],
+    max_extra: u32,
+    targets: &[Cell],
+    window: (Cell, Cell),
+) -> CostField {
     let (w, h) = (frame.width as usize, frame.height as usize);
     let pw = w + 2;
     let np = pw * (h + 2);
@@ -216,26 +245,48 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
         return CostField {
             frame,
             start,
-            nodes: vec![unreached; np],
+            window: (Cell::new(0, 0), 0, 0),
+            nodes: Vec::new(),
             complete: true,
         };
     }
-    // (Clamped, so that a grid breaking the `max_extra` promise cannot overrun the bucket ring.
-    // The records made from the grid in one pass, not filled and then given their entry costs:
-    // a search that stops at a near target costs little more than this.)
+    let (mut lo, mut hi) = (
+        Cell::new(window.0.x.max(0), window.0.y.max(0)),
+        Cell::new(window.1.x.min(w as i32 - 1), window.1.y.min(h as i32 - 1)),
+    );
+    let inside = |c: &Cell| c.x >= lo.x && c.y >= lo.y && c.x <= hi.x && c.y <= hi.y;
+    if !inside(&start) || !targets.iter().filter(|c| frame.contains(**c)).all(inside) {
+        (lo, hi) = (Cell::new(0, 0), Cell::new(w as i32 - 1, h as i32 - 1));
+    }
+    let (ww, wh) = ((hi.x - lo.x + 1) as usize, (hi.y - lo.y + 1) as usize);
+    // The window's records, padded by one blocked cell on every side (the cells there, if in
+    // the frame, are not passable: the window holds every passable cell). (Clamped, so that a
+    // grid breaking the `max_extra` promise cannot overrun the bucket ring. Made from the grid
+    // in one pass, not filled and then given their entry costs: a search that stops at a near
+    // target costs little more than this.)
+    let qw = ww + 2;
+    let mut nodes = Vec::with_capacity(qw * (wh + 2));
+    nodes.resize(qw, unreached);
+    for y in 0..wh {
+        let from = (lo.y as usize + y + 1) * pw + lo.x as usize + 1;
+        nodes.push(unreached);
+        nodes.extend(enter[from..from + ww].iter().map(|&e| Node {
+            enter: Into::<u32>::into(e).min(max_extra + 1) as u16,
+            ..unreached
+        }));
+        nodes.push(unreached);
+    }
+    nodes.resize(qw * (wh + 2), unreached);
     let mut field = CostField {
         frame,
         start,
-        nodes: enter
-            .iter()
-            .map(|&e| Node {
-                enter: Into::<u32>::into(e).min(max_extra + 1) as u16,
-                ..unreached
-            })
-            .collect(),
+        window: (lo, ww, wh),
+        nodes,
         complete: true,
     };
-    let pad = |c: Cell| (c.y as usize + 1) * pw + c.x as usize + 1;
+    // From here on, the window padded is the grid searched.
+    let pw = qw;
+    let pad = |c: Cell| (c.y - lo.y) as usize * pw + pw + (c.x - lo.x) as usize + 1;
     let si = pad(start);
     // Targets still to settle, marked in their cells (unmarked as they settle).
     let mut targets_left = 0usize;
@@ -759,6 +810,43 @@ mod tests {
                 proptest::prop_assert_eq!(some.distance_m(*c), all.distance_m(*c));
             }
             proptest::prop_assert!(reachable || some == all, "an unreachable target: {:?}", targets);
+        }
+    }
+
+    proptest::proptest! {
+        /// A search within a window holding every passable cell is the search of the whole
+        /// grid: every cell's cost and path are the same (a cell outside is unreachable); a
+        /// window without the start or a target is the whole grid.
+        #[test]
+        fn a_search_within_a_window_of_the_passable_cells_is_the_whole_search(
+            (cells, start, goal) in search_case(0.7),
+            (x0, y0, x1, y1) in (0i32..12, 0i32..9, 11i32..23, 8i32..17),
+            grow in 0i32..3,
+        ) {
+            let (w, h) = (23usize, 17usize);
+            // Passable cells only within the box (x0, y0)-(x1, y1).
+            let boxed: Vec<(bool, u8)> = cells
+                .iter()
+                .enumerate()
+                .map(|(i, &(open, extra))| {
+                    let (x, y) = ((i % w) as i32, (i / w) as i32);
+                    (open && x >= x0 && x <= x1 && y >= y0 && y <= y1, extra)
+                })
+                .collect();
+            let (frame, padded) = padded_grid(&boxed, w, h);
+            let window = (Cell::new(x0 - grow, y0 - grow), Cell::new(x1 + grow, y1 + grow));
+            for targets in [vec![], vec![goal]] {
+                let all = dijkstra_padded(frame, start, &padded, 5, &targets);
+                let within = dijkstra_padded_within(frame, start, &padded, 5, &targets, window);
+                proptest::prop_assert_eq!(within.is_complete(), all.is_complete());
+                for y in -1..=h as i32 {
+                    for x in -1..=w as i32 {
+                        let c = Cell::new(x, y);
+                        proptest::prop_assert_eq!(within.distance_m(c), all.distance_m(c));
+                        proptest::prop_assert_eq!(within.path_to(c), all.path_to(c));
+                    }
+                }
+            }
         }
     }
 
