@@ -12,9 +12,10 @@
 //! bounds check, and stops once every target cell is settled; each cell has one record (cost, entry
 //! cost, parent), and the eight relaxations of an expansion are tested together as a bit mask
 //! before any is applied. [`dijkstra_padded_within`] makes records only for a window of the grid
-//! known to hold every passable cell (the part of a building observed so far). [`AStar`] (octile heuristic) finds the path to the one chosen goal on the
-//! fine grid, first inside a corridor around the coarse path; its buffers are kept between searches
-//! and only the cells a search touched are reset.
+//! known to hold every passable cell (the part of a building observed so far). [`AStar`] (octile
+//! heuristic) finds the path to the one chosen goal on the fine grid, first inside a corridor
+//! around the coarse path; its buffers are kept between searches and only the cells a search
+//! touched are reset.
 
 use crate::grid::{Bitmap, Cell, Grid, GridFrame};
 use crate::mapping::distance_field::ObstacleDistance;
@@ -286,7 +287,7 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
     };
     // From here on, the window padded is the grid searched.
     let pw = qw;
-    let pad = |c: Cell| (c.y - lo.y) as usize * pw + pw + (c.x - lo.x) as usize + 1;
+    let pad = |c: Cell| ((c.y - lo.y) as usize + 1) * pw + (c.x - lo.x) as usize + 1;
     let si = pad(start);
     // Targets still to settle, marked in their cells (unmarked as they settle).
     let mut targets_left = 0usize;
