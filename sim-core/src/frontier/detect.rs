@@ -308,7 +308,7 @@ impl FrontierTracker {
         let h = grid.height() as i64;
         let mut frontiers = Vec::new();
         let mut queue = VecDeque::new();
-        let mut middles = LookupMap::default();
+        let mut middles = LookupMap::with_capacity(self.middles.len());
         // (One list for the components in turn, copied at its length for those kept: a list
         // made and grown for each component was most of a run's allocations.)
         let mut comp: Vec<usize> = Vec::new();
@@ -344,12 +344,19 @@ impl FrontierTracker {
                 continue;
             }
             comp.sort_unstable();
-            let middle = match self.middles.get(&comp[0]) {
-                Some((cells, middle)) if *cells == comp => *middle,
+            // (The last detection's entry moves to this one's: its list is kept as it is when
+            // the component is the same, and refilled otherwise, not allocated again.)
+            let (kept, middle) = match self.middles.remove(&comp[0]) {
+                Some((cells, middle)) if cells == comp => (cells, middle),
                 // (A cell's place in the component from a table over the component's box, not
                 // over the whole map; by binary search when the box is much larger than the
                 // component, a long diagonal chain.)
-                _ => middle_cell_boxed(&comp, w as usize),
+                old => {
+                    let mut cells = old.map(|(cells, _)| cells).unwrap_or_default();
+                    cells.clear();
+                    cells.extend_from_slice(&comp);
+                    (cells, middle_cell_boxed(&comp, w as usize))
+                }
             };
             let to_cell = |i: usize| grid.frame.cell_of_index(i);
             frontiers.push(Frontier {
@@ -357,7 +364,7 @@ impl FrontierTracker {
                 candidate: to_cell(middle),
                 cells: comp.iter().map(|&i| to_cell(i)).collect(),
             });
-            middles.insert(comp[0], (comp.clone(), middle));
+            middles.insert(comp[0], (kept, middle));
         }
         for &i in &self.cells {
             self.state[i as usize] &= !LABELLED;

@@ -123,14 +123,19 @@ pub fn match_scan(
             grid.get(cell).is_some_and(|o| *o != Occupancy::Unknown)
         })
     };
-    let points: Vec<Vec2> = BEAM_DIRECTIONS.with_borrow_mut(|dirs| {
+    // (Made at the most it can hold: collected from the filters, it grew about seven times.)
+    let mut points: Vec<Vec2> = Vec::with_capacity(scan.ranges_m.len().div_ceil(stride));
+    BEAM_DIRECTIONS.with_borrow_mut(|dirs| {
         let dirs = dirs.of(scan);
-        (0..scan.ranges_m.len())
-            .step_by(stride)
-            .filter(|&i| scan.is_hit(i) && scan.ranges_m[i].is_finite() && scan.ranges_m[i] > 0.0)
-            .map(|i| dirs[i] * scan.ranges_m[i])
-            .filter(|p| observed(*p))
-            .collect()
+        points.extend(
+            (0..scan.ranges_m.len())
+                .step_by(stride)
+                .filter(|&i| {
+                    scan.is_hit(i) && scan.ranges_m[i].is_finite() && scan.ranges_m[i] > 0.0
+                })
+                .map(|i| dirs[i] * scan.ranges_m[i])
+                .filter(|p| observed(*p)),
+        )
     });
     let rejected = |score, iterations, searched| MatchResult {
         pose: *prior,
