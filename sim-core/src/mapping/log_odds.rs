@@ -163,8 +163,7 @@ impl SurfacePoints {
 struct Beam {
     hit: bool,
     end: [f64; 2],
-    /// Not negative.
-    guard_cells: i32,
+    guard_cells: u32,
     guard2: f64,
 }
 
@@ -198,9 +197,9 @@ impl LogOddsMap {
         let mut bmax = bmin;
         let guard2 = cfg.hit_guard_cells * cfg.hit_guard_cells;
         let guard_cells = if cfg.hit_guard_cells.is_finite() {
-            cfg.hit_guard_cells.max(0.0).ceil().min(i32::MAX as f64) as i32
+            cfg.hit_guard_cells.max(0.0).ceil().min(i32::MAX as f64) as u32
         } else {
-            i32::MAX
+            i32::MAX as u32
         };
         let fill2 = (cfg.hit_gap_fill_m * inv_res).powi(2);
         // The previous beam's end (grid coordinates) when it was a hit.
@@ -219,15 +218,15 @@ impl LogOddsMap {
             let end_cell = Cell::new(floor_i32(end[0]), floor_i32(end[1]));
             bmin = Cell::new(bmin.x.min(end_cell.x), bmin.y.min(end_cell.y));
             bmax = Cell::new(bmax.x.max(end_cell.x), bmax.y.max(end_cell.y));
+            let beam = Beam {
+                hit,
+                end,
+                guard_cells,
+                guard2,
+            };
             if start_inside && inside(end_cell) {
                 // The usual beam, from a cell of the map to a cell of the map: no cell needs a
                 // bounds test, and the end cell is the last.
-                let beam = Beam {
-                    hit,
-                    end,
-                    guard_cells,
-                    guard2,
-                };
                 let last = SegmentCells::new(start, end).for_each_indexed(w, |c, idx, nx, ny| {
                     self.beam_cell(&beam, c, idx, (nx, ny), cfg, &mut stats)
                 });
@@ -257,22 +256,13 @@ impl LogOddsMap {
                 }
                 was_inside = true;
                 let idx = c.y as usize * w as usize + c.x as usize;
-                if hit {
-                    if c == end_cell {
-                        self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
-                        self.surface.add(c, end);
-                        continue;
-                    }
-                    // (A cell more than `guard_cells` cells from the end cell on either axis
-                    // is farther than the guard from the end point: no need for the distance.)
-                    let near = (c.x - end_cell.x).abs() <= guard_cells
-                        && (c.y - end_cell.y).abs() <= guard_cells;
-                    let (ddx, ddy) = (c.x as f64 + 0.5 - end[0], c.y as f64 + 0.5 - end[1]);
-                    if near && ddx * ddx + ddy * ddy < guard2 {
-                        continue;
-                    }
+                if hit && c == end_cell {
+                    self.update_cell(idx, cfg.hit_l, cfg, &mut stats);
+                    self.surface.add(c, end);
+                    continue;
                 }
-                self.update_cell(idx, cfg.miss_l, cfg, &mut stats);
+                let from_end = (c.x.abs_diff(end_cell.x), c.y.abs_diff(end_cell.y));
+                self.beam_cell(&beam, c, idx, from_end, cfg, &mut stats);
             }
             if clipped {
                 stats.beams_clipped += 1;
@@ -293,8 +283,9 @@ impl LogOddsMap {
         stats
     }
 
-    /// A cell of a beam in the map before its end cell, `from_end` columns and rows from it:
-    /// missed, unless the beam hit and the cell lies within the guard around the end.
+    /// A cell of a beam in the map other than a hit's end cell, `from_end` columns and rows from
+    /// the end cell: missed, unless the beam hit and the cell lies within the guard around the
+    /// end. (Both the usual beam's walk and the clipped beam's loop ask it.)
     #[inline(always)]
     fn beam_cell(
         &mut self,
@@ -306,7 +297,9 @@ impl LogOddsMap {
         stats: &mut InsertStats,
     ) {
         if beam.hit {
-            let g = beam.guard_cells as u32;
+            // (A cell more than `guard_cells` cells from the end cell on either axis is farther
+            // than the guard from the end point: no need for the distance.)
+            let g = beam.guard_cells;
             let near = from_end.0 <= g && from_end.1 <= g;
             let (ddx, ddy) = (
                 c.x as f64 + 0.5 - beam.end[0],
@@ -625,6 +618,38 @@ mod tests {
         m.insert_scan(&p, &one_beam(1.5, 3.0), &cfg);
         assert!(m.occupancy.is(Cell::new(10, 5), Occupancy::Free));
         assert_eq!(m.take_occupied_flips().len(), 3);
+    }
+
+    #[test]
+    fn a_beam_from_outside_the_frame_marks_its_cells_as_from_inside() {
+        // The same beams, hits and misses, in a frame holding their start (each walked whole)
+        // and in one starting 2 m further east (each clipped, its start outside): the cells
+        // the two share get the same log-odds, the guard around a hit included.
+        let big = GridFrame::new(Vec2::zeros(), 0.1, 60, 60);
+        let small = GridFrame::new(Vec2::new(2.0, 0.0), 0.1, 40, 60);
+        let cfg = LogOddsConfig {
+            hit_guard_cells: 2.5,
+            ..LogOddsConfig::default()
+        };
+        let (mut whole, mut clipped) = (LogOddsMap::new(big), LogOddsMap::new(small));
+        let mut beams_clipped = 0;
+        for k in 0..13 {
+            let pose = Pose::new(0.55, 3.05, -0.6 + 0.1 * k as f64);
+            let scan = one_beam(if k % 3 == 0 { 4.0 } else { 3.0 }, 4.0);
+            assert_eq!(whole.insert_scan(&pose, &scan, &cfg).beams_clipped, 0);
+            beams_clipped += clipped.insert_scan(&pose, &scan, &cfg).beams_clipped;
+        }
+        assert_eq!(beams_clipped, 13);
+        let mut hits = 0;
+        for y in 0..60 {
+            for x in 0..40 {
+                let (c, b) = (Cell::new(x, y), Cell::new(x + 20, y));
+                let (i, j) = (small.index(c).unwrap(), big.index(b).unwrap());
+                assert_eq!(clipped.data[i], whole.data[j], "{c:?}");
+                hits += (whole.occupancy.data[j] == Occupancy::Occupied) as usize;
+            }
+        }
+        assert!(hits >= 8, "{hits}");
     }
 
     #[test]
