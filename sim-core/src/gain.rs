@@ -9,9 +9,10 @@
 //!
 //! Implementation: the 360-degree rays are stored as a prefix tree of cell offsets, built once per
 //! range, so the cells that rays share near `p` are tested once, and a blocked cell skips every ray
-//! through it. Between decisions, `explore::gain_cache` reuses a candidate's gain while the map
-//! is unchanged where its rays went ([`CellsRead`]: the boxes of the cells they read, kept where
-//! each ray stopped, not at every cell).
+//! through it. Between decisions, `explore::gain_cache` reuses a candidate's gain while no cell
+//! its rays read has changed ([`CellsRead`]: the boxes of the cells read, and where each ray
+//! stopped, [`RayStops`], noted only where the walk skips a subtree; a changed cell is looked up
+//! among the rays through it).
 
 use crate::grid::{Cell, GridFrame, Occupancy, OccupancyGrid};
 use crate::mapping::ray::walk_segment;
@@ -37,11 +38,12 @@ pub struct CellBox {
 }
 
 /// Where the cells lie whose predicates a visible area read: in the union of four boxes, one
-/// per quadrant around the centre cell `p` (each holds `p`). The area stays the same while no
-/// cell in them changes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// per quadrant around the centre cell `p` (each holds `p`), and on the rays up to where they
+/// stopped ([`RayStops`]). The area stays the same while no cell read changes.
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CellsRead {
     pub boxes: [CellBox; 4],
+    pub rays: RayStops,
 }
 
 impl CellsRead {
@@ -49,7 +51,60 @@ impl CellsRead {
     pub fn of(c: Cell) -> Self {
         Self {
             boxes: [CellBox { min: c, max: c }; 4],
+            rays: RayStops::default(),
         }
+    }
+
+    /// Whether the visible area from `p` that this describes may have read the cell `c`: when
+    /// the rays' stops are kept, whether it lies on a ray at or before where it stopped (which
+    /// lies in the boxes); otherwise whether it lies in a box.
+    #[inline]
+    pub fn may_have_read(&self, p: Cell, c: Cell) -> bool {
+        if self.rays.cells.is_some() {
+            return self.rays.may_have_read(p, c);
+        }
+        let holds =
+            |b: &CellBox| b.min.x <= c.x && c.x <= b.max.x && b.min.y <= c.y && c.y <= b.max.y;
+        self.boxes.iter().any(holds)
+    }
+}
+
+/// Where each ray of a visible area stopped: ray `k` (at the angle `k 2 pi / n` from the
+/// centre of the centre cell, `n` rays) read the first `stops[k] + 1` cells of its walk. Empty
+/// when not kept (a walk longer than [`MAX_DEPTH_KEPT`] cells): any cell may then have been
+/// read.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct RayStops {
+    stops: Vec<u8>,
+    cells: Option<std::sync::Arc<RayCells>>,
+}
+
+/// The rays of a fan through each cell of the square around its centre: for the cell at
+/// offset `(dx, dy)`, `entries[start[j]..start[j + 1]]` with `j = (dy + half) side + dx +
+/// half`, each a ray `k` and the index `i` of the cell in its walk, as `k << 8 | i`.
+#[derive(Debug, PartialEq, Eq)]
+struct RayCells {
+    half: i32,
+    start: Vec<u32>,
+    entries: Vec<u32>,
+}
+
+impl RayStops {
+    /// Whether a ray from `p` read the cell `c` (true when the stops are not kept).
+    #[inline]
+    pub fn may_have_read(&self, p: Cell, c: Cell) -> bool {
+        let Some(cells) = &self.cells else {
+            return true;
+        };
+        let (dx, dy) = (c.x as i64 - p.x as i64, c.y as i64 - p.y as i64);
+        let (h, side) = (cells.half as i64, 2 * cells.half as i64 + 1);
+        if dx.abs() > h || dy.abs() > h {
+            return false;
+        }
+        let j = ((dy + h) * side + dx + h) as usize;
+        let on = &cells.entries[cells.start[j] as usize..cells.start[j + 1] as usize];
+        on.iter()
+            .any(|&e| self.stops[(e >> 8) as usize] as u32 >= (e & 0xff))
     }
 }
 
@@ -136,7 +191,26 @@ struct RayFan {
     seen: Vec<u8>,
     /// The frame width the nodes' `offset`s are for (none yet).
     offsets_width: Option<u32>,
+    /// Per node, its depth (the index of its cell in a ray's walk, at most 255: see
+    /// `ray_cells`) and the leaves before it in preorder (a subtree's leaves follow its root;
+    /// one more entry, all the leaves).
+    depth: Vec<u8>,
+    leaves_before: Vec<u32>,
+    /// Per ray (in the order of their angles), the first leaf under its last cell, in preorder.
+    ray_leaf: Vec<u32>,
+    /// The rays through each cell; none when a walk is longer than [`MAX_DEPTH_KEPT`] cells.
+    ray_cells: Option<std::sync::Arc<RayCells>>,
+    /// The nodes where rays stopped in this call, other than at leaves (at most one per leaf).
+    skips: Vec<u32>,
+    /// Per leaf in preorder, the depth of the node where its ray stopped in this call (255: at
+    /// its leaf, or beyond its last cell).
+    stops: Vec<u8>,
 }
+
+/// Visible areas keep where each ray stopped ([`RayStops`]) when no ray's walk is longer than
+/// this many cells after the first (a range of 180 cells: a byte per ray, kept with every
+/// cached gain).
+const MAX_DEPTH_KEPT: usize = 255;
 
 impl RayFan {
     fn new(r_cells: f64) -> Self {
@@ -151,17 +225,32 @@ impl RayFan {
         let mut first_child: Vec<u32> = vec![NONE];
         let mut last_child: Vec<u32> = vec![NONE];
         let mut next_sibling: Vec<u32> = vec![NONE];
+        // Each node's depth, each ray's last node, and per cell of the square the rays through
+        // it (the square's index, the ray and the cell's index in its walk), unless the walks
+        // are too long to be kept (a walk has up to `r_cells sqrt 2 + 2` cells: listed only up
+        // to twice the depth kept, then kept if no walk is deeper).
+        let mut depth: Vec<u32> = vec![0];
+        let mut ray_end: Vec<u32> = Vec::with_capacity(n_rays);
+        let side = 2 * half + 1;
+        let may_keep = r_cells <= 2.0 * MAX_DEPTH_KEPT as f64;
+        let mut on: Vec<(u32, u32)> = Vec::new();
         for k in 0..n_rays {
             let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
             let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
             let mut node = 0usize;
             let mut first = true;
+            let mut step = 0u32;
             walk_segment(start, end, |c| {
+                let o = (c.x as i16, c.y as i16);
+                if may_keep && step as usize <= MAX_DEPTH_KEPT {
+                    let j = ((c.y + half) * side + c.x + half) as u32;
+                    on.push((j, (k as u32) << 8 | step));
+                }
+                step += 1;
                 if first {
                     first = false; // the centre: the root
                     return true;
                 }
-                let o = (c.x as i16, c.y as i16);
                 let mut ch = first_child[node];
                 while ch != NONE && offset[ch as usize] != o {
                     ch = next_sibling[ch as usize];
@@ -174,6 +263,7 @@ impl RayFan {
                     first_child.push(NONE);
                     last_child.push(NONE);
                     next_sibling.push(NONE);
+                    depth.push(depth[node] + 1);
                     match last_child[node] {
                         NONE => first_child[node] = id,
                         last => next_sibling[last as usize] = id,
@@ -183,6 +273,7 @@ impl RayFan {
                 };
                 true
             });
+            ray_end.push(node as u32);
         }
         // Flatten in preorder (children in the order they were added).
         let r2 = r_cells * r_cells;
@@ -190,6 +281,8 @@ impl RayFan {
         let mut stack: Vec<(u32, bool)> = vec![(0, false)];
         let mut open: Vec<usize> = Vec::new();
         let mut children: Vec<u32> = Vec::new();
+        let mut preorder_of: Vec<u32> = vec![0; offset.len()];
+        let mut ids: Vec<u32> = Vec::with_capacity(offset.len());
         while let Some((id, done)) = stack.pop() {
             if done {
                 let at = open.pop().expect("opened before closed");
@@ -201,6 +294,8 @@ impl RayFan {
             let (dx, dy) = offset[id as usize];
             let d2 = (dx as i32 * dx as i32 + dy as i32 * dy as i32) as f64;
             open.push(nodes.len());
+            preorder_of[id as usize] = nodes.len() as u32;
+            ids.push(id);
             let side = 2 * half + 1;
             let seen_at = ((dy as i32 + half) * side + dx as i32 + half) as u32;
             nodes.push(FanNode {
@@ -220,13 +315,49 @@ impl RayFan {
                 stack.push((ch, false));
             }
         }
-        let side = (2 * half + 1) as usize;
+        // Leaves before each node in preorder (a subtree's leaves follow its root).
+        let mut leaves_before: Vec<u32> = Vec::with_capacity(nodes.len() + 1);
+        let mut leaves = 0u32;
+        for (i, n) in nodes.iter().enumerate() {
+            leaves_before.push(leaves);
+            leaves += (n.end as usize == i + 1) as u32;
+        }
+        leaves_before.push(leaves);
+        let deepest = depth.iter().copied().max().unwrap_or(0) as usize;
+        let ray_leaf = ray_end
+            .iter()
+            .map(|&id| leaves_before[preorder_of[id as usize] as usize])
+            .collect();
+        on.sort_unstable();
+        let mut starts = vec![0u32; (side * side) as usize + 1];
+        for &(j, _) in &on {
+            starts[j as usize + 1] += 1;
+        }
+        for j in 1..starts.len() {
+            starts[j] += starts[j - 1];
+        }
+        let ray_cells = RayCells {
+            half,
+            start: starts,
+            entries: on.into_iter().map(|(_, e)| e).collect(),
+        };
+        let side = side as usize;
         Self {
             r_cells,
             half,
             nodes,
             seen: vec![0; side * side],
             offsets_width: None,
+            depth: ids
+                .iter()
+                .map(|&id| depth[id as usize].min(255) as u8)
+                .collect(),
+            leaves_before,
+            ray_leaf,
+            ray_cells: (may_keep && deepest <= MAX_DEPTH_KEPT)
+                .then(|| std::sync::Arc::new(ray_cells)),
+            skips: vec![0; leaves as usize],
+            stops: vec![0; leaves as usize],
         }
     }
 
@@ -256,11 +387,32 @@ impl RayFan {
         // (The slices held apart, so that the stores to `seen` cannot make the compiler read
         // the vectors' addresses and lengths again from `self` for every node.)
         let (nodes, seen) = (&self.nodes[..], &mut self.seen[..]);
+        let skips = &mut self.skips[..];
         // (Two loops, one per answer to `inside`: the test is not made per node.)
-        let (count, boxes) = if inside {
-            walk::<true>(nodes, seen, frame, p, base, blocks, counts)
+        let (count, boxes, n_skips) = if inside {
+            walk::<true>(nodes, seen, skips, frame, p, base, blocks, counts)
         } else {
-            walk::<false>(nodes, seen, frame, p, base, blocks, counts)
+            walk::<false>(nodes, seen, skips, frame, p, base, blocks, counts)
+        };
+        let rays = match &self.ray_cells {
+            Some(cells) => {
+                // Each leaf's ray stopped at the skipped node above it, if any.
+                self.stops.fill(u8::MAX);
+                for &i in &self.skips[..n_skips] {
+                    let i = i as usize;
+                    let leaves = self.leaves_before[i]..self.leaves_before[nodes[i].end as usize];
+                    self.stops[leaves.start as usize..leaves.end as usize].fill(self.depth[i]);
+                }
+                RayStops {
+                    stops: self
+                        .ray_leaf
+                        .iter()
+                        .map(|&l| self.stops[l as usize])
+                        .collect(),
+                    cells: Some(cells.clone()),
+                }
+            }
+            None => RayStops::default(),
         };
         let at = |(dx, dy): (i16, i16)| Cell::new(p.x + dx as i32, p.y + dy as i32);
         let read = CellsRead {
@@ -268,6 +420,7 @@ impl RayFan {
                 min: at(lo),
                 max: at(hi),
             }),
+            rays,
         };
         (count, read)
     }
@@ -289,12 +442,13 @@ type QuadrantBoxes = [((i16, i16), (i16, i16)); 4];
 fn walk<const INSIDE: bool>(
     nodes: &[FanNode],
     seen: &mut [u8],
+    skips: &mut [u32],
     frame: &GridFrame,
     p: Cell,
     base: isize,
     blocks: &impl Fn(Cell, usize) -> bool,
     counts: &impl Fn(Cell, usize) -> bool,
-) -> (usize, QuadrantBoxes) {
+) -> (usize, QuadrantBoxes, usize) {
     let mut boxes: QuadrantBoxes = [((0i16, 0i16), (0i16, 0i16)); 4];
     let mut end_at = |(dx, dy): (i16, i16)| {
         let (lo, hi) = &mut boxes[(dx < 0) as usize | ((dy < 0) as usize) << 1];
@@ -302,6 +456,7 @@ fn walk<const INSIDE: bool>(
         *hi = (hi.0.max(dx), hi.1.max(dy));
     };
     let mut count = 0usize;
+    let mut n_skips = 0usize;
     let mut i = 0usize;
     while i < nodes.len() {
         let n = nodes[i];
@@ -315,11 +470,15 @@ fn walk<const INSIDE: bool>(
             (base + n.offset as isize) as usize
         } else {
             end_at((dx, dy));
+            skips[n_skips] = i as u32;
+            n_skips += 1;
             i = n.end as usize;
             continue;
         };
         if blocks(c, idx) {
             end_at((dx, dy));
+            skips[n_skips] = i as u32;
+            n_skips += 1;
             i = n.end as usize;
             continue;
         }
@@ -339,7 +498,7 @@ fn walk<const INSIDE: bool>(
         }
         i += 1;
     }
-    (count, boxes)
+    (count, boxes, n_skips)
 }
 
 /// The baseline `I(p)`: unknown area visible from `p` through the map, unknown treated as free,
@@ -449,10 +608,26 @@ mod tests {
             let holds = |b: &CellBox, c: Cell| {
                 (b.min.x..=b.max.x).contains(&c.x) && (b.min.y..=b.max.y).contains(&c.y)
             };
-            for c in asked.into_inner() {
-                prop_assert!(read.boxes.iter().any(|b| holds(b, c)), "{:?} not in {:?}", c, read);
+            let asked = asked.into_inner();
+            for c in &asked {
+                prop_assert!(read.boxes.iter().any(|b| holds(b, *c)), "{:?} not in {:?}", c, read);
             }
             prop_assert!(read.boxes.iter().all(|b| holds(b, p)));
+            // The rays' stops are kept whenever the fan was walked (a range of at most 30
+            // cells), and name exactly the cells asked about (or the boxes do, `p` alone).
+            prop_assert_eq!(read.rays.cells.is_some(), !g.is(p, Occupancy::Occupied));
+            for y in -2..32 {
+                for x in -2..42 {
+                    let c = Cell::new(x, y);
+                    let inside = g.frame.contains(c);
+                    prop_assert_eq!(
+                        read.may_have_read(p, c) && inside,
+                        asked.contains(&c),
+                        "{:?}",
+                        c
+                    );
+                }
+            }
         }
     }
 
@@ -549,6 +724,29 @@ mod tests {
             }
         }
         nodes
+    }
+
+    #[test]
+    fn the_rays_stops_are_kept_up_to_walks_of_255_cells() {
+        // A walk of a ray of `r` cells has about `r (|cos| + |sin|)` cells, up to `r sqrt 2`:
+        // 255 at 180 cells.
+        let frame = GridFrame::new(crate::geom::Vec2::zeros(), 1.0, 500, 500);
+        let p = Cell::new(250, 250);
+        for (range_m, kept) in [(3.0, true), (120.0, true), (179.0, true), (182.0, false)] {
+            let (area, read) = visible_area_read(&frame, p, range_m, |_, _| false, |_, _| true);
+            assert!(area > 0.0);
+            assert_eq!(read.rays.cells.is_some(), kept, "{range_m}");
+            // Either way, a cell far out on a ray was read and one beyond the range was not.
+            let r = range_m as i32;
+            assert!(
+                read.may_have_read(p, Cell::new(250 + r - 1, 250)),
+                "{range_m}"
+            );
+            assert!(
+                !read.may_have_read(p, Cell::new(250 + r + 3, 250)),
+                "{range_m}"
+            );
+        }
     }
 
     #[test]

@@ -1,13 +1,15 @@
 //! Information gains of frontier candidates, reused between decisions while the map around a
-//! candidate has not changed.
+//! candidate has not changed where its rays went.
 //!
-//! The map is divided into square blocks; every ternary change of a cell stamps its block with
+//! Every ternary change of a cell stamps the cell, its square block and the block's group with
 //! the current map-update number. A gain computed at update `k` for cell `p` stays valid while
-//! no block that holds a cell of the boxes of the cells it read ([`CellsRead`]: the rays' cells
-//! up to where they stopped, at a wall or at the range, one box per quadrant) and comes within
-//! the laser range of `p` (plus two cells, for the cells a ray crosses at its very end) has a
-//! later stamp: the gain only depends on the cells it read. (Boxes, not the blocks the rays
-//! crossed: those would be kept at every cell of the fan, which made runs slower.)
+//! no cell it read has a later stamp: the gain only depends on the cells it read. The cells
+//! read are those of the rays up to where each stopped, at a wall or at the range
+//! ([`CellsRead`]): the changed cells to look up among them are found through the blocks that
+//! changed within the laser range of `p` (plus two cells, for the cells a ray crosses at its
+//! very end) and the boxes of the cells read, a group's or a block's stamp sparing the cells of
+//! those unchanged. A gain found valid at update `n` is then the gain computed at `n` (the same
+//! cells, unchanged, read again), and later lookups look at the changes after `n` only.
 //!
 //! Gains of different kinds are kept apart ([`GainKind`]): a new layout makes the gains computed
 //! with the previous one stale, but not the plain gains, which read only the map (the paper's
@@ -37,7 +39,7 @@ const BLOCK_CELLS: i32 = 8;
 const GROUP_BLOCKS: i32 = 8;
 
 /// A gain kept: its value, the update at which it was computed, and where the cells it read lie.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Cached {
     gain: f64,
     at: u64,
@@ -54,6 +56,8 @@ pub(crate) struct GainCache {
     stamps: Vec<u64>,
     /// Map update that last changed each group of blocks.
     group_stamps: Vec<u64>,
+    /// Map update that last changed each cell (at most `u32::MAX`).
+    cell_stamps: Vec<u32>,
     /// Per [`GainKind`]: candidate cell -> its gain.
     gains: [BTreeMap<(i32, i32), Cached>; 3],
 }
@@ -71,6 +75,7 @@ impl GainCache {
             groups_w,
             stamps: vec![0; (blocks_w.max(0) * blocks_h.max(0)) as usize],
             group_stamps: vec![0; (groups_w.max(0) * groups_h.max(0)) as usize],
+            cell_stamps: vec![0; frame.len()],
             gains: Default::default(),
         }
     }
@@ -80,6 +85,9 @@ impl GainCache {
         let w = self.frame.width as usize;
         if w == 0 {
             return;
+        }
+        if let Some(s) = self.cell_stamps.get_mut(i as usize) {
+            *s = now.min(u32::MAX as u64) as u32;
         }
         let (x, y) = ((i as usize % w) as i32, (i as usize / w) as i32);
         let (bx, by) = (x / BLOCK_CELLS, y / BLOCK_CELLS);
@@ -108,15 +116,18 @@ impl GainCache {
         now: u64,
         compute: impl FnOnce() -> (f64, CellsRead),
     ) -> f64 {
-        let gains = &self.gains[kind as usize];
-        if let Some(&Cached { gain: g, at, read }) = gains.get(&(p.x, p.y)) {
-            if !read
-                .boxes
-                .iter()
-                .any(|b| self.changed_since(p, range_m, *b, at))
-            {
-                return g;
-            }
+        let key = (p.x, p.y);
+        let unchanged = self.gains[kind as usize]
+            .get(&key)
+            .is_some_and(|c| !self.changed_since(p, range_m, &c.read, c.at));
+        if let Some(c) = self.gains[kind as usize]
+            .get_mut(&key)
+            .filter(|_| unchanged)
+        {
+            // Computed now, the gain would read the same cells, unchanged: the same value and
+            // cells read. Later lookups need only look at the changes after this one.
+            c.at = now;
+            return c.gain;
         }
         let (g, read) = compute();
         let cached = Cached {
@@ -128,12 +139,18 @@ impl GainCache {
         g
     }
 
-    /// Whether a block holding a cell of `read` within the range of `p` (and two cells) changed
-    /// after update `at`.
-    fn changed_since(&self, p: Cell, range_m: f64, read: CellBox, at: u64) -> bool {
+    /// Whether a cell that `read` may have read ([`CellsRead::may_have_read`]), in the boxes
+    /// read and within the range of `p` (and two cells), changed after update `at`.
+    fn changed_since(&self, p: Cell, range_m: f64, read: &CellsRead, at: u64) -> bool {
         let r = (range_m / self.frame.resolution_m).ceil() as i32 + 2;
-        let (x0, x1) = ((p.x - r).max(read.min.x), (p.x + r).min(read.max.x));
-        let (y0, y1) = ((p.y - r).max(read.min.y), (p.y + r).min(read.max.y));
+        let mut boxes = read.boxes.iter();
+        let first = *boxes.next().expect("four boxes");
+        let all = boxes.fold(first, |a, b| CellBox {
+            min: Cell::new(a.min.x.min(b.min.x), a.min.y.min(b.min.y)),
+            max: Cell::new(a.max.x.max(b.max.x), a.max.y.max(b.max.y)),
+        });
+        let (x0, x1) = ((p.x - r).max(all.min.x), (p.x + r).min(all.max.x));
+        let (y0, y1) = ((p.y - r).max(all.min.y), (p.y + r).min(all.max.y));
         if x0 > x1 || y0 > y1 {
             return false;
         }
@@ -164,10 +181,50 @@ impl GainCache {
                         let dx = gap(p.x, bx * BLOCK_CELLS, BLOCK_CELLS);
                         if dx * dx + dy * dy <= r2
                             && self.stamps[(by * self.blocks_w + bx) as usize] > at
+                            && self.read_changed_cell(p, read, (bx, by), (x0, x1, y0, y1), at)
                         {
                             return true;
                         }
                     }
+                }
+            }
+        }
+        false
+    }
+
+    /// Whether a cell of block `(bx, by)` within `x0..=x1`, `y0..=y1` changed after update
+    /// `at` and may have been read.
+    fn read_changed_cell(
+        &self,
+        p: Cell,
+        read: &CellsRead,
+        (bx, by): (i32, i32),
+        (x0, x1, y0, y1): (i32, i32, i32, i32),
+        at: u64,
+    ) -> bool {
+        if at >= u32::MAX as u64 {
+            return true; // (the cells' stamps cannot tell)
+        }
+        let w = self.frame.width as i32;
+        let x0 = (bx * BLOCK_CELLS).max(x0).max(0);
+        let y0 = (by * BLOCK_CELLS).max(y0).max(0);
+        let x1 = (bx * BLOCK_CELLS + BLOCK_CELLS).min(x1 + 1).min(w);
+        let y1 = (by * BLOCK_CELLS + BLOCK_CELLS)
+            .min(y1 + 1)
+            .min(self.frame.height as i32);
+        let at = at as u32;
+        for y in y0..y1 {
+            let row = &self.cell_stamps[(y * w + x0) as usize..(y * w + x1) as usize];
+            // (Without branches, the row's changed cells as bits; then only those asked.)
+            let mut changed = row
+                .iter()
+                .enumerate()
+                .fold(0u32, |m, (k, &s)| m | ((s > at) as u32) << k);
+            while changed != 0 {
+                let x = x0 + changed.trailing_zeros() as i32;
+                changed &= changed - 1;
+                if read.may_have_read(p, Cell::new(x, y)) {
+                    return true;
                 }
             }
         }
@@ -179,6 +236,7 @@ impl GainCache {
 mod tests {
     use super::*;
     use crate::geom::Vec2;
+    use crate::grid::{Occupancy, OccupancyGrid};
 
     /// The gain `value` of `p`, unless one is kept, as computed by a fan whose cells read are
     /// anywhere near (any change within range makes it stale).
@@ -195,7 +253,9 @@ mod tests {
             max: Cell::new(1000, 1000),
         };
         cache.gain(kind, p, range_m, now, || {
-            (value, CellsRead { boxes: [whole; 4] })
+            let mut read = CellsRead::of(p);
+            read.boxes = [whole; 4];
+            (value, read)
         })
     }
 
@@ -242,15 +302,19 @@ mod tests {
             let mut cache = GainCache::new(frame);
             let far = CellsRead::of(Cell::new(-50, 70));
             let p = Cell::new(1, 1);
-            assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 1, || (3.0, far)), 3.0);
+            assert_eq!(
+                cache.gain(GainKind::Plain, p, 2.0, 1, || (3.0, far.clone())),
+                3.0
+            );
             cache.touch(0, 2);
             assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 2, || (9.0, far)), 3.0);
             let near = CellsRead::of(Cell::new(0, 0));
-            assert_eq!(cache.gain(GainKind::Rooms, p, 2.0, 2, || (4.0, near)), 4.0);
+            let compute = |v: f64| (v, near.clone());
+            assert_eq!(cache.gain(GainKind::Rooms, p, 2.0, 2, || compute(4.0)), 4.0);
             cache.touch(0, 3);
             let expected = if frame.is_empty() { 4.0 } else { 5.0 };
             assert_eq!(
-                cache.gain(GainKind::Rooms, p, 2.0, 3, || (5.0, near)),
+                cache.gain(GainKind::Rooms, p, 2.0, 3, || compute(5.0)),
                 expected
             );
         }
@@ -259,34 +323,97 @@ mod tests {
     #[test]
     fn a_change_within_range_outside_the_cells_read_keeps_the_gain() {
         let frame = GridFrame::new(Vec2::zeros(), 0.05, 200, 200);
-        let mut cache = GainCache::new(frame);
         // Range 2 m = 40 cells around (100, 100); the gain read a room east of it (the cells
-        // up to x = 120) and nothing west of x = 96.
+        // up to x = 120) and nothing west of x = 96 (its boxes; no rays kept).
         let p = Cell::new(100, 100);
         let room = CellBox {
             min: Cell::new(96, 90),
             max: Cell::new(120, 110),
         };
-        let read = CellsRead { boxes: [room; 4] };
-        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 1, || (5.0, read)), 5.0);
-        // Within range, west of the room's block (x 88..96): kept.
+        let mut read = CellsRead::of(p);
+        read.boxes = [room; 4];
+        let compute = |v: f64| (v, read.clone());
+        let mut cache = GainCache::new(frame);
+        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 1, || compute(5.0)), 5.0);
+        // Within range, west of the room: kept.
         cache.touch(frame.index(Cell::new(80, 100)).unwrap() as u32, 2);
-        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 2, || (7.0, read)), 5.0);
-        // North of the room, in a block the room does not reach: kept.
+        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 2, || compute(7.0)), 5.0);
+        // North of the room: kept.
         cache.touch(frame.index(Cell::new(110, 125)).unwrap() as u32, 3);
-        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 3, || (7.0, read)), 5.0);
-        // In a block the room reaches (x 120..128), though the cell itself is not in the room.
-        cache.touch(frame.index(Cell::new(126, 100)).unwrap() as u32, 4);
-        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 4, || (7.0, read)), 7.0);
+        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 3, || compute(7.0)), 5.0);
+        // Next to the room, in the same block as its east wall (x 120..128): kept.
+        cache.touch(frame.index(Cell::new(121, 100)).unwrap() as u32, 4);
+        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 4, || compute(7.0)), 5.0);
+        // On the room's east wall: computed again.
+        cache.touch(frame.index(Cell::new(120, 100)).unwrap() as u32, 5);
+        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 5, || compute(7.0)), 7.0);
         // Any one of the boxes read counts.
         let mut cache = GainCache::new(frame);
         let mut one = CellsRead::of(p);
         one.boxes[3] = room;
-        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 1, || (5.0, one)), 5.0);
+        let compute = |v: f64| (v, one.clone());
+        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 1, || compute(5.0)), 5.0);
         cache.touch(frame.index(Cell::new(80, 100)).unwrap() as u32, 2);
-        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 2, || (7.0, one)), 5.0);
+        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 2, || compute(7.0)), 5.0);
         cache.touch(frame.index(Cell::new(97, 91)).unwrap() as u32, 3);
-        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 3, || (9.0, one)), 9.0);
+        assert_eq!(cache.gain(GainKind::Plain, p, 2.0, 3, || compute(9.0)), 9.0);
+    }
+
+    #[test]
+    fn a_gain_is_kept_until_a_cell_its_rays_read_changes() {
+        // A room of cells x 10..=40, y 10..=20 (its walls included) at 5 cm in unknown, open to
+        // the east through a door (x 40, y 14..=16); the candidate at its west end. Cells
+        // changed behind the room's walls (in blocks its rays reach) keep the gain; a cell on
+        // the rays' way, or one the door lets them reach, does not.
+        let frame = GridFrame::new(Vec2::zeros(), 0.05, 90, 40);
+        let mut grid = OccupancyGrid::filled(frame, Occupancy::Unknown);
+        for y in 10..=20 {
+            for x in 10..=40 {
+                let wall = (y == 10 || y == 20 || x == 10 || x == 40)
+                    && !(x == 40 && (14..=16).contains(&y));
+                grid.set(
+                    Cell::new(x, y),
+                    if wall {
+                        Occupancy::Occupied
+                    } else {
+                        Occupancy::Free
+                    },
+                );
+            }
+        }
+        let p = Cell::new(12, 15);
+        let range_m = 2.0;
+        let mut cache = GainCache::new(grid.frame);
+        let mut now = 1;
+        let exact = |grid: &OccupancyGrid| crate::gain::information_gain_read(grid, p, range_m);
+        let first = cache.gain(GainKind::Plain, p, range_m, now, || exact(&grid));
+        assert!(first > 0.0, "the door lets the rays out");
+        // (cell, whether the gain is computed again): each change is made and undone in turn.
+        let cases = [
+            (Cell::new(20, 9), false),  // north of the wall, behind it
+            (Cell::new(9, 15), false),  // west of the wall, behind it
+            (Cell::new(30, 21), false), // south of the wall, behind it
+            // Beyond the door, within the boxes of the cells read but off every ray.
+            (Cell::new(50, 19), false),
+            (Cell::new(45, 11), false),
+            (Cell::new(25, 15), true), // in the room, in the rays' way
+            (Cell::new(20, 10), true), // the wall itself, where rays stop
+            (Cell::new(45, 15), true), // beyond the door, in the rays' way
+        ];
+        for (cell, recomputed) in cases {
+            for state in [Occupancy::Occupied, *grid.get(cell).expect("in the map")] {
+                now += 1;
+                grid.set(cell, state);
+                cache.touch(grid.frame.index(cell).unwrap() as u32, now);
+                let mut computed = false;
+                let g = cache.gain(GainKind::Plain, p, range_m, now, || {
+                    computed = true;
+                    exact(&grid)
+                });
+                assert_eq!(computed, recomputed, "{cell:?} set {state:?}");
+                assert_eq!(g, exact(&grid).0, "{cell:?} set {state:?}");
+            }
+        }
     }
 
     #[test]
