@@ -143,12 +143,32 @@ impl ObstacleDistance {
         // reach); then per cell the least squared distance over the columns within reach. Its
         // square root is what stamping every obstacle would have left, bit for bit (the square
         // root and the conversion to `f32` are monotonic), and the cells outside the discs keep
-        // their values: no obstacle they are within the cap of has gone. A cell in several
-        // discs is computed more than once, to the same value.
+        // their values: no obstacle they are within the cap of has gone. Removed cells close
+        // together (consecutive in their order, within a box of `2 reach` cells) are done at
+        // once: per row, the cells from the leftmost to the rightmost of their discs' rows
+        // (more than the discs, maybe: a cell computed afresh gets the value it has). A cell in
+        // discs of several groups is computed more than once, to the same value.
         let (reach, cap2) = (cap - 1, cap * cap);
-        for &r in removed.iter() {
-            let (x0, x1) = ((r.x - 2 * reach).max(0), (r.x + 2 * reach).min(w - 1));
-            let (y0, y1) = ((r.y - reach).max(0), (r.y + reach).min(h - 1));
+        let half_width = |dy: i32| -self.disc_rows[(dy + reach) as usize].1;
+        let mut next = 0;
+        while next < removed.len() {
+            let first = removed[next];
+            let (mut lo, mut hi) = (first, first);
+            let mut end = next + 1;
+            while let Some(&c) = removed.get(end) {
+                let (l, u) = (
+                    Cell::new(lo.x.min(c.x), lo.y.min(c.y)),
+                    Cell::new(hi.x.max(c.x), hi.y.max(c.y)),
+                );
+                if u.x - l.x > 2 * reach || u.y - l.y > 2 * reach {
+                    break;
+                }
+                (lo, hi, end) = (l, u, end + 1);
+            }
+            let group = &removed[next..end];
+            next = end;
+            let (x0, x1) = ((lo.x - 2 * reach).max(0), (hi.x + 2 * reach).min(w - 1));
+            let (y0, y1) = ((lo.y - reach).max(0), (hi.y + reach).min(h - 1));
             if x0 > x1 || y0 > y1 {
                 continue;
             }
@@ -180,10 +200,14 @@ impl ObstacleDistance {
                     }
                 }
             }
-            for (dy, dx0, ds) in &self.disc_rows {
-                let y = r.y + dy;
-                let (x_from, x_to) = ((r.x + dx0).max(0), (r.x + dx0 + ds.len() as i32).min(w));
-                if y < 0 || y >= h || x_from >= x_to {
+            for y in y0..=y1 {
+                let (mut x_from, mut x_to) = (w, 0);
+                for r in group.iter().filter(|r| (y - r.y).abs() <= reach) {
+                    let hw = half_width(y - r.y);
+                    (x_from, x_to) = (x_from.min(r.x - hw), x_to.max(r.x + hw + 1));
+                }
+                let (x_from, x_to) = (x_from.max(0), x_to.min(w));
+                if x_from >= x_to {
                     continue;
                 }
                 let cols = &col2[(y - y0) as usize * nx..(y - y0 + 1) as usize * nx];
@@ -455,6 +479,59 @@ mod tests {
                     .filter(|&i| before[i as usize] != new.data[i as usize])
                     .collect();
                 prop_assert_eq!(changed, differ);
+            }
+        }
+    }
+
+    #[test]
+    fn walls_removed_at_once_equal_the_reference() {
+        // Removed cells in lines and clusters (done together, in groups of nearby cells),
+        // among other walls, near the frame's edges and inside it: the same bits as the first
+        // update and as the exact transform.
+        let frame = GridFrame::new(Vec2::zeros(), 0.1, 40, 30);
+        let shapes: [(&str, Vec<(i32, i32)>); 6] = [
+            ("row", (3..25).map(|x| (x, 12)).collect()),
+            ("column", (0..30).map(|y| (17, y)).collect()),
+            ("diagonal", (0..20).map(|k| (5 + k, 4 + k)).collect()),
+            (
+                "L",
+                (10..30)
+                    .map(|x| (x, 2))
+                    .chain((2..20).map(|y| (10, y)))
+                    .collect(),
+            ),
+            ("far apart in a column", vec![(20, 0), (20, 29), (21, 15)]),
+            (
+                "block at a corner",
+                (0..6).flat_map(|x| (0..5).map(move |y| (x, y))).collect(),
+            ),
+        ];
+        for cap in [1, 2, 4, 7] {
+            for (name, cells) in &shapes {
+                let mut grid = Grid::filled(frame, Occupancy::Free);
+                for y in (0..30).step_by(7) {
+                    for x in 0..40 {
+                        grid.set(Cell::new(x, y), Occupancy::Occupied);
+                    }
+                }
+                for &(x, y) in cells {
+                    grid.set(Cell::new(x, y), Occupancy::Occupied);
+                }
+                let mut new = ObstacleDistance::from_grid(&grid, cap);
+                let mut old = new.clone();
+                let mut flips = Vec::new();
+                for &(x, y) in cells {
+                    grid.set(Cell::new(x, y), Occupancy::Free);
+                    flips.push(frame.index(Cell::new(x, y)).unwrap() as u32);
+                }
+                new.update(&grid, &flips);
+                update_reference(&mut old, &grid, &flips);
+                assert!(new.data == old.data, "{name}, cap {cap}");
+                let want = exact(&grid, cap);
+                for (i, (a, b)) in new.data.iter().zip(&want).enumerate() {
+                    let c = frame.cell_of_index(i);
+                    assert!((a - b).abs() < 1e-4, "{name}, cap {cap}, {c:?}: {a} vs {b}");
+                }
             }
         }
     }
