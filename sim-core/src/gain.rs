@@ -71,8 +71,8 @@ impl CellsRead {
 
 /// Where each ray of a visible area stopped: ray `k` (at the angle `k 2 pi / n` from the
 /// centre of the centre cell, `n` rays) read the first `stops[k] + 1` cells of its walk. Empty
-/// when not kept (a walk longer than [`MAX_DEPTH_KEPT`] cells): any cell may then have been
-/// read.
+/// when not kept (a walk longer than 255 cells, a range beyond about 180 cells): any cell may
+/// then have been read.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct RayStops {
     stops: Vec<u8>,

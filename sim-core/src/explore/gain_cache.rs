@@ -215,7 +215,7 @@ impl GainCache {
         let at = at as u32;
         for y in y0..y1 {
             let row = &self.cell_stamps[(y * w + x0) as usize..(y * w + x1) as usize];
-            // (Without branches, the row's changed cells as bits; then only those asked.)
+            // The row's changed cells as bits, then only those looked up.
             let mut changed = row
                 .iter()
                 .enumerate()
