@@ -220,16 +220,22 @@ pub struct FrontierTracker {
     /// Every frontier cell, possibly with cells that stopped being one and repeats (pruned at
     /// each detection).
     cells: Vec<u32>,
-    /// The frontiers of the last detection (sorted cell indices, middle cell) by their first
-    /// cell: most frontiers are unchanged between two decisions, and their middle cells (two
-    /// searches through the frontier) are taken from here. Looked up only, never iterated.
-    middles: LookupMap<usize, (Vec<usize>, usize)>,
+    /// The frontiers of the last detection (cells in row-major order, middle cell's index) by
+    /// their first cell's index: most frontiers are unchanged between two decisions, and their
+    /// cells and middle cells (two searches through the frontier) are taken from here. Looked
+    /// up only, never iterated.
+    middles: LookupMap<usize, (Vec<Cell>, usize)>,
+    /// The width of the grid of the last detection (its cells' indices are for it).
+    middles_width: u32,
 }
 
 /// [`FrontierTracker::state`]: a frontier cell.
 const FRONTIER: u8 = 1;
 /// [`FrontierTracker::state`]: reached by the component search.
 const LABELLED: u8 = 2;
+/// [`FrontierTracker::state`]: a cell of the last detection's list for the component at hand
+/// (set and cleared while comparing the two).
+const MARKED: u8 = 4;
 
 impl FrontierTracker {
     /// A tracker of `grid`'s frontier cells, from a full scan of the grid.
@@ -239,6 +245,7 @@ impl FrontierTracker {
             state: vec![0; n],
             cells: Vec::new(),
             middles: Default::default(),
+            middles_width: grid.width(),
         };
         // (Row by row, as `update` of every cell would find them, without its five tests per
         // cell: the first update of a run scans a map that is nearly all unknown.)
@@ -297,6 +304,10 @@ impl FrontierTracker {
     /// The frontiers of `grid` (which must be the grid of the last update), as
     /// [`detect_frontiers`] finds them.
     pub fn detect(&mut self, grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
+        if self.middles_width != grid.width() {
+            self.middles.clear();
+            self.middles_width = grid.width();
+        }
         let state = &self.state;
         self.cells.retain(|&i| state[i as usize] & FRONTIER != 0);
         // (The stable sort, whose result is the same for integers: the list is the last
@@ -343,28 +354,51 @@ impl FrontierTracker {
             if comp.len() < cfg.min_cells.max(1) {
                 continue;
             }
-            comp.sort_unstable();
-            // (The last detection's entry moves to this one's: its list is kept as it is when
-            // the component is the same, and refilled otherwise, not allocated again.)
-            let (kept, middle) = match self.middles.remove(&comp[0]) {
-                Some((cells, middle)) if cells == comp => (cells, middle),
+            // The last detection's entry moves to this one's: its cells are kept as they are
+            // when the component is the same, and refilled otherwise, not allocated again.
+            // (The component's first cell is its least, the cells being searched from in
+            // order. The same cells, found by marking the entry's and looking for the marks:
+            // most components are the same from one detection to the next, and need no sort
+            // and no division per cell for their coordinates.)
+            let old = self.middles.remove(&start);
+            let index = |c: &Cell| (c.y as i64 * w + c.x as i64) as usize;
+            let same = old.as_ref().is_some_and(|(cells, _)| {
+                cells.len() == comp.len() && {
+                    let state = &mut self.state;
+                    for c in cells {
+                        if let Some(s) = state.get_mut(index(c)) {
+                            *s |= MARKED;
+                        }
+                    }
+                    let all = comp.iter().all(|&i| state[i] & MARKED != 0);
+                    for c in cells {
+                        if let Some(s) = state.get_mut(index(c)) {
+                            *s &= !MARKED;
+                        }
+                    }
+                    all
+                }
+            });
+            let to_cell = |i: usize| grid.frame.cell_of_index(i);
+            let (kept, middle) = match old {
+                Some((cells, middle)) if same => (cells, middle),
                 // (A cell's place in the component from a table over the component's box, not
                 // over the whole map; by binary search when the box is much larger than the
                 // component, a long diagonal chain.)
                 old => {
+                    comp.sort_unstable();
                     let mut cells = old.map(|(cells, _)| cells).unwrap_or_default();
                     cells.clear();
-                    cells.extend_from_slice(&comp);
+                    cells.extend(comp.iter().map(|&i| to_cell(i)));
                     (cells, middle_cell_boxed(&comp, w as usize))
                 }
             };
-            let to_cell = |i: usize| grid.frame.cell_of_index(i);
             frontiers.push(Frontier {
-                size: comp.len(),
+                size: kept.len(),
                 candidate: to_cell(middle),
-                cells: comp.iter().map(|&i| to_cell(i)).collect(),
+                cells: kept.clone(),
             });
-            middles.insert(comp[0], (kept, middle));
+            middles.insert(start, (kept, middle));
         }
         for &i in &self.cells {
             self.state[i as usize] &= !LABELLED;
@@ -650,6 +684,43 @@ mod tests {
         assert_eq!(f[0].cells, vec![Cell::new(1, 0)]);
     }
 
+    #[test]
+    fn a_frontier_of_other_cells_from_the_same_first_cell_is_found_again() {
+        // Each map after the first changes one frontier so that it keeps its first cell and
+        // its number of cells but not all its cells (or keeps them all): the tracker, which
+        // reuses the cells of a frontier found the same, finds what a full detection finds.
+        let maps = [
+            "
+            ??????
+            ....##
+            ......",
+            // The chain's last cell moves: (3, 1) stops being a frontier cell, (4, 1) is one.
+            "
+            ???.??
+            ...###
+            ......",
+            // Unchanged.
+            "
+            ???.??
+            ...###
+            ......",
+            // The same number of cells, one of them moved a row down.
+            "
+            ?.?.??
+            ..?###
+            ......",
+        ];
+        let cfg = FrontierConfig { min_cells: 1 };
+        let first = grid(maps[0]);
+        let mut t = FrontierTracker::new(&first);
+        assert_eq!(t.detect(&first, &cfg), detect_frontiers(&first, &cfg));
+        for text in &maps[1..] {
+            let g = grid(text);
+            t.update(&g, 0..g.data.len() as u32);
+            assert_eq!(t.detect(&g, &cfg), detect_frontiers(&g, &cfg), "{text}");
+        }
+    }
+
     proptest! {
         #[test]
         fn frontier_cells_are_free_touch_unknown_and_are_disjoint(
@@ -693,7 +764,7 @@ mod tests {
                 *s = state(init[i]);
             }
             let n = w * h;
-            let mut old = FrontierTracker { state: vec![0; n], cells: Vec::new(), middles: Default::default() };
+            let mut old = FrontierTracker { state: vec![0; n], cells: Vec::new(), middles: Default::default(), middles_width: 0 };
             old.update(&g, 0..n as u32);
             let new = FrontierTracker::new(&g);
             prop_assert_eq!(&new.state, &old.state);
