@@ -60,12 +60,11 @@ impl CellsRead {
     /// lies in the boxes); otherwise whether it lies in a box.
     #[inline]
     pub fn may_have_read(&self, p: Cell, c: Cell) -> bool {
-        if self.rays.cells.is_some() {
-            return self.rays.may_have_read(p, c);
-        }
-        let holds =
-            |b: &CellBox| b.min.x <= c.x && c.x <= b.max.x && b.min.y <= c.y && c.y <= b.max.y;
-        self.boxes.iter().any(holds)
+        self.rays.read(p, c).unwrap_or_else(|| {
+            let holds =
+                |b: &CellBox| b.min.x <= c.x && c.x <= b.max.x && b.min.y <= c.y && c.y <= b.max.y;
+            self.boxes.iter().any(holds)
+        })
     }
 }
 
@@ -90,21 +89,21 @@ struct RayCells {
 }
 
 impl RayStops {
-    /// Whether a ray from `p` read the cell `c` (true when the stops are not kept).
+    /// Whether a ray from `p` read the cell `c`; `None` when the stops are not kept.
     #[inline]
-    pub fn may_have_read(&self, p: Cell, c: Cell) -> bool {
-        let Some(cells) = &self.cells else {
-            return true;
-        };
+    pub fn read(&self, p: Cell, c: Cell) -> Option<bool> {
+        let cells = self.cells.as_ref()?;
         let (dx, dy) = (c.x as i64 - p.x as i64, c.y as i64 - p.y as i64);
         let (h, side) = (cells.half as i64, 2 * cells.half as i64 + 1);
         if dx.abs() > h || dy.abs() > h {
-            return false;
+            return Some(false);
         }
         let j = ((dy + h) * side + dx + h) as usize;
         let on = &cells.entries[cells.start[j] as usize..cells.start[j + 1] as usize];
-        on.iter()
-            .any(|&e| self.stops[(e >> 8) as usize] as u32 >= (e & 0xff))
+        Some(
+            on.iter()
+                .any(|&e| self.stops[(e >> 8) as usize] as u32 >= (e & 0xff)),
+        )
     }
 }
 
@@ -296,7 +295,6 @@ impl RayFan {
             open.push(nodes.len());
             preorder_of[id as usize] = nodes.len() as u32;
             ids.push(id);
-            let side = 2 * half + 1;
             let seen_at = ((dy as i32 + half) * side + dx as i32 + half) as u32;
             nodes.push(FanNode {
                 end: 0,

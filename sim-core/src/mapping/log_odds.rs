@@ -196,11 +196,8 @@ impl LogOddsMap {
         let mut bmin = start_cell;
         let mut bmax = bmin;
         let guard2 = cfg.hit_guard_cells * cfg.hit_guard_cells;
-        let guard_cells = if cfg.hit_guard_cells.is_finite() {
-            cfg.hit_guard_cells.max(0.0).ceil().min(i32::MAX as f64) as u32
-        } else {
-            i32::MAX as u32
-        };
+        // (The conversion saturates: an infinite guard is `u32::MAX` cells.)
+        let guard_cells = cfg.hit_guard_cells.max(0.0).ceil() as u32;
         let fill2 = (cfg.hit_gap_fill_m * inv_res).powi(2);
         // The previous beam's end (grid coordinates) when it was a hit.
         let mut prev_hit: Option<[f64; 2]> = None;
