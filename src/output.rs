@@ -60,7 +60,7 @@ pub fn parse_pose(s: &str) -> Result<sim_core::Pose, String> {
             .parse::<f64>()
             .ok()
             .filter(|x| x.is_finite())
-            .ok_or_else(|| format!("'{p}' in '{s}' is not a number (expected x,y,theta)"))?;
+            .ok_or_else(|| format!("'{p}' in '{s}' is not a finite number (expected x,y,theta)"))?;
     }
     Ok(sim_core::Pose::new(v[0], v[1], v[2].to_radians()))
 }
