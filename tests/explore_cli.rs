@@ -142,7 +142,8 @@ fn a_start_heading_beyond_a_full_turn_is_refused() {
         ("3,3,1e300", "heading 1e300"),
         ("3,3,361", "[-360, 360]"),
         ("3,3,-400", "[-360, 360]"),
-        ("3,nan,0", "not a number"),
+        ("3,nan,0", "'nan' in '3,nan,0' is not a finite number"),
+        ("3e400,3,0", "'3e400' in '3e400,3,0' is not a finite number"),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let o = run(&[
