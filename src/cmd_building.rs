@@ -29,6 +29,7 @@ pub enum Kind {
 }
 
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 pub struct GenerateArgs {
     /// Seed: the same seed and options give the same building.
     #[arg(long, default_value_t = 0)]
@@ -59,6 +60,7 @@ pub struct GenerateArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 pub struct CheckArgs {
     /// Building file (floorcast TOML, map_server YAML, Stage .world).
     file: PathBuf,
@@ -68,6 +70,7 @@ pub struct CheckArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
     /// Building file (floorcast TOML, map_server YAML, Stage .world).
     file: PathBuf,

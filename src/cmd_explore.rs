@@ -15,7 +15,10 @@ use sim_core::explore::RunResult;
 use crate::output::{create_dir, parse_pose, progress_bar, write_text, Picture};
 
 #[derive(Debug, Args)]
-#[command(after_long_help = floorcast_worker::settings::settings_help_text())]
+#[command(
+    after_long_help = floorcast_worker::settings::settings_help_text(),
+    allow_negative_numbers = true
+)]
 pub struct ExploreArgs {
     /// Building to explore: floorcast TOML, ROS map_server YAML, or Stage .world.
     #[arg(long, value_name = "FILE")]

@@ -13,6 +13,7 @@ use sim_core::{OccupancyGrid, Polygon};
 use crate::output::{create_dir, write_text};
 
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 pub struct LayoutArgs {
     /// Map to analyse: a map_server YAML (e.g. a `map.yaml` written by `floorcast explore`), a
     /// building TOML or a Stage .world (drawn at 0.05 m).

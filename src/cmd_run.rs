@@ -32,7 +32,10 @@ pub struct NetArgs {
 }
 
 #[derive(Debug, Args)]
-#[command(after_long_help = floorcast_worker::settings::settings_help_text())]
+#[command(
+    after_long_help = floorcast_worker::settings::settings_help_text(),
+    allow_negative_numbers = true
+)]
 pub struct RunArgs {
     /// Grid file (TOML): buildings, seeds, strategies, settings; see README.
     grid: PathBuf,
@@ -86,6 +89,7 @@ pub struct RunArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 pub struct ReportArgs {
     /// Results directory (holding results.sqlite), e.g. results/quick.
     results: PathBuf,

@@ -16,6 +16,7 @@ pub enum StrategyCommand {
 }
 
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 pub struct CheckArgs {
     /// The program, e.g. "python3 my_strategy.py" (split into words as a shell splits them).
     #[arg(value_name = "COMMAND")]

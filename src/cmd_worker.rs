@@ -10,6 +10,7 @@ use floorcast_worker::process::{run_worker, WorkerEvent, WorkerOptions};
 use crate::cmd_run::NetArgs;
 
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 pub struct WorkerArgs {
     /// The coordinator's (or a zenoh router's) endpoint, e.g. tcp/192.168.1.10:7447
     /// (repeatable). May be omitted when --zenoh-config lists the endpoints.

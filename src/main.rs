@@ -19,7 +19,16 @@ use clap::{Parser, Subcommand};
 /// odometry noise, SLAM mapping, frontiers, layout prediction, strategy, early stop), far faster
 /// than real time, deterministically per seed.
 #[derive(Debug, Parser)]
-#[command(name = "floorcast", version, about, long_about = None, propagate_version = true)]
+// (Negative numbers are values, so that `--seed -1` is refused by the flag's own check, which
+// names the flag, rather than taken for an unknown flag.)
+#[command(
+    name = "floorcast",
+    version,
+    about,
+    long_about = None,
+    propagate_version = true,
+    allow_negative_numbers = true
+)]
 struct Cli {
     /// Most grid cells a map or building may need (its 0.05 m exploration grid over its extent
     /// plus a margin of 15 % of its longer side, 1 to 8 m, on each side; an image's pixels, a Stage floor plan's raster); a larger one is

@@ -164,6 +164,34 @@ fn a_start_heading_beyond_a_full_turn_is_refused() {
     }
 }
 
+/// A negative number given to a flag is that flag's value, refused by its own check (naming the
+/// flag), not taken for an unknown flag.
+#[test]
+fn a_negative_number_is_refused_as_the_flags_value() {
+    let b = repo().join("buildings/small.toml");
+    for (flag, value) in [("--seed", "-1"), ("--max-cells", "-5")] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let o = run(&[
+            "explore",
+            "--building",
+            b.to_str().unwrap(),
+            flag,
+            value,
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{flag} {value}: {err}");
+        assert!(
+            err.contains(&format!("invalid value '{value}' for '{flag}")),
+            "{flag} {value}: {err}"
+        );
+        assert!(!out.exists(), "{flag} {value}");
+    }
+}
+
 #[test]
 fn a_random_start_is_drawn_from_the_seed() {
     let b = repo().join("buildings/small.toml");
