@@ -445,7 +445,10 @@ impl Plan {
             if !g.rotation_deg.is_finite() {
                 return Err(invalid(
                     &format!("{field}.rotation_deg"),
-                    "not a number".into(),
+                    format!(
+                        "expected a finite number of degrees, got {}",
+                        g.rotation_deg
+                    ),
                 ));
             }
             let name = g
