@@ -31,11 +31,11 @@ pub enum Kind {
 #[derive(Debug, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct GenerateArgs {
-    /// Seed: the same seed and options give the same building.
-    #[arg(long, default_value_t = 0)]
+    /// Seed, 0 to 2^64 - 1: the same seed and options give the same building.
+    #[arg(long, default_value_t = 0, value_parser = crate::values::whole_number::<u64>(0, u64::MAX))]
     seed: u64,
     /// Target free area in square metres (the result is within 15 %).
-    #[arg(long, value_name = "M2")]
+    #[arg(long, value_name = "M2", value_parser = crate::values::number)]
     area_m2: f64,
     /// Kind of building: schools have classrooms and halls, offices smaller rooms.
     #[arg(long, value_enum, default_value = "school")]
@@ -48,7 +48,8 @@ pub struct GenerateArgs {
         long,
         value_name = "DEG",
         default_value_t = 0.0,
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::values::number
     )]
     rotation_deg: f64,
     /// Building name (default: the output file's stem).

@@ -35,15 +35,15 @@ pub struct ExploreArgs {
     strategy_command: Option<String>,
     /// Seconds the --strategy-command program has for each reply (the first includes its start),
     /// 0.01 to 3600.
-    #[arg(long, value_name = "SECONDS", default_value_t = floorcast_worker::external::DEFAULT_TIMEOUT_S, requires = "strategy_command")]
+    #[arg(long, value_name = "SECONDS", default_value_t = floorcast_worker::external::DEFAULT_TIMEOUT_S, requires = "strategy_command", value_parser = crate::values::number)]
     strategy_timeout_s: f64,
     /// The --strategy-command program's own parameters, a JSON object (at most 64 KiB), e.g.
     /// '{"stop_below_m2": 5}': sent to it in the run message as `params` and recorded with
     /// the run.
     #[arg(long, value_name = "JSON", requires = "strategy_command")]
     strategy_params: Option<String>,
-    /// Seed of the run's randomness (odometry error, laser noise).
-    #[arg(long, default_value_t = 0)]
+    /// Seed of the run's randomness (odometry error, laser noise): a whole number, 0 to 2^64 - 1.
+    #[arg(long, default_value_t = 0, value_parser = crate::values::whole_number::<u64>(0, u64::MAX))]
     seed: u64,
     /// Output directory (default: results/explore/<building>-<strategy>-<seed>).
     #[arg(long, value_name = "DIR")]
@@ -61,7 +61,7 @@ pub struct ExploreArgs {
     localization: Option<LocalizationSetting>,
     /// The utility's weight of distance against information gain, in [0, 1] (default: 0.5, or
     /// the settings file's).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::values::number)]
     alpha: Option<f64>,
     /// What the utility's distance D(p) measures: the planned path's length, or the straight
     /// line from the robot to the candidate as the paper defines it (default: path, or the
@@ -77,7 +77,7 @@ pub struct ExploreArgs {
     candidate_from_reachable_part: bool,
     /// Stop the run at this simulated time, in seconds, 1 to 100000 (default: 14400, or the
     /// settings file's).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", value_parser = crate::values::number)]
     time_limit_s: Option<f64>,
     /// Settings file: a JSON object of run settings such as {"alpha": 0.8} (the settings are
     /// listed below); a flag given on the command line overrides the file's value.

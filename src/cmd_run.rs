@@ -39,9 +39,10 @@ pub struct NetArgs {
 pub struct RunArgs {
     /// Grid file (TOML): buildings, seeds, strategies, settings; see README.
     grid: PathBuf,
-    /// Worker threads on this machine (default: one per core; 0 with --listen/--connect lets
-    /// only remote workers run jobs).
-    #[arg(long, value_name = "N")]
+    /// Worker threads on this machine, 0 to 1024 (default: one per core; 0 with
+    /// --listen/--connect lets only remote workers run jobs). Each runs one exploration at a
+    /// time, up to about 200 MB of memory each.
+    #[arg(long, value_name = "N", value_parser = crate::values::whole_number::<usize>(0, crate::values::MAX_THREADS))]
     workers: Option<usize>,
     /// Also accept remote workers (`floorcast worker --connect ...`) on this zenoh endpoint,
     /// e.g. tcp/0.0.0.0:7447 (repeatable). Without --listen/--connect nothing opens a port.
@@ -55,14 +56,14 @@ pub struct RunArgs {
     net: NetArgs,
     /// Lease of a remote job in seconds: a worker renews it while it runs the job; a job whose
     /// lease runs out (a hung worker) goes back to the queue.
-    #[arg(long, value_name = "S", default_value_t = 60.0)]
+    #[arg(long, value_name = "S", default_value_t = 60.0, value_parser = crate::values::number)]
     lease_s: f64,
     /// Fraction of remote workers' results, in [0, 1], that this machine runs again and
     /// compares bit for bit (wall times aside), besides each worker's first result, which is
     /// always checked; 0 checks none. A worker whose result differs gets no more jobs and its
     /// results are discarded and run again. Jobs of external strategies and jobs that charge
     /// compute time are not checked.
-    #[arg(long, value_name = "F", default_value_t = 0.05)]
+    #[arg(long, value_name = "F", default_value_t = 0.05, value_parser = crate::values::number)]
     verify_fraction: f64,
     /// Run every job alone. By default this machine's workers run jobs that share their
     /// beginning together: strategies that differ only in their early stop (`layout`,
@@ -78,7 +79,7 @@ pub struct RunArgs {
     results: Option<PathBuf>,
     /// Most jobs (buildings x seeds x strategies) the grid may hold; a larger grid is refused
     /// before anything runs.
-    #[arg(long, value_name = "N", default_value_t = floorcast_coordinator::grid::DEFAULT_MAX_JOBS, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_name = "N", default_value_t = floorcast_coordinator::grid::DEFAULT_MAX_JOBS, value_parser = crate::values::whole_number::<u64>(1, u64::MAX))]
     max_jobs: u64,
     /// Only print the table of what is stored so far; run nothing.
     #[arg(long)]

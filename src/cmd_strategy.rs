@@ -22,13 +22,13 @@ pub struct CheckArgs {
     #[arg(value_name = "COMMAND")]
     command: String,
     /// Seconds the program has for each reply, 0.01 to 3600.
-    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_TIMEOUT_S)]
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_TIMEOUT_S, value_parser = crate::values::number)]
     strategy_timeout_s: f64,
     /// Building of the exploration (default: a generated school of about 400 m2, seed 1).
     #[arg(long, value_name = "FILE")]
     building: Option<PathBuf>,
     /// Simulated seconds the exploration may take, 1 to 100000.
-    #[arg(long, value_name = "SECONDS", default_value_t = 1800.0)]
+    #[arg(long, value_name = "SECONDS", default_value_t = 1800.0, value_parser = crate::values::number)]
     time_limit_s: f64,
 }
 

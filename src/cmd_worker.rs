@@ -16,12 +16,13 @@ pub struct WorkerArgs {
     /// (repeatable). May be omitted when --zenoh-config lists the endpoints.
     #[arg(long, value_name = "ENDPOINT")]
     connect: Vec<String>,
-    /// Jobs to run at once (default: one per core).
-    #[arg(long, value_name = "N")]
+    /// Jobs to run at once, 1 to 1024 (default: one per core), each up to about 200 MB of
+    /// memory.
+    #[arg(long, value_name = "N", value_parser = crate::values::whole_number::<usize>(1, crate::values::MAX_THREADS))]
     jobs: Option<usize>,
     /// Give up when no coordinator has answered for this many seconds (0: wait forever).
     /// The worker also waits this long for a coordinator that restarts.
-    #[arg(long, value_name = "S", default_value_t = 300.0)]
+    #[arg(long, value_name = "S", default_value_t = 300.0, value_parser = crate::values::number)]
     wait_s: f64,
     /// This worker's name in the coordinator's log and the results (default: host, process id
     /// and zenoh id).
@@ -48,9 +49,6 @@ pub fn run(a: WorkerArgs) -> Result<()> {
             .map(|n| n.get())
             .unwrap_or(1)
     });
-    if jobs == 0 {
-        anyhow::bail!("--jobs must be at least 1");
-    }
     let net = NetConfig {
         listen: Vec::new(),
         connect: a.connect.clone(),

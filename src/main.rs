@@ -8,6 +8,7 @@ mod cmd_layout;
 mod cmd_run;
 mod cmd_strategy;
 mod cmd_worker;
+mod values;
 
 use std::process::ExitCode;
 
@@ -34,7 +35,7 @@ struct Cli {
     /// plus a margin of 15 % of its longer side, 1 to 8 m, on each side; an image's pixels, a Stage floor plan's raster); a larger one is
     /// refused before anything is allocated. Raise it for very large buildings (about 22 bytes of
     /// memory per cell while exploring, 27 with a layout strategy).
-    #[arg(long, global = true, value_name = "CELLS", default_value_t = floorcast_formats::limits::DEFAULT_MAX_CELLS, value_parser = clap::value_parser!(u64).range(1..=4_000_000_000))]
+    #[arg(long, global = true, value_name = "CELLS", default_value_t = floorcast_formats::limits::DEFAULT_MAX_CELLS, value_parser = values::whole_number::<u64>(1, 4_000_000_000))]
     max_cells: u64,
     #[command(subcommand)]
     command: Command,

@@ -164,12 +164,23 @@ fn a_start_heading_beyond_a_full_turn_is_refused() {
     }
 }
 
-/// A negative number given to a flag is that flag's value, refused by its own check (naming the
-/// flag), not taken for an unknown flag.
+/// A number a flag cannot take is refused naming the flag, the value and what was expected; a
+/// negative number is that flag's value, not taken for an unknown flag.
 #[test]
-fn a_negative_number_is_refused_as_the_flags_value() {
+fn a_flags_bad_number_is_refused_saying_what_was_expected() {
     let b = repo().join("buildings/small.toml");
-    for (flag, value) in [("--seed", "-1"), ("--max-cells", "-5")] {
+    let whole = |lo: &str, hi: &str| format!("expected a whole number from {lo} to {hi}");
+    let u64_max = u64::MAX.to_string();
+    for (flag, value, expected) in [
+        ("--seed", "-1", whole("0", &u64_max)),
+        ("--seed", "1.5", whole("0", &u64_max)),
+        ("--seed", "18446744073709551616", whole("0", &u64_max)),
+        ("--max-cells", "-5", whole("1", "4000000000")),
+        ("--max-cells", "0", whole("1", "4000000000")),
+        ("--time-limit-s", "abc", "expected a number".into()),
+        ("--time-limit-s", "inf", "expected a finite number".into()),
+        ("--alpha", "nan", "expected a finite number".into()),
+    ] {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("out");
         let o = run(&[
@@ -185,7 +196,8 @@ fn a_negative_number_is_refused_as_the_flags_value() {
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{flag} {value}: {err}");
         assert!(
-            err.contains(&format!("invalid value '{value}' for '{flag}")),
+            err.contains(&format!("invalid value '{value}' for '{flag}"))
+                && err.contains(&expected),
             "{flag} {value}: {err}"
         );
         assert!(!out.exists(), "{flag} {value}");

@@ -365,3 +365,40 @@ fn garbage_on_the_job_keys_changes_nothing() {
     let rows = assert_each_job_once(&res);
     assert!(rows.iter().all(|(_, w)| w == "w1"));
 }
+
+/// A worker asked for more jobs at once than the system will start threads for (here: too
+/// little address space for their stacks) stops with an error saying what to do, takes no job
+/// and does not panic; a worker of fewer jobs then completes the grid.
+#[test]
+fn a_worker_refused_threads_says_so_and_takes_no_job() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path());
+    let res = dir.path().join("res");
+    let port = free_port();
+    let c = coordinator(&g, &res, port, &[]);
+    // 1024 threads' stacks (2 MiB each) do not fit in 1 GB of address space.
+    let w = Proc::spawn(
+        Command::new("/bin/sh")
+            .arg("-c")
+            .arg(r#"ulimit -v 1000000 && exec "$0" worker --connect "$1" --jobs 1024 --wait-s 60"#)
+            .arg(env!("CARGO_BIN_EXE_floorcast"))
+            .arg(format!("tcp/127.0.0.1:{port}")),
+    );
+    let (ok, out) = w.finish(Duration::from_secs(120));
+    assert!(!ok, "{out}");
+    assert!(!out.contains("panicked"), "{out}");
+    assert!(
+        out.contains("error: could not start 1024 job threads (give fewer --jobs)"),
+        "{out}"
+    );
+    assert!(
+        !out.lines().any(|l| l.starts_with("job ")) && !out.contains("connected"),
+        "{out}"
+    );
+    let w = worker(port, "w", &[]);
+    let (ok, out) = w.finish(Duration::from_secs(240));
+    assert!(ok && out.contains("grid complete"), "{out}");
+    let (okc, outc) = c.finish(Duration::from_secs(60));
+    assert!(okc, "{outc}");
+    assert_each_job_once(&res);
+}

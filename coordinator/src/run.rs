@@ -107,6 +107,11 @@ pub enum RunError {
     Remote(Box<dyn std::error::Error + Send + Sync>),
     #[error("no workers: --workers 0 needs --listen or --connect so that remote workers can join")]
     NoWorkers,
+    #[error("could not start {workers} worker threads (give fewer --workers): {source}")]
+    Spawn {
+        workers: usize,
+        source: std::io::Error,
+    },
 }
 
 /// While a sequential grid's current batch is all stored: tests it (the tests are stored and
@@ -219,9 +224,15 @@ pub fn run_plan(
         let plan = Arc::clone(&plan);
         let stop = Arc::clone(&stop);
         let exec = Arc::clone(&local_exec);
-        handles.push(std::thread::spawn(move || {
-            local_worker(&name, &plan, &tx, &stop, &*exec)
-        }));
+        // (A thread the system refuses is an error, not a panic; the workers already started
+        // leave when the inbox is dropped on the way out.)
+        let h = std::thread::Builder::new()
+            .spawn(move || local_worker(&name, &plan, &tx, &stop, &*exec))
+            .map_err(|e| RunError::Spawn {
+                workers: opts.workers,
+                source: e,
+            })?;
+        handles.push(h);
     }
     let (verify_tx, verifier) = if listener.is_some() && opts.verify_fraction > 0.0 {
         let (tx, rx) = mpsc::channel::<(PlannedJob, StoredResult, String)>();

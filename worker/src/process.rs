@@ -87,6 +87,8 @@ pub enum WorkerError {
     Refused(String),
     #[error("no coordinator answered on {whereabouts} for {waited_s:.0} s: check that `floorcast run GRID --listen ...` runs there, the address, and the credentials/TLS settings of --zenoh-config")]
     NoCoordinator { whereabouts: String, waited_s: f64 },
+    #[error("could not start {jobs} job threads (give fewer --jobs): {source}")]
+    Spawn { jobs: usize, source: std::io::Error },
 }
 
 /// Runs `job` in `building` and reports what it gave ([`crate::execute::execute_wire`] is the
@@ -118,14 +120,41 @@ pub fn run_worker(
         duplicates: AtomicUsize::new(0),
         rejected: AtomicUsize::new(0),
     };
+    let jobs = opts.jobs.max(1);
+    // Every slot's thread is started before any asks for a job: a thread the system refuses
+    // (too many for its limits) is an error, and the slots already started leave without
+    // working, rather than a worker left with what it got and no room for anything else.
+    let gate = std::sync::RwLock::new(false);
     let outcomes: Vec<Result<(), WorkerError>> = std::thread::scope(|s| {
-        let slots: Vec<_> = (0..opts.jobs.max(1))
-            .map(|_| s.spawn(|| slot(&state)))
-            .collect();
-        slots
+        let mut all_started = gate.write().unwrap_or_else(|p| p.into_inner());
+        let mut slots = Vec::with_capacity(jobs);
+        let mut refused = None;
+        for _ in 0..jobs {
+            let started = std::thread::Builder::new().spawn_scoped(s, || {
+                if *gate.read().unwrap_or_else(|p| p.into_inner()) {
+                    slot(&state)
+                } else {
+                    Ok(())
+                }
+            });
+            match started {
+                Ok(h) => slots.push(h),
+                Err(e) => {
+                    refused = Some(e);
+                    break;
+                }
+            }
+        }
+        *all_started = refused.is_none();
+        drop(all_started);
+        let mut outcomes: Vec<Result<(), WorkerError>> = slots
             .into_iter()
             .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
-            .collect()
+            .collect();
+        if let Some(source) = refused {
+            outcomes.push(Err(WorkerError::Spawn { jobs, source }));
+        }
+        outcomes
     });
     outcomes.into_iter().collect::<Result<(), _>>()?;
     Ok(WorkerReport {
@@ -261,7 +290,9 @@ fn run_one(x: &State<'_>, job: WireJob, lease_s: f64) -> Result<(), WorkerError>
     let (stop, stopped) = mpsc::channel::<()>();
     let result = std::thread::scope(|s| {
         let id = id.as_str();
-        s.spawn(move || {
+        // (Without the thread, the job runs unrenewed: should its lease run out, the
+        // coordinator hands it to another worker too, and keeps the first result.)
+        let renewing = std::thread::Builder::new().spawn_scoped(s, move || {
             let renewal = Renewal {
                 worker: x.worker().to_string(),
             };
@@ -275,6 +306,11 @@ fn run_one(x: &State<'_>, job: WireJob, lease_s: f64) -> Result<(), WorkerError>
                 }
             }
         });
+        if let Err(e) = renewing {
+            (x.events)(WorkerEvent::Note(format!(
+                "job {id}: its lease is not renewed: the system refused a thread ({e})"
+            )));
+        }
         let result = match building(x, &job.building_hash) {
             Ok(Ok(b)) => Ok(run_guarded(x, &job, &b)),
             Ok(Err(e)) => Ok(JobReport::failed(format!("its building: {e}"))),

@@ -1,0 +1,78 @@
+//! Parsers of the command line's numbers whose errors say what was expected (clap's own say how
+//! the text failed to parse: "invalid digit found in string", "invalid float literal"). clap puts
+//! the flag and the value before the message: `invalid value 'x' for '--seed <SEED>': expected a
+//! whole number from 0 to 18446744073709551615`.
+
+/// Most threads a machine's `run --workers` or `worker --jobs` may ask for: each runs an
+/// exploration at once (up to about 200 MB each), and a count beyond what the system allows
+/// would fail to start threads rather than run.
+pub const MAX_THREADS: u64 = 1024;
+
+/// A whole number from `lo` to `hi` (both included), as `T`.
+pub fn whole_number<T: TryFrom<u64>>(
+    lo: u64,
+    hi: u64,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static {
+    move |s: &str| {
+        s.trim()
+            .parse::<u64>()
+            .ok()
+            .filter(|v| (lo..=hi).contains(v))
+            .and_then(|v| T::try_from(v).ok())
+            .ok_or_else(|| format!("expected a whole number from {lo} to {hi}"))
+    }
+}
+
+/// A finite number (its range is the flag's own check, which names the range).
+pub fn number(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err("expected a finite number".into()),
+        Err(_) => Err("expected a number, e.g. 2.5 or 1e3".into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_parsed_or_refused_saying_what_was_expected() {
+        let seed = whole_number::<u64>(0, u64::MAX);
+        let workers = whole_number::<usize>(0, MAX_THREADS);
+        let cells = whole_number::<u64>(1, 4_000_000_000);
+        fn whole_err<T>(lo: u64, hi: u64) -> Result<T, String> {
+            Err(format!("expected a whole number from {lo} to {hi}"))
+        }
+        for (text, want) in [
+            ("0", Ok(0)),
+            (" 7 ", Ok(7)),
+            ("18446744073709551615", Ok(u64::MAX)),
+            ("18446744073709551616", whole_err(0, u64::MAX)),
+            ("-1", whole_err(0, u64::MAX)),
+            ("1.5", whole_err(0, u64::MAX)),
+            ("abc", whole_err(0, u64::MAX)),
+            ("", whole_err(0, u64::MAX)),
+        ] {
+            assert_eq!(seed(text), want, "{text:?}");
+        }
+        assert_eq!(workers("1024"), Ok(1024));
+        assert_eq!(workers("1025"), whole_err(0, MAX_THREADS));
+        assert_eq!(cells("0"), whole_err(1, 4_000_000_000));
+        assert_eq!(cells("4000000000"), Ok(4_000_000_000));
+        for (text, want) in [
+            ("2.5", Ok(2.5)),
+            ("-5", Ok(-5.0)),
+            ("1e300", Ok(1e300)),
+            ("inf", Err("expected a finite number".to_string())),
+            ("NaN", Err("expected a finite number".to_string())),
+            ("1e400", Err("expected a finite number".to_string())),
+            (
+                "five",
+                Err("expected a number, e.g. 2.5 or 1e3".to_string()),
+            ),
+        ] {
+            assert_eq!(number(text), want, "{text:?}");
+        }
+    }
+}
