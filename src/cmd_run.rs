@@ -151,13 +151,13 @@ pub fn run(a: RunArgs) -> Result<()> {
     if !(0.0..=1.0).contains(&a.verify_fraction) {
         anyhow::bail!(
             "--verify-fraction: expected a fraction in [0, 1], got {}",
-            a.verify_fraction
+            floorcast_worker::settings::fmt_num(a.verify_fraction)
         );
     }
     if !(a.lease_s.is_finite() && (1.0..=86_400.0).contains(&a.lease_s)) {
         anyhow::bail!(
             "--lease-s: expected seconds in [1, 86400], got {}",
-            a.lease_s
+            floorcast_worker::settings::fmt_num(a.lease_s)
         );
     }
     let store = Store::open(&plan.results_dir)?;

@@ -42,7 +42,10 @@ pub fn run(a: WorkerArgs) -> Result<()> {
         );
     }
     if !(a.wait_s.is_finite() && a.wait_s >= 0.0) {
-        anyhow::bail!("--wait-s must be 0 or more seconds, got {}", a.wait_s);
+        anyhow::bail!(
+            "--wait-s must be 0 or more seconds, got {}",
+            floorcast_worker::settings::fmt_num(a.wait_s)
+        );
     }
     let jobs = a.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism()

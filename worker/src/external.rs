@@ -84,7 +84,8 @@ impl StrategyProgram {
         }
         if !(timeout_s.is_finite() && (0.01..=3600.0).contains(&timeout_s)) {
             return Err(format!(
-                "the strategy timeout {timeout_s} s is outside [0.01, 3600] s"
+                "the strategy timeout {} s is outside [0.01, 3600] s",
+                crate::settings::fmt_num(timeout_s)
             ));
         }
         for f in &files {

@@ -512,7 +512,7 @@ impl std::fmt::Display for SettingValue {
 }
 
 /// A number for messages and tables: `0.2`, `1000000000`, `1e300`.
-fn fmt_num(v: f64) -> String {
+pub fn fmt_num(v: f64) -> String {
     if v.is_finite() && v.abs() < 1e15 {
         format!("{v}")
     } else {
