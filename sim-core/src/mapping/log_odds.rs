@@ -136,7 +136,8 @@ impl SurfacePoints {
     }
 
     /// Adds a hit point `q` (grid coordinates) to the running mean of cell `c` (in the frame).
-    #[inline]
+    // (Always inlined, as profile-guided optimisation chose: BENCHMARKS.md.)
+    #[inline(always)]
     fn add(&mut self, c: Cell, q: [f64; 2]) {
         let (b, k) = self.locate(c);
         if self.slot[b] == 0 {
@@ -364,6 +365,8 @@ impl LogOddsMap {
     /// The surface points ([`LogOddsMap::surface_point`]) of the 3 x 3 cells around `c0`, in row
     /// order, into `out`; returns how many. Read in place when the nine cells lie in the frame
     /// and in one block of the surface store (most cells), else cell by cell.
+    // (Always inlined, as profile-guided optimisation chose: BENCHMARKS.md.)
+    #[inline(always)]
     pub fn surface_points_around(&self, c0: Cell, out: &mut [Vec2; 9]) -> usize {
         const B: usize = SURFACE_BLOCK;
         let (w, h) = (self.frame.width as i32, self.frame.height as i32);

@@ -14,6 +14,8 @@ pub fn grid_from_world(frame: &GridFrame, p: Vec2) -> [f64; 2] {
 /// both end cells included. `visit` returns `false` to stop early. Cells may lie outside any grid;
 /// the caller filters. When the segment passes exactly through a cell corner, the x-neighbour is
 /// visited before the y-neighbour (deterministic, 4-connected walk).
+// (Always inlined, as profile-guided optimisation chose: BENCHMARKS.md.)
+#[inline(always)]
 pub fn walk_segment(a: [f64; 2], b: [f64; 2], mut visit: impl FnMut(Cell) -> bool) {
     for c in SegmentCells::new(a, b) {
         if !visit(c) {
@@ -44,6 +46,8 @@ pub struct SegmentCells {
 }
 
 impl SegmentCells {
+    // (Always inlined, as profile-guided optimisation chose: BENCHMARKS.md.)
+    #[inline(always)]
     pub fn new(a: [f64; 2], b: [f64; 2]) -> Self {
         let finite = a[0].is_finite() && a[1].is_finite() && b[0].is_finite() && b[1].is_finite();
         let cx = floor_i32(a[0]);
@@ -180,6 +184,8 @@ impl Iterator for SegmentCells {
 }
 
 /// Whether every cell on the segment between the centres of `a` and `b` satisfies `clear`.
+// (Always inlined, as profile-guided optimisation chose: BENCHMARKS.md.)
+#[inline(always)]
 pub fn line_of_sight(a: Cell, b: Cell, mut clear: impl FnMut(Cell) -> bool) -> bool {
     let mut ok = true;
     walk_segment(
