@@ -184,9 +184,9 @@ struct RayFan {
     r_cells: f64,
     half: i32,
     nodes: Vec<FanNode>,
-    /// One byte per cell of the `(2 half + 1)^2` square: 1 when counted in this call. (Bytes,
-    /// not bits: consecutive nodes are neighbouring cells, whose bits would share a word, and
-    /// each node's read would wait for the previous node's write.)
+    /// One byte per cell of the `(2 half + 1)^2` square: 0, or when reached in range in this
+    /// call, 1 and (bit 1) whether it counts. (Bytes, not bits: consecutive nodes are
+    /// neighbouring cells, whose bits would share a word, each write waiting on the last.)
     seen: Vec<u8>,
     /// The frame width the nodes' `offset`s are for (none yet).
     offsets_width: Option<u32>,
