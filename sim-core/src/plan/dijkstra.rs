@@ -10,8 +10,9 @@
 //! Implementation, for speed (results are bit-identical to a plain Dijkstra): [`dijkstra_padded`]
 //! searches the planning grid as stored, padded by one blocked cell so that no neighbour needs a
 //! bounds check, and stops once every target cell is settled; each cell has one record (cost, entry
-//! cost, parent), and the eight relaxations of an expansion are tested together as a bit mask
-//! before any is applied. [`dijkstra_padded_within`] makes records only for a window of the grid
+//! cost, parent), a blocked cell's with the cost 0 (so that no step improves it: no test of its
+//! own), and the eight relaxations of an expansion are tested together as a bit mask before any is
+//! applied. [`dijkstra_padded_within`] makes records only for a window of the grid
 //! known to hold every passable cell (the part of a building observed so far). [`AStar`] (octile
 //! heuristic) finds the path to the one chosen goal on the fine grid, first inside a corridor
 //! around the coarse path; its buffers are kept between searches and only the cells a search
@@ -70,7 +71,8 @@ pub struct CostField {
 /// The search state of one cell.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Node {
-    /// Cost units (see module doc) from the start; `u32::MAX` = unreachable.
+    /// Cost units (see module doc) from the start; `u32::MAX` = not reached. 0 for the start
+    /// and for a blocked cell (which no step then improves: no test of its own).
     cost: u32,
     /// 0 = blocked, else 1 + the extra cost of entering the cell.
     enter: u16,
@@ -95,19 +97,24 @@ impl CostField {
             .then(|| (y as usize + 1) * (ww + 2) + x as usize + 1)
     }
 
-    /// Cost of reaching `c` in metres (extra costs included), `None` if unreachable.
-    pub fn distance_m(&self, c: Cell) -> Option<f64> {
+    /// Cost units from the start to `c`, `None` if unreachable (a blocked cell's record holds
+    /// 0 like the start's).
+    fn cost_to(&self, c: Cell) -> Option<u32> {
         let i = self.padded_index(c)?;
         let cost = self.nodes[i].cost;
-        (cost != UNREACHED).then(|| cost as f64 * self.frame.resolution_m / STRAIGHT as f64)
+        (cost != UNREACHED && (cost != 0 || c == self.start)).then_some(cost)
+    }
+
+    /// Cost of reaching `c` in metres (extra costs included), `None` if unreachable.
+    pub fn distance_m(&self, c: Cell) -> Option<f64> {
+        let cost = self.cost_to(c)?;
+        Some(cost as f64 * self.frame.resolution_m / STRAIGHT as f64)
     }
 
     /// Cells from the start to `goal` (both included), `None` if unreachable.
     pub fn path_to(&self, goal: Cell) -> Option<Vec<Cell>> {
+        self.cost_to(goal)?;
         let mut i = self.padded_index(goal)?;
-        if self.nodes[i].cost == UNREACHED {
-            return None;
-        }
         let mut path = vec![goal];
         let mut c = goal;
         while self.nodes[i].parent != 255 {
@@ -236,8 +243,9 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
     let np = pw * (h + 2);
     assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
     let max_extra = max_extra.min(u16::MAX as u32 - 2);
+    // (Also the record of a blocked cell: its cost 0, see `Node::cost`.)
     let unreached = Node {
-        cost: UNREACHED,
+        cost: 0,
         enter: 0,
         parent: 255,
         target: false,
@@ -271,9 +279,14 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
     for y in 0..wh {
         let from = (lo.y as usize + y + 1) * pw + lo.x as usize + 1;
         nodes.push(unreached);
-        nodes.extend(enter[from..from + ww].iter().map(|&e| Node {
-            enter: Into::<u32>::into(e).min(max_extra + 1) as u16,
-            ..unreached
+        nodes.extend(enter[from..from + ww].iter().map(|&e| {
+            let e = Into::<u32>::into(e).min(max_extra + 1);
+            Node {
+                // (`UNREACHED` for a passable cell, 0 for a blocked one.)
+                cost: 0u32.wrapping_sub((e != 0) as u32),
+                enter: e as u16,
+                ..unreached
+            }
         }));
         nodes.push(unreached);
     }
@@ -298,7 +311,10 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
             targets_left += 1;
         }
     }
-    let nb = (DIAGONAL + max_extra + 1) as usize;
+    // A ring of buckets, one per cost modulo its length (a power of two at least the spread
+    // of costs pending at once, `DIAGONAL + max_extra + 1`: the bucket of a cost by a mask).
+    let nb = ((DIAGONAL + max_extra + 1) as usize).next_power_of_two();
+    let ring = nb - 1;
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); nb];
     let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * pw as isize + dx as isize);
     field.nodes[si].cost = 0;
@@ -307,9 +323,12 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
     let mut current = 0u32;
     let nodes = &mut field.nodes;
     while pending > 0 {
-        let b = current as usize % nb;
-        while let Some(i) = buckets[b].pop() {
-            pending -= 1;
+        let b = current as usize & ring;
+        // The bucket being emptied is taken out of the ring (the steps it pushes go to other
+        // buckets: each costs from `current + 10` to `current + nb - 1`).
+        let mut bucket = std::mem::take(&mut buckets[b]);
+        pending -= bucket.len();
+        while let Some(i) = bucket.pop() {
             let i = i as usize;
             if nodes[i].cost != current {
                 continue; // stale entry
@@ -322,39 +341,47 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
                     return field;
                 }
             }
-            // Every expanded cell is inside the frame, so its neighbours are in the padding.
-            let at = |k: usize| -> u32 { nodes[(i as isize + offsets[k]) as usize].enter as u32 };
-            let pass: [u32; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
+            // The cell's neighbours, in `STEPS` order, read from the three rows around it (every
+            // expanded cell is inside the frame, so its neighbours are in the padding).
+            let below: &[Node; 3] = nodes[i - pw - 1..i - pw + 2].try_into().expect("3");
+            let row: &[Node; 3] = nodes[i - 1..i + 2].try_into().expect("3");
+            let above: &[Node; 3] = nodes[i + pw - 1..i + pw + 2].try_into().expect("3");
+            let near = [
+                row[2], row[0], above[1], below[1], above[2], above[0], below[2], below[0],
+            ];
             // Which steps are allowed (a diagonal may not cut a corner) and improve their cell,
             // found for all eight before any is applied (they are distinct cells), as a bit mask:
             // fewer unpredictable branches than testing and applying one step at a time.
-            let ok = allowed_steps(&pass);
+            // A step improves its cell when its cost is below the cell's (never a blocked cell's:
+            // its cost is 0); a diagonal step is allowed only when both straight cells beside it
+            // are passable (no cutting corners).
+            let open = |k: usize| near[k].enter != 0;
+            let corners = [
+                open(0) & open(2),
+                open(1) & open(2),
+                open(0) & open(3),
+                open(1) & open(3),
+            ];
             let mut improved = 0u32;
-            let mut costs = [0u32; 8];
             for (k, &(_, _, step)) in STEPS.iter().enumerate() {
-                let j = (i as isize + offsets[k]) as usize;
-                // (With `pass[k] == 0` this is one below the step, and unused.)
-                let c = (current + step + pass[k]).wrapping_sub(1);
-                costs[k] = c;
-                improved |= ((ok[k] & (c < nodes[j].cost)) as u32) << k;
+                // (With `enter == 0` this is one below the step, and no improvement.)
+                let c = (current + step + near[k].enter as u32).wrapping_sub(1);
+                let allowed = k < 4 || corners[k - 4];
+                improved |= ((allowed & (c < near[k].cost)) as u32) << k;
             }
             while improved != 0 {
                 let k = improved.trailing_zeros() as usize;
                 improved &= improved - 1;
                 let j = (i as isize + offsets[k]) as usize;
-                let c = costs[k];
                 let n = &mut nodes[j];
+                let c = current + STEPS[k].2 + n.enter as u32 - 1;
                 n.cost = c;
                 n.parent = k as u8;
-                // `c % nb` without a division: `current <= c < current + nb`.
-                let mut bj = b + (c - current) as usize;
-                if bj >= nb {
-                    bj -= nb;
-                }
-                buckets[bj].push(j as u32);
+                buckets[c as usize & ring].push(j as u32);
                 pending += 1;
             }
         }
+        buckets[b] = bucket;
         current += 1;
     }
     // (Targets never reached are left unmarked too: the field says nothing of its targets.)
