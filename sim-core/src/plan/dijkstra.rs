@@ -632,17 +632,14 @@ impl AStar {
         let (si, gi) = (pad(start), pad(goal));
         // Octile distance to the goal in cost units: a lower bound of every path's cost, and
         // consistent (it falls by at most a step's cost per step).
-        let heuristic = |i: usize| -> u32 {
-            let (x, y) = ((i % pw) as i64 - 1, (i / pw) as i64 - 1);
-            let (dx, dy) = (
-                (x - goal.x as i64).unsigned_abs() as u32,
-                (y - goal.y as i64).unsigned_abs() as u32,
-            );
+        let heuristic = |c: Cell| -> u32 {
+            let (dx, dy) = (c.x.abs_diff(goal.x), c.y.abs_diff(goal.y));
             STRAIGHT * dx.max(dy) + (DIAGONAL - STRAIGHT) * dx.min(dy)
         };
+        // (A padded index's cell by one division; its neighbours' cells by a step from it.)
+        let cell_of = |i: usize| Cell::new((i % pw) as i32 - 1, (i / pw) as i32 - 1);
         let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * pw as isize + dx as isize);
-        let pass_of = |j: usize| {
-            let cell = Cell::new((j % pw) as i32 - 1, (j / pw) as i32 - 1);
+        let pass_of = |j: usize, cell: Cell| {
             if allowed(cell) {
                 Into::<u32>::into(enter[j]).min(max_extra + 1)
             } else {
@@ -651,7 +648,7 @@ impl AStar {
         };
         self.cost[si] = 0;
         self.touched.push(si as u32);
-        let mut current = heuristic(si);
+        let mut current = heuristic(start);
         self.buckets[current as usize % nb].push(si as u32);
         let mut pending = 1usize;
         while pending > 0 {
@@ -660,7 +657,8 @@ impl AStar {
                 pending -= 1;
                 let i = i as usize;
                 let g = self.cost[i];
-                if g.wrapping_add(heuristic(i)) != current {
+                let here = cell_of(i);
+                if g.wrapping_add(heuristic(here)) != current {
                     continue; // stale entry
                 }
                 if i == gi {
@@ -668,24 +666,31 @@ impl AStar {
                 }
                 // Every expanded cell is inside the frame (the start, or entered through a
                 // passable cell), so its neighbours are in the padding at worst.
-                let at = |k: usize| pass_of((i as isize + offsets[k]) as usize);
+                let near = |k: usize| Cell::new(here.x + STEPS[k].0, here.y + STEPS[k].1);
+                let at = |k: usize| pass_of((i as isize + offsets[k]) as usize, near(k));
                 let pass: [u32; 8] = [at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7)];
+                // The steps allowed that improve their cell, found for all eight before any is
+                // applied (as in `dijkstra_padded_within`: fewer unpredictable branches).
                 let ok = allowed_steps(&pass);
+                let mut improved = 0u32;
                 for (k, &(_, _, step)) in STEPS.iter().enumerate() {
-                    if !ok[k] {
-                        continue;
-                    }
                     let j = (i as isize + offsets[k]) as usize;
-                    let c = g + step + pass[k] - 1;
-                    if c < self.cost[j] {
-                        if self.cost[j] == UNREACHED {
-                            self.touched.push(j as u32);
-                        }
-                        self.cost[j] = c;
-                        self.parent[j] = k as u8;
-                        self.buckets[(c + heuristic(j)) as usize % nb].push(j as u32);
-                        pending += 1;
+                    // (With `pass[k] == 0` this is one below the step, and unused.)
+                    let c = (g + step + pass[k]).wrapping_sub(1);
+                    improved |= ((ok[k] & (c < self.cost[j])) as u32) << k;
+                }
+                while improved != 0 {
+                    let k = improved.trailing_zeros() as usize;
+                    improved &= improved - 1;
+                    let j = (i as isize + offsets[k]) as usize;
+                    let c = g + STEPS[k].2 + pass[k] - 1;
+                    if self.cost[j] == UNREACHED {
+                        self.touched.push(j as u32);
                     }
+                    self.cost[j] = c;
+                    self.parent[j] = k as u8;
+                    self.buckets[(c + heuristic(near(k))) as usize % nb].push(j as u32);
+                    pending += 1;
                 }
             }
             current += 1;
