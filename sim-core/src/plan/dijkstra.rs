@@ -584,8 +584,8 @@ impl AStar {
             self.touched.clear();
         }
         // Keys are `cost + heuristic`; a step raises the key by at most two diagonal steps and
-        // the extra cost.
-        let nb = (2 * DIAGONAL + max_extra + 1) as usize;
+        // the extra cost. (A ring of a power of two buckets: a key's bucket by a mask.)
+        let nb = ((2 * DIAGONAL + max_extra + 1) as usize).next_power_of_two();
         self.buckets.resize_with(nb, Vec::new);
         let found = self.search(pw, enter, max_extra, nb, start, goal, allowed);
         let result = found.map(|cost| {
@@ -649,10 +649,10 @@ impl AStar {
         self.cost[si] = 0;
         self.touched.push(si as u32);
         let mut current = heuristic(start);
-        self.buckets[current as usize % nb].push(si as u32);
+        self.buckets[current as usize & (nb - 1)].push(si as u32);
         let mut pending = 1usize;
         while pending > 0 {
-            let b = current as usize % nb;
+            let b = current as usize & (nb - 1);
             while let Some(i) = self.buckets[b].pop() {
                 pending -= 1;
                 let i = i as usize;
@@ -689,7 +689,7 @@ impl AStar {
                     }
                     self.cost[j] = c;
                     self.parent[j] = k as u8;
-                    self.buckets[(c + heuristic(near(k))) as usize % nb].push(j as u32);
+                    self.buckets[(c + heuristic(near(k))) as usize & (nb - 1)].push(j as u32);
                     pending += 1;
                 }
             }
