@@ -425,7 +425,11 @@ pub(crate) fn frontier_row(grid: &OccupancyGrid, y: usize, xa: usize, xb: usize,
     let (w, h) = (grid.width() as usize, grid.height() as usize);
     debug_assert!(xa <= xb && xb < w && y < h && out.len() > xb - xa);
     let (ia, ib) = (xa.max(1), xb.min(w.saturating_sub(2)));
-    for x in (xa..=xb).filter(|x| *x < ia || *x > ib) {
+    // (The cells before `ia` and after `ib`: at most a map's first and last columns, or the
+    // whole span when the map is one or two columns wide. Counted from the ends, not found by
+    // testing every column of the span.)
+    let edges = (xa..=xb.min(ia - 1)).chain(xa.max(ib + 1)..=xb);
+    for x in edges {
         out[x - xa] = is_frontier_cell(grid, Cell::new(x as i32, y as i32));
     }
     if ia > ib {
