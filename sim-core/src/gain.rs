@@ -185,7 +185,8 @@ struct RayFan {
     half: i32,
     nodes: Vec<FanNode>,
     /// One byte per cell of the `(2 half + 1)^2` square: 0, or when reached in range in this
-    /// call, 1 and (bit 1) whether it counts. (Bytes, not bits: consecutive nodes are
+    /// call, 1 and (bit 1) whether it counts; all 0 between calls (a call clears what it
+    /// marked as it counts the marks). (Bytes, not bits: consecutive nodes are
     /// neighbouring cells, whose bits would share a word, each write waiting on the last.)
     seen: Vec<u8>,
     /// The frame width the nodes' `offset`s are for (none yet).
@@ -368,7 +369,6 @@ impl RayFan {
         blocks: &impl Fn(Cell, usize) -> bool,
         counts: &impl Fn(Cell, usize) -> bool,
     ) -> (usize, CellsRead) {
-        self.seen.fill(0);
         let w = frame.width as i32;
         if self.offsets_width != Some(frame.width) {
             for n in self.nodes.iter_mut() {
@@ -492,11 +492,18 @@ fn walk<const INSIDE: bool>(
         }
         i += 1;
     }
-    // The cells that count: those marked 3. (In runs of at most 255 bytes, each adding at
-    // most 1, summed in bytes: the compiler adds 16 at a time.)
+    // The cells that count: those marked 3, the marks cleared as they are read (the next
+    // walk starts from a clear square). (In runs of at most 255 bytes, each adding at most 1,
+    // summed in bytes: the compiler adds 16 at a time.)
     let count = seen
-        .chunks(255)
-        .map(|run| run.iter().fold(0u8, |a, &b| a + (b >> 1)) as usize)
+        .chunks_mut(255)
+        .map(|run| {
+            run.iter_mut().fold(0u8, |a, b| {
+                let counted = *b >> 1;
+                *b = 0;
+                a + counted
+            }) as usize
+        })
         .sum();
     (count, boxes, n_skips)
 }
