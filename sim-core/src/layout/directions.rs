@@ -360,6 +360,14 @@ mod tests {
         hist.iter().map(|v| v * v).sum()
     }
 
+    /// The points of `cells` (column, row) on a lattice of spacing `res`, the origin at 0.
+    fn centres(cells: &[(i32, i32)], res: f64) -> Vec<Vec2> {
+        cells
+            .iter()
+            .map(|&(x, y)| Vec2::new(x as f64 * res, y as f64 * res))
+            .collect()
+    }
+
     proptest::proptest! {
         /// Bit for bit the reference, on cell centres of any grid (the origin's cell included:
         /// zero offsets of either sign), any number of points and any angle.
@@ -369,10 +377,7 @@ mod tests {
             t in 0.0f64..PI,
             res in proptest::prop_oneof![proptest::strategy::Just(0.05), 0.01f64..0.2],
         ) {
-            let pts: Vec<Vec2> = cells
-                .iter()
-                .map(|&(x, y)| Vec2::new(x as f64 * res, y as f64 * res))
-                .collect();
+            let pts = centres(&cells, res);
             let mut buf = SharpnessBuffers::default();
             for angle in [t, 0.0, PI / 2.0] {
                 let got = sharpness(&pts, angle, 2.0 * res, &mut buf);
@@ -389,10 +394,7 @@ mod tests {
             ts in proptest::collection::vec(0.0f64..PI, 0..11),
             res in proptest::prop_oneof![proptest::strategy::Just(0.05), 0.01f64..0.2],
         ) {
-            let pts: Vec<Vec2> = cells
-                .iter()
-                .map(|&(x, y)| Vec2::new(x as f64 * res, y as f64 * res))
-                .collect();
+            let pts = centres(&cells, res);
             let mut bufs = Default::default();
             let got = sharpness_at(&pts, &ts, 2.0 * res, &mut bufs);
             let want: Vec<u64> =
