@@ -116,12 +116,19 @@ pub fn match_scan(
         if cfg.observed_before_hit_m <= 0.0 {
             return true;
         }
-        let q = prior.position() + Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
-        let back = Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y) / p.norm().max(1e-9) * res;
-        (0..=front_steps).any(|k| {
-            let cell = grid.frame.cell_from_world(q - back * k as f64);
+        let turned = Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y);
+        let q = prior.position() + turned;
+        let known = |at: Vec2| {
+            let cell = grid.frame.cell_from_world(at);
             grid.get(cell).is_some_and(|o| *o != Occupancy::Unknown)
-        })
+        };
+        // The point itself first (`q - back * 0.0` is `q`: `back` is finite), as good as always
+        // known; the step back along the beam only when it is not.
+        if known(q) {
+            return true;
+        }
+        let back = turned / p.norm().max(1e-9) * res;
+        (1..=front_steps).any(|k| known(q - back * k as f64))
     };
     // (Made at the most it can hold: collected from the filters, it grew about seven times.)
     let mut points: Vec<Vec2> = Vec::with_capacity(scan.ranges_m.len().div_ceil(stride));
