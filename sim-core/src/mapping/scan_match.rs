@@ -122,8 +122,9 @@ pub fn match_scan(
             let cell = grid.frame.cell_from_world(at);
             grid.get(cell).is_some_and(|o| *o != Occupancy::Unknown)
         };
-        // The point itself first (`q - back * 0.0` is `q`: `back` is finite), as good as always
-        // known; the step back along the beam only when it is not.
+        // The point itself first (`q - back * 0.0`, `back` being finite, is `q` but for the sign
+        // of a zero, which changes no cell), as good as always known; the steps back along the
+        // beam only when it is not.
         if known(q) {
             return true;
         }
