@@ -189,6 +189,9 @@ struct RayFan {
     /// marked as it counts the marks). (Bytes, not bits: consecutive nodes are
     /// neighbouring cells, whose bits would share a word, each write waiting on the last.)
     seen: Vec<u8>,
+    /// A call left marks in `seen`: it stopped in its walk (a predicate panicked, and the run's
+    /// caller caught it), so the next call clears the square first.
+    marked: bool,
     /// The frame width the nodes' `offset`s are for (none yet).
     offsets_width: Option<u32>,
     /// Per node, its depth (the index of its cell in a ray's walk, at most 255: see
@@ -346,6 +349,7 @@ impl RayFan {
             half,
             nodes,
             seen: vec![0; side * side],
+            marked: false,
             offsets_width: None,
             depth: ids
                 .iter()
@@ -369,6 +373,10 @@ impl RayFan {
         blocks: &impl Fn(Cell, usize) -> bool,
         counts: &impl Fn(Cell, usize) -> bool,
     ) -> (usize, CellsRead) {
+        if self.marked {
+            self.seen.fill(0);
+        }
+        self.marked = true;
         let w = frame.width as i32;
         if self.offsets_width != Some(frame.width) {
             for n in self.nodes.iter_mut() {
@@ -392,6 +400,8 @@ impl RayFan {
         } else {
             walk::<false>(nodes, seen, skips, frame, p, base, blocks, counts)
         };
+        // (The walk cleared its marks as it counted them.)
+        self.marked = false;
         let rays = match &self.ray_cells {
             Some(cells) => {
                 // Each leaf's ray stopped at the skipped node above it, if any.
@@ -825,5 +835,41 @@ mod tests {
         assert_eq!(information_gain(&all_unknown, Cell::new(2, 2), 0.0), 0.0);
         let wall = OccupancyGrid::from_ascii("#", 1.0);
         assert_eq!(information_gain(&wall, Cell::new(0, 0), 3.0), 0.0);
+    }
+
+    /// A walk stopped by a panicking predicate (a job's panic, caught by its worker, which
+    /// goes on with other jobs on the same thread) leaves no mark that a later count on that
+    /// thread would add: here the later count sees less than the stopped walk had marked.
+    #[test]
+    fn a_walk_stopped_by_a_panic_leaves_no_marks() {
+        let frame = GridFrame::new(crate::geom::Vec2::zeros(), 1.0, 41, 41);
+        let p = Cell::new(20, 20);
+        // Walls on a ring of radius 5 around `p`: the far cells are hidden.
+        let ring = |c: Cell, _: usize| {
+            let d2 = (c.x - p.x).pow(2) + (c.y - p.y).pow(2);
+            (25..=36).contains(&d2)
+        };
+        let walled = || visible_area_read(&frame, p, 15.0, ring, |_, _| true).0;
+        let before = walled();
+        let calls = std::cell::Cell::new(0);
+        let stopped = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            visible_area_read(
+                &frame,
+                p,
+                15.0,
+                |_, _| false,
+                |_, _| {
+                    calls.set(calls.get() + 1);
+                    assert!(calls.get() < 600, "a predicate's panic");
+                    true
+                },
+            )
+        }));
+        assert!(stopped.is_err());
+        assert!(
+            calls.get() >= 600,
+            "the walk marked cells beyond the ring first"
+        );
+        assert_eq!(walled(), before);
     }
 }
