@@ -89,16 +89,11 @@ pub fn run(c: BuildingCommand) -> Result<()> {
 }
 
 fn generate_cmd(a: GenerateArgs) -> Result<()> {
-    if !(a.area_m2.is_finite() && (100.0..=20_000.0).contains(&a.area_m2)) {
+    // (Flags' numbers are finite: `values::number` refused any other.)
+    if !(100.0..=20_000.0).contains(&a.area_m2) {
         bail!(
             "--area-m2 {}: expected a free area between 100 and 20000 m2",
             a.area_m2
-        );
-    }
-    if !a.rotation_deg.is_finite() {
-        bail!(
-            "--rotation-deg {}: expected a number of degrees",
-            a.rotation_deg
         );
     }
     let name = a.name.clone().unwrap_or_else(|| {

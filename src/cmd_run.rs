@@ -154,7 +154,7 @@ pub fn run(a: RunArgs) -> Result<()> {
             floorcast_worker::settings::fmt_num(a.verify_fraction)
         );
     }
-    if !(a.lease_s.is_finite() && (1.0..=86_400.0).contains(&a.lease_s)) {
+    if !(1.0..=86_400.0).contains(&a.lease_s) {
         anyhow::bail!(
             "--lease-s: expected seconds in [1, 86400], got {}",
             floorcast_worker::settings::fmt_num(a.lease_s)

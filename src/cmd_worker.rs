@@ -41,7 +41,7 @@ pub fn run(a: WorkerArgs) -> Result<()> {
             "no coordinator to join: give --connect tcp/HOST:7447 (the endpoint of `floorcast run GRID --listen ...`) or a --zenoh-config that lists it"
         );
     }
-    if !(a.wait_s.is_finite() && a.wait_s >= 0.0) {
+    if a.wait_s < 0.0 {
         anyhow::bail!(
             "--wait-s must be 0 or more seconds, got {}",
             floorcast_worker::settings::fmt_num(a.wait_s)

@@ -12,6 +12,7 @@ mod values;
 
 use std::process::ExitCode;
 
+use clap::error::ErrorKind;
 use clap::{Parser, Subcommand};
 
 /// Does this exploration strategy map an unknown building faster than that one?
@@ -72,7 +73,10 @@ struct SettingsArgs {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(e),
+    };
     floorcast_formats::limits::set_max_cells(cli.max_cells);
     let result = match cli.command {
         Command::Building(c) => cmd_building::run(c),
@@ -103,6 +107,41 @@ fn main() -> ExitCode {
     }
 }
 
+/// A command line clap refuses (an unknown flag or subcommand, a value out of its range, a
+/// missing argument): one `error: ...` line and exit code 2, as for any other bad input. Help and
+/// the version (and the help shown when no subcommand is given) print as clap prints them.
+fn usage_error(e: clap::Error) -> ExitCode {
+    if matches!(
+        e.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        e.exit();
+    }
+    eprintln!("{}", usage_line(&e.render().to_string()));
+    ExitCode::from(2)
+}
+
+/// Clap's message on one line: its usage lines left out (`--help` prints them), the rest joined
+/// (a list of possible values, or the list a line ending in a colon announces, after a space;
+/// other lines after a semicolon).
+fn usage_line(text: &str) -> String {
+    let mut line = String::new();
+    for part in text
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("Usage:"))
+    {
+        if !line.is_empty() {
+            let list = part.starts_with('[') || line.ends_with(':');
+            line.push_str(if list { " " } else { "; " });
+        }
+        line.push_str(part);
+    }
+    line
+}
+
 /// An error and its causes on one line, each cause said once: a cause whose text the message so
 /// far already holds (a library error that quotes its source) is left out.
 fn one_line_error(e: &anyhow::Error) -> String {
@@ -123,7 +162,26 @@ fn one_line_error(e: &anyhow::Error) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::one_line_error;
+    use super::{one_line_error, usage_line};
+
+    #[test]
+    fn clap_errors_are_one_line_without_the_usage() {
+        let text = "error: invalid value 'x' for '--strategy <STRATEGY>'\n  [possible values: a, b]\n\nFor more information, try '--help'.\n";
+        assert_eq!(
+            usage_line(text),
+            "error: invalid value 'x' for '--strategy <STRATEGY>' [possible values: a, b]; For more information, try '--help'."
+        );
+        let text = "error: unrecognized subcommand 'x'\n\nUsage: floorcast [OPTIONS] <COMMAND>\n\nFor more information, try '--help'.\n";
+        assert_eq!(
+            usage_line(text),
+            "error: unrecognized subcommand 'x'; For more information, try '--help'."
+        );
+        let text = "error: the following required arguments were not provided:\n  <RESULTS>\n\nUsage: floorcast report <RESULTS>\n";
+        assert_eq!(
+            usage_line(text),
+            "error: the following required arguments were not provided: <RESULTS>"
+        );
+    }
 
     #[test]
     fn causes_are_said_once_on_one_line() {
