@@ -15,6 +15,7 @@
 //! with the previous one stale, but not the plain gains, which read only the map (the paper's
 //! `I(p)` falls back to them for most candidates, those in rooms with an open frontier).
 
+use std::collections::btree_map::Entry;
 use std::collections::BTreeMap;
 
 use crate::gain::{CellBox, CellsRead};
@@ -116,26 +117,36 @@ impl GainCache {
         now: u64,
         compute: impl FnOnce() -> (f64, CellsRead),
     ) -> f64 {
-        let key = (p.x, p.y);
-        let unchanged = self.gains[kind as usize]
-            .get(&key)
-            .is_some_and(|c| !self.changed_since(p, range_m, &c.read, c.at));
-        if let Some(c) = self.gains[kind as usize]
-            .get_mut(&key)
-            .filter(|_| unchanged)
-        {
+        // (The kind's map is taken out for the call, so that the entry is found once and the
+        // cache's stamps read while it is held; taking a map allocates nothing. Should `compute`
+        // panic, the kind's gains are forgotten: computed again, they are the same.)
+        let mut gains = std::mem::take(&mut self.gains[kind as usize]);
+        let g = match gains.entry((p.x, p.y)) {
             // Computed now, the gain would read the same cells, unchanged: the same value and
             // cells read. Later lookups need only look at the changes after this one.
-            c.at = now;
-            return c.gain;
-        }
-        let (g, read) = compute();
-        let cached = Cached {
-            gain: g,
-            at: now,
-            read,
+            Entry::Occupied(mut e)
+                if !self.changed_since(p, range_m, &e.get().read, e.get().at) =>
+            {
+                e.get_mut().at = now;
+                e.get().gain
+            }
+            entry => {
+                let (gain, read) = compute();
+                let cached = Cached {
+                    gain,
+                    at: now,
+                    read,
+                };
+                match entry {
+                    Entry::Occupied(mut e) => *e.get_mut() = cached,
+                    Entry::Vacant(e) => {
+                        e.insert(cached);
+                    }
+                }
+                gain
+            }
         };
-        self.gains[kind as usize].insert((p.x, p.y), cached);
+        self.gains[kind as usize] = gains;
         g
     }
 

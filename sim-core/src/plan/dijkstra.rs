@@ -349,12 +349,11 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
             let near = [
                 row[2], row[0], above[1], below[1], above[2], above[0], below[2], below[0],
             ];
-            // Which steps are allowed (a diagonal may not cut a corner) and improve their cell,
-            // found for all eight before any is applied (they are distinct cells), as a bit mask:
-            // fewer unpredictable branches than testing and applying one step at a time.
-            // A step improves its cell when its cost is below the cell's (never a blocked cell's:
-            // its cost is 0); a diagonal step is allowed only when both straight cells beside it
-            // are passable (no cutting corners).
+            // Which steps are allowed and improve their cell, found for all eight before any is
+            // applied (they are distinct cells), as a bit mask: fewer unpredictable branches than
+            // testing and applying one step at a time. A step improves its cell when its cost is
+            // below the cell's (never a blocked cell's: its cost is 0); a diagonal step is
+            // allowed only when both straight cells beside it are passable (no cutting corners).
             let open = |k: usize| near[k].enter != 0;
             let corners = [
                 open(0) & open(2),
@@ -649,10 +648,11 @@ impl AStar {
         self.cost[si] = 0;
         self.touched.push(si as u32);
         let mut current = heuristic(start);
-        self.buckets[current as usize & (nb - 1)].push(si as u32);
+        let ring = nb - 1;
+        self.buckets[current as usize & ring].push(si as u32);
         let mut pending = 1usize;
         while pending > 0 {
-            let b = current as usize & (nb - 1);
+            let b = current as usize & ring;
             while let Some(i) = self.buckets[b].pop() {
                 pending -= 1;
                 let i = i as usize;
@@ -689,7 +689,7 @@ impl AStar {
                     }
                     self.cost[j] = c;
                     self.parent[j] = k as u8;
-                    self.buckets[(c + heuristic(near(k))) as usize & (nb - 1)].push(j as u32);
+                    self.buckets[(c + heuristic(near(k))) as usize & ring].push(j as u32);
                     pending += 1;
                 }
             }
