@@ -54,6 +54,7 @@ const NOT_RUN: &[(&str, Check)] = &[
     ("run grids/schools.toml", Check::LongGrid("grids/schools.toml", 99)),
     ("run grids/paper-gaps.toml", Check::LongGrid("grids/paper-gaps.toml", 100)),
     ("run grids/starts.toml", Check::LongGrid("grids/starts.toml", 600)),
+    ("run grids/layout-update.toml", Check::LongGrid("grids/layout-update.toml", 1000)),
     (
         "run grids/paper.toml --listen tcp/0.0.0.0:7447 --workers 0",
         Check::Network(Some("grids/paper.toml")),
@@ -96,7 +97,7 @@ const NOT_RUN: &[(&str, Check)] = &[
 
 /// At most this many printed commands may be left unrun (each reference grid's `run` line is
 /// one: they take minutes to hours and are planned instead).
-const MAX_NOT_RUN: usize = 22;
+const MAX_NOT_RUN: usize = 23;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
