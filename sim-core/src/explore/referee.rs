@@ -57,6 +57,11 @@ impl Explorer<'_> {
         let frame = self.map.frame;
         let referee = &mut self.referee;
         let (w, h) = (frame.width as i32, frame.height as i32);
+        // The previous fresh cell's square of building cells (clipped to the frame): every cell
+        // of it has been tested in this update, so that it is credited or found untestable, and
+        // a test again would change nothing. Consecutive fresh cells are mostly neighbours (a
+        // beam's cells), whose squares overlap in 20 of their 25 cells.
+        let mut done: Option<(i32, i32, i32, i32)> = None;
         for &i in fresh {
             let b = map_to_world.building_cell_of(&frame, frame.cell_of_index(i));
             let (x0, x1) = (
@@ -69,7 +74,15 @@ impl Explorer<'_> {
             );
             for y in y0..=y1 {
                 let row = y as usize * w as usize;
-                for x in x0..=x1 {
+                // The row's columns outside the previous square: all of them, or those left and
+                // right of its columns when the row is one of its rows.
+                let (left, right) = match done {
+                    Some((dx0, dx1, dy0, dy1)) if (dy0..=dy1).contains(&y) => {
+                        (x0..=x1.min(dx0 - 1), x0.max(dx1 + 1)..=x1)
+                    }
+                    _ => (x0..=x1, 1..=0),
+                };
+                for x in left.chain(right) {
                     let j = row + x as usize;
                     // Most neighbours are credited already: test that before transforming back.
                     if referee.explored.data[j] || referee.untestable.data[j] {
@@ -87,6 +100,7 @@ impl Explorer<'_> {
                     }
                 }
             }
+            done = (x0 <= x1 && y0 <= y1).then_some((x0, x1, y0, y1));
         }
         for j in referee.untestable_list.drain(..) {
             referee.untestable.data[j] = false;
