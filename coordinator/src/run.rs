@@ -112,6 +112,8 @@ pub enum RunError {
         workers: usize,
         source: std::io::Error,
     },
+    #[error("could not start the thread that checks remote workers' results (the system is out of threads or memory; give fewer --workers, or --verify-fraction 0): {0}")]
+    VerifierSpawn(std::io::Error),
 }
 
 /// While a sequential grid's current batch is all stored: tests it (the tests are stored and
@@ -239,7 +241,9 @@ pub fn run_plan(
         let inbox = inbox_tx.clone();
         let plan = Arc::clone(&plan);
         let exec = Arc::clone(&local_exec);
-        let h = std::thread::spawn(move || verifier(&plan, &rx, &inbox, &*exec));
+        let h = std::thread::Builder::new()
+            .spawn(move || verifier(&plan, &rx, &inbox, &*exec))
+            .map_err(RunError::VerifierSpawn)?;
         (Some(tx), Some(h))
     } else {
         (None, None)

@@ -475,18 +475,38 @@ impl ExternalStrategy {
                     _ => format!("cannot start '{}': {e}", program.command[0]),
                 })
             })?;
-        let stdin = child.stdin.take().map(|pipe| {
-            let (tx, rx) = mpsc::channel::<String>();
-            std::thread::spawn(move || write_lines(pipe, rx));
-            tx
-        });
+        // The pipes' threads. One the system refuses is an error, not a panic: the program is
+        // stopped (the threads already started end with its pipes).
+        let refused = |child: &mut std::process::Child, e: std::io::Error| {
+            let _ = child.kill();
+            let _ = child.wait();
+            fail(format!(
+                "cannot start a thread for the program's pipes ({e}): the system is out of threads or memory; run fewer jobs at once"
+            ))
+        };
+        let stdin = match child.stdin.take() {
+            Some(pipe) => {
+                let (tx, rx) = mpsc::channel::<String>();
+                std::thread::Builder::new()
+                    .spawn(move || write_lines(pipe, rx))
+                    .map_err(|e| refused(&mut child, e))?;
+                Some(tx)
+            }
+            None => None,
+        };
         let stdout = child.stdout.take().expect("stdout is piped");
         let stderr_pipe = child.stderr.take().expect("stderr is piped");
         let (tx, lines) = mpsc::channel();
-        std::thread::spawn(move || read_lines(stdout, tx));
+        std::thread::Builder::new()
+            .spawn(move || read_lines(stdout, tx))
+            .map_err(|e| refused(&mut child, e))?;
         let stderr = Arc::new(Mutex::new(Stderr::default()));
         let sink = Arc::clone(&stderr);
-        let stderr_reader = Some(std::thread::spawn(move || read_stderr(stderr_pipe, sink)));
+        let stderr_reader = Some(
+            std::thread::Builder::new()
+                .spawn(move || read_stderr(stderr_pipe, sink))
+                .map_err(|e| refused(&mut child, e))?,
+        );
         let mut s = Self {
             program: program.clone(),
             command: command.clone(),

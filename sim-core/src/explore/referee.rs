@@ -74,15 +74,13 @@ impl Explorer<'_> {
             );
             for y in y0..=y1 {
                 let row = y as usize * w as usize;
-                // The row's columns outside the previous square: all of them, or those left and
-                // right of its columns when the row is one of its rows.
-                let (left, right) = match done {
-                    Some((dx0, dx1, dy0, dy1)) if (dy0..=dy1).contains(&y) => {
-                        (x0..=x1.min(dx0 - 1), x0.max(dx1 + 1)..=x1)
-                    }
-                    _ => (x0..=x1, 1..=0),
+                // The row's columns outside the previous square: those left and right of its
+                // columns when the row is one of its rows, else all of them (none skipped).
+                let (skip0, skip1) = match done {
+                    Some((dx0, dx1, dy0, dy1)) if (dy0..=dy1).contains(&y) => (dx0, dx1),
+                    _ => (x1 + 1, x1),
                 };
-                for x in left.chain(right) {
+                for x in (x0..=x1.min(skip0 - 1)).chain(x0.max(skip1 + 1)..=x1) {
                     let j = row + x as usize;
                     // Most neighbours are credited already: test that before transforming back.
                     if referee.explored.data[j] || referee.untestable.data[j] {
