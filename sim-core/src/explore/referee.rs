@@ -60,7 +60,7 @@ impl Explorer<'_> {
         // The previous fresh cell's square of building cells (clipped to the frame): every cell
         // of it has been tested in this update, so that it is credited or found untestable, and
         // a test again would change nothing. Consecutive fresh cells are mostly neighbours (a
-        // beam's cells), whose squares overlap in 20 of their 25 cells.
+        // beam's cells), whose squares share 20 of their 25 cells (16 for diagonal neighbours).
         let mut done: Option<(i32, i32, i32, i32)> = None;
         for &i in fresh {
             let b = map_to_world.building_cell_of(&frame, frame.cell_of_index(i));
