@@ -692,7 +692,7 @@ mod tests {
 
     use super::*;
     use crate::execute::{execute, row};
-    use crate::run::{run_plan, Counts, RunOptions};
+    use crate::run::{run_plan, Counts, RunError, RunOptions};
     use crate::store::Store;
     use floorcast_worker::execute::execute_wire;
     use floorcast_worker::process::{run_worker, WorkerError, WorkerOptions, WorkerReport};
@@ -942,6 +942,33 @@ mod tests {
         assert!(e.to_string().contains("floorcast run GRID --listen"));
         assert!(
             e.to_string().contains(&format!("{ep} (campaign 'test')")),
+            "{e}"
+        );
+    }
+
+    /// The thread that checks remote workers' results refused by the system: `run` is an error
+    /// saying what to do (fewer workers, or no checks), not a panic.
+    #[test]
+    fn a_refused_checker_thread_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = plan(dir.path(), "[1]");
+        let store = Store::open(&p.results_dir).unwrap();
+        let opts = RunOptions {
+            workers: 0,
+            remote: Some(Arc::new(net(vec![endpoint(dir.path())], vec![]))),
+            lease_s: 30.0,
+            linger_s: 0.0,
+            executor: None,
+            verify_fraction: 0.5,
+            share: true,
+        };
+        floorcast_worker::refuse_threads_after(Some(0));
+        let r = crate::run::tests::run_quietly(&p, &store, &opts);
+        floorcast_worker::refuse_threads_after(None);
+        let e = r.expect_err("an error");
+        assert!(
+            matches!(e, RunError::VerifierSpawn(_))
+                && e.to_string().contains("--verify-fraction 0"),
             "{e}"
         );
     }

@@ -20,6 +20,7 @@ use crate::grid::{Plan, PlannedJob};
 use crate::inbox::{Answer, Inbox, InboxSender, RemoteWorkers, LOCAL};
 use crate::schedule::{Grant, Note, Renewal, RequeueReason, Scheduler, Verdict};
 use crate::store::{Store, StoreError, StoredResult};
+use floorcast_worker::spawn_thread;
 use floorcast_worker::wire::{check_report, JobReport, RenewReply, SubmitReply};
 
 /// Counts for a progress display.
@@ -228,11 +229,12 @@ pub fn run_plan(
         let exec = Arc::clone(&local_exec);
         // (A thread the system refuses is an error, not a panic; the workers already started
         // leave when the inbox is dropped on the way out.)
-        let h = std::thread::Builder::new()
-            .spawn(move || local_worker(&name, &plan, &tx, &stop, &*exec))
-            .map_err(|e| RunError::Spawn {
-                workers: opts.workers,
-                source: e,
+        let h =
+            spawn_thread(move || local_worker(&name, &plan, &tx, &stop, &*exec)).map_err(|e| {
+                RunError::Spawn {
+                    workers: opts.workers,
+                    source: e,
+                }
             })?;
         handles.push(h);
     }
@@ -241,8 +243,7 @@ pub fn run_plan(
         let inbox = inbox_tx.clone();
         let plan = Arc::clone(&plan);
         let exec = Arc::clone(&local_exec);
-        let h = std::thread::Builder::new()
-            .spawn(move || verifier(&plan, &rx, &inbox, &*exec))
+        let h = spawn_thread(move || verifier(&plan, &rx, &inbox, &*exec))
             .map_err(RunError::VerifierSpawn)?;
         (Some(tx), Some(h))
     } else {
@@ -646,9 +647,25 @@ fn local_worker(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::execute::tests::small_plan;
+
+    /// [`run_plan`] not interrupted, its progress and log dropped.
+    pub(crate) fn run_quietly(
+        plan: &Plan,
+        store: &Store,
+        opts: &RunOptions,
+    ) -> Result<(Outcome, Counts), RunError> {
+        run_plan(
+            plan,
+            store,
+            opts,
+            &AtomicBool::new(false),
+            &mut |_| {},
+            &mut |_| {},
+        )
+    }
 
     /// A job that panics is stored as a failed job (with the panic's message), never lost, and
     /// the other workers' jobs still run.
@@ -668,15 +685,7 @@ mod tests {
             executor: Some(exec),
             ..RunOptions::default()
         };
-        let (outcome, counts) = run_plan(
-            &plan,
-            &store,
-            &opts,
-            &AtomicBool::new(false),
-            &mut |_| {},
-            &mut |_| {},
-        )
-        .unwrap();
+        let (outcome, counts) = run_quietly(&plan, &store, &opts).unwrap();
         assert_eq!(outcome, Outcome::Complete);
         assert_eq!((counts.done, counts.failed), (4, 2));
         let rows = store.all().unwrap();
@@ -691,6 +700,45 @@ mod tests {
                 "{r:?}"
             );
         }
+    }
+
+    /// A worker thread the system refuses (the first, second or third of three): `run` is an
+    /// error naming the workers asked for, runs no job, and the workers already started leave
+    /// (none is left waiting for a job: each holds the executor until it leaves).
+    #[test]
+    fn a_refused_worker_thread_is_an_error_and_the_started_ones_leave() {
+        let dir = tempfile::tempdir().unwrap();
+        let plan = small_plan(dir.path(), "[1, 2, 3, 4]", 10, "");
+        let store = Store::open(&plan.results_dir).unwrap();
+        let exec: Arc<LocalExecutor> =
+            Arc::new(|_: &Plan, job: &PlannedJob| panic!("job {} was run", job.id));
+        for started in 0..3 {
+            let opts = RunOptions {
+                workers: 3,
+                executor: Some(Arc::clone(&exec)),
+                ..RunOptions::default()
+            };
+            floorcast_worker::refuse_threads_after(Some(started));
+            let r = run_quietly(&plan, &store, &opts);
+            floorcast_worker::refuse_threads_after(None);
+            match r {
+                Err(e @ RunError::Spawn { workers: 3, .. }) => {
+                    assert!(e.to_string().contains("give fewer --workers"), "{e}")
+                }
+                other => panic!("after {started} threads: {other:?}"),
+            }
+            drop(opts);
+            let t0 = Instant::now();
+            while Arc::strong_count(&exec) > 1 && t0.elapsed() < Duration::from_secs(10) {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            assert_eq!(
+                Arc::strong_count(&exec),
+                1,
+                "after {started} threads: a started worker did not leave"
+            );
+        }
+        assert!(store.all().unwrap().is_empty());
     }
 
     /// Jobs that share their beginning (`layout`, `layout-es`, `layout-aes` on one building,
@@ -715,15 +763,7 @@ mod tests {
                 share,
                 ..RunOptions::default()
             };
-            let (outcome, counts) = run_plan(
-                &plan,
-                &store,
-                &opts,
-                &AtomicBool::new(false),
-                &mut |_| {},
-                &mut |_| {},
-            )
-            .unwrap();
+            let (outcome, counts) = run_quietly(&plan, &store, &opts).unwrap();
             assert_eq!(outcome, Outcome::Complete);
             assert_eq!((counts.done, counts.failed), (12, 0));
             let mut all = store.all().unwrap();

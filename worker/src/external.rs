@@ -487,8 +487,7 @@ impl ExternalStrategy {
         let stdin = match child.stdin.take() {
             Some(pipe) => {
                 let (tx, rx) = mpsc::channel::<String>();
-                std::thread::Builder::new()
-                    .spawn(move || write_lines(pipe, rx))
+                crate::spawn_thread(move || write_lines(pipe, rx))
                     .map_err(|e| refused(&mut child, e))?;
                 Some(tx)
             }
@@ -497,14 +496,11 @@ impl ExternalStrategy {
         let stdout = child.stdout.take().expect("stdout is piped");
         let stderr_pipe = child.stderr.take().expect("stderr is piped");
         let (tx, lines) = mpsc::channel();
-        std::thread::Builder::new()
-            .spawn(move || read_lines(stdout, tx))
-            .map_err(|e| refused(&mut child, e))?;
+        crate::spawn_thread(move || read_lines(stdout, tx)).map_err(|e| refused(&mut child, e))?;
         let stderr = Arc::new(Mutex::new(Stderr::default()));
         let sink = Arc::clone(&stderr);
         let stderr_reader = Some(
-            std::thread::Builder::new()
-                .spawn(move || read_stderr(stderr_pipe, sink))
+            crate::spawn_thread(move || read_stderr(stderr_pipe, sink))
                 .map_err(|e| refused(&mut child, e))?,
         );
         let mut s = Self {
@@ -1286,6 +1282,32 @@ mod tests {
                 (Err(e), Err(needle)) => assert!(e.contains(needle), "{name}: {e}"),
                 (got, want) => panic!("{name}: got {got:?}, want {want:?}"),
             }
+        }
+    }
+
+    #[test]
+    fn a_refused_pipe_thread_stops_the_program_and_is_an_error() {
+        // A program that would run for a minute: stopped as soon as a thread for its pipes is
+        // refused (the first, the second or the third), not waited for, and the error says what
+        // to do.
+        for started in 0..3 {
+            let p = StrategyProgram::from_command_line("sleep 60", Path::new("."), 1.0).unwrap();
+            crate::refuse_threads_after(Some(started));
+            let t0 = std::time::Instant::now();
+            let e = ExternalStrategy::start(&p).map(|_| ()).unwrap_err();
+            crate::refuse_threads_after(None);
+            assert!(
+                e.what
+                    .contains("cannot start a thread for the program's pipes")
+                    && e.what.contains("run fewer jobs at once"),
+                "after {started} threads: {}",
+                e.what
+            );
+            assert!(
+                t0.elapsed() < std::time::Duration::from_secs(30),
+                "after {started} threads: the program was not stopped ({:?})",
+                t0.elapsed()
+            );
         }
     }
 

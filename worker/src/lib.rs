@@ -381,6 +381,52 @@ pub fn run_jobs_shared(jobs: &[Job<'_>]) -> Vec<(Result<JobOutput, JobError>, f6
     out.into_iter().map(|o| o.expect("every job run")).collect()
 }
 
+/// A thread, or the system's refusal (out of threads or memory) as an error rather than a
+/// panic: the threads of a strategy program's pipes and of `run` (its embedded workers, the
+/// checker of remote workers' results).
+pub fn spawn_thread<T: Send + 'static>(
+    f: impl FnOnce() -> T + Send + 'static,
+) -> std::io::Result<std::thread::JoinHandle<T>> {
+    refused_for_a_test()?;
+    std::thread::Builder::new().spawn(f)
+}
+
+/// [`spawn_thread`] in a scope: the threads of `worker` (its job slots, a job's lease renewal).
+pub fn spawn_scoped_thread<'scope, T: Send + 'scope>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
+    f: impl FnOnce() -> T + Send + 'scope,
+) -> std::io::Result<std::thread::ScopedJoinHandle<'scope, T>> {
+    refused_for_a_test()?;
+    std::thread::Builder::new().spawn_scoped(scope, f)
+}
+
+/// The refusal [`refuse_threads_after`] asked for, if this is the thread to refuse.
+fn refused_for_a_test() -> std::io::Result<()> {
+    let refuse = REFUSED_AFTER.with(|n| {
+        let left = n.get();
+        n.set(left.map(|k| k.saturating_sub(1)));
+        left == Some(0)
+    });
+    if refuse {
+        return Err(std::io::Error::other("refused for a test"));
+    }
+    Ok(())
+}
+
+thread_local! {
+    /// How many more threads [`spawn_thread`] and [`spawn_scoped_thread`] start on this thread
+    /// before they refuse them (`None`, always but in tests: all).
+    static REFUSED_AFTER: std::cell::Cell<Option<usize>> = const { std::cell::Cell::new(None) };
+}
+
+/// For tests of what a refused thread does: [`spawn_thread`] and [`spawn_scoped_thread`],
+/// called on this thread, start the next `n` threads and refuse every one after, as a system
+/// out of threads would (`None`: refuse none).
+#[doc(hidden)]
+pub fn refuse_threads_after(n: Option<usize>) {
+    REFUSED_AFTER.with(|r| r.set(n));
+}
+
 /// The message of a caught panic.
 pub fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = p.downcast_ref::<&str>() {

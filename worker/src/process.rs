@@ -130,7 +130,7 @@ pub fn run_worker(
         let mut slots = Vec::with_capacity(jobs);
         let mut refused = None;
         for _ in 0..jobs {
-            let started = std::thread::Builder::new().spawn_scoped(s, || {
+            let started = crate::spawn_scoped_thread(s, || {
                 if *gate.read().unwrap_or_else(|p| p.into_inner()) {
                     slot(&state)
                 } else {
@@ -292,7 +292,7 @@ fn run_one(x: &State<'_>, job: WireJob, lease_s: f64) -> Result<(), WorkerError>
         let id = id.as_str();
         // (Without the thread, the job runs unrenewed: should its lease run out, the
         // coordinator hands it to another worker too, and keeps the first result.)
-        let renewing = std::thread::Builder::new().spawn_scoped(s, move || {
+        let renewing = crate::spawn_scoped_thread(s, move || {
             let renewal = Renewal {
                 worker: x.worker().to_string(),
             };
@@ -392,6 +392,8 @@ mod tests {
         renewed: AtomicUsize,
         refuse: bool,
         silent: bool,
+        /// Every thread the worker's job slot starts after asking for a job is refused.
+        refuse_threads: bool,
     }
 
     impl Coordinator for Fake {
@@ -404,6 +406,10 @@ mod tests {
         fn next(&self, _: &Hello) -> Result<Option<NextReply>, String> {
             if self.silent {
                 return Ok(None);
+            }
+            if self.refuse_threads {
+                // (Asked on the slot's thread, which starts the job's threads.)
+                crate::refuse_threads_after(Some(0));
             }
             if self.refuse {
                 return Ok(Some(NextReply::Refused {
@@ -465,6 +471,7 @@ mod tests {
             renewed: AtomicUsize::new(0),
             refuse: false,
             silent: false,
+            refuse_threads: false,
         }
     }
 
@@ -534,6 +541,58 @@ mod tests {
         assert!(matches!(e, WorkerError::NoCoordinator { .. }), "{e}");
         assert!(e.to_string().contains("memory (campaign 'test')"), "{e}");
         assert!(t.elapsed() < Duration::from_secs(10));
+    }
+
+    /// A job slot's thread the system refuses (the first, second or third of three): the worker
+    /// is an error saying what to do, and no job is taken (the slots already started leave
+    /// without asking for one).
+    #[test]
+    fn a_refused_slot_thread_is_an_error_and_no_job_is_taken() {
+        for started in 0..3 {
+            let f = fake(4);
+            crate::refuse_threads_after(Some(started));
+            let e = run_worker(
+                &f,
+                "host",
+                WorkerOptions {
+                    jobs: 3,
+                    wait_s: 5.0,
+                },
+                &exec,
+                &|_| {},
+            );
+            crate::refuse_threads_after(None);
+            let e = e.unwrap_err();
+            assert!(
+                matches!(e, WorkerError::Spawn { jobs: 3, .. })
+                    && e.to_string().contains("give fewer --jobs"),
+                "after {started} threads: {e}"
+            );
+            assert_eq!(f.jobs.lock().unwrap().len(), 4, "after {started} threads");
+            assert!(f.submitted.lock().unwrap().is_empty());
+        }
+    }
+
+    /// A job's lease renewal thread refused: the job still runs and is submitted (unrenewed),
+    /// and the worker says so.
+    #[test]
+    fn a_refused_renewal_thread_leaves_the_job_run_but_unrenewed() {
+        let mut f = fake(1);
+        f.refuse_threads = true;
+        let events = Mutex::new(Vec::new());
+        let opts = WorkerOptions {
+            jobs: 1,
+            wait_s: 5.0,
+        };
+        let report = run_worker(&f, "host", opts, &exec, &|e| events.lock().unwrap().push(e));
+        let report = report.unwrap();
+        assert_eq!((report.jobs_run, report.stored), (1, 1));
+        assert_eq!(f.renewed.load(Ordering::SeqCst), 0);
+        let notes = format!("{:?}", events.lock().unwrap());
+        assert!(
+            notes.contains("job job0: its lease is not renewed: the system refused a thread"),
+            "{notes}"
+        );
     }
 
     #[test]

@@ -107,7 +107,8 @@ pub struct LayoutDiagnostics {
     pub known_cells: usize,
     pub boundary_cells: usize,
     pub directions: usize,
-    /// Angles tried while refining the directions.
+    /// Angles tried to find the directions: the coarse scan's (one per degree), then each
+    /// refinement's (its second scan's centre counted, though its score is the first scan's best).
     pub direction_refine_steps: usize,
     pub lines: usize,
     pub faces: usize,
