@@ -14,9 +14,10 @@ use floorcast_coordinator::run::{run_plan, Outcome, RunOptions};
 use floorcast_coordinator::store::{provenance, Store, DB_FILE};
 use floorcast_coordinator::table::{
     gains_against, labels_of, render_against, render_ends, render_text, results_csv, table,
+    SequentialVerdict,
 };
 
-use crate::output::{progress_bar, write_text, Picture};
+use crate::output::{progress_bar, write_text};
 
 /// Network options shared by `run` and `worker`.
 #[derive(Debug, Args)]
@@ -110,9 +111,21 @@ pub struct ReportArgs {
     /// (inline SVG), e.g. report.html.
     #[arg(long, value_name = "FILE")]
     html: Option<PathBuf>,
-    /// Picture format of the charts.
-    #[arg(long, value_enum, default_value_t = Picture::Png)]
-    picture: Picture,
+    /// Picture formats of the charts, one or more (comma-separated or repeated): png, svg, pdf
+    /// (vector, fonts embedded, for LaTeX).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "png")]
+    picture: Vec<ChartPicture>,
+    /// Lay the charts out for print at this width, with its unit: e.g. 3.5in (a journal
+    /// column), 7.16in (a page), 8.9cm, 89mm, 252pt; 1 to 20 inches. Text is then --font-pt
+    /// points at that size and PNGs are 300 dpi. Default: a screen layout, 1160 px wide.
+    #[arg(long, value_name = "LENGTH", value_parser = crate::values::length_in)]
+    plot_width: Option<f64>,
+    /// With --plot-width: the charts' text size in points, 4 to 36 (default 8).
+    #[arg(long, value_name = "PT", requires = "plot_width", value_parser = crate::values::number)]
+    font_pt: Option<f64>,
+    /// Leave the titles off the charts (a paper's caption says what a figure shows).
+    #[arg(long)]
+    no_titles: bool,
     /// Also compare with another results directory (or this one): the gain of each strategy
     /// label here over a label there (the same label, or --against-label), paired by building
     /// content, seed and start pose, with its 95 % interval; for a grid that changes one thing
@@ -128,11 +141,19 @@ pub struct ReportArgs {
     #[arg(long, value_name = "LABEL")]
     reference: Option<String>,
     /// Also write the report as JSON (versioned, documented in docs/report-json.md): per label
-    /// its times, ends and failures; per comparison (overall and per building) the paired mean
-    /// gain with its t and bootstrap intervals, the Wilcoxon p-value, the Holm-adjusted one, the
-    /// effect size, pairs and unpaired runs, and a sequential grid's decision.
+    /// its times, ends and failures; per comparison (overall and per building) the paired gain
+    /// (mean log ratio) with its t, bootstrap and anytime-valid intervals, the Wilcoxon
+    /// p-value, the Holm-adjusted one, the effect size, pairs, runs below the coverage level on
+    /// each side, and a sequential grid's decision; the aggregates across buildings (IQM,
+    /// probability of improvement, performance profile).
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+    /// The coverage level, a fraction in (0, 1]: a run achieves the outcome when it ended with
+    /// at least this fraction of the explorable area explored; a run below it counts as a loss
+    /// against a run that reached it (a tie against one that did not). Default: the grids'
+    /// `coverage` as recorded in the store (0.99 unless a grid set another).
+    #[arg(long, value_name = "F", value_parser = crate::values::number)]
+    coverage: Option<f64>,
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
@@ -171,11 +192,16 @@ pub fn run(a: RunArgs) -> Result<()> {
             jobs.len(),
             store.path().display()
         );
-        say_raw!("{}", render_text(&table(&results, &plan.labels)));
+        say_raw!(
+            "{}",
+            render_text(&table(&results, &plan.labels, plan.coverage))
+        );
         print_sequential(&plan, &progress);
         return Ok(());
     }
     let before = stored_of(&jobs, &store)?;
+    // The grid's label order and coverage level, for `report`.
+    store.record_grid(&plan.name, &plan.labels, plan.coverage)?;
     if before == jobs.len() && progress.finished {
         say!(
             "nothing to do: all {} jobs of grid '{}' are already stored in {}",
@@ -183,7 +209,10 @@ pub fn run(a: RunArgs) -> Result<()> {
             plan.name,
             store.path().display()
         );
-        say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
+        say_raw!(
+            "{}",
+            render_text(&table(&store.all()?, &plan.labels, plan.coverage))
+        );
         print_sequential(&plan, &progress);
         return failed_jobs(&jobs, &store);
     }
@@ -306,7 +335,10 @@ pub fn run(a: RunArgs) -> Result<()> {
                     }
                 );
             }
-            say_raw!("{}", render_text(&table(&store.all()?, &plan.labels)));
+            say_raw!(
+                "{}",
+                render_text(&table(&store.all()?, &plan.labels, plan.coverage))
+            );
             let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
             print_sequential(&plan, &progress);
             failed_jobs(&jobs, &store)
@@ -378,9 +410,42 @@ fn print_sequential(plan: &Plan, progress: &floorcast_coordinator::sequential::P
     }
 }
 
+/// A chart's picture format (`report --picture`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ChartPicture {
+    Png,
+    Svg,
+    Pdf,
+}
+
+impl ChartPicture {
+    fn extension(self) -> &'static str {
+        match self {
+            ChartPicture::Png => "png",
+            ChartPicture::Svg => "svg",
+            ChartPicture::Pdf => "pdf",
+        }
+    }
+}
+
 pub fn report(a: ReportArgs) -> Result<()> {
+    if let Some(f) = a.font_pt {
+        if !(4.0..=36.0).contains(&f) {
+            anyhow::bail!("--font-pt: expected a text size in points from 4 to 36, got {f}");
+        }
+    }
+    let style = floorcast_render::chart::ChartStyle {
+        width_in: a.plot_width,
+        font_pt: a.font_pt.unwrap_or(8.0),
+        titles: !a.no_titles,
+    };
+    if let Some(c) = a.coverage {
+        floorcast_coordinator::outcome::check_coverage(c)
+            .map_err(|e| anyhow::anyhow!("--coverage: {e}"))?;
+    }
     let store = Store::open_existing(&a.results)?;
     let results = store.all()?;
+    let grids = store.grids()?;
     // The other store and its label are checked before anything is printed.
     let against = match &a.against {
         Some(dir) => {
@@ -403,59 +468,98 @@ pub fn report(a: ReportArgs) -> Result<()> {
         results.len(),
         a.results.join(DB_FILE).display()
     );
-    let labels = labels_of(&results);
+    // Labels in the order of the grids that made them, then as stored.
+    let mut order: Vec<String> = Vec::new();
+    for (_, labels, _) in &grids {
+        for l in labels {
+            if !order.contains(l) && results.iter().any(|r| &r.label == l) {
+                order.push(l.clone());
+            }
+        }
+    }
+    let order = floorcast_coordinator::table::label_order(&results, &order);
     let reference = match &a.reference {
-        Some(r) if !labels.contains(&r.as_str()) => anyhow::bail!(
+        Some(r) if !order.contains(r) => anyhow::bail!(
             "--reference: {} holds no runs labelled '{r}'; its labels: {}",
             a.results.display(),
-            labels.join(", ")
+            order.join(", ")
         ),
         Some(r) => r.clone(),
-        None => labels
+        None => order
             .iter()
-            .find(|l| **l == "baseline")
-            .or(labels.first())
-            .map(|l| l.to_string())
+            .find(|l| l.as_str() == "baseline")
+            .or(order.first())
+            .cloned()
             .unwrap_or_default(),
     };
-    let t = floorcast_coordinator::table::table_against(&results, &[], Some(&reference));
-    let comparisons = floorcast_coordinator::table::comparisons(&results, &reference);
+    // The coverage level: as given, else the grids' own when they agree.
+    let coverage = match a.coverage {
+        Some(c) => c,
+        None => {
+            let levels: Vec<f64> = grids.iter().map(|g| g.2).collect();
+            match levels.first() {
+                Some(&c) if levels.iter().all(|l| *l == c) => c,
+                Some(_) => anyhow::bail!(
+                    "the grids of {} were compared at different coverage levels ({}); choose one with --coverage",
+                    a.results.display(),
+                    levels
+                        .iter()
+                        .map(|l| l.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                None => floorcast_coordinator::outcome::DEFAULT_COVERAGE,
+            }
+        }
+    };
+    // Sequential grids' decisions: each label's last test.
+    let mut last: std::collections::BTreeMap<(String, String), SequentialVerdict> =
+        Default::default();
+    for (grid, t) in store.tests()? {
+        last.insert(
+            (grid.clone(), t.label.clone()),
+            SequentialVerdict { grid, test: t },
+        );
+    }
+    let mut verdicts: Vec<SequentialVerdict> = last.into_values().collect();
+    verdicts.sort_by_key(|v| {
+        (
+            v.grid.clone(),
+            order.iter().position(|l| *l == v.test.label),
+        )
+    });
+    let sequential_labels: Vec<String> = verdicts
+        .iter()
+        .filter(|v| v.test.reference == reference)
+        .map(|v| v.test.label.clone())
+        .collect();
+    let t =
+        floorcast_coordinator::table::table_against(&results, &order, Some(&reference), coverage);
+    let comparisons =
+        floorcast_coordinator::table::comparisons(&results, &order, &reference, coverage);
+    let aggregates =
+        floorcast_coordinator::aggregate::aggregates(&results, &order, &reference, coverage);
     // What is printed, kept for --html.
     let mut text = format!(
-        "{}{}{}",
+        "{}{}{}{}",
         render_text(&t),
         render_ends(&t),
-        floorcast_coordinator::table::render_comparisons(&comparisons)
+        floorcast_coordinator::table::render_comparisons(&comparisons, &sequential_labels),
+        floorcast_coordinator::aggregate::render(&aggregates)
     );
     say_raw!("{}", text);
-    // Sequential grids' decisions: each label's last test.
-    let tests = store.tests()?;
-    let mut last: std::collections::BTreeMap<
-        (&str, &str),
-        &floorcast_coordinator::sequential::LabelTest,
-    > = Default::default();
-    for (grid, t) in &tests {
-        last.insert((grid.as_str(), t.label.as_str()), t);
-    }
-    for ((grid, _), t) in last {
-        let s = &t.state;
+    for v in &verdicts {
         let line = format!(
-            "sequential grid '{grid}': {} against {}: {} after {} pairs (seeds 1-{}), LLR {:.2} in [{:.2}, {:.2}]",
-            t.label,
-            t.reference,
-            s.decision.as_str(),
-            s.pairs,
-            t.through_seed,
-            s.llr,
-            s.lower,
-            s.upper
+            "sequential grid '{}': {}",
+            v.grid,
+            floorcast_coordinator::sequential::render_test(&v.test)
         );
         say!("{line}");
         text.push_str(&line);
         text.push('\n');
     }
     let cross = against.as_ref().map(|(dir, other)| {
-        let gains = gains_against(&results, other, a.against_label.as_deref());
+        let gains = gains_against(&results, other, a.against_label.as_deref(), coverage);
         (dir.display().to_string(), gains)
     });
     if let Some((dir, gains)) = &cross {
@@ -464,7 +568,9 @@ pub fn report(a: ReportArgs) -> Result<()> {
         text.push_str(&against);
     }
     if let Some(path) = &a.json {
-        let mut v = floorcast_coordinator::table::report_json(&results, &reference, &tests);
+        let mut v = floorcast_coordinator::table::report_json(
+            &results, &order, &reference, coverage, &verdicts,
+        );
         if let Some((dir, gains)) = &cross {
             v["against"] = floorcast_coordinator::table::against_json(gains, dir);
         }
@@ -478,14 +584,24 @@ pub fn report(a: ReportArgs) -> Result<()> {
         say!("wrote {}", csv.display());
     }
     if a.plots.is_some() || a.html.is_some() {
-        let charts = charts(&results, &reference);
+        let charts = charts(&results, &t, &aggregates, &style);
         if let Some(dir) = &a.plots {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create the chart directory {}", dir.display()))?;
+            let mut formats = a.picture.clone();
+            formats.dedup();
             for (name, fig) in &charts {
-                fig.save(dir.join(format!("{name}.{}", a.picture.extension())))?;
+                for f in &formats {
+                    fig.save(dir.join(format!("{name}.{}", f.extension())))?;
+                }
             }
-            say!("wrote {} charts to {}", charts.len(), dir.display());
+            let names: Vec<&str> = formats.iter().map(|f| f.extension()).collect();
+            say!(
+                "wrote {} charts ({}) to {}",
+                charts.len(),
+                names.join(", "),
+                dir.display()
+            );
         }
         if let Some(path) = &a.html {
             write_text(
@@ -500,26 +616,31 @@ pub fn report(a: ReportArgs) -> Result<()> {
 }
 
 /// The charts of a report, by file stem: `times` (the paper's Fig. 2: the mean exploration
-/// time per building and strategy, with one standard deviation over the runs that ended
-/// normally), `gains` (the paired gain over `reference` per building with its 95 % t interval)
-/// and `progress-<building>` (the paper's Fig. 4: the explored fraction over time per strategy,
-/// its mean, a band from the least to the greatest run, and rings where runs stopped early).
+/// time per building and strategy, with one standard deviation over the runs that achieved the
+/// outcome), `gains` (the paired gain over the reference per building with its 95 % t
+/// interval), `profile` (the performance profile across buildings: the fraction of runs whose
+/// normalized time is at most tau, with its bootstrap band) and `progress-<building>` (the
+/// paper's Fig. 4: the explored fraction over time per strategy, its mean, a band from the
+/// least to the greatest run, and rings where runs stopped early).
 fn charts(
     results: &[floorcast_coordinator::store::StoredResult],
-    reference: &str,
+    t: &floorcast_coordinator::table::Table,
+    aggregates: &floorcast_coordinator::aggregate::Aggregates,
+    style: &floorcast_render::chart::ChartStyle,
 ) -> Vec<(String, floorcast_render::Figure)> {
     use floorcast_render::chart::{series_color, Interval, IntervalChart, LineChart, Series};
-    let t = floorcast_coordinator::table::table_against(results, &[], Some(reference));
+    let reference = t.reference.clone().unwrap_or_default();
     // One colour per strategy label in every chart.
     let order: Vec<String> = t.overall.iter().map(|r| r.label.clone()).collect();
     let color = |l: &str| series_color(order.iter().position(|o| o == l).unwrap_or(0));
     let labels: Vec<String> = order.iter().filter(|l| **l != reference).cloned().collect();
     let gain = |rows: &[floorcast_coordinator::table::LabelRow], label: &str| {
-        let p = rows.iter().find(|r| r.label == label)?.paired?;
+        let p = rows.iter().find(|r| r.label == label)?.paired.as_ref()?;
+        let (lo, hi) = p.ci_pct().unwrap_or((p.gain_pct(), p.gain_pct()));
         Some(Interval {
-            mean: p.mean_pct,
-            lo: p.mean_pct - p.ci95_pct,
-            hi: p.mean_pct + p.ci95_pct,
+            mean: p.gain_pct(),
+            lo,
+            hi,
         })
     };
     let time = |rows: &[floorcast_coordinator::table::LabelRow], label: &str| {
@@ -550,7 +671,10 @@ fn charts(
     let mut categories = buildings;
     categories.push("all".into());
     let gains = IntervalChart {
-        title: format!("Exploration time gain over {reference} (paired by seed, 95 % CI)"),
+        title: format!(
+            "Exploration time gain over {reference} (paired, {} coverage, 95 % CI)",
+            floorcast_coordinator::table::coverage_text(t.coverage)
+        ),
         y_label: "gain (%)".into(),
         series: labels
             .iter()
@@ -564,10 +688,35 @@ fn charts(
         categories,
         bars: false,
     };
+    let profile = LineChart {
+        title: format!(
+            "Performance profile across {} buildings (time / {reference}'s median)",
+            aggregates.reference_median_s.len()
+        ),
+        x_label: "normalized exploration time tau".into(),
+        x_range: Some((0.5, 2.0)),
+        y_label: "fraction of runs at most tau".into(),
+        y_range: Some((0.0, 1.0)),
+        series: aggregates
+            .labels
+            .iter()
+            .map(|l| Series {
+                color: color(&l.label),
+                label: format!("{} ({} runs)", l.label, l.runs),
+                points: l.profile.iter().map(|p| (p.tau, p.fraction)).collect(),
+                band: l.profile.iter().map(|p| (p.tau, p.lo, p.hi)).collect(),
+                marks: Vec::new(),
+            })
+            .collect(),
+        marks_label: String::new(),
+    };
     let mut out = vec![
-        ("times".to_string(), times.figure()),
-        ("gains".to_string(), gains.figure()),
+        ("times".to_string(), times.figure_styled(style)),
+        ("gains".to_string(), gains.figure_styled(style)),
     ];
+    if !aggregates.labels.is_empty() {
+        out.push(("profile".to_string(), profile.figure_styled(style)));
+    }
     for building in t.per_building.keys() {
         let curves = floorcast_coordinator::table::progress_curves(results, building, &order, 400);
         if curves.is_empty() {
@@ -576,6 +725,7 @@ fn charts(
         let chart = LineChart {
             title: format!("{building}: explored fraction (mean, range over seeds)"),
             x_label: "simulated time (s)".into(),
+            x_range: None,
             y_label: "explored fraction".into(),
             y_range: Some((0.0, 1.0)),
             series: curves
@@ -590,7 +740,7 @@ fn charts(
                 .collect(),
             marks_label: "early stop".into(),
         };
-        out.push((format!("progress-{building}"), chart.figure()));
+        out.push((format!("progress-{building}"), chart.figure_styled(style)));
     }
     out
 }

@@ -32,9 +32,53 @@ pub fn number(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A printed length with its unit, in inches: `3.5in`, `8.9cm`, `89mm` or `252pt`, from 1 to 20
+/// inches (a figure's width).
+pub fn length_in(s: &str) -> Result<f64, String> {
+    let t = s.trim();
+    let expected = || {
+        "expected a length with its unit from 1 to 20 inches, e.g. 3.5in, 8.9cm, 89mm or 252pt"
+            .to_string()
+    };
+    let (number, per_inch) = [("in", 1.0), ("cm", 2.54), ("mm", 25.4), ("pt", 72.0)]
+        .iter()
+        .find_map(|(unit, per)| t.strip_suffix(unit).map(|n| (n.trim(), *per)))
+        .ok_or_else(expected)?;
+    let v: f64 = number.parse().map_err(|_| expected())?;
+    let inches = v / per_inch;
+    (inches.is_finite() && (1.0..=20.0).contains(&inches))
+        .then_some(inches)
+        .ok_or_else(expected)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn lengths_carry_their_unit() {
+        for (text, want) in [
+            ("3.5in", Some(3.5)),
+            (" 8.89cm ", Some(3.5)),
+            ("89 mm", Some(89.0 / 25.4)),
+            ("252pt", Some(3.5)),
+            ("3.5", None),
+            ("0.5in", None),
+            ("30in", None),
+            ("NaNin", None),
+            ("in", None),
+        ] {
+            let got = length_in(text).ok();
+            assert!(
+                match (got, want) {
+                    (Some(g), Some(w)) => (g - w).abs() < 1e-9,
+                    (None, None) => true,
+                    _ => false,
+                },
+                "{text}: {got:?}"
+            );
+        }
+    }
 
     #[test]
     fn numbers_are_parsed_or_refused_saying_what_was_expected() {

@@ -146,7 +146,7 @@ fn grid_errors_name_the_field() {
 fn report_against_pairs_runs_across_results_directories() {
     let dir = tempfile::tempdir().unwrap();
     let g = grid(dir.path(), "[1, 2]");
-    // Runs that explore the building to the end: runs cut by the time limit are not timed.
+    // Runs that explore the building to the end (a run cut by the time limit is a loss).
     let text = std::fs::read_to_string(&g).unwrap();
     std::fs::write(&g, text.replace("time_limit_s = 60", "time_limit_s = 3600")).unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
@@ -170,7 +170,11 @@ fn report_against_pairs_runs_across_results_directories() {
             .unwrap_or_else(|| panic!("no line for {label}: {out}"));
         let words: Vec<&str> = line.split_whitespace().collect();
         assert_eq!(words[1], over, "{line}");
-        assert_eq!(&words[2..], ["+0.0", "±", "0.0", "%", "(n=2)"], "{line}");
+        assert_eq!(
+            &words[2..],
+            ["+0.0", "%", "[+0.0,", "+0.0]", "(n=2)"],
+            "{line}"
+        );
     }
     // Against baseline of the same store: the table's paired gain of "near".
     let o = report(&[a.to_str().unwrap(), "--against-label", "baseline"]);
@@ -185,17 +189,7 @@ fn report_against_pairs_runs_across_results_directories() {
         let start = line.find(['+', '-']).unwrap();
         line[start..].split(')').next().unwrap().to_string()
     };
-    let table_line = table
-        .lines()
-        .find(|l| l.trim_start().starts_with("near "))
-        .unwrap();
-    let paired_in_table = table_line[table_line.find("% ").unwrap() + 2..]
-        .trim_start()
-        .split(')')
-        .next()
-        .unwrap()
-        .to_string();
-    assert_eq!(cell(against), paired_in_table, "{out}");
+    assert_eq!(cell(against), cell(table), "{out}");
     // The same comparison in the JSON report: the other directory, and per label the label it
     // is compared with and the paired gain, equal to the table's comparison of the same store.
     let json = dir.path().join("r.json");
@@ -394,4 +388,108 @@ fn workers_beyond_1024_are_refused() {
         "{err}"
     );
     assert!(!res.exists());
+}
+
+/// `report` lists labels in their grid's order (not alphabetically), and `--plots` lays the
+/// charts out for print: `--plot-width 3.5in --font-pt 8 --no-titles --picture pdf,svg` writes
+/// PDFs whose page is 3.5 in (252 pt) wide and SVGs 3.5 in wide whose text is 8 pt at that
+/// width, without titles.
+#[test]
+fn report_keeps_the_grid_order_and_draws_figures_for_print() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = repo().join("buildings/small.toml");
+    let g = dir.path().join("grid.toml");
+    std::fs::write(
+        &g,
+        format!(
+            r#"format = "floorcast-grid"
+version = 1
+name = "order"
+buildings = ["{}"]
+seeds = [1, 2]
+[[strategies]]
+name = "baseline"
+label = "zz"
+settings = {{ alpha = 0.8 }}
+[[strategies]]
+name = "baseline"
+[[strategies]]
+name = "baseline"
+label = "aa"
+settings = {{ alpha = 0.9 }}
+"#,
+            small.display()
+        ),
+    )
+    .unwrap();
+    let res = dir.path().join("res");
+    let o = run_grid(&g, &res);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let plots = dir.path().join("fig");
+    let json = dir.path().join("r.json");
+    let o = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+        "--plots",
+        plots.to_str().unwrap(),
+        "--picture",
+        "pdf,svg",
+        "--plot-width",
+        "3.5in",
+        "--font-pt",
+        "8",
+        "--no-titles",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let labels: Vec<&str> = v["labels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["label"].as_str().unwrap())
+        .collect();
+    assert_eq!(labels, ["zz", "baseline", "aa"]);
+    let text = stdout(&o);
+    let at = |l: &str| {
+        text.find(&format!("\n  {l} "))
+            .unwrap_or_else(|| panic!("{text}"))
+    };
+    assert!(
+        at("zz") < at("baseline") && at("baseline") < at("aa"),
+        "{text}"
+    );
+    for chart in ["times", "gains", "profile", "progress-small"] {
+        let pdf = std::fs::read(plots.join(format!("{chart}.pdf"))).unwrap();
+        assert!(pdf.starts_with(b"%PDF"), "{chart}");
+        let pdf = String::from_utf8_lossy(&pdf);
+        assert!(
+            pdf.contains("/MediaBox [0 0 252 "),
+            "{chart}: no 252 pt page"
+        );
+        let svg = std::fs::read_to_string(plots.join(format!("{chart}.svg"))).unwrap();
+        assert!(svg.contains("width=\"3.5000in\""), "{chart}");
+        let view_w: f64 = svg
+            .split("viewBox=\"0 0 ")
+            .nth(1)
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let sizes: Vec<f64> = svg
+            .split("font-size=\"")
+            .skip(1)
+            .map(|s| s.split('"').next().unwrap().parse().unwrap())
+            .collect();
+        assert!(!sizes.is_empty(), "{chart}");
+        for size in sizes {
+            let pt = size / view_w * 3.5 * 72.0;
+            assert!((pt - 8.0).abs() < 0.05, "{chart}: text of {pt} pt");
+        }
+        assert!(!svg.contains("over baseline"), "{chart}: a title was drawn");
+    }
 }

@@ -83,14 +83,13 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     assert_decided(&stdout(&again));
     let r = run(&["report", res.to_str().unwrap()]);
     let report = stdout(&r);
-    assert!(
-        report.contains("nearest against baseline: H1 after 12 pairs (seeds 1-12)"),
-        "{report}"
-    );
-    assert!(
-        report.contains("same against baseline: H0 after 12 pairs"),
-        "{report}"
-    );
+    let stored: String = report
+        .lines()
+        .filter_map(|l| l.strip_prefix("sequential grid 'seq': "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_decided(&stored);
+    assert!(stored.contains("(seeds 1-12)"), "{report}");
     // `report --json`: every comparison with its statistics and the sequential decision.
     let json = dir.path().join("report.json");
     let r = run(&[
@@ -103,7 +102,8 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["format"], "floorcast-report");
-    assert_eq!(v["version"], 1);
+    assert_eq!(v["version"], 2);
+    assert_eq!(v["coverage"], 0.99);
     assert_eq!(v["reference"], "baseline");
     let overall = |label: &str| {
         v["comparisons"]
@@ -124,6 +124,26 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     let [lo, hi] = [0, 1].map(|i| nearest["bootstrap_ci95_pct"][i].as_f64().unwrap());
     let mean = nearest["mean_gain_pct"].as_f64().unwrap();
     assert!(lo < mean && mean < hi && lo > 10.0, "{nearest}");
+    // After a sequential stop the anytime interval is the one that holds: wider than t's.
+    assert_eq!(nearest["fixed_sample_intervals_biased"], true);
+    let [alo, ahi] = [0, 1].map(|i| nearest["anytime_ci95_pct"][i].as_f64().unwrap());
+    let [tlo, thi] = [0, 1].map(|i| nearest["t_ci95_pct"][i].as_f64().unwrap());
+    assert!(
+        alo < tlo && thi < ahi && alo < mean && mean < ahi,
+        "{nearest}"
+    );
+    assert_eq!(nearest["family"], "headline");
+    // The aggregates across buildings: the faster label's IQM of normalized times below 1.
+    let agg = v["aggregates"]["labels"].as_array().unwrap();
+    let iqm = |label: &str| {
+        agg.iter().find(|a| a["label"] == label).unwrap()["iqm_normalized_time"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(
+        iqm("nearest") < 0.9 && (iqm("same") - 1.0).abs() < 0.05,
+        "{agg:?}"
+    );
     // The labels' other metrics.
     let labels = v["labels"].as_array().unwrap();
     assert_eq!(labels.len(), 3);
@@ -142,13 +162,36 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     assert_eq!(same["decision"], "H0");
     assert!(same["wilcoxon_p"].is_null(), "{same}");
     assert_eq!(same["mean_gain_pct"], 0.0);
-    // Another reference: the labels are compared with it.
-    let r = run(&["report", res.to_str().unwrap(), "--reference", "nearest"]);
+    // Another reference: the labels are compared with it, and the gain of baseline over
+    // nearest is exactly the negative of nearest's over baseline in log space, p the same.
+    let swapped = dir.path().join("swapped.json");
+    let r = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--reference",
+        "nearest",
+        "--json",
+        swapped.to_str().unwrap(),
+    ]);
     assert!(
         stdout(&r).contains("Paired gains over nearest"),
         "{}",
         stdout(&r)
     );
+    let w: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&swapped).unwrap()).unwrap();
+    let back = w["comparisons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["label"] == "baseline" && c["building"].is_null())
+        .unwrap()
+        .clone();
+    assert_eq!(
+        back["mean_log_ratio"].as_f64().unwrap(),
+        -nearest["mean_log_ratio"].as_f64().unwrap()
+    );
+    assert_eq!(back["wilcoxon_p"], nearest["wilcoxon_p"]);
     let r = run(&["report", res.to_str().unwrap(), "--reference", "nope"]);
     assert_clean_failure(&r, &["--reference", "no runs labelled 'nope'"]);
 }

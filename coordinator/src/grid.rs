@@ -45,6 +45,9 @@ struct GridFile {
     starts: Option<StartsSpec>,
     /// Seeds added in batches until a sequential test decides each comparison.
     sequential: Option<SequentialSpec>,
+    /// The coverage level of the grid's comparisons and sequential test: a run achieves the
+    /// outcome with at least this fraction of the explorable area explored (default 0.99).
+    coverage: Option<f64>,
 }
 
 /// `[sequential]`: the comparisons decided by a sequential test (see `sequential.rs`).
@@ -67,6 +70,10 @@ struct SequentialSpec {
     /// The most seeds a comparison takes; undecided then.
     #[serde(default = "default_max_seeds")]
     max_seeds: u64,
+    /// How the error rate is shared among several labels tested against the reference:
+    /// "bonferroni" (default: each label's test at alpha / labels, so the chance of any false
+    /// H1 stays within alpha) or "none" (each at alpha).
+    multiplicity: Option<String>,
 }
 
 fn default_h1_gain_pct() -> f64 {
@@ -207,6 +214,8 @@ pub struct Plan {
     /// The sequential test, when the grid has a `[sequential]` table: `jobs` then holds the
     /// first batch of seeds, and [`Plan::jobs_for`] makes the next ones.
     pub sequential: Option<crate::sequential::SequentialPlan>,
+    /// The coverage level of the grid's comparisons (`coverage`, default 0.99).
+    pub coverage: f64,
     /// The strategies and each building's start poses, for [`Plan::jobs_for`].
     strategies: Vec<Resolved>,
     starts: Vec<Vec<Option<PlannedStart>>>,
@@ -494,7 +503,7 @@ impl Plan {
 
         // Seeds (counted before they are listed). A sequential grid adds them in batches.
         check_job_count(&file, buildings.len(), limits, &invalid)?;
-        let sequential = match &file.sequential {
+        let mut sequential = match &file.sequential {
             Some(q) => Some(sequential_plan(q, &file, &invalid)?),
             None => None,
         };
@@ -669,6 +678,30 @@ impl Plan {
             .fold(0.0, f64::max);
         let starts = plan_starts(file.starts.as_ref(), &buildings, radius_m, &invalid)?;
 
+        let coverage = file.coverage.unwrap_or(crate::outcome::DEFAULT_COVERAGE);
+        crate::outcome::check_coverage(coverage).map_err(|e| invalid("coverage", e))?;
+        if let Some(q) = &mut sequential {
+            q.coverage = coverage;
+            q.labels_tested = labels.len().saturating_sub(1).max(1);
+            // Pairs a label's test can have at most: one per building, start and seed.
+            let per_seed = starts
+                .iter()
+                .map(|s| s.len().max(1) as u128)
+                .sum::<u128>()
+                .max(1);
+            let most = q.max_seeds as u128 * per_seed;
+            if most < crate::sequential::MIN_PAIRS as u128 {
+                return Err(invalid(
+                    "sequential.max_seeds",
+                    format!(
+                        "{} seeds give at most {most} pairs ({per_seed} per seed: buildings x starts), fewer than the {} the test needs to decide; raise max_seeds to at least {}",
+                        q.max_seeds,
+                        crate::sequential::MIN_PAIRS,
+                        (crate::sequential::MIN_PAIRS as u128).div_ceil(per_seed)
+                    ),
+                ));
+            }
+        }
         if let Some(q) = &sequential {
             if !labels.contains(&q.reference) {
                 return Err(invalid(
@@ -705,6 +738,7 @@ impl Plan {
             jobs: Vec::new(),
             program_files,
             sequential,
+            coverage,
             strategies: resolved,
             starts,
         }
@@ -1013,11 +1047,26 @@ fn sequential_plan(
             ),
         ));
     }
+    let multiplicity = match q.multiplicity.as_deref() {
+        None | Some("bonferroni") => crate::sequential::Multiplicity::Bonferroni,
+        Some("none") => crate::sequential::Multiplicity::None,
+        Some(other) => {
+            return Err(invalid(
+                "sequential.multiplicity",
+                format!(
+                    "'{other}' is not a multiplicity rule (expected \"bonferroni\" or \"none\")"
+                ),
+            ))
+        }
+    };
     Ok(crate::sequential::SequentialPlan {
         config,
         reference: q.reference.clone(),
         batch_seeds: q.batch_seeds,
         max_seeds: q.max_seeds,
+        coverage: crate::outcome::DEFAULT_COVERAGE,
+        multiplicity,
+        labels_tested: 1,
     })
 }
 

@@ -18,14 +18,21 @@
 //! - [`table`]: the paper's Table 1 for a grid, the comparisons of `report` (and `--json`), and
 //!   CSV export.
 //! - [`verify`]: results of remote workers checked by running their jobs again here.
-//! - [`stats`]: Wilcoxon, bootstrap, Holm, effect size of paired differences.
+//! - [`outcome`]: what a run achieved at a coverage level, and the pairs of two labels' runs
+//!   (a run that did not achieve the outcome is a loss against one that did).
+//! - [`stats`]: Wilcoxon, bootstrap, Holm, effect size of paired differences, the anytime-valid
+//!   confidence sequence, the interquartile mean, the stratified bootstrap.
+//! - [`aggregate`]: aggregates across buildings (IQM, probability of improvement, performance
+//!   profiles).
 //! - [`sequential`]: the sequential test (GSPRT) that decides a comparison from paired runs,
 //!   and a sequential grid's progress.
 
+pub mod aggregate;
 pub mod execute;
 pub mod grid;
 pub mod inbox;
 pub mod net;
+pub mod outcome;
 pub mod run;
 pub mod schedule;
 pub mod sequential;

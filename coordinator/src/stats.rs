@@ -142,6 +142,122 @@ pub fn effect_size_dz(xs: &[f64]) -> Option<f64> {
     (sd > 0.0).then(|| mean / sd)
 }
 
+/// The error rate of [`confidence_sequence`]'s intervals: 95 % at every number of pairs at once.
+pub const CS_ALPHA: f64 = 0.05;
+/// The number of pairs at which [`confidence_sequence`] is tightest (its mixture's tuning):
+/// about where sequential grids decide.
+pub const CS_TUNED_PAIRS: f64 = 30.0;
+
+/// The half-width of a two-sided, time-uniform (anytime-valid) 95 % confidence sequence for
+/// the mean of `n` outcomes with sample standard deviation `sd`: the asymptotic confidence
+/// sequence of Waudby-Smith, Arnold, Wu, Wang and Ramdas ("Time-uniform central limit theory
+/// and asymptotic confidence sequences", Annals of Statistics, 2024; Howard, Ramdas,
+/// McAuliffe and Sekhon's normal-mixture boundary, Annals of Statistics 49(2), 2021, with the
+/// variance estimated), in units of the sample standard deviation:
+/// `sd / n · sqrt(2 (n ρ² + 1) / ρ² · ln(sqrt(n ρ² + 1) / α))`, with
+/// `ρ² = (-2 ln α + ln(1 - 2 ln α)) / n*` (`n*` = [`CS_TUNED_PAIRS`]). It holds at once for
+/// every `n`, so also where a sequential test stopped, which a fixed-sample interval does not
+/// (its coverage after a data-dependent stop is measured in
+/// `tests::confidence_sequence_covers_after_sequential_stops`). `None` below two outcomes.
+pub fn confidence_sequence_half_width(n: usize, sd: f64) -> Option<f64> {
+    if n < 2 || !sd.is_finite() {
+        return None;
+    }
+    let a = CS_ALPHA;
+    let rho2 = (-2.0 * a.ln() + (1.0 - 2.0 * a.ln()).ln()) / CS_TUNED_PAIRS;
+    let nf = n as f64;
+    let v = nf * rho2 + 1.0;
+    Some(sd / nf * (2.0 * v / rho2 * (v.sqrt() / a).ln()).sqrt())
+}
+
+/// The anytime-valid 95 % interval of the mean of `xs` ([`confidence_sequence_half_width`]
+/// about their mean, with the sample standard deviation). `None` below two values.
+pub fn confidence_sequence(xs: &[f64]) -> Option<(f64, f64)> {
+    let n = xs.len();
+    if n < 2 {
+        return None;
+    }
+    let mean = xs.iter().sum::<f64>() / n as f64;
+    let sd = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt();
+    let h = confidence_sequence_half_width(n, sd)?;
+    Some((mean - h, mean + h))
+}
+
+/// The interquartile mean: the mean of the middle half of `xs` once sorted, as
+/// `scipy.stats.trim_mean(xs, 0.25)` (`floor(n / 4)` values cut from each end), the robust
+/// aggregate of Agarwal et al., "Deep reinforcement learning at the edge of the statistical
+/// precipice" (NeurIPS 2021). `None` for no values or a NaN.
+pub fn interquartile_mean(xs: &[f64]) -> Option<f64> {
+    if xs.is_empty() || xs.iter().any(|x| x.is_nan()) {
+        return None;
+    }
+    let mut v = xs.to_vec();
+    v.sort_by(f64::total_cmp);
+    let cut = v.len() / 4;
+    let mid = &v[cut..v.len() - cut];
+    Some(mid.iter().sum::<f64>() / mid.len() as f64)
+}
+
+/// The probability that a run drawn from `xs` is better (lower) than one drawn from `ys`, ties
+/// counting half: the Mann-Whitney statistic over `|xs| · |ys|` (Agarwal et al.'s probability
+/// of improvement on one task). `None` if either is empty.
+pub fn probability_lower(xs: &[f64], ys: &[f64]) -> Option<f64> {
+    if xs.is_empty() || ys.is_empty() {
+        return None;
+    }
+    let mut score = 0.0;
+    for x in xs {
+        for y in ys {
+            score += if x < y {
+                1.0
+            } else if x == y {
+                0.5
+            } else {
+                0.0
+            };
+        }
+    }
+    Some(score / (xs.len() * ys.len()) as f64)
+}
+
+/// Resamples for the stratified bootstrap of the aggregates across buildings.
+pub const STRATIFIED_RESAMPLES: usize = 2_000;
+
+/// The 95 % percentile interval of `statistic` under the stratified bootstrap: each stratum
+/// (a building's runs, of one or more labels) resampled with replacement within itself,
+/// [`STRATIFIED_RESAMPLES`] times from [`BOOTSTRAP_SEED`] (as `rliable` resamples runs within
+/// each task). `statistic` gets the resampled strata in order; resamples where it gives `None`
+/// or a NaN are skipped. `None` when no stratum has two values or no resample gives a value.
+pub fn stratified_bootstrap_ci95<const K: usize>(
+    strata: &[[Vec<f64>; K]],
+    statistic: impl Fn(&[[Vec<f64>; K]]) -> Option<f64>,
+) -> Option<(f64, f64)> {
+    if !strata.iter().any(|s| s.iter().any(|v| v.len() > 1)) {
+        return None;
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(BOOTSTRAP_SEED);
+    let mut values = Vec::with_capacity(STRATIFIED_RESAMPLES);
+    let mut resampled: Vec<[Vec<f64>; K]> = strata.to_vec();
+    for _ in 0..STRATIFIED_RESAMPLES {
+        for (to, from) in resampled.iter_mut().zip(strata) {
+            for (t, f) in to.iter_mut().zip(from) {
+                for slot in t.iter_mut() {
+                    *slot = f[rng.random_range(0..f.len())];
+                }
+            }
+        }
+        if let Some(v) = statistic(&resampled).filter(|v| !v.is_nan()) {
+            values.push(v);
+        }
+    }
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_by(f64::total_cmp);
+    let at = |q: f64| values[((q * (values.len() - 1) as f64).round()) as usize];
+    Some((at(0.025), at(0.975)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

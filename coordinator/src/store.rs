@@ -29,6 +29,8 @@ pub enum StoreError {
     Missing(PathBuf),
     #[error("{path} is not a floorcast results store ({why}); floorcast leaves it untouched: give another --results directory")]
     Foreign { path: PathBuf, why: String },
+    #[error("results store {path}: {problem}")]
+    Row { path: PathBuf, problem: String },
 }
 
 /// One stored job: its identity (from the grid's plan), outcome and provenance.
@@ -205,6 +207,11 @@ impl Store {
                 upper REAL NOT NULL,
                 decision TEXT NOT NULL,
                 PRIMARY KEY (grid, label, reference, through_seed)
+             );
+             CREATE TABLE IF NOT EXISTS grids (
+                grid TEXT PRIMARY KEY,
+                labels_json TEXT NOT NULL,
+                coverage REAL NOT NULL
              );",
         ))?;
         let found: Option<String> = self.sql(
@@ -413,6 +420,50 @@ impl Store {
         let mut out = Vec::new();
         for r in rows {
             out.push(self.sql(r)?);
+        }
+        Ok(out)
+    }
+
+    /// Records a grid's label order and coverage level (what `report` shows them by); a grid
+    /// run again replaces its entry.
+    pub fn record_grid(
+        &self,
+        grid: &str,
+        labels: &[String],
+        coverage: f64,
+    ) -> Result<(), StoreError> {
+        let labels_json = serde_json::to_string(labels).unwrap_or_default();
+        self.sql(self.conn.execute(
+            "INSERT INTO grids (grid, labels_json, coverage) VALUES (?1, ?2, ?3)
+             ON CONFLICT(grid) DO UPDATE SET labels_json = ?2, coverage = ?3",
+            params![grid, labels_json, coverage],
+        ))?;
+        Ok(())
+    }
+
+    /// The grids recorded, in the order first recorded: name, labels in the grid's order,
+    /// coverage level. Stores written before grids were recorded have none.
+    pub fn grids(&self) -> Result<Vec<(String, Vec<String>, f64)>, StoreError> {
+        let mut st = self.sql(
+            self.conn
+                .prepare("SELECT grid, labels_json, coverage FROM grids ORDER BY rowid"),
+        )?;
+        let rows = self.sql(st.query_map([], |r| {
+            Ok((
+                r.get::<_, String>(0)?,
+                r.get::<_, String>(1)?,
+                r.get::<_, f64>(2)?,
+            ))
+        }))?;
+        let mut out = Vec::new();
+        for r in rows {
+            let (grid, labels, coverage) = self.sql(r)?;
+            let labels: Vec<String> =
+                serde_json::from_str(&labels).map_err(|e| StoreError::Row {
+                    path: self.path.clone(),
+                    problem: format!("grid '{grid}': labels_json is not a list of labels ({e})"),
+                })?;
+            out.push((grid, labels, coverage));
         }
         Ok(out)
     }

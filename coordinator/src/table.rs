@@ -1,15 +1,14 @@
-//! The grid's version of the paper's Table 1, computed from stored results: per strategy label
-//! the mean and standard deviation of exploration time over all runs, and the gain over the
-//! baseline in per cent with its spread (paired by building and seed: the mean of the per-pair
-//! gains and a 95 % confidence interval); the same per building; and a CSV export.
+//! The grid's version of the paper's Table 1, computed from stored results, and the comparisons
+//! of `report` (`docs/statistics.md` says why they are made this way).
 //!
-//! Only runs that ended by exploring what they could have an exploration time: complete (no
-//! frontier left), the strategy's early stop, or stuck or with frontiers unreachable after
-//! exploring at least [`SHORT_OF_FRACTION`] of the explorable area (the frontiers left are
-//! slivers no goal reaches, as on most real maps). Runs cut off by the time limit, and stuck
-//! or unreachable runs short of that fraction, are counted per class and left out of the time
-//! statistics and gains, and a note under the table says how many and why. Runs ending short
-//! of [`SHORT_OF_FRACTION`] explored are marked.
+//! Every comparison is at a coverage level ([`crate::outcome`]): a run *achieves* the outcome
+//! when it ends with at least that fraction of the explorable area explored. Per strategy label
+//! the table gives the exploration time of the runs that achieved it (mean and standard
+//! deviation: descriptive), how many did not and why, and the **paired gain** over the reference:
+//! per pair of runs (same building, seed and start pose) the log ratio `ln t_ref - ln t`, a run
+//! that did not achieve the outcome charged the pair's horizon (so it never wins), their mean
+//! `m` shown as the gain `1 - exp(-m)` in per cent with its 95 % interval. Swapping the
+//! reference negates `m` exactly.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -17,6 +16,7 @@ use std::fmt::Write as _;
 use floorcast_worker::RunSummary;
 use sim_core::explore::EndReason;
 
+use crate::outcome::{self, Pair, PairCounts};
 use crate::store::StoredResult;
 
 /// Mean and sample standard deviation.
@@ -47,9 +47,6 @@ impl Stat {
     }
 }
 
-/// Runs that end with less than this fraction explored are marked in the tables.
-pub const SHORT_OF_FRACTION: f64 = 0.97;
-
 /// The end classes in the order tables list them (`sim_core`'s [`EndReason`] names).
 pub fn end_classes() -> [&'static str; 5] {
     EndReason::ALL.map(EndReason::as_str)
@@ -64,23 +61,18 @@ pub fn end_class(s: &RunSummary) -> &str {
     }
 }
 
-/// Whether a run's exploration time is the time to explore the building (or to decide to
-/// stop): it ended complete or by an early stop, or stuck or with frontiers unreachable after
-/// exploring at least [`SHORT_OF_FRACTION`]. Not at the time limit, nor with an unknown end.
-pub fn ended_normally(s: &RunSummary) -> bool {
-    let class = end_class(s);
-    is_normal_class(class)
-        || ([EndReason::Stuck, EndReason::Unreachable]
-            .iter()
-            .any(|r| r.as_str() == class)
-            && s.explored_fraction >= SHORT_OF_FRACTION)
+/// A gain as a percentage of the reference's time from a mean log ratio `m = ln t_ref - ln t`:
+/// `100 (1 - exp(-m))` (positive: faster).
+pub fn gain_pct(mean_log_ratio: f64) -> f64 {
+    100.0 * (1.0 - (-mean_log_ratio).exp())
 }
 
 /// One row per strategy label.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LabelRow {
     pub label: String,
-    /// Exploration time of the runs that ended normally (see [`ended_normally`]).
+    /// Exploration time of the runs that achieved the outcome (descriptive: runs that did not
+    /// are not in it, see `not_achieved`).
     pub time: Stat,
     /// Explored fraction of every successful run.
     pub explored_fraction: Stat,
@@ -89,59 +81,82 @@ pub struct LabelRow {
     /// Successful runs per end class: every class of [`end_classes`] in order (zeros
     /// included), then any other `end_reason` found.
     pub ends: Vec<(String, usize)>,
-    /// Successful runs left out of `time` (and the gains): ended by the time limit, stuck or
-    /// with frontiers unreachable short of [`SHORT_OF_FRACTION`], or an unknown end.
-    pub left_out: usize,
-    /// The left-out runs per end class (classes with none omitted).
-    pub left_out_ends: Vec<(String, usize)>,
-    /// Successful runs that ended with less than [`SHORT_OF_FRACTION`] explored.
-    pub short: usize,
-    /// Gain of mean time over the reference label, per cent (positive = faster); `None` unless
-    /// this label's successful runs are of exactly the reference's buildings and seeds (means
-    /// over different runs would compare buildings, not strategies).
-    pub gain_pct: Option<f64>,
-    /// Gain over the reference paired by (building, seed); `None` without common pairs.
+    /// Successful runs that ended below the coverage level.
+    pub not_achieved: usize,
+    /// Those runs per end class (classes with none omitted).
+    pub not_achieved_ends: Vec<(String, usize)>,
+    /// The paired gain over the reference; `None` without common pairs.
     pub paired: Option<PairedGain>,
 }
 
-/// Per-pair gains `(t_ref - t) / t_ref` in per cent, over the runs of a label and of the
-/// reference with the same building and seed.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The paired gain of a label over the reference: statistics of the per-pair log ratios
+/// `ln t_ref - ln t` (runs that did not achieve the outcome charged the pair's horizon).
+#[derive(Debug, Clone, PartialEq)]
 pub struct PairedGain {
     pub pairs: usize,
-    pub mean_pct: f64,
-    pub sd_pct: f64,
-    /// Half-width of the 95 % confidence interval of the mean (Student's t); NaN for one pair.
-    pub ci95_pct: f64,
+    /// Mean and standard deviation of the log ratios.
+    pub mean_log: f64,
+    pub sd_log: f64,
+    /// Half-width of Student's t 95 % interval of the mean log ratio; NaN for one pair.
+    pub t_half_log: f64,
+    /// What the pairs achieved.
+    pub counts: PairCounts,
 }
 
 impl PairedGain {
-    /// From per-pair gains in per cent.
-    pub fn of(gains_pct: &[f64]) -> Option<PairedGain> {
-        let s = Stat::of(gains_pct);
+    /// From the pairs (`None` without one).
+    pub fn of(pairs: &[Pair]) -> Option<PairedGain> {
+        let xs: Vec<f64> = pairs.iter().map(Pair::log_ratio).collect();
+        let mut g = PairedGain::of_log_ratios(&xs)?;
+        g.counts = PairCounts::of(pairs);
+        Some(g)
+    }
+
+    /// From log ratios alone (`counts` empty).
+    pub fn of_log_ratios(xs: &[f64]) -> Option<PairedGain> {
+        let s = Stat::of(xs);
         (s.n > 0).then(|| PairedGain {
             pairs: s.n,
-            mean_pct: s.mean,
-            sd_pct: s.sd,
-            ci95_pct: if s.n > 1 {
+            mean_log: s.mean,
+            sd_log: s.sd,
+            t_half_log: if s.n > 1 {
                 t95(s.n - 1) * s.sd / (s.n as f64).sqrt()
             } else {
                 f64::NAN
             },
+            counts: PairCounts::default(),
         })
     }
-}
 
-impl PairedGain {
-    /// `+1.9 ± 16.9 % (n=3)`, or without the interval for one pair.
-    pub fn cell(&self) -> String {
-        if self.ci95_pct.is_finite() {
-            format!(
-                "{:+.1} ± {:.1} % (n={})",
-                self.mean_pct, self.ci95_pct, self.pairs
+    /// The gain in per cent, `1 - exp(-m)`.
+    pub fn gain_pct(&self) -> f64 {
+        gain_pct(self.mean_log)
+    }
+
+    /// The t interval as gains in per cent (`None` for one pair).
+    pub fn ci_pct(&self) -> Option<(f64, f64)> {
+        self.t_half_log.is_finite().then(|| {
+            (
+                gain_pct(self.mean_log - self.t_half_log),
+                gain_pct(self.mean_log + self.t_half_log),
             )
-        } else {
-            format!("{:+.1} % (n={})", self.mean_pct, self.pairs)
+        })
+    }
+
+    /// `+1.9 % [-3.1, +6.6] (n=3)`, or without the interval for one pair; `, 2 lost` when the
+    /// label did not achieve the outcome in pairs where the reference did.
+    pub fn cell(&self) -> String {
+        let lost = match self.counts.label_only_not_achieved {
+            0 => String::new(),
+            k => format!(", {k} lost"),
+        };
+        match self.ci_pct() {
+            Some((lo, hi)) => format!(
+                "{:+.1} % [{lo:+.1}, {hi:+.1}] (n={}{lost})",
+                self.gain_pct(),
+                self.pairs
+            ),
+            None => format!("{:+.1} % (n={}{lost})", self.gain_pct(), self.pairs),
         }
     }
 }
@@ -150,57 +165,6 @@ impl PairedGain {
 fn t95(df: usize) -> f64 {
     use statrs::distribution::{ContinuousCDF, StudentsT};
     StudentsT::new(0.0, 1.0, df as f64).map_or(f64::NAN, |t| t.inverse_cdf(0.975))
-}
-
-/// What pairs a run with the reference's: building, seed and start pose (bits).
-pub(crate) type PairKey = (String, u64, [u64; 3]);
-
-/// Exploration time of the successful runs of `label` in `subset` that ended normally, by
-/// (building, seed, start pose).
-fn times_by_pair(subset: &[&StoredResult], label: &str) -> BTreeMap<PairKey, f64> {
-    times_by(subset, label, |r| r.building.clone())
-}
-
-/// The per-pair gains `(t_ref - t) / t_ref` in per cent of the runs in `mine` that have a
-/// partner in `reference`.
-fn paired_gains(mine: &BTreeMap<PairKey, f64>, reference: &BTreeMap<PairKey, f64>) -> Vec<f64> {
-    mine.iter()
-        .filter_map(|(k, t)| {
-            let b = *reference.get(k)?;
-            (b > 0.0).then(|| (b - t) / b * 100.0)
-        })
-        .collect()
-}
-
-/// The exploration times of `label`'s successful runs in `subset` that ended normally, by
-/// (building, seed, start pose): the pairs of a sequential test.
-pub(crate) fn normal_times_by_pair(
-    subset: &[&StoredResult],
-    label: &str,
-) -> BTreeMap<PairKey, f64> {
-    times_by_pair(subset, label)
-}
-
-/// [`times_by_pair`] with the building named by `building` (its name, or its content hash when
-/// runs of two results sets are paired).
-fn times_by(
-    subset: &[&StoredResult],
-    label: &str,
-    building: impl Fn(&StoredResult) -> String,
-) -> BTreeMap<PairKey, f64> {
-    subset
-        .iter()
-        .filter(|r| r.label == label && r.status == "ok")
-        .filter_map(|r| {
-            let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
-            ended_normally(&s).then(|| {
-                (
-                    (building(r), r.seed, s.start.map(f64::to_bits)),
-                    s.exploration_time_s,
-                )
-            })
-        })
-        .collect()
 }
 
 /// The strategy labels of `results`, in the order they first appear.
@@ -225,34 +189,28 @@ pub struct CrossGain {
 
 /// The gain of each label of `results` (in the order they first appear) over `against_label`
 /// of `against` (`None`: the same label), paired by building content (its hash: the same
-/// building under any name), seed and start pose, over the runs that ended normally. A positive
+/// building under any name), seed and start pose, at `coverage` as every comparison. A positive
 /// gain is faster in `results`. For grids that change one thing against a reference grid, e.g.
 /// `results/paper-alpha` against `results/paper`.
 pub fn gains_against(
     results: &[StoredResult],
     against: &[StoredResult],
     against_label: Option<&str>,
+    coverage: f64,
 ) -> Vec<CrossGain> {
-    let labels = labels_of(results);
-    let mine: Vec<&StoredResult> = results.iter().collect();
-    let theirs: Vec<&StoredResult> = against.iter().collect();
     let hash = |r: &StoredResult| r.building_hash.clone();
-    labels
+    labels_of(results)
         .into_iter()
         .map(|label| {
             let other = against_label.unwrap_or(label);
-            let reference = times_by(&theirs, other, hash);
-            let gains: Vec<f64> = times_by(&mine, label, hash)
-                .iter()
-                .filter_map(|(k, t)| {
-                    let b = *reference.get(k)?;
-                    (b > 0.0).then(|| (b - t) / b * 100.0)
-                })
-                .collect();
+            let pairing = outcome::pair(
+                outcome::outcomes(results, label, coverage, hash),
+                outcome::outcomes(against, other, coverage, hash),
+            );
             CrossGain {
                 label: label.to_string(),
                 against_label: other.to_string(),
-                gain: PairedGain::of(&gains),
+                gain: PairedGain::of(&pairing.pairs),
             }
         })
         .collect()
@@ -268,10 +226,12 @@ pub fn against_json(gains: &[CrossGain], against: &str) -> serde_json::Value {
                 "label": g.label,
                 "against_label": g.against_label,
                 "pairs": g.gain.as_ref().map_or(0, |p| p.pairs),
-                "mean_gain_pct": g.gain.as_ref().and_then(|p| finite(p.mean_pct)),
-                "t_ci95_pct": g.gain.as_ref().and_then(|p| {
-                    Some([finite(p.mean_pct - p.ci95_pct)?, finite(p.mean_pct + p.ci95_pct)?])
-                }),
+                "mean_log_ratio": g.gain.as_ref().and_then(|p| finite(p.mean_log)),
+                "mean_gain_pct": g.gain.as_ref().and_then(|p| finite(p.gain_pct())),
+                "t_ci95_pct": g.gain.as_ref().and_then(|p| p.ci_pct()).map(|(a, b)| [a, b]),
+                "label_only_not_achieved": g.gain.as_ref().map_or(0, |p| p.counts.label_only_not_achieved),
+                "reference_only_not_achieved": g.gain.as_ref().map_or(0, |p| p.counts.reference_only_not_achieved),
+                "neither_achieved": g.gain.as_ref().map_or(0, |p| p.counts.neither_achieved),
             })
         })
         .collect();
@@ -288,16 +248,17 @@ pub fn render_against(gains: &[CrossGain], against: &str) -> String {
     );
     let _ = writeln!(
         out,
-        "  {:<16}  {:<16}  {:>22}",
-        "strategy", "over (there)", "paired gain (95% CI)"
+        "  {:<16}  {:<16}  {:>30}",
+        "strategy", "over (there)", "paired gain [95% CI]"
     );
     for g in gains {
         let cell = g
             .gain
+            .as_ref()
             .map_or_else(|| "no common runs".to_string(), |p| p.cell());
         let _ = writeln!(
             out,
-            "  {:<16}  {:<16}  {cell:>22}",
+            "  {:<16}  {:<16}  {cell:>30}",
             g.label, g.against_label
         );
     }
@@ -321,15 +282,28 @@ fn count_ends<'a>(summaries: impl Iterator<Item = &'a RunSummary>) -> Vec<(Strin
 #[derive(Debug, Clone, PartialEq)]
 pub struct Table {
     pub reference: Option<String>,
+    /// The coverage level of its outcomes.
+    pub coverage: f64,
     pub overall: Vec<LabelRow>,
     /// Per building: label rows.
     pub per_building: BTreeMap<String, Vec<LabelRow>>,
 }
 
-/// Builds the table. `labels` gives the order (labels found only in the store come after);
-/// the reference is `baseline` if present, else the first label.
-pub fn table(results: &[StoredResult], labels: &[String]) -> Table {
-    table_against(results, labels, None)
+/// Builds the table at `coverage`. `labels` gives the order (labels found only in the store
+/// come after); the reference is `baseline` if present, else the first label.
+pub fn table(results: &[StoredResult], labels: &[String], coverage: f64) -> Table {
+    table_against(results, labels, None, coverage)
+}
+
+/// The labels of `labels` then those of `results` not among them, in the order they appear.
+pub fn label_order(results: &[StoredResult], labels: &[String]) -> Vec<String> {
+    let mut order: Vec<String> = labels.to_vec();
+    for r in results {
+        if !order.contains(&r.label) {
+            order.push(r.label.clone());
+        }
+    }
+    order
 }
 
 /// [`table`] with the gains over `reference` (default: `baseline` if present, else the first
@@ -338,13 +312,9 @@ pub fn table_against(
     results: &[StoredResult],
     labels: &[String],
     reference: Option<&str>,
+    coverage: f64,
 ) -> Table {
-    let mut order: Vec<String> = labels.to_vec();
-    for r in results {
-        if !order.contains(&r.label) {
-            order.push(r.label.clone());
-        }
-    }
+    let order = label_order(results, labels);
     let reference = match reference {
         Some(r) => Some(r.to_string()),
         None => order
@@ -353,9 +323,8 @@ pub fn table_against(
             .or(order.first())
             .cloned(),
     };
-    let reference_label = reference.clone();
     let rows_for = |subset: &[&StoredResult]| -> Vec<LabelRow> {
-        let mut rows: Vec<LabelRow> = order
+        order
             .iter()
             .filter_map(|label| {
                 let mine: Vec<&&StoredResult> =
@@ -372,12 +341,22 @@ pub fn table_against(
                             .and_then(|s| RunSummary::from_json(s).ok())
                     })
                     .collect();
+                let achieves = |s: &RunSummary| {
+                    s.explored_fraction >= coverage
+                        && s.exploration_time_s.is_finite()
+                        && s.exploration_time_s > 0.0
+                };
                 let times: Vec<f64> = summaries
                     .iter()
-                    .filter(|s| ended_normally(s))
+                    .filter(|s| achieves(s))
                     .map(|s| s.exploration_time_s)
                     .collect();
                 let fracs: Vec<f64> = summaries.iter().map(|s| s.explored_fraction).collect();
+                let paired = reference.as_ref().and_then(|r| {
+                    PairedGain::of(
+                        &outcome::paired(subset.iter().copied(), label, r, coverage).pairs,
+                    )
+                });
                 Some(LabelRow {
                     label: label.clone(),
                     time: Stat::of(&times),
@@ -385,37 +364,15 @@ pub fn table_against(
                     stopped_early: summaries.iter().filter(|s| s.stopped_early).count(),
                     failed: mine.len() - summaries.len(),
                     ends: count_ends(summaries.iter()),
-                    left_out: summaries.len() - times.len(),
-                    left_out_ends: count_ends(summaries.iter().filter(|s| !ended_normally(s)))
+                    not_achieved: summaries.len() - times.len(),
+                    not_achieved_ends: count_ends(summaries.iter().filter(|s| !achieves(s)))
                         .into_iter()
                         .filter(|(_, n)| *n > 0)
                         .collect(),
-                    short: summaries
-                        .iter()
-                        .filter(|s| s.explored_fraction < SHORT_OF_FRACTION)
-                        .count(),
-                    gain_pct: None,
-                    paired: None,
+                    paired,
                 })
             })
-            .collect();
-        let base = reference_label
-            .as_ref()
-            .and_then(|r| rows.iter().find(|row| &row.label == r))
-            .map(|row| row.time.mean);
-        let reference_times = reference_label
-            .as_deref()
-            .map(|r| times_by_pair(subset, r))
-            .unwrap_or_default();
-        for row in &mut rows {
-            let mine = times_by_pair(subset, &row.label);
-            let same_runs = mine.keys().eq(reference_times.keys());
-            row.gain_pct = base
-                .filter(|b| same_runs && b.is_finite() && *b > 0.0)
-                .map(|b| (b - row.time.mean) / b * 100.0);
-            row.paired = PairedGain::of(&paired_gains(&mine, &reference_times));
-        }
-        rows
+            .collect()
     };
     let all: Vec<&StoredResult> = results.iter().collect();
     let mut per_building = BTreeMap::new();
@@ -426,34 +383,32 @@ pub fn table_against(
         let subset: Vec<&StoredResult> = results.iter().filter(|r| r.building == b).collect();
         per_building.insert(b.to_string(), rows_for(&subset));
     }
+    let overall = rows_for(&all);
     Table {
-        reference,
-        overall: rows_for(&all),
+        reference: reference.clone(),
+        coverage,
+        overall,
         per_building,
     }
 }
 
-fn is_normal_class(class: &str) -> bool {
-    EndReason::ALL
-        .iter()
-        .any(|r| r.is_normal() && r.as_str() == class)
-}
-
-fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
+fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>, coverage: f64) {
     let _ = writeln!(
         out,
-        "  {:<16} {:>5} {:>10} {:>9} {:>9} {:>22} {:>10} {:>6}",
-        "strategy", "runs", "time (s)", "sd (s)", "gain", "paired gain (95% CI)", "explored", "ES"
+        "  {:<16} {:>5} {:>8} {:>10} {:>9} {:>32} {:>9} {:>5}",
+        "strategy",
+        "runs",
+        format!(">={:.0}%", coverage * 100.0),
+        "time (s)",
+        "sd (s)",
+        "paired gain [95% CI]",
+        "explored",
+        "ES"
     );
     for r in rows {
         let is_reference = reference.is_some_and(|reference| &r.label == reference);
-        let gain = match r.gain_pct {
+        let paired = match &r.paired {
             _ if is_reference => "ref".to_string(),
-            Some(g) => format!("{g:+.1} %"),
-            None => "-".into(),
-        };
-        let paired = match r.paired {
-            _ if is_reference => String::new(),
             Some(p) => p.cell(),
             None => "-".into(),
         };
@@ -461,19 +416,17 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
         if r.failed > 0 {
             marks.push(format!("{} failed", r.failed));
         }
-        if r.left_out > 0 {
+        if r.not_achieved > 0 {
             let classes: Vec<String> = r
-                .left_out_ends
+                .not_achieved_ends
                 .iter()
                 .map(|(c, n)| format!("{n} {c}"))
                 .collect();
-            marks.push(format!("{} left out: {}", r.left_out, classes.join(", ")));
-        }
-        if r.short > 0 {
             marks.push(format!(
-                "{} short of {:.0} %",
-                r.short,
-                SHORT_OF_FRACTION * 100.0
+                "{} below {}: {}",
+                r.not_achieved,
+                coverage_text(coverage),
+                classes.join(", ")
             ));
         }
         // A label without a run to average (all failed) shows dashes, not NaN.
@@ -490,12 +443,12 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
         };
         let _ = writeln!(
             out,
-            "  {:<16} {:>5} {:>10} {:>9} {:>9} {:>22} {:>10} {:>6}{}",
+            "  {:<16} {:>5} {:>8} {:>10} {:>9} {:>32} {:>9} {:>5}{}",
             r.label,
+            r.failed + r.ends.iter().map(|(_, n)| n).sum::<usize>(),
             r.time.n,
             number(r.time.mean, 0),
             number(r.time.sd, 0),
-            gain,
             paired,
             explored,
             r.stopped_early,
@@ -508,41 +461,71 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>) {
     }
 }
 
+/// `99 %`: a coverage level as text.
+pub fn coverage_text(coverage: f64) -> String {
+    let pct = coverage * 100.0;
+    if (pct - pct.round()).abs() < 1e-9 {
+        format!("{pct:.0} %")
+    } else {
+        format!("{pct} %")
+    }
+}
+
 /// One comparison of a label with the reference, over all buildings (`building` = `None`) or on
-/// one: statistics of the per-pair gains `(t_ref - t) / t_ref` in per cent, over the pairs of
-/// runs (same building, seed and start pose) that both ended normally.
+/// one, at a coverage level: statistics of the per-pair log ratios `ln t_ref - ln t` (positive:
+/// the label is faster), over every pair of runs (same building, seed and start pose), a run
+/// that did not achieve the outcome charged the pair's horizon.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Comparison {
     pub label: String,
     pub reference: String,
     pub building: Option<String>,
+    /// The coverage level: a run achieves the outcome with at least this fraction explored.
+    pub coverage: f64,
     pub pairs: usize,
-    /// The label's normally ended runs without a partner among the reference's.
+    /// The label's runs without a partner among the reference's.
     pub unpaired: usize,
+    /// What the pairs achieved, side by side.
+    #[serde(flatten)]
+    pub counts: PairCounts,
+    /// Mean and standard deviation of the log ratios.
+    pub mean_log_ratio: Option<f64>,
+    pub sd_log_ratio: Option<f64>,
+    /// The mean as a gain, `100 (1 - exp(-mean_log_ratio))` (positive: the label is faster).
     pub mean_gain_pct: Option<f64>,
-    pub sd_gain_pct: Option<f64>,
-    /// Student's t 95 % interval of the mean gain.
+    /// Student's t 95 % interval of the mean log ratio, and as gains in per cent.
+    pub t_ci95_log: Option<[f64; 2]>,
     pub t_ci95_pct: Option<[f64; 2]>,
-    /// The seeded percentile bootstrap 95 % interval of the mean gain
-    /// ([`crate::stats::bootstrap_mean_ci95`]).
+    /// The seeded percentile bootstrap 95 % interval of the mean log ratio
+    /// ([`crate::stats::bootstrap_mean_ci95`]), and as gains.
+    pub bootstrap_ci95_log: Option<[f64; 2]>,
     pub bootstrap_ci95_pct: Option<[f64; 2]>,
-    /// Two-sided Wilcoxon signed-rank p-value of the gains.
+    /// The anytime-valid 95 % interval of the mean log ratio ([`crate::stats::confidence_sequence`]):
+    /// it holds after a sequential stop, where the fixed-sample ones do not; and as gains.
+    pub anytime_ci95_log: Option<[f64; 2]>,
+    pub anytime_ci95_pct: Option<[f64; 2]>,
+    /// Two-sided Wilcoxon signed-rank p-value of the log ratios.
     pub wilcoxon_p: Option<f64>,
-    /// `wilcoxon_p` adjusted by Holm's method over every comparison of the report.
+    /// `wilcoxon_p` adjusted by Holm's method within its family ([`Comparison::family`]).
     pub holm_p: Option<f64>,
-    /// Cohen's d_z: the mean gain over its standard deviation.
+    /// The Holm family: "headline" (the comparisons over all buildings, one per label) or
+    /// "per-building" (the per-building rows, descriptive, adjusted among themselves).
+    pub family: &'static str,
+    /// Cohen's d_z of the log ratios: their mean over their standard deviation.
     pub effect_size_dz: Option<f64>,
     /// The other metrics, paired the same way over the successful runs (see [`METRICS`]).
     pub metrics: BTreeMap<String, MetricGain>,
 }
 
-/// A paired comparison of one metric: per pair, the gain `(ref - x) / ref` in per cent for the
-/// metrics where lower is better, and `x - ref` in percentage points for the explored fraction.
+/// A paired comparison of one metric: per pair, the log ratio `ln ref - ln x` for the metrics
+/// where lower is better (shown as a gain `1 - exp(-mean)` in per cent), and `x - ref` in
+/// percentage points for the explored fraction.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct MetricGain {
     pub pairs: usize,
+    /// The mean: a gain in per cent, or percentage points.
     pub mean: Option<f64>,
-    /// Student's t 95 % interval of the mean.
+    /// Student's t 95 % interval of the mean, in the same unit.
     pub t_ci95: Option<[f64; 2]>,
 }
 
@@ -569,6 +552,9 @@ fn metric_of(name: &str, s: &RunSummary, progress_csv: &str) -> Option<f64> {
     }
 }
 
+/// What pairs a run with the reference's for the other metrics: building, seed and start pose.
+type PairKey = (String, u64, [u64; 3]);
+
 /// `name` of `label`'s successful runs in `subset` (those that have it), by pair key.
 fn metric_by_pair(subset: &[&StoredResult], label: &str, name: &str) -> BTreeMap<PairKey, f64> {
     subset
@@ -594,34 +580,112 @@ fn metric_gains(
         .map(|name| {
             let mine = metric_by_pair(subset, label, name);
             let theirs = metric_by_pair(subset, reference, name);
-            let diffs: Vec<f64> = if *name == "explored_fraction_points" {
-                mine.iter()
-                    .filter_map(|(k, v)| Some(v - theirs.get(k)?))
-                    .collect()
-            } else {
-                paired_gains(&mine, &theirs)
-            };
-            let p = PairedGain::of(&diffs);
+            let points = *name == "explored_fraction_points";
+            let diffs: Vec<f64> = mine
+                .iter()
+                .filter_map(|(k, v)| {
+                    let r = *theirs.get(k)?;
+                    if points {
+                        Some(v - r)
+                    } else {
+                        (r > 0.0 && *v > 0.0).then(|| r.ln() - v.ln())
+                    }
+                })
+                .collect();
+            let p = PairedGain::of_log_ratios(&diffs);
+            let shown = |x: f64| if points { x } else { gain_pct(x) };
             let gain = MetricGain {
                 pairs: diffs.len(),
-                mean: p.map(|p| p.mean_pct),
-                t_ci95: p
-                    .filter(|p| p.ci95_pct.is_finite())
-                    .map(|p| [p.mean_pct - p.ci95_pct, p.mean_pct + p.ci95_pct]),
+                mean: p.as_ref().map(|p| shown(p.mean_log)),
+                t_ci95: p.as_ref().filter(|p| p.t_half_log.is_finite()).map(|p| {
+                    [
+                        shown(p.mean_log - p.t_half_log),
+                        shown(p.mean_log + p.t_half_log),
+                    ]
+                }),
             };
             (name.to_string(), gain)
         })
         .collect()
 }
 
-/// The comparisons of every label with `reference`, over all buildings and then per building,
-/// with Holm's adjustment across all of them.
-pub fn comparisons(results: &[StoredResult], reference: &str) -> Vec<Comparison> {
+/// `[a, b]` of a pair.
+fn span(v: Option<(f64, f64)>) -> Option<[f64; 2]> {
+    v.map(|(a, b)| [a, b])
+}
+
+/// A log-space interval as gains in per cent.
+fn span_pct(v: Option<[f64; 2]>) -> Option<[f64; 2]> {
+    v.map(|[a, b]| [gain_pct(a), gain_pct(b)])
+}
+
+/// The comparison of `label` with `reference` over `subset`.
+fn compare(
+    subset: &[&StoredResult],
+    label: &str,
+    reference: &str,
+    building: Option<String>,
+    coverage: f64,
+) -> Option<Comparison> {
+    if !subset.iter().any(|r| r.label == label) {
+        return None;
+    }
+    let pairing = outcome::paired(subset.iter().copied(), label, reference, coverage);
+    let xs: Vec<f64> = pairing.pairs.iter().map(Pair::log_ratio).collect();
+    let paired = PairedGain::of(&pairing.pairs);
+    let t_log = paired
+        .as_ref()
+        .filter(|p| p.t_half_log.is_finite())
+        .map(|p| [p.mean_log - p.t_half_log, p.mean_log + p.t_half_log]);
+    let boot = span(crate::stats::bootstrap_mean_ci95(&xs));
+    let anytime = span(crate::stats::confidence_sequence(&xs));
+    let family = if building.is_none() {
+        "headline"
+    } else {
+        "per-building"
+    };
+    Some(Comparison {
+        label: label.to_string(),
+        reference: reference.to_string(),
+        building,
+        coverage,
+        pairs: xs.len(),
+        unpaired: pairing.unpaired,
+        counts: PairCounts::of(&pairing.pairs),
+        mean_log_ratio: paired.as_ref().and_then(|p| finite(p.mean_log)),
+        sd_log_ratio: paired
+            .as_ref()
+            .filter(|p| p.pairs > 1)
+            .and_then(|p| finite(p.sd_log)),
+        mean_gain_pct: paired.as_ref().and_then(|p| finite(p.gain_pct())),
+        t_ci95_log: t_log,
+        t_ci95_pct: span_pct(t_log),
+        bootstrap_ci95_log: boot,
+        bootstrap_ci95_pct: span_pct(boot),
+        anytime_ci95_log: anytime,
+        anytime_ci95_pct: span_pct(anytime),
+        wilcoxon_p: crate::stats::wilcoxon_signed_rank_p(&xs),
+        holm_p: None,
+        family,
+        effect_size_dz: crate::stats::effect_size_dz(&xs),
+        metrics: metric_gains(subset, label, reference),
+    })
+}
+
+/// The comparisons of every label (in `order`, then as they appear) with `reference` at
+/// `coverage`, over all buildings and then per building. Holm's adjustment runs within two
+/// families: the comparisons over all buildings (the headline results, one per label) and,
+/// apart, the per-building rows (descriptive).
+pub fn comparisons(
+    results: &[StoredResult],
+    order: &[String],
+    reference: &str,
+    coverage: f64,
+) -> Vec<Comparison> {
     let mut out = Vec::new();
-    let labels: Vec<String> = labels_of(results)
+    let labels: Vec<String> = label_order(results, order)
         .into_iter()
-        .filter(|l| *l != reference)
-        .map(str::to_string)
+        .filter(|l| l != reference)
         .collect();
     let mut buildings: Vec<Option<String>> = vec![None];
     let mut names: Vec<&str> = results.iter().map(|r| r.building.as_str()).collect();
@@ -633,98 +697,121 @@ pub fn comparisons(results: &[StoredResult], reference: &str) -> Vec<Comparison>
             .iter()
             .filter(|r| building.as_ref().is_none_or(|b| &r.building == b))
             .collect();
-        let reference_times = times_by_pair(&subset, reference);
         for label in &labels {
-            let mine = times_by_pair(&subset, label);
-            if mine.is_empty() {
-                continue;
-            }
-            let gains = paired_gains(&mine, &reference_times);
-            let paired = PairedGain::of(&gains);
-            out.push(Comparison {
-                label: label.clone(),
-                reference: reference.to_string(),
-                building: building.clone(),
-                pairs: gains.len(),
-                unpaired: mine.len() - gains.len(),
-                mean_gain_pct: paired.map(|p| p.mean_pct),
-                sd_gain_pct: paired.map(|p| p.sd_pct).filter(|v| v.is_finite()),
-                t_ci95_pct: paired
-                    .filter(|p| p.ci95_pct.is_finite())
-                    .map(|p| [p.mean_pct - p.ci95_pct, p.mean_pct + p.ci95_pct]),
-                bootstrap_ci95_pct: crate::stats::bootstrap_mean_ci95(&gains).map(|(a, b)| [a, b]),
-                wilcoxon_p: crate::stats::wilcoxon_signed_rank_p(&gains),
-                holm_p: None,
-                effect_size_dz: crate::stats::effect_size_dz(&gains),
-                metrics: metric_gains(&subset, label, reference),
-            });
+            out.extend(compare(
+                &subset,
+                label,
+                reference,
+                building.clone(),
+                coverage,
+            ));
         }
     }
-    let adjusted = crate::stats::holm(&out.iter().map(|c| c.wilcoxon_p).collect::<Vec<_>>());
-    for (c, p) in out.iter_mut().zip(adjusted) {
-        c.holm_p = p;
+    for family in ["headline", "per-building"] {
+        let idx: Vec<usize> = (0..out.len())
+            .filter(|&i| out[i].family == family)
+            .collect();
+        let ps: Vec<Option<f64>> = idx.iter().map(|&i| out[i].wilcoxon_p).collect();
+        for (&i, p) in idx.iter().zip(crate::stats::holm(&ps)) {
+            out[i].holm_p = p;
+        }
     }
     out
 }
 
-/// The comparisons over all buildings as text: one line each.
-pub fn render_comparisons(cs: &[Comparison]) -> String {
+/// The comparisons over all buildings as text: one line each. `sequential` names the labels
+/// whose comparison a sequential test decided: their fixed-sample intervals are marked as
+/// such and the anytime-valid interval is the one shown first.
+pub fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
     let mut out = String::new();
     let overall: Vec<&Comparison> = cs.iter().filter(|c| c.building.is_none()).collect();
     if overall.is_empty() {
         return out;
     }
+    let coverage = coverage_text(overall[0].coverage);
     let _ = writeln!(
         out,
-        "Paired gains over {} (all buildings): t and bootstrap 95 % intervals, Wilcoxon p (Holm-adjusted over the report's {} comparisons), effect size d_z:",
+        "Paired gains over {} (all buildings; gain 1 - exp(-mean ln(t_ref/t)); a run below {coverage} explored charged the time limit): 95 % intervals t (fixed-sample), bootstrap, anytime (valid after a sequential stop); Wilcoxon p on the log ratios, Holm-adjusted over the {} headline comparisons; d_z:",
         overall[0].reference,
-        cs.len()
+        overall.len()
     );
     let range =
         |r: Option<[f64; 2]>| r.map_or("-".to_string(), |[a, b]| format!("[{a:+.1}, {b:+.1}]"));
     let num =
         |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |v| format!("{v:.digits$}"));
-    for c in overall {
+    for c in &overall {
+        let seq = sequential.contains(&c.label);
+        let n = &c.counts;
         let _ = writeln!(
             out,
-            "  {:<16} {:>8} % t {:<16} boot {:<16} p {:<7} Holm {:<7} d_z {:<6} {} pairs, {} unpaired",
+            "  {:<16} {:>7} % t {:<16} boot {:<16} anytime {:<16} p {:<7} Holm {:<7} d_z {:<6} {} pairs ({} both >= {coverage}, {} lost, {} won, {} neither), {} unpaired{}",
             c.label,
             c.mean_gain_pct.map_or("-".to_string(), |m| format!("{m:+.1}")),
             range(c.t_ci95_pct),
             range(c.bootstrap_ci95_pct),
+            range(c.anytime_ci95_pct),
             num(c.wilcoxon_p, 4),
             num(c.holm_p, 4),
             num(c.effect_size_dz, 2),
             c.pairs,
-            c.unpaired
+            n.both_achieved,
+            n.label_only_not_achieved,
+            n.reference_only_not_achieved,
+            n.neither_achieved,
+            c.unpaired,
+            if seq {
+                "; sequential: read the anytime interval (t, bootstrap and p are fixed-sample, biased after its stop)"
+            } else {
+                ""
+            }
+        );
+    }
+    if overall
+        .iter()
+        .any(|c| c.counts.label_only_not_achieved + c.counts.reference_only_not_achieved > 0)
+    {
+        let _ = writeln!(
+            out,
+            "  (lost: pairs where only the label's run stayed below {coverage}, a loss whatever its time; won: only the reference's; neither: a tie)"
         );
     }
     out
 }
 
-/// The format and version of `report --json`.
+/// The format and version of `report --json` (2: comparisons at a coverage level, symmetric
+/// log-ratio gains, anytime intervals, Holm families, aggregates across buildings).
 pub const REPORT_FORMAT: &str = "floorcast-report";
-pub const REPORT_VERSION: u32 = 1;
+pub const REPORT_VERSION: u32 = 2;
 
-/// `report --json`: the labels' statistics, every comparison, and sequential grids' decisions
-/// (documented in `docs/report-json.md`).
+/// A sequential grid's last test of a label, as `report` shows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SequentialVerdict {
+    pub grid: String,
+    pub test: crate::sequential::LabelTest,
+}
+
+/// `report --json`: the labels' statistics, every comparison, sequential grids' decisions and
+/// the aggregates across buildings (documented in `docs/report-json.md`).
 pub fn report_json(
     results: &[StoredResult],
+    order: &[String],
     reference: &str,
-    tests: &[(String, crate::sequential::LabelTest)],
+    coverage: f64,
+    verdicts: &[SequentialVerdict],
 ) -> serde_json::Value {
     use serde_json::json;
-    let t = table_against(results, &[], Some(reference));
+    let t = table_against(results, order, Some(reference), coverage);
     let label_row = |r: &LabelRow, building: Option<&str>| {
         let mut v = json!({
             "label": r.label,
-            "runs_timed": r.time.n,
+            "runs_achieved": r.time.n,
             "time_mean_s": finite(r.time.mean),
             "time_sd_s": finite(r.time.sd),
             "explored_fraction_mean": finite(r.explored_fraction.mean),
             "early_stops": r.stopped_early,
             "failed": r.failed,
-            "left_out": r.left_out,
+            "not_achieved": r.not_achieved,
+            "not_achieved_ends": r.not_achieved_ends.iter().map(|(c, n)| (c.clone(), *n)).collect::<BTreeMap<String, usize>>(),
             "ends": r.ends.iter().map(|(c, n)| (c.clone(), *n)).collect::<BTreeMap<String, usize>>(),
         });
         v["metrics"] = label_metrics(
@@ -735,24 +822,29 @@ pub fn report_json(
         );
         v
     };
-    // The last test of each (grid, label, reference).
-    let mut decided: BTreeMap<(String, String), &crate::sequential::LabelTest> = BTreeMap::new();
-    for (_, test) in tests {
-        decided.insert((test.label.clone(), test.reference.clone()), test);
-    }
-    let comparisons: Vec<serde_json::Value> = comparisons(results, reference)
+    let comparisons: Vec<serde_json::Value> = comparisons(results, order, reference, coverage)
         .into_iter()
         .map(|c| {
             let mut v = serde_json::to_value(&c).unwrap_or_default();
             let seq = c
                 .building
                 .is_none()
-                .then(|| decided.get(&(c.label.clone(), c.reference.clone())))
+                .then(|| {
+                    verdicts
+                        .iter()
+                        .rev()
+                        .find(|s| s.test.label == c.label && s.test.reference == c.reference)
+                })
                 .flatten();
             v["decision"] = seq.map_or(serde_json::Value::Null, |s| {
-                json!(s.state.decision.as_str())
+                json!(s.test.state.decision.as_str())
             });
-            v["sequential_pairs"] = seq.map_or(serde_json::Value::Null, |s| json!(s.state.pairs));
+            v["sequential_pairs"] =
+                seq.map_or(serde_json::Value::Null, |s| json!(s.test.state.pairs));
+            v["sequential_llr"] = seq
+                .and_then(|s| s.test.state.llr_if_any())
+                .map_or(serde_json::Value::Null, |l| json!(finite(l)));
+            v["fixed_sample_intervals_biased"] = json!(seq.is_some());
             v
         })
         .collect();
@@ -761,10 +853,12 @@ pub fn report_json(
         "version": REPORT_VERSION,
         "floorcast_version": floorcast_worker::FLOORCAST_VERSION,
         "reference": reference,
+        "coverage": coverage,
         "runs": results.len(),
         "labels": t.overall.iter().map(|r| label_row(r, None)).collect::<Vec<_>>(),
         "per_building": t.per_building.iter().map(|(b, rows)| (b.clone(), rows.iter().map(|r| label_row(r, Some(b))).collect::<Vec<_>>())).collect::<BTreeMap<String, Vec<serde_json::Value>>>(),
         "comparisons": comparisons,
+        "aggregates": crate::aggregate::aggregates_json(&crate::aggregate::aggregates(results, order, reference, coverage)),
     })
 }
 
@@ -823,35 +917,25 @@ fn finite(v: f64) -> Option<f64> {
 /// The table as text.
 pub fn render_text(t: &Table) -> String {
     let mut out = String::new();
+    let coverage = coverage_text(t.coverage);
     let _ = writeln!(
         out,
-        "Exploration time over all runs (mean, standard deviation), gain over {}:",
+        "Exploration time of the runs that explored at least {coverage} (mean, sd), and the paired gain over {} (1 - exp(-mean ln(t_ref/t)); a run below {coverage} charged the time limit, a loss):",
         t.reference.as_deref().unwrap_or("-")
     );
-    fmt_rows(&mut out, &t.overall, t.reference.as_ref());
+    fmt_rows(&mut out, &t.overall, t.reference.as_ref(), t.coverage);
     if t.per_building.len() > 1 {
         for (b, rows) in &t.per_building {
             let _ = writeln!(out, "{b}:");
-            fmt_rows(&mut out, rows, t.reference.as_ref());
+            fmt_rows(&mut out, rows, t.reference.as_ref(), t.coverage);
         }
     }
-    let unbalanced = std::iter::once(&t.overall)
-        .chain(t.per_building.values())
-        .flatten()
-        .any(|r| r.gain_pct.is_none() && t.reference.as_ref() != Some(&r.label));
-    if unbalanced {
-        let _ = writeln!(
-            out,
-            "gain '-': the label's runs are not the same buildings and seeds as {}'s (some are \
-             missing, failed or left out); the paired gain compares the runs they share",
-            t.reference.as_deref().unwrap_or("the reference")
-        );
-    }
-    let left_out: usize = t.overall.iter().map(|r| r.left_out).sum();
-    if left_out > 0 {
+    let below: usize = t.overall.iter().map(|r| r.not_achieved).sum();
+    let failed: usize = t.overall.iter().map(|r| r.failed).sum();
+    if below + failed > 0 {
         let mut classes: BTreeMap<&str, usize> = BTreeMap::new();
         for r in &t.overall {
-            for (c, n) in &r.left_out_ends {
+            for (c, n) in &r.not_achieved_ends {
                 *classes.entry(c.as_str()).or_default() += n;
             }
         }
@@ -860,31 +944,22 @@ pub fn render_text(t: &Table) -> String {
             .filter_map(|c| classes.remove(c).map(|n| format!("{n} {c}")))
             .collect();
         listed.extend(classes.iter().map(|(c, n)| format!("{n} {c}")));
+        if failed > 0 {
+            listed.push(format!("{failed} failed"));
+        }
         let _ = writeln!(
             out,
-            "left out of the times and gains: {left_out} runs that did not end by exploring \
-             everything they could reach (at least {:.0} %) or by an early stop ({}); their times \
-             say when they were cut off, not how long exploring took (`runs` counts the rest; see how runs \
-             ended below)",
-            SHORT_OF_FRACTION * 100.0,
-            listed.join(", ")
-        );
-    }
-    let short: usize = t.overall.iter().map(|r| r.short).sum();
-    if short > 0 {
-        let _ = writeln!(
-            out,
-            "{short} runs ended with less than {:.0} % of the reachable free area explored \
-             (marked 'short'); 'explored' averages every run",
-            SHORT_OF_FRACTION * 100.0
+            "{} runs did not explore {coverage} ({}): not in `time (s)`, and each a loss in the paired gain against a run that did (a tie against one that did not); `>={:.0}%` counts the runs that did",
+            below + failed,
+            listed.join(", "),
+            t.coverage * 100.0
         );
     }
     out
 }
 
 /// How the runs ended: per strategy label (overall, then per building when there are
-/// several), the successful runs of each end class and those short of
-/// [`SHORT_OF_FRACTION`] explored.
+/// several), the successful runs of each end class and those below the coverage level.
 pub fn render_ends(t: &Table) -> String {
     let mut out = String::new();
     let extra: Vec<String> = std::iter::once(&t.overall)
@@ -904,23 +979,26 @@ pub fn render_ends(t: &Table) -> String {
         .copied()
         .chain(extra.iter().map(String::as_str))
         .collect();
+    let below = format!("< {}", coverage_text(t.coverage));
     let rows = |out: &mut String, rows: &[LabelRow]| {
         let mut head = format!("  {:<16}", "strategy");
         for c in &classes {
             let _ = write!(head, " {c:>10}");
         }
-        let _ = writeln!(
-            out,
-            "{head} {:>10}",
-            format!("< {:.0} %", SHORT_OF_FRACTION * 100.0)
-        );
+        let _ = writeln!(out, "{head} {below:>10} {:>7}", "failed");
         for r in rows {
             let mut line = format!("  {:<16}", r.label);
             for c in &classes {
                 let n = r.ends.iter().find(|(e, _)| e == c).map_or(0, |(_, n)| *n);
                 let _ = write!(line, " {:>w$}", n, w = c.len().max(10));
             }
-            let _ = writeln!(out, "{line} {:>10}", r.short);
+            let _ = writeln!(
+                out,
+                "{line} {:>w$} {:>7}",
+                r.not_achieved,
+                r.failed,
+                w = below.len().max(10)
+            );
         }
     };
     let _ = writeln!(out, "How runs ended (successful runs per end class):");
@@ -1248,35 +1326,29 @@ mod tests {
         results.push(stored("b", "baseline", 2, 100.0));
         results.push(stored("b", "layout", 2, 100.0));
         results.push(stored("b", "layout", 3, 50.0));
-        let t = table(&results, &["baseline".into(), "layout".into()]);
+        let t = table(&results, &["baseline".into(), "layout".into()], 0.99);
         let a = &t.per_building["a"][1];
-        let p = a.paired.unwrap();
+        let p = a.paired.as_ref().unwrap();
         assert_eq!(p.pairs, 3);
-        assert!((p.mean_pct - 10.0).abs() < 1e-9, "{p:?}");
-        assert!(p.sd_pct.abs() < 1e-9 && p.ci95_pct.abs() < 1e-9);
-        let b = t.per_building["b"][1].paired.unwrap();
+        assert!((p.gain_pct() - 10.0).abs() < 1e-9, "{p:?}");
+        assert!(p.sd_log.abs() < 1e-9 && p.t_half_log.abs() < 1e-9);
+        let b = t.per_building["b"][1].paired.as_ref().unwrap();
         assert_eq!(b.pairs, 2);
-        assert!((b.mean_pct - 10.0).abs() < 1e-9);
-        // sd of {20, 0} = 14.142; t(1) = 12.706; half-width = 12.706 * 14.142 / sqrt(2).
-        assert!((b.ci95_pct - 127.06).abs() < 0.01, "{b:?}");
-        // Overall: 5 pairs across both buildings.
-        assert_eq!(t.overall[1].paired.unwrap().pairs, 5);
-        assert!(t.overall[0].paired.is_some_and(|p| p.mean_pct == 0.0));
-        // The plain gain of the means only where both labels ran the same buildings and seeds.
-        assert!(a.gain_pct.is_some_and(|g| (g - 10.0).abs() < 1e-9), "{a:?}");
-        assert_eq!(t.per_building["b"][1].gain_pct, None);
-        assert_eq!(t.overall[1].gain_pct, None);
+        // Log ratios ln(1 / 0.8) and 0: their mean is the geometric gain 1 - sqrt(0.8).
+        assert!((b.gain_pct() - 100.0 * (1.0 - 0.8f64.sqrt())).abs() < 1e-9);
+        // sd of {ln 1.25, 0}; t(1) = 12.706; half-width = 12.706 * sd / sqrt(2).
+        let sd = 1.25f64.ln() / 2f64.sqrt();
+        assert!((b.t_half_log - 12.706204736174694 * sd / 2f64.sqrt()).abs() < 1e-9);
+        // Overall: 5 pairs across both buildings; the reference against itself: 0.
+        assert_eq!(t.overall[1].paired.as_ref().unwrap().pairs, 5);
+        assert!(t.overall[0]
+            .paired
+            .as_ref()
+            .is_some_and(|p| p.mean_log == 0.0));
         let text = render_text(&t);
-        assert!(text.contains("+10.0 ± 0.0 % (n=3)"), "{text}");
+        assert!(text.contains("+10.0 % [+10.0, +10.0] (n=3)"), "{text}");
         assert!(text.contains("b:"), "{text}");
-        assert!(text.contains("gain '-'"), "{text}");
-        let balanced: Vec<StoredResult> =
-            results.into_iter().filter(|r| r.building == "a").collect();
-        let text = render_text(&table(&balanced, &["baseline".into(), "layout".into()]));
-        assert!(
-            text.contains("+10.0 %") && !text.contains("gain '-'"),
-            "{text}"
-        );
+        assert!(!text.contains("lost"), "{text}");
     }
 
     /// The other metrics are paired like the time: a label whose path is 20 % shorter on every
@@ -1302,7 +1374,7 @@ mod tests {
             run("baseline", 2, 200.0, 1.0, "0,0,0\n100,9,0.95\n"),
             run("layout", 2, 160.0, 0.99, "0,0,0\n100,9,0.85\n"),
         ];
-        let c = comparisons(&results, "baseline");
+        let c = comparisons(&results, &[], "baseline", 0.99);
         let overall = c
             .iter()
             .find(|c| c.label == "layout" && c.building.is_none())
@@ -1311,7 +1383,11 @@ mod tests {
         let close = |a: Option<f64>, b: f64| a.is_some_and(|a| (a - b).abs() < 1e-9);
         assert_eq!(m["path_length_m"].pairs, 2);
         assert!(close(m["path_length_m"].mean, 20.0), "{m:?}");
-        assert_eq!(m["path_length_m"].t_ci95, Some([20.0, 20.0]));
+        let ci = m["path_length_m"].t_ci95.unwrap();
+        assert!(
+            close(Some(ci[0]), 20.0) && close(Some(ci[1]), 20.0),
+            "{ci:?}"
+        );
         assert!(close(m["explored_fraction_points"].mean, -1.0), "{m:?}");
         // Seed 1 reaches 90 % at 40 s against 50 s; seed 2's layout never does.
         assert_eq!(m["time_to_90_s"].pairs, 1);
@@ -1343,7 +1419,7 @@ mod tests {
     }
 
     #[test]
-    fn every_end_class_is_counted_and_only_normal_ends_are_timed() {
+    fn every_end_class_is_counted_and_only_runs_reaching_the_coverage_are_timed() {
         let s0 = [1.0, 2.0, 0.0];
         // (seed, time_s, end_reason, explored_fraction): the baseline's runs.
         let runs = [
@@ -1353,8 +1429,8 @@ mod tests {
             (4, 14400.0, "time limit", 0.6),
             (5, 500.0, "stuck", 0.9),
             (6, 600.0, "frontiers unreachable", 0.95),
-            (7, 700.0, "complete", 0.96), // complete, but short of 97 %
-            (8, 800.0, "stuck", 0.99),    // slivers left: explored what it could
+            (7, 700.0, "complete", 0.96), // complete, but short of 99 %
+            (8, 800.0, "stuck", 0.99),    // slivers left: explored enough
             (9, 900.0, "frontiers unreachable", 0.98),
         ];
         let mut results: Vec<StoredResult> = runs
@@ -1365,7 +1441,7 @@ mod tests {
         for &(seed, t, _, _) in &runs {
             results.push(stored_end("layout", seed, t / 2.0, "complete", 1.0, s0));
         }
-        let t = table(&results, &["baseline".into(), "layout".into()]);
+        let t = table(&results, &["baseline".into(), "layout".into()], 0.99);
         let base = &t.overall[0];
         let counts: Vec<(&str, usize)> = base.ends.iter().map(|(c, n)| (c.as_str(), *n)).collect();
         assert_eq!(
@@ -1378,26 +1454,34 @@ mod tests {
                 ("frontiers unreachable", 2)
             ]
         );
-        // Times of the complete and early-stop runs, and of the stuck and unreachable ones
-        // that explored at least 97 %: 100, 200, 300, 700, 800, 900.
-        assert_eq!(base.time.n, 6);
-        assert_eq!(base.time.mean, 500.0);
-        assert_eq!(base.left_out, 3);
-        assert_eq!(base.short, 4);
+        // Timed: the runs that explored at least 99 %: 100, 200, 800.
+        assert_eq!(base.time.n, 3);
+        assert!((base.time.mean - 1100.0 / 3.0).abs() < 1e-9);
+        assert_eq!(base.not_achieved, 6);
         assert_eq!(base.explored_fraction.n, 9);
-        // Pairs only where the baseline ended normally; no plain gain over different runs.
+        // Every pair counts: 3 where both reached 99 % (layout twice as fast), 6 where only
+        // layout did (the baseline charged its time limit, 14400 s).
         let layout = &t.overall[1];
-        assert_eq!(layout.left_out, 0);
-        assert_eq!(layout.paired.unwrap().pairs, 6);
-        assert_eq!(layout.paired.unwrap().mean_pct, 50.0);
-        assert_eq!(layout.gain_pct, None);
+        assert_eq!(layout.not_achieved, 0);
+        let p = layout.paired.as_ref().unwrap();
+        assert_eq!(p.pairs, 9);
+        assert_eq!(p.counts.both_achieved, 3);
+        assert_eq!(p.counts.reference_only_not_achieved, 6);
+        let want: f64 = [100.0, 200.0, 800.0]
+            .iter()
+            .map(|_| 2f64.ln())
+            .chain(
+                [300.0, 14400.0, 500.0, 600.0, 700.0, 900.0]
+                    .iter()
+                    .map(|t: &f64| 14400f64.ln() - (t / 2.0).ln()),
+            )
+            .sum::<f64>()
+            / 9.0;
+        assert!((p.mean_log - want).abs() < 1e-12, "{p:?}");
         let text = render_text(&t);
         for needle in [
-            "(3 left out: 1 time limit, 1 stuck, 1 frontiers unreachable; 4 short of 97 %)",
-            "left out of the times and gains: 3 runs",
-            "(1 time limit, 1 stuck, 1 frontiers unreachable)",
-            "4 runs ended with less than 97 %",
-            "gain '-'",
+            "6 below 99 %: 1 complete, 1 early stop, 1 time limit, 1 stuck, 2 frontiers unreachable",
+            "6 runs did not explore 99 %",
         ] {
             assert!(text.contains(needle), "{needle}: {text}");
         }
@@ -1411,27 +1495,136 @@ mod tests {
                 .collect::<Vec<_>>()
                 .join(" ")
         };
-        assert_eq!(line("baseline"), "3 1 1 2 2 4", "{ends}");
-        assert_eq!(line("layout"), "9 0 0 0 0 0", "{ends}");
+        assert_eq!(line("baseline"), "3 1 1 2 2 6 0", "{ends}");
+        assert_eq!(line("layout"), "9 0 0 0 0 0 0", "{ends}");
         assert!(ends.contains("frontiers unreachable"), "{ends}");
     }
 
+    /// Swapping the reference negates every comparison's log ratios exactly (mean, t,
+    /// bootstrap and anytime intervals) and keeps its p-values, with runs below the coverage
+    /// level and failed jobs on both sides.
     #[test]
-    fn an_unknown_end_is_left_out_and_shown() {
+    fn swapping_the_reference_negates_the_gain_exactly() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let s0 = [1.0, 2.0, 0.0];
+        let mut results = Vec::new();
+        for building in ["x", "y", "z"] {
+            for seed in 1..=9 {
+                for label in ["a", "b"] {
+                    let t = rng.random_range(200.0..900.0);
+                    let f = if rng.random::<f64>() < 0.15 { 0.7 } else { 1.0 };
+                    let mut r = stored_end(label, seed, t, "complete", f, s0);
+                    r.building = building.into();
+                    if rng.random::<f64>() < 0.05 {
+                        r.status = "failed".into();
+                        r.summary_json = None;
+                    }
+                    results.push(r);
+                }
+            }
+        }
+        let pick = |reference: &str, building: Option<&str>| {
+            comparisons(&results, &[], reference, 0.99)
+                .into_iter()
+                .find(|c| c.building.as_deref() == building)
+                .unwrap()
+        };
+        for building in [None, Some("x"), Some("y"), Some("z")] {
+            let (ab, ba) = (pick("a", building), pick("b", building));
+            assert_eq!((ab.label.as_str(), ba.label.as_str()), ("b", "a"));
+            assert_eq!(ab.pairs, ba.pairs);
+            assert_eq!(ab.mean_log_ratio.map(|m| -m), ba.mean_log_ratio);
+            let flip = |v: Option<[f64; 2]>| v.map(|[lo, hi]| [-hi, -lo]);
+            assert_eq!(flip(ab.t_ci95_log), ba.t_ci95_log);
+            assert_eq!(flip(ab.bootstrap_ci95_log), ba.bootstrap_ci95_log);
+            assert_eq!(flip(ab.anytime_ci95_log), ba.anytime_ci95_log);
+            assert_eq!(ab.wilcoxon_p, ba.wilcoxon_p);
+            assert_eq!(ab.holm_p, ba.holm_p);
+            assert_eq!(ab.effect_size_dz.map(|d| -d), ba.effect_size_dz);
+            assert_eq!(
+                ab.counts.label_only_not_achieved,
+                ba.counts.reference_only_not_achieved
+            );
+            assert_eq!(ab.counts.neither_achieved, ba.counts.neither_achieved);
+            assert!(ab.pairs > 0 && ab.mean_log_ratio.is_some());
+        }
+        // Some runs of each side did not achieve the outcome (the case is exercised).
+        let all = pick("a", None);
+        assert!(
+            all.counts.label_only_not_achieved > 0 && all.counts.reference_only_not_achieved > 0
+        );
+    }
+
+    /// A label that stops early, far below the coverage level, is never shown faster, however
+    /// quickly it stops; nor is one whose slow runs are cut off by a short time limit (the
+    /// runs it loses that way count against it, none are dropped); the sequential test says H0.
+    #[test]
+    fn stopping_early_or_being_cut_off_never_looks_faster() {
+        let s0 = [1.0, 2.0, 0.0];
+        let mut results = Vec::new();
+        for seed in 1..=20u64 {
+            let t = 600.0 + 10.0 * seed as f64;
+            results.push(stored_end("baseline", seed, t, "complete", 1.0, s0));
+            results.push(stored_end("quitter", seed, 60.0, "early stop", 0.26, s0));
+            // A copy 5 % faster whose slower half hits a 580 s time limit at 90 %.
+            let (time, end, f) = if seed % 2 == 0 {
+                (580.0, "time limit", 0.9)
+            } else {
+                (t * 0.95, "complete", 1.0)
+            };
+            let mut r = stored_end("cut", seed, time, end, f, s0);
+            let mut v: serde_json::Value =
+                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            v["settings"]["time_limit_s"] = serde_json::json!(580.0);
+            r.summary_json = Some(v.to_string());
+            results.push(r);
+        }
+        let cs = comparisons(&results, &[], "baseline", 0.99);
+        let cfg = crate::sequential::SprtConfig::default();
+        for label in ["quitter", "cut"] {
+            let c = cs
+                .iter()
+                .find(|c| c.label == label && c.building.is_none())
+                .unwrap();
+            assert!(c.mean_gain_pct.unwrap() < 0.0, "{label}: {c:?}");
+            assert!(c.t_ci95_pct.unwrap()[0] < 0.0, "{label}: {c:?}");
+            assert_eq!(c.pairs, 20, "{label}: none dropped");
+            let pairs = crate::outcome::paired(&results, label, "baseline", 0.99);
+            let xs: Vec<f64> = pairs
+                .pairs
+                .iter()
+                .map(crate::outcome::Pair::log_ratio)
+                .collect();
+            assert_eq!(
+                cfg.state(&xs).decision,
+                crate::sequential::Decision::H0,
+                "{label}"
+            );
+        }
+        let quitter = cs.iter().find(|c| c.label == "quitter").unwrap();
+        assert_eq!(quitter.counts.label_only_not_achieved, 20);
+        assert_eq!(quitter.counts.label_not_achieved["early stop"], 20);
+        assert_eq!(quitter.counts.label_coverage_min, Some(0.26));
+    }
+
+    #[test]
+    fn an_unknown_end_is_shown_and_judged_by_its_coverage() {
         let s0 = [1.0, 2.0, 0.0];
         let results = vec![
             stored_end("baseline", 1, 100.0, "complete", 1.0, s0),
             stored_end("baseline", 2, 900.0, "meteor", 1.0, s0),
+            stored_end("baseline", 3, 900.0, "meteor", 0.5, s0),
         ];
-        let t = table(&results, &[]);
-        assert_eq!(t.overall[0].time.n, 1);
-        assert_eq!(t.overall[0].left_out, 1);
+        let t = table(&results, &[], 0.99);
+        assert_eq!(t.overall[0].time.n, 2);
+        assert_eq!(t.overall[0].not_achieved, 1);
         assert!(render_text(&t).contains("1 meteor"), "{}", render_text(&t));
         assert!(render_ends(&t).contains("meteor"));
     }
 
     #[test]
-    fn tables_of_normal_ends_carry_no_marks() {
+    fn tables_of_runs_reaching_the_coverage_carry_no_marks() {
         let s0 = [1.0, 2.0, 0.0];
         let results: Vec<StoredResult> = [(1, "complete"), (2, "no frontiers"), (3, "early stop")]
             .iter()
@@ -1442,14 +1635,21 @@ mod tests {
                 ]
             })
             .collect();
-        let t = table(&results, &[]);
+        let t = table(&results, &[], 0.99);
         let text = render_text(&t);
         assert!(
-            !text.contains("left out") && !text.contains("short") && !text.contains("gain '-'"),
+            !text.contains("did not explore") && !text.contains("failed") && !text.contains("lost"),
             "{text}"
         );
         assert!(text.contains("+10.0 %"), "{text}");
         assert_eq!(t.overall[0].time.n, 3);
+        // At a coverage level above what they explored, every run is below it: ties.
+        let t = table(&results, &[], 1.0);
+        let p = t.overall[1].paired.as_ref().unwrap();
+        assert_eq!(
+            (p.pairs, p.counts.neither_achieved, p.mean_log),
+            (3, 3, 0.0)
+        );
     }
 
     #[test]
@@ -1462,10 +1662,13 @@ mod tests {
             stored_end("layout", 1, 90.0, "complete", 1.0, a),
             stored_end("layout", 1, 140.0, "complete", 1.0, b),
         ];
-        let t = table(&results, &[]);
-        let p = t.overall[1].paired.unwrap();
+        let t = table(&results, &[], 0.99);
+        let p = t.overall[1].paired.as_ref().unwrap();
         assert_eq!(p.pairs, 2);
-        assert!((p.mean_pct - 20.0).abs() < 1e-9, "{p:?}");
+        assert!(
+            (p.gain_pct() - 100.0 * (1.0 - (0.9f64 * 0.7).sqrt())).abs() < 1e-9,
+            "{p:?}"
+        );
         assert_eq!(t.overall[1].time.n, 2);
         // The CSV carries each start pose exactly.
         let csv = results_csv(&results);

@@ -156,6 +156,8 @@ pub struct Figure {
     width_px: u32,
     height_px: u32,
     background: Color,
+    /// The printed width in inches (SVG and PDF sizes), `None`: its pixels at 96 per inch.
+    print_width_in: Option<f64>,
     pub(crate) items: Vec<Item>,
 }
 
@@ -167,8 +169,10 @@ pub enum RenderError {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("{path}: unknown figure format (use .svg or .png)")]
+    #[error("{path}: unknown figure format (use .svg, .png or .pdf)")]
     UnknownFormat { path: PathBuf },
+    #[error("cannot convert the figure to PDF: {0}")]
+    Pdf(String),
 }
 
 impl Figure {
@@ -198,6 +202,7 @@ impl Figure {
             width_px: side(bounds.width_m()),
             height_px: side(bounds.height_m()),
             background: Color::WHITE,
+            print_width_in: None,
             items: Vec::new(),
         }
     }
@@ -353,12 +358,44 @@ impl Figure {
         svg::render(self)
     }
 
+    /// Sets the width the figure is printed at (inches): its SVG and PDF say so, its height in
+    /// proportion; pixels and PNGs are unchanged.
+    pub fn set_print_width_in(&mut self, width_in: f64) -> &mut Self {
+        self.print_width_in = (width_in.is_finite() && width_in > 0.0).then_some(width_in);
+        self
+    }
+
+    /// The printed size in inches, if set.
+    pub fn print_size_in(&self) -> Option<(f64, f64)> {
+        let w = self.print_width_in?;
+        Some((w, w * self.height_px as f64 / self.width_px as f64))
+    }
+
+    /// The figure as a PDF document of one page its size (vector shapes, text in the embedded
+    /// DejaVu Sans), converted from its SVG by `svg2pdf`.
+    pub fn to_pdf(&self) -> Result<Vec<u8>, RenderError> {
+        let mut options = svg2pdf::usvg::Options::default();
+        options
+            .fontdb_mut()
+            .load_font_data(dejavu::sans::regular().to_vec());
+        options.font_family = "DejaVu Sans".into();
+        let tree = svg2pdf::usvg::Tree::from_str(&self.to_svg(), &options)
+            .map_err(|e| RenderError::Pdf(e.to_string()))?;
+        svg2pdf::to_pdf(
+            &tree,
+            svg2pdf::ConversionOptions::default(),
+            // usvg reads the SVG's inches as 96 pixels each: so many per inch of the page.
+            svg2pdf::PageOptions { dpi: 96.0 },
+        )
+        .map_err(|e| RenderError::Pdf(e.to_string()))
+    }
+
     /// The figure as PNG bytes.
     pub fn to_png(&self) -> Vec<u8> {
         png::encode(&png::rasterise(self))
     }
 
-    /// Writes the figure as SVG or PNG, chosen by the extension of `path`.
+    /// Writes the figure as SVG, PNG or PDF, chosen by the extension of `path`.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), RenderError> {
         let path = path.as_ref();
         let ext = path
@@ -368,6 +405,7 @@ impl Figure {
         let bytes = match ext.as_deref() {
             Some("svg") => self.to_svg().into_bytes(),
             Some("png") => self.to_png(),
+            Some("pdf") => self.to_pdf()?,
             _ => {
                 return Err(RenderError::UnknownFormat {
                     path: path.to_path_buf(),

@@ -46,9 +46,14 @@ fn escape(text: &str) -> String {
 pub(crate) fn render(fig: &Figure) -> String {
     let (w, h) = fig.size_px();
     let mut out = String::new();
+    // A figure sized for print says its size in inches; its coordinates stay pixels.
+    let (width, height) = match fig.print_size_in() {
+        Some((wi, hi)) => (format!("{wi:.4}in"), format!("{hi:.4}in")),
+        None => (w.to_string(), h.to_string()),
+    };
     let _ = writeln!(
         out,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\">"
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {w} {h}\">"
     );
     let bg = fig.background_color();
     let _ = writeln!(

@@ -1,0 +1,383 @@
+//! What a run achieved, and how two labels' runs compare: the outcome every comparison,
+//! sequential test and aggregate of floorcast is built on (`docs/statistics.md`).
+//!
+//! A comparison is at a **coverage level** (default [`DEFAULT_COVERAGE`]): a run *achieves* the
+//! outcome when it ended with at least that fraction of the explorable area explored, and its
+//! time is then its exploration time. A run that ended below the level (an early stop, the time
+//! limit, stuck, frontiers unreachable, or "complete" on a building it saw too little of) or that
+//! failed has not achieved it, and can never make its label look better:
+//!
+//! - Its order against its partner (the other label's run on the same building, seed and start
+//!   pose) is known whenever the partner achieved: a run that stopped will never reach the level
+//!   (its time to it is infinite), and one cut off by the time limit would have needed longer
+//!   than the limit, which the partner did not. It is a loss. When both did not achieve, the
+//!   order is unknown: a tie. This is Gehan's scoring of censored pairs (a comparison counts
+//!   only where the data order the two), as in the paired tests of Woolson and Lachenbruch.
+//! - In numbers (log ratios, means, intervals, the sequential test), such a run takes the pair's
+//!   **horizon**: the larger of the two runs' time limits (and of their end times), the
+//!   penalised runtime of algorithm benchmarks (PAR-1). It is never less than the partner's
+//!   time, so the run never wins; and when both runs had the same time limit it is the least
+//!   time consistent with the data (a run cut off needed more than the limit, one that stopped
+//!   would never have got there), so a loss shown is a lower bound on the true one.
+//!
+//! The outcome of a pair is `x = ln t_ref - ln t` (positive: the label is faster), computed as a
+//! difference of logarithms so that swapping the two labels negates it exactly.
+
+use std::collections::BTreeMap;
+
+use floorcast_worker::RunSummary;
+
+use crate::store::StoredResult;
+use crate::table::end_class;
+
+/// The default coverage level: a run achieves the outcome with at least 99 % of the explorable
+/// area explored at its end.
+pub const DEFAULT_COVERAGE: f64 = 0.99;
+
+/// The time limit assumed for a run whose settings do not say (floorcast's default).
+const DEFAULT_TIME_LIMIT_S: f64 = 14_400.0;
+
+/// Checks a coverage level (a grid's `coverage`, `report --coverage`): a fraction in (0, 1].
+pub fn check_coverage(coverage: f64) -> Result<(), String> {
+    if coverage.is_finite() && coverage > 0.0 && coverage <= 1.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "{coverage} is not a coverage level (expected a fraction of the explorable area, more than 0 and at most 1, e.g. 0.99)"
+        ))
+    }
+}
+
+/// What one stored run achieved at a coverage level.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOutcome {
+    /// Its building as the comparison names it (its name, or its content hash).
+    pub building: String,
+    pub seed: u64,
+    /// The start pose's bits (from the summary; unknown for a failed job).
+    pub start: Option<[u64; 3]>,
+    /// The exploration time if the run reached the coverage level, else `None`.
+    pub achieved_s: Option<f64>,
+    /// Why not, if not: the end class ("early stop", "time limit", ...), or "failed".
+    pub not_achieved: Option<String>,
+    /// The explored fraction at its end (`None` for a failed job).
+    pub explored_fraction: Option<f64>,
+    /// The run's time limit, or its end time if later: the least time it may be charged.
+    pub horizon_s: f64,
+}
+
+/// The time limit in a stored job's settings JSON.
+fn time_limit_of(settings_json: &str) -> Option<f64> {
+    let v: serde_json::Value = serde_json::from_str(settings_json).ok()?;
+    v.get("time_limit_s")?
+        .as_f64()
+        .filter(|t| t.is_finite() && *t > 0.0)
+}
+
+/// The outcome of `r` at `coverage`, its building named by `building`.
+pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome {
+    let summary = (r.status == "ok")
+        .then(|| RunSummary::from_json(r.summary_json.as_deref()?).ok())
+        .flatten();
+    let limit = summary
+        .as_ref()
+        .map(|s| s.settings.time_limit_s)
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .or_else(|| time_limit_of(&r.settings_json))
+        .unwrap_or(DEFAULT_TIME_LIMIT_S);
+    let mut out = RunOutcome {
+        building: building.to_string(),
+        seed: r.seed,
+        start: None,
+        achieved_s: None,
+        not_achieved: Some("failed".into()),
+        explored_fraction: None,
+        horizon_s: limit,
+    };
+    if let Some(s) = summary {
+        let t = s.exploration_time_s;
+        out.start = Some(s.start.map(f64::to_bits));
+        out.explored_fraction = Some(s.explored_fraction).filter(|f| f.is_finite());
+        if t.is_finite() && t > 0.0 {
+            out.horizon_s = limit.max(t);
+        }
+        if s.explored_fraction >= coverage && t.is_finite() && t > 0.0 {
+            out.achieved_s = Some(t);
+            out.not_achieved = None;
+        } else {
+            out.not_achieved = Some(end_class(&s).to_string());
+        }
+    }
+    out
+}
+
+/// One pair: the label's run and the reference's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pair {
+    pub label: RunOutcome,
+    pub reference: RunOutcome,
+}
+
+impl Pair {
+    /// The pair's horizon: the larger of the two runs' horizons.
+    pub fn horizon_s(&self) -> f64 {
+        self.label.horizon_s.max(self.reference.horizon_s)
+    }
+
+    /// The times the comparison charges: a run's exploration time if it achieved the outcome,
+    /// else the pair's horizon. `(reference, label)`.
+    pub fn charged_s(&self) -> (f64, f64) {
+        let h = self.horizon_s();
+        (
+            self.reference.achieved_s.unwrap_or(h),
+            self.label.achieved_s.unwrap_or(h),
+        )
+    }
+
+    /// `ln t_ref - ln t` of the charged times: positive when the label is faster; 0 when
+    /// neither achieved the outcome; negative whenever only the reference did.
+    pub fn log_ratio(&self) -> f64 {
+        let (r, l) = self.charged_s();
+        r.ln() - l.ln()
+    }
+}
+
+/// The pairs of two labels' runs, and the runs left without a partner.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Pairing {
+    pub pairs: Vec<Pair>,
+    /// The label's runs without a reference run on the same building, seed and start.
+    pub unpaired: usize,
+}
+
+/// Pairs `mine` (a label's runs) with `theirs` (the reference's) by building, seed and start
+/// pose. A run whose start pose is unknown (a failed job has no summary) pairs when it is the
+/// only run of its side on that building and seed and the other side has exactly one there.
+/// Pairs come in the order of (building, seed, start).
+pub fn pair(mine: Vec<RunOutcome>, theirs: Vec<RunOutcome>) -> Pairing {
+    type Group = (Vec<RunOutcome>, Vec<RunOutcome>);
+    let mut groups: BTreeMap<(String, u64), Group> = BTreeMap::new();
+    for r in mine {
+        groups
+            .entry((r.building.clone(), r.seed))
+            .or_default()
+            .0
+            .push(r);
+    }
+    for r in theirs {
+        groups
+            .entry((r.building.clone(), r.seed))
+            .or_default()
+            .1
+            .push(r);
+    }
+    let mut out = Pairing::default();
+    for (_, (mut a, mut b)) in groups {
+        if a.len() == 1 && b.len() == 1 {
+            let (x, y) = (a.pop(), b.pop());
+            if let (Some(x), Some(y)) = (x, y) {
+                if x.start.is_none() || y.start.is_none() || x.start == y.start {
+                    out.pairs.push(Pair {
+                        label: x,
+                        reference: y,
+                    });
+                } else {
+                    out.unpaired += 1;
+                }
+            }
+            continue;
+        }
+        a.sort_by_key(|r| r.start);
+        for x in a {
+            let k = x
+                .start
+                .and_then(|s| b.iter().position(|y| y.start == Some(s)));
+            match k {
+                Some(k) => {
+                    let y = b.swap_remove(k);
+                    out.pairs.push(Pair {
+                        label: x,
+                        reference: y,
+                    });
+                }
+                None => out.unpaired += 1,
+            }
+        }
+    }
+    out
+}
+
+/// The outcomes of `label`'s runs in `subset` at `coverage`, buildings named by `building`.
+pub fn outcomes<'a>(
+    subset: impl IntoIterator<Item = &'a StoredResult>,
+    label: &str,
+    coverage: f64,
+    building: impl Fn(&StoredResult) -> String,
+) -> Vec<RunOutcome> {
+    subset
+        .into_iter()
+        .filter(|r| r.label == label)
+        .map(|r| outcome_of(r, coverage, &building(r)))
+        .collect()
+}
+
+/// The pairs of `label` with `reference` in `subset` at `coverage` (buildings by name).
+pub fn paired<'a>(
+    subset: impl IntoIterator<Item = &'a StoredResult> + Clone,
+    label: &str,
+    reference: &str,
+    coverage: f64,
+) -> Pairing {
+    let name = |r: &StoredResult| r.building.clone();
+    pair(
+        outcomes(subset.clone(), label, coverage, name),
+        outcomes(subset, reference, coverage, name),
+    )
+}
+
+/// What a comparison says of its pairs besides the numbers: how many achieved the outcome on
+/// each side, why the others did not, and how much each side explored.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct PairCounts {
+    /// Pairs where both runs achieved the outcome.
+    pub both_achieved: usize,
+    /// Pairs where only the reference did (losses of the label by not achieving it).
+    pub label_only_not_achieved: usize,
+    /// Pairs where only the label did.
+    pub reference_only_not_achieved: usize,
+    /// Pairs where neither did (ties).
+    pub neither_achieved: usize,
+    /// The label's paired runs that did not achieve the outcome, by end class ("failed" for
+    /// failed jobs).
+    pub label_not_achieved: BTreeMap<String, usize>,
+    /// The same for the reference.
+    pub reference_not_achieved: BTreeMap<String, usize>,
+    /// Mean and least explored fraction at the end of the label's paired runs (not failed).
+    pub label_coverage_mean: Option<f64>,
+    pub label_coverage_min: Option<f64>,
+    /// The same for the reference.
+    pub reference_coverage_mean: Option<f64>,
+    pub reference_coverage_min: Option<f64>,
+}
+
+impl PairCounts {
+    pub fn of(pairs: &[Pair]) -> PairCounts {
+        let mut c = PairCounts::default();
+        for p in pairs {
+            match (
+                p.label.achieved_s.is_some(),
+                p.reference.achieved_s.is_some(),
+            ) {
+                (true, true) => c.both_achieved += 1,
+                (false, true) => c.label_only_not_achieved += 1,
+                (true, false) => c.reference_only_not_achieved += 1,
+                (false, false) => c.neither_achieved += 1,
+            }
+            if let Some(why) = &p.label.not_achieved {
+                *c.label_not_achieved.entry(why.clone()).or_default() += 1;
+            }
+            if let Some(why) = &p.reference.not_achieved {
+                *c.reference_not_achieved.entry(why.clone()).or_default() += 1;
+            }
+        }
+        let stats = |side: &dyn Fn(&Pair) -> Option<f64>| {
+            let xs: Vec<f64> = pairs.iter().filter_map(side).collect();
+            let mean = (!xs.is_empty()).then(|| xs.iter().sum::<f64>() / xs.len() as f64);
+            (mean, xs.into_iter().reduce(f64::min))
+        };
+        (c.label_coverage_mean, c.label_coverage_min) = stats(&|p| p.label.explored_fraction);
+        (c.reference_coverage_mean, c.reference_coverage_min) =
+            stats(&|p| p.reference.explored_fraction);
+        c
+    }
+
+    /// Runs of either side that did not achieve the outcome.
+    pub fn not_achieved(&self) -> usize {
+        self.label_only_not_achieved + self.reference_only_not_achieved + 2 * self.neither_achieved
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(building: &str, seed: u64, start: Option<u64>, achieved: Option<f64>) -> RunOutcome {
+        RunOutcome {
+            building: building.into(),
+            seed,
+            start: start.map(|s| [s, 0, 0]),
+            achieved_s: achieved,
+            not_achieved: achieved.is_none().then(|| "early stop".to_string()),
+            explored_fraction: Some(if achieved.is_some() { 1.0 } else { 0.3 }),
+            horizon_s: 1000.0,
+        }
+    }
+
+    /// Every combination of achieved and not: the charged times, the sign of the outcome, and
+    /// its exact negation when the sides swap.
+    #[test]
+    fn a_run_that_does_not_achieve_never_wins_and_swapping_negates() {
+        // (label, reference, expected sign of ln t_ref - ln t)
+        let cases: [(Option<f64>, Option<f64>, f64); 5] = [
+            (Some(100.0), Some(200.0), 1.0),
+            (Some(300.0), Some(200.0), -1.0),
+            (None, Some(999.0), -1.0),
+            (Some(999.0), None, 1.0),
+            (None, None, 0.0),
+        ];
+        for (l, r, sign) in cases {
+            let p = Pair {
+                label: run("a", 1, Some(1), l),
+                reference: run("a", 1, Some(1), r),
+            };
+            let x = p.log_ratio();
+            assert_eq!(x.signum() * sign.abs(), sign, "{l:?} {r:?}: {x}");
+            let swapped = Pair {
+                label: p.reference.clone(),
+                reference: p.label.clone(),
+            };
+            assert_eq!(swapped.log_ratio(), -x, "{l:?} {r:?}");
+        }
+    }
+
+    #[test]
+    fn pairs_by_building_seed_and_start_and_failed_jobs_when_unambiguous() {
+        let mine = vec![
+            run("a", 1, Some(1), Some(10.0)),
+            run("a", 2, None, None), // a failed job: start unknown, alone on (a, 2)
+            run("a", 3, Some(1), Some(10.0)),
+            run("a", 3, Some(2), Some(10.0)),
+            run("a", 4, Some(1), Some(10.0)), // no partner
+            run("b", 1, Some(5), Some(10.0)), // the partner started elsewhere
+        ];
+        let theirs = vec![
+            run("a", 1, Some(1), Some(20.0)),
+            run("a", 2, Some(7), Some(20.0)),
+            run("a", 3, Some(2), Some(20.0)),
+            run("a", 3, Some(1), Some(20.0)),
+            run("b", 1, Some(6), Some(20.0)),
+        ];
+        let p = pair(mine, theirs);
+        assert_eq!(p.pairs.len(), 4);
+        assert_eq!(p.unpaired, 2);
+        for q in &p.pairs {
+            assert!(q.label.start.is_none() || q.label.start == q.reference.start);
+        }
+        let c = PairCounts::of(&p.pairs);
+        assert_eq!(c.both_achieved, 3);
+        assert_eq!(c.label_only_not_achieved, 1);
+        assert_eq!(c.label_not_achieved["early stop"], 1);
+        assert_eq!(c.label_coverage_min, Some(0.3));
+        assert_eq!(c.reference_coverage_mean, Some(1.0));
+    }
+
+    #[test]
+    fn coverage_levels_are_checked() {
+        for ok in [0.5, 0.99, 1.0] {
+            assert!(check_coverage(ok).is_ok());
+        }
+        for bad in [0.0, -0.1, 1.01, f64::NAN, f64::INFINITY] {
+            assert!(check_coverage(bad).is_err(), "{bad}");
+        }
+    }
+}
