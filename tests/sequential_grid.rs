@@ -264,6 +264,18 @@ fn sequential_grid_errors_name_the_field() {
             "",
             "sequential.max_seeds",
         ),
+        // One building and start: 4 seeds give 4 pairs, never the 10 the test needs.
+        (
+            "[sequential]\nreference = \"baseline\"\nbatch_seeds = 2\nmax_seeds = 4\n",
+            "",
+            "sequential.max_seeds: 4 seeds give at most 4 pairs",
+        ),
+        (
+            "[sequential]\nreference = \"baseline\"\nmultiplicity = \"holm\"\n",
+            "",
+            "sequential.multiplicity: 'holm' is not a multiplicity rule",
+        ),
+        (SEQUENTIAL, "coverage = 1.5", "coverage: 1.5 is not a coverage level"),
     ];
     for (sequential, seeds, needle) in cases {
         let g = grid(dir.path(), sequential, seeds);
