@@ -380,6 +380,17 @@ fn print_sequential(plan: &Plan, progress: &floorcast_coordinator::sequential::P
 
 pub fn report(a: ReportArgs) -> Result<()> {
     let store = Store::open_existing(&a.results)?;
+    // No export may overwrite the store or a file of it (checked before anything is written).
+    use floorcast_coordinator::store::{refuse_owned, refuse_owned_in};
+    refuse_owned("--csv", a.csv.as_deref(), &a.results)?;
+    refuse_owned("--json", a.json.as_deref(), &a.results)?;
+    refuse_owned("--html", a.html.as_deref(), &a.results)?;
+    refuse_owned_in(
+        "--plots",
+        a.plots.as_deref(),
+        a.picture.extension(),
+        &a.results,
+    )?;
     let results = store.all()?;
     // The other store and its label are checked before anything is printed.
     let against = match &a.against {

@@ -10,6 +10,17 @@ use rusqlite::{params, Connection, OptionalExtension};
 /// Version of the database layout.
 pub const STORE_VERSION: u32 = 1;
 pub const DB_FILE: &str = "results.sqlite";
+/// The lock a `floorcast run` holds on its results directory while it runs.
+pub const LOCK_FILE: &str = "floorcast.lock";
+/// Every file floorcast owns in a results directory: the store, SQLite's files beside it and the
+/// run's lock. No export may write to one of them.
+pub const OWNED_FILES: [&str; 5] = [
+    DB_FILE,
+    "results.sqlite-wal",
+    "results.sqlite-shm",
+    "results.sqlite-journal",
+    LOCK_FILE,
+];
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
@@ -29,6 +40,12 @@ pub enum StoreError {
     Missing(PathBuf),
     #[error("{path} is not a floorcast results store ({why}); floorcast leaves it untouched: give another --results directory")]
     Foreign { path: PathBuf, why: String },
+    #[error("{flag}: {path} is {owned}, a file floorcast owns; writing there would destroy the results: give another path")]
+    Owned {
+        flag: String,
+        path: PathBuf,
+        owned: PathBuf,
+    },
 }
 
 /// One stored job: its identity (from the grid's plan), outcome and provenance.
@@ -104,6 +121,78 @@ impl Store {
     pub fn path(&self) -> &Path {
         &self.path
     }
+}
+
+/// Refuses an output path (`report --csv`, `--json`, `--html`) that is one of the files
+/// floorcast owns in `results_dir` ([`OWNED_FILES`]), whatever its spelling: relative, with
+/// `.` or `..`, through symbolic links, or a hard link (the same device and inode). `None` (the
+/// flag not given) passes. Nothing is written.
+pub fn refuse_owned(flag: &str, out: Option<&Path>, results_dir: &Path) -> Result<(), StoreError> {
+    let Some(out) = out else { return Ok(()) };
+    match owned_file_at(out, results_dir) {
+        Some(owned) => Err(StoreError::Owned {
+            flag: flag.to_string(),
+            path: out.to_path_buf(),
+            owned,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// [`refuse_owned`] for a directory of charts (`report --plots`): every file there with the
+/// charts' extension `ext` (one a chart may overwrite), a symbolic link included, is checked.
+pub fn refuse_owned_in(
+    flag: &str,
+    dir: Option<&Path>,
+    ext: &str,
+    results_dir: &Path,
+) -> Result<(), StoreError> {
+    let Some(dir) = dir else { return Ok(()) };
+    refuse_owned(flag, Some(dir), results_dir)?;
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for e in entries.flatten() {
+        let path = e.path();
+        if path.extension().and_then(|x| x.to_str()) == Some(ext) {
+            refuse_owned(flag, Some(&path), results_dir)?;
+        }
+    }
+    Ok(())
+}
+
+/// The file of [`OWNED_FILES`] in `results_dir` that writing `out` would write, if any.
+fn owned_file_at(out: &Path, results_dir: &Path) -> Option<PathBuf> {
+    use std::os::unix::fs::MetadataExt;
+    let out_meta = std::fs::metadata(out).ok();
+    let out_resolved = resolved(out);
+    OWNED_FILES
+        .iter()
+        .map(|f| results_dir.join(f))
+        .find(|owned| match (&out_meta, std::fs::metadata(owned).ok()) {
+            (Some(a), Some(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => out_resolved.is_some() && out_resolved == resolved(owned),
+        })
+}
+
+/// Where writing `path` would write: its absolute path with every symbolic link followed, a
+/// link to a file not yet there included (`None` when its directory does not exist, or it has
+/// no file name).
+fn resolved(path: &Path) -> Option<PathBuf> {
+    let mut p = std::path::absolute(path).ok()?;
+    // As many links as the kernel follows.
+    for _ in 0..40 {
+        if let Ok(c) = p.canonicalize() {
+            return Some(c);
+        }
+        let name = p.file_name()?.to_owned();
+        let full = p.parent()?.canonicalize().ok()?.join(name);
+        match std::fs::read_link(&full) {
+            Ok(target) => p = full.parent()?.join(target),
+            Err(_) => return Some(full),
+        }
+    }
+    None
 }
 
 /// Refuses, without writing anything, a file that is not a floorcast results store: not a file,

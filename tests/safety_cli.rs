@@ -1,0 +1,145 @@
+//! Nothing lost, nothing run that should not be (issue 62), end to end: exports never overwrite
+//! the results store, a failed write to stdout is an error, one `run` per results directory.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+
+/// A results directory `res` in `dir` holding two runs of a one-seed grid on small.toml.
+fn results(dir: &Path) -> std::path::PathBuf {
+    let small = repo().join("buildings/small.toml");
+    let grid = dir.join("grid.toml");
+    std::fs::write(
+        &grid,
+        format!(
+            "format = \"floorcast-grid\"\nversion = 1\nname = \"safe\"\nbuildings = [\"{}\"]\nseeds = [1]\n[[strategies]]\nname = \"baseline\"\n[[strategies]]\nname = \"baseline\"\nlabel = \"near\"\nsettings = {{ alpha = 0.8 }}\n[settings]\ntime_limit_s = 30\n",
+            small.display()
+        ),
+    )
+    .unwrap();
+    let res = dir.join("res");
+    let o = run_grid(&grid, &res);
+    assert!(o.status.success(), "{}", stderr(&o));
+    res
+}
+
+/// The CSV of every stored row (written outside the results directory).
+fn rows_csv(dir: &Path, res: &Path) -> String {
+    let csv = dir.join("check.csv");
+    let o = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::read_to_string(csv).unwrap()
+}
+
+/// Every spelling of a file the store owns is refused, before anything is written, for every
+/// export flag: one line naming the flag and the path, exit code 2, the store's rows intact.
+#[test]
+fn exports_never_overwrite_the_store() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let res = results(tmp);
+    let before = rows_csv(tmp, &res);
+    assert_eq!(before.lines().count(), 3, "{before}");
+    std::fs::create_dir(res.join("sub")).unwrap();
+    std::os::unix::fs::symlink("res", tmp.join("link")).unwrap();
+    std::os::unix::fs::symlink("res/results.sqlite", tmp.join("store-link")).unwrap();
+    std::os::unix::fs::symlink("res/results.sqlite-journal", tmp.join("dangling")).unwrap();
+    std::fs::hard_link(res.join("results.sqlite"), tmp.join("hard")).unwrap();
+    // Chart directories whose chart files would be the store.
+    std::fs::create_dir(tmp.join("plots-sym")).unwrap();
+    std::os::unix::fs::symlink("../res/results.sqlite", tmp.join("plots-sym/times.png")).unwrap();
+    std::fs::create_dir(tmp.join("plots-hard")).unwrap();
+    std::fs::hard_link(res.join("results.sqlite"), tmp.join("plots-hard/gains.svg")).unwrap();
+    let abs = res.join("results.sqlite").display().to_string();
+    // (flag, path, extra arguments)
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("--csv", "res/results.sqlite", &[]),
+        ("--csv", "./res/results.sqlite", &[]),
+        ("--csv", "res/../res/results.sqlite", &[]),
+        ("--csv", "res/sub/../results.sqlite", &[]),
+        ("--csv", "res//results.sqlite", &[]),
+        ("--csv", &abs, &[]),
+        ("--csv", "link/results.sqlite", &[]),
+        ("--csv", "store-link", &[]),
+        ("--csv", "hard", &[]),
+        ("--csv", "dangling", &[]),
+        ("--csv", "res/results.sqlite-wal", &[]),
+        ("--csv", "res/results.sqlite-shm", &[]),
+        ("--csv", "res/results.sqlite-journal", &[]),
+        ("--csv", "res/floorcast.lock", &[]),
+        ("--json", "res/results.sqlite", &[]),
+        ("--json", "link/../res/results.sqlite", &[]),
+        ("--json", "hard", &[]),
+        ("--html", "./link/./results.sqlite", &[]),
+        ("--html", "store-link", &[]),
+        ("--plots", "plots-sym", &[]),
+        ("--plots", "plots-hard", &["--picture", "svg"]),
+    ];
+    let mut failures = Vec::new();
+    for (flag, path, extra) in cases {
+        let o = floorcast()
+            .args(["report", "res", flag, path])
+            .args(*extra)
+            .current_dir(tmp)
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        let clean = o.status.code() == Some(2)
+            && err.trim().lines().count() == 1
+            && err.contains(flag)
+            && err.contains(path)
+            && err.contains("floorcast owns")
+            && o.stdout.is_empty();
+        if !clean {
+            failures.push(format!("{flag} {path}: {:?} {err}", o.status.code()));
+        }
+        let now = rows_csv(tmp, &res);
+        if now != before {
+            failures.push(format!("{flag} {path}: the store changed"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(!tmp.join("res/results.sqlite-journal").exists());
+    assert!(!tmp.join("res/floorcast.lock").exists());
+}
+
+/// Exports beside the store, and charts in the results directory itself, are still written.
+#[test]
+fn exports_beside_the_store_are_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let res = results(tmp);
+    let o = floorcast()
+        .args([
+            "report",
+            "res",
+            "--csv",
+            "res/results.csv",
+            "--json",
+            "./res/results.sqlite.json",
+            "--plots",
+            "res",
+            "--html",
+            "res/report.html",
+        ])
+        .current_dir(tmp)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "results.csv",
+        "results.sqlite.json",
+        "times.png",
+        "report.html",
+    ] {
+        assert!(res.join(f).is_file(), "{f} missing");
+    }
+    assert_eq!(rows_csv(tmp, &res).lines().count(), 3);
+}
