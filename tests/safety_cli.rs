@@ -143,3 +143,89 @@ fn exports_beside_the_store_are_written() {
     }
     assert_eq!(rows_csv(tmp, &res).lines().count(), 3);
 }
+
+/// A strategy program using floorcast's Python module (`import floorcast_strategy` from its
+/// `PYTHONPATH`), which stops at once; written into `dir` as `stops.py`.
+fn python_module_strategy(dir: &Path) -> String {
+    std::fs::write(
+        dir.join("stops.py"),
+        "from floorcast_strategy import Strategy, run\n\n\nclass Stops(Strategy):\n    name = \"stops\"\n\n    def decide(self, d):\n        return None\n\n\nrun(Stops())\n",
+    )
+    .unwrap();
+    "python3 stops.py".to_string()
+}
+
+/// `explore` of small.toml with the program `command`, in `cwd`, with `TMPDIR` set to `tmpdir`.
+fn explore_with_tmpdir(cwd: &Path, command: &str, tmpdir: &Path) -> std::process::Output {
+    floorcast()
+        .args(["explore", "--building"])
+        .arg(repo().join("buildings/small.toml"))
+        .args([
+            "--seed",
+            "1",
+            "--out",
+            "out",
+            "--quiet",
+            "--strategy-command",
+            command,
+        ])
+        .env("TMPDIR", tmpdir)
+        .current_dir(cwd)
+        .output()
+        .unwrap()
+}
+
+/// The folder floorcast's Python module used to be put in (and reused): a name anyone could
+/// make first, here holding a `json.py` and a `floorcast_strategy.py` that leave a marker when
+/// imported. floorcast never puts it on a program's `PYTHONPATH`, and leaves no folder of its own
+/// behind in `TMPDIR`.
+#[test]
+fn a_planted_python_folder_is_never_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let tmpdir = tmp.join("tmp");
+    let o = std::process::Command::new("sha256sum")
+        .arg(repo().join("python/floorcast_strategy.py"))
+        .output()
+        .unwrap();
+    let hash = String::from_utf8(o.stdout).unwrap()[..12].to_string();
+    let planted = tmpdir.join(format!("floorcast-python-{hash}"));
+    std::fs::create_dir_all(&planted).unwrap();
+    let marker = tmp.join("marker");
+    let plant = format!(
+        "open({:?}, 'w').write('planted')\n",
+        marker.display().to_string()
+    );
+    for module in ["json.py", "floorcast_strategy.py", "sys.py"] {
+        std::fs::write(planted.join(module), &plant).unwrap();
+    }
+    let command = python_module_strategy(tmp);
+    let o = explore_with_tmpdir(tmp, &command, &tmpdir);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(tmp.join("out/summary.json").is_file());
+    assert!(!marker.exists(), "a planted module ran");
+    let left: Vec<_> = std::fs::read_dir(&tmpdir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, vec![planted.file_name().unwrap().to_owned()]);
+}
+
+/// A `TMPDIR` floorcast cannot write in is a floorcast error naming it and what to do, not
+/// Python's `ModuleNotFoundError`.
+#[test]
+fn an_unwritable_tmpdir_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let command = python_module_strategy(tmp);
+    let o = explore_with_tmpdir(tmp, &command, &tmp.join("no-such-dir"));
+    assert_clean_failure(
+        &o,
+        &["no-such-dir", "set TMPDIR to a directory you can write"],
+    );
+    assert!(
+        !stderr(&o).contains("ModuleNotFoundError"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -13,7 +13,7 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
@@ -341,24 +341,35 @@ fn files_sha256(files: &[(String, Vec<u8>)]) -> String {
 /// speaks this floorcast's protocol.
 pub const PYTHON_MODULE: &str = include_str!("../../python/floorcast_strategy.py");
 
-/// The directory holding [`PYTHON_MODULE`] (written once per version into the temporary
-/// directory), or `None` if it cannot be written.
-fn python_dir() -> Option<PathBuf> {
-    static DIR: OnceLock<Option<PathBuf>> = OnceLock::new();
-    DIR.get_or_init(|| {
-        use sha2::{Digest, Sha256};
-        let hash = format!("{:x}", Sha256::digest(PYTHON_MODULE.as_bytes()));
-        let dir = std::env::temp_dir().join(format!("floorcast-python-{}", &hash[..12]));
-        let file = dir.join("floorcast_strategy.py");
-        if std::fs::read_to_string(&file).ok().as_deref() != Some(PYTHON_MODULE) {
-            std::fs::create_dir_all(&dir).ok()?;
-            let tmp = dir.join(format!(".tmp-{}", std::process::id()));
-            std::fs::write(&tmp, PYTHON_MODULE).ok()?;
-            std::fs::rename(&tmp, &file).ok()?;
-        }
-        Some(dir)
-    })
-    .clone()
+/// A new folder of this process's own in the temporary directory (`TMPDIR`): a name no one
+/// else chose, mode 0700, removed when dropped. A folder with a name known in advance could be
+/// made first by another user, with modules of theirs that our programs would import.
+pub fn private_temp_dir(prefix: &str) -> Result<tempfile::TempDir, String> {
+    use std::os::unix::fs::PermissionsExt;
+    let tmp = std::env::temp_dir();
+    tempfile::Builder::new()
+        .prefix(prefix)
+        .permissions(std::fs::Permissions::from_mode(0o700))
+        .tempdir_in(&tmp)
+        .map_err(|e| {
+            format!(
+                "cannot create a folder in the temporary directory {} ({e}); set TMPDIR to a directory you can write",
+                tmp.display()
+            )
+        })
+}
+
+/// A private folder ([`private_temp_dir`]) holding [`PYTHON_MODULE`], for one program.
+fn python_dir() -> Result<tempfile::TempDir, String> {
+    let dir = private_temp_dir("floorcast-python-")?;
+    let file = dir.path().join("floorcast_strategy.py");
+    std::fs::write(&file, PYTHON_MODULE).map_err(|e| {
+        format!(
+            "cannot write {} ({e}); set TMPDIR to a directory you can write",
+            file.display()
+        )
+    })?;
+    Ok(dir)
 }
 
 /// What the program said of itself.
@@ -403,6 +414,8 @@ pub struct ExternalStrategy {
     program: StrategyProgram,
     command: String,
     child: Child,
+    /// The folder of floorcast's Python module, removed with the program.
+    _python: tempfile::TempDir,
     /// Lines to write to the program's stdin, written by a thread of their own: a program that
     /// stops reading blocks that thread, never the run (its reply then times out).
     stdin: Option<mpsc::Sender<String>>,
@@ -451,15 +464,15 @@ impl ExternalStrategy {
         cmd.args(&command_words[1..]);
         // No __pycache__ beside the programs (or in a repository's python/).
         cmd.env("PYTHONDONTWRITEBYTECODE", "1");
-        // floorcast's Python module, importable by every strategy program.
-        if let Some(dir) = python_dir() {
-            let mut paths = vec![dir];
-            if let Some(old) = std::env::var_os("PYTHONPATH") {
-                paths.extend(std::env::split_paths(&old));
-            }
-            if let Ok(joined) = std::env::join_paths(paths) {
-                cmd.env("PYTHONPATH", joined);
-            }
+        // floorcast's Python module, importable by every strategy program, in a folder of
+        // this program's own.
+        let python = python_dir().map_err(&fail)?;
+        let mut paths = vec![python.path().to_path_buf()];
+        if let Some(old) = std::env::var_os("PYTHONPATH") {
+            paths.extend(std::env::split_paths(&old));
+        }
+        if let Ok(joined) = std::env::join_paths(paths) {
+            cmd.env("PYTHONPATH", joined);
         }
         let mut child = cmd
             .stdin(Stdio::piped())
@@ -507,6 +520,7 @@ impl ExternalStrategy {
             program: program.clone(),
             command: command.clone(),
             child,
+            _python: python,
             stdin,
             stderr_reader,
             lines,
