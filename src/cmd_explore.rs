@@ -100,6 +100,7 @@ pub struct ExploreArgs {
 }
 
 pub fn run(a: ExploreArgs) -> Result<()> {
+    crate::output::stop_programs_on_ctrl_c();
     let building = floorcast_formats::read_building(&a.building)?;
     let name = a
         .building

@@ -246,6 +246,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         // A second Ctrl-C kills at once.
         let _ = ctrlc::set_handler(move || {
             if flag.swap(true, Ordering::SeqCst) {
+                floorcast_worker::external::kill_all_programs();
                 std::process::exit(130);
             }
         });

@@ -36,6 +36,7 @@ pub struct WorkerArgs {
 }
 
 pub fn run(a: WorkerArgs) -> Result<()> {
+    crate::output::stop_programs_on_ctrl_c();
     if a.connect.is_empty() && a.net.zenoh_config.is_none() {
         anyhow::bail!(
             "no coordinator to join: give --connect tcp/HOST:7447 (the endpoint of `floorcast run GRID --listen ...`) or a --zenoh-config that lists it"

@@ -65,6 +65,15 @@ pub fn parse_pose(s: &str) -> Result<sim_core::Pose, String> {
     Ok(sim_core::Pose::new(v[0], v[1], v[2].to_radians()))
 }
 
+/// Ctrl-C ends floorcast at once (exit code 130) and every strategy program with everything it
+/// started: each runs in a process group of its own, which the terminal's signal does not reach.
+pub fn stop_programs_on_ctrl_c() {
+    let _ = ctrlc::set_handler(|| {
+        floorcast_worker::external::kill_all_programs();
+        std::process::exit(130);
+    });
+}
+
 /// Writes one line to stdout. A closed pipe (`floorcast ... | head`) ends the program quietly
 /// instead of panicking as `println!` does.
 pub fn say_fmt(args: std::fmt::Arguments<'_>, newline: bool) {

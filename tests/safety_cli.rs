@@ -229,3 +229,83 @@ fn an_unwritable_tmpdir_is_named() {
         stderr(&o)
     );
 }
+
+/// Whether process `pid` has ended (gone, or a zombie waiting to be reaped).
+fn ended(pid: u32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Err(_) => true,
+        Ok(stat) => stat
+            .rsplit_once(')')
+            .unwrap()
+            .1
+            .trim_start()
+            .starts_with('Z'),
+    }
+}
+
+/// The pid a wrapper script wrote, and whether it has ended (waiting up to 5 s).
+fn ended_soon(pid_file: &Path) -> (u32, bool) {
+    let pid: u32 = std::fs::read_to_string(pid_file)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !ended(pid) && t0.elapsed() < std::time::Duration::from_secs(5) {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    (pid, ended(pid))
+}
+
+/// A wrapper script (`sh wrap-<name>.sh`) that starts `sleep 1000` in the background (its pid in
+/// `<name>.pid`) and then becomes the Python program `program`.
+fn wrapper(dir: &Path, name: &str, program: &str) -> String {
+    std::fs::write(
+        dir.join(format!("wrap-{name}.sh")),
+        format!("sleep 1000 &\necho $! > {name}.pid\nexec {program}\n"),
+    )
+    .unwrap();
+    format!("sh wrap-{name}.sh")
+}
+
+/// Everything a strategy program starts is ended with it: at the run's end, on a timeout, and
+/// when `strategy check` finds it left processes behind, which fails the check.
+#[test]
+fn a_programs_children_end_with_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let stops = python_module_strategy(tmp);
+    let hang = format!(
+        "python3 {}",
+        repo().join("tests/strategies/hang.py").display()
+    );
+    // (name, program, extra arguments, whether explore succeeds)
+    let cases: &[(&str, &str, &[&str], bool)] = &[
+        ("end", &stops, &[], true),
+        ("timeout", &hang, &["--strategy-timeout-s", "1"], false),
+    ];
+    for (name, program, extra, ok) in cases {
+        let command = wrapper(tmp, name, program);
+        let o = floorcast()
+            .args(["explore", "--building"])
+            .arg(repo().join("buildings/small.toml"))
+            .args(["--seed", "1", "--quiet", "--out", name])
+            .args(["--strategy-command", &command])
+            .args(*extra)
+            .current_dir(tmp)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.success(), *ok, "{name}: {}", stderr(&o));
+        let (pid, gone) = ended_soon(&tmp.join(format!("{name}.pid")));
+        assert!(gone, "{name}: the program's child {pid} still runs");
+    }
+    let command = wrapper(tmp, "check", &stops);
+    let o = floorcast()
+        .args(["strategy", "check", &command])
+        .current_dir(tmp)
+        .output()
+        .unwrap();
+    assert_clean_failure(&o, &["wrap-check.sh", "left processes it started running"]);
+    let (pid, gone) = ended_soon(&tmp.join("check.pid"));
+    assert!(gone, "check: the program's child {pid} still runs");
+}

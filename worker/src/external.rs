@@ -400,6 +400,9 @@ pub struct StrategyStats {
     pub stderr: String,
     /// Whether it exited by itself within a second of its stdin closing (else it was killed).
     pub exited: bool,
+    /// Whether processes it started were still running in its process group after it ended
+    /// (they were killed).
+    pub left_behind: bool,
 }
 
 enum Line {
@@ -462,6 +465,9 @@ impl ExternalStrategy {
         let command_words = program.resolved_command();
         let mut cmd = Command::new(&command_words[0]);
         cmd.args(&command_words[1..]);
+        // A process group of its own, so that everything it starts (a wrapper script's
+        // children, a daemon it forks) is ended with it: `kill_group`.
+        std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
         // No __pycache__ beside the programs (or in a repository's python/).
         cmd.env("PYTHONDONTWRITEBYTECODE", "1");
         // floorcast's Python module, importable by every strategy program, in a folder of
@@ -490,7 +496,10 @@ impl ExternalStrategy {
             })?;
         // The pipes' threads. One the system refuses is an error, not a panic: the program is
         // stopped (the threads already started end with its pipes).
+        live_groups(|g| g.insert(child.id()));
         let refused = |child: &mut std::process::Child, e: std::io::Error| {
+            kill_group(child.id());
+            live_groups(|g| g.remove(&child.id()));
             let _ = child.kill();
             let _ = child.wait();
             fail(format!(
@@ -589,6 +598,9 @@ impl ExternalStrategy {
             }
             std::thread::sleep(Duration::from_millis(5));
         }
+        // What it started and left running is ended with it (and said: `check_program`).
+        let left_behind = exited && group_alive(self.child.id());
+        kill_group(self.child.id());
         let _ = self.child.kill();
         let _ = self.child.wait();
         self.join_stderr();
@@ -600,6 +612,7 @@ impl ExternalStrategy {
             replies: self.replies,
             stderr: self.stderr_text(),
             exited,
+            left_behind,
         })
     }
 
@@ -786,9 +799,82 @@ impl ExternalStrategy {
 
 impl Drop for ExternalStrategy {
     fn drop(&mut self) {
+        kill_group(self.child.id());
         let _ = self.child.kill();
         let _ = self.child.wait();
+        live_groups(|g| g.remove(&self.child.id()));
     }
+}
+
+/// The process groups of the programs running now (each program's group is its process id).
+fn live_groups<T>(f: impl FnOnce(&mut std::collections::BTreeSet<u32>) -> T) -> T {
+    static GROUPS: Mutex<std::collections::BTreeSet<u32>> =
+        Mutex::new(std::collections::BTreeSet::new());
+    f(&mut GROUPS.lock().unwrap_or_else(|e| e.into_inner()))
+}
+
+/// Kills every process of every program running now, for a floorcast that must stop at once
+/// (a second Ctrl-C): the programs' process groups do not get the terminal's signals.
+pub fn kill_all_programs() {
+    for g in live_groups(std::mem::take) {
+        kill_group(g);
+    }
+}
+
+/// Kills (SIGKILL) every process of the process group `pgid`, a program's.
+fn kill_group(pgid: u32) {
+    if let Ok(pgid) = i32::try_from(pgid) {
+        let _ = nix::sys::signal::killpg(
+            nix::unistd::Pid::from_raw(pgid),
+            nix::sys::signal::Signal::SIGKILL,
+        );
+    }
+}
+
+/// Whether a process of the group `pgid` is still running after its leader (the program)
+/// ended, waiting up to 200 ms for processes on their way out. Ended processes not yet reaped
+/// (zombies) do not count; without `/proc`, whether the group has any process.
+fn group_alive(pgid: u32) -> bool {
+    let deadline = Instant::now() + Duration::from_millis(200);
+    loop {
+        let alive = match running_in_group(pgid) {
+            Some(n) => n > 0,
+            None => i32::try_from(pgid).is_ok_and(|p| {
+                nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), None).is_ok()
+            }),
+        };
+        if !alive || Instant::now() >= deadline {
+            return alive;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// How many processes of the group `pgid` run (zombies aside), from `/proc` (`None` without it).
+fn running_in_group(pgid: u32) -> Option<usize> {
+    let mut n = 0;
+    for e in std::fs::read_dir("/proc").ok()?.flatten() {
+        if !e
+            .file_name()
+            .to_string_lossy()
+            .bytes()
+            .all(|b| b.is_ascii_digit())
+        {
+            continue;
+        }
+        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
+            continue;
+        };
+        // "pid (comm) state ppid pgrp ...": the name may hold spaces and parentheses.
+        let Some((_, rest)) = stat.rsplit_once(')') else {
+            continue;
+        };
+        let fields: Vec<&str> = rest.split_whitespace().take(3).collect();
+        if fields.len() == 3 && fields[0] != "Z" && fields[2].parse::<u32>() == Ok(pgid) {
+            n += 1;
+        }
+    }
+    Some(n)
 }
 
 impl Policy for ExternalStrategy {
@@ -1004,6 +1090,10 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
     });
     let finished = s.finish();
     let _ = match finished {
+        Ok(stats) if stats.exited && stats.left_behind => push(
+            "end, then exit when stdin closes",
+            Err("exited, but left processes it started running (floorcast killed them): a strategy ends every process it starts before it exits".into()),
+        ),
         Ok(stats) if stats.exited => push("end, then exit when stdin closes", Ok("exited".into())),
         Ok(_) => push(
             "end, then exit when stdin closes",
