@@ -75,7 +75,8 @@ pub fn stop_programs_on_ctrl_c() {
 }
 
 /// Writes one line to stdout. A closed pipe (`floorcast ... | head`) ends the program quietly
-/// instead of panicking as `println!` does.
+/// with exit code 0, as `head`'s reader wanted no more; any other failed write (a full disk) is
+/// an error: one line on stderr and exit code 2, never a silently cut output.
 pub fn say_fmt(args: std::fmt::Arguments<'_>, newline: bool) {
     use std::io::Write;
     let mut out = std::io::stdout().lock();
@@ -85,18 +86,26 @@ pub fn say_fmt(args: std::fmt::Arguments<'_>, newline: bool) {
         write!(out, "{args}")
     };
     if let Err(e) = r.and_then(|_| out.flush()) {
-        if e.kind() == std::io::ErrorKind::BrokenPipe {
-            std::process::exit(0);
-        }
+        stdout_failed(&e);
     }
 }
 
-/// `println!` that survives a closed pipe.
+/// Ends the program after a failed write to stdout: quietly (exit code 0) on a closed pipe, else
+/// with one line naming the problem and exit code 2.
+pub fn stdout_failed(e: &std::io::Error) -> ! {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        std::process::exit(0);
+    }
+    eprintln!("error: cannot write to stdout ({e}); free space on its device or send the output elsewhere");
+    std::process::exit(2);
+}
+
+/// `println!` that survives a closed pipe and fails on a full disk.
 macro_rules! say {
     ($($t:tt)*) => { crate::output::say_fmt(format_args!($($t)*), true) };
 }
 
-/// `print!` that survives a closed pipe.
+/// `print!` that survives a closed pipe and fails on a full disk.
 macro_rules! say_raw {
     ($($t:tt)*) => { crate::output::say_fmt(format_args!($($t)*), false) };
 }

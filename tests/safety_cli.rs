@@ -309,3 +309,80 @@ fn a_programs_children_end_with_it() {
     let (pid, gone) = ended_soon(&tmp.join("check.pid"));
     assert!(gone, "check: the program's child {pid} still runs");
 }
+
+/// Output to a full disk (`/dev/full` as stdout) is an error for every command that prints: one
+/// line, exit code 2; a closed pipe (`| head -1`) ends the program quietly with exit code 0.
+#[test]
+fn failed_writes_to_stdout_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let res = results(tmp);
+    let grid = tmp.join("grid.toml");
+    let small = repo().join("buildings/small.toml");
+    let (res, grid, small) = (
+        res.to_str().unwrap(),
+        grid.to_str().unwrap(),
+        small.to_str().unwrap(),
+    );
+    let cases: &[&[&str]] = &[
+        &["report", res],
+        &["settings"],
+        &["settings", "--markdown"],
+        &["run", grid, "--results", res, "--summary"],
+        &["run", grid, "--results", res],
+        &[
+            "explore",
+            "--building",
+            small,
+            "--out",
+            "out",
+            "--time-limit-s",
+            "20",
+        ],
+        &["building", "check", small],
+        &["--help"],
+        &["report", "--help"],
+        &["--version"],
+    ];
+    let mut failures = Vec::new();
+    for args in cases {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let o = floorcast()
+            .args(*args)
+            .current_dir(tmp)
+            .stdout(full)
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        if o.status.code() != Some(2)
+            || err.trim().lines().count() != 1
+            || !err.starts_with("error: cannot write to stdout")
+            || !err.contains("No space left on device")
+        {
+            failures.push(format!(
+                "{args:?} to /dev/full: {:?} {err}",
+                o.status.code()
+            ));
+        }
+        let mut child = floorcast()
+            .args(*args)
+            .current_dir(tmp)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        if o.status.code() != Some(0) || !err.is_empty() {
+            failures.push(format!(
+                "{args:?} to a closed pipe: {:?} {err}",
+                o.status.code()
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
