@@ -160,6 +160,10 @@ pub fn run(a: RunArgs) -> Result<()> {
             floorcast_worker::settings::fmt_num(a.lease_s)
         );
     }
+    // One run per results directory (`--summary` only reads).
+    let _lock = (!a.summary)
+        .then(|| floorcast_coordinator::store::lock_results(&plan.results_dir))
+        .transpose()?;
     let store = Store::open(&plan.results_dir)?;
     // A sequential grid's jobs so far: those of every batch whose predecessors are all stored.
     let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);

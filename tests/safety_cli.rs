@@ -386,3 +386,51 @@ fn failed_writes_to_stdout_are_errors() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// One `run` per results directory: while another process holds the lock, `run` is refused at
+/// once, naming the holder, and runs no job; `report` needs no lock.
+#[test]
+fn a_second_run_is_refused() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let res = results(tmp);
+    let before = rows_csv(tmp, &res);
+    let grid = tmp.join("grid.toml");
+    let two_seeds = std::fs::read_to_string(&grid)
+        .unwrap()
+        .replace("seeds = [1]", "seeds = [1, 2]");
+    std::fs::write(&grid, two_seeds).unwrap();
+    let mut lock = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .open(res.join("floorcast.lock"))
+        .unwrap();
+    lock.try_lock().unwrap();
+    writeln!(lock, "pid 4242 on host elsewhere\x1b[31m").unwrap();
+    let t0 = std::time::Instant::now();
+    let o = run_grid(&grid, &res);
+    assert_clean_failure(
+        &o,
+        &[
+            res.to_str().unwrap(),
+            "in use by another floorcast run (pid 4242 on host elsewhere",
+            "wait for it to end or stop it",
+        ],
+    );
+    assert!(!stderr(&o).contains('\x1b'), "{}", stderr(&o));
+    assert!(t0.elapsed() < std::time::Duration::from_secs(10));
+    // No job ran; report reads the store while the lock is held.
+    assert_eq!(rows_csv(tmp, &res), before);
+    drop(lock);
+    let o = run_grid(&grid, &res);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(rows_csv(tmp, &res).lines().count(), 5);
+    // The lock says who held it last.
+    let text = std::fs::read_to_string(res.join("floorcast.lock")).unwrap();
+    assert!(
+        text.starts_with("pid ") && text.contains(" on host "),
+        "{text}"
+    );
+}

@@ -40,6 +40,13 @@ pub enum StoreError {
     Missing(PathBuf),
     #[error("{path} is not a floorcast results store ({why}); floorcast leaves it untouched: give another --results directory")]
     Foreign { path: PathBuf, why: String },
+    #[error("results directory {dir} is in use by another floorcast run ({holder}); wait for it to end or stop it, then run again (report needs no lock)")]
+    Locked { dir: PathBuf, holder: String },
+    #[error("cannot lock {path} ({source}); give a --results directory you can write")]
+    Lock {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{flag}: {path} is {owned}, a file floorcast owns; writing there would destroy the results: give another path")]
     Owned {
         flag: String,
@@ -121,6 +128,63 @@ impl Store {
     pub fn path(&self) -> &Path {
         &self.path
     }
+}
+
+/// A results directory's lock ([`LOCK_FILE`]), held by one `floorcast run` for as long as it
+/// runs: the system releases it when the process ends, however it ends. The file says who holds
+/// it (process id and host).
+#[derive(Debug)]
+pub struct RunLock {
+    _file: std::fs::File,
+}
+
+/// Takes `dir`'s lock (creating the directory), or refuses at once if another process holds
+/// it, naming it. Reading a store (`report`) needs no lock.
+pub fn lock_results(dir: &Path) -> Result<RunLock, StoreError> {
+    use std::io::{Read, Seek, Write};
+    std::fs::create_dir_all(dir).map_err(|source| StoreError::Dir {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let path = dir.join(LOCK_FILE);
+    let failed = |source| StoreError::Lock {
+        path: path.clone(),
+        source,
+    };
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(failed)?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let mut text = String::new();
+            let _ = file.take(4096).read_to_string(&mut text);
+            let holder: String = text
+                .trim()
+                .chars()
+                .map(|c| if c.is_control() { ' ' } else { c })
+                .take(200)
+                .collect();
+            return Err(StoreError::Locked {
+                dir: dir.to_path_buf(),
+                holder: if holder.is_empty() {
+                    "its process id unknown".into()
+                } else {
+                    holder
+                },
+            });
+        }
+        Err(std::fs::TryLockError::Error(e)) => return Err(failed(e)),
+    }
+    file.set_len(0)
+        .and_then(|_| file.rewind())
+        .and_then(|_| writeln!(file, "pid {} on host {}", std::process::id(), host_name()))
+        .map_err(failed)?;
+    Ok(RunLock { _file: file })
 }
 
 /// Refuses an output path (`report --csv`, `--json`, `--html`) that is one of the files
