@@ -101,7 +101,11 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", one_line_error(&e));
+            // Errors quote outside text (a program's output): escaped, bounded.
+            eprintln!(
+                "error: {}",
+                floorcast_worker::text::shown(&one_line_error(&e), 4000)
+            );
             ExitCode::from(2)
         }
     }

@@ -434,3 +434,73 @@ fn a_second_run_is_refused() {
         "{text}"
     );
 }
+
+/// Whether `text` holds a control character other than the line feeds that end lines.
+fn has_controls(text: &str) -> bool {
+    text.chars().any(|c| c.is_control() && c != '\n')
+}
+
+/// A program's ESC, BEL and NUL bytes (and a 200 KB line) on its stderr or stdout, before it
+/// crashes, reach neither floorcast's stderr nor the store's `error` raw: escaped, and echoed
+/// only in part.
+#[test]
+fn a_programs_control_bytes_are_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let noise = r#""red \x1b[31m bell \x07 nul \x00 c1 \xc2\x9b " + "x" * 200000 + "\n""#;
+    // (name, what the program does, words of the error)
+    let cases = [
+        (
+            "stderr",
+            format!("sys.stderr.write({noise})\nsys.stderr.flush()\nsys.exit(3)\n"),
+            "its last stderr line: 'red \\x1b[31m bell \\x07 nul \\x00",
+        ),
+        (
+            "stdout",
+            format!("sys.stdout.write({noise})\nsys.stdout.flush()\nsys.exit(3)\n"),
+            "not a protocol message: 'red \\x1b[31m bell \\x07 nul \\x00",
+        ),
+    ];
+    for (name, body, words) in &cases {
+        std::fs::write(
+            tmp.join(format!("{name}.py")),
+            format!("import sys\n{body}"),
+        )
+        .unwrap();
+        let command = format!("python3 {name}.py");
+        let o = floorcast()
+            .args(["explore", "--building"])
+            .arg(repo().join("buildings/small.toml"))
+            .args(["--quiet", "--out", name, "--strategy-command", &command])
+            .current_dir(tmp)
+            .output()
+            .unwrap();
+        assert_clean_failure(&o, &[words]);
+        assert!(!has_controls(&stderr(&o)), "{name}: {:?}", stderr(&o));
+        assert!(o.stderr.len() < 1000, "{name}: {} bytes", o.stderr.len());
+        // The same program in a grid: the stored error, and what run prints.
+        std::fs::write(
+            tmp.join(format!("{name}.toml")),
+            format!(
+                "format = \"floorcast-grid\"\nversion = 1\nname = \"{name}\"\nbuildings = [\"{}\"]\nseeds = [1]\n[[strategies]]\nlabel = \"noisy\"\ncommand = [\"python3\", \"{name}.py\"]\n",
+                repo().join("buildings/small.toml").display()
+            ),
+        )
+        .unwrap();
+        let res = tmp.join(format!("res-{name}"));
+        let o = run_grid(&tmp.join(format!("{name}.toml")), &res);
+        assert_eq!(o.status.code(), Some(2), "{name}: {}", stderr(&o));
+        assert!(stderr(&o).contains(words), "{name}: {}", stderr(&o));
+        assert!(!has_controls(&stderr(&o)), "{name}: {:?}", stderr(&o));
+        let stored = std::process::Command::new("python3")
+            .arg("-c")
+            .arg("import sqlite3, sys; sys.stdout.write(sqlite3.connect(sys.argv[1]).execute('SELECT error FROM results').fetchone()[0])")
+            .arg(res.join("results.sqlite"))
+            .output()
+            .unwrap();
+        let error = String::from_utf8(stored.stdout).unwrap();
+        assert!(error.contains(words), "{name}: {error}");
+        assert!(!has_controls(&error), "{name}: {error:?}");
+        assert!(error.len() < 1000, "{name}: {} bytes", error.len());
+    }
+}

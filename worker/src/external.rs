@@ -717,7 +717,10 @@ impl ExternalStrategy {
         if last.is_empty() {
             format!("{how} {when}")
         } else {
-            format!("{how} {when}; its last stderr line: '{}'", clip(&last, 200))
+            format!(
+                "{how} {when}; its last stderr line: '{}'",
+                clip(&last, crate::text::MAX_ECHO_BYTES)
+            )
         }
     }
 
@@ -1280,13 +1283,10 @@ fn quote_json(v: &Value) -> String {
     clip(&v.to_string(), 80)
 }
 
-/// At most `n` characters of `s`, with "..." when cut.
+/// At most `n` bytes of `s` (a program's output, echoed in a message), its control characters
+/// escaped ([`crate::text::shown`]).
 fn clip(s: &str, n: usize) -> String {
-    if s.chars().count() <= n {
-        s.to_string()
-    } else {
-        format!("{}...", s.chars().take(n).collect::<String>())
-    }
+    crate::text::shown(s, n)
 }
 
 fn write_lines(mut pipe: ChildStdin, lines: mpsc::Receiver<String>) {
