@@ -1,7 +1,7 @@
 //! Small helpers for writing outputs and showing progress.
 
 use std::io::IsTerminal;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -108,4 +108,142 @@ macro_rules! say {
 /// `print!` that survives a closed pipe and fails on a full disk.
 macro_rules! say_raw {
     ($($t:tt)*) => { crate::output::say_fmt(format_args!($($t)*), false) };
+}
+
+/// Whether `name` is a file `explore` writes in its `--out` directory.
+fn is_explore_output(name: &str) -> bool {
+    const FILES: [&str; 9] = [
+        "summary.json",
+        "progress.csv",
+        "decisions.csv",
+        "trajectory.csv",
+        "strategy-stderr.txt",
+        "map.yaml",
+        "map.pgm",
+        "final.png",
+        "final.svg",
+    ];
+    FILES.contains(&name)
+        || (name.starts_with("layout-") && (name.ends_with(".png") || name.ends_with(".svg")))
+}
+
+/// `explore`'s output directory, written whole or not at all: the files go into a new hidden
+/// folder beside it (`.<name>.partial-XXXXXX`) and move into place only at the end
+/// ([`StagedOut::commit`]), so that a failed or killed `explore` leaves no half-written output.
+/// A new (or empty) directory is replaced by the folder in one rename; into one that holds files
+/// already, the new files move one by one, after `explore`'s files of an earlier run that this
+/// run did not make (a layout snapshot) are removed; other files are left alone. The directory
+/// is locked while `explore` runs: a second `explore` into it is refused.
+#[derive(Debug)]
+pub struct StagedOut {
+    out: PathBuf,
+    staging: Option<tempfile::TempDir>,
+    /// Created here (removed again if nothing is committed).
+    created: bool,
+    _lock: std::fs::File,
+}
+
+impl StagedOut {
+    /// Creates `out` if need be, locks it and makes the folder the files are written into.
+    pub fn begin(out: &Path) -> Result<StagedOut> {
+        use std::os::unix::fs::PermissionsExt;
+        let created = !out.exists();
+        create_dir(out)?;
+        let undo = |created: bool| {
+            if created {
+                let _ = std::fs::remove_dir(out);
+            }
+        };
+        let lock = std::fs::File::open(out)
+            .with_context(|| format!("cannot open directory {}", out.display()))?;
+        match lock.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => anyhow::bail!(
+                "--out: {} is being written by another floorcast explore; wait for it to end, or give another --out",
+                out.display()
+            ),
+            Err(std::fs::TryLockError::Error(e)) => {
+                undo(created);
+                return Err(e).with_context(|| format!("cannot lock {}", out.display()));
+            }
+        }
+        let parent = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let name = out
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "explore".into());
+        let staging = tempfile::Builder::new()
+            .prefix(&format!(".{name}.partial-"))
+            .permissions(std::fs::Permissions::from_mode(0o755))
+            .tempdir_in(parent)
+            .with_context(|| {
+                undo(created);
+                format!("cannot create a folder in {}", parent.display())
+            })?;
+        Ok(StagedOut {
+            out: out.to_path_buf(),
+            staging: Some(staging),
+            created,
+            _lock: lock,
+        })
+    }
+
+    /// Where the files are written until [`StagedOut::commit`].
+    pub fn dir(&self) -> &Path {
+        self.staging
+            .as_ref()
+            .map_or(self.out.as_path(), |s| s.path())
+    }
+
+    /// Moves the files written into place.
+    pub fn commit(mut self) -> Result<()> {
+        let Some(staging) = self.staging.take() else {
+            return Ok(());
+        };
+        let failed = |e: std::io::Error| {
+            anyhow::Error::new(e).context(format!(
+                "cannot move the outputs into {}",
+                self.out.display()
+            ))
+        };
+        let empty = std::fs::read_dir(&self.out)
+            .map_err(failed)?
+            .next()
+            .is_none();
+        if empty {
+            // An empty directory is replaced in one step.
+            let path = staging.keep();
+            return std::fs::rename(&path, &self.out).map_err(|e| {
+                let _ = std::fs::remove_dir_all(&path);
+                failed(e)
+            });
+        }
+        let new: std::collections::BTreeSet<std::ffi::OsString> = std::fs::read_dir(staging.path())
+            .map_err(failed)?
+            .map(|e| e.map(|e| e.file_name()))
+            .collect::<std::io::Result<_>>()
+            .map_err(failed)?;
+        for e in std::fs::read_dir(&self.out).map_err(failed)? {
+            let name = e.map_err(failed)?.file_name();
+            if !new.contains(&name) && is_explore_output(&name.to_string_lossy()) {
+                std::fs::remove_file(self.out.join(&name)).map_err(failed)?;
+            }
+        }
+        for name in &new {
+            std::fs::rename(staging.path().join(name), self.out.join(name)).map_err(failed)?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for StagedOut {
+    fn drop(&mut self) {
+        // Not committed: the folder goes (TempDir), and the directory if it was made here.
+        if self.staging.take().is_some() && self.created {
+            let _ = std::fs::remove_dir(&self.out);
+        }
+    }
 }

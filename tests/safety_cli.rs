@@ -506,3 +506,112 @@ fn a_programs_control_bytes_are_escaped() {
         assert!(error.len() < 1000, "{name}: {} bytes", error.len());
     }
 }
+
+/// The names in `dir`, sorted.
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .map(|r| {
+            r.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// `explore` of small.toml into `out` (in `cwd`) with `extra` arguments.
+fn explore_into(cwd: &Path, out: &str, extra: &[&str]) -> std::process::Output {
+    floorcast()
+        .args(["explore", "--building"])
+        .arg(repo().join("buildings/small.toml"))
+        .args(["--quiet", "--out", out])
+        .args(extra)
+        .current_dir(cwd)
+        .output()
+        .unwrap()
+}
+
+/// A reused `--out` keeps no output of an earlier run that this one did not make (layout
+/// snapshots), keeps files that are not explore's, and no staging folder is left beside it.
+#[test]
+fn a_reused_out_holds_one_runs_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let o = explore_into(tmp, "out", &["--layout-snapshots"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(tmp.join("out/layout-90.png").is_file());
+    std::fs::write(tmp.join("out/notes.txt"), "mine").unwrap();
+    let o = explore_into(tmp, "out", &["--seed", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let names = names_in(&tmp.join("out"));
+    assert!(!names.iter().any(|n| n.starts_with("layout-")), "{names:?}");
+    assert!(names.contains(&"notes.txt".to_string()), "{names:?}");
+    let summary = std::fs::read_to_string(tmp.join("out/summary.json")).unwrap();
+    assert!(summary.contains("\"seed\": 2"), "{summary}");
+    assert_eq!(names_in(tmp), vec!["out".to_string()]);
+}
+
+/// A second `explore` into a `--out` another is writing is refused at once and writes nothing.
+#[test]
+fn a_second_explore_into_one_out_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    std::fs::create_dir(tmp.join("out")).unwrap();
+    let lock = std::fs::File::open(tmp.join("out")).unwrap();
+    lock.try_lock().unwrap();
+    let o = explore_into(tmp, "out", &[]);
+    assert_clean_failure(&o, &["--out", "out", "another floorcast explore"]);
+    assert!(names_in(&tmp.join("out")).is_empty());
+    assert_eq!(names_in(tmp), vec!["out".to_string()]);
+}
+
+/// An `explore` stopped mid-run (Ctrl-C) or failing leaves no output: no `--out` directory, or
+/// an empty one.
+#[test]
+fn a_stopped_or_failed_explore_leaves_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let hang = format!(
+        "python3 {}",
+        repo().join("tests/strategies/hang.py").display()
+    );
+    let mut child = floorcast()
+        .args(["explore", "--building"])
+        .arg(repo().join("buildings/small.toml"))
+        .args(["--quiet", "--out", "stopped", "--strategy-command", &hang])
+        .args(["--strategy-timeout-s", "60"])
+        .current_dir(tmp)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !names_in(tmp).iter().any(|n| n.contains(".partial-")) {
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(30),
+            "no staging folder"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    assert!(names_in(&tmp.join("stopped")).is_empty());
+    let o = explore_into(
+        tmp,
+        "failed",
+        &["--strategy-command", &hang, "--strategy-timeout-s", "1"],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(!tmp.join("failed").exists());
+    assert!(
+        !names_in(tmp).iter().any(|n| n.contains("failed")),
+        "{:?}",
+        names_in(tmp)
+    );
+}
