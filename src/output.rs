@@ -67,11 +67,28 @@ pub fn parse_pose(s: &str) -> Result<sim_core::Pose, String> {
 
 /// Ctrl-C ends floorcast at once (exit code 130) and every strategy program with everything it
 /// started: each runs in a process group of its own, which the terminal's signal does not reach.
+/// An `explore` stopped so leaves no output either: its staging folder and the `--out` it made
+/// go ([`StagedOut`]).
 pub fn stop_programs_on_ctrl_c() {
     let _ = ctrlc::set_handler(|| {
         floorcast_worker::external::kill_all_programs();
+        for (staging, made) in staged(std::mem::take) {
+            let _ = std::fs::remove_dir_all(staging);
+            if let Some(out) = made {
+                let _ = std::fs::remove_dir(out);
+            }
+        }
         std::process::exit(130);
     });
+}
+
+/// The staging folders of the [`StagedOut`]s not yet committed, each with its `--out` if it was
+/// made for it (what a stop removes).
+type Staged = Vec<(PathBuf, Option<PathBuf>)>;
+
+fn staged<T>(f: impl FnOnce(&mut Staged) -> T) -> T {
+    static STAGED: std::sync::Mutex<Staged> = std::sync::Mutex::new(Vec::new());
+    f(&mut STAGED.lock().unwrap_or_else(|e| e.into_inner()))
 }
 
 /// Writes one line to stdout. A closed pipe (`floorcast ... | head`) ends the program quietly
@@ -183,6 +200,8 @@ impl StagedOut {
                 undo(created);
                 format!("cannot create a folder in {}", parent.display())
             })?;
+        let made = created.then(|| out.to_path_buf());
+        staged(|s| s.push((staging.path().to_path_buf(), made)));
         Ok(StagedOut {
             out: out.to_path_buf(),
             staging: Some(staging),
@@ -203,6 +222,7 @@ impl StagedOut {
         let Some(staging) = self.staging.take() else {
             return Ok(());
         };
+        staged(|s| s.retain(|(p, _)| p != staging.path()));
         let failed = |e: std::io::Error| {
             anyhow::Error::new(e).context(format!(
                 "cannot move the outputs into {}",
@@ -242,8 +262,12 @@ impl StagedOut {
 impl Drop for StagedOut {
     fn drop(&mut self) {
         // Not committed: the folder goes (TempDir), and the directory if it was made here.
-        if self.staging.take().is_some() && self.created {
-            let _ = std::fs::remove_dir(&self.out);
+        if let Some(staging) = self.staging.take() {
+            staged(|s| s.retain(|(p, _)| p != staging.path()));
+            drop(staging);
+            if self.created {
+                let _ = std::fs::remove_dir(&self.out);
+            }
         }
     }
 }
