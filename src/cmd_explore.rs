@@ -12,7 +12,7 @@ use floorcast_worker::{
 };
 use sim_core::explore::RunResult;
 
-use crate::output::{create_dir, parse_pose, progress_bar, write_text, Picture};
+use crate::output::{parse_pose, progress_bar, write_text, Picture};
 
 #[derive(Debug, Args)]
 #[command(
@@ -100,6 +100,7 @@ pub struct ExploreArgs {
 }
 
 pub fn run(a: ExploreArgs) -> Result<()> {
+    crate::output::stop_programs_on_ctrl_c();
     let building = floorcast_formats::read_building(&a.building)?;
     let name = a
         .building
@@ -203,37 +204,31 @@ pub fn run(a: ExploreArgs) -> Result<()> {
             .collect();
         PathBuf::from(format!("results/explore/{name}-{label}-{}", a.seed))
     });
-    let existed = out.exists();
-    create_dir(&out)?;
+    // Written whole or not at all, one explore at a time (`StagedOut`).
+    let staged = crate::output::StagedOut::begin(&out)?;
+    let dir = staged.dir();
 
     let pb = progress_bar(1000, a.quiet, "{spinner} {msg} [{bar:40}] {pos}‰ explored");
     let output = run_job(&job, &mut |s| {
         pb.set_position((s.explored_fraction * 1000.0) as u64);
         pb.set_message(format!("t = {:.0} s", s.time_s));
     })
-    .inspect_err(|_| {
-        // A run that failed (an external strategy that broke the protocol) leaves no empty
-        // directory behind.
-        if !existed {
-            let _ = std::fs::remove_dir(&out);
-        }
-    })
     .with_context(|| format!("{}: cannot explore", a.building.display()))?;
     pb.finish_and_clear();
 
     let summary = &output.summary;
     write_text(
-        &out.join("summary.json"),
+        &dir.join("summary.json"),
         &(serde_json::to_string_pretty(summary)? + "\n"),
     )?;
-    write_text(&out.join("progress.csv"), &progress_csv(&output.result))?;
-    write_text(&out.join("decisions.csv"), &decisions_csv(&output.result))?;
-    write_text(&out.join("trajectory.csv"), &trajectory_csv(&output.result))?;
+    write_text(&dir.join("progress.csv"), &progress_csv(&output.result))?;
+    write_text(&dir.join("decisions.csv"), &decisions_csv(&output.result))?;
+    write_text(&dir.join("trajectory.csv"), &trajectory_csv(&output.result))?;
     if let Some(text) = output.strategy_stderr.as_ref().filter(|t| !t.is_empty()) {
-        write_text(&out.join("strategy-stderr.txt"), text)?;
+        write_text(&dir.join("strategy-stderr.txt"), text)?;
     }
-    floorcast_formats::map_server::write_map(&output.result.map, &out.join("map.yaml"))?;
-    let picture = out.join(format!("final.{}", a.picture.extension()));
+    floorcast_formats::map_server::write_map(&output.result.map, &dir.join("map.yaml"))?;
+    let picture = dir.join(format!("final.{}", a.picture.extension()));
     crate::cmd_building::exploration_figure(&output.result, job.settings.min_frontier_m)
         .save(&picture)
         .with_context(|| format!("cannot write {}", picture.display()))?;
@@ -243,7 +238,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
             &snap.map,
             &sim_core::layout::LayoutConfig::default(),
         );
-        let p = out.join(format!(
+        let p = dir.join(format!(
             "layout-{:.0}.{}",
             snap.fraction * 100.0,
             a.picture.extension()
@@ -252,6 +247,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
             .save(&p)
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
+    staged.commit()?;
     say!(
         "{name}: {} after {:.0} s simulated ({:.1} % of {:.0} m2 explored, {} decisions, {:.1} m driven) in {:.2} s wall ({:.0}x real time)",
         summary.end_reason,

@@ -181,6 +181,10 @@ pub fn run(a: RunArgs) -> Result<()> {
             floorcast_worker::settings::fmt_num(a.lease_s)
         );
     }
+    // One run per results directory (`--summary` only reads).
+    let _lock = (!a.summary)
+        .then(|| floorcast_coordinator::store::lock_results(&plan.results_dir))
+        .transpose()?;
     let store = Store::open(&plan.results_dir)?;
     // A sequential grid's jobs so far: those of every batch whose predecessors are all stored.
     let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
@@ -275,6 +279,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         // A second Ctrl-C kills at once.
         let _ = ctrlc::set_handler(move || {
             if flag.swap(true, Ordering::SeqCst) {
+                floorcast_worker::external::kill_all_programs();
                 std::process::exit(130);
             }
         });
@@ -444,6 +449,17 @@ pub fn report(a: ReportArgs) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("--coverage: {e}"))?;
     }
     let store = Store::open_existing(&a.results)?;
+    // No export may overwrite the store or a file of it (checked before anything is written).
+    use floorcast_coordinator::store::{refuse_owned, refuse_owned_in};
+    refuse_owned("--csv", a.csv.as_deref(), &a.results)?;
+    refuse_owned("--json", a.json.as_deref(), &a.results)?;
+    refuse_owned("--html", a.html.as_deref(), &a.results)?;
+    refuse_owned_in(
+        "--plots",
+        a.plots.as_deref(),
+        a.picture.extension(),
+        &a.results,
+    )?;
     let results = store.all()?;
     let grids = store.grids()?;
     // The other store and its label are checked before anything is printed.

@@ -39,6 +39,7 @@ pub fn run(c: StrategyCommand) -> Result<()> {
 }
 
 fn check(a: CheckArgs) -> Result<()> {
+    crate::output::stop_programs_on_ctrl_c();
     let program = StrategyProgram::from_command_line(
         &a.command,
         std::path::Path::new("."),

@@ -36,6 +36,7 @@ pub struct WorkerArgs {
 }
 
 pub fn run(a: WorkerArgs) -> Result<()> {
+    crate::output::stop_programs_on_ctrl_c();
     if a.connect.is_empty() && a.net.zenoh_config.is_none() {
         anyhow::bail!(
             "no coordinator to join: give --connect tcp/HOST:7447 (the endpoint of `floorcast run GRID --listen ...`) or a --zenoh-config that lists it"
@@ -59,6 +60,8 @@ pub fn run(a: WorkerArgs) -> Result<()> {
         campaign: a.net.campaign.clone(),
     };
     let quiet = a.quiet;
+    // A job's status and the coordinator's reply may quote a program's output.
+    use floorcast_worker::text::shown;
     let events = move |e: WorkerEvent| {
         if quiet {
             return;
@@ -73,8 +76,12 @@ pub fn run(a: WorkerArgs) -> Result<()> {
                 status,
                 wall_time_s,
                 reply,
-            } => eprintln!("job {job}: {status} in {wall_time_s:.1} s, {reply}"),
-            WorkerEvent::Note(n) => eprintln!("note: {n}"),
+            } => eprintln!(
+                "job {job}: {} in {wall_time_s:.1} s, {}",
+                shown(&status, 4000),
+                shown(&reply, 4000)
+            ),
+            WorkerEvent::Note(n) => eprintln!("note: {}", shown(&n, 4000)),
         }
     };
     let link = join(&net, a.name.as_deref())?;

@@ -101,7 +101,11 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", one_line_error(&e));
+            // Errors quote outside text (a program's output): escaped, bounded.
+            eprintln!(
+                "error: {}",
+                floorcast_worker::text::shown(&one_line_error(&e), 4000)
+            );
             ExitCode::from(2)
         }
     }
@@ -109,7 +113,8 @@ fn main() -> ExitCode {
 
 /// A command line clap refuses (an unknown flag or subcommand, a value out of its range, a
 /// missing argument): one `error: ...` line and exit code 2, as for any other bad input. Help and
-/// the version (and the help shown when no subcommand is given) print as clap prints them.
+/// the version (and the help shown when no subcommand is given) print as clap prints them, a
+/// failed write of them as any other ([`output::stdout_failed`]).
 fn usage_error(e: clap::Error) -> ExitCode {
     if matches!(
         e.kind(),
@@ -117,7 +122,11 @@ fn usage_error(e: clap::Error) -> ExitCode {
             | ErrorKind::DisplayVersion
             | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
     ) {
-        e.exit();
+        use std::io::Write;
+        if let Err(err) = e.print().and_then(|_| std::io::stdout().flush()) {
+            output::stdout_failed(&err);
+        }
+        return ExitCode::from(e.exit_code() as u8);
     }
     eprintln!("{}", usage_line(&e.render().to_string()));
     ExitCode::from(2)

@@ -1,7 +1,7 @@
 //! Small helpers for writing outputs and showing progress.
 
 use std::io::IsTerminal;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -65,8 +65,35 @@ pub fn parse_pose(s: &str) -> Result<sim_core::Pose, String> {
     Ok(sim_core::Pose::new(v[0], v[1], v[2].to_radians()))
 }
 
+/// Ctrl-C ends floorcast at once (exit code 130) and every strategy program with everything it
+/// started: each runs in a process group of its own, which the terminal's signal does not reach.
+/// An `explore` stopped so leaves no output either: its staging folder and the `--out` it made
+/// go ([`StagedOut`]).
+pub fn stop_programs_on_ctrl_c() {
+    let _ = ctrlc::set_handler(|| {
+        floorcast_worker::external::kill_all_programs();
+        for (staging, made) in staged(std::mem::take) {
+            let _ = std::fs::remove_dir_all(staging);
+            if let Some(out) = made {
+                let _ = std::fs::remove_dir(out);
+            }
+        }
+        std::process::exit(130);
+    });
+}
+
+/// The staging folders of the [`StagedOut`]s not yet committed, each with its `--out` if it was
+/// made for it (what a stop removes).
+type Staged = Vec<(PathBuf, Option<PathBuf>)>;
+
+fn staged<T>(f: impl FnOnce(&mut Staged) -> T) -> T {
+    static STAGED: std::sync::Mutex<Staged> = std::sync::Mutex::new(Vec::new());
+    f(&mut STAGED.lock().unwrap_or_else(|e| e.into_inner()))
+}
+
 /// Writes one line to stdout. A closed pipe (`floorcast ... | head`) ends the program quietly
-/// instead of panicking as `println!` does.
+/// with exit code 0, as `head`'s reader wanted no more; any other failed write (a full disk) is
+/// an error: one line on stderr and exit code 2, never a silently cut output.
 pub fn say_fmt(args: std::fmt::Arguments<'_>, newline: bool) {
     use std::io::Write;
     let mut out = std::io::stdout().lock();
@@ -76,18 +103,171 @@ pub fn say_fmt(args: std::fmt::Arguments<'_>, newline: bool) {
         write!(out, "{args}")
     };
     if let Err(e) = r.and_then(|_| out.flush()) {
-        if e.kind() == std::io::ErrorKind::BrokenPipe {
-            std::process::exit(0);
-        }
+        stdout_failed(&e);
     }
 }
 
-/// `println!` that survives a closed pipe.
+/// Ends the program after a failed write to stdout: quietly (exit code 0) on a closed pipe, else
+/// with one line naming the problem and exit code 2.
+pub fn stdout_failed(e: &std::io::Error) -> ! {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        std::process::exit(0);
+    }
+    eprintln!("error: cannot write to stdout ({e}); free space on its device or send the output elsewhere");
+    std::process::exit(2);
+}
+
+/// `println!` that survives a closed pipe and fails on a full disk.
 macro_rules! say {
     ($($t:tt)*) => { crate::output::say_fmt(format_args!($($t)*), true) };
 }
 
-/// `print!` that survives a closed pipe.
+/// `print!` that survives a closed pipe and fails on a full disk.
 macro_rules! say_raw {
     ($($t:tt)*) => { crate::output::say_fmt(format_args!($($t)*), false) };
+}
+
+/// Whether `name` is a file `explore` writes in its `--out` directory.
+fn is_explore_output(name: &str) -> bool {
+    const FILES: [&str; 9] = [
+        "summary.json",
+        "progress.csv",
+        "decisions.csv",
+        "trajectory.csv",
+        "strategy-stderr.txt",
+        "map.yaml",
+        "map.pgm",
+        "final.png",
+        "final.svg",
+    ];
+    FILES.contains(&name)
+        || (name.starts_with("layout-") && (name.ends_with(".png") || name.ends_with(".svg")))
+}
+
+/// `explore`'s output directory, written whole or not at all: the files go into a new hidden
+/// folder beside it (`.<name>.partial-XXXXXX`) and move into place only at the end
+/// ([`StagedOut::commit`]), so that a failed or killed `explore` leaves no half-written output.
+/// A new (or empty) directory is replaced by the folder in one rename; into one that holds files
+/// already, the new files move one by one, after `explore`'s files of an earlier run that this
+/// run did not make (a layout snapshot) are removed; other files are left alone. The directory
+/// is locked while `explore` runs: a second `explore` into it is refused.
+#[derive(Debug)]
+pub struct StagedOut {
+    out: PathBuf,
+    staging: Option<tempfile::TempDir>,
+    /// Created here (removed again if nothing is committed).
+    created: bool,
+    _lock: std::fs::File,
+}
+
+impl StagedOut {
+    /// Creates `out` if need be, locks it and makes the folder the files are written into.
+    pub fn begin(out: &Path) -> Result<StagedOut> {
+        use std::os::unix::fs::PermissionsExt;
+        let created = !out.exists();
+        create_dir(out)?;
+        let undo = |created: bool| {
+            if created {
+                let _ = std::fs::remove_dir(out);
+            }
+        };
+        let lock = std::fs::File::open(out)
+            .with_context(|| format!("cannot open directory {}", out.display()))?;
+        match lock.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => anyhow::bail!(
+                "--out: {} is being written by another floorcast explore; wait for it to end, or give another --out",
+                out.display()
+            ),
+            Err(std::fs::TryLockError::Error(e)) => {
+                undo(created);
+                return Err(e).with_context(|| format!("cannot lock {}", out.display()));
+            }
+        }
+        let parent = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let name = out
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "explore".into());
+        let staging = tempfile::Builder::new()
+            .prefix(&format!(".{name}.partial-"))
+            .permissions(std::fs::Permissions::from_mode(0o755))
+            .tempdir_in(parent)
+            .with_context(|| {
+                undo(created);
+                format!("cannot create a folder in {}", parent.display())
+            })?;
+        let made = created.then(|| out.to_path_buf());
+        staged(|s| s.push((staging.path().to_path_buf(), made)));
+        Ok(StagedOut {
+            out: out.to_path_buf(),
+            staging: Some(staging),
+            created,
+            _lock: lock,
+        })
+    }
+
+    /// Where the files are written until [`StagedOut::commit`].
+    pub fn dir(&self) -> &Path {
+        self.staging
+            .as_ref()
+            .map_or(self.out.as_path(), |s| s.path())
+    }
+
+    /// Moves the files written into place.
+    pub fn commit(mut self) -> Result<()> {
+        let Some(staging) = self.staging.take() else {
+            return Ok(());
+        };
+        staged(|s| s.retain(|(p, _)| p != staging.path()));
+        let failed = |e: std::io::Error| {
+            anyhow::Error::new(e).context(format!(
+                "cannot move the outputs into {}",
+                self.out.display()
+            ))
+        };
+        let empty = std::fs::read_dir(&self.out)
+            .map_err(failed)?
+            .next()
+            .is_none();
+        if empty {
+            // An empty directory is replaced in one step.
+            let path = staging.keep();
+            return std::fs::rename(&path, &self.out).map_err(|e| {
+                let _ = std::fs::remove_dir_all(&path);
+                failed(e)
+            });
+        }
+        let new: std::collections::BTreeSet<std::ffi::OsString> = std::fs::read_dir(staging.path())
+            .map_err(failed)?
+            .map(|e| e.map(|e| e.file_name()))
+            .collect::<std::io::Result<_>>()
+            .map_err(failed)?;
+        for e in std::fs::read_dir(&self.out).map_err(failed)? {
+            let name = e.map_err(failed)?.file_name();
+            if !new.contains(&name) && is_explore_output(&name.to_string_lossy()) {
+                std::fs::remove_file(self.out.join(&name)).map_err(failed)?;
+            }
+        }
+        for name in &new {
+            std::fs::rename(staging.path().join(name), self.out.join(name)).map_err(failed)?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for StagedOut {
+    fn drop(&mut self) {
+        // Not committed: the folder goes (TempDir), and the directory if it was made here.
+        if let Some(staging) = self.staging.take() {
+            staged(|s| s.retain(|(p, _)| p != staging.path()));
+            drop(staging);
+            if self.created {
+                let _ = std::fs::remove_dir(&self.out);
+            }
+        }
+    }
 }

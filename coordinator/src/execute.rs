@@ -85,12 +85,15 @@ pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> S
         }
         JobOutcome::Failed { error } => {
             row.status = "failed".into();
-            row.error = Some(error.clone());
+            // A remote worker's or a program's text: no control characters, bounded.
+            row.error = Some(floorcast_worker::text::shown(error, MAX_ERROR_BYTES));
         }
     }
     row
 }
 
+/// The longest error stored in a row (bytes).
+pub const MAX_ERROR_BYTES: usize = 2000;
 /// Runs one planned job here and reports its outcome (success or a job error).
 pub fn execute(plan: &Plan, job: &PlannedJob) -> JobReport {
     floorcast_worker::execute::report(&spec(plan, job))

@@ -169,6 +169,8 @@ pub fn run_plan(
     if opts.workers == 0 && opts.remote.is_none() {
         return Err(RunError::NoWorkers);
     }
+    // Lines holding remote workers' and programs' text reach a terminal: escaped, bounded.
+    let on_log = &mut |line: &str| on_log(&floorcast_worker::text::shown(line, 4000));
     let stored = store.stored_ids()?;
     let ids: Vec<String> = plan.jobs.iter().map(|j| j.id.clone()).collect();
     let mut sched = Scheduler::new(ids, &stored, opts.lease_s);

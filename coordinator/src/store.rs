@@ -10,6 +10,17 @@ use rusqlite::{params, Connection, OptionalExtension};
 /// Version of the database layout.
 pub const STORE_VERSION: u32 = 1;
 pub const DB_FILE: &str = "results.sqlite";
+/// The lock a `floorcast run` holds on its results directory while it runs.
+pub const LOCK_FILE: &str = "floorcast.lock";
+/// Every file floorcast owns in a results directory: the store, SQLite's files beside it and the
+/// run's lock. No export may write to one of them.
+pub const OWNED_FILES: [&str; 5] = [
+    DB_FILE,
+    "results.sqlite-wal",
+    "results.sqlite-shm",
+    "results.sqlite-journal",
+    LOCK_FILE,
+];
 
 #[derive(Debug, thiserror::Error)]
 pub enum StoreError {
@@ -31,6 +42,19 @@ pub enum StoreError {
     Foreign { path: PathBuf, why: String },
     #[error("results store {path}: {problem}")]
     Row { path: PathBuf, problem: String },
+    #[error("results directory {dir} is in use by another floorcast run ({holder}); wait for it to end or stop it, then run again (report needs no lock)")]
+    Locked { dir: PathBuf, holder: String },
+    #[error("cannot lock {path} ({source}); give a --results directory you can write")]
+    Lock {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{flag}: {path} is {owned}, a file floorcast owns; writing there would destroy the results: give another path")]
+    Owned {
+        flag: String,
+        path: PathBuf,
+        owned: PathBuf,
+    },
 }
 
 /// One stored job: its identity (from the grid's plan), outcome and provenance.
@@ -106,6 +130,135 @@ impl Store {
     pub fn path(&self) -> &Path {
         &self.path
     }
+}
+
+/// A results directory's lock ([`LOCK_FILE`]), held by one `floorcast run` for as long as it
+/// runs: the system releases it when the process ends, however it ends. The file says who holds
+/// it (process id and host).
+#[derive(Debug)]
+pub struct RunLock {
+    _file: std::fs::File,
+}
+
+/// Takes `dir`'s lock (creating the directory), or refuses at once if another process holds
+/// it, naming it. Reading a store (`report`) needs no lock.
+pub fn lock_results(dir: &Path) -> Result<RunLock, StoreError> {
+    use std::io::{Read, Seek, Write};
+    std::fs::create_dir_all(dir).map_err(|source| StoreError::Dir {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let path = dir.join(LOCK_FILE);
+    let failed = |source| StoreError::Lock {
+        path: path.clone(),
+        source,
+    };
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(failed)?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let mut text = String::new();
+            let _ = file.take(4096).read_to_string(&mut text);
+            let holder: String = text
+                .trim()
+                .chars()
+                .map(|c| if c.is_control() { ' ' } else { c })
+                .take(200)
+                .collect();
+            return Err(StoreError::Locked {
+                dir: dir.to_path_buf(),
+                holder: if holder.is_empty() {
+                    "its process id unknown".into()
+                } else {
+                    holder
+                },
+            });
+        }
+        Err(std::fs::TryLockError::Error(e)) => return Err(failed(e)),
+    }
+    file.set_len(0)
+        .and_then(|_| file.rewind())
+        .and_then(|_| writeln!(file, "pid {} on host {}", std::process::id(), host_name()))
+        .map_err(failed)?;
+    Ok(RunLock { _file: file })
+}
+
+/// Refuses an output path (`report --csv`, `--json`, `--html`) that is one of the files
+/// floorcast owns in `results_dir` ([`OWNED_FILES`]), whatever its spelling: relative, with
+/// `.` or `..`, through symbolic links, or a hard link (the same device and inode). `None` (the
+/// flag not given) passes. Nothing is written.
+pub fn refuse_owned(flag: &str, out: Option<&Path>, results_dir: &Path) -> Result<(), StoreError> {
+    let Some(out) = out else { return Ok(()) };
+    match owned_file_at(out, results_dir) {
+        Some(owned) => Err(StoreError::Owned {
+            flag: flag.to_string(),
+            path: out.to_path_buf(),
+            owned,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// [`refuse_owned`] for a directory of charts (`report --plots`): every file there with the
+/// charts' extension `ext` (one a chart may overwrite), a symbolic link included, is checked.
+pub fn refuse_owned_in(
+    flag: &str,
+    dir: Option<&Path>,
+    ext: &str,
+    results_dir: &Path,
+) -> Result<(), StoreError> {
+    let Some(dir) = dir else { return Ok(()) };
+    refuse_owned(flag, Some(dir), results_dir)?;
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    for e in entries.flatten() {
+        let path = e.path();
+        if path.extension().and_then(|x| x.to_str()) == Some(ext) {
+            refuse_owned(flag, Some(&path), results_dir)?;
+        }
+    }
+    Ok(())
+}
+
+/// The file of [`OWNED_FILES`] in `results_dir` that writing `out` would write, if any.
+fn owned_file_at(out: &Path, results_dir: &Path) -> Option<PathBuf> {
+    use std::os::unix::fs::MetadataExt;
+    let out_meta = std::fs::metadata(out).ok();
+    let out_resolved = resolved(out);
+    OWNED_FILES
+        .iter()
+        .map(|f| results_dir.join(f))
+        .find(|owned| match (&out_meta, std::fs::metadata(owned).ok()) {
+            (Some(a), Some(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => out_resolved.is_some() && out_resolved == resolved(owned),
+        })
+}
+
+/// Where writing `path` would write: its absolute path with every symbolic link followed, a
+/// link to a file not yet there included (`None` when its directory does not exist, or it has
+/// no file name).
+fn resolved(path: &Path) -> Option<PathBuf> {
+    let mut p = std::path::absolute(path).ok()?;
+    // As many links as the kernel follows.
+    for _ in 0..40 {
+        if let Ok(c) = p.canonicalize() {
+            return Some(c);
+        }
+        let name = p.file_name()?.to_owned();
+        let full = p.parent()?.canonicalize().ok()?.join(name);
+        match std::fs::read_link(&full) {
+            Ok(target) => p = full.parent()?.join(target),
+            Err(_) => return Some(full),
+        }
+    }
+    None
 }
 
 /// Refuses, without writing anything, a file that is not a floorcast results store: not a file,

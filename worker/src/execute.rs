@@ -12,19 +12,18 @@ use crate::{run_job, run_jobs_shared, GivenStart, Job, JobError, JobOutput};
 /// Runs a job received from the network (see [`crate::process`]) in its building (already
 /// checked against the job's building hash).
 pub fn execute_wire(job: &WireJob, building: &Building) -> JobReport {
-    // An external strategy's files go to a directory of this job's own, removed after it.
-    let dir = std::env::temp_dir().join(format!(
-        "floorcast-job-{}-{}",
-        std::process::id(),
-        job.job_id
-    ));
+    // An external strategy's files go to a new private directory of this job's own
+    // (`private_temp_dir`: no one else can have made it), removed after it.
+    let mut dir = None;
     let program = match &job.program {
-        Some(p) => match p.materialize(&dir) {
-            Ok(p) => Some(p),
-            Err(e) => {
-                let _ = std::fs::remove_dir_all(&dir);
-                return JobReport::failed(format!("cannot run its strategy: {e}"));
+        Some(p) => match crate::external::private_temp_dir("floorcast-job-")
+            .and_then(|d| p.materialize(d.path()).map(|p| (d, p)))
+        {
+            Ok((d, p)) => {
+                dir = Some(d);
+                Some(p)
             }
+            Err(e) => return JobReport::failed(format!("cannot run its strategy: {e}")),
         },
         None => None,
     };
@@ -41,9 +40,7 @@ pub fn execute_wire(job: &WireJob, building: &Building) -> JobReport {
         }),
         snapshot_fractions: Vec::new(),
     });
-    if job.program.is_some() {
-        let _ = std::fs::remove_dir_all(&dir);
-    }
+    drop(dir);
     out
 }
 

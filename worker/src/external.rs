@@ -13,7 +13,7 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
@@ -341,24 +341,35 @@ fn files_sha256(files: &[(String, Vec<u8>)]) -> String {
 /// speaks this floorcast's protocol.
 pub const PYTHON_MODULE: &str = include_str!("../../python/floorcast_strategy.py");
 
-/// The directory holding [`PYTHON_MODULE`] (written once per version into the temporary
-/// directory), or `None` if it cannot be written.
-fn python_dir() -> Option<PathBuf> {
-    static DIR: OnceLock<Option<PathBuf>> = OnceLock::new();
-    DIR.get_or_init(|| {
-        use sha2::{Digest, Sha256};
-        let hash = format!("{:x}", Sha256::digest(PYTHON_MODULE.as_bytes()));
-        let dir = std::env::temp_dir().join(format!("floorcast-python-{}", &hash[..12]));
-        let file = dir.join("floorcast_strategy.py");
-        if std::fs::read_to_string(&file).ok().as_deref() != Some(PYTHON_MODULE) {
-            std::fs::create_dir_all(&dir).ok()?;
-            let tmp = dir.join(format!(".tmp-{}", std::process::id()));
-            std::fs::write(&tmp, PYTHON_MODULE).ok()?;
-            std::fs::rename(&tmp, &file).ok()?;
-        }
-        Some(dir)
-    })
-    .clone()
+/// A new folder of this process's own in the temporary directory (`TMPDIR`): a name no one
+/// else chose, mode 0700, removed when dropped. A folder with a name known in advance could be
+/// made first by another user, with modules of theirs that our programs would import.
+pub fn private_temp_dir(prefix: &str) -> Result<tempfile::TempDir, String> {
+    use std::os::unix::fs::PermissionsExt;
+    let tmp = std::env::temp_dir();
+    tempfile::Builder::new()
+        .prefix(prefix)
+        .permissions(std::fs::Permissions::from_mode(0o700))
+        .tempdir_in(&tmp)
+        .map_err(|e| {
+            format!(
+                "cannot create a folder in the temporary directory {} ({e}); set TMPDIR to a directory you can write",
+                tmp.display()
+            )
+        })
+}
+
+/// A private folder ([`private_temp_dir`]) holding [`PYTHON_MODULE`], for one program.
+fn python_dir() -> Result<tempfile::TempDir, String> {
+    let dir = private_temp_dir("floorcast-python-")?;
+    let file = dir.path().join("floorcast_strategy.py");
+    std::fs::write(&file, PYTHON_MODULE).map_err(|e| {
+        format!(
+            "cannot write {} ({e}); set TMPDIR to a directory you can write",
+            file.display()
+        )
+    })?;
+    Ok(dir)
 }
 
 /// What the program said of itself.
@@ -389,6 +400,9 @@ pub struct StrategyStats {
     pub stderr: String,
     /// Whether it exited by itself within a second of its stdin closing (else it was killed).
     pub exited: bool,
+    /// Whether processes it started were still running in its process group after it ended
+    /// (they were killed).
+    pub left_behind: bool,
 }
 
 enum Line {
@@ -403,6 +417,8 @@ pub struct ExternalStrategy {
     program: StrategyProgram,
     command: String,
     child: Child,
+    /// The folder of floorcast's Python module, removed with the program.
+    _python: tempfile::TempDir,
     /// Lines to write to the program's stdin, written by a thread of their own: a program that
     /// stops reading blocks that thread, never the run (its reply then times out).
     stdin: Option<mpsc::Sender<String>>,
@@ -449,17 +465,20 @@ impl ExternalStrategy {
         let command_words = program.resolved_command();
         let mut cmd = Command::new(&command_words[0]);
         cmd.args(&command_words[1..]);
+        // A process group of its own, so that everything it starts (a wrapper script's
+        // children, a daemon it forks) is ended with it: `kill_group`.
+        std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
         // No __pycache__ beside the programs (or in a repository's python/).
         cmd.env("PYTHONDONTWRITEBYTECODE", "1");
-        // floorcast's Python module, importable by every strategy program.
-        if let Some(dir) = python_dir() {
-            let mut paths = vec![dir];
-            if let Some(old) = std::env::var_os("PYTHONPATH") {
-                paths.extend(std::env::split_paths(&old));
-            }
-            if let Ok(joined) = std::env::join_paths(paths) {
-                cmd.env("PYTHONPATH", joined);
-            }
+        // floorcast's Python module, importable by every strategy program, in a folder of
+        // this program's own.
+        let python = python_dir().map_err(&fail)?;
+        let mut paths = vec![python.path().to_path_buf()];
+        if let Some(old) = std::env::var_os("PYTHONPATH") {
+            paths.extend(std::env::split_paths(&old));
+        }
+        if let Ok(joined) = std::env::join_paths(paths) {
+            cmd.env("PYTHONPATH", joined);
         }
         let mut child = cmd
             .stdin(Stdio::piped())
@@ -477,7 +496,10 @@ impl ExternalStrategy {
             })?;
         // The pipes' threads. One the system refuses is an error, not a panic: the program is
         // stopped (the threads already started end with its pipes).
+        live_groups(|g| g.insert(child.id()));
         let refused = |child: &mut std::process::Child, e: std::io::Error| {
+            kill_group(child.id());
+            live_groups(|g| g.remove(&child.id()));
             let _ = child.kill();
             let _ = child.wait();
             fail(format!(
@@ -507,6 +529,7 @@ impl ExternalStrategy {
             program: program.clone(),
             command: command.clone(),
             child,
+            _python: python,
             stdin,
             stderr_reader,
             lines,
@@ -575,6 +598,9 @@ impl ExternalStrategy {
             }
             std::thread::sleep(Duration::from_millis(5));
         }
+        // What it started and left running is ended with it (and said: `check_program`).
+        let left_behind = exited && group_alive(self.child.id());
+        kill_group(self.child.id());
         let _ = self.child.kill();
         let _ = self.child.wait();
         self.join_stderr();
@@ -586,6 +612,7 @@ impl ExternalStrategy {
             replies: self.replies,
             stderr: self.stderr_text(),
             exited,
+            left_behind,
         })
     }
 
@@ -690,7 +717,10 @@ impl ExternalStrategy {
         if last.is_empty() {
             format!("{how} {when}")
         } else {
-            format!("{how} {when}; its last stderr line: '{}'", clip(&last, 200))
+            format!(
+                "{how} {when}; its last stderr line: '{}'",
+                clip(&last, crate::text::MAX_ECHO_BYTES)
+            )
         }
     }
 
@@ -772,9 +802,82 @@ impl ExternalStrategy {
 
 impl Drop for ExternalStrategy {
     fn drop(&mut self) {
+        kill_group(self.child.id());
         let _ = self.child.kill();
         let _ = self.child.wait();
+        live_groups(|g| g.remove(&self.child.id()));
     }
+}
+
+/// The process groups of the programs running now (each program's group is its process id).
+fn live_groups<T>(f: impl FnOnce(&mut std::collections::BTreeSet<u32>) -> T) -> T {
+    static GROUPS: Mutex<std::collections::BTreeSet<u32>> =
+        Mutex::new(std::collections::BTreeSet::new());
+    f(&mut GROUPS.lock().unwrap_or_else(|e| e.into_inner()))
+}
+
+/// Kills every process of every program running now, for a floorcast that must stop at once
+/// (a second Ctrl-C): the programs' process groups do not get the terminal's signals.
+pub fn kill_all_programs() {
+    for g in live_groups(std::mem::take) {
+        kill_group(g);
+    }
+}
+
+/// Kills (SIGKILL) every process of the process group `pgid`, a program's.
+fn kill_group(pgid: u32) {
+    if let Ok(pgid) = i32::try_from(pgid) {
+        let _ = nix::sys::signal::killpg(
+            nix::unistd::Pid::from_raw(pgid),
+            nix::sys::signal::Signal::SIGKILL,
+        );
+    }
+}
+
+/// Whether a process of the group `pgid` is still running after its leader (the program)
+/// ended, waiting up to 200 ms for processes on their way out. Ended processes not yet reaped
+/// (zombies) do not count; without `/proc`, whether the group has any process.
+fn group_alive(pgid: u32) -> bool {
+    let deadline = Instant::now() + Duration::from_millis(200);
+    loop {
+        let alive = match running_in_group(pgid) {
+            Some(n) => n > 0,
+            None => i32::try_from(pgid).is_ok_and(|p| {
+                nix::sys::signal::killpg(nix::unistd::Pid::from_raw(p), None).is_ok()
+            }),
+        };
+        if !alive || Instant::now() >= deadline {
+            return alive;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// How many processes of the group `pgid` run (zombies aside), from `/proc` (`None` without it).
+fn running_in_group(pgid: u32) -> Option<usize> {
+    let mut n = 0;
+    for e in std::fs::read_dir("/proc").ok()?.flatten() {
+        if !e
+            .file_name()
+            .to_string_lossy()
+            .bytes()
+            .all(|b| b.is_ascii_digit())
+        {
+            continue;
+        }
+        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
+            continue;
+        };
+        // "pid (comm) state ppid pgrp ...": the name may hold spaces and parentheses.
+        let Some((_, rest)) = stat.rsplit_once(')') else {
+            continue;
+        };
+        let fields: Vec<&str> = rest.split_whitespace().take(3).collect();
+        if fields.len() == 3 && fields[0] != "Z" && fields[2].parse::<u32>() == Ok(pgid) {
+            n += 1;
+        }
+    }
+    Some(n)
 }
 
 impl Policy for ExternalStrategy {
@@ -990,6 +1093,10 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
     });
     let finished = s.finish();
     let _ = match finished {
+        Ok(stats) if stats.exited && stats.left_behind => push(
+            "end, then exit when stdin closes",
+            Err("exited, but left processes it started running (floorcast killed them): a strategy ends every process it starts before it exits".into()),
+        ),
         Ok(stats) if stats.exited => push("end, then exit when stdin closes", Ok("exited".into())),
         Ok(_) => push(
             "end, then exit when stdin closes",
@@ -1176,13 +1283,10 @@ fn quote_json(v: &Value) -> String {
     clip(&v.to_string(), 80)
 }
 
-/// At most `n` characters of `s`, with "..." when cut.
+/// At most `n` bytes of `s` (a program's output, echoed in a message), its control characters
+/// escaped ([`crate::text::shown`]).
 fn clip(s: &str, n: usize) -> String {
-    if s.chars().count() <= n {
-        s.to_string()
-    } else {
-        format!("{}...", s.chars().take(n).collect::<String>())
-    }
+    crate::text::shown(s, n)
 }
 
 fn write_lines(mut pipe: ChildStdin, lines: mpsc::Receiver<String>) {

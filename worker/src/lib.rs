@@ -9,6 +9,8 @@
 //!   coordinator that the caller supplies (it knows no transport).
 //! - [`wire`]: the versioned messages between coordinator and workers.
 //! - [`settings`], [`record`], [`external`]: the settings, the run record, external strategies.
+//! - [`text`]: outside text (a program's output, a remote worker's error) made safe to print
+//!   and store.
 //!
 //! This crate measures wall time and knows the floorcast version; the simulation itself is
 //! `sim-core`'s and stays pure. It stores nothing (the binary and the coordinator store what it
@@ -20,6 +22,7 @@ pub mod external;
 pub mod process;
 pub mod record;
 pub mod settings;
+pub mod text;
 pub mod wire;
 
 use std::time::Instant;
