@@ -454,12 +454,14 @@ pub fn report(a: ReportArgs) -> Result<()> {
     refuse_owned("--csv", a.csv.as_deref(), &a.results)?;
     refuse_owned("--json", a.json.as_deref(), &a.results)?;
     refuse_owned("--html", a.html.as_deref(), &a.results)?;
-    refuse_owned_in(
-        "--plots",
-        a.plots.as_deref(),
-        a.picture.extension(),
-        &a.results,
-    )?;
+    for picture in &a.picture {
+        refuse_owned_in(
+            "--plots",
+            a.plots.as_deref(),
+            picture.extension(),
+            &a.results,
+        )?;
+    }
     let results = store.all()?;
     let grids = store.grids()?;
     // The other store and its label are checked before anything is printed.

@@ -275,7 +275,11 @@ fn sequential_grid_errors_name_the_field() {
             "",
             "sequential.multiplicity: 'holm' is not a multiplicity rule",
         ),
-        (SEQUENTIAL, "coverage = 1.5", "coverage: 1.5 is not a coverage level"),
+        (
+            SEQUENTIAL,
+            "coverage = 1.5",
+            "coverage: 1.5 is not a coverage level",
+        ),
     ];
     for (sequential, seeds, needle) in cases {
         let g = grid(dir.path(), sequential, seeds);

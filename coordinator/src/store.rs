@@ -360,11 +360,6 @@ impl Store {
                 upper REAL NOT NULL,
                 decision TEXT NOT NULL,
                 PRIMARY KEY (grid, label, reference, through_seed)
-             );
-             CREATE TABLE IF NOT EXISTS grids (
-                grid TEXT PRIMARY KEY,
-                labels_json TEXT NOT NULL,
-                coverage REAL NOT NULL
              );",
         ))?;
         let found: Option<String> = self.sql(
@@ -586,6 +581,15 @@ impl Store {
         coverage: f64,
     ) -> Result<(), StoreError> {
         let labels_json = serde_json::to_string(labels).unwrap_or_default();
+        // Made here, by the run that writes it, not when a store is opened: opening one to
+        // read it changes nothing in it (stores of earlier builds have no such table).
+        self.sql(self.conn.execute_batch(
+            "CREATE TABLE IF NOT EXISTS grids (
+                grid TEXT PRIMARY KEY,
+                labels_json TEXT NOT NULL,
+                coverage REAL NOT NULL
+             );",
+        ))?;
         self.sql(self.conn.execute(
             "INSERT INTO grids (grid, labels_json, coverage) VALUES (?1, ?2, ?3)
              ON CONFLICT(grid) DO UPDATE SET labels_json = ?2, coverage = ?3",
@@ -597,6 +601,14 @@ impl Store {
     /// The grids recorded, in the order first recorded: name, labels in the grid's order,
     /// coverage level. Stores written before grids were recorded have none.
     pub fn grids(&self) -> Result<Vec<(String, Vec<String>, f64)>, StoreError> {
+        let exists: i64 = self.sql(self.conn.query_row(
+            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'grids'",
+            [],
+            |r| r.get(0),
+        ))?;
+        if exists == 0 {
+            return Ok(Vec::new());
+        }
         let mut st = self.sql(
             self.conn
                 .prepare("SELECT grid, labels_json, coverage FROM grids ORDER BY rowid"),
