@@ -83,7 +83,8 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 1 + 6);
     assert!(text.starts_with("job_id,building,"));
-    // Charts: the times (Fig. 2), the gains and one progress chart per building (Fig. 4), as
+    // Charts: the times (Fig. 2), the gains, the performance profile and one progress chart per
+    // building (Fig. 4), as
     // SVG text naming the strategies; the HTML page holds the printed tables and every chart.
     let plots = dir.path().join("plots");
     let html = dir.path().join("report.html");
@@ -105,7 +106,12 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
     names.sort();
     assert_eq!(
         names,
-        ["gains.svg", "progress-small.svg", "times.svg"],
+        [
+            "gains.svg",
+            "profile.svg",
+            "progress-small.svg",
+            "times.svg"
+        ],
         "{names:?}"
     );
     let progress = std::fs::read_to_string(plots.join("progress-small.svg")).unwrap();
@@ -121,7 +127,7 @@ fn runs_a_grid_then_resumes_with_nothing_to_do() {
         "{times}"
     );
     let page = std::fs::read_to_string(&html).unwrap();
-    assert_eq!(page.matches("<svg").count(), 3);
+    assert_eq!(page.matches("<svg").count(), 4);
     let table = stdout(&o);
     let first_row = table.lines().find(|l| l.contains("baseline")).unwrap();
     assert!(page.contains(first_row), "the page holds the printed table");
