@@ -74,6 +74,13 @@ fn time_limit_of(settings_json: &str) -> Option<f64> {
         .filter(|t| t.is_finite() && *t > 0.0)
 }
 
+/// Whether a run with summary `s` achieved the outcome: at least `coverage` explored, with an
+/// exploration time.
+pub fn achieves(s: &RunSummary, coverage: f64) -> bool {
+    let t = s.exploration_time_s;
+    s.explored_fraction >= coverage && t.is_finite() && t > 0.0
+}
+
 /// The outcome of `r` at `coverage`, its building named by `building`.
 pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome {
     let summary = (r.status == "ok")
@@ -101,7 +108,7 @@ pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome
         if t.is_finite() && t > 0.0 {
             out.horizon_s = limit.max(t);
         }
-        if s.explored_fraction >= coverage && t.is_finite() && t > 0.0 {
+        if achieves(&s, coverage) {
             out.achieved_s = Some(t);
             out.not_achieved = None;
         } else {
@@ -289,11 +296,6 @@ impl PairCounts {
         (c.reference_coverage_mean, c.reference_coverage_min) =
             stats(&|p| p.reference.explored_fraction);
         c
-    }
-
-    /// Runs of either side that did not achieve the outcome.
-    pub fn not_achieved(&self) -> usize {
-        self.label_only_not_achieved + self.reference_only_not_achieved + 2 * self.neither_achieved
     }
 }
 

@@ -341,11 +341,7 @@ pub fn table_against(
                             .and_then(|s| RunSummary::from_json(s).ok())
                     })
                     .collect();
-                let achieves = |s: &RunSummary| {
-                    s.explored_fraction >= coverage
-                        && s.exploration_time_s.is_finite()
-                        && s.exploration_time_s > 0.0
-                };
+                let achieves = |s: &RunSummary| outcome::achieves(s, coverage);
                 let times: Vec<f64> = summaries
                     .iter()
                     .filter(|s| achieves(s))
