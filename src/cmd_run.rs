@@ -181,11 +181,23 @@ pub fn run(a: RunArgs) -> Result<()> {
             floorcast_worker::settings::fmt_num(a.lease_s)
         );
     }
+    // Checked before the results directory is made.
+    if let Some(path) = &a.net.zenoh_config {
+        floorcast_coordinator::net::check_config_file(path)?;
+    }
     // One run per results directory (`--summary` only reads).
     let _lock = (!a.summary)
         .then(|| floorcast_coordinator::store::lock_results(&plan.results_dir))
         .transpose()?;
-    let store = Store::open(&plan.results_dir)?;
+    // `--summary` reads a store as it is (nothing written, nothing created beside it).
+    let store = if a.summary
+        && std::fs::symlink_metadata(plan.results_dir.join(floorcast_coordinator::store::DB_FILE))
+            .is_ok()
+    {
+        Store::open_existing(&plan.results_dir)?
+    } else {
+        Store::open(&plan.results_dir)?
+    };
     // A sequential grid's jobs so far: those of every batch whose predecessors are all stored.
     let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
     if a.summary {

@@ -37,6 +37,9 @@ struct Case {
     /// Directories to create before the run.
     #[serde(default)]
     mkdir: Vec<String>,
+    /// Named pipes (FIFOs) to create before the run: reading one would block forever.
+    #[serde(default)]
+    fifo: Vec<String>,
     /// Words that must appear exactly once (an OS error said once, not twice).
     #[serde(default)]
     once: Vec<String>,
@@ -102,6 +105,10 @@ fn check_case(case: &Case) -> Vec<String> {
     .unwrap();
     for d in &case.mkdir {
         std::fs::create_dir_all(tmp.join(d)).unwrap();
+    }
+    for f in &case.fifo {
+        let made = Command::new("mkfifo").arg(tmp.join(f)).status().unwrap();
+        assert!(made.success(), "mkfifo {f}");
     }
     let before: Vec<Option<Vec<u8>>> = case
         .unchanged

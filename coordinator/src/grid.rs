@@ -404,16 +404,7 @@ impl Plan {
         let mut buildings: Vec<PlannedBuilding> = Vec::new();
         for (i, pattern) in file.buildings.iter().enumerate() {
             let field = format!("buildings[{i}]");
-            let full = base_dir.join(pattern);
-            let full_str = full.to_string_lossy().into_owned();
-            let mut matched: Vec<PathBuf> = glob::glob(&full_str)
-                .map_err(|e| invalid(&field, format!("bad glob pattern '{pattern}': {e}")))?
-                .filter_map(Result::ok)
-                .collect();
-            matched.sort();
-            if matched.is_empty() {
-                return Err(invalid(&field, format!("'{pattern}' matches no file (paths are relative to the grid file's folder)")));
-            }
+            let matched = expand_pattern(base_dir, pattern).map_err(|e| invalid(&field, e))?;
             for p in matched {
                 let b =
                     floorcast_formats::read_building(&p).map_err(|source| GridError::Building {
@@ -1148,6 +1139,121 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// At most this many folder entries are visited expanding one building pattern.
+pub const MAX_PATTERN_ENTRIES: usize = 100_000;
+
+/// The files `pattern` (relative to `base_dir`) names, sorted. A pattern without wildcards
+/// (`*`, `?`, `[...]`) names one file. With wildcards, only the folder before the first
+/// wildcard is searched: never the whole file system (`/**`), never above it (`..` after a
+/// wildcard), symbolic links to folders not followed, at most [`MAX_PATTERN_ENTRIES`] entries
+/// visited; folders that cannot be read are passed over. A matching file whose name is not
+/// UTF-8 is an error naming it.
+fn expand_pattern(base_dir: &Path, pattern: &str) -> Result<Vec<PathBuf>, String> {
+    expand_pattern_within(base_dir, pattern, MAX_PATTERN_ENTRIES)
+}
+
+/// [`expand_pattern`] visiting at most `max_entries` entries.
+fn expand_pattern_within(
+    base_dir: &Path,
+    pattern: &str,
+    max_entries: usize,
+) -> Result<Vec<PathBuf>, String> {
+    let wild = |s: &str| s.contains(['*', '?', '[']);
+    let full = base_dir.join(pattern);
+    let none = || {
+        format!(
+            "'{}' matches no file (paths are relative to the grid file's folder)",
+            floorcast_worker::text::shown(pattern, 200)
+        )
+    };
+    if !wild(pattern) {
+        return match std::fs::metadata(&full) {
+            Ok(_) => Ok(vec![full]),
+            Err(_) => Err(none()),
+        };
+    }
+    // The grid's folder is taken as it is (wildcard characters in its name included).
+    let mut prefix = base_dir.to_path_buf();
+    let mut rest: Vec<String> = Vec::new();
+    for c in Path::new(pattern).components() {
+        let text = c.as_os_str().to_string_lossy().into_owned();
+        if rest.is_empty() && !wild(&text) {
+            prefix.push(c);
+        } else {
+            rest.push(text);
+        }
+    }
+    if rest.iter().any(|c| c == "..") {
+        return Err(format!(
+            "'{}' has '..' after a wildcard; a pattern searches only below the folder before its first wildcard",
+            floorcast_worker::text::shown(pattern, 200)
+        ));
+    }
+    let walk_root = if prefix.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        prefix.clone()
+    };
+    if prefix.parent().is_none() && prefix.has_root() {
+        return Err(format!(
+            "'{}' would search the whole file system; start it with the folder to search",
+            floorcast_worker::text::shown(pattern, 200)
+        ));
+    }
+    let rest_text = rest.join("/");
+    let glob = glob::Pattern::new(&rest_text).map_err(|e| {
+        format!(
+            "bad glob pattern '{}': {e}",
+            floorcast_worker::text::shown(pattern, 200)
+        )
+    })?;
+    let options = glob::MatchOptions {
+        case_sensitive: true,
+        require_literal_separator: true,
+        require_literal_leading_dot: false,
+    };
+    let mut walk = walkdir::WalkDir::new(&walk_root)
+        .min_depth(1)
+        .follow_links(false);
+    if !rest.iter().any(|c| c.contains("**")) {
+        walk = walk.max_depth(rest.len());
+    }
+    let mut matched = Vec::new();
+    for (visited, entry) in walk.into_iter().enumerate() {
+        if visited >= max_entries {
+            return Err(format!(
+                "'{}' visits more than {max_entries} entries under {}; give a narrower pattern (a deeper folder, no '**')",
+                floorcast_worker::text::shown(pattern, 200),
+                floorcast_worker::text::shown(&prefix.display().to_string(), 200)
+            ));
+        }
+        let Ok(entry) = entry else { continue };
+        let Ok(rel) = entry.path().strip_prefix(&walk_root) else {
+            continue;
+        };
+        let rel_text = rel.to_string_lossy();
+        if !glob.matches_with(&rel_text, options) {
+            continue;
+        }
+        if !std::fs::metadata(entry.path()).is_ok_and(|m| m.is_file()) {
+            continue;
+        }
+        if rel.to_str().is_none() {
+            return Err(format!(
+                "{} matches '{}' but its name is not UTF-8; rename it",
+                floorcast_worker::text::shown(&entry.path().display().to_string(), 200),
+                floorcast_worker::text::shown(pattern, 200)
+            ));
+        }
+        matched.push(prefix.join(rel));
+    }
+    matched.sort();
+    if matched.is_empty() {
+        return Err(none());
+    }
+    Ok(matched)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1192,6 +1298,91 @@ time_limit_s = 600
                 Plan::parse(&text, g, None).unwrap_or_else(|e| panic!("{}: {e}", g.display()));
             assert!(!plan.jobs.is_empty(), "{}", g.display());
         }
+    }
+
+    #[test]
+    fn building_patterns_stay_below_their_folder_and_are_bounded() {
+        use std::os::unix::ffi::OsStrExt;
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path();
+        let grids = root.join("grids");
+        for d in ["grids", "b/sub/deeper", "many", "odd"] {
+            std::fs::create_dir_all(root.join(d)).unwrap();
+        }
+        for f in [
+            "b/a.toml",
+            "b/z.toml",
+            "b/sub/c.toml",
+            "b/sub/deeper/d.toml",
+            "b/notes.txt",
+        ] {
+            std::fs::write(root.join(f), "").unwrap();
+        }
+        for i in 0..20 {
+            std::fs::write(root.join(format!("many/{i}.toml")), "").unwrap();
+        }
+        std::fs::write(
+            root.join("odd")
+                .join(std::ffi::OsStr::from_bytes(b"caf\xe9.toml")),
+            "",
+        )
+        .unwrap();
+        // A link back up: followed, it would never end.
+        std::os::unix::fs::symlink(root.join("b"), root.join("b/sub/loop")).unwrap();
+        let names = |r: Result<Vec<PathBuf>, String>| -> Result<Vec<String>, String> {
+            r.map(|v| {
+                v.iter()
+                    .map(|p| p.strip_prefix(&grids).unwrap().display().to_string())
+                    .collect()
+            })
+        };
+        // (pattern, entries visited at most, the files, or words of the error)
+        let cases: &[(&str, usize, Result<&[&str], &[&str]>)] = &[
+            ("../b/a.toml", 10, Ok(&["../b/a.toml"])),
+            ("../b/*.toml", 10, Ok(&["../b/a.toml", "../b/z.toml"])),
+            ("../b/?.toml", 10, Ok(&["../b/a.toml", "../b/z.toml"])),
+            (
+                "../b/**/*.toml",
+                100,
+                Ok(&[
+                    "../b/a.toml",
+                    "../b/sub/c.toml",
+                    "../b/sub/deeper/d.toml",
+                    "../b/z.toml",
+                ]),
+            ),
+            ("../b/*/c.toml", 100, Ok(&["../b/sub/c.toml"])),
+            ("../b/*.yaml", 10, Err(&["'../b/*.yaml' matches no file"])),
+            ("../b/nothing.toml", 10, Err(&["matches no file"])),
+            ("../b/*/../a.toml", 100, Err(&["'..' after a wildcard"])),
+            ("/**/small.toml", 100, Err(&["whole file system"])),
+            ("/*.toml", 100, Err(&["whole file system"])),
+            ("../b/[a.toml", 100, Err(&["bad glob pattern"])),
+            (
+                "../many/*.toml",
+                10,
+                Err(&["visits more than 10 entries", "narrower"]),
+            ),
+            ("../odd/*.toml", 10, Err(&["is not UTF-8", "rename it"])),
+        ];
+        for (pattern, max, want) in cases {
+            let got = names(expand_pattern_within(&grids, pattern, *max));
+            match (want, &got) {
+                (Ok(files), Ok(v)) => assert_eq!(v, files, "{pattern}"),
+                (Err(words), Err(e)) => {
+                    for w in *words {
+                        assert!(e.contains(w), "{pattern}: {w:?} missing in {e}");
+                    }
+                }
+                _ => panic!("{pattern}: got {got:?}, expected {want:?}"),
+            }
+        }
+        assert_eq!(
+            names(expand_pattern(&grids, "../many/*.toml"))
+                .unwrap()
+                .len(),
+            20
+        );
     }
 
     #[test]

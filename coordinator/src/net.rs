@@ -19,7 +19,7 @@
 //! reply per key). zenoh needs tokio's multi-thread runtime; simulations run on blocking
 //! threads, never on the runtime's workers.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
@@ -80,6 +80,30 @@ pub fn valid_chunk(s: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.')
 }
 
+/// Largest zenoh configuration file read: 1 MiB.
+pub const MAX_ZENOH_CONFIG_BYTES: u64 = 1 << 20;
+
+/// Checks a `--zenoh-config` before zenoh reads it: a regular file (not a FIFO, which would
+/// block, nor `/dev/zero`, which never ends) of at most [`MAX_ZENOH_CONFIG_BYTES`], named as
+/// zenoh's parsers expect (`*.json5`, `*.json`, `*.yaml`, `*.yml`).
+pub fn check_config_file(path: &Path) -> Result<(), NetError> {
+    let refuse = |message: String| NetError::ConfigFile {
+        path: path.to_path_buf(),
+        message,
+    };
+    floorcast_formats::limits::read_bytes(path, MAX_ZENOH_CONFIG_BYTES).map_err(|e| {
+        let text = e.to_string();
+        let prefix = format!("{}: ", path.display());
+        refuse(text.strip_prefix(&prefix).unwrap_or(&text).to_string())
+    })?;
+    match path.extension().and_then(|x| x.to_str()) {
+        Some("json" | "json5" | "yaml" | "yml") => Ok(()),
+        _ => Err(refuse(
+            "expected a zenoh configuration file named *.json5, *.json, *.yaml or *.yml".into(),
+        )),
+    }
+}
+
 fn zenoh_config(cfg: &NetConfig) -> Result<zenoh::Config, NetError> {
     if !valid_chunk(&cfg.campaign) {
         return Err(NetError::Option {
@@ -92,12 +116,7 @@ fn zenoh_config(cfg: &NetConfig) -> Result<zenoh::Config, NetError> {
     }
     let mut c = match &cfg.zenoh_config {
         Some(path) => {
-            if !path.exists() {
-                return Err(NetError::ConfigFile {
-                    path: path.clone(),
-                    message: "no such file".into(),
-                });
-            }
+            check_config_file(path)?;
             zenoh::Config::from_file(path).map_err(|e| NetError::ConfigFile {
                 path: path.clone(),
                 message: e.to_string(),

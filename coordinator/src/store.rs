@@ -40,6 +40,14 @@ pub enum StoreError {
     Missing(PathBuf),
     #[error("{path} is not a floorcast results store ({why}); floorcast leaves it untouched: give another --results directory")]
     Foreign { path: PathBuf, why: String },
+    #[error("results store {path} is damaged ({why}); floorcast leaves it untouched: restore it from a copy, salvage its rows with `sqlite3 {path} .recover`, or give another --results directory")]
+    Damaged { path: PathBuf, why: String },
+    #[error("results store {path} is locked by another program ({why}); end the program holding it (an sqlite3 shell, a backup) and try again")]
+    Busy { path: PathBuf, why: String },
+    #[error("results store {path} is read-only ({why}); `floorcast run` writes it: make it and its folder writable or give another --results directory (`floorcast report` reads it as it is)")]
+    ReadOnly { path: PathBuf, why: String },
+    #[error("results store {path} cannot be read ({why}); give yourself read access to it, or give another --results directory")]
+    Unreadable { path: PathBuf, why: String },
     #[error("results store {path}: {problem}")]
     Row { path: PathBuf, problem: String },
     #[error("results directory {dir} is in use by another floorcast run ({holder}); wait for it to end or stop it, then run again (report needs no lock)")]
@@ -98,7 +106,8 @@ pub struct Store {
 }
 
 impl Store {
-    /// Opens (creating if needed) the store in `dir`.
+    /// Opens (creating if needed) the store in `dir` to write it (`run`). A file already there
+    /// is checked first ([`check_is_store`]) without writing anything.
     pub fn open(dir: &Path) -> Result<Store, StoreError> {
         std::fs::create_dir_all(dir).map_err(|source| StoreError::Dir {
             path: dir.to_path_buf(),
@@ -107,24 +116,29 @@ impl Store {
         let path = dir.join(DB_FILE);
         if std::fs::symlink_metadata(&path).is_ok() {
             check_is_store(&path)?;
+            // Refused before SQLite opens it (and makes its files beside it) read-only.
+            if let Err(e) = std::fs::OpenOptions::new().write(true).open(&path) {
+                return Err(StoreError::ReadOnly {
+                    path,
+                    why: e.to_string(),
+                });
+            }
         }
-        let conn = Connection::open(&path).map_err(|source| StoreError::Sql {
-            path: path.clone(),
-            source,
-        })?;
+        let conn = Connection::open(&path).map_err(|e| classify(&path, e))?;
         let s = Store { path, conn };
         s.init()?;
         Ok(s)
     }
 
-    /// Opens an existing store read-only-ish (errors if absent).
+    /// Opens the store in `dir` to read it (`report`, `run --summary`): checked first, never
+    /// written, and nothing created beside it; errors if absent.
     pub fn open_existing(dir: &Path) -> Result<Store, StoreError> {
         let path = dir.join(DB_FILE);
         if !dir.is_dir() || std::fs::symlink_metadata(&path).is_err() {
             return Err(StoreError::Missing(dir.to_path_buf()));
         }
-        check_is_store(&path)?;
-        Self::open(dir)
+        let conn = check_is_store(&path)?;
+        Ok(Store { path, conn })
     }
 
     pub fn path(&self) -> &Path {
@@ -149,9 +163,17 @@ pub fn lock_results(dir: &Path) -> Result<RunLock, StoreError> {
         source,
     })?;
     let path = dir.join(LOCK_FILE);
-    let failed = |source| StoreError::Lock {
-        path: path.clone(),
-        source,
+    let failed = |source: std::io::Error| match source.kind() {
+        std::io::ErrorKind::PermissionDenied | std::io::ErrorKind::ReadOnlyFilesystem => {
+            StoreError::ReadOnly {
+                path: dir.join(DB_FILE),
+                why: format!("its folder cannot be written: {source}"),
+            }
+        }
+        _ => StoreError::Lock {
+            path: path.clone(),
+            source,
+        },
     };
     let mut file = std::fs::OpenOptions::new()
         .read(true)
@@ -261,25 +283,95 @@ fn resolved(path: &Path) -> Option<PathBuf> {
     None
 }
 
-/// Refuses, without writing anything, a file that is not a floorcast results store: not a file,
-/// empty, not SQLite, or a database without floorcast's `meta` table and store version.
-fn check_is_store(path: &Path) -> Result<(), StoreError> {
+/// SQLite's header: the first 16 bytes of every SQLite database file.
+const SQLITE_HEADER: &[u8; 16] = b"SQLite format 3\0";
+
+/// How long a store another program holds locked is waited for.
+const BUSY_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
+
+/// Opens `path` read-only, creating no file beside it, and checks it is a whole floorcast store:
+/// refuses, without writing anything, a file that is not one (foreign: not a file, not SQLite, a
+/// database without floorcast's store version), a damaged one (empty, truncated, failing
+/// `PRAGMA integrity_check`, its results table missing), one locked by another program, and one
+/// that cannot be read; each with its own message. Returns the read-only connection.
+///
+/// A store whose write-ahead log (`-wal`) is absent is whole in its one file (SQLite merges the
+/// log when its last connection closes), and is read as immutable: nothing is created, so a
+/// store in a folder one cannot write is read too. With a log present (a run writing it, or one
+/// that was killed), it is opened read-only through SQLite's locks.
+fn check_is_store(path: &Path) -> Result<Connection, StoreError> {
     let foreign = |why: &str| StoreError::Foreign {
         path: path.to_path_buf(),
         why: why.to_string(),
     };
-    let meta = std::fs::metadata(path).map_err(|_| foreign("it cannot be read"))?;
+    let damaged = |why: &str| StoreError::Damaged {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    };
+    let meta = std::fs::metadata(path).map_err(|e| StoreError::Unreadable {
+        path: path.to_path_buf(),
+        why: e.to_string(),
+    })?;
     if !meta.is_file() {
         return Err(foreign("not a regular file"));
     }
     if meta.len() == 0 {
-        return Err(foreign("an empty file"));
+        return Err(damaged("an empty file"));
     }
+    let mut header = [0u8; 16];
+    {
+        use std::io::Read;
+        let mut f = std::fs::File::open(path).map_err(|e| StoreError::Unreadable {
+            path: path.to_path_buf(),
+            why: e.to_string(),
+        })?;
+        let n = f.read(&mut header).map_err(|e| StoreError::Unreadable {
+            path: path.to_path_buf(),
+            why: e.to_string(),
+        })?;
+        if n < header.len() || &header != SQLITE_HEADER {
+            // A folder a run has used holds its lock: the store there was damaged at its start.
+            let used = path
+                .parent()
+                .is_some_and(|d| std::fs::symlink_metadata(d.join(LOCK_FILE)).is_ok());
+            return Err(if used {
+                damaged("its first bytes are not SQLite's header, in a folder floorcast has run in")
+            } else {
+                foreign("not an SQLite database: a store damaged at its start, or another program's file")
+            });
+        }
+    }
+    let wal = PathBuf::from(format!("{}-wal", path.display()));
+    let logged = std::fs::symlink_metadata(&wal).is_ok();
     let conn = Connection::open_with_flags(
-        path,
-        rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY | rusqlite::OpenFlags::SQLITE_OPEN_NO_MUTEX,
+        sqlite_uri(path, if logged { "mode=ro" } else { "immutable=1" }),
+        rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY
+            | rusqlite::OpenFlags::SQLITE_OPEN_NO_MUTEX
+            | rusqlite::OpenFlags::SQLITE_OPEN_URI,
     )
-    .map_err(|_| foreign("not an SQLite database"))?;
+    .map_err(|e| classify(path, e))?;
+    conn.busy_timeout(BUSY_WAIT)
+        .map_err(|e| classify(path, e))?;
+    let tables: Vec<String> = conn
+        .prepare("SELECT name FROM sqlite_master WHERE type = 'table'")
+        .and_then(|mut st| {
+            st.query_map([], |r| r.get::<_, String>(0))?
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .map_err(|e| match classify(path, e) {
+            StoreError::ReadOnly { why, .. } if logged => StoreError::ReadOnly {
+                path: path.to_path_buf(),
+                why: format!(
+                    "{why}; its write-ahead log {} holds rows SQLite must merge, which needs \
+                     a folder it can write: copy the folder somewhere writable and read the copy",
+                    wal.display()
+                ),
+            },
+            e => e,
+        })?;
+    if !tables.iter().any(|t| t == "meta") {
+        return Err(foreign("an SQLite database without floorcast's tables"));
+    }
     let version: Option<String> = conn
         .query_row(
             "SELECT value FROM meta WHERE key = 'store_version'",
@@ -287,26 +379,108 @@ fn check_is_store(path: &Path) -> Result<(), StoreError> {
             |r| r.get(0),
         )
         .optional()
-        .map_err(|e| match e {
-            rusqlite::Error::SqliteFailure(f, _) if f.code == rusqlite::ErrorCode::NotADatabase => {
-                foreign("not an SQLite database")
-            }
-            _ => foreign("an SQLite database without floorcast's tables"),
-        })?;
+        .map_err(|e| classify(path, e))?;
     match version {
-        None => Err(foreign(
-            "an SQLite database without a floorcast store version",
-        )),
-        Some(_) => Ok(()),
+        None => {
+            return Err(foreign(
+                "an SQLite database without a floorcast store version",
+            ))
+        }
+        Some(v) if v != STORE_VERSION.to_string() => {
+            return Err(StoreError::Version {
+                path: path.to_path_buf(),
+                found: floorcast_worker::text::shown(&v, 40),
+            })
+        }
+        Some(_) => {}
+    }
+    if !tables.iter().any(|t| t == "results") {
+        return Err(damaged("its results table is missing"));
+    }
+    let problems: Vec<String> = conn
+        .prepare("PRAGMA integrity_check(3)")
+        .and_then(|mut st| {
+            st.query_map([], |r| r.get::<_, String>(0))?
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .map_err(|e| classify(path, e))?;
+    if problems != ["ok"] {
+        return Err(damaged(&format!(
+            "PRAGMA integrity_check: {}",
+            floorcast_worker::text::shown(&problems.join("; "), 200)
+        )));
+    }
+    Ok(conn)
+}
+
+/// SQLite's URI for `path` (every byte but the unreserved ones percent-encoded) with `query`.
+fn sqlite_uri(path: &Path, query: &str) -> String {
+    use std::os::unix::ffi::OsStrExt;
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut uri = String::from("file:");
+    for &b in abs.as_os_str().as_bytes() {
+        if b.is_ascii_alphanumeric() || b"/-._~".contains(&b) {
+            uri.push(b as char);
+        } else {
+            uri.push_str(&format!("%{b:02X}"));
+        }
+    }
+    uri.push('?');
+    uri.push_str(query);
+    uri
+}
+
+/// SQLite's error on store `path`, told apart: damaged (corrupt, not a database), locked by
+/// another program, read-only, unreadable, or another error.
+fn classify(path: &Path, e: rusqlite::Error) -> StoreError {
+    use rusqlite::ErrorCode as C;
+    let path_buf = path.to_path_buf();
+    if let rusqlite::Error::SqliteFailure(f, message) = &e {
+        let why = message.clone().unwrap_or_else(|| f.to_string());
+        match f.code {
+            C::DatabaseCorrupt | C::NotADatabase => {
+                return StoreError::Damaged {
+                    path: path_buf,
+                    why,
+                }
+            }
+            C::DatabaseBusy | C::DatabaseLocked => {
+                return StoreError::Busy {
+                    path: path_buf,
+                    why,
+                }
+            }
+            C::ReadOnly => {
+                return StoreError::ReadOnly {
+                    path: path_buf,
+                    why,
+                }
+            }
+            C::PermissionDenied | C::CannotOpen => {
+                // Unreadable, or a folder in which SQLite cannot make its files.
+                return match std::fs::File::open(path) {
+                    Err(io) => StoreError::Unreadable {
+                        path: path_buf,
+                        why: io.to_string(),
+                    },
+                    Ok(_) => StoreError::ReadOnly {
+                        path: path_buf,
+                        why: format!("{why}: SQLite cannot create its files beside it"),
+                    },
+                };
+            }
+            _ => {}
+        }
+    }
+    StoreError::Sql {
+        path: path_buf,
+        source: e,
     }
 }
 
 impl Store {
     fn sql<T>(&self, r: rusqlite::Result<T>) -> Result<T, StoreError> {
-        r.map_err(|source| StoreError::Sql {
-            path: self.path.clone(),
-            source,
-        })
+        r.map_err(|e| classify(&self.path, e))
     }
 
     fn init(&self) -> Result<(), StoreError> {
@@ -468,7 +642,9 @@ impl Store {
         Ok(out)
     }
 
-    /// Every stored result, ordered by building, label, seed.
+    /// Every stored result, ordered by building, label, seed, each checked ([`check_row`]): a
+    /// row changed outside floorcast is an error naming its job and field, never a silent
+    /// failure.
     pub fn all(&self) -> Result<Vec<StoredResult>, StoreError> {
         let mut st = self.sql(self.conn.prepare(
             "SELECT job_id, grid, building, building_hash, strategy, label, seed, settings_json, status,
@@ -476,27 +652,41 @@ impl Store {
              FROM results ORDER BY building, label, seed, job_id",
         ))?;
         let rows = self.sql(st.query_map([], |r| {
-            Ok(StoredResult {
-                job_id: r.get(0)?,
-                grid: r.get(1)?,
-                building: r.get(2)?,
-                building_hash: r.get(3)?,
-                strategy: r.get(4)?,
-                label: r.get(5)?,
-                seed: r.get::<_, i64>(6)? as u64,
-                settings_json: r.get(7)?,
-                status: r.get(8)?,
-                error: r.get(9)?,
-                summary_json: r.get(10)?,
-                progress_csv: r.get(11)?,
-                worker: r.get(12)?,
-                wall_time_s: r.get(13)?,
-                floorcast_version: r.get(14)?,
-            })
+            // A value of the wrong type is the row's problem, named with its job.
+            let id = r.get::<_, String>(0).unwrap_or_default();
+            Ok(read_row(r).map_err(|e| (id, e)))
         }))?;
         let mut out = Vec::new();
         for r in rows {
-            out.push(self.sql(r)?);
+            let tampered = |job: &str, what: &str, problem: String| StoreError::Row {
+                path: self.path.clone(),
+                problem: format!(
+                    "job {}{what}: {problem}; the row was changed outside floorcast: restore the \
+                     store from a copy, or delete the row to run the job again",
+                    floorcast_worker::text::shown(job, 80),
+                ),
+            };
+            let (seed, mut row) = match self.sql(r)? {
+                Ok(read) => read,
+                Err((job, e)) => {
+                    return Err(tampered(
+                        &job,
+                        "",
+                        format!("a value of the wrong type ({e})"),
+                    ))
+                }
+            };
+            let what = format!(
+                " ({}, {}, seed {seed})",
+                floorcast_worker::text::shown(&row.building, 80),
+                floorcast_worker::text::shown(&row.label, 80),
+            );
+            let job = row.job_id.clone();
+            let tampered = |problem: String| tampered(&job, &what, problem);
+            row.seed = u64::try_from(seed)
+                .map_err(|_| tampered(format!("field seed is {seed}, expected 0 or more")))?;
+            check_row(&row).map_err(tampered)?;
+            out.push(row);
         }
         Ok(out)
     }
@@ -533,9 +723,22 @@ impl Store {
         self.sql(tx.commit())
     }
 
+    /// Whether the store has table `name` (stores of earlier builds may lack the newer ones).
+    fn has_table(&self, name: &str) -> Result<bool, StoreError> {
+        let n: i64 = self.sql(self.conn.query_row(
+            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = ?1",
+            [name],
+            |r| r.get(0),
+        ))?;
+        Ok(n > 0)
+    }
+
     /// The stored tests of sequential grids, by grid, label and batch.
     pub fn tests(&self) -> Result<Vec<(String, crate::sequential::LabelTest)>, StoreError> {
         use crate::sequential::{Decision, LabelTest, SprtState};
+        if !self.has_table("sequential")? {
+            return Ok(Vec::new());
+        }
         let mut st = self.sql(self.conn.prepare(
             "SELECT grid, label, reference, through_seed, pairs, mean, variance, llr, lower, upper,
                     decision
@@ -601,12 +804,7 @@ impl Store {
     /// The grids recorded, in the order first recorded: name, labels in the grid's order,
     /// coverage level. Stores written before grids were recorded have none.
     pub fn grids(&self) -> Result<Vec<(String, Vec<String>, f64)>, StoreError> {
-        let exists: i64 = self.sql(self.conn.query_row(
-            "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'grids'",
-            [],
-            |r| r.get(0),
-        ))?;
-        if exists == 0 {
+        if !self.has_table("grids")? {
             return Ok(Vec::new());
         }
         let mut st = self.sql(
@@ -641,6 +839,84 @@ impl Store {
         ))?;
         Ok(())
     }
+}
+
+/// One row of the results table as read, its seed apart (checked by the caller).
+fn read_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<(i64, StoredResult)> {
+    Ok((
+        r.get::<_, i64>(6)?,
+        StoredResult {
+            job_id: r.get(0)?,
+            grid: r.get(1)?,
+            building: r.get(2)?,
+            building_hash: r.get(3)?,
+            strategy: r.get(4)?,
+            label: r.get(5)?,
+            seed: 0,
+            settings_json: r.get(7)?,
+            status: r.get(8)?,
+            error: r.get(9)?,
+            summary_json: r.get(10)?,
+            progress_csv: r.get(11)?,
+            worker: r.get(12)?,
+            wall_time_s: r.get(13)?,
+            floorcast_version: r.get(14)?,
+        },
+    ))
+}
+
+/// What a stored row must hold: a status of `ok` with a valid run summary of the row's seed
+/// and building ([`RunSummary::check`](floorcast_worker::RunSummary::check)), or `failed` with
+/// its error; settings that are a JSON object; a finite wall time. The error names the field.
+pub fn check_row(r: &StoredResult) -> Result<(), String> {
+    if !(r.wall_time_s.is_finite() && r.wall_time_s >= 0.0) {
+        return Err(format!(
+            "field wall_time_s is {}, expected a finite number of seconds, 0 or more",
+            r.wall_time_s
+        ));
+    }
+    match serde_json::from_str::<serde_json::Value>(&r.settings_json) {
+        Ok(serde_json::Value::Object(_)) => {}
+        _ => return Err("field settings_json is not a JSON object".into()),
+    }
+    match r.status.as_str() {
+        "ok" => {
+            let text = r
+                .summary_json
+                .as_deref()
+                .ok_or("field summary_json is empty, expected the run's summary")?;
+            let s = floorcast_worker::RunSummary::from_json(text)
+                .map_err(|e| format!("field summary_json: {}", one_line_excerpt(&e)))?;
+            if s.seed != r.seed {
+                return Err(format!(
+                    "field summary_json.seed is {}, the row's seed is {}",
+                    s.seed, r.seed
+                ));
+            }
+            if s.building_hash != r.building_hash {
+                return Err(
+                    "field summary_json.building_hash differs from the row's building_hash".into(),
+                );
+            }
+        }
+        "failed" => {
+            if r.error.as_deref().is_none_or(|e| e.trim().is_empty()) {
+                return Err("field error is empty, expected why the job failed".into());
+            }
+        }
+        other => {
+            return Err(format!(
+                "field status is '{}', expected ok or failed",
+                floorcast_worker::text::shown(other, 40)
+            ))
+        }
+    }
+    Ok(())
+}
+
+/// An error from outside, escaped and cut to a short excerpt.
+fn one_line_excerpt(e: &str) -> String {
+    floorcast_worker::text::shown(e, 200)
 }
 
 /// This machine's name (or "unknown").
@@ -705,9 +981,9 @@ mod tests {
             label: "baseline".into(),
             seed: 1,
             settings_json: "{}".into(),
-            status: "ok".into(),
-            error: None,
-            summary_json: Some("{}".into()),
+            status: "failed".into(),
+            error: Some("no free space at the start".into()),
+            summary_json: None,
             progress_csv: Some("time_s\n".into()),
             worker: "local-0".into(),
             wall_time_s: 1.0,
@@ -715,61 +991,280 @@ mod tests {
         }
     }
 
+    /// The files of `dir`, by name.
+    fn files_in(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// A store of one ok row (a real summary) and one failed row, closed (its log merged).
+    fn good_store(dir: &Path) {
+        let s = Store::open(dir).unwrap();
+        let mut ok = crate::table::tests::stored("b", "baseline", 1, 600.0);
+        ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
+        s.insert_many(&[ok, row("failed-job")]).unwrap();
+    }
+
+    /// Overwrites `len` bytes of `path` at `at` with pseudo-random bytes.
+    fn scribble(path: &Path, at: u64, len: usize) {
+        use std::io::{Seek, Write};
+        let mut f = std::fs::OpenOptions::new().write(true).open(path).unwrap();
+        f.seek(std::io::SeekFrom::Start(at)).unwrap();
+        let bytes: Vec<u8> = (0..len).map(|i| (i * 7919 % 251) as u8).collect();
+        f.write_all(&bytes).unwrap();
+    }
+
     #[test]
-    fn foreign_files_are_refused_and_left_untouched() {
-        // (what is at results.sqlite, words of the message)
+    fn damaged_and_foreign_stores_are_told_apart_and_left_untouched() {
+        // (what is at results.sqlite, how it is made, words of the message)
         type Make = fn(&Path);
-        let cases: &[(&str, Make, &str)] = &[
+        let cases: &[(&str, Make, &[&str])] = &[
             (
                 "empty file",
-                |p| std::fs::write(p, b"").unwrap(),
-                "an empty file",
+                |d| std::fs::write(d.join(DB_FILE), b"").unwrap(),
+                &["is damaged", "an empty file"],
             ),
             (
                 "text file",
-                |p| {
-                    std::fs::write(p, b"hello, not a database at all....................................................................................").unwrap()
+                |d| {
+                    std::fs::write(d.join(DB_FILE), "hello, not a database at all.\n".repeat(9))
+                        .unwrap()
                 },
-                "not an SQLite database",
+                &["is not a floorcast results store", "not an SQLite database"],
+            ),
+            (
+                "random bytes where a run has run",
+                |d| {
+                    good_store(d);
+                    std::fs::write(d.join(LOCK_FILE), b"").unwrap();
+                    scribble(&d.join(DB_FILE), 0, 4096);
+                },
+                &["is damaged", "not SQLite's header"],
             ),
             (
                 "directory",
-                |p| std::fs::create_dir(p).unwrap(),
-                "not a regular file",
+                |d| std::fs::create_dir(d.join(DB_FILE)).unwrap(),
+                &["is not a floorcast results store", "not a regular file"],
             ),
             (
                 "foreign sqlite",
-                |p| {
-                    let c = Connection::open(p).unwrap();
+                |d| {
+                    let c = Connection::open(d.join(DB_FILE)).unwrap();
                     c.execute_batch(
                         "CREATE TABLE notes (x TEXT); INSERT INTO notes VALUES ('mine');",
                     )
                     .unwrap();
                 },
-                "without floorcast's tables",
+                &[
+                    "is not a floorcast results store",
+                    "without floorcast's tables",
+                ],
+            ),
+            (
+                "truncated store",
+                |d| {
+                    good_store(d);
+                    let p = d.join(DB_FILE);
+                    let len = std::fs::metadata(&p).unwrap().len();
+                    let f = std::fs::OpenOptions::new().write(true).open(&p).unwrap();
+                    f.set_len(len / 2).unwrap();
+                },
+                &["is damaged", "malformed", ".recover"],
+            ),
+            (
+                "bytes scribbled over its pages",
+                |d| {
+                    good_store(d);
+                    scribble(&d.join(DB_FILE), 100, 8000);
+                },
+                &["is damaged"],
+            ),
+            (
+                "results table dropped",
+                |d| {
+                    good_store(d);
+                    Connection::open(d.join(DB_FILE))
+                        .unwrap()
+                        .execute_batch("DROP TABLE results")
+                        .unwrap();
+                },
+                &["is damaged", "its results table is missing"],
+            ),
+            (
+                "another layout version",
+                |d| {
+                    good_store(d);
+                    Connection::open(d.join(DB_FILE))
+                        .unwrap()
+                        .execute_batch("UPDATE meta SET value = '99' WHERE key = 'store_version'")
+                        .unwrap();
+                },
+                &["layout version 99"],
             ),
         ];
         for (what, make, words) in cases {
             let dir = tempfile::tempdir().unwrap();
+            make(dir.path());
             let p = dir.path().join(DB_FILE);
-            make(&p);
             let before = std::fs::read(&p).ok();
-            for r in [Store::open(dir.path()), Store::open_existing(dir.path())] {
+            let files = files_in(dir.path());
+            for (how, r) in [
+                ("open", Store::open(dir.path())),
+                ("open_existing", Store::open_existing(dir.path())),
+            ] {
                 let e = r.unwrap_err().to_string();
-                assert!(
-                    e.contains("is not a floorcast results store") && e.contains(words),
-                    "{what}: {e}"
+                for w in *words {
+                    assert!(e.contains(w), "{what}, {how}: {w:?} missing in: {e}");
+                }
+                assert_eq!(
+                    std::fs::read(&p).ok(),
+                    before,
+                    "{what} was changed by {how}"
                 );
-            }
-            assert_eq!(std::fs::read(&p).ok(), before, "{what} was changed");
-            if *what == "foreign sqlite" {
-                let c = Connection::open(&p).unwrap();
-                let n: i64 = c
-                    .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
-                    .unwrap();
-                assert_eq!(n, 1, "tables were added to a foreign database");
+                assert_eq!(files_in(dir.path()), files, "{what}: {how} made files");
             }
         }
+    }
+
+    #[test]
+    fn reading_a_store_creates_nothing_beside_it() {
+        let dir = tempfile::tempdir().unwrap();
+        good_store(dir.path());
+        let files = files_in(dir.path());
+        assert_eq!(files, vec![DB_FILE.to_string()]);
+        let before = std::fs::read(dir.path().join(DB_FILE)).unwrap();
+        let s = Store::open_existing(dir.path()).unwrap();
+        assert_eq!(s.all().unwrap().len(), 2);
+        assert!(s.tests().unwrap().is_empty());
+        assert!(s.grids().unwrap().is_empty());
+        drop(s);
+        assert_eq!(files_in(dir.path()), files);
+        assert_eq!(std::fs::read(dir.path().join(DB_FILE)).unwrap(), before);
+    }
+
+    #[test]
+    fn a_store_another_program_holds_is_called_locked() {
+        let dir = tempfile::tempdir().unwrap();
+        good_store(dir.path());
+        let holder = Connection::open(dir.path().join(DB_FILE)).unwrap();
+        holder
+            .execute_batch(
+                "PRAGMA locking_mode = EXCLUSIVE; BEGIN EXCLUSIVE; \
+                 INSERT INTO meta (key, value) VALUES ('held', 'yes');",
+            )
+            .unwrap();
+        for (how, r) in [
+            ("open", Store::open(dir.path())),
+            ("open_existing", Store::open_existing(dir.path())),
+        ] {
+            let e = r.unwrap_err().to_string();
+            assert!(
+                e.contains("is locked by another program") && e.contains("try again"),
+                "{how}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn sqlite_errors_are_classified() {
+        let dir = tempfile::tempdir().unwrap();
+        good_store(dir.path());
+        let p = dir.path().join(DB_FILE);
+        let ro =
+            Connection::open_with_flags(&p, rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY).unwrap();
+        let e = ro
+            .execute("INSERT INTO meta (key, value) VALUES ('k', 'v')", [])
+            .unwrap_err();
+        assert!(matches!(classify(&p, e), StoreError::ReadOnly { .. }));
+        let e = ro.execute("SELECT nonsense FROM nowhere", []).unwrap_err();
+        assert!(matches!(classify(&p, e), StoreError::Sql { .. }));
+    }
+
+    #[test]
+    fn a_tampered_row_is_an_error_naming_its_job_and_field() {
+        // (the change, words of the message)
+        let cases: &[(&str, &[&str])] = &[
+            (
+                "UPDATE results SET summary_json = 'not json' WHERE status = 'ok'",
+                &["summary_json", "not JSON"],
+            ),
+            (
+                "UPDATE results SET summary_json = json_set(summary_json, '$.explored_fraction', 7) WHERE status = 'ok'",
+                &["explored_fraction is 7", "[0, 1]"],
+            ),
+            (
+                "UPDATE results SET summary_json = json_set(summary_json, '$.version', 99) WHERE status = 'ok'",
+                &["summary_json", "version 99"],
+            ),
+            (
+                "UPDATE results SET summary_json = json_set(summary_json, '$.total_time_s', -5) WHERE status = 'ok'",
+                &["total_time_s is -5"],
+            ),
+            (
+                "UPDATE results SET summary_json = json_set(summary_json, '$.seed', 2) WHERE status = 'ok'",
+                &["summary_json.seed is 2"],
+            ),
+            (
+                "UPDATE results SET summary_json = NULL WHERE status = 'ok'",
+                &["summary_json is empty"],
+            ),
+            (
+                "UPDATE results SET status = 'great' WHERE status = 'ok'",
+                &["field status is 'great'"],
+            ),
+            (
+                "UPDATE results SET error = NULL WHERE status = 'failed'",
+                &["failed-job", "field error is empty"],
+            ),
+            (
+                "UPDATE results SET seed = -3 WHERE status = 'failed'",
+                &["field seed is -3"],
+            ),
+            (
+                "UPDATE results SET wall_time_s = 1e999 WHERE status = 'failed'",
+                &["wall_time_s is inf"],
+            ),
+            (
+                "UPDATE results SET settings_json = '[1]' WHERE status = 'failed'",
+                &["settings_json is not a JSON object"],
+            ),
+            (
+                "UPDATE results SET wall_time_s = 'slow' WHERE status = 'failed'",
+                &["wrong type"],
+            ),
+        ];
+        for (change, words) in cases {
+            let dir = tempfile::tempdir().unwrap();
+            good_store(dir.path());
+            Connection::open(dir.path().join(DB_FILE))
+                .unwrap()
+                .execute_batch(change)
+                .unwrap();
+            for (how, s) in [
+                ("open", Store::open(dir.path()).unwrap()),
+                ("open_existing", Store::open_existing(dir.path()).unwrap()),
+            ] {
+                let e = s.all().unwrap_err().to_string();
+                for w in words.iter().chain(&["job ", "changed outside floorcast"]) {
+                    assert!(e.contains(w), "{change}, {how}: {w:?} missing in: {e}");
+                }
+            }
+        }
+        // Untouched, both rows read back.
+        let dir = tempfile::tempdir().unwrap();
+        good_store(dir.path());
+        assert_eq!(
+            Store::open_existing(dir.path())
+                .unwrap()
+                .all()
+                .unwrap()
+                .len(),
+            2
+        );
     }
 
     #[test]
@@ -785,21 +1280,5 @@ mod tests {
         let s = Store::open(dir.path()).unwrap();
         assert_eq!(s.stored_ids().unwrap().len(), 4);
         assert_eq!(s.all().unwrap()[0], row("a"));
-    }
-
-    #[test]
-    fn refuses_another_layout_version() {
-        let dir = tempfile::tempdir().unwrap();
-        {
-            let s = Store::open(dir.path()).unwrap();
-            s.conn
-                .execute(
-                    "UPDATE meta SET value = '99' WHERE key = 'store_version'",
-                    [],
-                )
-                .unwrap();
-        }
-        let e = Store::open(dir.path()).unwrap_err().to_string();
-        assert!(e.contains("99"), "{e}");
     }
 }

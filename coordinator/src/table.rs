@@ -1205,7 +1205,7 @@ pub fn results_csv(results: &[StoredResult]) -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -1266,7 +1266,7 @@ mod tests {
         assert!(t95(0).is_nan());
     }
 
-    fn stored(building: &str, label: &str, seed: u64, time_s: f64) -> StoredResult {
+    pub(crate) fn stored(building: &str, label: &str, seed: u64, time_s: f64) -> StoredResult {
         // A real summary (small.toml, layout, seed 1) with the time replaced.
         let template: &str = concat!(
             r#"{"format":"floorcast-run-summary","version":1,"floorcast_version":"0.1.0","build"#,
@@ -1289,6 +1289,7 @@ mod tests {
         );
         let mut summary: serde_json::Value = serde_json::from_str(template).unwrap();
         summary["exploration_time_s"] = serde_json::json!(time_s);
+        summary["total_time_s"] = serde_json::json!(time_s);
         StoredResult {
             job_id: format!("{building}-{label}-{seed}"),
             grid: "g".into(),

@@ -151,7 +151,8 @@ impl RunSummary {
 
     /// Parses and checks format and version.
     pub fn from_json(text: &str) -> Result<Self, String> {
-        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
+        let v: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| format!("not JSON ({e})"))?;
         let format = v.get("format").and_then(|f| f.as_str()).unwrap_or("");
         let version = v.get("version").and_then(|f| f.as_u64()).unwrap_or(0);
         if format != SUMMARY_FORMAT || version != SUMMARY_VERSION as u64 {
@@ -159,6 +160,67 @@ impl RunSummary {
                 "not a {SUMMARY_FORMAT} version {SUMMARY_VERSION} record (format '{format}', version {version})"
             ));
         }
-        serde_json::from_value(v).map_err(|e| e.to_string())
+        let s: RunSummary = serde_json::from_value(v).map_err(|e| e.to_string())?;
+        s.check()?;
+        Ok(s)
+    }
+
+    /// Checks what a reader relies on beyond the types: every time, area, length and rate
+    /// finite and not negative, every fraction and precision in [0, 1], the exploration time
+    /// within the run's (an end reason unknown to this build is shown as it is). The error
+    /// names the field and the value.
+    pub fn check(&self) -> Result<(), String> {
+        let bad = |field: &str, v: f64, want: &str| {
+            Err(format!(
+                "field {field} is {}, expected {want}",
+                crate::settings::fmt_num(v)
+            ))
+        };
+        let mut non_negative = vec![
+            ("exploration_time_s", self.exploration_time_s),
+            ("total_time_s", self.total_time_s),
+            ("explored_area_m2", self.explored_area_m2),
+            ("free_area_m2", self.free_area_m2),
+            ("unexplorable_free_m2", self.unexplorable_free_m2),
+            ("unexplored_free_m2", self.unexplored_free_m2),
+            ("path_length_m", self.path_length_m),
+            ("layout_compute_s", self.layout_compute_s),
+            ("wall_time_s", self.wall_time_s),
+            ("speedup", self.speedup),
+        ];
+        if let Some(v) = self.strategy_compute_s {
+            non_negative.push(("strategy_compute_s", v));
+        }
+        for (field, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(field, v, "a finite number, 0 or more");
+            }
+        }
+        for (field, v) in [
+            ("explored_fraction", self.explored_fraction),
+            ("map_free_precision", self.map_free_precision),
+            ("map_occupied_precision", self.map_occupied_precision),
+            (
+                "map_occupied_precision_aligned",
+                self.map_occupied_precision_aligned,
+            ),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return bad(field, v, "a fraction in [0, 1]");
+            }
+        }
+        if self.exploration_time_s > self.total_time_s {
+            return bad(
+                "exploration_time_s",
+                self.exploration_time_s,
+                "at most total_time_s",
+            );
+        }
+        for (i, v) in self.start.iter().enumerate() {
+            if !v.is_finite() {
+                return bad(&format!("start[{i}]"), *v, "a finite number");
+            }
+        }
+        Ok(())
     }
 }

@@ -375,6 +375,7 @@ pub fn check_report(report: &JobReport, job: &WireJob) -> Result<(), String> {
             ));
         }
     }
+    summary.check().map_err(|e| format!("the summary's {e}"))?;
     if let Some(p) = progress.iter().find(|p| p.iter().any(|v| !v.is_finite())) {
         return Err(format!("a progress sample is {p:?}"));
     }
