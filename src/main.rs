@@ -78,6 +78,8 @@ fn main() -> ExitCode {
         Err(e) => return usage_error(e),
     };
     floorcast_formats::limits::set_max_cells(cli.max_cells);
+    // What a strategy program starts in a session of its own is still found and ended.
+    floorcast_worker::external::adopt_orphans();
     let result = match cli.command {
         Command::Building(c) => cmd_building::run(c),
         Command::Explore(a) => cmd_explore::run(a),
@@ -101,6 +103,12 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            if floorcast_worker::external::stopping() {
+                // A signal is stopping floorcast (its handler ends the process with exit code
+                // 130 once the programs and partial output are gone): this error is its doing.
+                std::thread::sleep(std::time::Duration::from_secs(10));
+                return ExitCode::from(130);
+            }
             // Errors quote outside text (a program's output): escaped, bounded.
             eprintln!(
                 "error: {}",

@@ -259,12 +259,13 @@ fn ended_soon(pid_file: &Path) -> (u32, bool) {
     (pid, ended(pid))
 }
 
-/// A wrapper script (`sh wrap-<name>.sh`) that starts `sleep 1000` in the background (its pid in
-/// `<name>.pid`) and then becomes the Python program `program`.
-fn wrapper(dir: &Path, name: &str, program: &str) -> String {
+/// A wrapper script (`sh wrap-<name>.sh`) that starts `background` (a command such as `sleep
+/// 1000`) in the background (its pid in `<name>.pid`) and then becomes the Python program
+/// `program`.
+fn wrapper_starting(dir: &Path, name: &str, background: &str, program: &str) -> String {
     std::fs::write(
         dir.join(format!("wrap-{name}.sh")),
-        format!("sleep 1000 &\necho $! > {name}.pid\nexec {program}\n"),
+        format!("{background} &\necho $! > {name}.pid\nexec {program}\n"),
     )
     .unwrap();
     format!("sh wrap-{name}.sh")
@@ -281,13 +282,28 @@ fn a_programs_children_end_with_it() {
         "python3 {}",
         repo().join("tests/strategies/hang.py").display()
     );
-    // (name, program, extra arguments, whether explore succeeds)
-    let cases: &[(&str, &str, &[&str], bool)] = &[
-        ("end", &stops, &[], true),
-        ("timeout", &hang, &["--strategy-timeout-s", "1"], false),
+    // (name, what it starts in the background, program, extra arguments, whether explore
+    // succeeds): `setsid` leaves the program's process group and session.
+    let cases: &[(&str, &str, &str, &[&str], bool)] = &[
+        ("end", "sleep 1000", &stops, &[], true),
+        (
+            "timeout",
+            "sleep 1000",
+            &hang,
+            &["--strategy-timeout-s", "1"],
+            false,
+        ),
+        ("setsid-end", "setsid sleep 1000", &stops, &[], true),
+        (
+            "setsid-timeout",
+            "setsid sleep 1000",
+            &hang,
+            &["--strategy-timeout-s", "1"],
+            false,
+        ),
     ];
-    for (name, program, extra, ok) in cases {
-        let command = wrapper(tmp, name, program);
+    for (name, background, program, extra, ok) in cases {
+        let command = wrapper_starting(tmp, name, background, program);
         let o = floorcast()
             .args(["explore", "--building"])
             .arg(repo().join("buildings/small.toml"))
@@ -301,15 +317,68 @@ fn a_programs_children_end_with_it() {
         let (pid, gone) = ended_soon(&tmp.join(format!("{name}.pid")));
         assert!(gone, "{name}: the program's child {pid} still runs");
     }
-    let command = wrapper(tmp, "check", &stops);
-    let o = floorcast()
-        .args(["strategy", "check", &command])
-        .current_dir(tmp)
-        .output()
-        .unwrap();
-    assert_clean_failure(&o, &["wrap-check.sh", "left processes it started running"]);
-    let (pid, gone) = ended_soon(&tmp.join("check.pid"));
-    assert!(gone, "check: the program's child {pid} still runs");
+    for (name, background) in [
+        ("check", "sleep 1000"),
+        ("check-setsid", "setsid sleep 1000"),
+    ] {
+        let command = wrapper_starting(tmp, name, background, &stops);
+        let o = floorcast()
+            .args(["strategy", "check", &command])
+            .current_dir(tmp)
+            .output()
+            .unwrap();
+        assert_clean_failure(
+            &o,
+            &[
+                &format!("wrap-{name}.sh"),
+                "left processes it started running",
+            ],
+        );
+        let (pid, gone) = ended_soon(&tmp.join(format!("{name}.pid")));
+        assert!(gone, "{name}: the program's child {pid} still runs");
+    }
+}
+
+/// A floorcast ended by SIGTERM or SIGHUP (a shell closing, `kill`, a batch system's timeout)
+/// ends every strategy program it runs with everything they started, and leaves no output.
+#[test]
+fn a_terminated_floorcast_ends_its_programs() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = dir.path();
+    let hang = format!(
+        "python3 {}",
+        repo().join("tests/strategies/hang.py").display()
+    );
+    for (name, signal) in [("term", "TERM"), ("hup", "HUP")] {
+        let command = wrapper_starting(tmp, name, "setsid sleep 1000", &hang);
+        let mut child = floorcast()
+            .args(["explore", "--building"])
+            .arg(repo().join("buildings/small.toml"))
+            .args(["--seed", "1", "--quiet", "--out", name])
+            .args(["--strategy-command", &command, "--strategy-timeout-s", "60"])
+            .current_dir(tmp)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let pid_file = tmp.join(format!("{name}.pid"));
+        let t0 = std::time::Instant::now();
+        while !pid_file.is_file() && t0.elapsed() < std::time::Duration::from_secs(20) {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        // The program is waiting for its first decision by now, or soon.
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        let killed = std::process::Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let status = child.wait().unwrap();
+        assert!(!status.success(), "{name}: {status:?}");
+        let (pid, gone) = ended_soon(&pid_file);
+        assert!(gone, "{name}: the program's child {pid} still runs");
+        assert!(!tmp.join(name).exists(), "{name}: output left");
+    }
 }
 
 /// Output to a full disk (`/dev/full` as stdout) is an error for every command that prints: one

@@ -480,23 +480,27 @@ impl ExternalStrategy {
         if let Ok(joined) = std::env::join_paths(paths) {
             cmd.env("PYTHONPATH", joined);
         }
-        let mut child = cmd
-            .stdin(Stdio::piped())
+        cmd.stdin(Stdio::piped())
             .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .map_err(|e| {
-                fail(match e.kind() {
-                    std::io::ErrorKind::NotFound => format!(
-                        "cannot start '{}': no such program (is it installed and on PATH?)",
-                        program.command[0]
-                    ),
-                    _ => format!("cannot start '{}': {e}", program.command[0]),
-                })
-            })?;
+            .stderr(Stdio::piped());
+        // Started and registered under one lock, so that `end_strays` never takes a program
+        // just started for a stray.
+        let mut child = live_groups(|g| {
+            let child = cmd.spawn()?;
+            g.insert(child.id());
+            Ok(child)
+        })
+        .map_err(|e: std::io::Error| {
+            fail(match e.kind() {
+                std::io::ErrorKind::NotFound => format!(
+                    "cannot start '{}': no such program (is it installed and on PATH?)",
+                    program.command[0]
+                ),
+                _ => format!("cannot start '{}': {e}", program.command[0]),
+            })
+        })?;
         // The pipes' threads. One the system refuses is an error, not a panic: the program is
         // stopped (the threads already started end with its pipes).
-        live_groups(|g| g.insert(child.id()));
         let refused = |child: &mut std::process::Child, e: std::io::Error| {
             kill_group(child.id());
             live_groups(|g| g.remove(&child.id()));
@@ -598,11 +602,15 @@ impl ExternalStrategy {
             }
             std::thread::sleep(Duration::from_millis(5));
         }
-        // What it started and left running is ended with it (and said: `check_program`).
+        // What it started and left running is ended with it (and said: `check_program`),
+        // in its group or escaped from it (`end_strays`).
         let left_behind = exited && group_alive(self.child.id());
         kill_group(self.child.id());
         let _ = self.child.kill();
         let _ = self.child.wait();
+        live_groups(|g| g.remove(&self.child.id()));
+        let strays = end_strays();
+        let left_behind = left_behind || (exited && strays > 0);
         self.join_stderr();
         if let Some(what) = self.error.take() {
             return Err(self.error(what));
@@ -806,7 +814,80 @@ impl Drop for ExternalStrategy {
         let _ = self.child.kill();
         let _ = self.child.wait();
         live_groups(|g| g.remove(&self.child.id()));
+        end_strays();
     }
+}
+
+/// Makes floorcast the reaper of its orphaned descendants (Linux's child subreaper): a process a
+/// strategy program started in a session or process group of its own (`setsid`, a daemon) is
+/// no longer ended with the program's group, but when its parent ends it becomes floorcast's
+/// child instead of init's, and `end_strays` finds it. Called once at start.
+pub fn adopt_orphans() {
+    let _ = nix::sys::prctl::set_child_subreaper(true);
+}
+
+/// Ends (SIGKILL) and reaps every stray: a process that became floorcast's child by its parent
+/// ending ([`adopt_orphans`]), in a process group of neither floorcast nor a program running
+/// now, with the group it leads. Done after every program's end; returns how many it ended
+/// (ended strays not yet reaped are reaped, not counted).
+pub fn end_strays() -> usize {
+    let me = std::process::id();
+    let my_group = nix::unistd::getpgrp().as_raw() as u32;
+    let mut ended = 0;
+    // A stray's children become strays when it ends: a few rounds find them.
+    for _ in 0..10 {
+        let found = live_groups(|live| {
+            let mut found = 0;
+            for (pid, state, group) in children_of(me) {
+                if group == my_group || live.contains(&group) || live.contains(&pid) {
+                    continue;
+                }
+                let target = nix::unistd::Pid::from_raw(pid as i32);
+                if state != 'Z' {
+                    kill_group(group);
+                    let _ = nix::sys::signal::kill(target, nix::sys::signal::Signal::SIGKILL);
+                    found += 1;
+                }
+                let _ = nix::sys::wait::waitpid(target, None);
+            }
+            found
+        });
+        ended += found;
+        if found == 0 {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    ended
+}
+
+/// The children of process `parent` (pid, state, process group), from `/proc` (none without it).
+fn children_of(parent: u32) -> Vec<(u32, char, u32)> {
+    let Ok(dir) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for e in dir.flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
+            continue;
+        };
+        // "pid (comm) state ppid pgrp ...": the name may hold spaces and parentheses.
+        let Some((_, rest)) = stat.rsplit_once(')') else {
+            continue;
+        };
+        let fields: Vec<&str> = rest.split_whitespace().take(3).collect();
+        if let [state, ppid, group] = fields[..] {
+            if ppid.parse::<u32>() == Ok(parent) {
+                if let (Some(state), Ok(group)) = (state.chars().next(), group.parse::<u32>()) {
+                    out.push((pid, state, group));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The process groups of the programs running now (each program's group is its process id).
@@ -816,12 +897,23 @@ fn live_groups<T>(f: impl FnOnce(&mut std::collections::BTreeSet<u32>) -> T) -> 
     f(&mut GROUPS.lock().unwrap_or_else(|e| e.into_inner()))
 }
 
+/// Set when floorcast is being stopped ([`kill_all_programs`]).
+static STOPPING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether floorcast is being stopped by a signal (its programs killed): an error that follows
+/// (a program's pipe closed) is the stop's doing, and the stop's handler sets the exit code.
+pub fn stopping() -> bool {
+    STOPPING.load(std::sync::atomic::Ordering::SeqCst)
+}
+
 /// Kills every process of every program running now, for a floorcast that must stop at once
 /// (a second Ctrl-C): the programs' process groups do not get the terminal's signals.
 pub fn kill_all_programs() {
+    STOPPING.store(true, std::sync::atomic::Ordering::SeqCst);
     for g in live_groups(std::mem::take) {
         kill_group(g);
     }
+    end_strays();
 }
 
 /// Kills (SIGKILL) every process of the process group `pgid`, a program's.
