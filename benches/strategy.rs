@@ -10,7 +10,7 @@
 //! share; the start-up, from spawning the program to its hello reply, is printed apart). It
 //! checks that the two runs made the same decisions.
 //!
-//! Buildings: `buildings/small.toml`, and from `../shared/maps` Franch1 and freiburg_building79
+//! Buildings: `buildings/small.toml`, and from `maps/` Franch1 and freiburg_building79
 //! (skipped when absent).
 
 use std::path::{Path, PathBuf};
@@ -28,7 +28,7 @@ fn main() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(2);
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let maps = root.join("../shared/maps");
+    let maps = root.join("maps");
     let buildings: Vec<(PathBuf, u64)> = vec![
         (root.join("buildings/small.toml"), 1),
         (maps.join("schools/Franch1.yaml"), 2),

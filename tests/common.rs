@@ -20,9 +20,9 @@ pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// `../shared/maps` beside the repository.
+/// The real maps vendored in the repository (`maps/`).
 pub fn maps_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/maps")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("maps")
 }
 
 pub fn repo() -> PathBuf {

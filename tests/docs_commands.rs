@@ -1,7 +1,7 @@
 //! Every command the documents print is run, as printed, and must succeed.
 //!
 //! The documents are README.md, FINDINGS.md, BENCHMARKS.md, formats/*.md, buildings/README.md,
-//! results/**/README.md and docs/*.md. From each, the ```sh blocks are read; a line (joined with
+//! maps/README.md, results/**/README.md and docs/*.md. From each, the ```sh blocks are read; a line (joined with
 //! its `\` continuations, a `for ... done` loop taken whole) runs when it invokes floorcast:
 //! `floorcast ...`, `$F ...` after a `F=target/release/floorcast`-style assignment in the same
 //! block, `target/release/floorcast ...`, or `cargo run --release -- ...` (run as `floorcast
@@ -12,8 +12,9 @@
 //! Each document's commands run in order, with `bash -c`, in a fresh temporary directory that
 //! mirrors the repository: copies of `buildings/`, `grids/`, `results/` and `examples/` (so commands that
 //! write there leave the repository clean), `target/release/floorcast` and `bin/floorcast`
-//! (on `PATH`) linking to the built binary, and a `shared` sibling linking to the real
-//! `../shared`, so that relative paths in the commands mean what they mean in a checkout.
+//! (on `PATH`) linking to the built binary, and `maps/` linking to the repository's vendored
+//! maps, so that relative paths in the commands mean what they mean in a checkout. Nothing
+//! outside the repository is read.
 //!
 //! A few commands cannot run here; they are listed in [`NOT_RUN`], each checked otherwise:
 //! a grid of hundreds of runs is loaded and planned with the coordinator's `Plan::load` (and its
@@ -90,7 +91,7 @@ const NOT_RUN: &[(&str, Check)] = &[
         Check::LongRun,
     ),
     (
-        "explore --building ../shared/maps/schools/battle_creekhs_2.yaml --seed 2",
+        "explore --building maps/schools/battle_creekhs_2.yaml --seed 2",
         Check::LongRun,
     ),
 ];
@@ -111,6 +112,7 @@ fn documents() -> Vec<PathBuf> {
         root.join("FINDINGS.md"),
         root.join("BENCHMARKS.md"),
         root.join("buildings/README.md"),
+        root.join("maps/README.md"),
     ];
     let mut more = Vec::new();
     for dir in ["formats", "docs"] {
@@ -300,11 +302,8 @@ fn mirror() -> (tempfile::TempDir, PathBuf) {
     let bin = Path::new(env!("CARGO_BIN_EXE_floorcast"));
     link(bin, &root.join("target/release/floorcast"));
     link(bin, &tmp.path().join("bin/floorcast"));
-    let shared = repo()
-        .join("../shared")
-        .canonicalize()
-        .expect("../shared beside the repository");
-    link(&shared, &tmp.path().join("shared"));
+    // The vendored maps are only read: linked, not copied.
+    link(&repo().join("maps"), &root.join("maps"));
     (tmp, root)
 }
 

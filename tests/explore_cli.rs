@@ -321,7 +321,7 @@ fn layout_snapshots_draw_the_paper_sequence() {
     }
 }
 
-/// Real school maps (map_server rasters from `../shared/maps/schools`) explored with the SLAM
+/// Real school maps (map_server rasters from `maps/schools`) explored with the SLAM
 /// localization, one test per case: at least 97 % explored, not cut by the time limit, walls
 /// where the building has them, and an end class that agrees with the frontier cells left
 /// ("complete" exactly when none is left that the robot did not look into; the others name
@@ -467,12 +467,12 @@ macro_rules! short_end_cases {
 
 short_end_cases! {
     /// A crowded room whose way out the map narrowed to less than the body: 95.2 % explored.
-    pocket_freiburg_building101_baseline: "../shared/maps/radish/freiburg_building101.yaml",
+    pocket_freiburg_building101_baseline: "maps/radish/freiburg_building101.yaml",
         "baseline", 1, "9.125,14.375,-142.7496640392991", serde_json::Value::Null;
-    pocket_freiburg_building101_layout_es: "../shared/maps/radish/freiburg_building101.yaml",
+    pocket_freiburg_building101_layout_es: "maps/radish/freiburg_building101.yaml",
         "layout-es", 1, "9.125,14.375,-142.7496640392991", serde_json::Value::Null;
     /// A corridor about 0.5 m wide pinched shut by the map's noise ahead and behind: 95.5 %.
-    pocket_intel_map_baseline: "../shared/maps/radish/intel_map.yaml",
+    pocket_intel_map_baseline: "maps/radish/intel_map.yaml",
         "baseline", 1, "9.625,17.725,-142.7496640392991", serde_json::Value::Null;
     /// The door of a 67 m² room given up, the run ended "stuck" at 97.7 % with the room never
     /// entered (`baseline` explores it).
@@ -480,7 +480,7 @@ short_end_cases! {
         "layout-es", 1, "80.275,15.975,109.27675325726294", serde_json::json!(0);
     /// The door into the building's middle seen only from afar: the middle never entered,
     /// 79.3 % explored (0.5.0's starts grid).
-    closer_look_intel_map_baseline: "../shared/maps/radish/intel_map.yaml",
+    closer_look_intel_map_baseline: "maps/radish/intel_map.yaml",
         "baseline", 1, "1.5750000000000002,22.275000000000002,14.83180040987069", serde_json::Value::Null;
 }
 

@@ -44,7 +44,7 @@ const CASES: &[(&str, &str, &str, u64)] = &[
     ),
     (
         "franch1-baseline-1",
-        "../shared/maps/schools/Franch1.yaml",
+        "maps/schools/Franch1.yaml",
         "baseline",
         1,
     ),
@@ -52,7 +52,7 @@ const CASES: &[(&str, &str, &str, u64)] = &[
     // candidates have no path (the memo of what a failed search reached, `waypoints_to`).
     (
         "intel-map-baseline-1",
-        "../shared/maps/radish/intel_map.yaml",
+        "maps/radish/intel_map.yaml",
         "baseline",
         1,
     ),

@@ -178,7 +178,7 @@ fn a_strategy_drops_candidates_it_does_not_want() {
     let dir = tempfile::tempdir().unwrap();
     let command = python_command("tests/strategies/drops_small.py");
     let s = explore(
-        &repo().join("../shared/maps/schools/Franch1.yaml"),
+        &repo().join("maps/schools/Franch1.yaml"),
         2,
         "",
         dir.path(),

@@ -1463,7 +1463,7 @@ time_limit_s = 600
     fn the_starts_grid_plans_ten_random_starts_on_every_shared_map_and_paper_building() {
         let g = Path::new(env!("CARGO_MANIFEST_DIR")).join("../grids/starts.toml");
         let p = Plan::parse(&std::fs::read_to_string(&g).unwrap(), &g, None).unwrap();
-        let maps = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/maps");
+        let maps = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps");
         let mut expected = 10; // the paper set
         for folder in ["schools", "partial", "radish", "stage"] {
             expected += std::fs::read_dir(maps.join(folder))

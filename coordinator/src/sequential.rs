@@ -1,6 +1,6 @@
 //! Sequential comparisons: a generalized sequential probability ratio test (GSPRT) on paired
-//! outcomes, as fishtest decides chess engine changes (see `../shared/reference/
-//! harness-anchors.md`).
+//! outcomes, as fishtest decides chess engine changes (its SPRT on pentanomial outcomes and
+//! M. Van den Bergh's GSPRT notes).
 //!
 //! The outcome of a pair (the same building and seed run with the reference label and with the
 //! label under test) is the log ratio of their exploration times, `x = ln(t_ref / t_label)`:

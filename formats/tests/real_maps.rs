@@ -7,7 +7,7 @@ use floorcast_formats::map_server::{building_from_map, read_map};
 use sim_core::Occupancy;
 
 fn maps_dir() -> PathBuf {
-    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/maps")).to_path_buf()
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../maps")).to_path_buf()
 }
 
 fn all_yamls() -> Vec<PathBuf> {

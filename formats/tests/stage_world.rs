@@ -9,7 +9,7 @@ use sim_core::Geometry;
 fn willow_erratic_world() {
     let p = Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/maps/stage/willow-erratic.world"
+        "/../maps/stage/willow-erratic.world"
     ));
     let b = read_world(p).unwrap_or_else(|e| panic!("{e}"));
     let Geometry::Raster { solid } = &b.geometry else {

@@ -1,4 +1,4 @@
-//! Times `reconstruct_layout` on every real map in the shared folder and on synthetic complete
+//! Times `reconstruct_layout` on every real map in `maps/` and on synthetic complete
 //! and partial buildings, prints accuracy on the synthetic ones, and optionally draws the layouts.
 //!
 //! Per map class it prints the median and maximum time of `reconstruct_layout`, and a ratio

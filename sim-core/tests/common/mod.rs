@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 
 use sim_core::{Cell, GridFrame, Occupancy, OccupancyGrid, Vec2};
 
-/// The shared map folder (`/work/shared/maps` from a worktree).
+/// The real maps vendored in the repository (`maps/`).
 pub fn maps_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/maps")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps")
 }
 
 /// Every map YAML under the folder, sorted.
