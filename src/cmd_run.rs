@@ -758,9 +758,37 @@ fn charts(
                 .collect(),
             marks_label: "early stop".into(),
         };
-        out.push((format!("progress-{building}"), chart.figure_styled(style)));
+        out.push((
+            format!("progress-{}", file_name_part(building)),
+            chart.figure_styled(style),
+        ));
     }
     out
+}
+
+/// A stored building's name as part of a chart's file name: a name the grid checks
+/// ([`floorcast_coordinator::names::file_name_part`]) as it is; another (from an older or a
+/// tampered store) with its separators, dots and unprintable characters replaced by '_' and cut
+/// to 100 characters, so that no chart is written outside `--plots`.
+fn file_name_part(name: &str) -> String {
+    if floorcast_coordinator::names::file_name_part(name).is_ok()
+        && !name
+            .chars()
+            .any(|c| floorcast_worker::text::unprintable(c).is_some())
+    {
+        return name.to_string();
+    }
+    name.replace("..", "_")
+        .chars()
+        .map(|c| {
+            if c == '/' || c == '\\' || floorcast_worker::text::unprintable(c).is_some() {
+                '_'
+            } else {
+                c
+            }
+        })
+        .take(floorcast_coordinator::names::MAX_NAME_CHARS)
+        .collect()
 }
 
 /// `report --html`: one offline page with the report's text and its charts (inline SVG).

@@ -126,11 +126,11 @@ fn grid_errors_name_the_external_strategy_field() {
         ),
         (
             "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\nfiles = [\"missing.py\"]\n",
-            "strategies[0].command: file 'missing.py' is not a file",
+            "strategies[0].files[0]: file 'missing.py' is not a file",
         ),
         (
             "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\ntimeout_s = 0\n",
-            "strategies[0].command: the strategy timeout 0 s is outside",
+            "strategies[0].timeout_s: the strategy timeout 0 s is outside",
         ),
         (
             "[[strategies]]\nname = \"baseline\"\ntimeout_s = 5\n",
