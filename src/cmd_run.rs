@@ -186,8 +186,19 @@ pub fn run(a: RunArgs) -> Result<()> {
         .then(|| floorcast_coordinator::store::lock_results(&plan.results_dir))
         .transpose()?;
     let store = Store::open(&plan.results_dir)?;
+    let stored = store.all()?;
+    // A label stands for one configuration: runs of another under it would be merged in the
+    // report (refused before anything runs).
+    floorcast_coordinator::table::check_plan_labels(&plan.jobs, &stored).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e} (results in {})",
+            plan.grid_path.display(),
+            store.path().display()
+        )
+    })?;
     // A sequential grid's jobs so far: those of every batch whose predecessors are all stored.
-    let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
+    let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &stored);
+    drop(stored);
     if a.summary {
         let results = store.all()?;
         say!(
@@ -463,6 +474,9 @@ pub fn report(a: ReportArgs) -> Result<()> {
         )?;
     }
     let results = store.all()?;
+    // A label stands for one configuration: runs of two are never merged into one row.
+    floorcast_coordinator::table::check_label_configurations(&results)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.results.join(DB_FILE).display()))?;
     let grids = store.grids()?;
     // The other store and its label are checked before anything is printed.
     let against = match &a.against {
