@@ -250,6 +250,14 @@ impl Configuration {
         }
     }
 
+    /// Whether `other` is the same configuration. A row without a summary (a failed job)
+    /// stored no program: its program is taken as the same.
+    pub fn same(&self, other: &Configuration) -> bool {
+        self.strategy == other.strategy
+            && self.settings == other.settings
+            && (self.program.is_none() || other.program.is_none() || self.program == other.program)
+    }
+
     /// How `other` differs from this one, in a few words ("alpha 0.5 and 0.8").
     pub fn difference(&self, other: &Configuration) -> String {
         use floorcast_worker::text::excerpt;
@@ -297,13 +305,19 @@ pub fn check_label_configurations(results: &[StoredResult]) -> Result<(), String
             None => {
                 first.insert(&r.label, (c, &r.job_id));
             }
-            Some((c0, job0)) if *c0 != c => return Err(format!(
+            Some((c0, job0)) if !c0.same(&c) => {
+                return Err(format!(
                 "label '{}' holds runs of two configurations ({}; jobs {} and {}): {LABEL_REUSED}",
                 floorcast_worker::text::excerpt(&r.label),
                 c0.difference(&c),
                 floorcast_worker::text::excerpt(job0),
                 floorcast_worker::text::excerpt(&r.job_id)
-            )),
+            ))
+            }
+            Some((c0, _)) if c0.program.is_none() && c.program.is_some() => {
+                // The first row that knows the program stands for the label from here on.
+                first.insert(&r.label, (c, &r.job_id));
+            }
             Some(_) => {}
         }
     }
@@ -325,7 +339,7 @@ pub fn check_plan_labels(
     for r in results {
         if let Some(c) = planned.get(r.label.as_str()) {
             let stored = Configuration::of_row(r);
-            if stored != *c {
+            if !stored.same(c) {
                 return Err(format!(
                     "label '{}' already has runs of another configuration in this results directory ({}, stored and in the grid; stored job {}): {LABEL_REUSED}",
                     floorcast_worker::text::excerpt(&r.label),
@@ -1514,6 +1528,18 @@ mod tests {
         let e =
             check_label_configurations(&[with_program("a.py"), with_program("b.py")]).unwrap_err();
         assert!(e.contains("external program"), "{e}");
+        // A failed job stored no program: the same as any, and not the label's reference.
+        let mut failed = b.clone();
+        failed.summary_json = None;
+        failed.status = "failed".into();
+        assert_eq!(
+            check_label_configurations(&[failed.clone(), with_program("a.py")]),
+            Ok(())
+        );
+        assert!(
+            check_label_configurations(&[failed, with_program("a.py"), with_program("b.py")])
+                .is_err()
+        );
         let mut slower = with_program("a.py");
         slower.summary_json = slower
             .summary_json
