@@ -1205,8 +1205,16 @@ fn program_job_id(id: &str, p: &StrategyProgram) -> String {
     digest[..16].iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// A parser's message on one line, each of its lines (which may quote a long line of the
+/// grid) shortened ([`floorcast_worker::text::shortened`]).
 fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
+    s.lines()
+        .map(floorcast_worker::text::shortened)
+        .collect::<Vec<_>>()
+        .join("\n")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 #[cfg(test)]
@@ -1645,6 +1653,24 @@ time_limit_s = 600
     #[test]
     fn long_values_are_quoted_as_short_excerpts() {
         let big = "x".repeat(200_000);
+        // The parser's own messages quote the line (and the value): shortened.
+        for text in [
+            GOOD.replace("seed_range = [1, 3]", &format!("seed_range = \"{big}\"")),
+            GOOD.replace("label = \"near\"", &format!("label = \"{big}")),
+        ] {
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(e.len() < 800, "{} bytes: {}", e.len(), &e[..800]);
+            assert!(e.contains("characters in all)"), "{e}");
+        }
+        // A setting's name.
+        let e = parse(&GOOD.replace("time_limit_s = 600", &format!("{big} = 1")))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.len() < 1200 && e.contains("(200000 characters in all): unknown setting"),
+            "{}",
+            &e[..800.min(e.len())]
+        );
         for text in [
             GOOD.replace(
                 "name = \"baseline\"\n[[strategies]]",

@@ -76,9 +76,36 @@ pub fn excerpt(s: &str) -> String {
     }
 }
 
+/// A line of a library's message (a TOML parser's, which quotes the input's line and value)
+/// kept to its first and last [`EXCERPT_CHARS`] characters when longer than three times that,
+/// the cut saying the line's length: what the message says at its end (what was expected) stays.
+pub fn shortened(line: &str) -> String {
+    let n = line.chars().count();
+    if n <= 3 * EXCERPT_CHARS {
+        return line.to_string();
+    }
+    let head: String = line.chars().take(EXCERPT_CHARS).collect();
+    let tail: String = line.chars().skip(n - EXCERPT_CHARS).collect();
+    format!("{head} ... ({n} characters in all) ... {tail}")
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{excerpt, shown, unprintable, EXCERPT_CHARS};
+    use super::{excerpt, shortened, shown, unprintable, EXCERPT_CHARS};
+
+    #[test]
+    fn long_lines_keep_their_ends() {
+        assert_eq!(shortened("short line"), "short line");
+        let line = format!("value \"{}\", expected a table", "x".repeat(100_000));
+        let s = shortened(&line);
+        assert!(s.len() < 300, "{s}");
+        assert!(s.starts_with("value \"xxx"), "{s}");
+        assert!(s.ends_with("\", expected a table"), "{s}");
+        assert!(
+            s.contains(&format!("({} characters in all)", line.len())),
+            "{s}"
+        );
+    }
 
     #[test]
     fn excerpts_are_short_escaped_and_say_the_length() {
