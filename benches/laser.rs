@@ -163,8 +163,8 @@ fn main() {
         ..GenerateConfig::default()
     });
     bench("generated school (vector)", &school);
-    let willow = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("maps/stage/willow-full.yaml");
+    let willow =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("maps/stage/willow-full.yaml");
     match floorcast_formats::read_building(&willow) {
         Ok(b) => bench("willow-full (raster, 0.10 m)", &b),
         Err(e) => println!("skipping willow-full: {e}"),

@@ -39,8 +39,8 @@ pub struct ExploreArgs {
     strategy_timeout_s: f64,
     /// The --strategy-command program's own parameters, a JSON object (at most 64 KiB), e.g.
     /// '{"stop_below_m2": 5}': sent to it in the run message as `params` and recorded with
-    /// the run.
-    #[arg(long, value_name = "JSON", requires = "strategy_command")]
+    /// the run. Only with --strategy-command (built-in strategies take settings instead).
+    #[arg(long, value_name = "JSON")]
     strategy_params: Option<String>,
     /// Seed of the run's randomness (odometry error, laser noise): a whole number, 0 to 2^64 - 1.
     #[arg(long, default_value_t = 0, value_parser = crate::values::whole_number::<u64>(0, u64::MAX))]
@@ -101,6 +101,13 @@ pub struct ExploreArgs {
 
 pub fn run(a: ExploreArgs) -> Result<()> {
     crate::output::stop_programs_on_ctrl_c();
+    // Parameters a built-in strategy would never see are refused, not dropped.
+    if a.strategy_params.is_some() && a.strategy_command.is_none() {
+        anyhow::bail!(
+            "--strategy-params: applies to external strategies (--strategy-command) only; the built-in strategy {} takes settings instead (--settings FILE, see `floorcast settings`)",
+            a.strategy
+        );
+    }
     let building = floorcast_formats::read_building(&a.building)?;
     let name = a
         .building

@@ -198,8 +198,19 @@ pub fn run(a: RunArgs) -> Result<()> {
     } else {
         Store::open(&plan.results_dir)?
     };
+    let stored = store.all()?;
+    // A label stands for one configuration: runs of another under it would be merged in the
+    // report (refused before anything runs).
+    floorcast_coordinator::table::check_plan_labels(&plan.jobs, &stored).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e} (results in {})",
+            plan.grid_path.display(),
+            store.path().display()
+        )
+    })?;
     // A sequential grid's jobs so far: those of every batch whose predecessors are all stored.
-    let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
+    let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &stored);
+    drop(stored);
     if a.summary {
         let results = store.all()?;
         say!(
@@ -475,6 +486,9 @@ pub fn report(a: ReportArgs) -> Result<()> {
         )?;
     }
     let results = store.all()?;
+    // A label stands for one configuration: runs of two are never merged into one row.
+    floorcast_coordinator::table::check_label_configurations(&results)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.results.join(DB_FILE).display()))?;
     let grids = store.grids()?;
     // The other store and its label are checked before anything is printed.
     let against = match &a.against {
@@ -770,9 +784,37 @@ fn charts(
                 .collect(),
             marks_label: "early stop".into(),
         };
-        out.push((format!("progress-{building}"), chart.figure_styled(style)));
+        out.push((
+            format!("progress-{}", file_name_part(building)),
+            chart.figure_styled(style),
+        ));
     }
     out
+}
+
+/// A stored building's name as part of a chart's file name: a name the grid checks
+/// ([`floorcast_coordinator::names::file_name_part`]) as it is; another (from an older or a
+/// tampered store) with its separators, dots and unprintable characters replaced by '_' and cut
+/// to 100 characters, so that no chart is written outside `--plots`.
+fn file_name_part(name: &str) -> String {
+    if floorcast_coordinator::names::file_name_part(name).is_ok()
+        && !name
+            .chars()
+            .any(|c| floorcast_worker::text::unprintable(c).is_some())
+    {
+        return name.to_string();
+    }
+    name.replace("..", "_")
+        .chars()
+        .map(|c| {
+            if c == '/' || c == '\\' || floorcast_worker::text::unprintable(c).is_some() {
+                '_'
+            } else {
+                c
+            }
+        })
+        .take(floorcast_coordinator::names::MAX_NAME_CHARS)
+        .collect()
 }
 
 /// `report --html`: one offline page with the report's text and its charts (inline SVG).

@@ -20,8 +20,8 @@ pub struct WorkerArgs {
     /// memory.
     #[arg(long, value_name = "N", value_parser = crate::values::whole_number::<usize>(1, crate::values::MAX_THREADS))]
     jobs: Option<usize>,
-    /// Give up when no coordinator has answered for this many seconds (0: wait forever).
-    /// The worker also waits this long for a coordinator that restarts.
+    /// Give up when no coordinator has answered for this many seconds, 0 to 86400 (a day);
+    /// 0: wait forever. The worker also waits this long for a coordinator that restarts.
     #[arg(long, value_name = "S", default_value_t = 300.0, value_parser = crate::values::number)]
     wait_s: f64,
     /// This worker's name in the coordinator's log and the results (default: host, process id
@@ -35,6 +35,9 @@ pub struct WorkerArgs {
     quiet: bool,
 }
 
+/// The longest `--wait-s` (a day): longer is "forever", which is 0.
+const MAX_WAIT_S: f64 = 86_400.0;
+
 pub fn run(a: WorkerArgs) -> Result<()> {
     crate::output::stop_programs_on_ctrl_c();
     if a.connect.is_empty() && a.net.zenoh_config.is_none() {
@@ -42,9 +45,9 @@ pub fn run(a: WorkerArgs) -> Result<()> {
             "no coordinator to join: give --connect tcp/HOST:7447 (the endpoint of `floorcast run GRID --listen ...`) or a --zenoh-config that lists it"
         );
     }
-    if a.wait_s < 0.0 {
+    if !(0.0..=MAX_WAIT_S).contains(&a.wait_s) {
         anyhow::bail!(
-            "--wait-s must be 0 or more seconds, got {}",
+            "--wait-s: expected seconds in [0, {MAX_WAIT_S}] (0: wait forever), got {}",
             floorcast_worker::settings::fmt_num(a.wait_s)
         );
     }

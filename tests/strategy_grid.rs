@@ -89,20 +89,31 @@ fn a_grid_runs_external_strategies_beside_the_built_in_ones() {
         assert_eq!(rows[&("nearest".into(), seed.into())]["status"], "ok");
         assert_eq!(rows[&("crashes".into(), seed.into())]["status"], "failed");
     }
-    // The program's identity is in its jobs' ids: the same grid again has nothing to do; a
-    // changed program makes new jobs.
+    // The program's identity is in its jobs' ids: the same grid again has nothing to do (the
+    // crashing program's failed jobs, which stored no program, count as its own); a changed
+    // program is another configuration of its label, refused where the old one's runs are
+    // (report would merge them), and makes new jobs in another results directory.
     let again = run_grid(&g, &res);
     assert!(
         stdout(&again).contains("nothing to do"),
         "{}",
-        stdout(&again)
+        stderr(&again)
     );
     let script = dir.path().join("strategies/nearest.py");
     let text = std::fs::read_to_string(&script).unwrap();
     std::fs::write(&script, format!("{text}\n# changed\n")).unwrap();
-    let changed = run_grid(&g, &res);
+    let refused = run_grid(&g, &res);
+    assert_clean_failure(
+        &refused,
+        &[
+            "label 'nearest' already has runs of another configuration",
+            "external program",
+            "its own label",
+        ],
+    );
+    let changed = run_grid(&g, &dir.path().join("res-changed"));
     assert!(
-        stdout(&changed).contains("done: 2 jobs run now, 6 stored before"),
+        stdout(&changed).contains("done: 8 jobs run now"),
         "{}",
         stdout(&changed)
     );
@@ -126,11 +137,11 @@ fn grid_errors_name_the_external_strategy_field() {
         ),
         (
             "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\nfiles = [\"missing.py\"]\n",
-            "strategies[0].command: file 'missing.py' is not a file",
+            "strategies[0].files[0]: file 'missing.py' is not a file",
         ),
         (
             "[[strategies]]\nlabel = \"x\"\ncommand = [\"python3\", \"x.py\"]\ntimeout_s = 0\n",
-            "strategies[0].command: the strategy timeout 0 s is outside",
+            "strategies[0].timeout_s: the strategy timeout 0 s is outside",
         ),
         (
             "[[strategies]]\nname = \"baseline\"\ntimeout_s = 5\n",

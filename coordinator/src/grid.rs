@@ -15,6 +15,8 @@ use sha2::{Digest, Sha256};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 use sim_core::{Building, Pose};
 
+use floorcast_worker::text::excerpt;
+
 pub const GRID_FORMAT: &str = "floorcast-grid";
 pub const GRID_VERSION: u32 = 1;
 
@@ -394,11 +396,23 @@ impl Plan {
                 "name",
                 format!(
                     "'{}' must be non-empty and use only letters, digits, '-', '_', '.'",
-                    file.name
+                    excerpt(&file.name)
                 ),
             ));
         }
+        // The name is a folder of `results/` by default.
+        crate::names::file_name_part(&file.name).map_err(|p| invalid("name", p))?;
         let base_dir = path.parent().unwrap_or(Path::new("."));
+        // Patterns are matched as text: a folder whose name is not UTF-8 would match nothing.
+        if !file.buildings.is_empty() && base_dir.to_str().is_none() {
+            return Err(invalid(
+                "buildings",
+                format!(
+                    "the grid file's folder {} has a name that is not UTF-8, which patterns cannot match; move the grid (or rename the folder) to a UTF-8 path",
+                    floorcast_worker::text::shown(&base_dir.to_string_lossy(), 300)
+                ),
+            ));
+        }
 
         // Buildings.
         let mut buildings: Vec<PlannedBuilding> = Vec::new();
@@ -424,6 +438,18 @@ impl Plan {
                 });
             }
         }
+        // The names of the buildings from files (their file stems), checked as every name is.
+        for b in buildings.iter_mut() {
+            b.name = crate::names::building_name(&b.name).map_err(|p| {
+                invalid(
+                    "buildings",
+                    format!(
+                        "{}: its name (the file name without extension) {p}",
+                        floorcast_worker::text::shown(&b.source, 300)
+                    ),
+                )
+            })?;
+        }
         for (i, g) in file.generated.iter().enumerate() {
             let field = format!("generated[{i}]");
             if !(g.area_m2.is_finite() && (100.0..=20_000.0).contains(&g.area_m2)) {
@@ -438,7 +464,7 @@ impl Plan {
                 k => {
                     return Err(invalid(
                         &format!("{field}.kind"),
-                        format!("'{k}' is not school or office"),
+                        format!("'{}' is not school or office", excerpt(k)),
                     ))
                 }
             };
@@ -451,10 +477,11 @@ impl Plan {
                     ),
                 ));
             }
-            let name = g
-                .name
-                .clone()
-                .unwrap_or_else(|| format!("gen-{}-{}-{}", g.kind, g.area_m2 as u64, g.seed));
+            let name = match &g.name {
+                Some(n) => crate::names::building_name(n)
+                    .map_err(|p| invalid(&format!("{field}.name"), p))?,
+                None => format!("gen-{}-{}-{}", g.kind, g.area_m2 as u64, g.seed),
+            };
             let b = generate(&GenerateConfig {
                 seed: g.seed,
                 area_m2: g.area_m2,
@@ -485,8 +512,10 @@ impl Plan {
                 return Err(invalid(
                     "buildings",
                     format!(
-                        "two buildings are named '{}' ({prev} and {}); rename one",
-                        b.name, b.source
+                        "two buildings are named '{}' ({} and {}; names are compared after trimming and Unicode normalisation); rename one",
+                        excerpt(&b.name),
+                        floorcast_worker::text::shown(&prev, 300),
+                        floorcast_worker::text::shown(&b.source, 300)
                     ),
                 ));
             }
@@ -561,7 +590,7 @@ impl Plan {
                             &format!("{field}.name"),
                             format!(
                                 "unknown strategy '{}' (available: {})",
-                                name,
+                                excerpt(name),
                                 STRATEGIES.join(", ")
                             ),
                         ));
@@ -587,14 +616,29 @@ impl Plan {
                             "an external strategy (one with a command) needs a label".into(),
                         ));
                     };
-                    let program = StrategyProgram::new(
-                        command.clone(),
-                        s.files.clone(),
-                        grid_dir,
-                        s.timeout_s
-                            .unwrap_or(floorcast_worker::external::DEFAULT_TIMEOUT_S),
-                    )
-                    .map_err(|p| invalid(&format!("{field}.command"), p))?;
+                    let label = crate::names::label(label)
+                        .map_err(|p| invalid(&format!("{field}.label"), p))?;
+                    // Each field's errors name that field: the timeout, each of `files`, then
+                    // the command (reading the files: `files` when there are any).
+                    let timeout_s = s
+                        .timeout_s
+                        .unwrap_or(floorcast_worker::external::DEFAULT_TIMEOUT_S);
+                    floorcast_worker::external::check_timeout(timeout_s)
+                        .map_err(|p| invalid(&format!("{field}.timeout_s"), p))?;
+                    for (j, f) in s.files.iter().enumerate() {
+                        floorcast_worker::external::check_file(grid_dir, f)
+                            .map_err(|p| invalid(&format!("{field}.files[{j}]"), p))?;
+                    }
+                    let files_field = if s.files.is_empty()
+                        || command.first().is_none_or(|w| w.trim().is_empty())
+                    {
+                        format!("{field}.command")
+                    } else {
+                        format!("{field}.files")
+                    };
+                    let program =
+                        StrategyProgram::new(command.clone(), s.files.clone(), grid_dir, timeout_s)
+                            .map_err(|p| invalid(&files_field, p))?;
                     let params = match &s.params {
                         Some(t) => params_json(t, &format!("{field}.params"))
                             .map_err(|(f, p)| invalid(&f, p))?,
@@ -605,9 +649,9 @@ impl Plan {
                         .map_err(|p| invalid(&format!("{field}.params"), p))?;
                     let contents = program
                         .read_files()
-                        .map_err(|p| invalid(&format!("{field}.command"), p))?;
+                        .map_err(|p| invalid(&files_field, p))?;
                     program_files.insert(program.files_sha256.clone(), Arc::new(contents));
-                    (label.clone(), Some(program))
+                    (label, Some(program))
                 }
                 (Some(_), Some(_)) => {
                     return Err(invalid(
@@ -625,12 +669,17 @@ impl Plan {
                     ))
                 }
             };
-            let label = s.label.clone().unwrap_or_else(|| name.clone());
-            check_label(&label).map_err(|p| invalid(&format!("{field}.label"), p))?;
-            if labels.contains(&label) {
+            // Labels are compared as normalised: two that differ only by white space at an end,
+            // by NFC against NFD or by an invisible character are one label (the last refused).
+            let label = crate::names::label(s.label.as_deref().unwrap_or(&name))
+                .map_err(|p| invalid(&format!("{field}.label"), p))?;
+            if let Some(first) = labels.iter().position(|l| *l == label) {
                 return Err(invalid(
                     &format!("{field}.label"),
-                    format!("label '{label}' is used twice; give each strategy a distinct label"),
+                    format!(
+                        "label '{}' is used twice (strategies[{first}] and {field}; labels are compared after trimming and Unicode normalisation); give each strategy a distinct label",
+                        excerpt(&label)
+                    ),
                 ));
             }
             let mut merged = file.settings.clone();
@@ -648,7 +697,10 @@ impl Plan {
             }) {
                 return Err(invalid(
                     &field,
-                    format!("strategy '{label}' repeats another with the same name and settings"),
+                    format!(
+                        "strategy '{}' repeats another with the same name and settings",
+                        excerpt(&label)
+                    ),
                 ));
             }
             let built_in = if program.is_some() { "baseline" } else { &name };
@@ -693,17 +745,20 @@ impl Plan {
                 ));
             }
         }
-        if let Some(q) = &sequential {
-            if !labels.contains(&q.reference) {
+        if let Some(q) = &mut sequential {
+            let reference = crate::names::label(&q.reference)
+                .map_err(|p| invalid("sequential.reference", p))?;
+            if !labels.contains(&reference) {
                 return Err(invalid(
                     "sequential.reference",
                     format!(
                         "'{}' is not a label of the grid's strategies ({})",
-                        q.reference,
+                        excerpt(&q.reference),
                         labels.join(", ")
                     ),
                 ));
             }
+            q.reference = reference;
             if labels.len() < 2 {
                 return Err(invalid(
                     "sequential",
@@ -784,22 +839,6 @@ fn check_job_count(
     Ok(())
 }
 
-/// A strategy label is shown in tables and charts: non-empty, one line, printable.
-fn check_label(label: &str) -> Result<(), String> {
-    if label.trim().is_empty() {
-        return Err("the label is empty; give a short name such as \"nearest\"".into());
-    }
-    if label.chars().any(char::is_control) {
-        return Err(format!(
-            "{label:?} holds a line break or control character; expected one line of text"
-        ));
-    }
-    if label.chars().count() > 64 {
-        return Err("the label is longer than 64 characters; give a short name".into());
-    }
-    Ok(())
-}
-
 /// The results directory, when given, is a non-empty path on one line.
 fn check_results(results: Option<&str>) -> Result<(), String> {
     match results {
@@ -808,7 +847,8 @@ fn check_results(results: Option<&str>) -> Result<(), String> {
                 .into(),
         ),
         Some(r) if r.chars().any(char::is_control) => Err(format!(
-            "{r:?} holds a line break or control character; expected a directory path"
+            "'{}' holds a line break or control character; expected a directory path",
+            excerpt(r)
         )),
         _ => Ok(()),
     }
@@ -899,14 +939,16 @@ fn plan_starts(
         }
         for (i, p) in spec.poses.iter().enumerate() {
             let field = format!("starts.poses[{i}]");
-            let Some(bi) = buildings.iter().position(|b| b.name == p.building) else {
+            let name = crate::names::normalized(&p.building, "a building's name")
+                .map_err(|e| invalid(&format!("{field}.building"), e))?;
+            let Some(bi) = buildings.iter().position(|b| b.name == name) else {
                 let names: Vec<&str> = buildings.iter().map(|b| b.name.as_str()).collect();
                 return Err(invalid(
                     &format!("{field}.building"),
                     format!(
                         "no building of the grid is named '{}' (the names: {})",
-                        p.building,
-                        names.join(", ")
+                        excerpt(&p.building),
+                        excerpt(&names.join(", "))
                     ),
                 ));
             };
@@ -914,10 +956,13 @@ fn plan_starts(
             if !(-360.0..=360.0).contains(&deg) {
                 return Err(invalid(
                     &format!("{field}.pose"),
-                    format!("heading {deg} is not in [-360, 360] degrees (expected [x_m, y_m, heading_deg])"),
+                    format!(
+                        "heading {} is not in [-360, 360] degrees (expected [x_m, y_m, heading_deg])",
+                        floorcast_worker::settings::fmt_num(deg)
+                    ),
                 ));
             }
-            let pose = Pose::new(x, y, deg.to_radians());
+            let pose = Pose::new(x, y, normal_heading_deg(deg).to_radians());
             let b = &buildings[bi];
             check_start(
                 &b.building,
@@ -961,6 +1006,21 @@ fn plan_starts(
         }
     }
     Ok(out)
+}
+
+/// A heading in degrees as one angle of (-180, 180]: 0 and 360, or -180 and 180, are one start
+/// pose (one job identity). A heading already in (-180, 180] is returned bit for bit, so that the
+/// ids of the jobs it starts keep their value.
+pub fn normal_heading_deg(deg: f64) -> f64 {
+    if deg > -180.0 && deg <= 180.0 {
+        return deg;
+    }
+    let r = deg.rem_euclid(360.0);
+    if r > 180.0 {
+        r - 360.0
+    } else {
+        r
+    }
 }
 
 /// The identity of a job: a hash of everything that determines its result.
@@ -1045,7 +1105,8 @@ fn sequential_plan(
             return Err(invalid(
                 "sequential.multiplicity",
                 format!(
-                    "'{other}' is not a multiplicity rule (expected \"bonferroni\" or \"none\")"
+                    "'{}' is not a multiplicity rule (expected \"bonferroni\" or \"none\")",
+                    excerpt(other)
                 ),
             ))
         }
@@ -1135,8 +1196,16 @@ fn program_job_id(id: &str, p: &StrategyProgram) -> String {
     digest[..16].iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// A parser's message on one line, each of its lines (which may quote a long line of the
+/// grid) shortened ([`floorcast_worker::text::shortened`]).
 fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
+    s.lines()
+        .map(floorcast_worker::text::shortened)
+        .collect::<Vec<_>>()
+        .join("\n")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// At most this many folder entries are visited expanding one building pattern.
@@ -1601,6 +1670,210 @@ time_limit_s = 600
         .unwrap_err()
         .to_string();
         assert!(e.contains("for the robot's body"), "{e}");
+    }
+
+    #[test]
+    fn labels_are_unique_after_normalisation_naming_both() {
+        for second in ["near ", " near", "near\u{200b}"] {
+            let text = GOOD.replace("label = \"near\"", &format!("label = \"{second}\""))
+                + "[[strategies]]\nname = \"baseline\"\nlabel = \"near\"\nsettings = { alpha = 0.7 }\n";
+            let e = parse(&text).unwrap_err().to_string();
+            if second.contains('\u{200b}') {
+                assert!(
+                    e.contains("strategies[1].label") && e.contains("U+200B"),
+                    "{e}"
+                );
+            } else {
+                assert!(
+                    e.contains("strategies[2].label")
+                        && e.contains("used twice")
+                        && e.contains("strategies[1]"),
+                    "{second:?}: {e}"
+                );
+            }
+            assert_eq!(e.lines().count(), 1, "{e}");
+        }
+        // NFD and NFC spellings of one label are one label.
+        let text = GOOD.replace("label = \"near\"", "label = \"cafe\\u0301\"")
+            + "[[strategies]]\nname = \"baseline\"\nlabel = \"caf\\u00e9\"\nsettings = { alpha = 0.7 }\n";
+        let e = parse(&text).unwrap_err().to_string();
+        assert!(
+            e.contains("strategies[2].label") && e.contains("used twice"),
+            "{e}"
+        );
+        // A kept label is the normalised one.
+        let p = parse(&GOOD.replace("label = \"near\"", "label = \" cafe\\u0301 \"")).unwrap();
+        assert_eq!(p.labels, vec!["baseline", "caf\u{e9}"]);
+        for bad in ["\\u202eevil", "a\\u2066b", "\\u0007bell"] {
+            let e = parse(&GOOD.replace("label = \"near\"", &format!("label = \"{bad}\"")))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("strategies[1].label") && e.contains("printable"),
+                "{e}"
+            );
+            assert!(!e
+                .chars()
+                .any(|c| floorcast_worker::text::unprintable(c).is_some()));
+        }
+    }
+
+    #[test]
+    fn building_names_are_printable_short_and_no_paths() {
+        for (name, needle) in [
+            ("../evil", "path separator"),
+            ("a/b", "path separator"),
+            ("bell\\u0007", "U+0007"),
+            ("line\\nbreak", "U+000A"),
+            ("\\u202egnp", "U+202E"),
+        ] {
+            let text = GOOD.replace(
+                "area_m2 = 500",
+                &format!("area_m2 = 500\nname = \"{name}\""),
+            );
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(
+                e.contains("generated[0].name") && e.contains(needle),
+                "{name}: {e}"
+            );
+            assert_eq!(e.lines().count(), 1, "{e}");
+        }
+        let long = "n".repeat(245);
+        let e = parse(&GOOD.replace(
+            "area_m2 = 500",
+            &format!("area_m2 = 500\nname = \"{long}\""),
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("245 characters") && e.len() < 400, "{e}");
+        // A generated name equal to a file's stem after trimming is a duplicate.
+        let e = parse(&GOOD.replace("area_m2 = 500", "area_m2 = 500\nname = \" small \""))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("two buildings are named 'small'"), "{e}");
+        // Start poses name buildings as normalised.
+        let p = parse(&format!(
+            "{GOOD}[[starts.poses]]\nbuilding = \" small \"\npose = [3.0, 3.0, 0.0]\n"
+        ))
+        .unwrap();
+        assert!(p.jobs.iter().any(|j| j.start.is_some()));
+    }
+
+    #[test]
+    fn headings_are_one_angle_and_in_range_ids_keep_their_value() {
+        for (deg, want) in [
+            (0.0, 0.0),
+            (360.0, 0.0),
+            (-360.0, 0.0),
+            (180.0, 180.0),
+            (-180.0, 180.0),
+            (270.0, -90.0),
+            (-270.0, 90.0),
+            (-90.0, -90.0),
+            (45.5, 45.5),
+        ] {
+            assert_eq!(normal_heading_deg(deg), want, "{deg}");
+        }
+        // In (-180, 180]: bit for bit.
+        for deg in [0.1f64, -179.999, 180.0, 1e-300, -0.0, 33.333333333333336] {
+            assert_eq!(normal_heading_deg(deg).to_bits(), deg.to_bits(), "{deg}");
+        }
+        let pose = |deg: &str| {
+            format!("{GOOD}[[starts.poses]]\nbuilding = \"small\"\npose = [3.0, 3.0, {deg}]\n")
+        };
+        let id = |deg: &str| parse(&pose(deg)).unwrap().jobs[0].id.clone();
+        assert_eq!(id("360.0"), id("0.0"));
+        assert_eq!(id("-180.0"), id("180.0"));
+        assert_eq!(id("-270.0"), id("90.0"));
+        assert_ne!(id("90.0"), id("0.0"));
+        // The id of an in-range heading is the one it always had.
+        let p = parse(&pose("90.0")).unwrap();
+        let j = &p.jobs[0];
+        assert_eq!(
+            j.id,
+            job_id_from(
+                &p.buildings[0].hash,
+                "baseline",
+                j.seed,
+                &j.settings,
+                Some(&PlannedStart {
+                    pose: Pose::new(3.0, 3.0, 90f64.to_radians()),
+                    source: "grid".into()
+                })
+            )
+        );
+        // 0 and 360 degrees are one start pose: listed twice, refused.
+        let e = parse(&format!(
+            "{}[[starts.poses]]\nbuilding = \"small\"\npose = [3.0, 3.0, 360.0]\n",
+            pose("0.0")
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("starts.poses[1].pose") && e.contains("already starts"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_programs_files_are_named_as_files_and_its_timeout_as_timeout() {
+        let ext = |extra: &str| {
+            GOOD.replace(
+                "[[strategies]]\nname = \"baseline\"\nlabel",
+                &format!("[[strategies]]\ncommand = [\"python3\", \"../examples/strategies/nearest.py\"]\n{extra}label"),
+            )
+        };
+        let e = parse(&ext("files = [\"nothing.py\"]\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("strategies[1].files[0]") && e.contains("nothing.py"),
+            "{e}"
+        );
+        let e = parse(&ext("files = [\"/etc/hostname\"]\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("strategies[1].files[0]"), "{e}");
+        let e = parse(&ext("timeout_s = 1e300\n")).unwrap_err().to_string();
+        assert!(
+            e.contains("strategies[1].timeout_s") && e.contains("[0.01, 3600]"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn long_values_are_quoted_as_short_excerpts() {
+        let big = "x".repeat(200_000);
+        // The parser's own messages quote the line (and the value): shortened.
+        for text in [
+            GOOD.replace("seed_range = [1, 3]", &format!("seed_range = \"{big}\"")),
+            GOOD.replace("label = \"near\"", &format!("label = \"{big}")),
+        ] {
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(e.len() < 800, "{} bytes: {}", e.len(), &e[..800]);
+            assert!(e.contains("characters in all)"), "{e}");
+        }
+        // A setting's name.
+        let e = parse(&GOOD.replace("time_limit_s = 600", &format!("{big} = 1")))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.len() < 1200 && e.contains("(200000 characters in all): unknown setting"),
+            "{}",
+            &e[..800.min(e.len())]
+        );
+        for text in [
+            GOOD.replace(
+                "name = \"baseline\"\n[[strategies]]",
+                &format!("name = \"{big}\"\n[[strategies]]"),
+            ),
+            GOOD.replace("area_m2 = 500", &format!("area_m2 = 500\nkind = \"{big}\"")),
+            GOOD.replace("label = \"near\"", &format!("label = \"{big}\"")),
+        ] {
+            let e = parse(&text).unwrap_err().to_string();
+            assert!(e.len() < 600, "{} bytes: {}", e.len(), &e[..600]);
+            assert!(e.contains("200000 characters in all"), "{e}");
+        }
     }
 
     #[test]

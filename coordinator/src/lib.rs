@@ -31,6 +31,7 @@ pub mod aggregate;
 pub mod execute;
 pub mod grid;
 pub mod inbox;
+pub mod names;
 pub mod net;
 pub mod outcome;
 pub mod run;

@@ -178,6 +178,180 @@ pub fn labels_of(results: &[StoredResult]) -> Vec<&str> {
     labels
 }
 
+/// What a stored run of a label was run with: the strategy, the settings (each setting the row
+/// does not hold, stored by a version that had not got it yet, at its default: the value that
+/// version ran with) and an external program's identity (its command, files and their hash, its
+/// params; not its timeout). A label stands for one configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Configuration {
+    pub strategy: String,
+    pub settings: serde_json::Map<String, serde_json::Value>,
+    pub program: Option<serde_json::Value>,
+}
+
+impl Configuration {
+    /// The configuration of a stored row.
+    pub fn of_row(r: &StoredResult) -> Configuration {
+        let settings = match serde_json::from_str::<serde_json::Value>(&r.settings_json) {
+            Ok(serde_json::Value::Object(m)) => m,
+            _ => {
+                let mut m = serde_json::Map::new();
+                m.insert(
+                    "settings_json".into(),
+                    serde_json::Value::String(r.settings_json.clone()),
+                );
+                m
+            }
+        };
+        let program = r
+            .summary_json
+            .as_deref()
+            .and_then(|s| serde_json::from_str::<serde_json::Value>(s).ok())
+            .and_then(|v| v.get("strategy_program").cloned());
+        Self::new(&r.strategy, settings, program)
+    }
+
+    /// The configuration of a planned job.
+    pub fn of_job(j: &crate::grid::PlannedJob) -> Configuration {
+        let settings = match serde_json::to_value(&j.settings) {
+            Ok(serde_json::Value::Object(m)) => m,
+            _ => serde_json::Map::new(),
+        };
+        let program = j
+            .program
+            .as_ref()
+            .and_then(|p| serde_json::to_value(p).ok());
+        Self::new(&j.strategy, settings, program)
+    }
+
+    fn new(
+        strategy: &str,
+        stored: serde_json::Map<String, serde_json::Value>,
+        program: Option<serde_json::Value>,
+    ) -> Configuration {
+        let mut settings = match serde_json::to_value(floorcast_worker::Settings::default()) {
+            Ok(serde_json::Value::Object(m)) => m,
+            _ => serde_json::Map::new(),
+        };
+        settings.extend(stored);
+        let program = program.filter(|p| !p.is_null()).map(|p| {
+            let field = |k: &str, empty: serde_json::Value| p.get(k).cloned().unwrap_or(empty);
+            serde_json::json!({
+                "command": field("command", serde_json::json!([])),
+                "files": field("files", serde_json::json!([])),
+                "files_sha256": field("files_sha256", serde_json::json!("")),
+                "params": field("params", serde_json::json!({})),
+            })
+        });
+        Configuration {
+            strategy: strategy.to_string(),
+            settings,
+            program,
+        }
+    }
+
+    /// Whether `other` is the same configuration. A row without a summary (a failed job)
+    /// stored no program: its program is taken as the same.
+    pub fn same(&self, other: &Configuration) -> bool {
+        self.strategy == other.strategy
+            && self.settings == other.settings
+            && (self.program.is_none() || other.program.is_none() || self.program == other.program)
+    }
+
+    /// How `other` differs from this one, in a few words ("alpha 0.5 and 0.8").
+    pub fn difference(&self, other: &Configuration) -> String {
+        use floorcast_worker::text::excerpt;
+        if self.strategy != other.strategy {
+            return format!(
+                "strategy {} and {}",
+                excerpt(&self.strategy),
+                excerpt(&other.strategy)
+            );
+        }
+        let mut keys: Vec<&String> = self.settings.keys().chain(other.settings.keys()).collect();
+        keys.sort();
+        keys.dedup();
+        for k in keys {
+            let (a, b) = (self.settings.get(k), other.settings.get(k));
+            if a != b {
+                let show = |v: Option<&serde_json::Value>| {
+                    v.map_or("(none)".to_string(), |v| excerpt(&v.to_string()))
+                };
+                return format!("setting {} {} and {}", excerpt(k), show(a), show(b));
+            }
+        }
+        let show = |p: &Option<serde_json::Value>| match p {
+            Some(p) => excerpt(&p.to_string()),
+            None => "none".into(),
+        };
+        format!(
+            "external program {} and {}",
+            show(&self.program),
+            show(&other.program)
+        )
+    }
+}
+
+/// What to do when one label stands for two configurations.
+const LABEL_REUSED: &str = "the grid's label was reused after its settings changed; give the changed configuration its own label (or use another results directory)";
+
+/// Every label of `results` holds runs of one configuration ([`Configuration`]); else the first
+/// label that does not, and how its runs differ, in one line.
+pub fn check_label_configurations(results: &[StoredResult]) -> Result<(), String> {
+    let mut first: BTreeMap<&str, (Configuration, &str)> = BTreeMap::new();
+    for r in results {
+        let c = Configuration::of_row(r);
+        match first.get(r.label.as_str()) {
+            None => {
+                first.insert(&r.label, (c, &r.job_id));
+            }
+            Some((c0, job0)) if !c0.same(&c) => {
+                return Err(format!(
+                "label '{}' holds runs of two configurations ({}; jobs {} and {}): {LABEL_REUSED}",
+                floorcast_worker::text::excerpt(&r.label),
+                c0.difference(&c),
+                floorcast_worker::text::excerpt(job0),
+                floorcast_worker::text::excerpt(&r.job_id)
+            ))
+            }
+            Some((c0, _)) if c0.program.is_none() && c.program.is_some() => {
+                // The first row that knows the program stands for the label from here on.
+                first.insert(&r.label, (c, &r.job_id));
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// The labels of a planned grid's jobs have, among the stored `results`, only runs of the same
+/// configuration as the grid gives them; else the first label that has others, in one line.
+pub fn check_plan_labels(
+    jobs: &[crate::grid::PlannedJob],
+    results: &[StoredResult],
+) -> Result<(), String> {
+    let mut planned: BTreeMap<&str, Configuration> = BTreeMap::new();
+    for j in jobs {
+        planned
+            .entry(&j.label)
+            .or_insert_with(|| Configuration::of_job(j));
+    }
+    for r in results {
+        if let Some(c) = planned.get(r.label.as_str()) {
+            let stored = Configuration::of_row(r);
+            if !stored.same(c) {
+                return Err(format!(
+                    "label '{}' already has runs of another configuration in this results directory ({}, stored and in the grid; stored job {}): {LABEL_REUSED}",
+                    floorcast_worker::text::excerpt(&r.label),
+                    stored.difference(c),
+                    floorcast_worker::text::excerpt(&r.job_id)
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The paired gain of one label of a results set over a label of another (`report --against`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CrossGain {
@@ -1307,6 +1481,74 @@ pub(crate) mod tests {
             wall_time_s: 1.0,
             floorcast_version: "0".into(),
         }
+    }
+
+    #[test]
+    fn a_label_stands_for_one_configuration() {
+        let a = stored("small", "near", 1, 100.0);
+        let b = stored("small", "near", 2, 110.0);
+        assert_eq!(check_label_configurations(&[a.clone(), b.clone()]), Ok(()));
+        // A setting at its default, stored explicitly or not, is the same configuration.
+        let mut explicit = b.clone();
+        explicit.settings_json = serde_json::json!({
+            "alpha": floorcast_worker::Settings::default().alpha
+        })
+        .to_string();
+        assert_eq!(check_label_configurations(&[a.clone(), explicit]), Ok(()));
+        let mut changed = b.clone();
+        changed.settings_json = r#"{"alpha": 0.123}"#.into();
+        let e = check_label_configurations(&[a.clone(), changed.clone()]).unwrap_err();
+        for w in [
+            "'near'",
+            "setting alpha",
+            "0.123",
+            "reused",
+            "its own label",
+        ] {
+            assert!(e.contains(w), "{w}: {e}");
+        }
+        assert_eq!(e.lines().count(), 1);
+        let mut other = b.clone();
+        other.strategy = "layout".into();
+        let e = check_label_configurations(&[a.clone(), other]).unwrap_err();
+        assert!(e.contains("strategy near and layout"), "{e}");
+        // Another label may hold another configuration.
+        changed.label = "far".into();
+        assert_eq!(check_label_configurations(&[a.clone(), changed]), Ok(()));
+        // An external program's identity is part of it.
+        let with_program = |cmd: &str| {
+            let mut r = b.clone();
+            let mut v: serde_json::Value =
+                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            v["strategy_program"] = serde_json::json!({
+                "command": ["python3", cmd], "files_sha256": "ab", "timeout_s": 10.0
+            });
+            r.summary_json = Some(v.to_string());
+            r
+        };
+        let e =
+            check_label_configurations(&[with_program("a.py"), with_program("b.py")]).unwrap_err();
+        assert!(e.contains("external program"), "{e}");
+        // A failed job stored no program: the same as any, and not the label's reference.
+        let mut failed = b.clone();
+        failed.summary_json = None;
+        failed.status = "failed".into();
+        assert_eq!(
+            check_label_configurations(&[failed.clone(), with_program("a.py")]),
+            Ok(())
+        );
+        assert!(
+            check_label_configurations(&[failed, with_program("a.py"), with_program("b.py")])
+                .is_err()
+        );
+        let mut slower = with_program("a.py");
+        slower.summary_json = slower
+            .summary_json
+            .map(|s| s.replace("\"timeout_s\":10.0", "\"timeout_s\":20.0"));
+        assert_eq!(
+            check_label_configurations(&[with_program("a.py"), slower]),
+            Ok(())
+        );
     }
 
     #[test]

@@ -61,12 +61,21 @@ const EXPECTED_KEYS: &str =
 /// Reads a map_server YAML and its image as a ternary occupancy grid.
 pub fn read_map(yaml_path: &Path) -> Result<OccupancyGrid, Error> {
     let meta = read_map_yaml(yaml_path)?;
-    if !meta.image_path.is_file() {
+    // What is there decides the message: nothing, a folder, or a FIFO, device or socket (a FIFO
+    // would also block a reader forever).
+    let problem = match std::fs::metadata(&meta.image_path) {
+        Ok(m) if m.is_file() => None,
+        Ok(m) if m.is_dir() => Some("is a directory, not an image file"),
+        Ok(_) => Some("is not a regular file (a FIFO, device or socket); expected an image file"),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Some("does not exist"),
+        Err(_) => Some("cannot be read (its folder is not accessible)"),
+    };
+    if let Some(problem) = problem {
         return Err(Error::invalid(
             yaml_path,
             "image",
             format!(
-                "{} does not exist; `image` is resolved relative to the YAML's directory",
+                "{} {problem}; `image` is resolved relative to the YAML's directory",
                 meta.image_path.display()
             ),
         ));

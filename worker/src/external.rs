@@ -82,20 +82,9 @@ impl StrategyProgram {
         if command.is_empty() || command[0].trim().is_empty() {
             return Err("the strategy command is empty (expected a program and its arguments, e.g. \"python3 my_strategy.py\")".into());
         }
-        if !(timeout_s.is_finite() && (0.01..=3600.0).contains(&timeout_s)) {
-            return Err(format!(
-                "the strategy timeout {} s is outside [0.01, 3600] s",
-                crate::settings::fmt_num(timeout_s)
-            ));
-        }
+        check_timeout(timeout_s)?;
         for f in &files {
-            if !dir.join(f).is_file() {
-                return Err(format!(
-                    "file '{f}' is not a file (files are relative to {})",
-                    shown_dir(dir)
-                ));
-            }
-            relative_parts(f)?;
+            check_file(dir, f)?;
         }
         let mut p = Self {
             command,
@@ -125,7 +114,10 @@ impl StrategyProgram {
     /// The program from a command line split as a shell splits words.
     pub fn from_command_line(line: &str, dir: &Path, timeout_s: f64) -> Result<Self, String> {
         let words = shlex::split(line).ok_or_else(|| {
-            format!("cannot split the strategy command '{line}' into words (an unclosed quote?)")
+            format!(
+                "cannot split the strategy command '{}' into words (an unclosed quote?)",
+                crate::text::excerpt(line)
+            )
         })?;
         Self::new(words, Vec::new(), dir, timeout_s)
     }
@@ -293,6 +285,30 @@ fn shown_dir(dir: &Path) -> String {
     }
 }
 
+/// A program's reply timeout must be within [0.01, 3600] s.
+pub fn check_timeout(timeout_s: f64) -> Result<(), String> {
+    if !(timeout_s.is_finite() && (0.01..=3600.0).contains(&timeout_s)) {
+        return Err(format!(
+            "the strategy timeout {} s is outside [0.01, 3600] s",
+            crate::settings::fmt_num(timeout_s)
+        ));
+    }
+    Ok(())
+}
+
+/// One of a program's further `files`: a regular file, named relative to `dir`.
+pub fn check_file(dir: &Path, name: &str) -> Result<(), String> {
+    if !dir.join(name).is_file() {
+        return Err(format!(
+            "file '{}' is not a file (files are relative to {})",
+            crate::text::excerpt(name),
+            shown_dir(dir)
+        ));
+    }
+    relative_parts(name)?;
+    Ok(())
+}
+
 /// A relative file name as the levels it climbs ("..") and the parts below: refused when
 /// absolute or climbing after descending.
 fn relative_parts(name: &str) -> Result<(usize, Vec<String>), String> {
@@ -308,13 +324,17 @@ fn relative_parts(name: &str) -> Result<(usize, Vec<String>), String> {
             Component::Normal(p) => parts.push(p.to_string_lossy().into_owned()),
             Component::RootDir | Component::Prefix(_) => {
                 return Err(format!(
-                    "file '{name}' is an absolute path (give it relative to the grid file, so that remote workers can receive it)"
+                    "file '{}' is an absolute path (give it relative to the grid file, so that remote workers can receive it)",
+                    crate::text::excerpt(name)
                 ))
             }
         }
     }
     if parts.is_empty() {
-        return Err(format!("file '{name}' names no file"));
+        return Err(format!(
+            "file '{}' names no file",
+            crate::text::excerpt(name)
+        ));
     }
     Ok((up, parts))
 }
@@ -436,6 +456,8 @@ pub struct ExternalStrategy {
     charge: bool,
     compute_s: f64,
     replies: u64,
+    /// The last exchange, for a line that arrives unasked ("its answer to decision 3").
+    last_asked: String,
 }
 
 impl std::fmt::Debug for ExternalStrategy {
@@ -494,9 +516,12 @@ impl ExternalStrategy {
             fail(match e.kind() {
                 std::io::ErrorKind::NotFound => format!(
                     "cannot start '{}': no such program (is it installed and on PATH?)",
-                    program.command[0]
+                    crate::text::excerpt(&program.command[0])
                 ),
-                _ => format!("cannot start '{}': {e}", program.command[0]),
+                _ => format!(
+                    "cannot start '{}': {e}",
+                    crate::text::excerpt(&program.command[0])
+                ),
             })
         })?;
         // The pipes' threads. One the system refuses is an error, not a panic: the program is
@@ -551,6 +576,7 @@ impl ExternalStrategy {
             charge: false,
             compute_s: 0.0,
             replies: 0,
+            last_asked: "starting".into(),
         };
         let reply = s
             .exchange(
@@ -642,6 +668,17 @@ impl ExternalStrategy {
     /// Sends `msg` and waits for one reply line, parsed as JSON. `what` names the message in
     /// errors ("decision 4").
     fn exchange(&mut self, msg: &Value, what: &str) -> Result<Value, String> {
+        // A line waiting before `msg` is sent was not asked for (a second answer to the last
+        // message, or one written ahead): taken as the answer to `msg`, it would be blamed on
+        // the wrong message. (A program that ended is told by the `recv` below.)
+        if let Ok(Line::Text(early)) = self.lines.try_recv() {
+            return Err(format!(
+                "sent a line before it was asked for (after {}, before {what}): '{}'; a strategy answers each message once, after reading it (logs go to stderr)",
+                self.last_asked,
+                clip(&early, 80)
+            ));
+        }
+        self.last_asked = format!("its answer to {what}");
         self.send(msg)
             .map_err(|_| self.ended(&format!("before answering {what}")))?;
         let line = match self.lines.recv_timeout(self.timeout) {

@@ -673,8 +673,18 @@ pub fn settings_from_json_text(text: &str) -> Result<Settings, SettingsError> {
 
 /// A name or word from the file as a message shows it: escaped (a key written `"a\nb"` is shown
 /// `a\nb`, not broken over two lines).
+/// A value or name from the input as a message shows it: escaped, and cut to its first
+/// [`crate::text::EXCERPT_CHARS`] characters with its length when longer (as
+/// [`crate::text::excerpt`]).
 fn shown(s: &str) -> String {
-    s.escape_debug().to_string()
+    match s.char_indices().nth(crate::text::EXCERPT_CHARS) {
+        None => s.escape_debug().to_string(),
+        Some((cut, _)) => format!(
+            "{}... ({} characters in all)",
+            s[..cut].escape_debug(),
+            s.chars().count()
+        ),
+    }
 }
 
 fn one_line(s: &str) -> String {

@@ -19,9 +19,7 @@ pub fn shown(s: &str, max_bytes: usize) -> String {
             '\r' => "\\r".to_string(),
             '\t' => "\\t".to_string(),
             c if (c as u32) < 0x100 && c.is_control() => format!("\\x{:02x}", c as u32),
-            '\u{2028}' | '\u{2029}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}' => {
-                format!("\\u{{{:04x}}}", c as u32)
-            }
+            c if unprintable(c).is_some() => format!("\\u{{{:04x}}}", c as u32),
             c => c.to_string(),
         };
         if used + piece.len() > max_bytes {
@@ -34,9 +32,115 @@ pub fn shown(s: &str, max_bytes: usize) -> String {
     out
 }
 
+/// What kind of character `c` is when a terminal would not show it as itself: a control
+/// character (C0, DEL, C1), a bidirectional control (an override, embedding, isolate or mark,
+/// which reorders or hides what follows) or an invisible character (zero-width spaces and
+/// joiners, the word joiner, invisible operators, the byte-order mark, the line and paragraph
+/// separators); `None` for a printable character.
+pub fn unprintable(c: char) -> Option<&'static str> {
+    match c {
+        c if c.is_control() => Some("a control character"),
+        '\u{061c}'
+        | '\u{200e}'
+        | '\u{200f}'
+        | '\u{202a}'..='\u{202e}'
+        | '\u{2066}'..='\u{2069}' => Some("a bidirectional control character"),
+        '\u{00ad}'
+        | '\u{180e}'
+        | '\u{200b}'..='\u{200d}'
+        | '\u{2028}'
+        | '\u{2029}'
+        | '\u{2060}'..='\u{2064}'
+        | '\u{206a}'..='\u{206f}'
+        | '\u{feff}'
+        | '\u{fff9}'..='\u{fffb}' => Some("an invisible character"),
+        _ => None,
+    }
+}
+
+/// The most characters of outside text an error message quotes ([`excerpt`]).
+pub const EXCERPT_CHARS: usize = 80;
+
+/// Outside text (a value from a file, a name, a program's reply) as an error message quotes it:
+/// escaped as [`shown`] escapes it, and at most [`EXCERPT_CHARS`] characters; a longer text is
+/// cut with "..." and its length, so that what the message says after it is still read.
+pub fn excerpt(s: &str) -> String {
+    let mut chars = s.char_indices();
+    match chars.nth(EXCERPT_CHARS) {
+        None => shown(s, usize::MAX),
+        Some((cut, _)) => format!(
+            "{}... ({} characters in all)",
+            shown(&s[..cut], usize::MAX),
+            s.chars().count()
+        ),
+    }
+}
+
+/// A line of a library's message (a TOML parser's, which quotes the input's line and value)
+/// kept to its first and last [`EXCERPT_CHARS`] characters when longer than three times that,
+/// the cut saying the line's length: what the message says at its end (what was expected) stays.
+pub fn shortened(line: &str) -> String {
+    let n = line.chars().count();
+    if n <= 3 * EXCERPT_CHARS {
+        return line.to_string();
+    }
+    let head: String = line.chars().take(EXCERPT_CHARS).collect();
+    let tail: String = line.chars().skip(n - EXCERPT_CHARS).collect();
+    format!("{head} ... ({n} characters in all) ... {tail}")
+}
+
 #[cfg(test)]
 mod tests {
-    use super::shown;
+    use super::{excerpt, shortened, shown, unprintable, EXCERPT_CHARS};
+
+    #[test]
+    fn long_lines_keep_their_ends() {
+        assert_eq!(shortened("short line"), "short line");
+        let line = format!("value \"{}\", expected a table", "x".repeat(100_000));
+        let s = shortened(&line);
+        assert!(s.len() < 300, "{s}");
+        assert!(s.starts_with("value \"xxx"), "{s}");
+        assert!(s.ends_with("\", expected a table"), "{s}");
+        assert!(
+            s.contains(&format!("({} characters in all)", line.len())),
+            "{s}"
+        );
+    }
+
+    #[test]
+    fn excerpts_are_short_escaped_and_say_the_length() {
+        assert_eq!(excerpt("short"), "short");
+        assert_eq!(
+            excerpt(&"x".repeat(EXCERPT_CHARS)),
+            "x".repeat(EXCERPT_CHARS)
+        );
+        let long = "é".repeat(200_000);
+        let e = excerpt(&long);
+        assert_eq!(
+            e,
+            format!(
+                "{}... (200000 characters in all)",
+                "é".repeat(EXCERPT_CHARS)
+            )
+        );
+        assert_eq!(excerpt("a\nb\u{200b}c"), "a\\nb\\u{200b}c");
+        assert!(!excerpt(&"\x1b".repeat(500)).chars().any(char::is_control));
+        assert!(excerpt(&"\x1b".repeat(500)).len() < 400);
+    }
+
+    #[test]
+    fn invisible_and_bidi_characters_are_not_printable() {
+        for c in [
+            '\u{7}', '\n', '\u{9b}', '\u{202e}', '\u{2067}', '\u{200b}', '\u{200d}', '\u{2060}',
+            '\u{feff}',
+        ] {
+            assert!(unprintable(c).is_some(), "{c:?}");
+        }
+        for c in ['a', 'é', ' ', '✓', '\u{301}', '漢'] {
+            assert_eq!(unprintable(c), None, "{c:?}");
+        }
+        assert_eq!(shown("a\u{200b}b\u{feff}", 100), "a\\u{200b}b\\u{feff}");
+    }
 
     #[test]
     fn control_characters_are_escaped() {
