@@ -8,6 +8,7 @@
 
 pub mod building_toml;
 pub mod error;
+pub mod floorplan;
 pub mod limits;
 pub mod map_server;
 pub mod stage;
@@ -26,20 +27,21 @@ pub use building_toml::{
     parse_building_toml, read_building_toml, to_toml_string, write_building_toml,
 };
 pub use error::Error;
+pub use floorplan::read_floorplan;
 pub use map_server::{building_from_map, read_map, write_map};
 pub use stage::read_world;
 
 /// Resolution at which [`read_occupancy`] rasterises a building file.
 pub const OCCUPANCY_RESOLUTION_M: f64 = 0.05;
 
-const SUPPORTED: &str =
-    ".yaml/.yml (ROS map_server map), .world (Stage world), .toml (floorcast building)";
+const SUPPORTED: &str = ".yaml/.yml (ROS map_server map), .world (Stage world), .toml (floorcast building), .xml (annotated floor plan)";
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
     MapServer,
     Stage,
     Toml,
+    FloorPlan,
 }
 
 fn kind_of(path: &Path) -> Result<Kind, Error> {
@@ -50,6 +52,7 @@ fn kind_of(path: &Path) -> Result<Kind, Error> {
         Some("yaml" | "yml") => Ok(Kind::MapServer),
         Some("world") => Ok(Kind::Stage),
         Some("toml") => Ok(Kind::Toml),
+        Some("xml") => Ok(Kind::FloorPlan),
         Some(e) => Err(Error::unsupported(
             path,
             format!("file extension .{e}; expected one of {SUPPORTED}"),
@@ -75,6 +78,7 @@ pub fn read_building(path: &Path) -> Result<Building, Error> {
         Kind::MapServer => Ok(building_from_map(&read_map(path)?, &stem(path))),
         Kind::Stage => read_world(path),
         Kind::Toml => read_building_toml(path),
+        Kind::FloorPlan => read_floorplan(path),
     }
 }
 
@@ -84,7 +88,7 @@ pub fn read_building(path: &Path) -> Result<Building, Error> {
 pub fn read_occupancy(path: &Path) -> Result<OccupancyGrid, Error> {
     match kind_of(path)? {
         Kind::MapServer => read_map(path),
-        Kind::Stage | Kind::Toml => {
+        Kind::Stage | Kind::Toml | Kind::FloorPlan => {
             let b = read_building(path)?;
             let bounds = b.bounds();
             limits::check_cells(
