@@ -1406,7 +1406,8 @@ time_limit_s = 600
             })
         };
         // (pattern, entries visited at most, the files, or words of the error)
-        let cases: &[(&str, usize, Result<&[&str], &[&str]>)] = &[
+        type Case<'a> = (&'a str, usize, Result<&'a [&'a str], &'a [&'a str]>);
+        let cases: &[Case] = &[
             ("../b/a.toml", 10, Ok(&["../b/a.toml"])),
             ("../b/*.toml", 10, Ok(&["../b/a.toml", "../b/z.toml"])),
             ("../b/?.toml", 10, Ok(&["../b/a.toml", "../b/z.toml"])),

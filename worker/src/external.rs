@@ -900,11 +900,26 @@ pub fn end_strays() -> usize {
 
 /// The children of process `parent` (pid, state, process group), from `/proc` (none without it).
 fn children_of(parent: u32) -> Vec<(u32, char, u32)> {
-    let Ok(dir) = std::fs::read_dir("/proc") else {
-        return Vec::new();
-    };
+    processes()
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|p| p.parent == parent)
+        .map(|p| (p.pid, p.state, p.group))
+        .collect()
+}
+
+/// A process as `/proc/<pid>/stat` describes it.
+struct ProcessStat {
+    pid: u32,
+    state: char,
+    parent: u32,
+    group: u32,
+}
+
+/// Every process of the system, from `/proc` (`None` without it).
+fn processes() -> Option<Vec<ProcessStat>> {
     let mut out = Vec::new();
-    for e in dir.flatten() {
+    for e in std::fs::read_dir("/proc").ok()?.flatten() {
         let Ok(pid) = e.file_name().to_string_lossy().parse::<u32>() else {
             continue;
         };
@@ -916,15 +931,20 @@ fn children_of(parent: u32) -> Vec<(u32, char, u32)> {
             continue;
         };
         let fields: Vec<&str> = rest.split_whitespace().take(3).collect();
-        if let [state, ppid, group] = fields[..] {
-            if ppid.parse::<u32>() == Ok(parent) {
-                if let (Some(state), Ok(group)) = (state.chars().next(), group.parse::<u32>()) {
-                    out.push((pid, state, group));
-                }
+        if let [state, parent, group] = fields[..] {
+            if let (Some(state), Ok(parent), Ok(group)) =
+                (state.chars().next(), parent.parse(), group.parse())
+            {
+                out.push(ProcessStat {
+                    pid,
+                    state,
+                    parent,
+                    group,
+                });
             }
         }
     }
-    out
+    Some(out)
 }
 
 /// The process groups of the programs running now (each program's group is its process id).
@@ -984,29 +1004,12 @@ fn group_alive(pgid: u32) -> bool {
 
 /// How many processes of the group `pgid` run (zombies aside), from `/proc` (`None` without it).
 fn running_in_group(pgid: u32) -> Option<usize> {
-    let mut n = 0;
-    for e in std::fs::read_dir("/proc").ok()?.flatten() {
-        if !e
-            .file_name()
-            .to_string_lossy()
-            .bytes()
-            .all(|b| b.is_ascii_digit())
-        {
-            continue;
-        }
-        let Ok(stat) = std::fs::read_to_string(e.path().join("stat")) else {
-            continue;
-        };
-        // "pid (comm) state ppid pgrp ...": the name may hold spaces and parentheses.
-        let Some((_, rest)) = stat.rsplit_once(')') else {
-            continue;
-        };
-        let fields: Vec<&str> = rest.split_whitespace().take(3).collect();
-        if fields.len() == 3 && fields[0] != "Z" && fields[2].parse::<u32>() == Ok(pgid) {
-            n += 1;
-        }
-    }
-    Some(n)
+    Some(
+        processes()?
+            .iter()
+            .filter(|p| p.state != 'Z' && p.group == pgid)
+            .count(),
+    )
 }
 
 impl Policy for ExternalStrategy {
