@@ -29,6 +29,9 @@ pub const PLAN_RESOLUTION_M: f64 = 0.05;
 pub const WALL_THICKNESS_M: f64 = 0.15;
 /// Width of the doorway cut at every portal.
 pub const DOOR_WIDTH_M: f64 = 0.9;
+/// How far on either side of its portal a doorway is cut: the two faces of one wall are drawn
+/// apart in some plans (each space's own segment), a few pixels from each other.
+pub const DOOR_DEPTH_M: f64 = 0.5;
 /// Free space kept around a plan's spaces (solid).
 const MARGIN_M: f64 = 1.0;
 /// Most spaces, and points of one polygon, a plan may have.
@@ -236,7 +239,10 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
                 return Err(Error::invalid(
                     path,
                     format!("space ({})/portals", short(&s.id)),
-                    format!("a portal to space '{}', which the plan does not have", short(t)),
+                    format!(
+                        "a portal to space '{}', which the plan does not have",
+                        short(t)
+                    ),
                 ));
             }
         }
@@ -437,18 +443,40 @@ fn build(path: &Path, spaces: &[Space], ids: &HashMap<String, usize>) -> Result<
             });
         }
     }
-    // The walls, but where a doorway crosses them.
+    // The doorways' passages (between two faces of a wall drawn apart, outside both spaces).
+    for o in &openings {
+        let Some(u) = o.along else { continue };
+        let reach = DOOR_WIDTH_M / 2.0 + DOOR_DEPTH_M;
+        let area = sim_core::Aabb {
+            min: o.centre - Vec2::new(reach, reach),
+            max: o.centre + Vec2::new(reach, reach),
+        };
+        for_cells_in(&frame, &area, |c, p| {
+            let d = p - o.centre;
+            if (d.x * u.x + d.y * u.y).abs() <= DOOR_WIDTH_M / 2.0
+                && (d.x * u.y - d.y * u.x).abs() <= DOOR_DEPTH_M
+            {
+                free.set(c, true);
+            }
+        });
+    }
+    // The walls, but where a doorway crosses them (a wall along the doorway's, within its
+    // depth; walls across it stay).
     let half = WALL_THICKNESS_M / 2.0;
     for s in spaces {
         for &(a, b) in &s.walls {
             let len = (b - a).norm();
             let seg = sim_core::Segment::new(a, b);
-            let u = if len > 1e-9 { (b - a) / len } else { Vec2::new(1.0, 0.0) };
+            let u = if len > 1e-9 {
+                (b - a) / len
+            } else {
+                Vec2::new(1.0, 0.0)
+            };
             let doors: Vec<&Opening> = openings
                 .iter()
                 .filter(|o| {
                     o.along.is_some_and(|d| (d.x * u.y - d.y * u.x).abs() < 0.2)
-                        && seg.distance_to(o.centre) <= half + 1e-6
+                        && seg.distance_to(o.centre) <= DOOR_DEPTH_M
                 })
                 .collect();
             let band = Polygon::thick_segment(a, b, WALL_THICKNESS_M);
@@ -456,9 +484,9 @@ fn build(path: &Path, spaces: &[Space], ids: &HashMap<String, usize>) -> Result<
                 if seg.distance_to(p) > half {
                     return;
                 }
-                let in_door = doors
-                    .iter()
-                    .any(|o| ((p - o.centre).x * u.x + (p - o.centre).y * u.y).abs() <= DOOR_WIDTH_M / 2.0);
+                let in_door = doors.iter().any(|o| {
+                    ((p - o.centre).x * u.x + (p - o.centre).y * u.y).abs() <= DOOR_WIDTH_M / 2.0
+                });
                 if !in_door {
                     free.set(c, false);
                 }
