@@ -39,6 +39,8 @@ const MAX_SPACES: usize = 10_000;
 const MAX_POINTS: usize = 100_000;
 /// Most XML nodes parsed.
 const MAX_NODES: u32 = 5_000_000;
+/// Deepest nesting of elements read (the plans nest 8 deep); deeper is refused before parsing.
+const MAX_DEPTH: usize = 64;
 /// A start needs at least this clearance (m) from the walls.
 const MIN_START_CLEARANCE_M: f64 = 0.3;
 
@@ -57,6 +59,12 @@ struct Space {
 /// Reads an annotated floor plan (`.xml`) as a building with its rooms and doors.
 pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
     let text = limits::read_text(path)?;
+    if let Some(depth) = nesting_beyond(&text, MAX_DEPTH) {
+        return Err(Error::syntax(
+            path,
+            format!("elements nested {depth} deep or more; expected at most {MAX_DEPTH}"),
+        ));
+    }
     let options = roxmltree::ParsingOptions {
         allow_dtd: false,
         nodes_limit: MAX_NODES,
@@ -248,6 +256,32 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
         }
     }
     build(path, &spaces, &ids)
+}
+
+/// The nesting reached when it first passes `max` (a scan of the tags, quotes aside: enough to
+/// refuse what the parser would recurse on too deeply), or `None`.
+fn nesting_beyond(text: &str, max: usize) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while let Some(off) = bytes[i..].iter().position(|&b| b == b'<') {
+        i += off + 1;
+        match bytes.get(i) {
+            Some(b'/') => depth = depth.saturating_sub(1),
+            Some(b'?') | Some(b'!') | None => {}
+            Some(_) => {
+                let end = bytes[i..].iter().position(|&b| b == b'>').map(|e| i + e);
+                if end.is_some_and(|e| e > 0 && bytes[e - 1] == b'/') {
+                    continue;
+                }
+                depth += 1;
+                if depth > max {
+                    return Some(depth);
+                }
+            }
+        }
+    }
+    None
 }
 
 /// Metres per pixel from `<scale>`.
