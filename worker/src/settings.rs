@@ -692,7 +692,7 @@ fn one_line(s: &str) -> String {
 }
 
 /// The settings reference as a markdown table (name, type and range, unit, default, meaning);
-/// README.md carries it between `<!-- settings:begin -->` and `<!-- settings:end -->`.
+/// docs/settings.md carries it between `<!-- settings:begin -->` and `<!-- settings:end -->`.
 pub fn settings_reference_markdown() -> String {
     let mut s = String::from(
         "| setting | type and range | unit | default | meaning |\n|---|---|---|---|---|\n",
@@ -1258,28 +1258,28 @@ mod tests {
         }
     }
 
-    /// README.md carries the reference generated from the table (print it with
+    /// docs/settings.md carries the reference generated from the table (print it with
     /// `floorcast settings --markdown`).
     #[test]
-    fn readme_holds_the_settings_reference() {
+    fn docs_hold_the_settings_reference() {
         let readme = std::fs::read_to_string(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"),
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/settings.md"),
         )
         .unwrap();
         let begin = "<!-- settings:begin -->\n";
         let end = "<!-- settings:end -->";
         let a = readme
             .find(begin)
-            .expect("README.md has no <!-- settings:begin --> line")
+            .expect("docs/settings.md has no <!-- settings:begin --> line")
             + begin.len();
         let b = readme[a..]
             .find(end)
-            .expect("README.md has no <!-- settings:end --> line")
+            .expect("docs/settings.md has no <!-- settings:end --> line")
             + a;
         assert_eq!(
             &readme[a..b],
             settings_reference_markdown(),
-            "README.md's settings block is stale: replace it with the output of `floorcast settings --markdown`"
+            "docs/settings.md's settings block is stale: replace it with the output of `floorcast settings --markdown`"
         );
     }
 
