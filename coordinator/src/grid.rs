@@ -1232,7 +1232,7 @@ fn expand_pattern_within(
     let none = || {
         format!(
             "'{}' matches no file (paths are relative to the grid file's folder)",
-            floorcast_worker::text::shown(pattern, 200)
+            floorcast_worker::text::excerpt(pattern)
         )
     };
     if !wild(pattern) {
@@ -1255,7 +1255,7 @@ fn expand_pattern_within(
     if rest.iter().any(|c| c == "..") {
         return Err(format!(
             "'{}' has '..' after a wildcard; a pattern searches only below the folder before its first wildcard",
-            floorcast_worker::text::shown(pattern, 200)
+            floorcast_worker::text::excerpt(pattern)
         ));
     }
     let walk_root = if prefix.as_os_str().is_empty() {
@@ -1266,14 +1266,14 @@ fn expand_pattern_within(
     if prefix.parent().is_none() && prefix.has_root() {
         return Err(format!(
             "'{}' would search the whole file system; start it with the folder to search",
-            floorcast_worker::text::shown(pattern, 200)
+            floorcast_worker::text::excerpt(pattern)
         ));
     }
     let rest_text = rest.join("/");
     let glob = glob::Pattern::new(&rest_text).map_err(|e| {
         format!(
             "bad glob pattern '{}': {e}",
-            floorcast_worker::text::shown(pattern, 200)
+            floorcast_worker::text::excerpt(pattern)
         )
     })?;
     let options = glob::MatchOptions {
@@ -1292,7 +1292,7 @@ fn expand_pattern_within(
         if visited >= max_entries {
             return Err(format!(
                 "'{}' visits more than {max_entries} entries under {}; give a narrower pattern (a deeper folder, no '**')",
-                floorcast_worker::text::shown(pattern, 200),
+                floorcast_worker::text::excerpt(pattern),
                 floorcast_worker::text::shown(&prefix.display().to_string(), 200)
             ));
         }
@@ -1311,7 +1311,7 @@ fn expand_pattern_within(
             return Err(format!(
                 "{} matches '{}' but its name is not UTF-8; rename it",
                 floorcast_worker::text::shown(&entry.path().display().to_string(), 200),
-                floorcast_worker::text::shown(pattern, 200)
+                floorcast_worker::text::excerpt(pattern)
             ));
         }
         matched.push(prefix.join(rel));

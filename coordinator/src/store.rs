@@ -389,7 +389,7 @@ fn check_is_store(path: &Path) -> Result<Connection, StoreError> {
         Some(v) if v != STORE_VERSION.to_string() => {
             return Err(StoreError::Version {
                 path: path.to_path_buf(),
-                found: floorcast_worker::text::shown(&v, 40),
+                found: floorcast_worker::text::excerpt(&v),
             })
         }
         Some(_) => {}
@@ -663,7 +663,7 @@ impl Store {
                 problem: format!(
                     "job {}{what}: {problem}; the row was changed outside floorcast: restore the \
                      store from a copy, or delete the row to run the job again",
-                    floorcast_worker::text::shown(job, 80),
+                    floorcast_worker::text::excerpt(job),
                 ),
             };
             let (seed, mut row) = match self.sql(r)? {
@@ -678,8 +678,8 @@ impl Store {
             };
             let what = format!(
                 " ({}, {}, seed {seed})",
-                floorcast_worker::text::shown(&row.building, 80),
-                floorcast_worker::text::shown(&row.label, 80),
+                floorcast_worker::text::excerpt(&row.building),
+                floorcast_worker::text::excerpt(&row.label),
             );
             let job = row.job_id.clone();
             let tampered = |problem: String| tampered(&job, &what, problem);
@@ -885,8 +885,12 @@ pub fn check_row(r: &StoredResult) -> Result<(), String> {
                 .summary_json
                 .as_deref()
                 .ok_or("field summary_json is empty, expected the run's summary")?;
-            let s = floorcast_worker::RunSummary::from_json(text)
-                .map_err(|e| format!("field summary_json: {}", one_line_excerpt(&e)))?;
+            let s = floorcast_worker::RunSummary::from_json(text).map_err(|e| {
+                format!(
+                    "field summary_json: {}",
+                    floorcast_worker::text::shown(&e, 200)
+                )
+            })?;
             if s.seed != r.seed {
                 return Err(format!(
                     "field summary_json.seed is {}, the row's seed is {}",
@@ -907,16 +911,11 @@ pub fn check_row(r: &StoredResult) -> Result<(), String> {
         other => {
             return Err(format!(
                 "field status is '{}', expected ok or failed",
-                floorcast_worker::text::shown(other, 40)
+                floorcast_worker::text::excerpt(other)
             ))
         }
     }
     Ok(())
-}
-
-/// An error from outside, escaped and cut to a short excerpt.
-fn one_line_excerpt(e: &str) -> String {
-    floorcast_worker::text::shown(e, 200)
 }
 
 /// This machine's name (or "unknown").
