@@ -63,7 +63,7 @@ pub struct GenerateArgs {
 #[derive(Debug, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct CheckArgs {
-    /// Building file (floorcast TOML, map_server YAML, Stage .world).
+    /// Building file (floorcast TOML, map_server YAML, Stage .world, annotated floor plan .xml).
     file: PathBuf,
     /// Print JSON instead of text.
     #[arg(long)]
@@ -73,7 +73,7 @@ pub struct CheckArgs {
 #[derive(Debug, Args)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
-    /// Building file (floorcast TOML, map_server YAML, Stage .world).
+    /// Building file (floorcast TOML, map_server YAML, Stage .world, annotated floor plan .xml).
     file: PathBuf,
     /// Output picture: .svg or .png.
     #[arg(long, value_name = "FILE")]
@@ -136,8 +136,16 @@ struct CheckReport {
     height_m: f64,
     free_area_m2: f64,
     reachable_free_area_m2: f64,
+    /// What a robot with the default settings can see from the start: the explored fraction's
+    /// denominator.
+    explorable_area_m2: f64,
     rooms: Option<usize>,
     doors: Option<usize>,
+    /// The ground-truth rooms: id, label, area, and the share of it the robot can see.
+    room_list: Vec<RoomReport>,
+    /// Rooms of which the robot can see less than half from the start (through no doorway it
+    /// fits).
+    unreachable_rooms: Vec<u32>,
     start: [f64; 3],
     start_source: &'static str,
     geometry: &'static str,
@@ -145,14 +153,74 @@ struct CheckReport {
     hash: String,
 }
 
+/// One ground-truth room in `building check`'s report.
+#[derive(Debug, Serialize)]
+struct RoomReport {
+    id: u32,
+    label: String,
+    area_m2: f64,
+    /// Share of the room's free cells the robot can see from the start, 0 to 1.
+    explorable: f64,
+}
+
+/// A room of which the robot can see less than this share is reported unreachable.
+const UNREACHABLE_BELOW: f64 = 0.5;
+
 fn check_report(file: &std::path::Path, b: &Building) -> Result<CheckReport> {
     let bounds = b.bounds();
+    let settings = floorcast_worker::Settings::default();
+    let config = settings
+        .to_explore_config()
+        .context("the default settings are invalid")?;
     let (start, source) = b
-        .default_start(floorcast_worker::Settings::default().robot_radius_m)
+        .default_start(settings.robot_radius_m)
         .with_context(|| format!("{}: no start pose", file.display()))?;
     let frame = b.area_frame();
-    let reachable =
-        b.reachable_free(frame, start.position()).count_true() as f64 * frame.cell_area_m2();
+    let reachable_cells = b.reachable_free(frame, start.position());
+    let reachable = reachable_cells.count_true() as f64 * frame.cell_area_m2();
+    let explorable = sim_core::building::explorable_free(
+        &reachable_cells,
+        start.position(),
+        config.sim.robot.radius_m + config.safety_margin_m,
+        config.sim.laser.max_range_m,
+    );
+    let free = b.free_mask(frame);
+    let room_list: Vec<RoomReport> = b
+        .rooms
+        .iter()
+        .map(|r| {
+            let (mut cells, mut seen) = (0usize, 0usize);
+            let aabb = r.polygon.aabb();
+            let (lo, hi) = (
+                frame.cell_from_world(aabb.min),
+                frame.cell_from_world(aabb.max),
+            );
+            for y in lo.y.max(0)..=hi.y.min(frame.height as i32 - 1) {
+                for x in lo.x.max(0)..=hi.x.min(frame.width as i32 - 1) {
+                    let c = sim_core::Cell::new(x, y);
+                    if free.get(c) == Some(&true) && r.polygon.contains(frame.world_from_cell(c)) {
+                        cells += 1;
+                        seen += usize::from(explorable.get(c) == Some(&true));
+                    }
+                }
+            }
+            RoomReport {
+                id: r.id,
+                label: r.kind.clone(),
+                area_m2: r.polygon.area_m2(),
+                explorable: if cells == 0 {
+                    0.0
+                } else {
+                    seen as f64 / cells as f64
+                },
+            }
+        })
+        .collect();
+    let unreachable_rooms = room_list
+        .iter()
+        .filter(|r| r.explorable < UNREACHABLE_BELOW)
+        .map(|r| r.id)
+        .collect();
     Ok(CheckReport {
         file: file.display().to_string(),
         name: b.name.clone(),
@@ -160,6 +228,9 @@ fn check_report(file: &std::path::Path, b: &Building) -> Result<CheckReport> {
         height_m: bounds.height_m(),
         free_area_m2: b.free_area_m2(),
         reachable_free_area_m2: reachable,
+        explorable_area_m2: explorable.count_true() as f64 * frame.cell_area_m2(),
+        room_list,
+        unreachable_rooms,
         rooms: (!b.rooms.is_empty()).then_some(b.rooms.len()),
         doors: (!b.doors.is_empty()).then_some(b.doors.len()),
         start: [start.x_m, start.y_m, start.theta_rad.to_degrees()],
@@ -196,9 +267,28 @@ fn check_cmd(a: CheckArgs) -> Result<()> {
         r.free_area_m2,
         r.reachable_free_area_m2
     );
+    say!(
+        "explorable:      {:.1} m2 ({:.1} % of the free area: what the robot can see from the start)",
+        r.explorable_area_m2,
+        100.0 * r.explorable_area_m2 / r.free_area_m2.max(f64::MIN_POSITIVE)
+    );
     match r.rooms {
         Some(n) => say!("rooms:           {n} ({} doors)", r.doors.unwrap_or(0)),
         None => say!("rooms:           unknown (no ground truth)"),
+    }
+    if !r.unreachable_rooms.is_empty() {
+        let names: Vec<String> = r
+            .room_list
+            .iter()
+            .filter(|x| r.unreachable_rooms.contains(&x.id))
+            .map(|x| format!("{} ({}, {:.0} m2)", x.id, x.label, x.area_m2))
+            .collect();
+        say!(
+            "unreachable:     {} of the rooms, the robot sees less than half of each from the \
+             start (no doorway it fits leads there): {}",
+            names.len(),
+            text_list(&names, 12)
+        );
     }
     say!(
         "start:           x {:.2} m, y {:.2} m, theta {:.1} deg ({})",
@@ -210,6 +300,15 @@ fn check_cmd(a: CheckArgs) -> Result<()> {
     say!("wall segments:   {}", r.wall_segments);
     say!("hash:            {}", r.hash);
     Ok(())
+}
+
+/// At most `max` items joined by ", ", then how many more.
+fn text_list(items: &[String], max: usize) -> String {
+    let mut s = items[..items.len().min(max)].join(", ");
+    if items.len() > max {
+        s.push_str(&format!(" and {} more", items.len() - max));
+    }
+    s
 }
 
 fn render_cmd(a: RenderArgs) -> Result<()> {

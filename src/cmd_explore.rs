@@ -20,7 +20,8 @@ use crate::output::{parse_pose, progress_bar, write_text, Picture};
     allow_negative_numbers = true
 )]
 pub struct ExploreArgs {
-    /// Building to explore: floorcast TOML, ROS map_server YAML, or Stage .world.
+    /// Building to explore: floorcast TOML, ROS map_server YAML, Stage .world, or annotated floor
+    /// plan .xml.
     #[arg(long, value_name = "FILE")]
     building: PathBuf,
     /// Exploration strategy (built in).

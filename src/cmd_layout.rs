@@ -16,10 +16,11 @@ use crate::output::{create_dir, write_text};
 #[command(allow_negative_numbers = true)]
 pub struct LayoutArgs {
     /// Map to analyse: a map_server YAML (e.g. a `map.yaml` written by `floorcast explore`), a
-    /// building TOML or a Stage .world (drawn at 0.05 m).
+    /// building TOML, a Stage .world or an annotated floor plan .xml (drawn at 0.05 m).
     #[arg(long, value_name = "FILE")]
     map: PathBuf,
-    /// A building with ground-truth rooms to score the layout against (writes accuracy.json).
+    /// A building with ground-truth rooms to score the layout against (writes accuracy.json):
+    /// a building TOML or an annotated floor plan .xml, in the map's frame.
     #[arg(long, value_name = "FILE")]
     truth: Option<PathBuf>,
     /// Output directory (default: results/layout/<map>).

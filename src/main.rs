@@ -44,7 +44,7 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Generate, check and draw buildings (floorcast TOML, ROS map_server YAML, Stage .world).
+    /// Generate, check and draw buildings (floorcast TOML, ROS map_server YAML, Stage .world, annotated floor plan .xml).
     #[command(subcommand)]
     Building(cmd_building::BuildingCommand),
     /// Run one exploration and write its summary, curve, map and picture.

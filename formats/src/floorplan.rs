@@ -6,14 +6,21 @@
 //! segments; `portals` name the two spaces a door joins.
 //!
 //! The plan becomes a raster world at [`PLAN_RESOLUTION_M`]: free inside the spaces' polygons,
-//! walls [`WALL_THICKNESS_M`] thick centred on every WALL segment, and a doorway
-//! [`DOOR_WIDTH_M`] wide cut into the wall at every PORTAL (the data set's portals are points on
-//! a wall that runs straight through them, with no width of their own). The spaces are the
-//! ground-truth rooms (their labels, lower case, as the rooms' kinds), the portals its doors.
-//! The start is the free point farthest from the walls in the largest corridor (the plans mark
-//! no door to the outside; without a corridor, the largest space), heading 0. Pixel `y` grows
-//! downwards in the plans: it is turned so that the plan is not mirrored. Spaces without a
-//! polygon (some offices' untyped spaces) are left out, and so are portals to them.
+//! walls [`WALL_THICKNESS_M`] thick centred on every WALL segment, and a doorway cut through
+//! the walls at every PORTAL. The data set's portals have no width: each is a point on a wall
+//! that runs straight through it (some plans mark a door's two ends, one in each space's
+//! copy of the portal). The doorway lies along the stretch of wall the two spaces share nearest
+//! that point: [`DOOR_WIDTH_M`] wide (as wide as the two ends are apart, up to 2.5 m), slid
+//! along the wall when the point is near a corner so that the walls across stay whole; between
+//! two corridors the whole shared stretch is open. It reaches from one space's outline to the
+//! other's (some plans draw a wall's two faces apart) and 0.2 m beyond. A portal whose line
+//! segment no space has is placed midway along the longest stretch of wall its spaces share.
+//! The spaces are the ground-truth rooms (their labels, lower case, as the rooms' kinds), the
+//! doorways its doors. The start is the free point farthest from the walls in the largest
+//! corridor (the plans mark no door to the outside; without a corridor, the largest space),
+//! heading 0. Pixel `y` grows downwards in the plans: it is turned so that the plan is not
+//! mirrored. Spaces without a polygon (some offices' untyped spaces), or whose polygon is one
+//! point repeated (spaces left empty), are left out, and so are portals to them.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -29,9 +36,6 @@ pub const PLAN_RESOLUTION_M: f64 = 0.05;
 pub const WALL_THICKNESS_M: f64 = 0.15;
 /// Width of the doorway cut at every portal.
 pub const DOOR_WIDTH_M: f64 = 0.9;
-/// How far on either side of its portal a doorway is cut: the two faces of one wall are drawn
-/// apart in some plans (each space's own segment), a few pixels from each other.
-pub const DOOR_DEPTH_M: f64 = 0.5;
 /// Free space kept around a plan's spaces (solid).
 const MARGIN_M: f64 = 1.0;
 /// Most spaces, and points of one polygon, a plan may have.
@@ -49,8 +53,11 @@ struct Space {
     kind: String,
     polygon: Vec<Vec2>,
     walls: Vec<(Vec2, Vec2)>,
-    /// Portals: the point, and the two spaces' ids it joins.
-    portals: Vec<(Vec2, Vec<String>)>,
+    /// Its line segments by id (a portal's point is the one its own space gives).
+    segments: HashMap<String, (Vec2, Vec2)>,
+    /// Portals: the field, the line segment's id, its point (`None` when no space has that
+    /// line segment), and the two spaces' ids it joins.
+    portals: Vec<(String, String, Option<Vec2>, Vec<String>)>,
     /// Portals as read: the field, its line segment's id, the spaces it joins.
     portal_refs: Vec<(String, String, Vec<String>)>,
     corridor: bool,
@@ -107,8 +114,10 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             None => Vec::new(),
         };
         let polygon = dedup_closed(polygon);
-        if polygon.is_empty() {
-            continue; // A space without a polygon (left out, as its portals).
+        if polygon.len() <= 1 {
+            // A space without a polygon, or with every point of it the same (the data set's
+            // spaces left empty, area -1): left out, as its portals.
+            continue;
         }
         if polygon.len() < 3 {
             return Err(Error::invalid(
@@ -138,6 +147,7 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             .trim()
             .to_lowercase();
         let mut walls = Vec::new();
+        let mut own = HashMap::new();
         if let Some(rep) = child(s, "space_representation") {
             for (k, seg) in children(rep, "linesegment").enumerate() {
                 let sf = format!("{field}/space_representation/linesegment[{k}]");
@@ -163,6 +173,7 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
                 }
                 if let Some(sid) = seg.attribute("id") {
                     segments.insert(sid.to_string(), (pts[0], pts[1]));
+                    own.insert(sid.to_string(), (pts[0], pts[1]));
                 }
             }
         }
@@ -214,6 +225,7 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             },
             polygon,
             walls,
+            segments: own,
             portals: Vec::new(),
             portal_refs,
         });
@@ -227,23 +239,21 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
     }
     for s in &mut spaces {
         for (field, seg_id, targets) in std::mem::take(&mut s.portal_refs) {
-            let (a, b) = *segments.get(&seg_id).ok_or_else(|| {
-                Error::invalid(
-                    path,
-                    format!("{field}/linesegment"),
-                    format!("'{}' is not a line segment of the plan", short(&seg_id)),
-                )
-            })?;
-            s.portals.push(((a + b) * 0.5, targets));
+            let point = s
+                .segments
+                .get(&seg_id)
+                .or(segments.get(&seg_id))
+                .map(|(a, b)| (*a + *b) * 0.5);
+            s.portals.push((field, seg_id, point, targets));
         }
     }
     // Every portal's spaces must exist (one without a polygon is left out with its portals).
-    let all_ids: Vec<String> = children(spaces_el, "space")
-        .filter_map(|s| s.attribute("id").map(str::to_string))
+    let all_ids: std::collections::HashSet<&str> = children(spaces_el, "space")
+        .filter_map(|s| s.attribute("id"))
         .collect();
     for s in &spaces {
-        for (_, targets) in &s.portals {
-            if let Some(t) = targets.iter().find(|t| !all_ids.contains(t)) {
+        for (_, _, _, targets) in &s.portals {
+            if let Some(t) = targets.iter().find(|t| !all_ids.contains(t.as_str())) {
                 return Err(Error::invalid(
                     path,
                     format!("space ({})/portals", short(&s.id)),
@@ -255,7 +265,8 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             }
         }
     }
-    build(path, &spaces, &ids)
+    let portals = portals(path, &spaces, &ids)?;
+    build(path, &spaces, &portals)
 }
 
 /// The nesting reached when it first passes `max` (a scan of the tags, quotes aside: enough to
@@ -413,14 +424,54 @@ fn short(s: &str) -> String {
     }
 }
 
-/// A doorway: its centre, the direction of its wall, and the rooms it joins.
-struct Opening {
-    centre: Vec2,
-    along: Option<Vec2>,
+/// A portal as the spaces give it: the points its spaces mark (a door's two ends in some
+/// plans, one point in most), and the rooms it joins.
+struct Portal {
+    segment: String,
+    points: Vec<Vec2>,
     rooms: [Option<u32>; 2],
 }
 
-fn build(path: &Path, spaces: &[Space], ids: &HashMap<String, usize>) -> Result<Building, Error> {
+/// A doorway cut into the walls: a rectangle `half_width` either side of `centre` along `u`,
+/// from `across.0` to `across.1` along the normal (it spans the wall, or the gap between the
+/// two spaces' outlines where a plan draws a wall's two faces apart).
+struct Doorway {
+    centre: Vec2,
+    u: Vec2,
+    half_width: f64,
+    across: (f64, f64),
+    rooms: [Option<u32>; 2],
+}
+
+impl Doorway {
+    fn contains(&self, p: Vec2) -> bool {
+        let d = p - self.centre;
+        let n = Vec2::new(-self.u.y, self.u.x);
+        d.dot(&self.u).abs() <= self.half_width
+            && (self.across.0..=self.across.1).contains(&d.dot(&n))
+    }
+
+    fn aabb(&self) -> sim_core::Aabb {
+        let r = self.half_width + self.across.0.abs().max(self.across.1.abs());
+        sim_core::Aabb {
+            min: self.centre - Vec2::new(r, r),
+            max: self.centre + Vec2::new(r, r),
+        }
+    }
+
+    /// The door as the building records it: across the doorway, midway through the wall.
+    fn door(&self) -> Door {
+        let n = Vec2::new(-self.u.y, self.u.x);
+        let mid = self.centre + n * ((self.across.0 + self.across.1) / 2.0);
+        Door {
+            a: mid - self.u * self.half_width,
+            b: mid + self.u * self.half_width,
+            rooms: self.rooms,
+        }
+    }
+}
+
+fn build(path: &Path, spaces: &[Space], portals: &[Portal]) -> Result<Building, Error> {
     let mut bounds = sim_core::Aabb::empty();
     for s in spaces {
         for p in &s.polygon {
@@ -452,80 +503,25 @@ fn build(path: &Path, spaces: &[Space], ids: &HashMap<String, usize>) -> Result<
             }
         });
     }
-    // The doorways, each once (a portal appears in both spaces it joins).
-    let mut openings: Vec<Opening> = Vec::new();
-    for s in spaces {
-        for (centre, targets) in &s.portals {
-            let rooms = [
-                targets.first().and_then(|t| ids.get(t)).map(|&i| i as u32),
-                targets.get(1).and_then(|t| ids.get(t)).map(|&i| i as u32),
-            ];
-            if rooms.iter().all(Option::is_none) {
-                continue;
-            }
-            if openings
-                .iter()
-                .any(|o| (o.centre - *centre).norm() < 0.05 && same_rooms(o.rooms, rooms))
-            {
-                continue;
-            }
-            let along = door_direction(s, spaces, *centre);
-            openings.push(Opening {
-                centre: *centre,
-                along,
-                rooms,
-            });
-        }
-    }
-    // The doorways' passages (between two faces of a wall drawn apart, outside both spaces).
-    for o in &openings {
-        let Some(u) = o.along else { continue };
-        let reach = DOOR_WIDTH_M / 2.0 + DOOR_DEPTH_M;
-        let area = sim_core::Aabb {
-            min: o.centre - Vec2::new(reach, reach),
-            max: o.centre + Vec2::new(reach, reach),
-        };
-        for_cells_in(&frame, &area, |c, p| {
-            let d = p - o.centre;
-            if (d.x * u.x + d.y * u.y).abs() <= DOOR_WIDTH_M / 2.0
-                && (d.x * u.y - d.y * u.x).abs() <= DOOR_DEPTH_M
-            {
-                free.set(c, true);
-            }
-        });
-    }
-    // The walls, but where a doorway crosses them (a wall along the doorway's, within its
-    // depth; walls across it stay).
     let half = WALL_THICKNESS_M / 2.0;
     for s in spaces {
         for &(a, b) in &s.walls {
-            let len = (b - a).norm();
             let seg = sim_core::Segment::new(a, b);
-            let u = if len > 1e-9 {
-                (b - a) / len
-            } else {
-                Vec2::new(1.0, 0.0)
-            };
-            let doors: Vec<&Opening> = openings
-                .iter()
-                .filter(|o| {
-                    o.along.is_some_and(|d| (d.x * u.y - d.y * u.x).abs() < 0.2)
-                        && seg.distance_to(o.centre) <= DOOR_DEPTH_M
-                })
-                .collect();
             let band = Polygon::thick_segment(a, b, WALL_THICKNESS_M);
             for_cells_in(&frame, &band.aabb(), |c, p| {
-                if seg.distance_to(p) > half {
-                    return;
-                }
-                let in_door = doors.iter().any(|o| {
-                    ((p - o.centre).x * u.x + (p - o.centre).y * u.y).abs() <= DOOR_WIDTH_M / 2.0
-                });
-                if !in_door {
+                if seg.distance_to(p) <= half {
                     free.set(c, false);
                 }
             });
         }
+    }
+    let doorways: Vec<Doorway> = portals.iter().map(|p| doorway(p, spaces)).collect();
+    for d in &doorways {
+        for_cells_in(&frame, &d.aabb(), |c, p| {
+            if d.contains(p) {
+                free.set(c, true);
+            }
+        });
     }
     let solid = Bitmap {
         frame,
@@ -540,17 +536,7 @@ fn build(path: &Path, spaces: &[Space], ids: &HashMap<String, usize>) -> Result<
             polygon: Polygon::new(s.polygon.clone()),
         })
         .collect();
-    let doors: Vec<Door> = openings
-        .iter()
-        .map(|o| {
-            let d = o.along.unwrap_or(Vec2::new(1.0, 0.0)) * (DOOR_WIDTH_M / 2.0);
-            Door {
-                a: o.centre - d,
-                b: o.centre + d,
-                rooms: o.rooms,
-            }
-        })
-        .collect();
+    let doors: Vec<Door> = doorways.iter().map(Doorway::door).collect();
     let start = start_in(spaces, &solid);
     let name = path
         .file_stem()
@@ -565,36 +551,299 @@ fn build(path: &Path, spaces: &[Space], ids: &HashMap<String, usize>) -> Result<
     })
 }
 
-/// The direction of the wall a portal at `centre` opens: that of the space's own wall segments
-/// that end there (the plans split a wall at its portals), a straight pair first; else that of
-/// any wall through it; `None` for a portal in no wall.
-fn door_direction(space: &Space, spaces: &[Space], centre: Vec2) -> Option<Vec2> {
-    let unit = |(a, b): &(Vec2, Vec2)| {
-        let d = *b - *a;
-        (d.norm() > 1e-6).then(|| d / d.norm())
-    };
-    let ending: Vec<Vec2> = space
-        .walls
-        .iter()
-        .filter(|(a, b)| (*a - centre).norm() < 0.01 || (*b - centre).norm() < 0.01)
-        .filter_map(unit)
-        .collect();
-    for (i, u) in ending.iter().enumerate() {
-        if ending[i + 1..]
-            .iter()
-            .any(|v| (u.x * v.y - u.y * v.x).abs() < 0.1)
-        {
-            return Some(*u);
+/// Two of a portal's points farther apart than this are two doors (between the same spaces).
+const SAME_DOOR_M: f64 = 1.5;
+/// A portal's wall is the space's outline within this distance of its point.
+const NEAR_WALL_M: f64 = 1.0;
+/// Widest door a portal's two points make (farther apart, the door is [`DOOR_WIDTH_M`]).
+const MAX_DOOR_M: f64 = 2.5;
+/// How far a doorway reaches past the outlines of the spaces it joins: through the wall.
+const THROUGH_WALL_M: f64 = 0.2;
+
+/// The portals of the plan, each once: a portal appears in both spaces it joins, with the same
+/// line segment's id (its point may differ: some plans mark a door's two ends, one in each
+/// space), or with points less than [`SAME_DOOR_M`] apart. A portal whose line segment no
+/// space has is placed midway along the longest stretch of wall its two spaces share; one
+/// whose spaces share none is an error.
+fn portals(
+    path: &Path,
+    spaces: &[Space],
+    ids: &HashMap<String, usize>,
+) -> Result<Vec<Portal>, Error> {
+    let mut out: Vec<Portal> = Vec::new();
+    let mut unplaced: Vec<(&str, usize)> = Vec::new();
+    for s in spaces {
+        for (field, segment, point, targets) in &s.portals {
+            let rooms = [
+                targets.first().and_then(|t| ids.get(t)).map(|&i| i as u32),
+                targets.get(1).and_then(|t| ids.get(t)).map(|&i| i as u32),
+            ];
+            if rooms.iter().all(Option::is_none) {
+                continue;
+            }
+            let same = out.iter().position(|o| {
+                same_rooms(o.rooms, rooms)
+                    && (o.segment == *segment
+                        || point.is_some_and(|p| {
+                            o.points.iter().any(|q| (*q - p).norm() < SAME_DOOR_M)
+                        }))
+            });
+            let at = match same {
+                Some(i) => i,
+                None => {
+                    out.push(Portal {
+                        segment: segment.clone(),
+                        points: Vec::new(),
+                        rooms,
+                    });
+                    out.len() - 1
+                }
+            };
+            match point {
+                Some(p) if out[at].points.iter().all(|q| (*q - *p).norm() > 1e-6) => {
+                    out[at].points.push(*p)
+                }
+                Some(_) => {}
+                None => unplaced.push((field, at)),
+            }
         }
     }
-    if let Some(u) = ending.first() {
-        return Some(*u);
+    for (field, at) in unplaced {
+        if !out[at].points.is_empty() {
+            continue;
+        }
+        let [Some(a), Some(b)] = out[at].rooms else {
+            return Err(Error::invalid(
+                path,
+                format!("{field}/linesegment"),
+                format!(
+                    "'{}' is not a line segment of the plan; expected one, or a portal \
+                     joining two spaces that share a wall",
+                    short(&out[at].segment)
+                ),
+            ));
+        };
+        let p = shared_wall_midpoint(&spaces[a as usize].polygon, &spaces[b as usize].polygon)
+            .ok_or_else(|| {
+                Error::invalid(
+                    path,
+                    format!("{field}/linesegment"),
+                    format!(
+                        "'{}' is not a line segment of the plan, and the two spaces it joins \
+                         share no wall to place it on",
+                        short(&out[at].segment)
+                    ),
+                )
+            })?;
+        out[at].points.push(p);
     }
-    spaces
+    Ok(out)
+}
+
+/// Where an edge of one outline and an edge of another run side by side: parallel, at most
+/// [`NEAR_WALL_M`] apart, overlapping; `from`-`to` is the overlap, midway between them.
+struct SharedWall {
+    a: (Vec2, Vec2),
+    b: (Vec2, Vec2),
+    from: Vec2,
+    to: Vec2,
+}
+
+/// Every place where an edge of `a` and an edge of `b` run side by side.
+fn shared_walls<'p>(a: &'p [Vec2], b: &'p [Vec2]) -> impl Iterator<Item = SharedWall> + 'p {
+    edges(a).flat_map(move |(a0, a1)| {
+        let len = (a1 - a0).norm();
+        edges(b).filter_map(move |(b0, b1)| {
+            if len < 1e-6 {
+                return None;
+            }
+            let u = (a1 - a0) / len;
+            let n = Vec2::new(-u.y, u.x);
+            let d = b1 - b0;
+            if d.norm() < 1e-6 || (d.x * u.y - d.y * u.x).abs() / d.norm() >= 0.2 {
+                return None;
+            }
+            let gap = ((b0 + b1) * 0.5 - a0).dot(&n);
+            let (s, t) = ((b0 - a0).dot(&u), (b1 - a0).dot(&u));
+            let (lo, hi) = (s.min(t).max(0.0), s.max(t).min(len));
+            (gap.abs() <= NEAR_WALL_M && hi - lo > 1e-6).then(|| SharedWall {
+                a: (a0, a1),
+                b: (b0, b1),
+                from: a0 + u * lo + n * (gap / 2.0),
+                to: a0 + u * hi + n * (gap / 2.0),
+            })
+        })
+    })
+}
+
+/// The middle of the longest place where the outlines `a` and `b` run side by side, if any.
+fn shared_wall_midpoint(a: &[Vec2], b: &[Vec2]) -> Option<Vec2> {
+    shared_walls(a, b)
+        .max_by(|x, y| (x.to - x.from).norm().total_cmp(&(y.to - y.from).norm()))
+        .map(|w| (w.from + w.to) * 0.5)
+}
+
+/// Where a portal's doorway is cut. Its wall is the outline edge of its spaces nearest to its
+/// point; the doorway runs along that edge, [`DOOR_WIDTH_M`] wide (or as wide as the portal's
+/// two points are apart, up to [`MAX_DOOR_M`]), slid along the wall, when the point is near a
+/// corner, so that it stays clear of the walls at the ends of the stretch the two spaces share;
+/// between two corridors the whole shared stretch is open. Across, it reaches from one space's
+/// outline to the other's and [`THROUGH_WALL_M`] beyond. A portal far from any outline opens a
+/// square [`DOOR_WIDTH_M`] wide around its point.
+fn doorway(portal: &Portal, spaces: &[Space]) -> Doorway {
+    let c = portal.points.iter().fold(Vec2::zeros(), |a, p| a + *p) / portal.points.len() as f64;
+    let span = portal
+        .points
         .iter()
-        .flat_map(|o| o.walls.iter())
-        .filter(|(a, b)| sim_core::Segment::new(*a, *b).distance_to(centre) < 0.01)
-        .find_map(unit)
+        .flat_map(|p| portal.points.iter().map(move |q| (*p - *q).norm()))
+        .fold(0.0, f64::max);
+    let members: Vec<&Space> = portal
+        .rooms
+        .iter()
+        .flatten()
+        .map(|&i| &spaces[i as usize])
+        .collect();
+    // The wall the door is in: where the two spaces' outlines run side by side nearest the
+    // point; for a portal of one space, or of two that share no wall near it, the outline edge
+    // nearest the point.
+    let side_by_side = match members[..] {
+        [x, y] => shared_walls(&x.polygon, &y.polygon)
+            .map(|w| (sim_core::Segment::new(w.from, w.to).distance_to(c), w))
+            .filter(|(d, _)| *d <= NEAR_WALL_M)
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, w)| vec![Some(w.a), Some(w.b)]),
+        _ => None,
+    };
+    let chosen = side_by_side.or_else(|| {
+        let nearest = members
+            .iter()
+            .flat_map(|s| edges(&s.polygon))
+            .filter(|(a, b)| (*b - *a).norm() > 1e-6)
+            .map(|(a, b)| (sim_core::Segment::new(a, b).distance_to(c), a, b))
+            .filter(|(d, _, _)| *d <= NEAR_WALL_M)
+            .min_by(|x, y| x.0.total_cmp(&y.0))?;
+        Some(vec![Some((nearest.1, nearest.2)); 1])
+    });
+    let Some(chosen) = chosen else {
+        return Doorway {
+            centre: c,
+            u: Vec2::new(1.0, 0.0),
+            half_width: DOOR_WIDTH_M / 2.0,
+            across: (-DOOR_WIDTH_M / 2.0, DOOR_WIDTH_M / 2.0),
+            rooms: portal.rooms,
+        };
+    };
+    let (a, b) = chosen[0].expect("the first wall is always chosen");
+    let u = (b - a) / (b - a).norm();
+    let n = Vec2::new(-u.y, u.x);
+    // Each space's stretch of wall along the door: its outline's edges parallel to it and in
+    // line with its edge chosen above (or the one nearest the point), merged; (from, to) along
+    // `u`, and the offset across.
+    let stretches: Vec<((f64, f64), f64)> = members
+        .iter()
+        .enumerate()
+        .filter_map(|(i, s)| {
+            let edge = if chosen.len() == members.len() {
+                chosen[i]
+            } else {
+                None
+            };
+            stretch(&s.polygon, edge, c, u, n)
+        })
+        .collect();
+    let shared = stretches
+        .iter()
+        .map(|(r, _)| *r)
+        .reduce(|x, y| (x.0.max(y.0), x.1.min(y.1)))
+        .filter(|r| r.1 > r.0)
+        .or_else(|| stretches.first().map(|(r, _)| *r));
+    let offsets = stretches.iter().map(|(_, o)| *o);
+    let across = (
+        offsets.clone().fold(0.0, f64::min) - THROUGH_WALL_M,
+        offsets.fold(0.0, f64::max) + THROUGH_WALL_M,
+    );
+    let corridors = members.len() == 2 && members.iter().all(|s| s.corridor);
+    let clear = |(lo, hi): (f64, f64)| (lo + WALL_THICKNESS_M / 2.0, hi - WALL_THICKNESS_M / 2.0);
+    let (t, width) = match shared.map(clear) {
+        Some((lo, hi)) if corridors && hi - lo >= DOOR_WIDTH_M => ((lo + hi) / 2.0, hi - lo),
+        Some((lo, hi)) => {
+            let w = span
+                .clamp(DOOR_WIDTH_M, MAX_DOOR_M)
+                .min((hi - lo).max(DOOR_WIDTH_M));
+            let (first, last) = (lo + w / 2.0, hi - w / 2.0);
+            if first <= last {
+                (0.0f64.clamp(first, last), w)
+            } else {
+                ((lo + hi) / 2.0, w)
+            }
+        }
+        None => (0.0, DOOR_WIDTH_M),
+    };
+    Doorway {
+        centre: c + u * t,
+        u,
+        half_width: width / 2.0,
+        across,
+        rooms: portal.rooms,
+    }
+}
+
+/// The stretch of `polygon`'s outline along `u` near `c`: the edges parallel to `u` in line
+/// with `edge` (or, without one, with the parallel edge nearest `c`, within [`NEAR_WALL_M`]),
+/// merged where they touch, the piece holding that edge; as (from, to) along `u` from `c`, and
+/// its offset along `n`.
+fn stretch(
+    polygon: &[Vec2],
+    edge: Option<(Vec2, Vec2)>,
+    c: Vec2,
+    u: Vec2,
+    n: Vec2,
+) -> Option<((f64, f64), f64)> {
+    let parallel: Vec<(Vec2, Vec2)> = edges(polygon)
+        .filter(|(a, b)| {
+            let d = *b - *a;
+            d.norm() > 1e-6 && (d.x * u.y - d.y * u.x).abs() / d.norm() < 0.2
+        })
+        .collect();
+    let (a0, b0) = match edge {
+        Some(e) => e,
+        None => parallel
+            .iter()
+            .map(|&(a, b)| (sim_core::Segment::new(a, b).distance_to(c), a, b))
+            .filter(|(d, _, _)| *d <= NEAR_WALL_M)
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, a, b)| (a, b))?,
+    };
+    let offset = ((a0 + b0) * 0.5 - c).dot(&n);
+    let mut pieces: Vec<(f64, f64)> = parallel
+        .iter()
+        .filter(|(a, b)| (((*a + *b) * 0.5 - c).dot(&n) - offset).abs() <= 0.1)
+        .map(|(a, b)| {
+            let (s, t) = ((*a - c).dot(&u), (*b - c).dot(&u));
+            (s.min(t), s.max(t))
+        })
+        .collect();
+    pieces.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut merged: Vec<(f64, f64)> = Vec::new();
+    for p in pieces {
+        match merged.last_mut() {
+            Some(m) if p.0 <= m.1 + 0.1 => m.1 = m.1.max(p.1),
+            _ => merged.push(p),
+        }
+    }
+    let at = {
+        let (s, t) = ((a0 - c).dot(&u), (b0 - c).dot(&u));
+        (s.min(t) + s.max(t)) / 2.0
+    };
+    merged
+        .into_iter()
+        .find(|m| m.0 <= at && at <= m.1)
+        .map(|m| (m, offset))
+}
+
+/// The edges of a closed polygon.
+fn edges(polygon: &[Vec2]) -> impl Iterator<Item = (Vec2, Vec2)> + '_ {
+    (0..polygon.len()).map(move |i| (polygon[i], polygon[(i + 1) % polygon.len()]))
 }
 
 fn same_rooms(a: [Option<u32>; 2], b: [Option<u32>; 2]) -> bool {
