@@ -44,7 +44,10 @@ impl Explorer<'_> {
             let mut raster = if st.layout_from_truth {
                 // The oracle: nothing to compute (and nothing to charge).
                 let to_map = MapToWorld::new(&self.estimate, &self.sim.true_pose());
-                LayoutRaster::exact(&true_layout(&self.referee.rooms, &to_map), grid)
+                let mut raster =
+                    LayoutRaster::exact(&true_layout(&self.referee.rooms, &to_map), grid);
+                open_true_doors(&mut raster.walls, &self.referee.doors, &to_map);
+                raster
             } else {
                 let mut made = None;
                 let layout_cfg = &self.cfg.layout;

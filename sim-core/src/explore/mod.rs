@@ -707,6 +707,7 @@ fn new_explorer<'a>(
             untestable: Bitmap::filled(frame, false),
             untestable_list: Vec::new(),
             rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
+            doors: building.doors.iter().map(|d| (d.a, d.b)).collect(),
         },
         known: Bitmap::filled(frame, false),
         fresh_known: Vec::new(),

@@ -34,6 +34,8 @@ pub(super) struct Referee {
     /// Ground-truth room polygons (for the "rooms never entered" report, and the layout of the
     /// `layout-truth` oracle, its one door to the decision).
     pub(super) rooms: Vec<crate::geom::Polygon>,
+    /// Ground-truth doors (world frame): the `layout-truth` oracle's layout is open there.
+    pub(super) doors: Vec<(Vec2, Vec2)>,
 }
 
 impl Explorer<'_> {
@@ -376,6 +378,40 @@ pub(super) fn true_layout(
         rooms,
         lines: Vec::new(),
         diagnostics: Default::default(),
+    }
+}
+
+/// How far either side of a door's line the oracle's layout walls are opened: through the wall
+/// (the rooms' outlines run along its faces, or its centre line).
+const DOOR_REACH_M: f64 = 0.3;
+
+/// Opens the true layout's walls (`walls`, on `frame`) at the building's doors (world frame,
+/// brought into the map's through `to_map`): the layout cells within the door's width and
+/// [`DOOR_REACH_M`] of its line. A perfect layout knows its doorways, as a predicted one learns
+/// them from the gaps it sees in walls; without this, the oracle's gain stops at a door the
+/// robot has not yet seen open, and its early stop can leave a room behind it unexplored.
+pub(super) fn open_true_doors(walls: &mut Bitmap, doors: &[(Vec2, Vec2)], to_map: &MapToWorld) {
+    let frame = walls.frame;
+    for &(a, b) in doors {
+        let (a, b) = (to_map.backward(a), to_map.backward(b));
+        let len = (b - a).norm();
+        if !(len > 1e-9) {
+            continue;
+        }
+        let u = (b - a) / len;
+        let mid = (a + b) * 0.5;
+        let r = len / 2.0 + DOOR_REACH_M;
+        let lo = frame.cell_from_world(mid - Vec2::new(r, r));
+        let hi = frame.cell_from_world(mid + Vec2::new(r, r));
+        for y in lo.y.max(0)..=hi.y.min(frame.height as i32 - 1) {
+            for x in lo.x.max(0)..=hi.x.min(frame.width as i32 - 1) {
+                let c = Cell::new(x, y);
+                let d = frame.world_from_cell(c) - mid;
+                if d.dot(&u).abs() <= len / 2.0 && (d.x * u.y - d.y * u.x).abs() <= DOOR_REACH_M {
+                    walls.set(c, false);
+                }
+            }
+        }
     }
 }
 

@@ -207,6 +207,48 @@ fn the_true_layout_is_the_building_rooms_in_the_map_frame() {
     );
 }
 
+/// The oracle's layout walls open at the true doors (through the wall, within the door's
+/// width), in the map's frame, and nowhere else.
+#[test]
+fn the_true_layout_opens_at_the_true_doors() {
+    let frame = GridFrame::new(Vec2::new(0.0, 0.0), 0.05, 200, 200);
+    // Two walls 0.15 m apart along y = 5 (two rooms' outlines along the faces of one wall),
+    // and one across them at x = 2.
+    let mut walls = Bitmap::filled(frame, false);
+    for x in 0..200 {
+        walls.set(
+            frame.cell_from_world(Vec2::new(x as f64 * 0.05, 4.925)),
+            true,
+        );
+        walls.set(
+            frame.cell_from_world(Vec2::new(x as f64 * 0.05, 5.075)),
+            true,
+        );
+    }
+    for y in 0..200 {
+        walls.set(frame.cell_from_world(Vec2::new(2.0, y as f64 * 0.05)), true);
+    }
+    let before = walls.clone();
+    // A 0.9 m door centred at x = 4 on the wall's centre line; the estimate 0.5 m ahead of the
+    // truth along x, so the map shows it at x = 4.5.
+    let door = (Vec2::new(3.55, 5.0), Vec2::new(4.45, 5.0));
+    let to_map = MapToWorld::new(&Pose::new(1.5, 1.0, 0.0), &Pose::new(1.0, 1.0, 0.0));
+    open_true_doors(&mut walls, &[door], &to_map);
+    for (i, (&was, &is)) in before.data.iter().zip(&walls.data).enumerate() {
+        let p = frame.world_from_cell(frame.cell_of_index(i));
+        let in_door = (p.x - 4.5).abs() <= 0.45 && (p.y - 5.0).abs() <= 0.3;
+        assert_eq!(is, was && !in_door, "at {p:?}");
+    }
+    // Both faces are open at the door, the wall across untouched.
+    for y in [4.925, 5.075] {
+        assert!(!walls.get(frame.cell_from_world(Vec2::new(4.5, y))).unwrap());
+        assert!(*walls.get(frame.cell_from_world(Vec2::new(3.9, y))).unwrap());
+    }
+    assert!(*walls
+        .get(frame.cell_from_world(Vec2::new(2.0, 5.0)))
+        .unwrap());
+}
+
 #[test]
 fn the_true_layout_oracle_explores_and_its_early_stop_leaves_little_unseen() {
     let b = corridor_building_with_rooms(4);
