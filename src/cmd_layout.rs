@@ -7,7 +7,9 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use floorcast_render::{room_color, Color, Figure, Style};
 use serde::Serialize;
-use sim_core::layout::{evaluate, reconstruct_layout, Layout, LayoutConfig, RoomLabel};
+use sim_core::layout::{
+    evaluate_merged, reconstruct_layout, unwalled_pairs, Layout, LayoutConfig, RoomLabel,
+};
 use sim_core::{OccupancyGrid, Polygon};
 
 use crate::output::{create_dir, write_text};
@@ -20,7 +22,9 @@ pub struct LayoutArgs {
     #[arg(long, value_name = "FILE")]
     map: PathBuf,
     /// A building with ground-truth rooms to score the layout against (writes accuracy.json):
-    /// a building TOML or an annotated floor plan .xml, in the map's frame.
+    /// a building TOML or an annotated floor plan .xml, in the map's frame. True rooms that no
+    /// wall parts (joined by a doorway at least 1.5 m wide, or corridor, hall and lobby pieces
+    /// joined by any) are scored as one.
     #[arg(long, value_name = "FILE")]
     truth: Option<PathBuf>,
     /// Output directory (default: results/layout/<map>).
@@ -190,7 +194,7 @@ pub fn run(a: LayoutArgs) -> Result<()> {
                 truth_path.display()
             );
         }
-        let acc = evaluate(&layout, &truth.rooms, grid.frame);
+        let acc = evaluate_merged(&layout, &truth.rooms, &unwalled_pairs(&truth), grid.frame);
         let f = AccuracyFile {
             format: "floorcast-layout-accuracy",
             version: 1,

@@ -56,6 +56,7 @@ const NOT_RUN: &[(&str, Check)] = &[
     ("run grids/paper-gaps.toml", Check::LongGrid("grids/paper-gaps.toml", 100)),
     ("run grids/starts.toml", Check::LongGrid("grids/starts.toml", 600)),
     ("run grids/layout-update.toml", Check::LongGrid("grids/layout-update.toml", 1000)),
+    ("run grids/real-schools.toml", Check::LongGrid("grids/real-schools.toml", 1620)),
     (
         "run grids/paper.toml --listen tcp/0.0.0.0:7447 --workers 0",
         Check::Network(Some("grids/paper.toml")),

@@ -12,7 +12,8 @@
 //! copy of the portal). The doorway lies along the stretch of wall the two spaces share nearest
 //! that point: [`DOOR_WIDTH_M`] wide (as wide as the two ends are apart, up to 2.5 m), slid
 //! along the wall when the point is near a corner so that the walls across stay whole; between
-//! two corridors the whole shared stretch is open. It reaches from one space's outline to the
+//! two corridors (type C: corridors, halls, lobbies; not the washrooms the data set types C too)
+//! the whole shared stretch is open. It reaches from one space's outline to the
 //! other's (some plans draw a wall's two faces apart) and 0.2 m beyond. A portal whose line
 //! segment no space has is placed midway along the longest stretch of wall its spaces share.
 //! The spaces are the ground-truth rooms (their labels, lower case, as the rooms' kinds), the
@@ -45,6 +46,8 @@ const MAX_POINTS: usize = 100_000;
 const MAX_NODES: u32 = 5_000_000;
 /// Deepest nesting of elements read (the plans nest 8 deep); deeper is refused before parsing.
 const MAX_DEPTH: usize = 64;
+/// Labels of spaces that the data set types C (connective) but that are rooms behind a door.
+const ROOMS_TYPED_C: &[&str] = &["washroom", "toilet", "bathroom", "restroom", "wc"];
 /// A start needs at least this clearance (m) from the walls.
 const MIN_START_CLEARANCE_M: f64 = 0.3;
 
@@ -213,7 +216,9 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
         }
         spaces.push(Space {
             id,
-            corridor: kind_code == "C",
+            // Type C is the data set's connective space (corridors, halls, lobbies), but it
+            // types washrooms C too: those keep their doors.
+            corridor: kind_code == "C" && !ROOMS_TYPED_C.contains(&label.as_str()),
             kind: if label.is_empty() {
                 match kind_code.as_str() {
                     "C" => "corridor".into(),

@@ -395,7 +395,7 @@ pub(super) fn open_true_doors(walls: &mut Bitmap, doors: &[(Vec2, Vec2)], to_map
     for &(a, b) in doors {
         let (a, b) = (to_map.backward(a), to_map.backward(b));
         let len = (b - a).norm();
-        if !(len > 1e-9) {
+        if len.is_nan() || len <= 1e-9 {
             continue;
         }
         let u = (b - a) / len;

@@ -83,6 +83,26 @@ fn iou(inter: usize, a: usize, b: usize) -> f64 {
     }
 }
 
+/// A doorway at least this wide (m) joins two true rooms into one region of the map.
+pub const OPENING_M: f64 = 1.5;
+
+/// The pairs of `b`'s rooms (indices into `b.rooms`) that no wall parts, to be scored as one
+/// ([`evaluate_merged`]): joined by a doorway at least [`OPENING_M`] wide, or both connective
+/// (kind `corridor`, `hall` or `lobby`) and joined by any doorway: the pieces a generator or an
+/// annotator splits a corridor into, which no map shows apart.
+pub fn unwalled_pairs(b: &crate::building::Building) -> Vec<(usize, usize)> {
+    let index = |id: Option<u32>| b.rooms.iter().position(|r| Some(r.id) == id);
+    let connective = |i: usize| matches!(b.rooms[i].kind.as_str(), "corridor" | "hall" | "lobby");
+    b.doors
+        .iter()
+        .filter_map(|d| {
+            let (i, j) = (index(d.rooms[0])?, index(d.rooms[1])?);
+            let wide = (d.b - d.a).norm() >= OPENING_M;
+            (i != j && (wide || (connective(i) && connective(j)))).then_some((i, j))
+        })
+        .collect()
+}
+
 /// Scores `layout` against `truth` on `frame`.
 pub fn evaluate(layout: &Layout, truth: &[Room], frame: GridFrame) -> Accuracy {
     evaluate_merged(layout, truth, &[], frame)
@@ -195,6 +215,51 @@ pub fn evaluate_merged(
 mod tests {
     use super::*;
     use crate::layout::{LayoutRoom, RoomLabel};
+
+    /// Which true rooms are scored as one: (kinds of rooms 1 and 2, door width, merged).
+    #[test]
+    fn rooms_no_wall_parts_are_scored_as_one() {
+        use crate::building::{Building, Door, Geometry};
+        use crate::geom::Polygon;
+        let cases = [
+            (("corridor", "corridor"), 0.9, true),
+            (("hall", "lobby"), 0.9, true),
+            (("corridor", "classroom"), 0.9, false),
+            (("corridor", "classroom"), 1.5, true),
+            (("office", "office"), 1.2, false),
+            (("washroom", "corridor"), 0.9, false),
+        ];
+        for ((k1, k2), width, merged) in cases {
+            let mut a = room(7, (0.0, 0.0), (4.0, 2.0));
+            a.kind = k1.into();
+            let mut b = room(9, (0.0, 2.0), (4.0, 6.0));
+            b.kind = k2.into();
+            let building = Building {
+                name: "t".into(),
+                geometry: Geometry::Vector {
+                    outline: Polygon::rect(Vec2::new(0.0, 0.0), Vec2::new(4.0, 6.0)),
+                    solids: vec![],
+                },
+                rooms: vec![a, b],
+                doors: vec![
+                    Door {
+                        a: Vec2::new(1.0, 2.0),
+                        b: Vec2::new(1.0 + width, 2.0),
+                        rooms: [Some(9), Some(7)],
+                    },
+                    // A door to the outside joins nothing.
+                    Door {
+                        a: Vec2::new(0.0, 0.5),
+                        b: Vec2::new(0.0, 2.5),
+                        rooms: [Some(7), None],
+                    },
+                ],
+                start: None,
+            };
+            let want: Vec<(usize, usize)> = if merged { vec![(1, 0)] } else { vec![] };
+            assert_eq!(unwalled_pairs(&building), want, "{k1} {k2} {width}");
+        }
+    }
 
     fn room(id: u32, min: (f64, f64), max: (f64, f64)) -> Room {
         Room {

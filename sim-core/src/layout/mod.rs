@@ -41,7 +41,7 @@ mod tests;
 use crate::geom::{Polygon, Segment, Vec2};
 use crate::grid::OccupancyGrid;
 
-pub use accuracy::{evaluate, evaluate_merged, Accuracy};
+pub use accuracy::{evaluate, evaluate_merged, unwalled_pairs, Accuracy};
 
 /// Whether a room was seen completely.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
