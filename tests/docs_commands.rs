@@ -99,7 +99,7 @@ const NOT_RUN: &[(&str, Check)] = &[
 
 /// At most this many printed commands may be left unrun (each reference grid's `run` line is
 /// one: they take minutes to hours and are planned instead).
-const MAX_NOT_RUN: usize = 23;
+const MAX_NOT_RUN: usize = 24;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
