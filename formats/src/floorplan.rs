@@ -744,7 +744,7 @@ fn doorway(portal: &Portal, spaces: &[Space]) -> Doorway {
     // Each space's stretch of wall along the door: its outline's edges parallel to it and in
     // line with its edge chosen above (or the one nearest the point), merged; (from, to) along
     // `u`, and the offset across.
-    let stretches: Vec<((f64, f64), f64)> = members
+    let stretches: Vec<((f64, f64), (Vec2, Vec2))> = members
         .iter()
         .enumerate()
         .filter_map(|(i, s)| {
@@ -762,11 +762,6 @@ fn doorway(portal: &Portal, spaces: &[Space]) -> Doorway {
         .reduce(|x, y| (x.0.max(y.0), x.1.min(y.1)))
         .filter(|r| r.1 > r.0)
         .or_else(|| stretches.first().map(|(r, _)| *r));
-    let offsets = stretches.iter().map(|(_, o)| *o);
-    let across = (
-        offsets.clone().fold(0.0, f64::min) - THROUGH_WALL_M,
-        offsets.fold(0.0, f64::max) + THROUGH_WALL_M,
-    );
     let corridors = members.len() == 2 && members.iter().all(|s| s.corridor);
     let clear = |(lo, hi): (f64, f64)| (lo + WALL_THICKNESS_M / 2.0, hi - WALL_THICKNESS_M / 2.0);
     let (t, width) = match shared.map(clear) {
@@ -784,6 +779,20 @@ fn doorway(portal: &Portal, spaces: &[Space]) -> Doorway {
         }
         None => (0.0, DOOR_WIDTH_M),
     };
+    // Across: from the point to each space's wall line, where the door's ends and middle are
+    // (a wall slanted against the door's direction is farther at one end).
+    let offsets: Vec<f64> = stretches
+        .iter()
+        .flat_map(|(_, (a, b))| {
+            [t - width / 2.0, t, t + width / 2.0]
+                .into_iter()
+                .filter_map(move |along| offset_at(*a, *b, c, u, n, along))
+        })
+        .collect();
+    let across = (
+        offsets.iter().copied().fold(0.0, f64::min) - THROUGH_WALL_M,
+        offsets.iter().copied().fold(0.0, f64::max) + THROUGH_WALL_M,
+    );
     Doorway {
         centre: c + u * t,
         u,
@@ -793,17 +802,30 @@ fn doorway(portal: &Portal, spaces: &[Space]) -> Doorway {
     }
 }
 
+/// Where the line through `a` and `b` crosses the normal to `u` at `along` (from `c`): its
+/// offset along `n`, within [`NEAR_WALL_M`]; `None` for a line across the door, or farther.
+fn offset_at(a: Vec2, b: Vec2, c: Vec2, u: Vec2, n: Vec2, along: f64) -> Option<f64> {
+    let v = b - a;
+    let vu = v.dot(&u);
+    if vu.abs() < 1e-9 {
+        return None;
+    }
+    let q = a + v * ((along - (a - c).dot(&u)) / vu);
+    let offset = (q - c).dot(&n);
+    (offset.abs() <= NEAR_WALL_M).then_some(offset)
+}
+
 /// The stretch of `polygon`'s outline along `u` near `c`: the edges parallel to `u` in line
 /// with `edge` (or, without one, with the parallel edge nearest `c`, within [`NEAR_WALL_M`]),
 /// merged where they touch, the piece holding that edge; as (from, to) along `u` from `c`, and
-/// its offset along `n`.
+/// that edge.
 fn stretch(
     polygon: &[Vec2],
     edge: Option<(Vec2, Vec2)>,
     c: Vec2,
     u: Vec2,
     n: Vec2,
-) -> Option<((f64, f64), f64)> {
+) -> Option<((f64, f64), (Vec2, Vec2))> {
     let parallel: Vec<(Vec2, Vec2)> = edges(polygon)
         .filter(|(a, b)| {
             let d = *b - *a;
@@ -843,7 +865,7 @@ fn stretch(
     merged
         .into_iter()
         .find(|m| m.0 <= at && at <= m.1)
-        .map(|m| (m, offset))
+        .map(|m| (m, (a0, b0)))
 }
 
 /// The edges of a closed polygon.
