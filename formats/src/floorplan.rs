@@ -18,10 +18,11 @@
 //! segment no space has is placed midway along the longest stretch of wall its spaces share.
 //! The spaces are the ground-truth rooms (their labels, lower case, as the rooms' kinds), the
 //! doorways its doors. The start is the free point farthest from the walls in the largest
-//! corridor (the plans mark no door to the outside; without a corridor, the largest space),
-//! heading 0. Pixel `y` grows downwards in the plans: it is turned so that the plan is not
-//! mirrored. Spaces without a polygon (some offices' untyped spaces), or whose polygon is one
-//! point repeated (spaces left empty), are left out, and so are portals to them.
+//! entrance space (the plans mark no door to the outside; the paper starts at the entrance),
+//! else in the largest corridor, else in the largest space, heading 0. Pixel `y` grows
+//! downwards in the plans: it is turned so that the plan is not mirrored. Spaces without a
+//! polygon (some offices' untyped spaces), or whose polygon is one point repeated (spaces left
+//! empty), are left out, and so are portals to them.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -889,28 +890,54 @@ fn for_cells_in(frame: &GridFrame, aabb: &sim_core::Aabb, mut f: impl FnMut(sim_
     }
 }
 
-/// The free cell farthest from the walls in the largest corridor (else the largest space),
-/// lowest cell first among equals; `None` when none has [`MIN_START_CLEARANCE_M`].
+/// The start: the free cell farthest from the walls (lowest cell first among equals) in the
+/// largest entrance (a space labelled ENTRANCE, as the paper's runs start at the entrance)
+/// from which the default robot can see at least [`ENTRANCE_REACH`] of what it sees from the
+/// largest corridor; else in the largest corridor; else in the largest space. A space whose
+/// best cell has less than [`MIN_START_CLEARANCE_M`] is passed over; `None` when none has it.
 fn start_in(spaces: &[Space], solid: &Bitmap) -> Option<Pose> {
     let area = |s: &Space| Polygon::new(s.polygon.clone()).area_m2();
-    let pick = spaces
-        .iter()
-        .filter(|s| s.corridor)
-        .max_by(|a, b| area(a).total_cmp(&area(b)))
-        .or_else(|| spaces.iter().max_by(|a, b| area(a).total_cmp(&area(b))))?;
     let clearance = sim_core::distance::distance_to(solid);
-    let poly = Polygon::new(pick.polygon.clone());
-    let mut best: Option<(f32, sim_core::Cell)> = None;
-    for_cells_in(&solid.frame, &poly.aabb(), |c, p| {
-        let Some(&d) = clearance.get(c) else { return };
-        if poly.contains(p) && best.is_none_or(|(bd, _)| d > bd) {
-            best = Some((d, c));
-        }
-    });
-    let (d, c) = best?;
-    if f64::from(d) * solid.frame.resolution_m < MIN_START_CLEARANCE_M {
-        return None;
-    }
+    let best_cell = |s: &Space| -> Option<sim_core::Cell> {
+        let poly = Polygon::new(s.polygon.clone());
+        let mut best: Option<(f32, sim_core::Cell)> = None;
+        for_cells_in(&solid.frame, &poly.aabb(), |c, p| {
+            let Some(&d) = clearance.get(c) else { return };
+            if poly.contains(p) && best.is_none_or(|(bd, _)| d > bd) {
+                best = Some((d, c));
+            }
+        });
+        let (d, c) = best?;
+        (f64::from(d) * solid.frame.resolution_m >= MIN_START_CLEARANCE_M).then_some(c)
+    };
+    let largest_first = |keep: &dyn Fn(&Space) -> bool| {
+        let mut v: Vec<&Space> = spaces.iter().filter(|s| keep(s)).collect();
+        v.sort_by(|a, b| area(b).total_cmp(&area(a)));
+        v
+    };
+    let inside = sim_core::Bitmap {
+        frame: solid.frame,
+        data: solid.data.iter().map(|s| !s).collect(),
+    };
+    // What the default robot (0.2 m and a 0.05 m margin, a 6 m laser) can see from a cell.
+    let reach = |c: sim_core::Cell| {
+        let p = solid.frame.world_from_cell(c);
+        let free = sim_core::building::flood_fill(&inside, c);
+        sim_core::building::explorable_free(&free, p, 0.25, 6.0).count_true()
+    };
+    let fallback = largest_first(&|s| s.corridor)
+        .into_iter()
+        .chain(largest_first(&|_| true))
+        .find_map(best_cell);
+    let entrance = largest_first(&|s| s.kind == "entrance")
+        .into_iter()
+        .filter_map(best_cell)
+        .find(|&c| fallback.is_none_or(|f| reach(c) as f64 >= ENTRANCE_REACH * reach(f) as f64));
+    let c = entrance.or(fallback)?;
     let p = solid.frame.world_from_cell(c);
     Some(Pose::new(p.x, p.y, 0.0))
 }
+
+/// An entrance is a start when the default robot can see at least this share of what it sees
+/// from the largest corridor (an entrance behind a doorway it does not fit is not).
+const ENTRANCE_REACH: f64 = 0.95;
