@@ -106,6 +106,20 @@ pub fn run(a: LayoutArgs) -> Result<()> {
     if grid.frame.is_empty() {
         bail!("{}: the map is empty", a.map.display());
     }
+    // The ground truth is checked before anything is written.
+    let truth = match &a.truth {
+        Some(truth_path) => {
+            let truth = floorcast_formats::read_building(truth_path)?;
+            if truth.rooms.is_empty() {
+                bail!(
+                    "{}: the building has no ground-truth rooms to compare with",
+                    truth_path.display()
+                );
+            }
+            Some((truth_path, truth))
+        }
+        None => None,
+    };
     let stem = a
         .map
         .file_stem()
@@ -181,14 +195,7 @@ pub fn run(a: LayoutArgs) -> Result<()> {
         layout.lines.len(),
         ms
     );
-    if let Some(truth_path) = &a.truth {
-        let truth = floorcast_formats::read_building(truth_path)?;
-        if truth.rooms.is_empty() {
-            bail!(
-                "{}: the building has no ground-truth rooms to compare with",
-                truth_path.display()
-            );
-        }
+    if let Some((truth_path, truth)) = truth {
         let acc = evaluate(&layout, &truth.rooms, grid.frame);
         let f = AccuracyFile {
             format: "floorcast-layout-accuracy",
