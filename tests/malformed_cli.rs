@@ -84,7 +84,7 @@ impl Generate {
         };
         let file = std::fs::File::create(dir.join(&self.file)).unwrap();
         let mut out = std::io::BufWriter::new(file);
-        out.write_all(base[..cut].as_bytes()).unwrap();
+        out.write_all(&base.as_bytes()[..cut]).unwrap();
         for i in 0..self.times {
             if self.repeat.contains("{i}") {
                 out.write_all(self.repeat.replace("{i}", &i.to_string()).as_bytes())
@@ -93,7 +93,7 @@ impl Generate {
             }
             .unwrap();
         }
-        out.write_all(base[cut..].as_bytes()).unwrap();
+        out.write_all(&base.as_bytes()[cut..]).unwrap();
         out.flush().unwrap();
     }
 }
