@@ -111,6 +111,20 @@ pub fn run(a: LayoutArgs) -> Result<()> {
     if grid.frame.is_empty() {
         bail!("{}: the map is empty", a.map.display());
     }
+    // The ground truth is checked before anything is written.
+    let truth = match &a.truth {
+        Some(truth_path) => {
+            let truth = floorcast_formats::read_building(truth_path)?;
+            if truth.rooms.is_empty() {
+                bail!(
+                    "{}: the building has no ground-truth rooms to compare with",
+                    truth_path.display()
+                );
+            }
+            Some((truth_path, truth))
+        }
+        None => None,
+    };
     let stem = a
         .map
         .file_stem()
@@ -186,14 +200,7 @@ pub fn run(a: LayoutArgs) -> Result<()> {
         layout.lines.len(),
         ms
     );
-    if let Some(truth_path) = &a.truth {
-        let truth = floorcast_formats::read_building(truth_path)?;
-        if truth.rooms.is_empty() {
-            bail!(
-                "{}: the building has no ground-truth rooms to compare with",
-                truth_path.display()
-            );
-        }
+    if let Some((truth_path, truth)) = truth {
         let acc = evaluate_merged(&layout, &truth.rooms, &unwalled_pairs(&truth), grid.frame);
         let f = AccuracyFile {
             format: "floorcast-layout-accuracy",

@@ -46,6 +46,56 @@ struct Case {
     /// Words that must not appear (Rust debug text).
     #[serde(default)]
     never: Vec<String>,
+    /// Files to write before the run, in order: inputs too large or too deep to commit.
+    #[serde(default)]
+    generate: Vec<Generate>,
+}
+
+/// A file written into the case's directory before the run: the file `from` (in that
+/// directory: a copy of `files/`, or a file an earlier entry generated; none when empty) with
+/// `repeat` written `times` times before its first `at` (at its end when `at` is empty); `{i}`
+/// in `repeat` becomes the repetition's number (0, 1, ...). Written as it is made: a 100 MB
+/// file costs no memory.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Generate {
+    file: String,
+    #[serde(default)]
+    from: String,
+    #[serde(default)]
+    at: String,
+    repeat: String,
+    times: u64,
+}
+
+impl Generate {
+    fn write(&self, dir: &Path) {
+        use std::io::Write;
+        let base = if self.from.is_empty() {
+            String::new()
+        } else {
+            std::fs::read_to_string(dir.join(&self.from)).unwrap()
+        };
+        let cut = if self.at.is_empty() {
+            base.len()
+        } else {
+            base.find(&self.at)
+                .unwrap_or_else(|| panic!("{:?} not in {}", self.at, self.from))
+        };
+        let file = std::fs::File::create(dir.join(&self.file)).unwrap();
+        let mut out = std::io::BufWriter::new(file);
+        out.write_all(&base.as_bytes()[..cut]).unwrap();
+        for i in 0..self.times {
+            if self.repeat.contains("{i}") {
+                out.write_all(self.repeat.replace("{i}", &i.to_string()).as_bytes())
+            } else {
+                out.write_all(self.repeat.as_bytes())
+            }
+            .unwrap();
+        }
+        out.write_all(&base.as_bytes()[cut..]).unwrap();
+        out.flush().unwrap();
+    }
 }
 
 fn corpus_dir() -> PathBuf {
@@ -105,6 +155,9 @@ fn check_case(case: &Case) -> Vec<String> {
     .unwrap();
     for d in &case.mkdir {
         std::fs::create_dir_all(tmp.join(d)).unwrap();
+    }
+    for g in &case.generate {
+        g.write(tmp);
     }
     for f in &case.fifo {
         let made = Command::new("mkfifo").arg(tmp.join(f)).status().unwrap();

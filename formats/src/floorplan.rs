@@ -43,6 +43,15 @@ const MARGIN_M: f64 = 1.0;
 /// Most spaces, and points of one polygon, a plan may have.
 const MAX_SPACES: usize = 10_000;
 const MAX_POINTS: usize = 100_000;
+/// Most line segments (walls and portals) and portals a plan may have (the vendored plans have
+/// at most 785 and 168): every doorway is looked for among the walls.
+const MAX_SEGMENTS: usize = 50_000;
+const MAX_PORTALS: usize = 5_000;
+/// Most cell visits drawing a plan may take, as a multiple of the cell budget: every space's
+/// bounding box times its points (a point-in-polygon test per cell) and every wall's box (the
+/// vendored plans need at most 1.2 budgets; overlapping spaces or long diagonal walls could need
+/// thousands).
+const MAX_DRAWING_BUDGETS: f64 = 16.0;
 /// Most XML nodes parsed.
 const MAX_NODES: u32 = 5_000_000;
 /// Deepest nesting of elements read (the plans nest 8 deep); deeper is refused before parsing.
@@ -53,6 +62,8 @@ const ROOMS_TYPED_C: &[&str] = &["washroom", "toilet", "bathroom", "restroom", "
 const MIN_START_CLEARANCE_M: f64 = 0.3;
 
 struct Space {
+    /// The plan's id of the space (portals name it).
+    #[allow(dead_code)]
     id: String,
     kind: String,
     polygon: Vec<Vec2>,
@@ -70,10 +81,18 @@ struct Space {
 /// Reads an annotated floor plan (`.xml`) as a building with its rooms and doors.
 pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
     let text = limits::read_text(path)?;
-    if let Some(depth) = nesting_beyond(&text, MAX_DEPTH) {
+    if let Some((depth, at)) = nesting_beyond(&text, MAX_DEPTH) {
+        let line = text[..at].matches('\n').count() + 1;
+        let name: String = text[at..]
+            .chars()
+            .take_while(|c| !c.is_whitespace() && !matches!(c, '>' | '/'))
+            .collect();
         return Err(Error::syntax(
             path,
-            format!("elements nested {depth} deep or more; expected at most {MAX_DEPTH}"),
+            format!(
+                "line {line}: element <{}> nested {depth} deep; expected elements nested at most {MAX_DEPTH} deep",
+                short(&name)
+            ),
         ));
     }
     let options = roxmltree::ParsingOptions {
@@ -81,7 +100,7 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
         nodes_limit: MAX_NODES,
     };
     let doc = roxmltree::Document::parse_with_options(&text, options)
-        .map_err(|e| Error::syntax(path, format!("not a well-formed XML floor plan: {e}")))?;
+        .map_err(|e| Error::syntax(path, xml_error(&e)))?;
     let root = doc.root_element();
     if root.tag_name().name() != "building" {
         return Err(Error::invalid(
@@ -98,20 +117,29 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
     let mut ids: HashMap<String, usize> = HashMap::new();
     // Every line segment by id: a portal may name one of the other space's.
     let mut segments: HashMap<String, (Vec2, Vec2)> = HashMap::new();
+    let (mut n_segments, mut n_portals) = (0usize, 0usize);
     for (i, s) in children(spaces_el, "space").enumerate() {
         if i >= MAX_SPACES {
             return Err(Error::invalid(
                 path,
-                "spaces",
-                format!("more than {MAX_SPACES} spaces"),
+                "building/floor/spaces",
+                format!("more than {MAX_SPACES} spaces; expected at most {MAX_SPACES}"),
             ));
         }
         let field = format!("space[{i}]");
-        let id = s
-            .attribute("id")
-            .filter(|v| !v.trim().is_empty())
-            .ok_or_else(|| Error::invalid(path, &field, "expected an id attribute"))?
-            .to_string();
+        let id = match s.attribute("id") {
+            None => {
+                return Err(Error::invalid(
+                    path,
+                    &field,
+                    "no id attribute; expected one",
+                ))
+            }
+            Some(v) if v.trim().is_empty() => {
+                return Err(Error::invalid(path, &field, "an empty id; expected one"))
+            }
+            Some(v) => v.to_string(),
+        };
         let field = format!("space[{i}] ({})", short(&id));
         let polygon = match child(s, "bounding_polygon") {
             Some(p) => points(path, &format!("{field}/bounding_polygon"), p, metres_per_px)?,
@@ -127,7 +155,11 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             return Err(Error::invalid(
                 path,
                 format!("{field}/bounding_polygon"),
-                format!("{} distinct points; expected at least 3", polygon.len()),
+                format!(
+                    "{} distinct point{}; expected at least 3",
+                    polygon.len(),
+                    if polygon.len() == 1 { "" } else { "s" }
+                ),
             ));
         }
         if Polygon::new(polygon.clone()).area_m2() < 0.01 {
@@ -155,6 +187,14 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
         if let Some(rep) = child(s, "space_representation") {
             for (k, seg) in children(rep, "linesegment").enumerate() {
                 let sf = format!("{field}/space_representation/linesegment[{k}]");
+                n_segments += 1;
+                if n_segments > MAX_SEGMENTS {
+                    return Err(Error::invalid(
+                        path,
+                        sf,
+                        format!("more than {MAX_SEGMENTS} line segments in the plan; expected at most {MAX_SEGMENTS}"),
+                    ));
+                }
                 let pts = points(path, &sf, seg, metres_per_px)?;
                 if pts.len() != 2 {
                     return Err(Error::invalid(
@@ -185,11 +225,26 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
         if let Some(ps) = child(s, "portals") {
             for (k, p) in children(ps, "portal").enumerate() {
                 let pf = format!("{field}/portals/portal[{k}]");
+                n_portals += 1;
+                if n_portals > MAX_PORTALS {
+                    return Err(Error::invalid(
+                        path,
+                        pf,
+                        format!("more than {MAX_PORTALS} portals in the plan; expected at most {MAX_PORTALS}"),
+                    ));
+                }
                 let seg_id = child(p, "linesegment")
                     .and_then(|l| l.text())
                     .unwrap_or("")
                     .trim()
                     .to_string();
+                if seg_id.is_empty() {
+                    return Err(Error::invalid(
+                        path,
+                        format!("{pf}/linesegment"),
+                        "missing or empty; expected the id of the portal's line segment",
+                    ));
+                }
                 let targets: Vec<String> = child(p, "target")
                     .map(|t| {
                         children(t, "id")
@@ -243,6 +298,22 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             "no space with a polygon; expected the rooms of a floor",
         ));
     }
+    // Every portal's spaces must exist (one without a polygon is left out with its portals).
+    let all_ids: std::collections::HashSet<&str> = children(spaces_el, "space")
+        .filter_map(|s| s.attribute("id"))
+        .collect();
+    for (field, _, targets) in spaces.iter().flat_map(|s| &s.portal_refs) {
+        if let Some(t) = targets.iter().find(|t| !all_ids.contains(t.as_str())) {
+            return Err(Error::invalid(
+                path,
+                format!("{field}/target"),
+                format!(
+                    "space '{}', which the plan does not have; expected the ids of the spaces the portal joins",
+                    short(t)
+                ),
+            ));
+        }
+    }
     for s in &mut spaces {
         for (field, seg_id, targets) in std::mem::take(&mut s.portal_refs) {
             let point = s
@@ -253,31 +324,31 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             s.portals.push((field, seg_id, point, targets));
         }
     }
-    // Every portal's spaces must exist (one without a polygon is left out with its portals).
-    let all_ids: std::collections::HashSet<&str> = children(spaces_el, "space")
-        .filter_map(|s| s.attribute("id"))
-        .collect();
-    for s in &spaces {
-        for (_, _, _, targets) in &s.portals {
-            if let Some(t) = targets.iter().find(|t| !all_ids.contains(t.as_str())) {
-                return Err(Error::invalid(
-                    path,
-                    format!("space ({})/portals", short(&s.id)),
-                    format!(
-                        "a portal to space '{}', which the plan does not have",
-                        short(t)
-                    ),
-                ));
-            }
-        }
-    }
+    check_drawing(path, &spaces)?;
     let portals = portals(path, &spaces, &ids)?;
     build(path, &spaces, &portals)
 }
 
-/// The nesting reached when it first passes `max` (a scan of the tags, quotes aside: enough to
-/// refuse what the parser would recurse on too deeply), or `None`.
-fn nesting_beyond(text: &str, max: usize) -> Option<usize> {
+/// A parser's error as a message: what was found, where, and what was expected.
+fn xml_error(e: &roxmltree::Error) -> String {
+    use roxmltree::Error as E;
+    match e {
+        E::DtdDetected => "a DTD (<!DOCTYPE ...>), which is not read (its entities could expand without bound); expected a floor plan without one".into(),
+        E::NodesLimitReached => format!(
+            "more than {MAX_NODES} XML nodes; expected a floor plan's (the vendored plans have fewer than 10000 elements)"
+        ),
+        E::NoRootNode => "not a well-formed XML floor plan: no element; expected a <building> element (the KTH floor-plan schema)".into(),
+        E::UnclosedRootNode | E::UnexpectedEndOfStream => format!(
+            "not a well-formed XML floor plan: {e} (is the file cut short?); expected it to end with </building>"
+        ),
+        _ => format!("not a well-formed XML floor plan: {e}"),
+    }
+}
+
+/// The nesting reached when it first passes `max` and the byte offset of the element's name
+/// there (a scan of the tags, quotes aside: enough to refuse what the parser would recurse on
+/// too deeply), or `None`.
+fn nesting_beyond(text: &str, max: usize) -> Option<(usize, usize)> {
     let bytes = text.as_bytes();
     let mut depth = 0usize;
     let mut i = 0;
@@ -293,7 +364,7 @@ fn nesting_beyond(text: &str, max: usize) -> Option<usize> {
                 }
                 depth += 1;
                 if depth > max {
-                    return Some(depth);
+                    return Some((depth, i));
                 }
             }
         }
@@ -307,15 +378,19 @@ fn scale(path: &Path, root: roxmltree::Node<'_, '_>) -> Result<f64, Error> {
     let value = |what: &str| -> Result<(f64, String), Error> {
         let el = child(sc, what)
             .ok_or_else(|| Error::invalid(path, format!("scale/{what}"), "missing"))?;
-        let v = child(el, "value")
+        let text = child(el, "value")
             .and_then(|v| v.text())
-            .and_then(|t| t.trim().parse::<f64>().ok())
+            .unwrap_or("")
+            .trim();
+        let v = text
+            .parse::<f64>()
+            .ok()
             .filter(|v| v.is_finite() && *v > 0.0)
             .ok_or_else(|| {
                 Error::invalid(
                     path,
                     format!("scale/{what}/value"),
-                    "expected a positive number",
+                    format!("{}; expected a positive number", found(text)),
                 )
             })?;
         let um = child(el, "um")
@@ -377,8 +452,9 @@ fn points(
             ));
         }
         let coord = |a: &str| -> Result<f64, Error> {
-            p.attribute(a)
-                .and_then(|v| v.trim().parse::<f64>().ok())
+            let text = p.attribute(a).unwrap_or("").trim();
+            text.parse::<f64>()
+                .ok()
                 .map(|v| v * mpp)
                 .filter(|v| limits::coordinate_ok(*v))
                 .ok_or_else(|| {
@@ -386,7 +462,8 @@ fn points(
                         path,
                         format!("{field}/point[{k}]/{a}"),
                         format!(
-                            "expected a number of pixels within {} m of the origin at this scale",
+                            "{}; expected a number of pixels within {} m of the origin at this scale",
+                            found(text),
                             num(limits::COORDINATE_LIMIT_M)
                         ),
                     )
@@ -417,17 +494,86 @@ fn children<'a, 'i: 'a>(
     n.children().filter(move |c| c.has_tag_name(name))
 }
 
-/// A short excerpt of outside text for a message.
+/// Most characters of outside text a message quotes.
+const EXCERPT_CHARS: usize = 80;
+
+/// Outside text as a message quotes it (the project's rule, `floorcast_worker::text::excerpt`):
+/// control characters escaped, at most [`EXCERPT_CHARS`] characters, a longer text cut with
+/// "..." and its length.
 fn short(s: &str) -> String {
-    let clean: String = s
-        .chars()
-        .map(|c| if c.is_control() { ' ' } else { c })
-        .collect();
-    if clean.chars().count() > 60 {
-        format!("{}...", clean.chars().take(60).collect::<String>())
-    } else {
-        clean
+    let escaped = |s: &str| -> String {
+        s.chars()
+            .map(|c| match c {
+                '\n' => "\\n".to_string(),
+                '\r' => "\\r".to_string(),
+                '\t' => "\\t".to_string(),
+                c if c.is_control() && (c as u32) < 0x100 => format!("\\x{:02x}", c as u32),
+                c => c.to_string(),
+            })
+            .collect()
+    };
+    match s.char_indices().nth(EXCERPT_CHARS) {
+        None => escaped(s),
+        Some((cut, _)) => format!(
+            "{}... ({} characters in all)",
+            escaped(&s[..cut]),
+            s.chars().count()
+        ),
     }
+}
+
+/// What a value's text was, for a message: "missing" or "got '...'".
+fn found(text: &str) -> String {
+    if text.is_empty() {
+        "missing".into()
+    } else {
+        format!("got '{}'", short(text))
+    }
+}
+
+/// Refuses a plan whose drawing would take more than [`MAX_DRAWING_BUDGETS`] cell budgets of
+/// work (see there), before anything is drawn.
+fn check_drawing(path: &Path, spaces: &[Space]) -> Result<(), Error> {
+    let cells = |w: f64, h: f64| limits::cells_for(w.max(0.0), h.max(0.0), PLAN_RESOLUTION_M);
+    let bounds_of = |pts: &mut dyn Iterator<Item = &Vec2>| {
+        let mut b = sim_core::Aabb::empty();
+        pts.for_each(|p| b.grow(*p));
+        b
+    };
+    let all = bounds_of(&mut spaces.iter().flat_map(|s| s.polygon.iter()));
+    let (w, h) = (
+        all.width_m() + 2.0 * MARGIN_M,
+        all.height_m() + 2.0 * MARGIN_M,
+    );
+    if cells(w, h) > limits::max_cells() as f64 {
+        return Ok(()); // Refused for its extent, which `build` names.
+    }
+    let mut work = 0.0;
+    for s in spaces {
+        let b = bounds_of(&mut s.polygon.iter());
+        work += cells(b.width_m(), b.height_m()) * s.polygon.len() as f64;
+        // A wall's box, within the plan's (the raster ends there).
+        for &(a, z) in &s.walls {
+            let h = WALL_THICKNESS_M + MARGIN_M;
+            let w = a.x.max(z.x).min(all.max.x + h) - a.x.min(z.x).max(all.min.x - h);
+            let t = a.y.max(z.y).min(all.max.y + h) - a.y.min(z.y).max(all.min.y - h);
+            work += cells(w + WALL_THICKNESS_M, t + WALL_THICKNESS_M);
+        }
+    }
+    let most = MAX_DRAWING_BUDGETS * limits::max_cells() as f64;
+    if work <= most {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        path,
+        "floor/spaces",
+        format!(
+            "drawing the spaces (overlapping, or with long diagonal walls) would visit {work:.3e} cells, more than {} times the budget of {} cells; expected spaces side by side, or raise the budget with {}",
+            num(MAX_DRAWING_BUDGETS),
+            limits::max_cells(),
+            limits::MAX_CELLS_FLAG
+        ),
+    ))
 }
 
 /// A portal as the spaces give it: the points its spaces mark (a door's two ends in some
@@ -569,8 +715,9 @@ const THROUGH_WALL_M: f64 = 0.2;
 /// The portals of the plan, each once: a portal appears in both spaces it joins, with the same
 /// line segment's id (its point may differ: some plans mark a door's two ends, one in each
 /// space), or with points less than [`SAME_DOOR_M`] apart. A portal whose line segment no
-/// space has is placed midway along the longest stretch of wall its two spaces share; one
-/// whose spaces share none is an error.
+/// space has is the other space's portal between the same two if there is one; else it is
+/// placed midway along the longest stretch of wall its two spaces share; one whose spaces
+/// share none is an error.
 fn portals(
     path: &Path,
     spaces: &[Space],
@@ -615,7 +762,12 @@ fn portals(
         }
     }
     for (field, at) in unplaced {
-        if !out[at].points.is_empty() {
+        // Placed by its own segment in the other space, or the other space's portal between
+        // the same two under an id of its own.
+        if out
+            .iter()
+            .any(|o| !o.points.is_empty() && same_rooms(o.rooms, out[at].rooms))
+        {
             continue;
         }
         let [Some(a), Some(b)] = out[at].rooms else {
@@ -643,6 +795,7 @@ fn portals(
             })?;
         out[at].points.push(p);
     }
+    out.retain(|o| !o.points.is_empty());
     Ok(out)
 }
 

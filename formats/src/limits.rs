@@ -158,6 +158,12 @@ pub fn read_bytes(path: &Path, max_bytes: u64) -> Result<Vec<u8>, Error> {
 /// Reads a UTF-8 text file of at most [`MAX_TEXT_BYTES`] (see [`read_bytes`]).
 pub fn read_text(path: &Path) -> Result<String, Error> {
     let bytes = read_bytes(path, MAX_TEXT_BYTES)?;
+    if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
+        return Err(Error::syntax(
+            path,
+            "UTF-16 text (it starts with a UTF-16 byte-order mark); expected UTF-8 text",
+        ));
+    }
     String::from_utf8(bytes).map_err(|e| {
         Error::syntax(
             path,

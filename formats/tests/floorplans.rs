@@ -144,7 +144,7 @@ fn malformed_plans_are_refused_naming_the_element() {
         (
             "a DTD",
             format!("<!DOCTYPE building [<!ENTITY a \"aaaa\">]>{good}"),
-            vec!["not a well-formed XML"],
+            vec!["DTD", "expected a floor plan without one"],
         ),
     ];
     let dir = tempfile::tempdir().unwrap();
