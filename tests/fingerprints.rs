@@ -56,6 +56,14 @@ const CASES: &[(&str, &str, &str, u64)] = &[
         "baseline",
         1,
     ),
+    // An annotated plan (its doorways, start and rooms drawn by formats::floorplan) and the
+    // true-layout oracle with its early stop (its layout open at the doors).
+    (
+        "lamuniere1-plan-layout-truth-es-1",
+        "maps/plans/Lamuniere1_updated.xml",
+        "layout-truth-es",
+        1,
+    ),
 ];
 
 fn fingerprint(building: &Path, strategy: &str, seed: u64) -> String {
