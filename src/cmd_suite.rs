@@ -344,6 +344,8 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
     // The entries: the files given (each keeping what the manifest said of it), or the
     // manifest's own.
     let mut entries: Vec<SuiteBuilding> = Vec::new();
+    // Where each is read from: the file as given, or as the manifest names it.
+    let mut files: Vec<PathBuf> = Vec::new();
     if a.files.is_empty() {
         let Some(m) = &old else {
             bail!(
@@ -352,6 +354,7 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
             );
         };
         entries = m.buildings.clone();
+        files = entries.iter().map(|e| Manifest::path_of(&path, e)).collect();
     } else {
         for file in &a.files {
             let rel = relative_to(file, &dir)?;
@@ -393,6 +396,7 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
                 }
             };
             entries.push(entry);
+            files.push(file.clone());
         }
     }
     for e in entries.iter_mut() {
@@ -408,9 +412,8 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
     }
     // Each building read: its hash, free area and rooms.
     let mut changed = Vec::new();
-    for e in entries.iter_mut() {
-        let file = Manifest::path_of(&path, e);
-        let b = floorcast_formats::read_building(&file)?;
+    for (e, file) in entries.iter_mut().zip(&files) {
+        let b = floorcast_formats::read_building(file)?;
         let hash = b.content_hash();
         if !e.hash.is_empty() && e.hash != hash {
             changed.push(e.name.clone());

@@ -1555,6 +1555,50 @@ time_limit_s = 600
         );
     }
 
+    /// A suite's buildings are planned under their manifests' names, tagged with the suite's
+    /// name and hash; their jobs are those of the same files named in `buildings` (a suite is a
+    /// label on a result, not part of its identity).
+    #[test]
+    fn a_suite_plans_its_buildings_with_the_same_job_ids_as_their_files() {
+        let grid = |buildings: &str| {
+            format!(
+                "format = \"floorcast-grid\"\nversion = 1\nname = \"s\"\n{buildings}\nseeds = [1]\n[[strategies]]\nname = \"baseline\"\n"
+            )
+        };
+        let suite = parse(&grid("suites = [\"paper-set\"]")).unwrap();
+        let files = parse(&grid("buildings = [\"../buildings/paper/paper-*.toml\"]")).unwrap();
+        let manifest = floorcast_formats::suite::read_manifest(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites/paper-set.toml"),
+        )
+        .unwrap();
+        assert_eq!(suite.suites.len(), 1);
+        assert_eq!(suite.suites[0].name, "paper-set");
+        assert_eq!(suite.suites[0].hash, manifest.hash());
+        assert_eq!(suite.buildings.len(), 10);
+        for b in &suite.buildings {
+            let tag = b.suite.as_ref().unwrap();
+            assert_eq!((tag.name.as_str(), tag.hash.as_str()), ("paper-set", manifest.hash().as_str()));
+        }
+        assert!(files.buildings.iter().all(|b| b.suite.is_none()));
+        let ids = |p: &Plan| {
+            let mut v: Vec<(String, String)> = p
+                .jobs
+                .iter()
+                .map(|j| (p.buildings[j.building].name.clone(), j.id.clone()))
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(ids(&suite), ids(&files));
+        // Both at once: the same buildings twice, refused by name.
+        let e = parse(&grid(
+            "buildings = [\"../buildings/paper/paper-01.toml\"]\nsuites = [\"paper-set\"]",
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("two buildings are named 'paper-01'"), "{e}");
+    }
+
     #[test]
     fn expands_buildings_seeds_and_strategies() {
         let p = parse(GOOD).unwrap();

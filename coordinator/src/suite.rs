@@ -165,6 +165,66 @@ pub fn describe_suites(results: &[StoredResult]) -> Vec<String> {
 mod tests {
     use super::*;
 
+    /// Records of version 1 (no suite) and 2 read; a store holds one hash of a suite name.
+    #[test]
+    fn a_store_holds_one_version_of_a_suite_and_old_records_read() {
+        let edit = |r: &StoredResult, f: &dyn Fn(&mut serde_json::Value)| {
+            let mut v: serde_json::Value =
+                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            f(&mut v);
+            let mut r = r.clone();
+            r.summary_json = Some(v.to_string());
+            r
+        };
+        let (ha, hb) = ("a".repeat(32), "b".repeat(32));
+        let old = crate::table::tests::stored("small", "baseline", 1, 100.0);
+        let tagged = edit(
+            &crate::table::tests::stored("small", "baseline", 2, 100.0),
+            &|v| {
+                v["version"] = 2.into();
+                v["suite"] = "s".into();
+                v["suite_hash"] = ha.as_str().into();
+            },
+        );
+        for r in [&old, &tagged] {
+            crate::store::check_row(r).unwrap();
+        }
+        let both = [old.clone(), tagged.clone()];
+        assert_eq!(stored_suites(&both), vec![("s".to_string(), ha.clone(), 1)]);
+        assert_eq!(describe_suites(&both), vec![format!("suite s, hash {ha}: 1 runs")]);
+        let planned = |hash: &str| {
+            vec![PlannedSuite {
+                name: "s".into(),
+                hash: hash.into(),
+                manifest: PathBuf::from("suites/s.toml"),
+                buildings: 1,
+            }]
+        };
+        assert_eq!(check_stored_suites(&planned(&ha), &both), Ok(()));
+        let e = check_stored_suites(&planned(&hb), &both).unwrap_err();
+        assert!(e.contains("one version of a suite"), "{e}");
+        // Two versions in one store (written by hand): said.
+        let other = edit(&tagged, &|v| v["suite_hash"] = hb.as_str().into());
+        let lines = describe_suites(&[tagged.clone(), other]);
+        assert!(lines[0].contains("has 2 versions here"), "{lines:?}");
+        // A version 1 record with a suite, a suite without its hash: tampered rows.
+        let cases = [
+            (edit(&old, &|v| v["suite"] = "s".into()), "new in version 2"),
+            (
+                edit(&tagged, &|v| {
+                    v.as_object_mut().unwrap().remove("suite_hash");
+                }),
+                "go together",
+            ),
+            (edit(&tagged, &|v| v["suite_hash"] = "xyz".into()), "32 hex"),
+            (edit(&tagged, &|v| v["version"] = 3.into()), "version 1 to 2"),
+        ];
+        for (row, words) in &cases {
+            let e = crate::store::check_row(row).unwrap_err();
+            assert!(e.contains(words), "{words}: {e}");
+        }
+    }
+
     #[test]
     fn suites_are_found_by_name_in_a_folder_above_or_by_path() {
         let tmp = tempfile::tempdir().unwrap();
