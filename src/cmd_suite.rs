@@ -7,8 +7,8 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use floorcast_coordinator::suite::{find_suite, is_path, manifests_in, suites_dir, SUITES_DIR};
 use floorcast_formats::suite::{
-    area_text, parse_manifest, read_manifest, rounded_area_m2, suite_name, Manifest,
-    SuiteBuilding, SuiteKind,
+    area_text, parse_manifest, read_manifest, rounded_area_m2, suite_name, Manifest, SuiteBuilding,
+    SuiteKind,
 };
 use serde::Serialize;
 use sim_core::Building;
@@ -245,7 +245,8 @@ fn check_building(manifest: &Path, spec: &str, sb: &SuiteBuilding) -> Result<Str
 }
 
 fn check_cmd(a: CheckArgs) -> Result<()> {
-    let path = find_suite(&a.suite, Path::new(".")).map_err(|e| anyhow::anyhow!("{}: {e}", a.suite))?;
+    let path =
+        find_suite(&a.suite, Path::new(".")).map_err(|e| anyhow::anyhow!("{}: {e}", a.suite))?;
     let m = read_manifest(&path)?;
     let n = m.buildings.len();
     say!(
@@ -323,7 +324,11 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
     } else {
         None
     };
-    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf();
     let name = match (&old, is_path(&a.suite)) {
         (Some(m), true) => m.name.clone(),
         (_, false) => a.suite.clone(),
@@ -354,7 +359,10 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
             );
         };
         entries = m.buildings.clone();
-        files = entries.iter().map(|e| Manifest::path_of(&path, e)).collect();
+        files = entries
+            .iter()
+            .map(|e| Manifest::path_of(&path, e))
+            .collect();
     } else {
         for file in &a.files {
             let rel = relative_to(file, &dir)?;

@@ -26,7 +26,10 @@ fn the_shipped_suites_list_with_their_hashes() {
     for name in ["real-schools", "real-offices", "school-maps", "paper-set"] {
         assert!(out.contains(name), "{name}: {out}");
     }
-    assert!(out.contains("school 27") && out.contains("office 9"), "{out}");
+    assert!(
+        out.contains("school 27") && out.contains("office 9"),
+        "{out}"
+    );
     let o = run_in(&repo(), &["suite", "list", "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let list: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
@@ -34,10 +37,9 @@ fn the_shipped_suites_list_with_their_hashes() {
     assert_eq!(list.len(), 4);
     for s in list {
         let name = s["name"].as_str().unwrap();
-        let manifest = floorcast_formats::suite::read_manifest(
-            &repo().join(format!("suites/{name}.toml")),
-        )
-        .unwrap();
+        let manifest =
+            floorcast_formats::suite::read_manifest(&repo().join(format!("suites/{name}.toml")))
+                .unwrap();
         assert_eq!(s["hash"], manifest.hash(), "{name}");
         assert_eq!(s["buildings"], manifest.buildings.len(), "{name}");
     }
@@ -120,13 +122,18 @@ fn a_suite_is_written_checked_and_fails_naming_each_building() {
     assert_eq!(m.buildings[1].hash, check["hash"].as_str().unwrap());
     // The halves fail: half of it is out of reach.
     let o = run_in(&root, &["suite", "check", "mine"]);
-    assert_clean_failure(&o, &["suite mine", "1 of 2 buildings fail", "halves", "explorable"]);
+    assert_clean_failure(
+        &o,
+        &[
+            "suite mine",
+            "1 of 2 buildings fail",
+            "halves",
+            "explorable",
+        ],
+    );
     assert!(stdout(&o).contains("small: ok:"), "{}", stdout(&o));
     // A building that changed: its hash, and the command that refreshes the manifest.
-    let o = run_in(
-        &root,
-        &["suite", "update", "mine", "buildings/small.toml"],
-    );
+    let o = run_in(&root, &["suite", "update", "mine", "buildings/small.toml"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let b = floorcast_formats::read_building(&small).unwrap();
     let g = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
@@ -151,15 +158,32 @@ fn a_suite_is_written_checked_and_fails_naming_each_building() {
     );
     let o = run_in(&root, &["suite", "update", "suites/mine.toml"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stdout(&o).contains("content hash changed: small"), "{}", stdout(&o));
+    assert!(
+        stdout(&o).contains("content hash changed: small"),
+        "{}",
+        stdout(&o)
+    );
     let o = run_in(&root, &["suite", "check", "mine"]);
     assert!(o.status.success(), "{}", stderr(&o));
     // A new file needs its description.
     let o = run_in(
         &root,
-        &["suite", "update", "mine", "buildings/small.toml", "buildings/halves.toml"],
+        &[
+            "suite",
+            "update",
+            "mine",
+            "buildings/small.toml",
+            "buildings/halves.toml",
+        ],
     );
-    assert_clean_failure(&o, &["--kind, --source, --licence", "halves.toml", "new to suite mine"]);
+    assert_clean_failure(
+        &o,
+        &[
+            "--kind, --source, --licence",
+            "halves.toml",
+            "new to suite mine",
+        ],
+    );
     // An unknown suite names the ones there are.
     let o = run_in(&root, &["suite", "check", "theirs"]);
     assert_clean_failure(&o, &["no suite named 'theirs'", "its suites: mine"]);
@@ -174,8 +198,18 @@ fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
     let o = run_in(
         &root,
         &[
-            "suite", "update", "one", "--kind", "generated", "--source", "made here",
-            "--licence", "MIT", "--description", "One building", "buildings/small.toml",
+            "suite",
+            "update",
+            "one",
+            "--kind",
+            "generated",
+            "--source",
+            "made here",
+            "--licence",
+            "MIT",
+            "--description",
+            "One building",
+            "buildings/small.toml",
         ],
     );
     assert!(o.status.success(), "{}", stderr(&o));
@@ -190,7 +224,10 @@ fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
     let o = run_in(&root, &["run", "grids/g.toml", "--summary"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
-    assert!(out.contains(&format!("suite one: 1 buildings, hash {hash}")), "{out}");
+    assert!(
+        out.contains(&format!("suite one: 1 buildings, hash {hash}")),
+        "{out}"
+    );
     assert!(out.contains("0 of 2 jobs stored"), "{out}");
     let o = run_in(&root, &["run", "grids/g.toml", "--quiet"]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -213,8 +250,8 @@ fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
         .all()
         .unwrap();
     for r in &stored {
-        let s = floorcast_worker::RunSummary::from_json(r.summary_json.as_deref().unwrap())
-            .unwrap();
+        let s =
+            floorcast_worker::RunSummary::from_json(r.summary_json.as_deref().unwrap()).unwrap();
         assert_eq!(s.version, 2);
         assert_eq!(s.suite.as_deref(), Some("one"));
         assert_eq!(s.suite_hash.as_deref(), Some(hash.as_str()));
@@ -223,15 +260,27 @@ fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
     let o = run_in(
         &root,
         &[
-            "suite", "update", "one", "buildings/small.toml", "buildings/halves.toml",
-            "--kind", "generated", "--source", "made here", "--licence", "MIT",
+            "suite",
+            "update",
+            "one",
+            "buildings/small.toml",
+            "buildings/halves.toml",
+            "--kind",
+            "generated",
+            "--source",
+            "made here",
+            "--licence",
+            "MIT",
         ],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let o = run_in(&root, &["run", "grids/g.toml", "--quiet"]);
     assert_clean_failure(
         &o,
-        &["suite one has hash", "one results directory holds one version of a suite"],
+        &[
+            "suite one has hash",
+            "one results directory holds one version of a suite",
+        ],
     );
     // A building whose file changed since its manifest was written: refused, naming the fix.
     let g = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
@@ -243,9 +292,16 @@ fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
         name: "small".into(),
     });
     floorcast_formats::write_building_toml(&g, &root.join("buildings/small.toml")).unwrap();
-    let o = run_in(&root, &["run", "grids/g.toml", "--summary", "--results", "results/h"]);
+    let o = run_in(
+        &root,
+        &["run", "grids/g.toml", "--summary", "--results", "results/h"],
+    );
     assert_clean_failure(
         &o,
-        &["grids/g.toml: suites[0]", "building small", "run `floorcast suite update one`"],
+        &[
+            "grids/g.toml: suites[0]",
+            "building small",
+            "run `floorcast suite update one`",
+        ],
     );
 }

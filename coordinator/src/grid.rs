@@ -526,8 +526,7 @@ impl Plan {
         if buildings.is_empty() {
             return Err(invalid(
                 "buildings",
-                "the grid names no building (give `buildings`, `suites` or `[[generated]]`)"
-                    .into(),
+                "the grid names no building (give `buildings`, `suites` or `[[generated]]`)".into(),
             ));
         }
         let mut names = BTreeMap::new();
@@ -851,13 +850,12 @@ fn plan_suites(
         let hash = m.hash();
         for sb in &m.buildings {
             let file = Manifest::path_of(&manifest_path, sb);
-            let b = floorcast_formats::read_building(&file).map_err(|source| {
-                GridError::Building {
+            let b =
+                floorcast_formats::read_building(&file).map_err(|source| GridError::Building {
                     path: path.to_path_buf(),
                     field: format!("{field} (suite {}, building {})", m.name, sb.name),
                     source: Box::new(source),
-                }
-            })?;
+                })?;
             let content = b.content_hash();
             if content != sb.hash {
                 return Err(invalid(format!(
@@ -1577,7 +1575,10 @@ time_limit_s = 600
         assert_eq!(suite.buildings.len(), 10);
         for b in &suite.buildings {
             let tag = b.suite.as_ref().unwrap();
-            assert_eq!((tag.name.as_str(), tag.hash.as_str()), ("paper-set", manifest.hash().as_str()));
+            assert_eq!(
+                (tag.name.as_str(), tag.hash.as_str()),
+                ("paper-set", manifest.hash().as_str())
+            );
         }
         assert!(files.buildings.iter().all(|b| b.suite.is_none()));
         let ids = |p: &Plan| {

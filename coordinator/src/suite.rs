@@ -38,10 +38,12 @@ pub fn suites_dir(base: &Path) -> Option<PathBuf> {
     for dir in abs.ancestors() {
         let candidate = dir.join(SUITES_DIR);
         if candidate.is_dir() {
-            return Some(match cwd.as_deref().and_then(|c| candidate.strip_prefix(c).ok()) {
-                Some(rel) if !rel.as_os_str().is_empty() => rel.to_path_buf(),
-                _ => candidate,
-            });
+            return Some(
+                match cwd.as_deref().and_then(|c| candidate.strip_prefix(c).ok()) {
+                    Some(rel) if !rel.as_os_str().is_empty() => rel.to_path_buf(),
+                    _ => candidate,
+                },
+            );
         }
     }
     None
@@ -49,7 +51,8 @@ pub fn suites_dir(base: &Path) -> Option<PathBuf> {
 
 /// The manifests of a `suites/` folder, sorted by file name.
 pub fn manifests_in(dir: &Path) -> Result<Vec<PathBuf>, String> {
-    let entries = std::fs::read_dir(dir).map_err(|e| format!("cannot read {}: {e}", dir.display()))?;
+    let entries =
+        std::fs::read_dir(dir).map_err(|e| format!("cannot read {}: {e}", dir.display()))?;
     let mut out: Vec<PathBuf> = entries
         .flatten()
         .map(|e| e.path())
@@ -69,7 +72,10 @@ pub fn is_path(spec: &str) -> bool {
 /// `suites/NAME.toml` in `base` or the nearest folder above it that has a `suites/` folder.
 pub fn find_suite(spec: &str, base: &Path) -> Result<PathBuf, String> {
     if spec.trim().is_empty() {
-        return Err("is empty; expected a suite's name such as \"real-schools\" or its manifest's path".into());
+        return Err(
+            "is empty; expected a suite's name such as \"real-schools\" or its manifest's path"
+                .into(),
+        );
     }
     if is_path(spec) {
         return Ok(base.join(spec));
@@ -186,12 +192,16 @@ mod tests {
                 v["suite_hash"] = ha.as_str().into();
             },
         );
+        let read = |r: &StoredResult| RunSummary::from_json(r.summary_json.as_deref().unwrap());
         for r in [&old, &tagged] {
-            crate::store::check_row(r).unwrap();
+            read(r).unwrap();
         }
         let both = [old.clone(), tagged.clone()];
         assert_eq!(stored_suites(&both), vec![("s".to_string(), ha.clone(), 1)]);
-        assert_eq!(describe_suites(&both), vec![format!("suite s, hash {ha}: 1 runs")]);
+        assert_eq!(
+            describe_suites(&both),
+            vec![format!("suite s, hash {ha}: 1 runs")]
+        );
         let planned = |hash: &str| {
             vec![PlannedSuite {
                 name: "s".into(),
@@ -207,7 +217,7 @@ mod tests {
         let other = edit(&tagged, &|v| v["suite_hash"] = hb.as_str().into());
         let lines = describe_suites(&[tagged.clone(), other]);
         assert!(lines[0].contains("has 2 versions here"), "{lines:?}");
-        // A version 1 record with a suite, a suite without its hash: tampered rows.
+        // A version 1 record with a suite, a suite without its hash: refused (a tampered row).
         let cases = [
             (edit(&old, &|v| v["suite"] = "s".into()), "new in version 2"),
             (
@@ -217,10 +227,13 @@ mod tests {
                 "go together",
             ),
             (edit(&tagged, &|v| v["suite_hash"] = "xyz".into()), "32 hex"),
-            (edit(&tagged, &|v| v["version"] = 3.into()), "version 1 to 2"),
+            (
+                edit(&tagged, &|v| v["version"] = 3.into()),
+                "version 1 to 2",
+            ),
         ];
         for (row, words) in &cases {
-            let e = crate::store::check_row(row).unwrap_err();
+            let e = read(row).unwrap_err();
             assert!(e.contains(words), "{words}: {e}");
         }
     }
@@ -242,7 +255,10 @@ mod tests {
             root.join("grids/../x.toml")
         );
         let e = find_suite("b", &root.join("grids")).unwrap_err();
-        assert!(e.contains("no suite named 'b'") && e.contains("its suites: a"), "{e}");
+        assert!(
+            e.contains("no suite named 'b'") && e.contains("its suites: a"),
+            "{e}"
+        );
         let e = find_suite("a b", root).unwrap_err();
         assert!(e.contains("not a suite name"), "{e}");
         let e = find_suite("", root).unwrap_err();

@@ -1374,7 +1374,9 @@ pub fn results_csv(results: &[StoredResult]) -> String {
             sum.as_ref()
                 .map(|s| s.start_source.clone())
                 .unwrap_or_default(),
-            sum.as_ref().and_then(|s| s.suite.clone()).unwrap_or_default(),
+            sum.as_ref()
+                .and_then(|s| s.suite.clone())
+                .unwrap_or_default(),
             sum.as_ref()
                 .and_then(|s| s.suite_hash.clone())
                 .unwrap_or_default(),

@@ -155,7 +155,8 @@ pub fn read_manifest(path: &Path) -> Result<Manifest, Error> {
 /// Parses and validates a manifest's text; `path` is named in errors.
 pub fn parse_manifest(text: &str, path: &Path) -> Result<Manifest, Error> {
     // The header first, so that a newer file says so instead of failing on a key.
-    let table: toml::Table = toml::from_str(text).map_err(|e| Error::syntax(path, e.to_string()))?;
+    let table: toml::Table =
+        toml::from_str(text).map_err(|e| Error::syntax(path, e.to_string()))?;
     match table.get("format").and_then(|v| v.as_str()) {
         Some(SUITE_FORMAT) => {}
         Some(f) => {
@@ -208,8 +209,8 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Manifest, Error> {
     let _ = (&file.format, file.version);
     let bad = |field: &str, problem: String| Error::invalid(path, field, problem);
     let name = suite_name(&file.name).map_err(|p| bad("name", p))?;
-    let description =
-        text_field(&file.description, "a one-line description").map_err(|p| bad("description", p))?;
+    let description = text_field(&file.description, "a one-line description")
+        .map_err(|p| bad("description", p))?;
     if file.buildings.is_empty() {
         return Err(bad(
             "buildings",
@@ -225,7 +226,10 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Manifest, Error> {
         if !names.insert(name.clone()) {
             return Err(bad(
                 &field("name"),
-                format!("'{}' names two buildings of the suite; names must differ", excerpt(&name)),
+                format!(
+                    "'{}' names two buildings of the suite; names must differ",
+                    excerpt(&name)
+                ),
             ));
         }
         let file_path = relative_path(&b.path).map_err(|p| bad(&field("path"), p))?;
@@ -245,11 +249,13 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Manifest, Error> {
                 ),
             )
         })?;
-        let source =
-            text_field(&b.source, "where the file comes from").map_err(|p| bad(&field("source"), p))?;
+        let source = text_field(&b.source, "where the file comes from")
+            .map_err(|p| bad(&field("source"), p))?;
         let licence =
             text_field(&b.licence, "the file's licence").map_err(|p| bad(&field("licence"), p))?;
-        if !(b.free_area_m2.is_finite() && b.free_area_m2 > 0.0 && b.free_area_m2 <= MAX_FREE_AREA_M2)
+        if !(b.free_area_m2.is_finite()
+            && b.free_area_m2 > 0.0
+            && b.free_area_m2 <= MAX_FREE_AREA_M2)
         {
             return Err(bad(
                 &field("free_area_m2"),
@@ -482,7 +488,10 @@ fn relative_path(p: &str) -> Result<String, String> {
 }
 
 fn content_hash(h: &str) -> Result<String, String> {
-    if h.len() == 32 && h.chars().all(|c| c.is_ascii_digit() || ('a'..='f').contains(&c)) {
+    if h.len() == 32
+        && h.chars()
+            .all(|c| c.is_ascii_digit() || ('a'..='f').contains(&c))
+    {
         Ok(h.to_string())
     } else {
         Err(format!(
@@ -612,34 +621,153 @@ hash = "fedcba9876543210fedcba9876543210"
                 one("floorcast-suite", "floorcast-grid"),
                 vec!["format", "floorcast-grid"],
             ),
-            ("version 2", one("version = 1", "version = 2"), vec!["version 2 is not supported"]),
-            ("version text", one("version = 1", "version = \"1\""), vec!["version", "whole number"]),
-            ("unknown top field", one("description", "colour = 1\ndescription"), vec!["unknown field", "colour"]),
-            ("unknown building field", one("rooms = 12", "rooms = 12\ndoors = 3"), vec!["unknown field", "doors"]),
-            ("missing hash", one("hash = \"0123456789abcdef0123456789abcdef\"\n", ""), vec!["missing field", "hash"]),
-            ("no buildings", GOOD[..first].to_string() + "buildings = []\n", vec!["buildings", "lists no building"]),
-            ("too many buildings", many, vec!["buildings", "more than the 10000"]),
-            ("name with slash", one("name = \"two\"", "name = \"a/b\""), vec!["name", "not a suite name"]),
-            ("name empty", one("name = \"two\"", "name = \"\""), vec!["name", "not a suite name"]),
-            ("description empty", one("\"Two buildings\"", "\" \""), vec!["description", "empty"]),
-            ("description too long", one("Two buildings", &long), vec!["description", "more than 2000"]),
-            ("building name a path", one("name = \"a\"", "name = \"../a\""), vec!["buildings[0].name", "is a path"]),
-            ("building name control", one("name = \"a\"", "name = \"a\\u0007\""), vec!["buildings[0].name", "control character"]),
-            ("duplicate name", one("name = \"b\"", "name = \"a\""), vec!["buildings[1].name", "names two buildings"]),
-            ("duplicate path", one("../maps/b.yaml", "../buildings/a.toml"), vec!["buildings[1].path", "listed twice"]),
-            ("absolute path", one("../maps/b.yaml", "/etc/b.yaml"), vec!["buildings[1].path", "absolute"]),
-            ("empty path", one("../maps/b.yaml", ""), vec!["buildings[1].path", "empty"]),
-            ("unknown kind", one("kind = \"map\"", "kind = \"castle\""), vec!["buildings[1].kind", "castle", "school, office, generated, map"]),
-            ("empty source", one("source = \"made here\"", "source = \"\""), vec!["buildings[0].source", "empty"]),
-            ("empty licence", one("licence = \"MIT\"", "licence = \"\""), vec!["buildings[0].licence", "empty"]),
-            ("negative area", one("400.5", "-1.0"), vec!["buildings[0].free_area_m2", "not a free area"]),
-            ("infinite area", one("400.5", "inf"), vec!["buildings[0].free_area_m2", "not a free area"]),
-            ("huge area", one("400.5", "1e300"), vec!["buildings[0].free_area_m2", "not a free area"]),
-            ("area as text", one("400.5", "\"400\""), vec!["free_area_m2", "invalid type"]),
-            ("zero rooms", one("rooms = 12", "rooms = 0"), vec!["buildings[0].rooms", "not a number of rooms"]),
-            ("negative rooms", one("rooms = 12", "rooms = -3"), vec!["buildings[0].rooms", "not a number of rooms"]),
-            ("short hash", one("0123456789abcdef0123456789abcdef", "0123"), vec!["buildings[0].hash", "32 lowercase hex"]),
-            ("upper-case hash", one("0123456789abcdef0123456789abcdef", "0123456789ABCDEF0123456789ABCDEF"), vec!["buildings[0].hash", "32 lowercase hex"]),
+            (
+                "version 2",
+                one("version = 1", "version = 2"),
+                vec!["version 2 is not supported"],
+            ),
+            (
+                "version text",
+                one("version = 1", "version = \"1\""),
+                vec!["version", "whole number"],
+            ),
+            (
+                "unknown top field",
+                one("description", "colour = 1\ndescription"),
+                vec!["unknown field", "colour"],
+            ),
+            (
+                "unknown building field",
+                one("rooms = 12", "rooms = 12\ndoors = 3"),
+                vec!["unknown field", "doors"],
+            ),
+            (
+                "missing hash",
+                one("hash = \"0123456789abcdef0123456789abcdef\"\n", ""),
+                vec!["missing field", "hash"],
+            ),
+            (
+                "no buildings",
+                GOOD[..first].to_string() + "buildings = []\n",
+                vec!["buildings", "lists no building"],
+            ),
+            (
+                "too many buildings",
+                many,
+                vec!["buildings", "more than the 10000"],
+            ),
+            (
+                "name with slash",
+                one("name = \"two\"", "name = \"a/b\""),
+                vec!["name", "not a suite name"],
+            ),
+            (
+                "name empty",
+                one("name = \"two\"", "name = \"\""),
+                vec!["name", "not a suite name"],
+            ),
+            (
+                "description empty",
+                one("\"Two buildings\"", "\" \""),
+                vec!["description", "empty"],
+            ),
+            (
+                "description too long",
+                one("Two buildings", &long),
+                vec!["description", "more than 2000"],
+            ),
+            (
+                "building name a path",
+                one("name = \"a\"", "name = \"../a\""),
+                vec!["buildings[0].name", "is a path"],
+            ),
+            (
+                "building name control",
+                one("name = \"a\"", "name = \"a\\u0007\""),
+                vec!["buildings[0].name", "control character"],
+            ),
+            (
+                "duplicate name",
+                one("name = \"b\"", "name = \"a\""),
+                vec!["buildings[1].name", "names two buildings"],
+            ),
+            (
+                "duplicate path",
+                one("../maps/b.yaml", "../buildings/a.toml"),
+                vec!["buildings[1].path", "listed twice"],
+            ),
+            (
+                "absolute path",
+                one("../maps/b.yaml", "/etc/b.yaml"),
+                vec!["buildings[1].path", "absolute"],
+            ),
+            (
+                "empty path",
+                one("../maps/b.yaml", ""),
+                vec!["buildings[1].path", "empty"],
+            ),
+            (
+                "unknown kind",
+                one("kind = \"map\"", "kind = \"castle\""),
+                vec![
+                    "buildings[1].kind",
+                    "castle",
+                    "school, office, generated, map",
+                ],
+            ),
+            (
+                "empty source",
+                one("source = \"made here\"", "source = \"\""),
+                vec!["buildings[0].source", "empty"],
+            ),
+            (
+                "empty licence",
+                one("licence = \"MIT\"", "licence = \"\""),
+                vec!["buildings[0].licence", "empty"],
+            ),
+            (
+                "negative area",
+                one("400.5", "-1.0"),
+                vec!["buildings[0].free_area_m2", "not a free area"],
+            ),
+            (
+                "infinite area",
+                one("400.5", "inf"),
+                vec!["buildings[0].free_area_m2", "not a free area"],
+            ),
+            (
+                "huge area",
+                one("400.5", "1e300"),
+                vec!["buildings[0].free_area_m2", "not a free area"],
+            ),
+            (
+                "area as text",
+                one("400.5", "\"400\""),
+                vec!["free_area_m2", "invalid type"],
+            ),
+            (
+                "zero rooms",
+                one("rooms = 12", "rooms = 0"),
+                vec!["buildings[0].rooms", "not a number of rooms"],
+            ),
+            (
+                "negative rooms",
+                one("rooms = 12", "rooms = -3"),
+                vec!["buildings[0].rooms", "not a number of rooms"],
+            ),
+            (
+                "short hash",
+                one("0123456789abcdef0123456789abcdef", "0123"),
+                vec!["buildings[0].hash", "32 lowercase hex"],
+            ),
+            (
+                "upper-case hash",
+                one(
+                    "0123456789abcdef0123456789abcdef",
+                    "0123456789ABCDEF0123456789ABCDEF",
+                ),
+                vec!["buildings[0].hash", "32 lowercase hex"],
+            ),
         ];
         let mut failed = Vec::new();
         for (what, text, words) in &cases {
