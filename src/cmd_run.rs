@@ -208,6 +208,23 @@ pub fn run(a: RunArgs) -> Result<()> {
             store.path().display()
         )
     })?;
+    // One version of a suite per results directory.
+    floorcast_coordinator::suite::check_stored_suites(&plan.suites, &stored).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e} (results in {})",
+            plan.grid_path.display(),
+            store.path().display()
+        )
+    })?;
+    for s in &plan.suites {
+        say!(
+            "suite {}: {} buildings, hash {} ({})",
+            s.name,
+            s.buildings,
+            s.hash,
+            s.manifest.display()
+        );
+    }
     // A sequential grid's jobs so far: those of every batch whose predecessors are all stored.
     let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &stored);
     drop(stored);
@@ -512,6 +529,38 @@ pub fn report(a: ReportArgs) -> Result<()> {
         results.len(),
         a.results.join(DB_FILE).display()
     );
+    // Which suites the runs come from, so that two results directories say whether they ran
+    // the same one.
+    let suites = floorcast_coordinator::suite::describe_suites(&results);
+    for line in &suites {
+        say!("{line}");
+    }
+    if let Some((dir, other)) = &against {
+        use floorcast_coordinator::suite::stored_suites;
+        let versions = |r: &[floorcast_coordinator::store::StoredResult]| {
+            stored_suites(r)
+                .into_iter()
+                .map(|(n, h, _)| format!("{n} {h}"))
+                .collect::<Vec<_>>()
+        };
+        let (mine, theirs) = (versions(&results), versions(other));
+        if !mine.is_empty() || !theirs.is_empty() {
+            say!(
+                "{} ran {}: {}",
+                dir.display(),
+                if theirs.is_empty() {
+                    "no suite".to_string()
+                } else {
+                    format!("suites {}", theirs.join(", "))
+                },
+                if mine == theirs {
+                    "the same suites (names and hashes) as here"
+                } else {
+                    "NOT the same suites as here (names or hashes differ)"
+                }
+            );
+        }
+    }
     // Labels in the order of the grids that made them, then as stored.
     let mut order: Vec<String> = Vec::new();
     for (_, labels, _) in &grids {

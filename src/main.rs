@@ -7,6 +7,7 @@ mod cmd_explore;
 mod cmd_layout;
 mod cmd_run;
 mod cmd_strategy;
+mod cmd_suite;
 mod cmd_worker;
 mod values;
 
@@ -61,6 +62,9 @@ enum Command {
     /// Tools for your own strategies (the strategy protocol): check a program's compliance.
     #[command(subcommand)]
     Strategy(cmd_strategy::StrategyCommand),
+    /// Suites: named, versioned sets of buildings (manifests in suites/): list, check, update.
+    #[command(subcommand)]
+    Suite(cmd_suite::SuiteCommand),
     /// Print the reference of every run setting (type, unit, default, range, meaning).
     Settings(SettingsArgs),
 }
@@ -88,6 +92,7 @@ fn main() -> ExitCode {
         Command::Worker(a) => cmd_worker::run(a),
         Command::Report(a) => cmd_run::report(a),
         Command::Strategy(c) => cmd_strategy::run(c),
+        Command::Suite(c) => cmd_suite::run(c),
         Command::Settings(a) => {
             if a.markdown {
                 say_raw!(

@@ -1,7 +1,7 @@
 //! Every command the documents print is run, as printed, and must succeed.
 //!
 //! The documents are README.md, FINDINGS.md, BENCHMARKS.md, formats/*.md, buildings/README.md,
-//! maps/README.md, results/**/README.md and docs/*.md. From each, the ```sh blocks are read; a line (joined with
+//! maps/README.md, suites/README.md, results/**/README.md and docs/*.md. From each, the ```sh blocks are read; a line (joined with
 //! its `\` continuations, a `for ... done` loop taken whole) runs when it invokes floorcast:
 //! `floorcast ...`, `$F ...` after a `F=target/release/floorcast`-style assignment in the same
 //! block, `target/release/floorcast ...`, or `cargo run --release -- ...` (run as `floorcast
@@ -10,7 +10,7 @@
 //! already does. Lines of other programs (`python3`, `zenohd`) are not run either.
 //!
 //! Each document's commands run in order, with `bash -c`, in a fresh temporary directory that
-//! mirrors the repository: copies of `buildings/`, `grids/`, `results/` and `examples/` (so commands that
+//! mirrors the repository: copies of `buildings/`, `grids/`, `results/`, `examples/` and `suites/` (so commands that
 //! write there leave the repository clean), `target/release/floorcast` and `bin/floorcast`
 //! (on `PATH`) linking to the built binary, and `maps/` linking to the repository's vendored
 //! maps, so that relative paths in the commands mean what they mean in a checkout. Nothing
@@ -114,6 +114,7 @@ fn documents() -> Vec<PathBuf> {
         root.join("BENCHMARKS.md"),
         root.join("buildings/README.md"),
         root.join("maps/README.md"),
+        root.join("suites/README.md"),
     ];
     let mut more = Vec::new();
     for dir in ["formats", "docs"] {
@@ -297,7 +298,7 @@ fn copy_dir(from: &Path, to: &Path) {
 fn mirror() -> (tempfile::TempDir, PathBuf) {
     let tmp = tempfile::tempdir().unwrap();
     let root = tmp.path().join("floorcast");
-    for dir in ["buildings", "grids", "results", "examples"] {
+    for dir in ["buildings", "grids", "results", "examples", "suites"] {
         copy_dir(&repo().join(dir), &root.join(dir));
     }
     let bin = Path::new(env!("CARGO_BIN_EXE_floorcast"));

@@ -76,7 +76,12 @@ pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> S
     row.wall_time_s = report.wall_time_s;
     match &report.outcome {
         JobOutcome::Ok { summary, progress } => {
-            row.summary_json = serde_json::to_string(summary).ok();
+            // The suite is the plan's label on the result (a worker's is never taken).
+            let suite = plan.buildings[job.building].suite.as_ref();
+            let mut summary = summary.clone();
+            summary.suite = suite.map(|s| s.name.clone());
+            summary.suite_hash = suite.map(|s| s.hash.clone());
+            row.summary_json = serde_json::to_string(&summary).ok();
             let mut csv = String::from("time_s,explored_area_m2,explored_fraction\n");
             for [t, area, fraction] in progress {
                 let _ = writeln!(csv, "{t:.1},{area:.3},{fraction:.5}");

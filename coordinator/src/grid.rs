@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use floorcast_worker::{
-    check_start, GivenStart, Settings, StrategyProgram, FLOORCAST_VERSION, STRATEGIES,
-    SUMMARY_VERSION,
+    check_start, GivenStart, Settings, StrategyProgram, FLOORCAST_VERSION, JOB_ID_RESULT_FORMAT,
+    STRATEGIES,
 };
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
@@ -32,6 +32,10 @@ struct GridFile {
     /// Building files or glob patterns, relative to the grid file's directory.
     #[serde(default)]
     buildings: Vec<String>,
+    /// Suites (`suites/NAME.toml`): names, found in a `suites/` folder beside the grid file or
+    /// above it, or manifests' paths relative to the grid file.
+    #[serde(default)]
+    suites: Vec<String>,
     /// Buildings generated on the fly.
     #[serde(default)]
     generated: Vec<GeneratedSpec>,
@@ -172,6 +176,15 @@ pub struct PlannedBuilding {
     pub source: String,
     pub hash: String,
     pub building: Arc<Building>,
+    /// The suite it was planned from (`suites`), which its runs' records carry.
+    pub suite: Option<SuiteTag>,
+}
+
+/// The suite a building of the plan comes from: its name and hash.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SuiteTag {
+    pub name: String,
+    pub hash: String,
 }
 
 /// One job of the plan.
@@ -207,6 +220,8 @@ pub struct Plan {
     pub grid_path: PathBuf,
     pub results_dir: PathBuf,
     pub buildings: Vec<PlannedBuilding>,
+    /// The suites the grid names, in its order.
+    pub suites: Vec<crate::suite::PlannedSuite>,
     /// Strategy labels in file order (the first `baseline` one is the reference of gains).
     pub labels: Vec<String>,
     pub jobs: Vec<PlannedJob>,
@@ -435,17 +450,24 @@ impl Plan {
                     source: p.display().to_string(),
                     hash: b.content_hash(),
                     building: Arc::new(b),
+                    suite: None,
                 });
             }
         }
+        let suites = plan_suites(&file.suites, base_dir, path, &mut buildings)?;
         // The names of the buildings from files (their file stems), checked as every name is.
         for b in buildings.iter_mut() {
             b.name = crate::names::building_name(&b.name).map_err(|p| {
                 invalid(
                     "buildings",
                     format!(
-                        "{}: its name (the file name without extension) {p}",
-                        floorcast_worker::text::shown(&b.source, 300)
+                        "{}: its name ({}) {p}",
+                        floorcast_worker::text::shown(&b.source, 300),
+                        if b.suite.is_some() {
+                            "in its suite's manifest"
+                        } else {
+                            "the file name without extension"
+                        }
                     ),
                 )
             })?;
@@ -498,12 +520,13 @@ impl Plan {
                 ),
                 hash: b.content_hash(),
                 building: Arc::new(b),
+                suite: None,
             });
         }
         if buildings.is_empty() {
             return Err(invalid(
                 "buildings",
-                "the grid names no building (give `buildings` or `[[generated]]`)".into(),
+                "the grid names no building (give `buildings`, `suites` or `[[generated]]`)".into(),
             ));
         }
         let mut names = BTreeMap::new();
@@ -780,6 +803,7 @@ impl Plan {
             grid_path: path.to_path_buf(),
             results_dir,
             buildings,
+            suites,
             labels,
             jobs: Vec::new(),
             program_files,
@@ -790,6 +814,80 @@ impl Plan {
         }
         .with_jobs_for(&seeds))
     }
+}
+
+/// The buildings of the grid's `suites` (each found with [`crate::suite::find_suite`] from the
+/// grid's folder), added to `buildings` under their manifests' names. Every building must load
+/// and have the content hash its manifest states, so that the suite's hash, which the runs'
+/// records carry, names the buildings that ran.
+fn plan_suites(
+    specs: &[String],
+    base_dir: &Path,
+    path: &Path,
+    buildings: &mut Vec<PlannedBuilding>,
+) -> Result<Vec<crate::suite::PlannedSuite>, GridError> {
+    use floorcast_formats::suite::{read_manifest, Manifest};
+    let mut suites: Vec<crate::suite::PlannedSuite> = Vec::new();
+    for (i, spec) in specs.iter().enumerate() {
+        let field = format!("suites[{i}]");
+        let invalid = |problem: String| GridError::Invalid {
+            path: path.to_path_buf(),
+            field: field.clone(),
+            problem,
+        };
+        let manifest_path = crate::suite::find_suite(spec, base_dir).map_err(&invalid)?;
+        let m = read_manifest(&manifest_path).map_err(|source| GridError::Building {
+            path: path.to_path_buf(),
+            field: field.clone(),
+            source: Box::new(source),
+        })?;
+        if let Some(j) = suites.iter().position(|s| s.name == m.name) {
+            return Err(invalid(format!(
+                "suite {} is named twice (suites[{j}] and {field})",
+                m.name
+            )));
+        }
+        let hash = m.hash();
+        for sb in &m.buildings {
+            let file = Manifest::path_of(&manifest_path, sb);
+            let b =
+                floorcast_formats::read_building(&file).map_err(|source| GridError::Building {
+                    path: path.to_path_buf(),
+                    field: format!("{field} (suite {}, building {})", m.name, sb.name),
+                    source: Box::new(source),
+                })?;
+            let content = b.content_hash();
+            if content != sb.hash {
+                return Err(invalid(format!(
+                    "suite {}: building {} ({}) has content hash {content}, its manifest {} says {}: the file or floorcast's reading of it changed; run `floorcast suite update {}` (then `floorcast suite check {}`)",
+                    m.name,
+                    sb.name,
+                    file.display(),
+                    manifest_path.display(),
+                    sb.hash,
+                    spec,
+                    spec
+                )));
+            }
+            buildings.push(PlannedBuilding {
+                name: sb.name.clone(),
+                source: file.display().to_string(),
+                hash: content,
+                building: Arc::new(b),
+                suite: Some(SuiteTag {
+                    name: m.name.clone(),
+                    hash: hash.clone(),
+                }),
+            });
+        }
+        suites.push(crate::suite::PlannedSuite {
+            name: m.name.clone(),
+            hash,
+            manifest: manifest_path,
+            buildings: m.buildings.len(),
+        });
+    }
+    Ok(suites)
 }
 
 /// Settings from a grid's settings table, checked setting by setting.
@@ -1039,7 +1137,7 @@ pub fn job_id_from(
 ) -> String {
     let mut canonical = serde_json::json!({
         "floorcast_version": FLOORCAST_VERSION,
-        "result_format": SUMMARY_VERSION,
+        "result_format": JOB_ID_RESULT_FORMAT,
         "building_hash": building_hash,
         "strategy": strategy,
         "seed": seed,
@@ -1453,6 +1551,53 @@ time_limit_s = 600
                 .len(),
             20
         );
+    }
+
+    /// A suite's buildings are planned under their manifests' names, tagged with the suite's
+    /// name and hash; their jobs are those of the same files named in `buildings` (a suite is a
+    /// label on a result, not part of its identity).
+    #[test]
+    fn a_suite_plans_its_buildings_with_the_same_job_ids_as_their_files() {
+        let grid = |buildings: &str| {
+            format!(
+                "format = \"floorcast-grid\"\nversion = 1\nname = \"s\"\n{buildings}\nseeds = [1]\n[[strategies]]\nname = \"baseline\"\n"
+            )
+        };
+        let suite = parse(&grid("suites = [\"paper-set\"]")).unwrap();
+        let files = parse(&grid("buildings = [\"../buildings/paper/paper-*.toml\"]")).unwrap();
+        let manifest = floorcast_formats::suite::read_manifest(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites/paper-set.toml"),
+        )
+        .unwrap();
+        assert_eq!(suite.suites.len(), 1);
+        assert_eq!(suite.suites[0].name, "paper-set");
+        assert_eq!(suite.suites[0].hash, manifest.hash());
+        assert_eq!(suite.buildings.len(), 10);
+        for b in &suite.buildings {
+            let tag = b.suite.as_ref().unwrap();
+            assert_eq!(
+                (tag.name.as_str(), tag.hash.as_str()),
+                ("paper-set", manifest.hash().as_str())
+            );
+        }
+        assert!(files.buildings.iter().all(|b| b.suite.is_none()));
+        let ids = |p: &Plan| {
+            let mut v: Vec<(String, String)> = p
+                .jobs
+                .iter()
+                .map(|j| (p.buildings[j.building].name.clone(), j.id.clone()))
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(ids(&suite), ids(&files));
+        // Both at once: the same buildings twice, refused by name.
+        let e = parse(&grid(
+            "buildings = [\"../buildings/paper/paper-01.toml\"]\nsuites = [\"paper-set\"]",
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("two buildings are named 'paper-01'"), "{e}");
     }
 
     #[test]

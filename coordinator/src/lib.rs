@@ -17,6 +17,8 @@
 //! The messages between coordinator and workers are `floorcast_worker::wire`'s.
 //! - [`table`]: the paper's Table 1 for a grid, the comparisons of `report` (and `--json`), and
 //!   CSV export.
+//! - [`suite`]: suites named by grids (found by name or path), and the suites of a store's
+//!   runs.
 //! - [`verify`]: results of remote workers checked by running their jobs again here.
 //! - [`outcome`]: what a run achieved at a coverage level, and the pairs of two labels' runs
 //!   (a run that did not achieve the outcome is a loss against one that did).
@@ -39,5 +41,6 @@ pub mod schedule;
 pub mod sequential;
 pub mod stats;
 pub mod store;
+pub mod suite;
 pub mod table;
 pub mod verify;

@@ -1297,7 +1297,7 @@ pub fn time_to_fraction(progress_csv: &str, fraction: f64) -> Option<f64> {
 /// `end_reason` is the end class ([`end_class`]). The start pose (`start_x_m`, `start_y_m`,
 /// `start_theta_rad`, full precision) and where it came from close each line.
 pub fn results_csv(results: &[StoredResult]) -> String {
-    const HEADER: [&str; 26] = [
+    const HEADER: [&str; 28] = [
         "job_id",
         "building",
         "building_hash",
@@ -1324,6 +1324,8 @@ pub fn results_csv(results: &[StoredResult]) -> String {
         "start_y_m",
         "start_theta_rad",
         "start_source",
+        "suite",
+        "suite_hash",
     ];
     let mut w = csv::WriterBuilder::new()
         .terminator(csv::Terminator::Any(b'\n'))
@@ -1371,6 +1373,12 @@ pub fn results_csv(results: &[StoredResult]) -> String {
             f(sum.as_ref().map(|s| s.start[2])),
             sum.as_ref()
                 .map(|s| s.start_source.clone())
+                .unwrap_or_default(),
+            sum.as_ref()
+                .and_then(|s| s.suite.clone())
+                .unwrap_or_default(),
+            sum.as_ref()
+                .and_then(|s| s.suite_hash.clone())
                 .unwrap_or_default(),
         ];
         let _ = w.write_record(&row);

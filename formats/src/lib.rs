@@ -12,6 +12,7 @@ pub mod floorplan;
 pub mod limits;
 pub mod map_server;
 pub mod stage;
+pub mod suite;
 
 #[cfg(test)]
 mod fuzz;

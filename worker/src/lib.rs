@@ -32,7 +32,9 @@ use sim_core::explore::{explore_with, Hooks, ProgressSample, RunResult};
 use sim_core::{Building, Pose};
 
 pub use external::{StrategyError, StrategyProgram};
-pub use record::{RunSummary, SUMMARY_FORMAT, SUMMARY_VERSION};
+pub use record::{
+    RunSummary, JOB_ID_RESULT_FORMAT, SUMMARY_FORMAT, SUMMARY_OLDEST_VERSION, SUMMARY_VERSION,
+};
 pub use settings::{Settings, SettingsError};
 
 /// The floorcast version recorded in every result.

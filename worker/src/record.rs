@@ -7,7 +7,16 @@ use sim_core::explore::RunResult;
 use crate::{Job, Settings, FLOORCAST_VERSION};
 
 pub const SUMMARY_FORMAT: &str = "floorcast-run-summary";
-pub const SUMMARY_VERSION: u32 = 1;
+/// The version written. Version 2 (0.7.0) added `suite` and `suite_hash`; version 1 records
+/// (without them) are read as they are.
+pub const SUMMARY_VERSION: u32 = 2;
+/// The oldest version read.
+pub const SUMMARY_OLDEST_VERSION: u32 = 1;
+/// The result format a job's id hashes (`floorcast_coordinator::grid::job_id`): still 1, as
+/// the only change of version 2, the suite a building was planned from, is the coordinator's
+/// label on a result, not part of it, so stores written before stay resumable. A new version
+/// that changes what a result holds must change this too.
+pub const JOB_ID_RESULT_FORMAT: u32 = 1;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -17,6 +26,15 @@ pub struct RunSummary {
     pub floorcast_version: String,
     pub building: String,
     pub building_hash: String,
+    /// The suite the building was planned from (a grid's `suites`), set by the coordinator from
+    /// its plan; absent for a building of the grid's `buildings` or `[[generated]]`, in
+    /// `explore`'s summaries and in version 1 records.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub suite: Option<String>,
+    /// That suite's hash (`floorcast suite list`): two results of one suite name and hash ran
+    /// the same buildings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub suite_hash: Option<String>,
     /// The built-in strategy's name, or the external strategy's label.
     pub strategy: String,
     /// An external strategy's program: its command, the hash of its files, its reply timeout
@@ -108,6 +126,8 @@ impl RunSummary {
             floorcast_version: FLOORCAST_VERSION.to_string(),
             building: job.building_name.clone(),
             building_hash: job.building.content_hash(),
+            suite: None,
+            suite_hash: None,
             strategy: job.strategy.clone(),
             strategy_program: job.program.clone(),
             strategy_name: None,
@@ -155,10 +175,21 @@ impl RunSummary {
             serde_json::from_str(text).map_err(|e| format!("not JSON ({e})"))?;
         let format = v.get("format").and_then(|f| f.as_str()).unwrap_or("");
         let version = v.get("version").and_then(|f| f.as_u64()).unwrap_or(0);
-        if format != SUMMARY_FORMAT || version != SUMMARY_VERSION as u64 {
+        if format != SUMMARY_FORMAT
+            || !(SUMMARY_OLDEST_VERSION as u64..=SUMMARY_VERSION as u64).contains(&version)
+        {
             return Err(format!(
-                "not a {SUMMARY_FORMAT} version {SUMMARY_VERSION} record (format '{format}', version {version})"
+                "not a {SUMMARY_FORMAT} version {SUMMARY_OLDEST_VERSION} to {SUMMARY_VERSION} record (format '{format}', version {version})"
             ));
+        }
+        if version < 2 {
+            for field in ["suite", "suite_hash"] {
+                if v.get(field).is_some() {
+                    return Err(format!(
+                        "field {field} is new in version 2, and this record is version {version}"
+                    ));
+                }
+            }
         }
         let s: RunSummary = serde_json::from_value(v).map_err(|e| e.to_string())?;
         s.check()?;
@@ -215,6 +246,18 @@ impl RunSummary {
                 self.exploration_time_s,
                 "at most total_time_s",
             );
+        }
+        match (&self.suite, &self.suite_hash) {
+            (None, None) => {}
+            (Some(name), Some(hash)) => {
+                if name.is_empty() || name.len() > 64 || name.chars().any(char::is_control) {
+                    return Err("field suite is not a suite's name".into());
+                }
+                if hash.len() != 32 || !hash.chars().all(|c| c.is_ascii_hexdigit()) {
+                    return Err("field suite_hash is not 32 hex digits".into());
+                }
+            }
+            _ => return Err("fields suite and suite_hash go together: both or neither".into()),
         }
         for (i, v) in self.start.iter().enumerate() {
             if !v.is_finite() {
