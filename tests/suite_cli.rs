@@ -26,8 +26,11 @@ fn the_shipped_suites_list_with_their_hashes() {
     for name in ["real-schools", "real-offices", "school-maps", "paper-set"] {
         assert!(out.contains(name), "{name}: {out}");
     }
+    // Every annotated plan of maps/plans, by its type.
+    let (schools, offices) = plans_by_type();
+    assert!(schools >= 40 && offices >= 10, "{schools} {offices}");
     assert!(
-        out.contains("school 27") && out.contains("office 9"),
+        out.contains(&format!("school {schools}")) && out.contains(&format!("office {offices}")),
         "{out}"
     );
     let o = run_in(&repo(), &["suite", "list", "--json"]);
@@ -64,8 +67,23 @@ fn real_schools_check() {
     let o = run_in(&repo(), &["suite", "check", "real-schools"]);
     assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
     let out = stdout(&o);
-    assert_eq!(out.matches(": ok: ").count(), 27, "{out}");
-    assert!(out.contains("all 27 buildings pass"), "{out}");
+    let (schools, _) = plans_by_type();
+    assert_eq!(out.matches(": ok: ").count(), schools, "{out}");
+    assert!(
+        out.contains(&format!("all {schools} buildings pass")),
+        "{out}"
+    );
+}
+
+/// How many plans of maps/plans are schools and how many offices (their `<main_type>`).
+fn plans_by_type() -> (usize, usize) {
+    let (mut schools, mut offices) = (0, 0);
+    for e in std::fs::read_dir(repo().join("maps/plans")).unwrap() {
+        let text = std::fs::read_to_string(e.unwrap().path()).unwrap();
+        schools += usize::from(text.contains("<main_type>SCHOOL</main_type>"));
+        offices += usize::from(text.contains("<main_type>OFFICE</main_type>"));
+    }
+    (schools, offices)
 }
 
 /// A suite of its own in a scratch copy: `suites/` and the buildings it names.
