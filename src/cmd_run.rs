@@ -570,7 +570,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
             }
         }
     }
-    let order = floorcast_coordinator::table::label_order(&results, &order);
+    let order = floorcast_coordinator::outcome::label_order(&results, &order);
     let reference = match &a.reference {
         Some(r) if !order.contains(r) => anyhow::bail!(
             "--reference: {} holds no runs labelled '{r}'; its labels: {}",
@@ -766,7 +766,7 @@ fn charts(
     let gains = IntervalChart {
         title: format!(
             "Exploration time gain over {reference} (paired, {} coverage, 95 % CI)",
-            floorcast_coordinator::table::coverage_text(t.coverage)
+            floorcast_coordinator::outcome::coverage_text(t.coverage)
         ),
         y_label: "gain (%)".into(),
         series: labels

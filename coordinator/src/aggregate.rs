@@ -118,7 +118,7 @@ pub fn aggregates(
         })
         .collect();
     let taus = profile_taus();
-    let labels = crate::table::label_order(results, order)
+    let labels = crate::outcome::label_order(results, order)
         .into_iter()
         .map(|label| {
             // Per building (with a normalizer): normalized charged times, normalized times for
@@ -234,7 +234,7 @@ pub fn render(a: &Aggregates) -> String {
         "Across {} buildings (Agarwal et al. 2021; times normalized by {}'s median per building, a run below {} charged the time limit; IQM of normalized times, probability of being faster than a run of the reference, share of runs at most the reference's median; stratified bootstrap 95 % intervals):",
         a.reference_median_s.len(),
         a.reference,
-        crate::table::coverage_text(a.coverage)
+        crate::outcome::coverage_text(a.coverage)
     );
     let range =
         |r: Option<[f64; 2]>| r.map_or("-".to_string(), |[x, y]| format!("[{x:.3}, {y:.3}]"));
@@ -262,7 +262,7 @@ pub fn render(a: &Aggregates) -> String {
             range(l.iqm_ci95),
             l.runs,
             l.achieved_fraction * 100.0,
-            crate::table::coverage_text(a.coverage)
+            crate::outcome::coverage_text(a.coverage)
         );
     }
     out

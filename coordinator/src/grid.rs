@@ -230,7 +230,7 @@ pub struct Plan {
     pub program_files: BTreeMap<String, Arc<floorcast_worker::external::ProgramFiles>>,
     /// The sequential test, when the grid has a `[sequential]` table: `jobs` then holds the
     /// first batch of seeds, and [`Plan::jobs_for`] makes the next ones.
-    pub sequential: Option<crate::sequential::SequentialPlan>,
+    pub sequential: Option<crate::sprt::SequentialPlan>,
     /// The coverage level of the grid's comparisons (`coverage`, default 0.99).
     pub coverage: f64,
     /// The strategies and each building's start poses, for [`Plan::jobs_for`].
@@ -756,14 +756,14 @@ impl Plan {
                 .sum::<u128>()
                 .max(1);
             let most = q.max_seeds as u128 * per_seed;
-            if most < crate::sequential::MIN_PAIRS as u128 {
+            if most < crate::sprt::MIN_PAIRS as u128 {
                 return Err(invalid(
                     "sequential.max_seeds",
                     format!(
                         "{} seeds give at most {most} pairs ({per_seed} per seed: buildings x starts), fewer than the {} the test needs to decide; raise max_seeds to at least {}",
                         q.max_seeds,
-                        crate::sequential::MIN_PAIRS,
-                        (crate::sequential::MIN_PAIRS as u128).div_ceil(per_seed)
+                        crate::sprt::MIN_PAIRS,
+                        (crate::sprt::MIN_PAIRS as u128).div_ceil(per_seed)
                     ),
                 ));
             }
@@ -1164,14 +1164,14 @@ fn sequential_plan(
     q: &SequentialSpec,
     file: &GridFile,
     invalid: &dyn Fn(&str, String) -> GridError,
-) -> Result<crate::sequential::SequentialPlan, GridError> {
+) -> Result<crate::sprt::SequentialPlan, GridError> {
     if file.seeds.is_some() || file.seed_range.is_some() {
         return Err(invalid(
             if file.seeds.is_some() { "seeds" } else { "seed_range" },
             "a grid with [sequential] adds seeds 1, 2, ... in batches itself; leave out seeds and seed_range (max_seeds bounds them)".into(),
         ));
     }
-    let config = crate::sequential::SprtConfig {
+    let config = crate::sprt::SprtConfig {
         h0_gain_pct: q.h0_gain_pct,
         h1_gain_pct: q.h1_gain_pct,
         alpha: q.alpha,
@@ -1197,8 +1197,8 @@ fn sequential_plan(
         ));
     }
     let multiplicity = match q.multiplicity.as_deref() {
-        None | Some("bonferroni") => crate::sequential::Multiplicity::Bonferroni,
-        Some("none") => crate::sequential::Multiplicity::None,
+        None | Some("bonferroni") => crate::sprt::Multiplicity::Bonferroni,
+        Some("none") => crate::sprt::Multiplicity::None,
         Some(other) => {
             return Err(invalid(
                 "sequential.multiplicity",
@@ -1209,7 +1209,7 @@ fn sequential_plan(
             ))
         }
     };
-    Ok(crate::sequential::SequentialPlan {
+    Ok(crate::sprt::SequentialPlan {
         config,
         reference: q.reference.clone(),
         batch_seeds: q.batch_seeds,

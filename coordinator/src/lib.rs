@@ -26,8 +26,8 @@
 //!   confidence sequence, the interquartile mean, the stratified bootstrap.
 //! - [`aggregate`]: aggregates across buildings (IQM, probability of improvement, performance
 //!   profiles).
-//! - [`sequential`]: the sequential test (GSPRT) that decides a comparison from paired runs,
-//!   and a sequential grid's progress.
+//! - [`sprt`]: the sequential test (GSPRT) that decides a comparison from paired runs.
+//! - [`sequential`]: a sequential grid's progress, batch by batch, replayed from the store.
 
 pub mod aggregate;
 pub mod execute;
@@ -39,6 +39,7 @@ pub mod outcome;
 pub mod run;
 pub mod schedule;
 pub mod sequential;
+pub mod sprt;
 pub mod stats;
 pub mod store;
 pub mod suite;

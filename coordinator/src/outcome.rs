@@ -26,9 +26,9 @@
 use std::collections::BTreeMap;
 
 use floorcast_worker::RunSummary;
+use sim_core::explore::EndReason;
 
 use crate::store::StoredResult;
-use crate::table::end_class;
 
 /// The default coverage level: a run achieves the outcome with at least 99 % of the explorable
 /// area explored at its end.
@@ -45,6 +45,47 @@ pub fn check_coverage(coverage: f64) -> Result<(), String> {
         Err(format!(
             "{coverage} is not a coverage level (expected a fraction of the explorable area, more than 0 and at most 1, e.g. 0.99)"
         ))
+    }
+}
+
+/// The end classes in the order tables list them (`sim_core`'s [`EndReason`] names).
+pub fn end_classes() -> [&'static str; 5] {
+    EndReason::ALL.map(EndReason::as_str)
+}
+
+/// The end class of a stored summary: its `end_reason`, with the "no frontiers" of summaries
+/// written before the classes existed read as "complete".
+pub fn end_class(s: &RunSummary) -> &str {
+    match s.end_reason.as_str() {
+        "no frontiers" => EndReason::Complete.as_str(),
+        other => other,
+    }
+}
+
+/// A gain as a percentage of the reference's time from a mean log ratio `m = ln t_ref - ln t`:
+/// `100 (1 - exp(-m))` (positive: faster).
+pub fn gain_pct(mean_log_ratio: f64) -> f64 {
+    100.0 * (1.0 - (-mean_log_ratio).exp())
+}
+
+/// The labels of `labels` then those of `results` not among them, in the order they appear.
+pub fn label_order(results: &[StoredResult], labels: &[String]) -> Vec<String> {
+    let mut order: Vec<String> = labels.to_vec();
+    for r in results {
+        if !order.contains(&r.label) {
+            order.push(r.label.clone());
+        }
+    }
+    order
+}
+
+/// `99 %`: a coverage level as text.
+pub fn coverage_text(coverage: f64) -> String {
+    let pct = coverage * 100.0;
+    if (pct - pct.round()).abs() < 1e-9 {
+        format!("{pct:.0} %")
+    } else {
+        format!("{pct} %")
     }
 }
 

@@ -134,7 +134,7 @@ fn advance(
         let next = progress.advance(plan, &results);
         store.record_tests(&plan.name, &progress.path[before..])?;
         for t in &progress.path[before..] {
-            if t.state.decision != crate::sequential::Decision::Undecided {
+            if t.state.decision != crate::sprt::Decision::Undecided {
                 on_log(&format!(
                     "{} against {}: {} after {} pairs (seeds 1-{})",
                     t.label,

@@ -696,7 +696,7 @@ impl Store {
     pub fn record_tests(
         &self,
         grid: &str,
-        tests: &[crate::sequential::LabelTest],
+        tests: &[crate::sprt::LabelTest],
     ) -> Result<(), StoreError> {
         let tx = self.sql(self.conn.unchecked_transaction())?;
         for t in tests {
@@ -734,8 +734,8 @@ impl Store {
     }
 
     /// The stored tests of sequential grids, by grid, label and batch.
-    pub fn tests(&self) -> Result<Vec<(String, crate::sequential::LabelTest)>, StoreError> {
-        use crate::sequential::{Decision, LabelTest, SprtState};
+    pub fn tests(&self) -> Result<Vec<(String, crate::sprt::LabelTest)>, StoreError> {
+        use crate::sprt::{Decision, LabelTest, SprtState};
         if !self.has_table("sequential")? {
             return Ok(Vec::new());
         }
@@ -966,6 +966,56 @@ pub fn provenance(grid: &str, command: &str) -> Provenance {
     }
 }
 
+/// Stored results for the crate's tests.
+#[cfg(test)]
+pub(crate) mod fixtures {
+    use super::StoredResult;
+
+    /// A stored run of `label` on `building` with seed `seed` that explored in `time_s`.
+    pub(crate) fn stored(building: &str, label: &str, seed: u64, time_s: f64) -> StoredResult {
+        // A real summary (small.toml, layout, seed 1) with the time replaced.
+        let template: &str = concat!(
+            r#"{"format":"floorcast-run-summary","version":1,"floorcast_version":"0.1.0","build"#,
+            r#"ing":"small","building_hash":"bd6183b04c0805da57279aa53b7844c1","strategy":"layo"#,
+            r#"ut","seed":1,"settings":{"robot_radius_m":0.2,"max_speed_mps":0.5,"max_turn_rate"#,
+            r#"_radps":1.0,"laser_fov_deg":180.0,"laser_range_m":6.0,"laser_beams":181,"laser_r"#,
+            r#"ate_hz":10.0,"laser_noise_sd_m":0.01,"odometry_translation_error":0.01,"odometry"#,
+            r#"_rotation_error_deg_per_rad":2.0,"localization":"slam","map_resolution_m":0.05,""#,
+            r#"alpha":0.5,"min_frontier_m":0.5,"redecide_period_s":10.0,"blacklist_radius_m":0."#,
+            r#"5,"progress_timeout_s":20.0,"time_limit_s":14400.0,"return_home":false,"es_thres"#,
+            r#"hold_m2":1.0,"aes_min_gain_m2":2.0,"layout_update_m2":20.0},"start":[1.199999999"#,
+            r#"9999993,9.81368055441612,0.0],"start_source":"building file","exploration_time_s"#,
+            r#"":606.2000000000693,"total_time_s":606.2000000000693,"explored_area_m2":407.9825"#,
+            r#"000000001,"free_area_m2":408.2100000000001,"explored_fraction":0.999442688812131"#,
+            r#","path_length_m":265.2573756983305,"decisions":166,"stopped_early":false,"unexpl"#,
+            r#"ored_free_m2":0.22750000000002046,"rooms_never_entered":0,"layouts_computed":17,"#,
+            r#""end_reason":"no frontiers","blacklisted_goals":0,"scans":3341,"scan_matches_acc"#,
+            r#"epted":3220,"map_free_precision":0.9946381028273507,"map_occupied_precision":0.8"#,
+            r#"890061565523307,"wall_time_s":11.839814543,"speedup":51.200126302524744}"#,
+        );
+        let mut summary: serde_json::Value = serde_json::from_str(template).unwrap();
+        summary["exploration_time_s"] = serde_json::json!(time_s);
+        summary["total_time_s"] = serde_json::json!(time_s);
+        StoredResult {
+            job_id: format!("{building}-{label}-{seed}"),
+            grid: "g".into(),
+            building: building.into(),
+            building_hash: "h".into(),
+            strategy: label.into(),
+            label: label.into(),
+            seed,
+            settings_json: "{}".into(),
+            status: "ok".into(),
+            error: None,
+            summary_json: Some(summary.to_string()),
+            progress_csv: None,
+            worker: "w".into(),
+            wall_time_s: 1.0,
+            floorcast_version: "0".into(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1003,7 +1053,7 @@ mod tests {
     /// A store of one ok row (a real summary) and one failed row, closed (its log merged).
     fn good_store(dir: &Path) {
         let s = Store::open(dir).unwrap();
-        let mut ok = crate::table::tests::stored("b", "baseline", 1, 600.0);
+        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
         ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
         s.insert_many(&[ok, row("failed-job")]).unwrap();
     }

@@ -183,9 +183,9 @@ mod tests {
             r
         };
         let (ha, hb) = ("a".repeat(32), "b".repeat(32));
-        let old = crate::table::tests::stored("small", "baseline", 1, 100.0);
+        let old = crate::store::fixtures::stored("small", "baseline", 1, 100.0);
         let tagged = edit(
-            &crate::table::tests::stored("small", "baseline", 2, 100.0),
+            &crate::store::fixtures::stored("small", "baseline", 2, 100.0),
             &|v| {
                 v["version"] = 2.into();
                 v["suite"] = "s".into();

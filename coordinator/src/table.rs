@@ -14,9 +14,10 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use floorcast_worker::RunSummary;
-use sim_core::explore::EndReason;
 
-use crate::outcome::{self, Pair, PairCounts};
+use crate::outcome::{
+    self, coverage_text, end_class, end_classes, gain_pct, label_order, Pair, PairCounts,
+};
 use crate::store::StoredResult;
 
 /// Mean and sample standard deviation.
@@ -45,26 +46,6 @@ impl Stat {
         };
         Stat { n, mean, sd }
     }
-}
-
-/// The end classes in the order tables list them (`sim_core`'s [`EndReason`] names).
-pub fn end_classes() -> [&'static str; 5] {
-    EndReason::ALL.map(EndReason::as_str)
-}
-
-/// The end class of a stored summary: its `end_reason`, with the "no frontiers" of summaries
-/// written before the classes existed read as "complete".
-pub fn end_class(s: &RunSummary) -> &str {
-    match s.end_reason.as_str() {
-        "no frontiers" => EndReason::Complete.as_str(),
-        other => other,
-    }
-}
-
-/// A gain as a percentage of the reference's time from a mean log ratio `m = ln t_ref - ln t`:
-/// `100 (1 - exp(-m))` (positive: faster).
-pub fn gain_pct(mean_log_ratio: f64) -> f64 {
-    100.0 * (1.0 - (-mean_log_ratio).exp())
 }
 
 /// One row per strategy label.
@@ -469,17 +450,6 @@ pub fn table(results: &[StoredResult], labels: &[String], coverage: f64) -> Tabl
     table_against(results, labels, None, coverage)
 }
 
-/// The labels of `labels` then those of `results` not among them, in the order they appear.
-pub fn label_order(results: &[StoredResult], labels: &[String]) -> Vec<String> {
-    let mut order: Vec<String> = labels.to_vec();
-    for r in results {
-        if !order.contains(&r.label) {
-            order.push(r.label.clone());
-        }
-    }
-    order
-}
-
 /// [`table`] with the gains over `reference` (default: `baseline` if present, else the first
 /// label).
 pub fn table_against(
@@ -628,16 +598,6 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>, cov
                 format!("  ({})", marks.join("; "))
             }
         );
-    }
-}
-
-/// `99 %`: a coverage level as text.
-pub fn coverage_text(coverage: f64) -> String {
-    let pct = coverage * 100.0;
-    if (pct - pct.round()).abs() < 1e-9 {
-        format!("{pct:.0} %")
-    } else {
-        format!("{pct} %")
     }
 }
 
@@ -957,7 +917,7 @@ pub const REPORT_VERSION: u32 = 2;
 #[derive(Debug, Clone, PartialEq)]
 pub struct SequentialVerdict {
     pub grid: String,
-    pub test: crate::sequential::LabelTest,
+    pub test: crate::sprt::LabelTest,
 }
 
 /// `report --json`: the labels' statistics, every comparison, sequential grids' decisions and
@@ -1387,8 +1347,9 @@ pub fn results_csv(results: &[StoredResult]) -> String {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
+    use crate::store::fixtures::stored;
 
     #[test]
     fn stat_mean_and_sd() {
@@ -1446,49 +1407,6 @@ pub(crate) mod tests {
             assert!((got - want).abs() < 1e-9, "df {df}: {got} against {want}");
         }
         assert!(t95(0).is_nan());
-    }
-
-    pub(crate) fn stored(building: &str, label: &str, seed: u64, time_s: f64) -> StoredResult {
-        // A real summary (small.toml, layout, seed 1) with the time replaced.
-        let template: &str = concat!(
-            r#"{"format":"floorcast-run-summary","version":1,"floorcast_version":"0.1.0","build"#,
-            r#"ing":"small","building_hash":"bd6183b04c0805da57279aa53b7844c1","strategy":"layo"#,
-            r#"ut","seed":1,"settings":{"robot_radius_m":0.2,"max_speed_mps":0.5,"max_turn_rate"#,
-            r#"_radps":1.0,"laser_fov_deg":180.0,"laser_range_m":6.0,"laser_beams":181,"laser_r"#,
-            r#"ate_hz":10.0,"laser_noise_sd_m":0.01,"odometry_translation_error":0.01,"odometry"#,
-            r#"_rotation_error_deg_per_rad":2.0,"localization":"slam","map_resolution_m":0.05,""#,
-            r#"alpha":0.5,"min_frontier_m":0.5,"redecide_period_s":10.0,"blacklist_radius_m":0."#,
-            r#"5,"progress_timeout_s":20.0,"time_limit_s":14400.0,"return_home":false,"es_thres"#,
-            r#"hold_m2":1.0,"aes_min_gain_m2":2.0,"layout_update_m2":20.0},"start":[1.199999999"#,
-            r#"9999993,9.81368055441612,0.0],"start_source":"building file","exploration_time_s"#,
-            r#"":606.2000000000693,"total_time_s":606.2000000000693,"explored_area_m2":407.9825"#,
-            r#"000000001,"free_area_m2":408.2100000000001,"explored_fraction":0.999442688812131"#,
-            r#","path_length_m":265.2573756983305,"decisions":166,"stopped_early":false,"unexpl"#,
-            r#"ored_free_m2":0.22750000000002046,"rooms_never_entered":0,"layouts_computed":17,"#,
-            r#""end_reason":"no frontiers","blacklisted_goals":0,"scans":3341,"scan_matches_acc"#,
-            r#"epted":3220,"map_free_precision":0.9946381028273507,"map_occupied_precision":0.8"#,
-            r#"890061565523307,"wall_time_s":11.839814543,"speedup":51.200126302524744}"#,
-        );
-        let mut summary: serde_json::Value = serde_json::from_str(template).unwrap();
-        summary["exploration_time_s"] = serde_json::json!(time_s);
-        summary["total_time_s"] = serde_json::json!(time_s);
-        StoredResult {
-            job_id: format!("{building}-{label}-{seed}"),
-            grid: "g".into(),
-            building: building.into(),
-            building_hash: "h".into(),
-            strategy: label.into(),
-            label: label.into(),
-            seed,
-            settings_json: "{}".into(),
-            status: "ok".into(),
-            error: None,
-            summary_json: Some(summary.to_string()),
-            progress_csv: None,
-            worker: "w".into(),
-            wall_time_s: 1.0,
-            floorcast_version: "0".into(),
-        }
     }
 
     #[test]
@@ -1828,7 +1746,7 @@ pub(crate) mod tests {
             results.push(r);
         }
         let cs = comparisons(&results, &[], "baseline", 0.99);
-        let cfg = crate::sequential::SprtConfig::default();
+        let cfg = crate::sprt::SprtConfig::default();
         for label in ["quitter", "cut"] {
             let c = cs
                 .iter()
@@ -1845,7 +1763,7 @@ pub(crate) mod tests {
                 .collect();
             assert_eq!(
                 cfg.state(&xs).decision,
-                crate::sequential::Decision::H0,
+                crate::sprt::Decision::H0,
                 "{label}"
             );
         }

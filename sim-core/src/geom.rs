@@ -81,6 +81,27 @@ pub fn wrap_angle(a: f64) -> f64 {
     a
 }
 
+/// Angular distance modulo pi.
+pub fn angle_diff_mod_pi(a: f64, b: f64) -> f64 {
+    let d = rem_pi(a - b);
+    d.min(std::f64::consts::PI - d)
+}
+
+/// `x.rem_euclid(std::f64::consts::PI)`, bit for bit, without its division (`fmod`) in the usual case of an
+/// angle within pi of 0: there `x % std::f64::consts::PI` is `x` exactly.
+#[inline]
+pub fn rem_pi(x: f64) -> f64 {
+    if x.abs() < std::f64::consts::PI {
+        if x < 0.0 {
+            x + std::f64::consts::PI
+        } else {
+            x
+        }
+    } else {
+        x.rem_euclid(std::f64::consts::PI)
+    }
+}
+
 /// A line segment in world metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Segment {
@@ -228,6 +249,32 @@ impl Polygon {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rem_pi_is_rem_euclid() {
+        let special = [
+            0.0,
+            -0.0,
+            std::f64::consts::PI,
+            -std::f64::consts::PI,
+            std::f64::consts::PI.next_down(),
+            (-std::f64::consts::PI).next_up(),
+            1e-300,
+            -1e-300,
+            7.5,
+            -7.5,
+            f64::INFINITY,
+            f64::NAN,
+        ];
+        let sweep = (-2000..=2000).map(|k| k as f64 * 0.0037);
+        for x in special.into_iter().chain(sweep) {
+            assert_eq!(
+                rem_pi(x).to_bits(),
+                x.rem_euclid(std::f64::consts::PI).to_bits(),
+                "{x}"
+            );
+        }
+    }
 
     #[test]
     fn fast_floor_is_floor_bit_for_bit() {

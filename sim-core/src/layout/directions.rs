@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 
 use super::evidence::BoundaryCell;
 use super::{LayoutConfig, LayoutDiagnostics};
-use crate::geom::Vec2;
+use crate::geom::{angle_diff_mod_pi, Vec2};
 
 const BINS: usize = 180;
 /// A direction this close to perpendicular to a kept one is its partner.
@@ -18,27 +18,6 @@ const OBLIQUE_FACTOR: f64 = 3.0;
 const LOCAL_TOLERANCE_RAD: f64 = 0.14;
 /// A direction needs at least this fraction of the locally supporting cells of the best one.
 const MIN_LOCAL_FRACTION: f64 = 0.12;
-
-/// Angular distance modulo pi.
-pub fn angle_diff_mod_pi(a: f64, b: f64) -> f64 {
-    let d = rem_pi(a - b);
-    d.min(PI - d)
-}
-
-/// `x.rem_euclid(PI)`, bit for bit, without its division (`fmod`) in the usual case of an
-/// angle within pi of 0: there `x % PI` is `x` exactly.
-#[inline]
-pub fn rem_pi(x: f64) -> f64 {
-    if x.abs() < PI {
-        if x < 0.0 {
-            x + PI
-        } else {
-            x
-        }
-    } else {
-        x.rem_euclid(PI)
-    }
-}
 
 /// [`sharpness_of`] at one angle.
 #[cfg(test)]
@@ -405,28 +384,6 @@ mod tests {
             let want: Vec<u64> =
                 ts.iter().map(|&t| sharpness_reference(&pts, t, 2.0 * res).to_bits()).collect();
             proptest::prop_assert_eq!(got.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), want);
-        }
-    }
-
-    #[test]
-    fn rem_pi_is_rem_euclid() {
-        let special = [
-            0.0,
-            -0.0,
-            PI,
-            -PI,
-            PI.next_down(),
-            (-PI).next_up(),
-            1e-300,
-            -1e-300,
-            7.5,
-            -7.5,
-            f64::INFINITY,
-            f64::NAN,
-        ];
-        let sweep = (-2000..=2000).map(|k| k as f64 * 0.0037);
-        for x in special.into_iter().chain(sweep) {
-            assert_eq!(rem_pi(x).to_bits(), x.rem_euclid(PI).to_bits(), "{x}");
         }
     }
 

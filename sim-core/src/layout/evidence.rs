@@ -244,7 +244,7 @@ fn free_side_normal(gx: i32, gy: i32) -> f64 {
 
 /// An angle taken to `[0, pi)`.
 fn normal_in_half_turn(a: f64) -> f64 {
-    let a = super::directions::rem_pi(a);
+    let a = crate::geom::rem_pi(a);
     if a >= std::f64::consts::PI {
         0.0
     } else {

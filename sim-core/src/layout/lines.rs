@@ -4,9 +4,9 @@
 
 use std::f64::consts::PI;
 
-use super::directions::angle_diff_mod_pi;
 use super::evidence::BoundaryCell;
 use super::{LayoutConfig, WallLine};
+use crate::geom::angle_diff_mod_pi;
 use crate::geom::{Segment, Vec2};
 use crate::grid::{Occupancy, OccupancyGrid};
 

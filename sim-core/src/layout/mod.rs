@@ -261,7 +261,8 @@ pub fn reconstruct_layout(grid: &OccupancyGrid, config: &LayoutConfig) -> Layout
         .enumerate()
         .filter(|(k, d)| {
             let partner = dirs.iter().any(|o| {
-                (directions::angle_diff_mod_pi(*o, **d) - std::f64::consts::FRAC_PI_2).abs() <= 0.06
+                (crate::geom::angle_diff_mod_pi(*o, **d) - std::f64::consts::FRAC_PI_2).abs()
+                    <= 0.06
             });
             partner
                 || lines
