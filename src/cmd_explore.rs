@@ -115,73 +115,9 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| building.name.clone());
-    let mut settings = match &a.settings {
-        Some(p) => {
-            let text = floorcast_formats::limits::read_text(p)?;
-            floorcast_worker::settings::settings_from_json_text(&text)
-                .map_err(|e| anyhow::anyhow!("{}: {e} (see `floorcast settings`)", p.display()))?
-        }
-        None => Settings::default(),
-    };
-    if let Some(l) = a.localization {
-        settings.localization = l;
-    }
-    if let Some(alpha) = a.alpha {
-        settings.alpha = alpha;
-    }
-    if let Some(t) = a.time_limit_s {
-        settings.time_limit_s = t;
-    }
-    if let Some(d) = a.utility_distance {
-        settings.utility_distance = d;
-    }
-    settings.return_home |= a.return_home;
-    settings.candidate_from_reachable_part |= a.candidate_from_reachable_part;
-    settings.charge_compute |= a.charge_compute;
-    let start = match a.start {
-        None => None,
-        Some(StartArg::Pose(pose)) => {
-            check_start(&building, &name, pose, settings.robot_radius_m, "--start")
-                .with_context(|| format!("{}: cannot explore", a.building.display()))?;
-            Some(GivenStart {
-                pose,
-                source: GivenStart::COMMAND_LINE.into(),
-            })
-        }
-        Some(StartArg::Random) => Some(GivenStart {
-            pose: building
-                .random_start(settings.robot_radius_m, a.seed, 0)
-                .with_context(|| {
-                    format!(
-                        "{}: --start random: cannot draw a start",
-                        a.building.display()
-                    )
-                })?,
-            source: GivenStart::RANDOM.into(),
-        }),
-    };
-    // An external strategy is started once to learn its name (and refused here if it cannot
-    // start or shake hands), before any output is created.
-    let (label, program) = match &a.strategy_command {
-        Some(line) => {
-            let program = StrategyProgram::from_command_line(
-                line,
-                std::path::Path::new("."),
-                a.strategy_timeout_s,
-            )
-            .map_err(|e| anyhow::anyhow!("--strategy-command: {e}"))?;
-            let program = match &a.strategy_params {
-                Some(text) => program.with_params(strategy_params(text)?),
-                None => Ok(program),
-            }
-            .map_err(|e| anyhow::anyhow!("--strategy-params: {e}"))?;
-            let probe = ExternalStrategy::start(&program)?;
-            let name = probe.hello().name.clone();
-            probe.finish()?;
-            (name, Some(program))
-        }
-        None => (a.strategy.clone(), None),
-    };
+    let settings = explore_settings(&a)?;
+    let start = given_start(&a, &building, &name, &settings)?;
+    let (label, program) = strategy_of(&a)?;
     let job = Job {
         building: &building,
         building_name: name.clone(),
@@ -224,6 +160,120 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     .with_context(|| format!("{}: cannot explore", a.building.display()))?;
     pb.finish_and_clear();
 
+    write_outputs(&a, dir, &job, &output)?;
+    let summary = &output.summary;
+    staged.commit()?;
+    say!(
+        "{name}: {} after {:.0} s simulated ({:.1} % of {:.0} m2 explored, {} decisions, {:.1} m driven) in {:.2} s wall ({:.0}x real time)",
+        summary.end_reason,
+        summary.exploration_time_s,
+        summary.explored_fraction * 100.0,
+        summary.free_area_m2,
+        summary.decisions,
+        summary.path_length_m,
+        summary.wall_time_s,
+        summary.speedup
+    );
+    if let Some(w) = short_run_warning(summary) {
+        eprintln!("warning: {w}");
+    }
+    say!("results in {}", out.display());
+    Ok(())
+}
+
+/// The run's settings: the file's (or the defaults), with the flags on top.
+fn explore_settings(a: &ExploreArgs) -> Result<Settings> {
+    let mut settings = match &a.settings {
+        Some(p) => {
+            let text = floorcast_formats::limits::read_text(p)?;
+            floorcast_worker::settings::settings_from_json_text(&text)
+                .map_err(|e| anyhow::anyhow!("{}: {e} (see `floorcast settings`)", p.display()))?
+        }
+        None => Settings::default(),
+    };
+    if let Some(l) = a.localization {
+        settings.localization = l;
+    }
+    if let Some(alpha) = a.alpha {
+        settings.alpha = alpha;
+    }
+    if let Some(t) = a.time_limit_s {
+        settings.time_limit_s = t;
+    }
+    if let Some(d) = a.utility_distance {
+        settings.utility_distance = d;
+    }
+    settings.return_home |= a.return_home;
+    settings.candidate_from_reachable_part |= a.candidate_from_reachable_part;
+    settings.charge_compute |= a.charge_compute;
+    Ok(settings)
+}
+
+/// The start pose of `--start`, checked (`None`: the building's own).
+fn given_start(
+    a: &ExploreArgs,
+    building: &sim_core::building::Building,
+    name: &str,
+    settings: &Settings,
+) -> Result<Option<GivenStart>> {
+    Ok(match a.start {
+        None => None,
+        Some(StartArg::Pose(pose)) => {
+            check_start(building, name, pose, settings.robot_radius_m, "--start")
+                .with_context(|| format!("{}: cannot explore", a.building.display()))?;
+            Some(GivenStart {
+                pose,
+                source: GivenStart::COMMAND_LINE.into(),
+            })
+        }
+        Some(StartArg::Random) => Some(GivenStart {
+            pose: building
+                .random_start(settings.robot_radius_m, a.seed, 0)
+                .with_context(|| {
+                    format!(
+                        "{}: --start random: cannot draw a start",
+                        a.building.display()
+                    )
+                })?,
+            source: GivenStart::RANDOM.into(),
+        }),
+    })
+}
+
+/// The strategy's label and, for `--strategy-command`, its program. An external strategy is
+/// started once to learn its name (and refused here if it cannot start or shake hands), before
+/// any output is created.
+fn strategy_of(a: &ExploreArgs) -> Result<(String, Option<StrategyProgram>)> {
+    Ok(match &a.strategy_command {
+        Some(line) => {
+            let program = StrategyProgram::from_command_line(
+                line,
+                std::path::Path::new("."),
+                a.strategy_timeout_s,
+            )
+            .map_err(|e| anyhow::anyhow!("--strategy-command: {e}"))?;
+            let program = match &a.strategy_params {
+                Some(text) => program.with_params(strategy_params(text)?),
+                None => Ok(program),
+            }
+            .map_err(|e| anyhow::anyhow!("--strategy-params: {e}"))?;
+            let probe = ExternalStrategy::start(&program)?;
+            let name = probe.hello().name.clone();
+            probe.finish()?;
+            (name, Some(program))
+        }
+        None => (a.strategy.clone(), None),
+    })
+}
+
+/// The run's files: summary, progress, decisions, trajectory, the strategy's stderr, the map,
+/// the final picture and the layout snapshots.
+fn write_outputs(
+    a: &ExploreArgs,
+    dir: &std::path::Path,
+    job: &Job,
+    output: &floorcast_worker::JobOutput,
+) -> Result<()> {
     let summary = &output.summary;
     write_text(
         &dir.join("summary.json"),
@@ -255,22 +305,6 @@ pub fn run(a: ExploreArgs) -> Result<()> {
             .save(&p)
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
-    staged.commit()?;
-    say!(
-        "{name}: {} after {:.0} s simulated ({:.1} % of {:.0} m2 explored, {} decisions, {:.1} m driven) in {:.2} s wall ({:.0}x real time)",
-        summary.end_reason,
-        summary.exploration_time_s,
-        summary.explored_fraction * 100.0,
-        summary.free_area_m2,
-        summary.decisions,
-        summary.path_length_m,
-        summary.wall_time_s,
-        summary.speedup
-    );
-    if let Some(w) = short_run_warning(summary) {
-        eprintln!("warning: {w}");
-    }
-    say!("results in {}", out.display());
     Ok(())
 }
 

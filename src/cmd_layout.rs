@@ -138,40 +138,7 @@ pub fn run(a: LayoutArgs) -> Result<()> {
     let t = Instant::now();
     let layout = reconstruct_layout(&grid, &LayoutConfig::default());
     let ms = t.elapsed().as_secs_f64() * 1000.0;
-    let file = LayoutFile {
-        format: LAYOUT_FORMAT,
-        version: LAYOUT_VERSION,
-        floorcast_version: floorcast_worker::FLOORCAST_VERSION,
-        map: a.map.display().to_string(),
-        resolution_m: grid.frame.resolution_m,
-        layout_time_ms: ms,
-        rooms: layout
-            .rooms
-            .iter()
-            .map(|r| RoomOut {
-                id: r.id,
-                label: label_str(r.label),
-                predicted: r.predicted,
-                area_m2: r.area_m2,
-                observed_area_m2: r.observed_area_m2,
-                unknown_area_m2: r.unknown_area_m2,
-                polygon: pts(&r.polygon),
-                observed_polygon: pts(&r.observed_polygon),
-            })
-            .collect(),
-        lines: layout
-            .lines
-            .iter()
-            .map(|l| LineOut {
-                direction_deg: l.direction_rad.to_degrees(),
-                offset_m: l.offset_m,
-                weight: l.weight,
-                from: [l.extent.a.x, l.extent.a.y],
-                to: [l.extent.b.x, l.extent.b.y],
-            })
-            .collect(),
-        diagnostics: format!("{:?}", layout.diagnostics),
-    };
+    let file = layout_file(&a.map, &grid, &layout, ms);
     write_text(
         &out.join("layout.json"),
         &(serde_json::to_string_pretty(&file)? + "\n"),
@@ -201,37 +168,93 @@ pub fn run(a: LayoutArgs) -> Result<()> {
         ms
     );
     if let Some((truth_path, truth)) = truth {
-        let acc = evaluate_merged(&layout, &truth.rooms, &unwalled_pairs(&truth), grid.frame);
-        let f = AccuracyFile {
-            format: "floorcast-layout-accuracy",
-            version: 1,
-            map: a.map.display().to_string(),
-            truth: truth_path.display().to_string(),
-            matched_room_iou: acc.matched_room_iou,
-            pixel_accuracy: acc.pixel_accuracy,
-            rooms_found: acc.rooms_found,
-            rooms_true: acc.rooms_true,
-            partial_rooms: acc.partial_rooms,
-            predicted_iou: acc.predicted_iou,
-            observed_only_iou: acc.observed_only_iou,
-            prediction_gain: acc
-                .predicted_iou
-                .zip(acc.observed_only_iou)
-                .map(|(p, o)| p - o),
-        };
-        write_text(
-            &out.join("accuracy.json"),
-            &(serde_json::to_string_pretty(&f)? + "\n"),
-        )?;
-        say!(
-            "accuracy: matched room IoU {:.3}, pixel accuracy {:.3}, {} rooms found for {} true",
-            f.matched_room_iou,
-            f.pixel_accuracy,
-            f.rooms_found,
-            f.rooms_true
-        );
+        write_accuracy(&a.map, truth_path, &truth, &grid, &layout, &out)?;
     }
     say!("results in {}", out.display());
+    Ok(())
+}
+
+/// The layout as `layout.json` holds it.
+fn layout_file(
+    map: &std::path::Path,
+    grid: &OccupancyGrid,
+    layout: &Layout,
+    ms: f64,
+) -> LayoutFile {
+    LayoutFile {
+        format: LAYOUT_FORMAT,
+        version: LAYOUT_VERSION,
+        floorcast_version: floorcast_worker::FLOORCAST_VERSION,
+        map: map.display().to_string(),
+        resolution_m: grid.frame.resolution_m,
+        layout_time_ms: ms,
+        rooms: layout
+            .rooms
+            .iter()
+            .map(|r| RoomOut {
+                id: r.id,
+                label: label_str(r.label),
+                predicted: r.predicted,
+                area_m2: r.area_m2,
+                observed_area_m2: r.observed_area_m2,
+                unknown_area_m2: r.unknown_area_m2,
+                polygon: pts(&r.polygon),
+                observed_polygon: pts(&r.observed_polygon),
+            })
+            .collect(),
+        lines: layout
+            .lines
+            .iter()
+            .map(|l| LineOut {
+                direction_deg: l.direction_rad.to_degrees(),
+                offset_m: l.offset_m,
+                weight: l.weight,
+                from: [l.extent.a.x, l.extent.a.y],
+                to: [l.extent.b.x, l.extent.b.y],
+            })
+            .collect(),
+        diagnostics: format!("{:?}", layout.diagnostics),
+    }
+}
+
+/// The layout's accuracy against the building's true rooms: `accuracy.json` and one line.
+fn write_accuracy(
+    map: &std::path::Path,
+    truth_path: &std::path::Path,
+    truth: &sim_core::building::Building,
+    grid: &OccupancyGrid,
+    layout: &Layout,
+    out: &std::path::Path,
+) -> Result<()> {
+    let acc = evaluate_merged(layout, &truth.rooms, &unwalled_pairs(truth), grid.frame);
+    let f = AccuracyFile {
+        format: "floorcast-layout-accuracy",
+        version: 1,
+        map: map.display().to_string(),
+        truth: truth_path.display().to_string(),
+        matched_room_iou: acc.matched_room_iou,
+        pixel_accuracy: acc.pixel_accuracy,
+        rooms_found: acc.rooms_found,
+        rooms_true: acc.rooms_true,
+        partial_rooms: acc.partial_rooms,
+        predicted_iou: acc.predicted_iou,
+        observed_only_iou: acc.observed_only_iou,
+        prediction_gain: acc
+            .predicted_iou
+            .zip(acc.observed_only_iou)
+            .map(|(p, o)| p - o),
+    };
+    write_text(
+        &out.join("accuracy.json"),
+        &(serde_json::to_string_pretty(&f)? + "\n"),
+    )?;
+    say!(
+        "accuracy: matched room IoU {:.3}, pixel accuracy {:.3}, {} rooms found for {} true",
+        f.matched_room_iou,
+        f.pixel_accuracy,
+        f.rooms_found,
+        f.rooms_true
+    );
     Ok(())
 }
 

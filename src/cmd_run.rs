@@ -169,53 +169,10 @@ pub fn run(a: RunArgs) -> Result<()> {
             max_jobs: a.max_jobs,
         },
     )?;
-    if !(0.0..=1.0).contains(&a.verify_fraction) {
-        anyhow::bail!(
-            "--verify-fraction: expected a fraction in [0, 1], got {}",
-            floorcast_worker::settings::fmt_num(a.verify_fraction)
-        );
-    }
-    if !(1.0..=86_400.0).contains(&a.lease_s) {
-        anyhow::bail!(
-            "--lease-s: expected seconds in [1, 86400], got {}",
-            floorcast_worker::settings::fmt_num(a.lease_s)
-        );
-    }
-    // Checked before the results directory is made.
-    if let Some(path) = &a.net.zenoh_config {
-        floorcast_coordinator::net::check_config_file(path)?;
-    }
-    // One run per results directory (`--summary` only reads).
-    let _lock = (!a.summary)
-        .then(|| floorcast_coordinator::store::lock_results(&plan.results_dir))
-        .transpose()?;
-    // `--summary` reads a store as it is (nothing written, nothing created beside it).
-    let store = if a.summary
-        && std::fs::symlink_metadata(plan.results_dir.join(floorcast_coordinator::store::DB_FILE))
-            .is_ok()
-    {
-        Store::open_existing(&plan.results_dir)?
-    } else {
-        Store::open(&plan.results_dir)?
-    };
+    check_options(&a)?;
+    let (_lock, store) = open_store(&plan, a.summary)?;
     let stored = store.all()?;
-    // A label stands for one configuration: runs of another under it would be merged in the
-    // report (refused before anything runs).
-    floorcast_coordinator::table::check_plan_labels(&plan.jobs, &stored).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: {e} (results in {})",
-            plan.grid_path.display(),
-            store.path().display()
-        )
-    })?;
-    // One version of a suite per results directory.
-    floorcast_coordinator::suite::check_stored_suites(&plan.suites, &stored).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: {e} (results in {})",
-            plan.grid_path.display(),
-            store.path().display()
-        )
-    })?;
+    check_stored(&plan, &store, &stored)?;
     for s in &plan.suites {
         say!(
             "suite {}: {} buildings, hash {} ({})",
@@ -271,7 +228,90 @@ pub fn run(a: RunArgs) -> Result<()> {
             "--workers 0 runs nothing on this machine; add --listen ENDPOINT so that remote workers can join, or give --workers N"
         );
     }
-    let opts = RunOptions {
+    let opts = run_options(&a, networked, workers);
+    store.record_run(&provenance(
+        &a.grid.display().to_string(),
+        &std::env::args().collect::<Vec<_>>().join(" "),
+    ))?;
+    announce(&plan, jobs.len(), before, workers);
+    let interrupt = interrupt_on_ctrl_c();
+    let (outcome, counts) = run_with_progress(&plan, &store, &opts, &interrupt, a.quiet)?;
+    finish(&plan, &store, outcome, counts, networked)
+}
+
+/// The options checked once the grid is read (before the results directory is made).
+fn check_options(a: &RunArgs) -> Result<()> {
+    if !(0.0..=1.0).contains(&a.verify_fraction) {
+        anyhow::bail!(
+            "--verify-fraction: expected a fraction in [0, 1], got {}",
+            floorcast_worker::settings::fmt_num(a.verify_fraction)
+        );
+    }
+    if !(1.0..=86_400.0).contains(&a.lease_s) {
+        anyhow::bail!(
+            "--lease-s: expected seconds in [1, 86400], got {}",
+            floorcast_worker::settings::fmt_num(a.lease_s)
+        );
+    }
+    // Checked before the results directory is made.
+    if let Some(path) = &a.net.zenoh_config {
+        floorcast_coordinator::net::check_config_file(path)?;
+    }
+    Ok(())
+}
+
+/// The results store, locked for this run (`--summary` only reads: nothing written, nothing
+/// created beside it).
+fn open_store(
+    plan: &Plan,
+    summary: bool,
+) -> Result<(Option<floorcast_coordinator::store::RunLock>, Store)> {
+    // One run per results directory (`--summary` only reads).
+    let lock = (!summary)
+        .then(|| floorcast_coordinator::store::lock_results(&plan.results_dir))
+        .transpose()?;
+    // `--summary` reads a store as it is (nothing written, nothing created beside it).
+    let store = if summary
+        && std::fs::symlink_metadata(plan.results_dir.join(floorcast_coordinator::store::DB_FILE))
+            .is_ok()
+    {
+        Store::open_existing(&plan.results_dir)?
+    } else {
+        Store::open(&plan.results_dir)?
+    };
+    Ok((lock, store))
+}
+
+/// What is stored already agrees with the plan: one configuration per label, one version of
+/// each suite.
+fn check_stored(
+    plan: &Plan,
+    store: &Store,
+    stored: &[floorcast_coordinator::store::StoredResult],
+) -> Result<()> {
+    // A label stands for one configuration: runs of another under it would be merged in the
+    // report (refused before anything runs).
+    floorcast_coordinator::table::check_plan_labels(&plan.jobs, stored).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e} (results in {})",
+            plan.grid_path.display(),
+            store.path().display()
+        )
+    })?;
+    // One version of a suite per results directory.
+    floorcast_coordinator::suite::check_stored_suites(&plan.suites, stored).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: {e} (results in {})",
+            plan.grid_path.display(),
+            store.path().display()
+        )
+    })?;
+    Ok(())
+}
+
+/// How `run_plan` runs the grid: local workers, remote ones when networked.
+fn run_options(a: &RunArgs, networked: bool, workers: usize) -> RunOptions {
+    RunOptions {
         workers,
         remote: networked.then(|| {
             Arc::new(NetConfig {
@@ -286,11 +326,11 @@ pub fn run(a: RunArgs) -> Result<()> {
         verify_fraction: a.verify_fraction,
         share: !a.no_share,
         ..RunOptions::default()
-    };
-    store.record_run(&provenance(
-        &a.grid.display().to_string(),
-        &std::env::args().collect::<Vec<_>>().join(" "),
-    ))?;
+    }
+}
+
+/// The grid's first line: what runs, what is stored, on how many workers.
+fn announce(plan: &Plan, jobs: usize, before: usize, workers: usize) {
     match &plan.sequential {
         Some(q) => say!(
             "grid '{}': sequential, {} buildings x {} strategies, seeds in batches of {} up to {} ({} jobs so far, {} already stored), {} local workers",
@@ -299,7 +339,7 @@ pub fn run(a: RunArgs) -> Result<()> {
             plan.labels.len(),
             q.batch_seeds,
             q.max_seeds,
-            jobs.len(),
+            jobs,
             before,
             workers
         ),
@@ -313,6 +353,10 @@ pub fn run(a: RunArgs) -> Result<()> {
             workers
         ),
     }
+}
+
+/// A flag Ctrl-C sets (the run stops cleanly); a second Ctrl-C kills at once.
+fn interrupt_on_ctrl_c() -> Arc<AtomicBool> {
     let interrupt = Arc::new(AtomicBool::new(false));
     {
         let flag = Arc::clone(&interrupt);
@@ -324,17 +368,28 @@ pub fn run(a: RunArgs) -> Result<()> {
             }
         });
     }
+    interrupt
+}
+
+/// Runs the plan with a progress bar (log lines printed above it).
+fn run_with_progress(
+    plan: &Plan,
+    store: &Store,
+    opts: &RunOptions,
+    interrupt: &AtomicBool,
+    quiet: bool,
+) -> Result<(Outcome, floorcast_coordinator::run::Counts)> {
     let pb = progress_bar(
         plan.jobs.len() as u64,
-        a.quiet,
+        quiet,
         "{spinner} [{elapsed_precise}] [{bar:40}] {pos}/{len} jobs {msg} (eta {eta})",
     );
     let log_pb = pb.clone();
     let (outcome, counts) = run_plan(
-        &plan,
-        &store,
-        &opts,
-        &interrupt,
+        plan,
+        store,
+        opts,
+        interrupt,
         &mut |c| {
             // A sequential grid's jobs grow batch by batch.
             pb.set_length(c.total as u64);
@@ -358,6 +413,18 @@ pub fn run(a: RunArgs) -> Result<()> {
         },
     )?;
     pb.finish_and_clear();
+    Ok((outcome, counts))
+}
+
+/// What the run did: the table, a sequential grid's tests, the failed jobs (an interrupted run
+/// exits 130).
+fn finish(
+    plan: &Plan,
+    store: &Store,
+    outcome: Outcome,
+    counts: floorcast_coordinator::run::Counts,
+    networked: bool,
+) -> Result<()> {
     match outcome {
         Outcome::Complete => {
             say!(
@@ -384,9 +451,9 @@ pub fn run(a: RunArgs) -> Result<()> {
                 "{}",
                 render_text(&table(&store.all()?, &plan.labels, plan.coverage))
             );
-            let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &store.all()?);
-            print_sequential(&plan, &progress);
-            failed_jobs(&jobs, &store)
+            let (progress, jobs) = floorcast_coordinator::sequential::replay(plan, &store.all()?);
+            print_sequential(plan, &progress);
+            failed_jobs(&jobs, store)
         }
         Outcome::Interrupted => {
             eprintln!(
@@ -489,41 +556,13 @@ pub fn report(a: ReportArgs) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("--coverage: {e}"))?;
     }
     let store = Store::open_existing(&a.results)?;
-    // No export may overwrite the store or a file of it (checked before anything is written).
-    use floorcast_coordinator::store::{refuse_owned, refuse_owned_in};
-    refuse_owned("--csv", a.csv.as_deref(), &a.results)?;
-    refuse_owned("--json", a.json.as_deref(), &a.results)?;
-    refuse_owned("--html", a.html.as_deref(), &a.results)?;
-    for picture in &a.picture {
-        refuse_owned_in(
-            "--plots",
-            a.plots.as_deref(),
-            picture.extension(),
-            &a.results,
-        )?;
-    }
+    refuse_overwrites(&a)?;
     let results = store.all()?;
     // A label stands for one configuration: runs of two are never merged into one row.
     floorcast_coordinator::table::check_label_configurations(&results)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.results.join(DB_FILE).display()))?;
     let grids = store.grids()?;
-    // The other store and its label are checked before anything is printed.
-    let against = match &a.against {
-        Some(dir) => {
-            let other = Store::open_existing(dir)?.all()?;
-            if let Some(l) = &a.against_label {
-                if !other.iter().any(|r| &r.label == l) {
-                    anyhow::bail!(
-                        "--against-label: {} holds no runs labelled '{l}'; its labels: {}",
-                        dir.display(),
-                        labels_of(&other).join(", ")
-                    );
-                }
-            }
-            Some((dir, other))
-        }
-        None => None,
-    };
+    let against = open_against(&a)?;
     say!(
         "{} results in {}",
         results.len(),
@@ -536,91 +575,12 @@ pub fn report(a: ReportArgs) -> Result<()> {
         say!("{line}");
     }
     if let Some((dir, other)) = &against {
-        use floorcast_coordinator::suite::stored_suites;
-        let versions = |r: &[floorcast_coordinator::store::StoredResult]| {
-            stored_suites(r)
-                .into_iter()
-                .map(|(n, h, _)| format!("{n} {h}"))
-                .collect::<Vec<_>>()
-        };
-        let (mine, theirs) = (versions(&results), versions(other));
-        if !mine.is_empty() || !theirs.is_empty() {
-            say!(
-                "{} ran {}: {}",
-                dir.display(),
-                if theirs.is_empty() {
-                    "no suite".to_string()
-                } else {
-                    format!("suites {}", theirs.join(", "))
-                },
-                if mine == theirs {
-                    "the same suites (names and hashes) as here"
-                } else {
-                    "NOT the same suites as here (names or hashes differ)"
-                }
-            );
-        }
+        say_same_suites(dir, &results, other);
     }
-    // Labels in the order of the grids that made them, then as stored.
-    let mut order: Vec<String> = Vec::new();
-    for (_, labels, _) in &grids {
-        for l in labels {
-            if !order.contains(l) && results.iter().any(|r| &r.label == l) {
-                order.push(l.clone());
-            }
-        }
-    }
-    let order = floorcast_coordinator::outcome::label_order(&results, &order);
-    let reference = match &a.reference {
-        Some(r) if !order.contains(r) => anyhow::bail!(
-            "--reference: {} holds no runs labelled '{r}'; its labels: {}",
-            a.results.display(),
-            order.join(", ")
-        ),
-        Some(r) => r.clone(),
-        None => order
-            .iter()
-            .find(|l| l.as_str() == "baseline")
-            .or(order.first())
-            .cloned()
-            .unwrap_or_default(),
-    };
-    // The coverage level: as given, else the grids' own when they agree.
-    let coverage = match a.coverage {
-        Some(c) => c,
-        None => {
-            let levels: Vec<f64> = grids.iter().map(|g| g.2).collect();
-            match levels.first() {
-                Some(&c) if levels.iter().all(|l| *l == c) => c,
-                Some(_) => anyhow::bail!(
-                    "the grids of {} were compared at different coverage levels ({}); choose one with --coverage",
-                    a.results.display(),
-                    levels
-                        .iter()
-                        .map(|l| l.to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-                None => floorcast_coordinator::outcome::DEFAULT_COVERAGE,
-            }
-        }
-    };
-    // Sequential grids' decisions: each label's last test.
-    let mut last: std::collections::BTreeMap<(String, String), SequentialVerdict> =
-        Default::default();
-    for (grid, t) in store.tests()? {
-        last.insert(
-            (grid.clone(), t.label.clone()),
-            SequentialVerdict { grid, test: t },
-        );
-    }
-    let mut verdicts: Vec<SequentialVerdict> = last.into_values().collect();
-    verdicts.sort_by_key(|v| {
-        (
-            v.grid.clone(),
-            order.iter().position(|l| *l == v.test.label),
-        )
-    });
+    let order = report_order(&grids, &results);
+    let reference = report_reference(&a, &order)?;
+    let coverage = report_coverage(&a, &grids)?;
+    let verdicts = last_verdicts(&store, &order)?;
     let sequential_labels: Vec<String> = verdicts
         .iter()
         .filter(|v| v.test.reference == reference)
@@ -678,32 +638,189 @@ pub fn report(a: ReportArgs) -> Result<()> {
     }
     if a.plots.is_some() || a.html.is_some() {
         let charts = charts(&results, &t, &aggregates, &style);
-        if let Some(dir) = &a.plots {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("cannot create the chart directory {}", dir.display()))?;
-            let mut formats = a.picture.clone();
-            formats.dedup();
-            for (name, fig) in &charts {
-                for f in &formats {
-                    fig.save(dir.join(format!("{name}.{}", f.extension())))?;
+        write_pictures(&a, results.len(), &text, &charts)?;
+    }
+    Ok(())
+}
+
+/// No export may overwrite the store or a file of it (checked before anything is written).
+fn refuse_overwrites(a: &ReportArgs) -> Result<()> {
+    use floorcast_coordinator::store::{refuse_owned, refuse_owned_in};
+    refuse_owned("--csv", a.csv.as_deref(), &a.results)?;
+    refuse_owned("--json", a.json.as_deref(), &a.results)?;
+    refuse_owned("--html", a.html.as_deref(), &a.results)?;
+    for picture in &a.picture {
+        refuse_owned_in(
+            "--plots",
+            a.plots.as_deref(),
+            picture.extension(),
+            &a.results,
+        )?;
+    }
+    Ok(())
+}
+
+/// The other store of `--against` and its runs, its `--against-label` checked (before
+/// anything is printed).
+fn open_against(
+    a: &ReportArgs,
+) -> Result<Option<(&PathBuf, Vec<floorcast_coordinator::store::StoredResult>)>> {
+    Ok(match &a.against {
+        Some(dir) => {
+            let other = Store::open_existing(dir)?.all()?;
+            if let Some(l) = &a.against_label {
+                if !other.iter().any(|r| &r.label == l) {
+                    anyhow::bail!(
+                        "--against-label: {} holds no runs labelled '{l}'; its labels: {}",
+                        dir.display(),
+                        labels_of(&other).join(", ")
+                    );
                 }
             }
-            let names: Vec<&str> = formats.iter().map(|f| f.extension()).collect();
-            say!(
-                "wrote {} charts ({}) to {}",
-                charts.len(),
-                names.join(", "),
-                dir.display()
-            );
+            Some((dir, other))
         }
-        if let Some(path) = &a.html {
-            write_text(
-                path,
-                &report_html(&a.results, results.len(), &text, &charts),
-            )
+        None => None,
+    })
+}
+
+/// Whether `dir` ran the same suites (names and hashes) as the report's results.
+fn say_same_suites(
+    dir: &std::path::Path,
+    results: &[floorcast_coordinator::store::StoredResult],
+    other: &[floorcast_coordinator::store::StoredResult],
+) {
+    use floorcast_coordinator::suite::stored_suites;
+    let versions = |r: &[floorcast_coordinator::store::StoredResult]| {
+        stored_suites(r)
+            .into_iter()
+            .map(|(n, h, _)| format!("{n} {h}"))
+            .collect::<Vec<_>>()
+    };
+    let (mine, theirs) = (versions(results), versions(other));
+    if !mine.is_empty() || !theirs.is_empty() {
+        say!(
+            "{} ran {}: {}",
+            dir.display(),
+            if theirs.is_empty() {
+                "no suite".to_string()
+            } else {
+                format!("suites {}", theirs.join(", "))
+            },
+            if mine == theirs {
+                "the same suites (names and hashes) as here"
+            } else {
+                "NOT the same suites as here (names or hashes differ)"
+            }
+        );
+    }
+}
+
+/// Labels in the order of the grids that made them, then as stored.
+fn report_order(
+    grids: &[(String, Vec<String>, f64)],
+    results: &[floorcast_coordinator::store::StoredResult],
+) -> Vec<String> {
+    let mut order: Vec<String> = Vec::new();
+    for (_, labels, _) in grids {
+        for l in labels {
+            if !order.contains(l) && results.iter().any(|r| &r.label == l) {
+                order.push(l.clone());
+            }
+        }
+    }
+    floorcast_coordinator::outcome::label_order(results, &order)
+}
+
+/// The reference label: `--reference`, else `baseline`, else the first.
+fn report_reference(a: &ReportArgs, order: &[String]) -> Result<String> {
+    Ok(match &a.reference {
+        Some(r) if !order.contains(r) => anyhow::bail!(
+            "--reference: {} holds no runs labelled '{r}'; its labels: {}",
+            a.results.display(),
+            order.join(", ")
+        ),
+        Some(r) => r.clone(),
+        None => order
+            .iter()
+            .find(|l| l.as_str() == "baseline")
+            .or(order.first())
+            .cloned()
+            .unwrap_or_default(),
+    })
+}
+
+/// The coverage level: as given, else the grids' own when they agree.
+fn report_coverage(a: &ReportArgs, grids: &[(String, Vec<String>, f64)]) -> Result<f64> {
+    Ok(match a.coverage {
+        Some(c) => c,
+        None => {
+            let levels: Vec<f64> = grids.iter().map(|g| g.2).collect();
+            match levels.first() {
+                Some(&c) if levels.iter().all(|l| *l == c) => c,
+                Some(_) => anyhow::bail!(
+                    "the grids of {} were compared at different coverage levels ({}); choose one with --coverage",
+                    a.results.display(),
+                    levels
+                        .iter()
+                        .map(|l| l.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                None => floorcast_coordinator::outcome::DEFAULT_COVERAGE,
+            }
+        }
+    })
+}
+
+/// Sequential grids' decisions: each label's last test, by grid and label order.
+fn last_verdicts(store: &Store, order: &[String]) -> Result<Vec<SequentialVerdict>> {
+    let mut last: std::collections::BTreeMap<(String, String), SequentialVerdict> =
+        Default::default();
+    for (grid, t) in store.tests()? {
+        last.insert(
+            (grid.clone(), t.label.clone()),
+            SequentialVerdict { grid, test: t },
+        );
+    }
+    let mut verdicts: Vec<SequentialVerdict> = last.into_values().collect();
+    verdicts.sort_by_key(|v| {
+        (
+            v.grid.clone(),
+            order.iter().position(|l| *l == v.test.label),
+        )
+    });
+    Ok(verdicts)
+}
+
+/// `--plots` and `--html`: the charts in each picture format, and the report as a page.
+fn write_pictures(
+    a: &ReportArgs,
+    runs: usize,
+    text: &str,
+    charts: &[(String, floorcast_render::Figure)],
+) -> Result<()> {
+    if let Some(dir) = &a.plots {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the chart directory {}", dir.display()))?;
+        let mut formats = a.picture.clone();
+        formats.dedup();
+        for (name, fig) in charts {
+            for f in &formats {
+                fig.save(dir.join(format!("{name}.{}", f.extension())))?;
+            }
+        }
+        let names: Vec<&str> = formats.iter().map(|f| f.extension()).collect();
+        say!(
+            "wrote {} charts ({}) to {}",
+            charts.len(),
+            names.join(", "),
+            dir.display()
+        );
+    }
+    if let Some(path) = &a.html {
+        write_text(path, &report_html(&a.results, runs, text, charts))
             .with_context(|| format!("cannot write {}", path.display()))?;
-            say!("wrote {}", path.display());
-        }
+        say!("wrote {}", path.display());
     }
     Ok(())
 }
@@ -811,34 +928,47 @@ fn charts(
         out.push(("profile".to_string(), profile.figure_styled(style)));
     }
     for building in t.per_building.keys() {
-        let curves = floorcast_coordinator::table::progress_curves(results, building, &order, 400);
-        if curves.is_empty() {
-            continue;
-        }
-        let chart = LineChart {
-            title: format!("{building}: explored fraction (mean, range over seeds)"),
-            x_label: "simulated time (s)".into(),
-            x_range: None,
-            y_label: "explored fraction".into(),
-            y_range: Some((0.0, 1.0)),
-            series: curves
-                .into_iter()
-                .map(|c| Series {
-                    color: color(&c.label),
-                    label: format!("{} ({} runs)", c.label, c.runs),
-                    points: c.points.iter().map(|p| (p.0, p.1)).collect(),
-                    band: c.points.iter().map(|p| (p.0, p.2, p.3)).collect(),
-                    marks: c.early_stops,
-                })
-                .collect(),
-            marks_label: "early stop".into(),
-        };
-        out.push((
-            format!("progress-{}", file_name_part(building)),
-            chart.figure_styled(style),
-        ));
+        out.extend(progress_chart(results, building, &order, style));
     }
     out
+}
+
+/// The paper's Fig. 4 for one building: the explored fraction over time per strategy (`None`
+/// when no run has a progress curve).
+fn progress_chart(
+    results: &[floorcast_coordinator::store::StoredResult],
+    building: &str,
+    order: &[String],
+    style: &floorcast_render::chart::ChartStyle,
+) -> Option<(String, floorcast_render::Figure)> {
+    use floorcast_render::chart::{series_color, LineChart, Series};
+    let color = |l: &str| series_color(order.iter().position(|o| o == l).unwrap_or(0));
+    let curves = floorcast_coordinator::table::progress_curves(results, building, order, 400);
+    if curves.is_empty() {
+        return None;
+    }
+    let chart = LineChart {
+        title: format!("{building}: explored fraction (mean, range over seeds)"),
+        x_label: "simulated time (s)".into(),
+        x_range: None,
+        y_label: "explored fraction".into(),
+        y_range: Some((0.0, 1.0)),
+        series: curves
+            .into_iter()
+            .map(|c| Series {
+                color: color(&c.label),
+                label: format!("{} ({} runs)", c.label, c.runs),
+                points: c.points.iter().map(|p| (p.0, p.1)).collect(),
+                band: c.points.iter().map(|p| (p.0, p.2, p.3)).collect(),
+                marks: c.early_stops,
+            })
+            .collect(),
+        marks_label: "early stop".into(),
+    };
+    Some((
+        format!("progress-{}", file_name_part(building)),
+        chart.figure_styled(style),
+    ))
 }
 
 /// A stored building's name as part of a chart's file name: a name the grid checks

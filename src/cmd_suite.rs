@@ -346,67 +346,7 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
             path.display()
         ),
     };
-    // The entries: the files given (each keeping what the manifest said of it), or the
-    // manifest's own.
-    let mut entries: Vec<SuiteBuilding> = Vec::new();
-    // Where each is read from: the file as given, or as the manifest names it.
-    let mut files: Vec<PathBuf> = Vec::new();
-    if a.files.is_empty() {
-        let Some(m) = &old else {
-            bail!(
-                "{}: no such manifest; give the suite's FILES with --kind, --source, --licence and --description to make it",
-                path.display()
-            );
-        };
-        entries = m.buildings.clone();
-        files = entries
-            .iter()
-            .map(|e| Manifest::path_of(&path, e))
-            .collect();
-    } else {
-        for file in &a.files {
-            let rel = relative_to(file, &dir)?;
-            let known = old
-                .as_ref()
-                .and_then(|m| m.buildings.iter().find(|b| b.path == rel));
-            let entry = match known {
-                Some(b) => b.clone(),
-                None => {
-                    let missing: Vec<&str> = [
-                        ("--kind", a.kind.is_none()),
-                        ("--source", a.source.is_none()),
-                        ("--licence", a.licence.is_none()),
-                    ]
-                    .into_iter()
-                    .filter_map(|(f, m)| m.then_some(f))
-                    .collect();
-                    if !missing.is_empty() {
-                        bail!(
-                            "{}: {} is new to suite {name}: give {}",
-                            missing.join(", "),
-                            file.display(),
-                            missing.join(", ")
-                        );
-                    }
-                    SuiteBuilding {
-                        name: file
-                            .file_stem()
-                            .map(|s| s.to_string_lossy().into_owned())
-                            .unwrap_or_default(),
-                        path: rel,
-                        kind: SuiteKind::School,
-                        source: String::new(),
-                        licence: String::new(),
-                        free_area_m2: 0.0,
-                        rooms: None,
-                        hash: String::new(),
-                    }
-                }
-            };
-            entries.push(entry);
-            files.push(file.clone());
-        }
-    }
+    let (mut entries, files) = suite_entries(&a, &path, &dir, old.as_ref(), &name)?;
     for e in entries.iter_mut() {
         if let Some(k) = a.kind {
             e.kind = k.into();
@@ -418,36 +358,14 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
             e.licence = l.clone();
         }
     }
-    // Each building read: its hash, free area and rooms.
-    let mut changed = Vec::new();
-    for (e, file) in entries.iter_mut().zip(&files) {
-        let b = floorcast_formats::read_building(file)?;
-        let hash = b.content_hash();
-        if !e.hash.is_empty() && e.hash != hash {
-            changed.push(e.name.clone());
-        }
-        e.hash = hash;
-        e.free_area_m2 = rounded_area_m2(b.free_area_m2());
-        e.rooms = (!b.rooms.is_empty()).then_some(b.rooms.len() as u64);
-    }
+    let changed = read_entries(&mut entries, &files)?;
     entries.sort_by(|x, y| x.name.cmp(&y.name));
     let m = Manifest {
         name,
         description,
         buildings: entries,
     };
-    // What is written reads back as the same manifest (every value checked as on reading).
-    let text = m.to_toml();
-    let back = parse_manifest(&text, &path)?;
-    debug_assert_eq!(back, m);
-    crate::output::create_dir(&dir)?;
-    // Written beside it and moved into place: a manifest is never half written.
-    let tmp = dir.join(format!(".{}.tmp-{}", m.name, std::process::id()));
-    crate::output::write_text(&tmp, &text)?;
-    std::fs::rename(&tmp, &path).with_context(|| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("cannot write {}", path.display())
-    })?;
+    write_manifest(&m, &dir, &path)?;
     let hash = m.hash();
     let was = old.as_ref().map(|o| o.hash());
     say!(
@@ -469,6 +387,109 @@ fn update_cmd(a: UpdateArgs) -> Result<()> {
             changed.len()
         );
     }
+    Ok(())
+}
+
+/// The suite's entries and the files they are read from: the files given (each keeping what
+/// the manifest said of it), or the manifest's own.
+fn suite_entries(
+    a: &UpdateArgs,
+    path: &Path,
+    dir: &Path,
+    old: Option<&Manifest>,
+    name: &str,
+) -> Result<(Vec<SuiteBuilding>, Vec<PathBuf>)> {
+    let mut entries: Vec<SuiteBuilding> = Vec::new();
+    // Where each is read from: the file as given, or as the manifest names it.
+    let mut files: Vec<PathBuf> = Vec::new();
+    if a.files.is_empty() {
+        let Some(m) = old else {
+            bail!(
+                "{}: no such manifest; give the suite's FILES with --kind, --source, --licence and --description to make it",
+                path.display()
+            );
+        };
+        entries = m.buildings.clone();
+        files = entries.iter().map(|e| Manifest::path_of(path, e)).collect();
+    } else {
+        for file in &a.files {
+            let rel = relative_to(file, dir)?;
+            let known = old.and_then(|m| m.buildings.iter().find(|b| b.path == rel));
+            let entry = match known {
+                Some(b) => b.clone(),
+                None => new_entry(a, file, rel, name)?,
+            };
+            entries.push(entry);
+            files.push(file.clone());
+        }
+    }
+    Ok((entries, files))
+}
+
+/// A file new to the suite: its entry, named by its file stem, with the flags that say what
+/// the manifest says of every building (required).
+fn new_entry(a: &UpdateArgs, file: &Path, rel: String, name: &str) -> Result<SuiteBuilding> {
+    let missing: Vec<&str> = [
+        ("--kind", a.kind.is_none()),
+        ("--source", a.source.is_none()),
+        ("--licence", a.licence.is_none()),
+    ]
+    .into_iter()
+    .filter_map(|(f, m)| m.then_some(f))
+    .collect();
+    if !missing.is_empty() {
+        bail!(
+            "{}: {} is new to suite {name}: give {}",
+            missing.join(", "),
+            file.display(),
+            missing.join(", ")
+        );
+    }
+    Ok(SuiteBuilding {
+        name: file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        path: rel,
+        kind: SuiteKind::School,
+        source: String::new(),
+        licence: String::new(),
+        free_area_m2: 0.0,
+        rooms: None,
+        hash: String::new(),
+    })
+}
+
+/// Each building read: its hash, free area and rooms; the names of those whose hash changed.
+fn read_entries(entries: &mut [SuiteBuilding], files: &[PathBuf]) -> Result<Vec<String>> {
+    let mut changed = Vec::new();
+    for (e, file) in entries.iter_mut().zip(files) {
+        let b = floorcast_formats::read_building(file)?;
+        let hash = b.content_hash();
+        if !e.hash.is_empty() && e.hash != hash {
+            changed.push(e.name.clone());
+        }
+        e.hash = hash;
+        e.free_area_m2 = rounded_area_m2(b.free_area_m2());
+        e.rooms = (!b.rooms.is_empty()).then_some(b.rooms.len() as u64);
+    }
+    Ok(changed)
+}
+
+/// Writes the manifest beside `path` and moves it into place (never half written), after
+/// checking that it reads back as itself (every value checked as on reading).
+fn write_manifest(m: &Manifest, dir: &Path, path: &Path) -> Result<()> {
+    let text = m.to_toml();
+    let back = parse_manifest(&text, path)?;
+    debug_assert_eq!(&back, m);
+    crate::output::create_dir(dir)?;
+    // Written beside it and moved into place: a manifest is never half written.
+    let tmp = dir.join(format!(".{}.tmp-{}", m.name, std::process::id()));
+    crate::output::write_text(&tmp, &text)?;
+    std::fs::rename(&tmp, path).with_context(|| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("cannot write {}", path.display())
+    })?;
     Ok(())
 }
 

@@ -63,6 +63,7 @@ fn assert_decided(out: &str) {
 }
 
 #[test]
+#[allow(clippy::too_many_lines)] // a table of cases
 fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     let dir = tempfile::tempdir().unwrap();
     let g = grid(dir.path(), SEQUENTIAL, "");

@@ -211,6 +211,7 @@ fn a_suite_is_written_checked_and_fails_naming_each_building() {
 /// and hash; a grid whose suite changed is refused by that results directory, and a grid whose
 /// suite's file changed is refused until the manifest is refreshed.
 #[test]
+#[allow(clippy::too_many_lines)] // a table of cases
 fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
     let (_tmp, root) = scratch();
     let o = run_in(

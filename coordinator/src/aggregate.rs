@@ -102,7 +102,7 @@ pub fn aggregates(
     coverage: f64,
 ) -> Aggregates {
     // Per building and label: the runs' outcomes.
-    let mut by: BTreeMap<&str, BTreeMap<&str, Vec<RunOutcome>>> = BTreeMap::new();
+    let mut by: ByBuilding = BTreeMap::new();
     for r in results {
         by.entry(&r.building)
             .or_default()
@@ -120,84 +120,7 @@ pub fn aggregates(
     let taus = profile_taus();
     let labels = crate::outcome::label_order(results, order)
         .into_iter()
-        .map(|label| {
-            // Per building (with a normalizer): normalized charged times, normalized times for
-            // the profile (infinite when not achieved), and the two sides' times for the
-            // probability of improvement (infinite when not achieved).
-            let mut iqm_strata: Vec<[Vec<f64>; 1]> = Vec::new();
-            let mut profile_strata: Vec<[Vec<f64>; 1]> = Vec::new();
-            let mut poi_strata: Vec<[Vec<f64>; 2]> = Vec::new();
-            let (mut runs, mut achieved) = (0, 0);
-            for (b, m) in &reference_median_s {
-                let Some(mine) = by.get(b.as_str()).and_then(|l| l.get(label.as_str())) else {
-                    continue;
-                };
-                runs += mine.len();
-                achieved += mine.iter().filter(|r| r.achieved_s.is_some()).count();
-                iqm_strata.push([mine.iter().map(|r| charged(r) / m).collect()]);
-                profile_strata.push([mine
-                    .iter()
-                    .map(|r| r.achieved_s.map_or(f64::INFINITY, |t| t / m))
-                    .collect()]);
-                let speed = |rs: &[RunOutcome]| -> Vec<f64> {
-                    rs.iter()
-                        .map(|r| r.achieved_s.unwrap_or(f64::INFINITY))
-                        .collect()
-                };
-                poi_strata.push([speed(mine), speed(&by[b.as_str()][reference])]);
-            }
-            let pooled = |s: &[[Vec<f64>; 1]]| -> Vec<f64> {
-                s.iter().flat_map(|[v]| v.iter().copied()).collect()
-            };
-            let iqm = |s: &[[Vec<f64>; 1]]| interquartile_mean(&pooled(s));
-            let poi = |s: &[[Vec<f64>; 2]]| {
-                let ps: Vec<f64> = s
-                    .iter()
-                    .filter_map(|[x, y]| probability_lower(x, y))
-                    .collect();
-                (!ps.is_empty()).then(|| ps.iter().sum::<f64>() / ps.len() as f64)
-            };
-            let is_reference = label == reference;
-            let profile = taus
-                .iter()
-                .map(|&tau| {
-                    let frac = |s: &[[Vec<f64>; 1]]| {
-                        let v = pooled(s);
-                        (!v.is_empty()).then(|| {
-                            v.iter().filter(|x| **x <= tau).count() as f64 / v.len() as f64
-                        })
-                    };
-                    let fraction = frac(&profile_strata).unwrap_or(f64::NAN);
-                    let (lo, hi) = stratified_bootstrap_ci95(&profile_strata, frac)
-                        .unwrap_or((fraction, fraction));
-                    ProfilePoint {
-                        tau,
-                        fraction,
-                        lo,
-                        hi,
-                    }
-                })
-                .filter(|p| p.fraction.is_finite())
-                .collect();
-            LabelAggregate {
-                runs,
-                buildings: iqm_strata.len(),
-                achieved_fraction: if runs > 0 {
-                    achieved as f64 / runs as f64
-                } else {
-                    f64::NAN
-                },
-                iqm_normalized_time: iqm(&iqm_strata),
-                iqm_ci95: stratified_bootstrap_ci95(&iqm_strata, iqm).map(|(a, b)| [a, b]),
-                probability_of_improvement: (!is_reference).then(|| poi(&poi_strata)).flatten(),
-                probability_of_improvement_ci95: (!is_reference)
-                    .then(|| stratified_bootstrap_ci95(&poi_strata, poi))
-                    .flatten()
-                    .map(|(a, b)| [a, b]),
-                profile,
-                label,
-            }
-        })
+        .map(|label| label_aggregate(label, &by, &reference_median_s, reference, &taus))
         .filter(|a| a.runs > 0)
         .collect();
     Aggregates {
@@ -206,6 +129,101 @@ pub fn aggregates(
         reference_median_s,
         labels,
     }
+}
+
+/// The values of every stratum together.
+fn pooled(s: &[[Vec<f64>; 1]]) -> Vec<f64> {
+    s.iter().flat_map(|[v]| v.iter().copied()).collect()
+}
+
+/// Runs' outcomes per building and label.
+type ByBuilding<'a> = BTreeMap<&'a str, BTreeMap<&'a str, Vec<RunOutcome>>>;
+
+/// One label's aggregates over the buildings where the reference has a median time.
+fn label_aggregate(
+    label: String,
+    by: &ByBuilding,
+    reference_median_s: &BTreeMap<String, f64>,
+    reference: &str,
+    taus: &[f64],
+) -> LabelAggregate {
+    // Per building (with a normalizer): normalized charged times, normalized times for
+    // the profile (infinite when not achieved), and the two sides' times for the
+    // probability of improvement (infinite when not achieved).
+    let mut iqm_strata: Vec<[Vec<f64>; 1]> = Vec::new();
+    let mut profile_strata: Vec<[Vec<f64>; 1]> = Vec::new();
+    let mut poi_strata: Vec<[Vec<f64>; 2]> = Vec::new();
+    let (mut runs, mut achieved) = (0, 0);
+    for (b, m) in reference_median_s {
+        let Some(mine) = by.get(b.as_str()).and_then(|l| l.get(label.as_str())) else {
+            continue;
+        };
+        runs += mine.len();
+        achieved += mine.iter().filter(|r| r.achieved_s.is_some()).count();
+        iqm_strata.push([mine.iter().map(|r| charged(r) / m).collect()]);
+        profile_strata.push([mine
+            .iter()
+            .map(|r| r.achieved_s.map_or(f64::INFINITY, |t| t / m))
+            .collect()]);
+        let speed = |rs: &[RunOutcome]| -> Vec<f64> {
+            rs.iter()
+                .map(|r| r.achieved_s.unwrap_or(f64::INFINITY))
+                .collect()
+        };
+        poi_strata.push([speed(mine), speed(&by[b.as_str()][reference])]);
+    }
+    let iqm = |s: &[[Vec<f64>; 1]]| interquartile_mean(&pooled(s));
+    let poi = |s: &[[Vec<f64>; 2]]| {
+        let ps: Vec<f64> = s
+            .iter()
+            .filter_map(|[x, y]| probability_lower(x, y))
+            .collect();
+        (!ps.is_empty()).then(|| ps.iter().sum::<f64>() / ps.len() as f64)
+    };
+    let is_reference = label == reference;
+    let profile = profile(taus, &profile_strata);
+    LabelAggregate {
+        runs,
+        buildings: iqm_strata.len(),
+        achieved_fraction: if runs > 0 {
+            achieved as f64 / runs as f64
+        } else {
+            f64::NAN
+        },
+        iqm_normalized_time: iqm(&iqm_strata),
+        iqm_ci95: stratified_bootstrap_ci95(&iqm_strata, iqm).map(|(a, b)| [a, b]),
+        probability_of_improvement: (!is_reference).then(|| poi(&poi_strata)).flatten(),
+        probability_of_improvement_ci95: (!is_reference)
+            .then(|| stratified_bootstrap_ci95(&poi_strata, poi))
+            .flatten()
+            .map(|(a, b)| [a, b]),
+        profile,
+        label,
+    }
+}
+
+/// The performance profile: per `tau`, the fraction of runs within `tau` times the reference's
+/// median, with its stratified bootstrap interval.
+fn profile(taus: &[f64], profile_strata: &[[Vec<f64>; 1]]) -> Vec<ProfilePoint> {
+    taus.iter()
+        .map(|&tau| {
+            let frac = |s: &[[Vec<f64>; 1]]| {
+                let v = pooled(s);
+                (!v.is_empty())
+                    .then(|| v.iter().filter(|x| **x <= tau).count() as f64 / v.len() as f64)
+            };
+            let fraction = frac(profile_strata).unwrap_or(f64::NAN);
+            let (lo, hi) =
+                stratified_bootstrap_ci95(profile_strata, frac).unwrap_or((fraction, fraction));
+            ProfilePoint {
+                tau,
+                fraction,
+                lo,
+                hi,
+            }
+        })
+        .filter(|p| p.fraction.is_finite())
+        .collect()
 }
 
 /// The aggregates in `report --json` (`aggregates`).

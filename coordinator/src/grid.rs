@@ -363,186 +363,9 @@ impl Plan {
             field: field.to_string(),
             problem,
         };
-        // Check the header first, so that a newer file says so instead of failing on a key.
-        let value: toml::Table = toml::from_str(text).map_err(|e| GridError::Syntax {
-            path: path.to_path_buf(),
-            message: one_line(&e.to_string()),
-        })?;
-        match (
-            value.get("format").and_then(|v| v.as_str()),
-            value.get("version").and_then(|v| v.as_integer()),
-        ) {
-            (Some(GRID_FORMAT), Some(v)) if v == GRID_VERSION as i64 => {}
-            (Some(GRID_FORMAT), v) => {
-                return Err(invalid(
-                    "version",
-                    match v {
-                        Some(v) => format!("version {v} is not supported, expected {GRID_VERSION}"),
-                        None => format!(
-                            "missing or not a whole number; expected version = {GRID_VERSION}"
-                        ),
-                    },
-                ))
-            }
-            (f, _) => {
-                return Err(invalid(
-                    "format",
-                    match f {
-                        Some(f) => format!("expected format = \"{GRID_FORMAT}\", found \"{f}\""),
-                        None => {
-                            format!("missing or not a string; expected format = \"{GRID_FORMAT}\"")
-                        }
-                    },
-                ))
-            }
-        }
-        let file: GridFile = toml::from_str(text).map_err(|e| GridError::Syntax {
-            path: path.to_path_buf(),
-            message: one_line(&e.to_string()),
-        })?;
-        let _ = (&file.format, file.version);
-        if file.name.trim().is_empty()
-            || !file
-                .name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
-        {
-            return Err(invalid(
-                "name",
-                format!(
-                    "'{}' must be non-empty and use only letters, digits, '-', '_', '.'",
-                    excerpt(&file.name)
-                ),
-            ));
-        }
-        // The name is a folder of `results/` by default.
-        crate::names::file_name_part(&file.name).map_err(|p| invalid("name", p))?;
+        let file = read_grid_file(text, path, &invalid)?;
         let base_dir = path.parent().unwrap_or(Path::new("."));
-        // Patterns are matched as text: a folder whose name is not UTF-8 would match nothing.
-        if !file.buildings.is_empty() && base_dir.to_str().is_none() {
-            return Err(invalid(
-                "buildings",
-                format!(
-                    "the grid file's folder {} has a name that is not UTF-8, which patterns cannot match; move the grid (or rename the folder) to a UTF-8 path",
-                    floorcast_worker::text::shown(&base_dir.to_string_lossy(), 300)
-                ),
-            ));
-        }
-
-        // Buildings.
-        let mut buildings: Vec<PlannedBuilding> = Vec::new();
-        for (i, pattern) in file.buildings.iter().enumerate() {
-            let field = format!("buildings[{i}]");
-            let matched = expand_pattern(base_dir, pattern).map_err(|e| invalid(&field, e))?;
-            for p in matched {
-                let b =
-                    floorcast_formats::read_building(&p).map_err(|source| GridError::Building {
-                        path: path.to_path_buf(),
-                        field: field.clone(),
-                        source: Box::new(source),
-                    })?;
-                let name = p
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default();
-                buildings.push(PlannedBuilding {
-                    name,
-                    source: p.display().to_string(),
-                    hash: b.content_hash(),
-                    building: Arc::new(b),
-                    suite: None,
-                });
-            }
-        }
-        let suites = plan_suites(&file.suites, base_dir, path, &mut buildings)?;
-        // The names of the buildings from files (their file stems), checked as every name is.
-        for b in buildings.iter_mut() {
-            b.name = crate::names::building_name(&b.name).map_err(|p| {
-                invalid(
-                    "buildings",
-                    format!(
-                        "{}: its name ({}) {p}",
-                        floorcast_worker::text::shown(&b.source, 300),
-                        if b.suite.is_some() {
-                            "in its suite's manifest"
-                        } else {
-                            "the file name without extension"
-                        }
-                    ),
-                )
-            })?;
-        }
-        for (i, g) in file.generated.iter().enumerate() {
-            let field = format!("generated[{i}]");
-            if !(g.area_m2.is_finite() && (100.0..=20_000.0).contains(&g.area_m2)) {
-                return Err(invalid(
-                    &format!("{field}.area_m2"),
-                    format!("{} is not a free area in [100, 20000] m2", g.area_m2),
-                ));
-            }
-            let kind = match g.kind.as_str() {
-                "school" => BuildingKind::School,
-                "office" => BuildingKind::Office,
-                k => {
-                    return Err(invalid(
-                        &format!("{field}.kind"),
-                        format!("'{}' is not school or office", excerpt(k)),
-                    ))
-                }
-            };
-            if !g.rotation_deg.is_finite() {
-                return Err(invalid(
-                    &format!("{field}.rotation_deg"),
-                    format!(
-                        "expected a finite number of degrees, got {}",
-                        g.rotation_deg
-                    ),
-                ));
-            }
-            let name = match &g.name {
-                Some(n) => crate::names::building_name(n)
-                    .map_err(|p| invalid(&format!("{field}.name"), p))?,
-                None => format!("gen-{}-{}-{}", g.kind, g.area_m2 as u64, g.seed),
-            };
-            let b = generate(&GenerateConfig {
-                seed: g.seed,
-                area_m2: g.area_m2,
-                kind,
-                clutter: g.clutter,
-                rotation_rad: g.rotation_deg.to_radians(),
-                name: name.clone(),
-            });
-            buildings.push(PlannedBuilding {
-                name,
-                source: format!(
-                    "generated(seed={}, area_m2={}, kind={}, clutter={}, rotation_deg={})",
-                    g.seed, g.area_m2, g.kind, g.clutter, g.rotation_deg
-                ),
-                hash: b.content_hash(),
-                building: Arc::new(b),
-                suite: None,
-            });
-        }
-        if buildings.is_empty() {
-            return Err(invalid(
-                "buildings",
-                "the grid names no building (give `buildings`, `suites` or `[[generated]]`)".into(),
-            ));
-        }
-        let mut names = BTreeMap::new();
-        for b in &buildings {
-            if let Some(prev) = names.insert(b.name.clone(), b.source.clone()) {
-                return Err(invalid(
-                    "buildings",
-                    format!(
-                        "two buildings are named '{}' ({} and {}; names are compared after trimming and Unicode normalisation); rename one",
-                        excerpt(&b.name),
-                        floorcast_worker::text::shown(&prev, 300),
-                        floorcast_worker::text::shown(&b.source, 300)
-                    ),
-                ));
-            }
-        }
+        let (buildings, suites) = plan_buildings(&file, base_dir, path, &invalid)?;
 
         // Seeds (counted before they are listed). A sequential grid adds them in batches.
         check_job_count(&file, buildings.len(), limits, &invalid)?;
@@ -550,195 +373,11 @@ impl Plan {
             Some(q) => Some(sequential_plan(q, &file, &invalid)?),
             None => None,
         };
-        let seeds: Vec<u64> = match (&file.seeds, &file.seed_range) {
-            _ if sequential.is_some() => {
-                let batch = sequential.as_ref().map_or(1, |q| q.batch_seeds);
-                (1..=batch).collect()
-            }
-            (Some(s), None) if !s.is_empty() => s.clone(),
-            (None, Some([a, b])) if a <= b => (*a..=*b).collect(),
-            (None, Some(r)) => {
-                return Err(invalid(
-                    "seed_range",
-                    format!(
-                        "[{}, {}] is empty; expected [first, last] with first <= last",
-                        r[0], r[1]
-                    ),
-                ))
-            }
-            (Some(_), Some(_)) => {
-                return Err(invalid(
-                    "seeds",
-                    "give either `seeds` or `seed_range`, not both".into(),
-                ))
-            }
-            _ => {
-                return Err(invalid(
-                    "seeds",
-                    "expected `seeds = [1, 2, 3]` or `seed_range = [1, 10]`".into(),
-                ))
-            }
-        };
-        let mut seen = std::collections::BTreeSet::new();
-        for s in &seeds {
-            if !seen.insert(*s) {
-                return Err(invalid("seeds", format!("seed {s} is listed twice")));
-            }
-        }
+        let seeds = plan_seeds(&file, sequential.as_ref(), &invalid)?;
 
-        // Strategies and settings.
-        if file.strategies.is_empty() {
-            return Err(invalid("strategies", "the grid names no strategy".into()));
-        }
-        // Settings from a table, checked; an error names `field`.
-        let settings_of = |table: toml::Table, field: &str| -> Result<Settings, GridError> {
-            settings_from_table(&table).map_err(|e| match e.field() {
-                Some(name) => invalid(&format!("{field}.{name}"), e.problem()),
-                None => invalid(field, e.problem()),
-            })
-        };
-        // The shared settings alone first, so that an error in one of them names `settings`
-        // rather than the first strategy they were merged into.
-        settings_of(file.settings.clone(), "settings")?;
-        let mut labels = Vec::new();
-        let mut resolved = Vec::new();
-        let grid_dir = path.parent().unwrap_or(Path::new("."));
-        let mut program_files = BTreeMap::new();
-        for (i, s) in file.strategies.iter().enumerate() {
-            let field = format!("strategies[{i}]");
-            let (name, program) = match (&s.name, &s.command) {
-                (Some(name), None) => {
-                    if !STRATEGIES.contains(&name.as_str()) {
-                        return Err(invalid(
-                            &format!("{field}.name"),
-                            format!(
-                                "unknown strategy '{}' (available: {})",
-                                excerpt(name),
-                                STRATEGIES.join(", ")
-                            ),
-                        ));
-                    }
-                    for (key, given) in [
-                        ("files", !s.files.is_empty()),
-                        ("timeout_s", s.timeout_s.is_some()),
-                        ("params", s.params.is_some()),
-                    ] {
-                        if given {
-                            return Err(invalid(
-                                &format!("{field}.{key}"),
-                                "belongs to an external strategy (one with a command), not to a built-in one".into(),
-                            ));
-                        }
-                    }
-                    (name.clone(), None)
-                }
-                (None, Some(command)) => {
-                    let Some(label) = &s.label else {
-                        return Err(invalid(
-                            &format!("{field}.label"),
-                            "an external strategy (one with a command) needs a label".into(),
-                        ));
-                    };
-                    let label = crate::names::label(label)
-                        .map_err(|p| invalid(&format!("{field}.label"), p))?;
-                    // Each field's errors name that field: the timeout, each of `files`, then
-                    // the command (reading the files: `files` when there are any).
-                    let timeout_s = s
-                        .timeout_s
-                        .unwrap_or(floorcast_worker::external::DEFAULT_TIMEOUT_S);
-                    floorcast_worker::external::check_timeout(timeout_s)
-                        .map_err(|p| invalid(&format!("{field}.timeout_s"), p))?;
-                    for (j, f) in s.files.iter().enumerate() {
-                        floorcast_worker::external::check_file(grid_dir, f)
-                            .map_err(|p| invalid(&format!("{field}.files[{j}]"), p))?;
-                    }
-                    let files_field = if s.files.is_empty()
-                        || command.first().is_none_or(|w| w.trim().is_empty())
-                    {
-                        format!("{field}.command")
-                    } else {
-                        format!("{field}.files")
-                    };
-                    let program =
-                        StrategyProgram::new(command.clone(), s.files.clone(), grid_dir, timeout_s)
-                            .map_err(|p| invalid(&files_field, p))?;
-                    let params = match &s.params {
-                        Some(t) => params_json(t, &format!("{field}.params"))
-                            .map_err(|(f, p)| invalid(&f, p))?,
-                        None => serde_json::Map::new(),
-                    };
-                    let program = program
-                        .with_params(params)
-                        .map_err(|p| invalid(&format!("{field}.params"), p))?;
-                    let contents = program
-                        .read_files()
-                        .map_err(|p| invalid(&files_field, p))?;
-                    program_files.insert(program.files_sha256.clone(), Arc::new(contents));
-                    (label, Some(program))
-                }
-                (Some(_), Some(_)) => {
-                    return Err(invalid(
-                        &field,
-                        "gives both a name (a built-in strategy) and a command (an external one); keep one".into(),
-                    ))
-                }
-                (None, None) => {
-                    return Err(invalid(
-                        &field,
-                        format!(
-                            "names no strategy: give name = one of {}, or command = [\"python3\", \"my_strategy.py\"] with a label",
-                            STRATEGIES.join(", ")
-                        ),
-                    ))
-                }
-            };
-            // Labels are compared as normalised: two that differ only by white space at an end,
-            // by NFC against NFD or by an invisible character are one label (the last refused).
-            let label = crate::names::label(s.label.as_deref().unwrap_or(&name))
-                .map_err(|p| invalid(&format!("{field}.label"), p))?;
-            if let Some(first) = labels.iter().position(|l| *l == label) {
-                return Err(invalid(
-                    &format!("{field}.label"),
-                    format!(
-                        "label '{}' is used twice (strategies[{first}] and {field}; labels are compared after trimming and Unicode normalisation); give each strategy a distinct label",
-                        excerpt(&label)
-                    ),
-                ));
-            }
-            let mut merged = file.settings.clone();
-            for (k, v) in &s.settings {
-                merged.insert(k.clone(), v.clone());
-            }
-            let settings = settings_of(merged, &format!("{field}.settings"))?;
-            if resolved.iter().any(|r: &Resolved| {
-                r.settings == settings
-                    && match (&r.program, &program) {
-                        (None, None) => r.name == name,
-                        (Some(a), Some(b)) => program_identity(a) == program_identity(b),
-                        _ => false,
-                    }
-            }) {
-                return Err(invalid(
-                    &field,
-                    format!(
-                        "strategy '{}' repeats another with the same name and settings",
-                        excerpt(&label)
-                    ),
-                ));
-            }
-            let built_in = if program.is_some() { "baseline" } else { &name };
-            check_strategy_fits(built_in, &settings, &buildings, path)
-                .map_err(|(f, p)| invalid(&format!("{field}{f}"), p))?;
-            labels.push(label.clone());
-            resolved.push(Resolved {
-                name,
-                settings,
-                label,
-                program,
-            });
-        }
-
-        let radius_m = resolved
+        let strategies = plan_strategies(&file, path, &buildings, &invalid)?;
+        let radius_m = strategies
+            .resolved
             .iter()
             .map(|r| r.settings.robot_radius_m)
             .fold(0.0, f64::max);
@@ -747,47 +386,7 @@ impl Plan {
         let coverage = file.coverage.unwrap_or(crate::outcome::DEFAULT_COVERAGE);
         crate::outcome::check_coverage(coverage).map_err(|e| invalid("coverage", e))?;
         if let Some(q) = &mut sequential {
-            q.coverage = coverage;
-            q.labels_tested = labels.len().saturating_sub(1).max(1);
-            // Pairs a label's test can have at most: one per building, start and seed.
-            let per_seed = starts
-                .iter()
-                .map(|s| s.len().max(1) as u128)
-                .sum::<u128>()
-                .max(1);
-            let most = q.max_seeds as u128 * per_seed;
-            if most < crate::sprt::MIN_PAIRS as u128 {
-                return Err(invalid(
-                    "sequential.max_seeds",
-                    format!(
-                        "{} seeds give at most {most} pairs ({per_seed} per seed: buildings x starts), fewer than the {} the test needs to decide; raise max_seeds to at least {}",
-                        q.max_seeds,
-                        crate::sprt::MIN_PAIRS,
-                        (crate::sprt::MIN_PAIRS as u128).div_ceil(per_seed)
-                    ),
-                ));
-            }
-        }
-        if let Some(q) = &mut sequential {
-            let reference = crate::names::label(&q.reference)
-                .map_err(|p| invalid("sequential.reference", p))?;
-            if !labels.contains(&reference) {
-                return Err(invalid(
-                    "sequential.reference",
-                    format!(
-                        "'{}' is not a label of the grid's strategies ({})",
-                        excerpt(&q.reference),
-                        labels.join(", ")
-                    ),
-                ));
-            }
-            q.reference = reference;
-            if labels.len() < 2 {
-                return Err(invalid(
-                    "sequential",
-                    "a sequential grid compares labels with the reference: give at least two strategies".into(),
-                ));
-            }
+            finish_sequential(q, coverage, &strategies.labels, &starts, &invalid)?;
         }
         check_results(file.results.as_deref()).map_err(|p| invalid("results", p))?;
         let results_dir = match results_override {
@@ -804,16 +403,516 @@ impl Plan {
             results_dir,
             buildings,
             suites,
-            labels,
+            labels: strategies.labels,
             jobs: Vec::new(),
-            program_files,
+            program_files: strategies.program_files,
             sequential,
             coverage,
-            strategies: resolved,
+            strategies: strategies.resolved,
             starts,
         }
         .with_jobs_for(&seeds))
     }
+}
+
+/// The grid file parsed: its header checked first (so that a newer file says so instead of
+/// failing on a key), then its fields, then its name.
+fn read_grid_file(
+    text: &str,
+    path: &Path,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<GridFile, GridError> {
+    let syntax = |e: toml::de::Error| GridError::Syntax {
+        path: path.to_path_buf(),
+        message: one_line(&e.to_string()),
+    };
+    let value: toml::Table = toml::from_str(text).map_err(syntax)?;
+    match (
+        value.get("format").and_then(|v| v.as_str()),
+        value.get("version").and_then(|v| v.as_integer()),
+    ) {
+        (Some(GRID_FORMAT), Some(v)) if v == GRID_VERSION as i64 => {}
+        (Some(GRID_FORMAT), v) => {
+            return Err(invalid(
+                "version",
+                match v {
+                    Some(v) => format!("version {v} is not supported, expected {GRID_VERSION}"),
+                    None => {
+                        format!("missing or not a whole number; expected version = {GRID_VERSION}")
+                    }
+                },
+            ))
+        }
+        (f, _) => {
+            return Err(invalid(
+                "format",
+                match f {
+                    Some(f) => format!("expected format = \"{GRID_FORMAT}\", found \"{f}\""),
+                    None => {
+                        format!("missing or not a string; expected format = \"{GRID_FORMAT}\"")
+                    }
+                },
+            ))
+        }
+    }
+    let file: GridFile = toml::from_str(text).map_err(syntax)?;
+    let _ = (&file.format, file.version);
+    if file.name.trim().is_empty()
+        || !file
+            .name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+    {
+        return Err(invalid(
+            "name",
+            format!(
+                "'{}' must be non-empty and use only letters, digits, '-', '_', '.'",
+                excerpt(&file.name)
+            ),
+        ));
+    }
+    // The name is a folder of `results/` by default.
+    crate::names::file_name_part(&file.name).map_err(|p| invalid("name", p))?;
+    Ok(file)
+}
+
+/// The grid's buildings: its files (`buildings`), its suites' and its generated ones, each
+/// loaded and hashed, their names checked and distinct.
+fn plan_buildings(
+    file: &GridFile,
+    base_dir: &Path,
+    path: &Path,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<(Vec<PlannedBuilding>, Vec<crate::suite::PlannedSuite>), GridError> {
+    // Patterns are matched as text: a folder whose name is not UTF-8 would match nothing.
+    if !file.buildings.is_empty() && base_dir.to_str().is_none() {
+        return Err(invalid(
+            "buildings",
+            format!(
+                "the grid file's folder {} has a name that is not UTF-8, which patterns cannot match; move the grid (or rename the folder) to a UTF-8 path",
+                floorcast_worker::text::shown(&base_dir.to_string_lossy(), 300)
+            ),
+        ));
+    }
+    let mut buildings: Vec<PlannedBuilding> = Vec::new();
+    for (i, pattern) in file.buildings.iter().enumerate() {
+        let field = format!("buildings[{i}]");
+        let matched = expand_pattern(base_dir, pattern).map_err(|e| invalid(&field, e))?;
+        for p in matched {
+            buildings.push(building_from_file(&p, path, &field)?);
+        }
+    }
+    let suites = plan_suites(&file.suites, base_dir, path, &mut buildings)?;
+    // The names of the buildings from files (their file stems), checked as every name is.
+    for b in buildings.iter_mut() {
+        b.name = crate::names::building_name(&b.name).map_err(|p| {
+            invalid(
+                "buildings",
+                format!(
+                    "{}: its name ({}) {p}",
+                    floorcast_worker::text::shown(&b.source, 300),
+                    if b.suite.is_some() {
+                        "in its suite's manifest"
+                    } else {
+                        "the file name without extension"
+                    }
+                ),
+            )
+        })?;
+    }
+    for (i, g) in file.generated.iter().enumerate() {
+        buildings.push(generated_building(g, &format!("generated[{i}]"), invalid)?);
+    }
+    if buildings.is_empty() {
+        return Err(invalid(
+            "buildings",
+            "the grid names no building (give `buildings`, `suites` or `[[generated]]`)".into(),
+        ));
+    }
+    let mut names = BTreeMap::new();
+    for b in &buildings {
+        if let Some(prev) = names.insert(b.name.clone(), b.source.clone()) {
+            return Err(invalid(
+                "buildings",
+                format!(
+                    "two buildings are named '{}' ({} and {}; names are compared after trimming and Unicode normalisation); rename one",
+                    excerpt(&b.name),
+                    floorcast_worker::text::shown(&prev, 300),
+                    floorcast_worker::text::shown(&b.source, 300)
+                ),
+            ));
+        }
+    }
+    Ok((buildings, suites))
+}
+
+/// A building file of the grid, loaded and hashed, named by its file stem (checked later).
+fn building_from_file(p: &Path, path: &Path, field: &str) -> Result<PlannedBuilding, GridError> {
+    let b = floorcast_formats::read_building(p).map_err(|source| GridError::Building {
+        path: path.to_path_buf(),
+        field: field.to_string(),
+        source: Box::new(source),
+    })?;
+    let name = p
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    Ok(PlannedBuilding {
+        name,
+        source: p.display().to_string(),
+        hash: b.content_hash(),
+        building: Arc::new(b),
+        suite: None,
+    })
+}
+
+/// A `[[generated]]` building, its parameters checked, generated.
+fn generated_building(
+    g: &GeneratedSpec,
+    field: &str,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<PlannedBuilding, GridError> {
+    if !(g.area_m2.is_finite() && (100.0..=20_000.0).contains(&g.area_m2)) {
+        return Err(invalid(
+            &format!("{field}.area_m2"),
+            format!("{} is not a free area in [100, 20000] m2", g.area_m2),
+        ));
+    }
+    let kind = match g.kind.as_str() {
+        "school" => BuildingKind::School,
+        "office" => BuildingKind::Office,
+        k => {
+            return Err(invalid(
+                &format!("{field}.kind"),
+                format!("'{}' is not school or office", excerpt(k)),
+            ))
+        }
+    };
+    if !g.rotation_deg.is_finite() {
+        return Err(invalid(
+            &format!("{field}.rotation_deg"),
+            format!(
+                "expected a finite number of degrees, got {}",
+                g.rotation_deg
+            ),
+        ));
+    }
+    let name = match &g.name {
+        Some(n) => {
+            crate::names::building_name(n).map_err(|p| invalid(&format!("{field}.name"), p))?
+        }
+        None => format!("gen-{}-{}-{}", g.kind, g.area_m2 as u64, g.seed),
+    };
+    let b = generate(&GenerateConfig {
+        seed: g.seed,
+        area_m2: g.area_m2,
+        kind,
+        clutter: g.clutter,
+        rotation_rad: g.rotation_deg.to_radians(),
+        name: name.clone(),
+    });
+    Ok(PlannedBuilding {
+        name,
+        source: format!(
+            "generated(seed={}, area_m2={}, kind={}, clutter={}, rotation_deg={})",
+            g.seed, g.area_m2, g.kind, g.clutter, g.rotation_deg
+        ),
+        hash: b.content_hash(),
+        building: Arc::new(b),
+        suite: None,
+    })
+}
+
+/// The seeds of the grid (`seeds` or `seed_range`), each once; a sequential grid's first batch.
+fn plan_seeds(
+    file: &GridFile,
+    sequential: Option<&crate::sprt::SequentialPlan>,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<Vec<u64>, GridError> {
+    let seeds: Vec<u64> = match (&file.seeds, &file.seed_range) {
+        _ if sequential.is_some() => {
+            let batch = sequential.map_or(1, |q| q.batch_seeds);
+            (1..=batch).collect()
+        }
+        (Some(s), None) if !s.is_empty() => s.clone(),
+        (None, Some([a, b])) if a <= b => (*a..=*b).collect(),
+        (None, Some(r)) => {
+            return Err(invalid(
+                "seed_range",
+                format!(
+                    "[{}, {}] is empty; expected [first, last] with first <= last",
+                    r[0], r[1]
+                ),
+            ))
+        }
+        (Some(_), Some(_)) => {
+            return Err(invalid(
+                "seeds",
+                "give either `seeds` or `seed_range`, not both".into(),
+            ))
+        }
+        _ => {
+            return Err(invalid(
+                "seeds",
+                "expected `seeds = [1, 2, 3]` or `seed_range = [1, 10]`".into(),
+            ))
+        }
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    for s in &seeds {
+        if !seen.insert(*s) {
+            return Err(invalid("seeds", format!("seed {s} is listed twice")));
+        }
+    }
+    Ok(seeds)
+}
+
+/// The grid's strategies, resolved: labels in file order, each strategy with its settings and
+/// program, and the external strategies' files by hash.
+struct PlannedStrategies {
+    labels: Vec<String>,
+    resolved: Vec<Resolved>,
+    program_files: BTreeMap<String, Arc<floorcast_worker::external::ProgramFiles>>,
+}
+
+/// Resolves the grid's `[[strategies]]`: each a built-in or an external one, with a distinct
+/// label, its settings (the shared ones with its own on top, checked), fitting every building.
+fn plan_strategies(
+    file: &GridFile,
+    path: &Path,
+    buildings: &[PlannedBuilding],
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<PlannedStrategies, GridError> {
+    if file.strategies.is_empty() {
+        return Err(invalid("strategies", "the grid names no strategy".into()));
+    }
+    // Settings from a table, checked; an error names `field`.
+    let settings_of = |table: toml::Table, field: &str| -> Result<Settings, GridError> {
+        settings_from_table(&table).map_err(|e| match e.field() {
+            Some(name) => invalid(&format!("{field}.{name}"), e.problem()),
+            None => invalid(field, e.problem()),
+        })
+    };
+    // The shared settings alone first, so that an error in one of them names `settings`
+    // rather than the first strategy they were merged into.
+    settings_of(file.settings.clone(), "settings")?;
+    let mut planned = PlannedStrategies {
+        labels: Vec::new(),
+        resolved: Vec::new(),
+        program_files: BTreeMap::new(),
+    };
+    let grid_dir = path.parent().unwrap_or(Path::new("."));
+    for (i, s) in file.strategies.iter().enumerate() {
+        let field = format!("strategies[{i}]");
+        let (name, program) = match (&s.name, &s.command) {
+            (Some(name), None) => (built_in_strategy(s, name, &field, invalid)?, None),
+            (None, Some(command)) => {
+                let (label, program, contents) =
+                    external_strategy(s, command, grid_dir, &field, invalid)?;
+                planned
+                    .program_files
+                    .insert(program.files_sha256.clone(), Arc::new(contents));
+                (label, Some(program))
+            }
+            (Some(_), Some(_)) => {
+                return Err(invalid(
+                    &field,
+                    "gives both a name (a built-in strategy) and a command (an external one); keep one".into(),
+                ))
+            }
+            (None, None) => {
+                return Err(invalid(
+                    &field,
+                    format!(
+                        "names no strategy: give name = one of {}, or command = [\"python3\", \"my_strategy.py\"] with a label",
+                        STRATEGIES.join(", ")
+                    ),
+                ))
+            }
+        };
+        // Labels are compared as normalised: two that differ only by white space at an end,
+        // by NFC against NFD or by an invisible character are one label (the last refused).
+        let label = crate::names::label(s.label.as_deref().unwrap_or(&name))
+            .map_err(|p| invalid(&format!("{field}.label"), p))?;
+        if let Some(first) = planned.labels.iter().position(|l| *l == label) {
+            return Err(invalid(
+                &format!("{field}.label"),
+                format!(
+                    "label '{}' is used twice (strategies[{first}] and {field}; labels are compared after trimming and Unicode normalisation); give each strategy a distinct label",
+                    excerpt(&label)
+                ),
+            ));
+        }
+        let mut merged = file.settings.clone();
+        for (k, v) in &s.settings {
+            merged.insert(k.clone(), v.clone());
+        }
+        let settings = settings_of(merged, &format!("{field}.settings"))?;
+        if planned.resolved.iter().any(|r: &Resolved| {
+            r.settings == settings
+                && match (&r.program, &program) {
+                    (None, None) => r.name == name,
+                    (Some(a), Some(b)) => program_identity(a) == program_identity(b),
+                    _ => false,
+                }
+        }) {
+            return Err(invalid(
+                &field,
+                format!(
+                    "strategy '{}' repeats another with the same name and settings",
+                    excerpt(&label)
+                ),
+            ));
+        }
+        let built_in = if program.is_some() { "baseline" } else { &name };
+        check_strategy_fits(built_in, &settings, buildings, path)
+            .map_err(|(f, p)| invalid(&format!("{field}{f}"), p))?;
+        planned.labels.push(label.clone());
+        planned.resolved.push(Resolved {
+            name,
+            settings,
+            label,
+            program,
+        });
+    }
+    Ok(planned)
+}
+
+/// A built-in strategy's name, checked, with none of an external strategy's fields.
+fn built_in_strategy(
+    s: &StrategySpec,
+    name: &str,
+    field: &str,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<String, GridError> {
+    if !STRATEGIES.contains(&name) {
+        return Err(invalid(
+            &format!("{field}.name"),
+            format!(
+                "unknown strategy '{}' (available: {})",
+                excerpt(name),
+                STRATEGIES.join(", ")
+            ),
+        ));
+    }
+    for (key, given) in [
+        ("files", !s.files.is_empty()),
+        ("timeout_s", s.timeout_s.is_some()),
+        ("params", s.params.is_some()),
+    ] {
+        if given {
+            return Err(invalid(
+                &format!("{field}.{key}"),
+                "belongs to an external strategy (one with a command), not to a built-in one"
+                    .into(),
+            ));
+        }
+    }
+    Ok(name.to_string())
+}
+
+/// An external strategy: its label, its program (timeout, files, command and parameters
+/// checked, each error naming its field) and the contents of its files as read now.
+fn external_strategy(
+    s: &StrategySpec,
+    command: &[String],
+    grid_dir: &Path,
+    field: &str,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<
+    (
+        String,
+        StrategyProgram,
+        floorcast_worker::external::ProgramFiles,
+    ),
+    GridError,
+> {
+    let Some(label) = &s.label else {
+        return Err(invalid(
+            &format!("{field}.label"),
+            "an external strategy (one with a command) needs a label".into(),
+        ));
+    };
+    let label = crate::names::label(label).map_err(|p| invalid(&format!("{field}.label"), p))?;
+    // Each field's errors name that field: the timeout, each of `files`, then the command
+    // (reading the files: `files` when there are any).
+    let timeout_s = s
+        .timeout_s
+        .unwrap_or(floorcast_worker::external::DEFAULT_TIMEOUT_S);
+    floorcast_worker::external::check_timeout(timeout_s)
+        .map_err(|p| invalid(&format!("{field}.timeout_s"), p))?;
+    for (j, f) in s.files.iter().enumerate() {
+        floorcast_worker::external::check_file(grid_dir, f)
+            .map_err(|p| invalid(&format!("{field}.files[{j}]"), p))?;
+    }
+    let files_field = if s.files.is_empty() || command.first().is_none_or(|w| w.trim().is_empty()) {
+        format!("{field}.command")
+    } else {
+        format!("{field}.files")
+    };
+    let program = StrategyProgram::new(command.to_vec(), s.files.clone(), grid_dir, timeout_s)
+        .map_err(|p| invalid(&files_field, p))?;
+    let params = match &s.params {
+        Some(t) => params_json(t, &format!("{field}.params")).map_err(|(f, p)| invalid(&f, p))?,
+        None => serde_json::Map::new(),
+    };
+    let program = program
+        .with_params(params)
+        .map_err(|p| invalid(&format!("{field}.params"), p))?;
+    let contents = program.read_files().map_err(|p| invalid(&files_field, p))?;
+    Ok((label, program, contents))
+}
+
+/// A sequential grid's test completed once the strategies and starts are known: its coverage,
+/// the family's size, a `max_seeds` that can give the pairs the test needs, its reference.
+fn finish_sequential(
+    q: &mut crate::sprt::SequentialPlan,
+    coverage: f64,
+    labels: &[String],
+    starts: &[Vec<Option<PlannedStart>>],
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<(), GridError> {
+    q.coverage = coverage;
+    q.labels_tested = labels.len().saturating_sub(1).max(1);
+    // Pairs a label's test can have at most: one per building, start and seed.
+    let per_seed = starts
+        .iter()
+        .map(|s| s.len().max(1) as u128)
+        .sum::<u128>()
+        .max(1);
+    let most = q.max_seeds as u128 * per_seed;
+    if most < crate::sprt::MIN_PAIRS as u128 {
+        return Err(invalid(
+            "sequential.max_seeds",
+            format!(
+                "{} seeds give at most {most} pairs ({per_seed} per seed: buildings x starts), fewer than the {} the test needs to decide; raise max_seeds to at least {}",
+                q.max_seeds,
+                crate::sprt::MIN_PAIRS,
+                (crate::sprt::MIN_PAIRS as u128).div_ceil(per_seed)
+            ),
+        ));
+    }
+    let reference =
+        crate::names::label(&q.reference).map_err(|p| invalid("sequential.reference", p))?;
+    if !labels.contains(&reference) {
+        return Err(invalid(
+            "sequential.reference",
+            format!(
+                "'{}' is not a label of the grid's strategies ({})",
+                excerpt(&q.reference),
+                labels.join(", ")
+            ),
+        ));
+    }
+    q.reference = reference;
+    if labels.len() < 2 {
+        return Err(invalid(
+            "sequential",
+            "a sequential grid compares labels with the reference: give at least two strategies"
+                .into(),
+        ));
+    }
+    Ok(())
 }
 
 /// The buildings of the grid's `suites` (each found with [`crate::suite::find_suite`] from the

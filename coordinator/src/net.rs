@@ -785,6 +785,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::too_many_lines)] // a table of cases
     fn garbage_and_foreign_messages_change_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let p = plan(dir.path(), "[1, 2]");

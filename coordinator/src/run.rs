@@ -171,43 +171,17 @@ pub fn run_plan(
     }
     // Lines holding remote workers' and programs' text reach a terminal: escaped, bounded.
     let on_log = &mut |line: &str| on_log(&floorcast_worker::text::shown(line, 4000));
-    let stored = store.stored_ids()?;
-    let ids: Vec<String> = plan.jobs.iter().map(|j| j.id.clone()).collect();
-    let mut sched = Scheduler::new(ids, &stored, opts.lease_s);
-    let mut jobs: BTreeMap<String, PlannedJob> = plan
-        .jobs
-        .iter()
-        .map(|j| (j.id.clone(), j.clone()))
-        .collect();
-    // A sequential grid: batches of seeds added as the tests go (replaying those already run).
-    let mut progress = crate::sequential::Progress::start(plan);
-    sched.expect_more(!progress.finished);
-    advance(plan, store, &mut progress, &mut sched, &mut jobs, on_log)?;
-    let resumed = sched.done();
-    let mut failed = 0usize;
-    let mut remote: BTreeSet<String> = BTreeSet::new();
-    let mut checks = Checks::default();
-    let counts = |s: &Scheduler, failed: usize, remote: usize, c: &Checks| Counts {
-        total: s.total(),
-        done: s.done(),
-        running: s.running(),
-        failed,
-        resumed,
-        remote_workers: remote,
-        verified: c.verified,
-        quarantined: c.refused.len(),
-    };
-    on_progress(counts(&sched, failed, 0, &checks));
-    if sched.is_finished() {
-        return Ok((Outcome::Complete, counts(&sched, failed, 0, &checks)));
+    let mut state = LoopState::start(plan, store, opts, on_log)?;
+    on_progress(state.counts());
+    if state.sched.is_finished() {
+        return Ok((Outcome::Complete, state.counts()));
     }
-    let plan = Arc::new(plan.clone());
     let (inbox_tx, inbox) = mpsc::channel::<Inbox>();
     let listener = match &opts.remote {
         Some(remote) => Some(
             remote
                 .open(
-                    Arc::clone(&plan),
+                    Arc::clone(&state.plan),
                     opts.lease_s,
                     InboxSender(inbox_tx.clone()),
                 )
@@ -218,19 +192,55 @@ pub fn run_plan(
     if let Some(l) = &listener {
         on_log(&format!("accepting remote workers: {}", l.describe()));
     }
-    let share = opts.share && opts.executor.is_none();
-    let mut share_keys: BTreeMap<String, Option<String>> = BTreeMap::new();
     let local_exec: Arc<LocalExecutor> = opts.executor.clone().unwrap_or_else(|| Arc::new(execute));
     let stop = Arc::new(AtomicBool::new(false));
+    let handles = spawn_local_workers(&state.plan, opts, &inbox_tx, &stop, &local_exec)?;
+    let verifier = if listener.is_some() && opts.verify_fraction > 0.0 {
+        let (tx, rx) = mpsc::channel::<(PlannedJob, StoredResult, String)>();
+        let inbox = inbox_tx.clone();
+        let plan = Arc::clone(&state.plan);
+        let exec = Arc::clone(&local_exec);
+        let h = spawn_thread(move || verifier(&plan, &rx, &inbox, &*exec))
+            .map_err(RunError::VerifierSpawn)?;
+        state.verify_tx = Some(tx);
+        Some(h)
+    } else {
+        None
+    };
+    drop(inbox_tx);
+    let outcome = state.serve(&inbox, interrupt, on_progress, on_log)?;
+    stop.store(true, Ordering::SeqCst);
+    if let Some(l) = listener {
+        l.close();
+    }
+    state.verify_tx = None;
+    if outcome == Outcome::Complete {
+        drop(inbox);
+        for h in handles.into_iter().chain(verifier) {
+            let _ = h.join();
+        }
+    }
+    // On interruption, running simulations are abandoned (the process exits); their jobs are
+    // not stored and run again next time.
+    Ok((outcome, state.counts()))
+}
+
+/// Starts the embedded worker threads. A thread the system refuses is an error, not a panic;
+/// the workers already started leave when the inbox is dropped on the way out.
+fn spawn_local_workers(
+    plan: &Arc<Plan>,
+    opts: &RunOptions,
+    inbox_tx: &mpsc::Sender<Inbox>,
+    stop: &Arc<AtomicBool>,
+    local_exec: &Arc<LocalExecutor>,
+) -> Result<Vec<std::thread::JoinHandle<()>>, RunError> {
     let mut handles = Vec::new();
     for w in 0..opts.workers {
         let name = format!("{LOCAL}{w}");
         let tx = inbox_tx.clone();
-        let plan = Arc::clone(&plan);
-        let stop = Arc::clone(&stop);
-        let exec = Arc::clone(&local_exec);
-        // (A thread the system refuses is an error, not a panic; the workers already started
-        // leave when the inbox is dropped on the way out.)
+        let plan = Arc::clone(plan);
+        let stop = Arc::clone(stop);
+        let exec = Arc::clone(local_exec);
         let h =
             spawn_thread(move || local_worker(&name, &plan, &tx, &stop, &*exec)).map_err(|e| {
                 RunError::Spawn {
@@ -240,243 +250,392 @@ pub fn run_plan(
             })?;
         handles.push(h);
     }
-    let (verify_tx, verifier) = if listener.is_some() && opts.verify_fraction > 0.0 {
-        let (tx, rx) = mpsc::channel::<(PlannedJob, StoredResult, String)>();
-        let inbox = inbox_tx.clone();
-        let plan = Arc::clone(&plan);
-        let exec = Arc::clone(&local_exec);
-        let h = spawn_thread(move || verifier(&plan, &rx, &inbox, &*exec))
-            .map_err(RunError::VerifierSpawn)?;
-        (Some(tx), Some(h))
-    } else {
-        (None, None)
-    };
-    drop(inbox_tx);
-    let t0 = Instant::now();
-    let mut outcome = Outcome::Complete;
-    let mut finished_at: Option<Instant> = None;
-    let mut last_renewal = 0.0f64;
-    loop {
-        if interrupt.load(Ordering::SeqCst) {
-            outcome = Outcome::Interrupted;
-            break;
+    Ok(handles)
+}
+
+/// What one batch of the inbox's messages produced: the rows to store, the acknowledgements to
+/// send once they are stored, and the scheduler's notes.
+#[derive(Default)]
+struct Batch {
+    to_store: Vec<StoredResult>,
+    acks: Vec<(oneshot::Sender<SubmitReply>, SubmitReply)>,
+    notes: Vec<Note>,
+}
+
+/// The coordinator loop's state: the scheduler and the jobs it hands out, a sequential grid's
+/// progress, and what the run has seen (failed jobs, remote workers, checks of their results).
+struct LoopState<'a> {
+    plan: Arc<Plan>,
+    store: &'a Store,
+    opts: &'a RunOptions,
+    sched: Scheduler,
+    jobs: BTreeMap<String, PlannedJob>,
+    progress: crate::sequential::Progress,
+    /// Embedded workers run jobs that share their beginning together.
+    share: bool,
+    share_keys: BTreeMap<String, Option<String>>,
+    /// Remote workers' results to check go here (`None`: none are checked).
+    verify_tx: Option<mpsc::Sender<(PlannedJob, StoredResult, String)>>,
+    resumed: usize,
+    failed: usize,
+    remote: BTreeSet<String>,
+    checks: Checks,
+}
+
+impl<'a> LoopState<'a> {
+    /// The scheduler over the jobs not yet stored (a sequential grid's batches replayed).
+    fn start(
+        plan: &Plan,
+        store: &'a Store,
+        opts: &'a RunOptions,
+        on_log: &mut dyn FnMut(&str),
+    ) -> Result<LoopState<'a>, RunError> {
+        let stored = store.stored_ids()?;
+        let ids: Vec<String> = plan.jobs.iter().map(|j| j.id.clone()).collect();
+        let mut sched = Scheduler::new(ids, &stored, opts.lease_s);
+        let mut jobs: BTreeMap<String, PlannedJob> = plan
+            .jobs
+            .iter()
+            .map(|j| (j.id.clone(), j.clone()))
+            .collect();
+        // A sequential grid: batches of seeds added as the tests go (replaying those already run).
+        let mut progress = crate::sequential::Progress::start(plan);
+        sched.expect_more(!progress.finished);
+        advance(plan, store, &mut progress, &mut sched, &mut jobs, on_log)?;
+        Ok(LoopState {
+            plan: Arc::new(plan.clone()),
+            store,
+            opts,
+            resumed: sched.done(),
+            sched,
+            jobs,
+            progress,
+            share: opts.share && opts.executor.is_none(),
+            share_keys: BTreeMap::new(),
+            verify_tx: None,
+            failed: 0,
+            remote: BTreeSet::new(),
+            checks: Checks::default(),
+        })
+    }
+
+    fn counts(&self) -> Counts {
+        Counts {
+            total: self.sched.total(),
+            done: self.sched.done(),
+            running: self.sched.running(),
+            failed: self.failed,
+            resumed: self.resumed,
+            remote_workers: self.remote.len(),
+            verified: self.checks.verified,
+            quarantined: self.checks.refused.len(),
         }
-        if let Some(t) = finished_at {
-            // Remote workers get "done" when they ask; stop once they left or after the linger.
-            if remote.is_empty() || t.elapsed().as_secs_f64() >= opts.linger_s {
-                break;
+    }
+
+    /// Answers the inbox until the grid is finished (and remote workers left, or the linger
+    /// passed), every sender is gone, or `interrupt` is set.
+    fn serve(
+        &mut self,
+        inbox: &mpsc::Receiver<Inbox>,
+        interrupt: &AtomicBool,
+        on_progress: &mut dyn FnMut(Counts),
+        on_log: &mut dyn FnMut(&str),
+    ) -> Result<Outcome, RunError> {
+        let t0 = Instant::now();
+        let mut finished_at: Option<Instant> = None;
+        let mut last_renewal = 0.0f64;
+        loop {
+            if interrupt.load(Ordering::SeqCst) {
+                return Ok(Outcome::Interrupted);
             }
-        }
-        let mut batch = Vec::new();
-        match inbox.recv_timeout(Duration::from_millis(100)) {
-            Ok(m) => batch.push(m),
-            Err(mpsc::RecvTimeoutError::Timeout) => {}
-            Err(mpsc::RecvTimeoutError::Disconnected) => break,
-        }
-        while batch.len() < 512 {
-            match inbox.try_recv() {
-                Ok(m) => batch.push(m),
-                Err(_) => break,
-            }
-        }
-        let now = t0.elapsed().as_secs_f64();
-        let mut notes: Vec<Note> = Vec::new();
-        // Embedded workers cannot die alone (they are threads of this process): keep their
-        // leases alive.
-        if now - last_renewal >= opts.lease_s / 4.0 {
-            last_renewal = now;
-            let local: Vec<(String, String)> = sched
-                .leases()
-                .filter(|(_, w)| w.starts_with(LOCAL))
-                .map(|(j, w)| (j.clone(), w.clone()))
-                .collect();
-            for (job, worker) in local {
-                notes.extend(sched.renew(&worker, &job, now).notes);
-            }
-        }
-        notes.extend(sched.tick(now));
-        let mut to_store: Vec<StoredResult> = Vec::new();
-        let mut acks: Vec<(oneshot::Sender<SubmitReply>, SubmitReply)> = Vec::new();
-        for msg in batch {
-            match msg {
-                Inbox::Request { worker, reply } if checks.refused.contains_key(&worker) => {
-                    let _ = reply.send(Answer::Refused(checks.refused[&worker].clone()));
+            if let Some(t) = finished_at {
+                // Remote workers get "done" when they ask; stop once they left or after the
+                // linger.
+                if self.remote.is_empty() || t.elapsed().as_secs_f64() >= self.opts.linger_s {
+                    return Ok(Outcome::Complete);
                 }
-                Inbox::Submit { worker, reply, .. } if checks.refused.contains_key(&worker) => {
-                    let reason = checks.refused[&worker].clone();
+            }
+            let mut messages = Vec::new();
+            match inbox.recv_timeout(Duration::from_millis(100)) {
+                Ok(m) => messages.push(m),
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Ok(Outcome::Complete),
+            }
+            while messages.len() < 512 {
+                match inbox.try_recv() {
+                    Ok(m) => messages.push(m),
+                    Err(_) => break,
+                }
+            }
+            let now = t0.elapsed().as_secs_f64();
+            let mut batch = Batch::default();
+            // Embedded workers cannot die alone (they are threads of this process): keep their
+            // leases alive.
+            if now - last_renewal >= self.opts.lease_s / 4.0 {
+                last_renewal = now;
+                self.renew_local(now, &mut batch);
+            }
+            batch.notes.extend(self.sched.tick(now));
+            for msg in messages {
+                self.handle(msg, now, &mut batch, on_log)?;
+            }
+            if self.flush(batch, on_log)? {
+                finished_at = Some(Instant::now());
+            }
+            let (plan, store) = (Arc::clone(&self.plan), self.store);
+            advance(
+                &plan,
+                store,
+                &mut self.progress,
+                &mut self.sched,
+                &mut self.jobs,
+                on_log,
+            )?;
+            if self.sched.is_finished() && finished_at.is_none() {
+                finished_at = Some(Instant::now());
+            }
+            on_progress(self.counts());
+        }
+    }
+
+    /// Renews the leases of the embedded workers' jobs.
+    fn renew_local(&mut self, now: f64, batch: &mut Batch) {
+        let local: Vec<(String, String)> = self
+            .sched
+            .leases()
+            .filter(|(_, w)| w.starts_with(LOCAL))
+            .map(|(j, w)| (j.clone(), w.clone()))
+            .collect();
+        for (job, worker) in local {
+            batch
+                .notes
+                .extend(self.sched.renew(&worker, &job, now).notes);
+        }
+    }
+
+    /// One message: a refused worker is told so; the others go to their handlers.
+    fn handle(
+        &mut self,
+        msg: Inbox,
+        now: f64,
+        batch: &mut Batch,
+        on_log: &mut dyn FnMut(&str),
+    ) -> Result<(), RunError> {
+        let refused = &self.checks.refused;
+        match msg {
+            Inbox::Request { worker, reply } if refused.contains_key(&worker) => {
+                let _ = reply.send(Answer::Refused(refused[&worker].clone()));
+            }
+            Inbox::Submit { worker, reply, .. } if refused.contains_key(&worker) => {
+                let reason = refused[&worker].clone();
+                let _ = reply.send(SubmitReply::Rejected { reason });
+            }
+            Inbox::Renew { worker, reply, .. } if refused.contains_key(&worker) => {
+                let _ = reply.send(RenewReply::NotLeased);
+            }
+            Inbox::Request { worker, reply } => {
+                let answer = self.request(worker, now, batch);
+                let _ = reply.send(answer);
+            }
+            Inbox::Submit {
+                worker,
+                job_id,
+                report,
+                reply,
+            } => self.submit(worker, job_id, &report, reply, batch, on_log),
+            Inbox::Renew { worker, job, reply } => {
+                let r = self.sched.renew(&worker, &job, now);
+                batch.notes.extend(r.notes);
+                let _ = reply.send(match r.answer {
+                    Renewal::Renewed { .. } => RenewReply::Renewed,
+                    Renewal::NotLeased => RenewReply::NotLeased,
+                });
+            }
+            Inbox::Verified {
+                job,
+                worker,
+                ours,
+                outcome,
+            } => self.verified(&job, worker, &ours, outcome, batch, on_log)?,
+            Inbox::Joined(w) => {
+                if self.remote.insert(w.clone()) {
+                    on_log(&format!("worker {w} joined"));
+                }
+                self.sched.joined(w);
+            }
+            Inbox::Left(w) => {
+                if self.remote.remove(&w) {
+                    on_log(&format!("worker {w} left"));
+                }
+                batch.notes.extend(self.sched.left(&w));
+            }
+            Inbox::Log(line) => on_log(&line),
+        }
+        Ok(())
+    }
+
+    /// A worker asks for work: a job (with the jobs that share its beginning, for an embedded
+    /// worker), or wait, or done.
+    fn request(&mut self, worker: String, now: f64, batch: &mut Batch) -> Answer {
+        let local = worker.starts_with(LOCAL);
+        let r = self.sched.request(worker.clone(), now);
+        batch.notes.extend(r.notes);
+        match r.answer {
+            Grant::Lease { job, .. } => match self.jobs.get(&job) {
+                Some(j) if local && self.share => {
+                    let mut group = vec![j.clone()];
+                    for p in partners(&self.plan, j, &self.jobs, &mut self.share_keys) {
+                        if self.sched.claim(&worker, &p, now) {
+                            group.push(self.jobs[&p].clone());
+                        }
+                    }
+                    if group.len() > 1 {
+                        Answer::RunShared(group)
+                    } else {
+                        Answer::Run(Box::new(group.remove(0)))
+                    }
+                }
+                Some(j) => Answer::Run(Box::new(j.clone())),
+                None => Answer::Wait,
+            },
+            Grant::Wait => Answer::Wait,
+            Grant::Done => Answer::Done,
+        }
+    }
+
+    /// A worker's result: checked against its job, stored (acknowledged once durable), and for
+    /// a remote worker perhaps sent to be checked by a re-run here.
+    fn submit(
+        &mut self,
+        worker: String,
+        job_id: String,
+        report: &JobReport,
+        reply: oneshot::Sender<SubmitReply>,
+        batch: &mut Batch,
+        on_log: &mut dyn FnMut(&str),
+    ) {
+        // The row's identity comes from the plan; the report is checked against the job first.
+        let result = match self.jobs.get(&job_id) {
+            Some(j) => match check_report(report, &identity(&self.plan, j)) {
+                Ok(()) => Some(row(&self.plan, j, &worker, report)),
+                Err(reason) => {
+                    on_log(&format!(
+                        "rejected result of job {job_id} from {worker}: {reason}"
+                    ));
                     let _ = reply.send(SubmitReply::Rejected { reason });
+                    return;
                 }
-                Inbox::Renew { worker, reply, .. } if checks.refused.contains_key(&worker) => {
-                    let _ = reply.send(RenewReply::NotLeased);
-                }
-                Inbox::Request { worker, reply } => {
-                    let local = worker.starts_with(LOCAL);
-                    let r = sched.request(worker.clone(), now);
-                    notes.extend(r.notes);
-                    let answer = match r.answer {
-                        Grant::Lease { job, .. } => match jobs.get(&job) {
-                            Some(j) if local && share => {
-                                let mut group = vec![j.clone()];
-                                for p in partners(&plan, j, &jobs, &mut share_keys) {
-                                    if sched.claim(&worker, &p, now) {
-                                        group.push(jobs[&p].clone());
-                                    }
-                                }
-                                if group.len() > 1 {
-                                    Answer::RunShared(group)
-                                } else {
-                                    Answer::Run(Box::new(group.remove(0)))
-                                }
-                            }
-                            Some(j) => Answer::Run(Box::new(j.clone())),
-                            None => Answer::Wait,
-                        },
-                        Grant::Wait => Answer::Wait,
-                        Grant::Done => Answer::Done,
-                    };
-                    let _ = reply.send(answer);
-                }
-                Inbox::Submit {
-                    worker,
-                    job_id,
-                    report,
-                    reply,
-                } => {
-                    // The row's identity comes from the plan; the report is checked against
-                    // the job first.
-                    let result = match jobs.get(&job_id) {
-                        Some(j) => match check_report(&report, &identity(&plan, j)) {
-                            Ok(()) => Some(row(&plan, j, &worker, &report)),
-                            Err(reason) => {
-                                on_log(&format!(
-                                    "rejected result of job {job_id} from {worker}: {reason}"
-                                ));
-                                let _ = reply.send(SubmitReply::Rejected { reason });
-                                continue;
-                            }
-                        },
-                        None => None, // the scheduler rejects unknown jobs
-                    };
-                    // Chosen for a check: held (the grid does not finish) until it is done.
-                    let check = match (&verify_tx, jobs.get(&job_id), &result) {
-                        (Some(tx), Some(j), Some(result))
-                            if !worker.starts_with(LOCAL)
-                                && crate::verify::verifiable(j, result)
-                                && (checks.first_checked.insert(worker.clone())
-                                    || rand::random::<f64>() < opts.verify_fraction) =>
-                        {
-                            sched.hold(&job_id);
-                            Some((tx, j.clone(), result.clone()))
-                        }
-                        _ => None,
-                    };
-                    let r = sched.submit(&job_id);
-                    notes.extend(r.notes);
-                    if let Some((tx, j, theirs)) = check {
-                        if r.answer == Verdict::Store {
-                            let _ = tx.send((j, theirs, worker.clone()));
-                        } else {
-                            sched.release(&job_id);
-                        }
-                    }
-                    match (r.answer, result) {
-                        (Verdict::Store, Some(result)) => {
-                            if result.status != "ok" {
-                                failed += 1;
-                                on_log(&format!(
-                                    "job {} ({} {} seed {}) failed on {worker}: {}",
-                                    job_id,
-                                    result.building,
-                                    result.label,
-                                    result.seed,
-                                    result.error.as_deref().unwrap_or("")
-                                ));
-                            }
-                            to_store.push(result);
-                            acks.push((reply, SubmitReply::Stored));
-                        }
-                        (Verdict::Duplicate, _) => acks.push((reply, SubmitReply::Duplicate)),
-                        _ => {
-                            let reason =
-                                format!("job {job_id} is not part of grid '{}'", plan.name);
-                            on_log(&format!("rejected result from {worker}: {reason}"));
-                            let _ = reply.send(SubmitReply::Rejected { reason });
-                        }
-                    }
-                }
-                Inbox::Renew { worker, job, reply } => {
-                    let r = sched.renew(&worker, &job, now);
-                    notes.extend(r.notes);
-                    let _ = reply.send(match r.answer {
-                        Renewal::Renewed { .. } => RenewReply::Renewed,
-                        Renewal::NotLeased => RenewReply::NotLeased,
-                    });
-                }
-                Inbox::Verified {
-                    job,
-                    worker,
-                    ours,
-                    outcome,
-                } => {
-                    sched.release(&job);
-                    if checks.refused.contains_key(&worker) {
-                        continue; // its results are discarded already
-                    }
-                    match outcome {
-                        Ok(()) => checks.verified += 1,
-                        Err(why) if ours.status != "ok" => on_log(&format!(
-                            "job {job}: its re-run on this machine failed ({}), so {worker}'s result is kept unverified ({why})",
-                            ours.error.as_deref().unwrap_or("")
-                        )),
-                        Err(why) => {
-                            // The worker computes differently or forged its results: all of
-                            // them (stored, or of this batch) are discarded and run again,
-                            // but the job checked, whose row this machine's replaces.
-                            checks.verified += 1;
-                            let mut again = store.discard_worker(&worker)?;
-                            again.extend(
-                                to_store
-                                    .iter()
-                                    .filter(|r| r.worker == worker)
-                                    .map(|r| r.job_id.clone()),
-                            );
-                            to_store.retain(|r| r.worker != worker);
-                            again.retain(|j| *j != job);
-                            store.replace(&ours)?;
-                            sched.reopen(&again);
-                            notes.extend(sched.left(&worker));
-                            on_log(&format!(
-                                "worker {worker} computes differently or forged its results: in job {job} {why} (this machine's re-run); its other {} results are discarded and run again, and it gets no more jobs",
-                                again.len()
-                            ));
-                            checks.refused.insert(
-                                worker,
-                                format!("its result of job {job} differed from the coordinator's re-run ({why}); its results were discarded. Check that it runs the same floorcast build on a sound machine"),
-                            );
-                        }
-                    }
-                }
-                Inbox::Joined(w) => {
-                    if remote.insert(w.clone()) {
-                        on_log(&format!("worker {w} joined"));
-                    }
-                    sched.joined(w);
-                }
-                Inbox::Left(w) => {
-                    if remote.remove(&w) {
-                        on_log(&format!("worker {w} left"));
-                    }
-                    notes.extend(sched.left(&w));
-                }
-                Inbox::Log(line) => on_log(&line),
+            },
+            None => None, // the scheduler rejects unknown jobs
+        };
+        // Chosen for a check: held (the grid does not finish) until it is done.
+        let check = match (&self.verify_tx, self.jobs.get(&job_id), &result) {
+            (Some(tx), Some(j), Some(result))
+                if !worker.starts_with(LOCAL)
+                    && crate::verify::verifiable(j, result)
+                    && (self.checks.first_checked.insert(worker.clone())
+                        || rand::random::<f64>() < self.opts.verify_fraction) =>
+            {
+                self.sched.hold(&job_id);
+                Some((tx.clone(), j.clone(), result.clone()))
+            }
+            _ => None,
+        };
+        let r = self.sched.submit(&job_id);
+        batch.notes.extend(r.notes);
+        if let Some((tx, j, theirs)) = check {
+            if r.answer == Verdict::Store {
+                let _ = tx.send((j, theirs, worker.clone()));
+            } else {
+                self.sched.release(&job_id);
             }
         }
-        // Durable first, acknowledged second.
-        store.insert_many(&to_store)?;
-        for (r, a) in acks {
+        match (r.answer, result) {
+            (Verdict::Store, Some(result)) => {
+                if result.status != "ok" {
+                    self.failed += 1;
+                    on_log(&format!(
+                        "job {} ({} {} seed {}) failed on {worker}: {}",
+                        job_id,
+                        result.building,
+                        result.label,
+                        result.seed,
+                        result.error.as_deref().unwrap_or("")
+                    ));
+                }
+                batch.to_store.push(result);
+                batch.acks.push((reply, SubmitReply::Stored));
+            }
+            (Verdict::Duplicate, _) => batch.acks.push((reply, SubmitReply::Duplicate)),
+            _ => {
+                let reason = format!("job {job_id} is not part of grid '{}'", self.plan.name);
+                on_log(&format!("rejected result from {worker}: {reason}"));
+                let _ = reply.send(SubmitReply::Rejected { reason });
+            }
+        }
+    }
+
+    /// The answer of a check of a remote worker's result: counted, or (when the worker computes
+    /// differently) all its results discarded and run again, and the worker refused.
+    fn verified(
+        &mut self,
+        job: &str,
+        worker: String,
+        ours: &StoredResult,
+        outcome: Result<(), String>,
+        batch: &mut Batch,
+        on_log: &mut dyn FnMut(&str),
+    ) -> Result<(), RunError> {
+        self.sched.release(job);
+        if self.checks.refused.contains_key(&worker) {
+            return Ok(()); // its results are discarded already
+        }
+        match outcome {
+            Ok(()) => self.checks.verified += 1,
+            Err(why) if ours.status != "ok" => on_log(&format!(
+                "job {job}: its re-run on this machine failed ({}), so {worker}'s result is kept unverified ({why})",
+                ours.error.as_deref().unwrap_or("")
+            )),
+            Err(why) => {
+                // The worker computes differently or forged its results: all of them (stored,
+                // or of this batch) are discarded and run again, but the job checked, whose
+                // row this machine's replaces.
+                self.checks.verified += 1;
+                let mut again = self.store.discard_worker(&worker)?;
+                again.extend(
+                    batch
+                        .to_store
+                        .iter()
+                        .filter(|r| r.worker == worker)
+                        .map(|r| r.job_id.clone()),
+                );
+                batch.to_store.retain(|r| r.worker != worker);
+                again.retain(|j| *j != job);
+                self.store.replace(ours)?;
+                self.sched.reopen(&again);
+                batch.notes.extend(self.sched.left(&worker));
+                on_log(&format!(
+                    "worker {worker} computes differently or forged its results: in job {job} {why} (this machine's re-run); its other {} results are discarded and run again, and it gets no more jobs",
+                    again.len()
+                ));
+                self.checks.refused.insert(
+                    worker,
+                    format!("its result of job {job} differed from the coordinator's re-run ({why}); its results were discarded. Check that it runs the same floorcast build on a sound machine"),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Stores the batch's results (durable first, acknowledged second) and logs its notes;
+    /// true when the scheduler said the grid is finished.
+    fn flush(&mut self, batch: Batch, on_log: &mut dyn FnMut(&str)) -> Result<bool, RunError> {
+        self.store.insert_many(&batch.to_store)?;
+        for (r, a) in batch.acks {
             let _ = r.send(a);
         }
-        for n in notes {
+        let mut finished = false;
+        for n in batch.notes {
             match n {
                 Note::Requeued {
                     job,
@@ -489,29 +648,11 @@ pub fn run_plan(
                         RequeueReason::LeaseExpired => format!("lease of {worker} expired"),
                     }
                 )),
-                Note::Finished => finished_at = Some(Instant::now()),
+                Note::Finished => finished = true,
             }
         }
-        advance(&plan, store, &mut progress, &mut sched, &mut jobs, on_log)?;
-        if sched.is_finished() && finished_at.is_none() {
-            finished_at = Some(Instant::now());
-        }
-        on_progress(counts(&sched, failed, remote.len(), &checks));
+        Ok(finished)
     }
-    stop.store(true, Ordering::SeqCst);
-    if let Some(l) = listener {
-        l.close();
-    }
-    drop(verify_tx);
-    if outcome == Outcome::Complete {
-        drop(inbox);
-        for h in handles.into_iter().chain(verifier) {
-            let _ = h.join();
-        }
-    }
-    // On interruption, running simulations are abandoned (the process exits); their jobs are
-    // not stored and run again next time.
-    Ok((outcome, counts(&sched, failed, remote.len(), &checks)))
 }
 
 /// The checks of remote workers' results during a run.

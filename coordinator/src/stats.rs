@@ -266,6 +266,7 @@ mod tests {
     /// of its methods: exact, the permutation test (ties or zeros, at most 13), the normal
     /// approximation (ties or zeros beyond 13, or more than 50).
     #[test]
+    #[allow(clippy::too_many_lines)] // a table of cases
     fn wilcoxon_matches_scipy() {
         let cases: &[(&str, &[f64], f64)] = &[
             ("all five positive", &[1.0, 2.0, 3.0, 4.0, 5.0], 0.0625),

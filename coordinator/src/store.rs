@@ -300,6 +300,41 @@ const BUSY_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
 /// store in a folder one cannot write is read too. With a log present (a run writing it, or one
 /// that was killed), it is opened read-only through SQLite's locks.
 fn check_is_store(path: &Path) -> Result<Connection, StoreError> {
+    check_sqlite_file(path)?;
+    let wal = PathBuf::from(format!("{}-wal", path.display()));
+    let logged = std::fs::symlink_metadata(&wal).is_ok();
+    let conn = Connection::open_with_flags(
+        sqlite_uri(path, if logged { "mode=ro" } else { "immutable=1" }),
+        rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY
+            | rusqlite::OpenFlags::SQLITE_OPEN_NO_MUTEX
+            | rusqlite::OpenFlags::SQLITE_OPEN_URI,
+    )
+    .map_err(|e| classify(path, e))?;
+    conn.busy_timeout(BUSY_WAIT)
+        .map_err(|e| classify(path, e))?;
+    let tables: Vec<String> = conn
+        .prepare("SELECT name FROM sqlite_master WHERE type = 'table'")
+        .and_then(|mut st| {
+            st.query_map([], |r| r.get::<_, String>(0))?
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .map_err(|e| match classify(path, e) {
+            StoreError::ReadOnly { why, .. } if logged => StoreError::ReadOnly {
+                path: path.to_path_buf(),
+                why: format!(
+                    "{why}; its write-ahead log {} holds rows SQLite must merge, which needs \
+                     a folder it can write: copy the folder somewhere writable and read the copy",
+                    wal.display()
+                ),
+            },
+            e => e,
+        })?;
+    check_floorcast_tables(&conn, &tables, path)?;
+    Ok(conn)
+}
+
+/// The file at `path` is a regular, non-empty file starting with SQLite's header.
+fn check_sqlite_file(path: &Path) -> Result<(), StoreError> {
     let foreign = |why: &str| StoreError::Foreign {
         path: path.to_path_buf(),
         why: why.to_string(),
@@ -341,34 +376,23 @@ fn check_is_store(path: &Path) -> Result<Connection, StoreError> {
             });
         }
     }
-    let wal = PathBuf::from(format!("{}-wal", path.display()));
-    let logged = std::fs::symlink_metadata(&wal).is_ok();
-    let conn = Connection::open_with_flags(
-        sqlite_uri(path, if logged { "mode=ro" } else { "immutable=1" }),
-        rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY
-            | rusqlite::OpenFlags::SQLITE_OPEN_NO_MUTEX
-            | rusqlite::OpenFlags::SQLITE_OPEN_URI,
-    )
-    .map_err(|e| classify(path, e))?;
-    conn.busy_timeout(BUSY_WAIT)
-        .map_err(|e| classify(path, e))?;
-    let tables: Vec<String> = conn
-        .prepare("SELECT name FROM sqlite_master WHERE type = 'table'")
-        .and_then(|mut st| {
-            st.query_map([], |r| r.get::<_, String>(0))?
-                .collect::<Result<Vec<_>, _>>()
-        })
-        .map_err(|e| match classify(path, e) {
-            StoreError::ReadOnly { why, .. } if logged => StoreError::ReadOnly {
-                path: path.to_path_buf(),
-                why: format!(
-                    "{why}; its write-ahead log {} holds rows SQLite must merge, which needs \
-                     a folder it can write: copy the folder somewhere writable and read the copy",
-                    wal.display()
-                ),
-            },
-            e => e,
-        })?;
+    Ok(())
+}
+
+/// An SQLite database with `tables` is floorcast's store of this version, whole.
+fn check_floorcast_tables(
+    conn: &Connection,
+    tables: &[String],
+    path: &Path,
+) -> Result<(), StoreError> {
+    let foreign = |why: &str| StoreError::Foreign {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    };
+    let damaged = |why: &str| StoreError::Damaged {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    };
     if !tables.iter().any(|t| t == "meta") {
         return Err(foreign("an SQLite database without floorcast's tables"));
     }
@@ -410,7 +434,7 @@ fn check_is_store(path: &Path) -> Result<Connection, StoreError> {
             floorcast_worker::text::shown(&problems.join("; "), 200)
         )));
     }
-    Ok(conn)
+    Ok(())
 }
 
 /// SQLite's URI for `path` (every byte but the unreserved ones percent-encoded) with `query`.
@@ -1068,6 +1092,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::too_many_lines)] // a table of cases
     fn damaged_and_foreign_stores_are_told_apart_and_left_untouched() {
         // (what is at results.sqlite, how it is made, words of the message)
         type Make = fn(&Path);

@@ -226,6 +226,36 @@ fn toml_error(text: &str, path: &Path, e: &toml::de::Error) -> Error {
 
 fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
     let outline = ring(&f.outline, "outline", path)?;
+    let (solids, solid_names) = solids_of(&f, path)?;
+    let (rooms, ids) = rooms_of(&f, path)?;
+    let doors = doors_of(&f, &ids, path)?;
+    let start = match &f.start {
+        None => None,
+        Some(s) => Some(start_of(s, &outline, &solids, &solid_names, path)?),
+    };
+    let building = Building {
+        name: f.name.unwrap_or_else(|| {
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        }),
+        geometry: Geometry::Vector { outline, solids },
+        rooms,
+        doors,
+        start,
+    };
+    crate::limits::check_building(
+        &building,
+        path,
+        "outline",
+        crate::limits::EXPLORE_RESOLUTION_M,
+    )?;
+    Ok(building)
+}
+
+/// The walls (as thick segments) and solids, with the file entry each came from (for messages
+/// about the start pose).
+fn solids_of(f: &FileV1, path: &Path) -> Result<(Vec<Polygon>, Vec<String>), Error> {
     let mut solids = Vec::with_capacity(f.walls.len() + f.solids.len());
     // Which file entry each solid came from, for messages about the start pose.
     let mut solid_names = Vec::with_capacity(solids.capacity());
@@ -251,7 +281,11 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
         solids.push(ring(&s.polygon, &format!("solids[{i}].polygon"), path)?);
         solid_names.push(format!("a solid (solids[{i}])"));
     }
+    Ok((solids, solid_names))
+}
 
+/// The rooms, their ids checked (from 1, unique); the ids with their entries' indices.
+fn rooms_of(f: &FileV1, path: &Path) -> Result<(Vec<Room>, BTreeMap<u32, usize>), Error> {
     let mut rooms = Vec::with_capacity(f.rooms.len());
     let mut seen: BTreeMap<u32, usize> = BTreeMap::new();
     for (i, r) in f.rooms.iter().enumerate() {
@@ -279,7 +313,11 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
             polygon: ring(&r.polygon, &format!("{field}.polygon"), path)?,
         });
     }
+    Ok((rooms, seen))
+}
 
+/// The doors, each joining at most two known rooms (0: the outside).
+fn doors_of(f: &FileV1, seen: &BTreeMap<u32, usize>, path: &Path) -> Result<Vec<Door>, Error> {
     let mut doors = Vec::with_capacity(f.doors.len());
     for (i, d) in f.doors.iter().enumerate() {
         let field = format!("doors[{i}]");
@@ -319,72 +357,56 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
             rooms: joined,
         });
     }
+    Ok(doors)
+}
 
-    let start = match &f.start {
-        None => None,
-        Some(s) => {
-            let p = vec2([s.x, s.y], "start", path)?;
-            let theta_rad = match (s.theta_deg, s.theta_rad) {
-                (Some(_), Some(_)) => {
-                    return Err(Error::invalid(
-                        path,
-                        "start",
-                        "give either theta_deg or theta_rad, not both",
-                    ))
-                }
-                (Some(d), None) => d.to_radians(),
-                (None, Some(r)) => r,
-                (None, None) => 0.0,
-            };
-            if !theta_rad.is_finite() {
-                return Err(Error::invalid(
-                    path,
-                    "start",
-                    "the heading is not a finite number",
-                ));
-            }
-            let at = point(p.x, p.y);
-            if !outline.contains(p) {
-                return Err(Error::invalid(
-                    path,
-                    "start",
-                    format!(
-                        "start pose {at} is outside the outline; expected a point in free space"
-                    ),
-                ));
-            }
-            if let Some(k) = solids.iter().position(|s| s.contains(p)) {
-                return Err(Error::invalid(
-                    path,
-                    "start",
-                    format!(
-                        "start pose {at} is inside {}; expected a point in free space",
-                        solid_names[k]
-                    ),
-                ));
-            }
-            Some(Pose::new(p.x, p.y, theta_rad))
+/// The start pose: one heading, in free space (inside the outline, in no solid).
+fn start_of(
+    s: &StartV1,
+    outline: &Polygon,
+    solids: &[Polygon],
+    solid_names: &[String],
+    path: &Path,
+) -> Result<Pose, Error> {
+    let p = vec2([s.x, s.y], "start", path)?;
+    let theta_rad = match (s.theta_deg, s.theta_rad) {
+        (Some(_), Some(_)) => {
+            return Err(Error::invalid(
+                path,
+                "start",
+                "give either theta_deg or theta_rad, not both",
+            ))
         }
+        (Some(d), None) => d.to_radians(),
+        (None, Some(r)) => r,
+        (None, None) => 0.0,
     };
-
-    let building = Building {
-        name: f.name.unwrap_or_else(|| {
-            path.file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        }),
-        geometry: Geometry::Vector { outline, solids },
-        rooms,
-        doors,
-        start,
-    };
-    crate::limits::check_building(
-        &building,
-        path,
-        "outline",
-        crate::limits::EXPLORE_RESOLUTION_M,
-    )?;
-    Ok(building)
+    if !theta_rad.is_finite() {
+        return Err(Error::invalid(
+            path,
+            "start",
+            "the heading is not a finite number",
+        ));
+    }
+    let at = point(p.x, p.y);
+    if !outline.contains(p) {
+        return Err(Error::invalid(
+            path,
+            "start",
+            format!("start pose {at} is outside the outline; expected a point in free space"),
+        ));
+    }
+    if let Some(k) = solids.iter().position(|s| s.contains(p)) {
+        return Err(Error::invalid(
+            path,
+            "start",
+            format!(
+                "start pose {at} is inside {}; expected a point in free space",
+                solid_names[k]
+            ),
+        ));
+    }
+    Ok(Pose::new(p.x, p.y, theta_rad))
 }
 
 /// Thickest wall accepted (m).

@@ -63,7 +63,6 @@ const MIN_START_CLEARANCE_M: f64 = 0.3;
 
 struct Space {
     /// The plan's id of the space (portals name it).
-    #[allow(dead_code)]
     id: String,
     kind: String,
     polygon: Vec<Vec2>,
@@ -81,20 +80,7 @@ struct Space {
 /// Reads an annotated floor plan (`.xml`) as a building with its rooms and doors.
 pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
     let text = limits::read_text(path)?;
-    if let Some((depth, at)) = nesting_beyond(&text, MAX_DEPTH) {
-        let line = text[..at].matches('\n').count() + 1;
-        let name: String = text[at..]
-            .chars()
-            .take_while(|c| !c.is_whitespace() && !matches!(c, '>' | '/'))
-            .collect();
-        return Err(Error::syntax(
-            path,
-            format!(
-                "line {line}: element <{}> nested {depth} deep; expected elements nested at most {MAX_DEPTH} deep",
-                short(&name)
-            ),
-        ));
-    }
+    check_nesting(path, &text)?;
     let options = roxmltree::ParsingOptions {
         allow_dtd: false,
         nodes_limit: MAX_NODES,
@@ -113,11 +99,15 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
     let spaces_el = child(root, "floor")
         .and_then(|f| child(f, "spaces"))
         .ok_or_else(|| Error::invalid(path, "building/floor/spaces", "missing"))?;
+    let mut reader = SpaceReader {
+        path,
+        metres_per_px,
+        segments: HashMap::new(),
+        n_segments: 0,
+        n_portals: 0,
+    };
     let mut spaces: Vec<Space> = Vec::new();
     let mut ids: HashMap<String, usize> = HashMap::new();
-    // Every line segment by id: a portal may name one of the other space's.
-    let mut segments: HashMap<String, (Vec2, Vec2)> = HashMap::new();
-    let (mut n_segments, mut n_portals) = (0usize, 0usize);
     for (i, s) in children(spaces_el, "space").enumerate() {
         if i >= MAX_SPACES {
             return Err(Error::invalid(
@@ -126,6 +116,101 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
                 format!("more than {MAX_SPACES} spaces; expected at most {MAX_SPACES}"),
             ));
         }
+        let Some(space) = reader.space(i, s)? else {
+            continue;
+        };
+        if ids.insert(space.id.clone(), spaces.len()).is_some() {
+            return Err(Error::invalid(
+                path,
+                format!("space[{i}] ({})", short(&space.id)),
+                "an id used by another space; expected unique ids",
+            ));
+        }
+        spaces.push(space);
+    }
+    if spaces.is_empty() {
+        return Err(Error::invalid(
+            path,
+            "building/floor/spaces",
+            "no space with a polygon; expected the rooms of a floor",
+        ));
+    }
+    resolve_portals(path, spaces_el, &mut spaces, &reader.segments)?;
+    check_drawing(path, &spaces)?;
+    let portals = portals(path, &spaces, &ids)?;
+    build(path, &spaces, &portals)
+}
+
+/// Refuses elements nested deeper than [`MAX_DEPTH`], before parsing, naming the line.
+fn check_nesting(path: &Path, text: &str) -> Result<(), Error> {
+    let Some((depth, at)) = nesting_beyond(text, MAX_DEPTH) else {
+        return Ok(());
+    };
+    let line = text[..at].matches('\n').count() + 1;
+    let name: String = text[at..]
+        .chars()
+        .take_while(|c| !c.is_whitespace() && !matches!(c, '>' | '/'))
+        .collect();
+    Err(Error::syntax(
+        path,
+        format!(
+            "line {line}: element <{}> nested {depth} deep; expected elements nested at most {MAX_DEPTH} deep",
+            short(&name)
+        ),
+    ))
+}
+
+/// Every portal's spaces must exist (one without a polygon is left out with its portals); each
+/// portal gets its point: its own space's line segment, else another space's of that id.
+fn resolve_portals(
+    path: &Path,
+    spaces_el: roxmltree::Node,
+    spaces: &mut [Space],
+    segments: &HashMap<String, (Vec2, Vec2)>,
+) -> Result<(), Error> {
+    let all_ids: std::collections::HashSet<&str> = children(spaces_el, "space")
+        .filter_map(|s| s.attribute("id"))
+        .collect();
+    for (field, _, targets) in spaces.iter().flat_map(|s| &s.portal_refs) {
+        if let Some(t) = targets.iter().find(|t| !all_ids.contains(t.as_str())) {
+            return Err(Error::invalid(
+                path,
+                format!("{field}/target"),
+                format!(
+                    "space '{}', which the plan does not have; expected the ids of the spaces the portal joins",
+                    short(t)
+                ),
+            ));
+        }
+    }
+    for s in spaces {
+        for (field, seg_id, targets) in std::mem::take(&mut s.portal_refs) {
+            let point = s
+                .segments
+                .get(&seg_id)
+                .or(segments.get(&seg_id))
+                .map(|(a, b)| (*a + *b) * 0.5);
+            s.portals.push((field, seg_id, point, targets));
+        }
+    }
+    Ok(())
+}
+
+/// Reads the plan's spaces one by one, counting its line segments and portals against their
+/// limits and keeping every line segment by id (a portal may name one of another space's).
+struct SpaceReader<'a> {
+    path: &'a Path,
+    metres_per_px: f64,
+    segments: HashMap<String, (Vec2, Vec2)>,
+    n_segments: usize,
+    n_portals: usize,
+}
+
+impl SpaceReader<'_> {
+    /// The `i`-th `<space>`, or `None` for one without a polygon, or with every point of it the
+    /// same (the data set's spaces left empty, area -1): left out, as its portals.
+    fn space(&mut self, i: usize, s: roxmltree::Node) -> Result<Option<Space>, Error> {
+        let path = self.path;
         let field = format!("space[{i}]");
         let id = match s.attribute("id") {
             None => {
@@ -142,33 +227,19 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
         };
         let field = format!("space[{i}] ({})", short(&id));
         let polygon = match child(s, "bounding_polygon") {
-            Some(p) => points(path, &format!("{field}/bounding_polygon"), p, metres_per_px)?,
+            Some(p) => points(
+                path,
+                &format!("{field}/bounding_polygon"),
+                p,
+                self.metres_per_px,
+            )?,
             None => Vec::new(),
         };
         let polygon = dedup_closed(polygon);
         if polygon.len() <= 1 {
-            // A space without a polygon, or with every point of it the same (the data set's
-            // spaces left empty, area -1): left out, as its portals.
-            continue;
+            return Ok(None);
         }
-        if polygon.len() < 3 {
-            return Err(Error::invalid(
-                path,
-                format!("{field}/bounding_polygon"),
-                format!(
-                    "{} distinct point{}; expected at least 3",
-                    polygon.len(),
-                    if polygon.len() == 1 { "" } else { "s" }
-                ),
-            ));
-        }
-        if Polygon::new(polygon.clone()).area_m2() < 0.01 {
-            return Err(Error::invalid(
-                path,
-                format!("{field}/bounding_polygon"),
-                "a polygon of zero area; expected a room's outline",
-            ));
-        }
+        check_outline(path, &field, &polygon)?;
         let labels = child(s, "labels");
         let kind_code = labels
             .and_then(|l| child(l, "type"))
@@ -182,95 +253,15 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             .unwrap_or("")
             .trim()
             .to_lowercase();
-        let mut walls = Vec::new();
-        let mut own = HashMap::new();
-        if let Some(rep) = child(s, "space_representation") {
-            for (k, seg) in children(rep, "linesegment").enumerate() {
-                let sf = format!("{field}/space_representation/linesegment[{k}]");
-                n_segments += 1;
-                if n_segments > MAX_SEGMENTS {
-                    return Err(Error::invalid(
-                        path,
-                        sf,
-                        format!("more than {MAX_SEGMENTS} line segments in the plan; expected at most {MAX_SEGMENTS}"),
-                    ));
-                }
-                let pts = points(path, &sf, seg, metres_per_px)?;
-                if pts.len() != 2 {
-                    return Err(Error::invalid(
-                        path,
-                        sf,
-                        format!("{} points; expected 2", pts.len()),
-                    ));
-                }
-                let class = child(seg, "class").and_then(|c| c.text()).unwrap_or("");
-                match class.trim() {
-                    "WALL" => walls.push((pts[0], pts[1])),
-                    "PORTAL" => {}
-                    other => {
-                        return Err(Error::invalid(
-                            path,
-                            format!("{sf}/class"),
-                            format!("'{}'; expected WALL or PORTAL", short(other)),
-                        ))
-                    }
-                }
-                if let Some(sid) = seg.attribute("id") {
-                    segments.insert(sid.to_string(), (pts[0], pts[1]));
-                    own.insert(sid.to_string(), (pts[0], pts[1]));
-                }
-            }
-        }
-        let mut portal_refs = Vec::new();
-        if let Some(ps) = child(s, "portals") {
-            for (k, p) in children(ps, "portal").enumerate() {
-                let pf = format!("{field}/portals/portal[{k}]");
-                n_portals += 1;
-                if n_portals > MAX_PORTALS {
-                    return Err(Error::invalid(
-                        path,
-                        pf,
-                        format!("more than {MAX_PORTALS} portals in the plan; expected at most {MAX_PORTALS}"),
-                    ));
-                }
-                let seg_id = child(p, "linesegment")
-                    .and_then(|l| l.text())
-                    .unwrap_or("")
-                    .trim()
-                    .to_string();
-                if seg_id.is_empty() {
-                    return Err(Error::invalid(
-                        path,
-                        format!("{pf}/linesegment"),
-                        "missing or empty; expected the id of the portal's line segment",
-                    ));
-                }
-                let targets: Vec<String> = child(p, "target")
-                    .map(|t| {
-                        children(t, "id")
-                            .filter_map(|i| i.text())
-                            .map(|i| i.trim().to_string())
-                            .collect()
-                    })
-                    .unwrap_or_default();
-                if targets.is_empty() || targets.len() > 2 {
-                    return Err(Error::invalid(
-                        path,
-                        format!("{pf}/target"),
-                        format!("{} spaces; expected the one or two it joins", targets.len()),
-                    ));
-                }
-                portal_refs.push((pf, seg_id, targets));
-            }
-        }
-        if ids.insert(id.clone(), spaces.len()).is_some() {
-            return Err(Error::invalid(
-                path,
-                field,
-                "an id used by another space; expected unique ids",
-            ));
-        }
-        spaces.push(Space {
+        let (walls, own) = match child(s, "space_representation") {
+            Some(rep) => self.segments_of(&field, rep)?,
+            None => (Vec::new(), HashMap::new()),
+        };
+        let portal_refs = match child(s, "portals") {
+            Some(ps) => self.portal_refs(&field, ps)?,
+            None => Vec::new(),
+        };
+        Ok(Some(Space {
             id,
             // Type C is the data set's connective space (corridors, halls, lobbies), but it
             // types washrooms C too: those keep their doors.
@@ -289,44 +280,129 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
             segments: own,
             portals: Vec::new(),
             portal_refs,
-        });
+        }))
     }
-    if spaces.is_empty() {
+
+    /// A space's line segments: its walls, and its segments by id.
+    #[allow(clippy::type_complexity)]
+    fn segments_of(
+        &mut self,
+        field: &str,
+        rep: roxmltree::Node,
+    ) -> Result<(Vec<(Vec2, Vec2)>, HashMap<String, (Vec2, Vec2)>), Error> {
+        let path = self.path;
+        let mut walls = Vec::new();
+        let mut own = HashMap::new();
+        for (k, seg) in children(rep, "linesegment").enumerate() {
+            let sf = format!("{field}/space_representation/linesegment[{k}]");
+            self.n_segments += 1;
+            if self.n_segments > MAX_SEGMENTS {
+                return Err(Error::invalid(
+                    path,
+                    sf,
+                    format!("more than {MAX_SEGMENTS} line segments in the plan; expected at most {MAX_SEGMENTS}"),
+                ));
+            }
+            let pts = points(path, &sf, seg, self.metres_per_px)?;
+            if pts.len() != 2 {
+                return Err(Error::invalid(
+                    path,
+                    sf,
+                    format!("{} points; expected 2", pts.len()),
+                ));
+            }
+            let class = child(seg, "class").and_then(|c| c.text()).unwrap_or("");
+            match class.trim() {
+                "WALL" => walls.push((pts[0], pts[1])),
+                "PORTAL" => {}
+                other => {
+                    return Err(Error::invalid(
+                        path,
+                        format!("{sf}/class"),
+                        format!("'{}'; expected WALL or PORTAL", short(other)),
+                    ))
+                }
+            }
+            if let Some(sid) = seg.attribute("id") {
+                self.segments.insert(sid.to_string(), (pts[0], pts[1]));
+                own.insert(sid.to_string(), (pts[0], pts[1]));
+            }
+        }
+        Ok((walls, own))
+    }
+
+    /// A space's portals as read: the field, the line segment's id, the spaces it joins.
+    fn portal_refs(
+        &mut self,
+        field: &str,
+        ps: roxmltree::Node,
+    ) -> Result<Vec<(String, String, Vec<String>)>, Error> {
+        let path = self.path;
+        let mut refs = Vec::new();
+        for (k, p) in children(ps, "portal").enumerate() {
+            let pf = format!("{field}/portals/portal[{k}]");
+            self.n_portals += 1;
+            if self.n_portals > MAX_PORTALS {
+                return Err(Error::invalid(
+                    path,
+                    pf,
+                    format!("more than {MAX_PORTALS} portals in the plan; expected at most {MAX_PORTALS}"),
+                ));
+            }
+            let seg_id = child(p, "linesegment")
+                .and_then(|l| l.text())
+                .unwrap_or("")
+                .trim()
+                .to_string();
+            if seg_id.is_empty() {
+                return Err(Error::invalid(
+                    path,
+                    format!("{pf}/linesegment"),
+                    "missing or empty; expected the id of the portal's line segment",
+                ));
+            }
+            let targets: Vec<String> = child(p, "target")
+                .map(|t| {
+                    children(t, "id")
+                        .filter_map(|i| i.text())
+                        .map(|i| i.trim().to_string())
+                        .collect()
+                })
+                .unwrap_or_default();
+            if targets.is_empty() || targets.len() > 2 {
+                return Err(Error::invalid(
+                    path,
+                    format!("{pf}/target"),
+                    format!("{} spaces; expected the one or two it joins", targets.len()),
+                ));
+            }
+            refs.push((pf, seg_id, targets));
+        }
+        Ok(refs)
+    }
+}
+
+/// A space's outline has at least three distinct points and an area.
+fn check_outline(path: &Path, field: &str, polygon: &[Vec2]) -> Result<(), Error> {
+    if polygon.len() < 3 {
         return Err(Error::invalid(
             path,
-            "building/floor/spaces",
-            "no space with a polygon; expected the rooms of a floor",
+            format!("{field}/bounding_polygon"),
+            format!(
+                "{} distinct point{}; expected at least 3",
+                polygon.len(),
+                if polygon.len() == 1 { "" } else { "s" }
+            ),
         ));
     }
-    // Every portal's spaces must exist (one without a polygon is left out with its portals).
-    let all_ids: std::collections::HashSet<&str> = children(spaces_el, "space")
-        .filter_map(|s| s.attribute("id"))
-        .collect();
-    for (field, _, targets) in spaces.iter().flat_map(|s| &s.portal_refs) {
-        if let Some(t) = targets.iter().find(|t| !all_ids.contains(t.as_str())) {
-            return Err(Error::invalid(
-                path,
-                format!("{field}/target"),
-                format!(
-                    "space '{}', which the plan does not have; expected the ids of the spaces the portal joins",
-                    short(t)
-                ),
-            ));
-        }
+    if Polygon::new(polygon.to_vec()).area_m2() < 0.01 {
+        return Err(Error::invalid(
+            path,
+            format!("{field}/bounding_polygon"),
+            "a polygon of zero area; expected a room's outline",
+        ));
     }
-    for s in &mut spaces {
-        for (field, seg_id, targets) in std::mem::take(&mut s.portal_refs) {
-            let point = s
-                .segments
-                .get(&seg_id)
-                .or(segments.get(&seg_id))
-                .map(|(a, b)| (*a + *b) * 0.5);
-            s.portals.push((field, seg_id, point, targets));
-        }
-    }
-    check_drawing(path, &spaces)?;
-    let portals = portals(path, &spaces, &ids)?;
-    build(path, &spaces, &portals)
+    Ok(())
 }
 
 /// A parser's error as a message: what was found, where, and what was expected.

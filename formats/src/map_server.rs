@@ -175,7 +175,40 @@ pub fn parse_map_yaml(text: &str, yaml_path: &Path) -> Result<MapMeta, Error> {
         ));
     }
 
-    let origin_v = get("origin")?;
+    let origin_m = origin_of(get("origin")?, yaml_path)?;
+
+    let negate = match get("negate")? {
+        Value::Bool(b) => *b,
+        v if v.as_i64() == Some(0) => false,
+        v if v.as_i64() == Some(1) => true,
+        v => {
+            return Err(Error::invalid(
+                yaml_path,
+                "negate",
+                format!("expected 0 or 1, got {}", show(v)),
+            ))
+        }
+    };
+
+    let occupied_thresh = number("occupied_thresh", "a number between 0 and 1")?;
+    let free_thresh = number("free_thresh", "a number between 0 and 1")?;
+    check_thresholds(occupied_thresh, free_thresh, yaml_path)?;
+
+    let mode = mode_of(map.get("mode"), yaml_path)?;
+
+    Ok(MapMeta {
+        image_path,
+        resolution_m,
+        origin_m,
+        negate,
+        occupied_thresh,
+        free_thresh,
+        mode,
+    })
+}
+
+/// The map's origin `[x, y, yaw]` (yaw 0 only).
+fn origin_of(origin_v: &Value, yaml_path: &Path) -> Result<Vec2, Error> {
     let origin: Option<Vec<f64>> = origin_v
         .as_sequence()
         .and_then(|s| s.iter().map(Value::as_f64).collect());
@@ -209,22 +242,11 @@ pub fn parse_map_yaml(text: &str, yaml_path: &Path) -> Result<MapMeta, Error> {
             ),
         ));
     }
+    Ok(Vec2::new(origin[0], origin[1]))
+}
 
-    let negate = match get("negate")? {
-        Value::Bool(b) => *b,
-        v if v.as_i64() == Some(0) => false,
-        v if v.as_i64() == Some(1) => true,
-        v => {
-            return Err(Error::invalid(
-                yaml_path,
-                "negate",
-                format!("expected 0 or 1, got {}", show(v)),
-            ))
-        }
-    };
-
-    let occupied_thresh = number("occupied_thresh", "a number between 0 and 1")?;
-    let free_thresh = number("free_thresh", "a number between 0 and 1")?;
+/// Both thresholds within [0, 1], free below occupied.
+fn check_thresholds(occupied_thresh: f64, free_thresh: f64, yaml_path: &Path) -> Result<(), Error> {
     for (key, v) in [
         ("occupied_thresh", occupied_thresh),
         ("free_thresh", free_thresh),
@@ -248,8 +270,12 @@ pub fn parse_map_yaml(text: &str, yaml_path: &Path) -> Result<MapMeta, Error> {
             ),
         ));
     }
+    Ok(())
+}
 
-    let mode = match map.get("mode") {
+/// The map's `mode` (default trinary).
+fn mode_of(v: Option<&Value>, yaml_path: &Path) -> Result<MapMode, Error> {
+    Ok(match v {
         None => MapMode::Trinary,
         Some(Value::String(s)) if s == "trinary" => MapMode::Trinary,
         Some(Value::String(s)) if s == "scale" => MapMode::Scale,
@@ -261,16 +287,6 @@ pub fn parse_map_yaml(text: &str, yaml_path: &Path) -> Result<MapMeta, Error> {
                 format!("expected one of trinary, scale, raw, got {}", show(v)),
             ))
         }
-    };
-
-    Ok(MapMeta {
-        image_path,
-        resolution_m,
-        origin_m: Vec2::new(origin[0], origin[1]),
-        negate,
-        occupied_thresh,
-        free_thresh,
-        mode,
     })
 }
 

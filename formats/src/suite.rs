@@ -157,6 +157,48 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Manifest, Error> {
     // The header first, so that a newer file says so instead of failing on a key.
     let table: toml::Table =
         toml::from_str(text).map_err(|e| Error::syntax(path, e.to_string()))?;
+    check_header(&table, path)?;
+    // Counted before the entries are read one by one.
+    if let Some(n) = table
+        .get("buildings")
+        .and_then(|b| b.as_array())
+        .map(Vec::len)
+    {
+        if n > MAX_SUITE_BUILDINGS {
+            return Err(Error::invalid(
+                path,
+                "buildings",
+                format!("{n} buildings, more than the {MAX_SUITE_BUILDINGS} a suite may hold"),
+            ));
+        }
+    }
+    let file: FileV1 = toml::from_str(text).map_err(|e| Error::syntax(path, e.to_string()))?;
+    let _ = (&file.format, file.version);
+    let bad = |field: &str, problem: String| Error::invalid(path, field, problem);
+    let name = suite_name(&file.name).map_err(|p| bad("name", p))?;
+    let description = text_field(&file.description, "a one-line description")
+        .map_err(|p| bad("description", p))?;
+    if file.buildings.is_empty() {
+        return Err(bad(
+            "buildings",
+            "the suite lists no building; expected [[buildings]] entries".into(),
+        ));
+    }
+    let mut buildings = Vec::with_capacity(file.buildings.len());
+    let mut names = BTreeSet::new();
+    let mut paths = BTreeSet::new();
+    for (i, b) in file.buildings.into_iter().enumerate() {
+        buildings.push(suite_building(i, b, &mut names, &mut paths, path)?);
+    }
+    Ok(Manifest {
+        name,
+        description,
+        buildings,
+    })
+}
+
+/// The manifest's `format` and `version`, checked before anything else.
+fn check_header(table: &toml::Table, path: &Path) -> Result<(), Error> {
     match table.get("format").and_then(|v| v.as_str()) {
         Some(SUITE_FORMAT) => {}
         Some(f) => {
@@ -191,109 +233,83 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Manifest, Error> {
             ))
         }
     }
-    // Counted before the entries are read one by one.
-    if let Some(n) = table
-        .get("buildings")
-        .and_then(|b| b.as_array())
-        .map(Vec::len)
-    {
-        if n > MAX_SUITE_BUILDINGS {
-            return Err(Error::invalid(
-                path,
-                "buildings",
-                format!("{n} buildings, more than the {MAX_SUITE_BUILDINGS} a suite may hold"),
-            ));
-        }
-    }
-    let file: FileV1 = toml::from_str(text).map_err(|e| Error::syntax(path, e.to_string()))?;
-    let _ = (&file.format, file.version);
+    Ok(())
+}
+
+/// The manifest's `i`-th building, checked: a name and a path no other entry has, a kind, its
+/// source and licence, a free area, a number of rooms, a content hash.
+fn suite_building(
+    i: usize,
+    b: BuildingV1,
+    names: &mut BTreeSet<String>,
+    paths: &mut BTreeSet<String>,
+    path: &Path,
+) -> Result<SuiteBuilding, Error> {
     let bad = |field: &str, problem: String| Error::invalid(path, field, problem);
-    let name = suite_name(&file.name).map_err(|p| bad("name", p))?;
-    let description = text_field(&file.description, "a one-line description")
-        .map_err(|p| bad("description", p))?;
-    if file.buildings.is_empty() {
+    let field = |f: &str| format!("buildings[{i}].{f}");
+    let name = building_name(&b.name).map_err(|p| bad(&field("name"), p))?;
+    if !names.insert(name.clone()) {
         return Err(bad(
-            "buildings",
-            "the suite lists no building; expected [[buildings]] entries".into(),
+            &field("name"),
+            format!(
+                "'{}' names two buildings of the suite; names must differ",
+                excerpt(&name)
+            ),
         ));
     }
-    let mut buildings = Vec::with_capacity(file.buildings.len());
-    let mut names = BTreeSet::new();
-    let mut paths = BTreeSet::new();
-    for (i, b) in file.buildings.into_iter().enumerate() {
-        let field = |f: &str| format!("buildings[{i}].{f}");
-        let name = building_name(&b.name).map_err(|p| bad(&field("name"), p))?;
-        if !names.insert(name.clone()) {
-            return Err(bad(
-                &field("name"),
-                format!(
-                    "'{}' names two buildings of the suite; names must differ",
-                    excerpt(&name)
-                ),
-            ));
-        }
-        let file_path = relative_path(&b.path).map_err(|p| bad(&field("path"), p))?;
-        if !paths.insert(file_path.clone()) {
-            return Err(bad(
-                &field("path"),
-                format!("'{}' is listed twice", excerpt(&file_path)),
-            ));
-        }
-        let kind = SuiteKind::parse(&b.kind).ok_or_else(|| {
-            bad(
-                &field("kind"),
-                format!(
-                    "'{}' is not a kind; expected one of {}",
-                    excerpt(&b.kind),
-                    kinds_list()
-                ),
-            )
-        })?;
-        let source = text_field(&b.source, "where the file comes from")
-            .map_err(|p| bad(&field("source"), p))?;
-        let licence =
-            text_field(&b.licence, "the file's licence").map_err(|p| bad(&field("licence"), p))?;
-        if !(b.free_area_m2.is_finite()
-            && b.free_area_m2 > 0.0
-            && b.free_area_m2 <= MAX_FREE_AREA_M2)
-        {
-            return Err(bad(
-                &field("free_area_m2"),
-                format!(
-                    "{} is not a free area in (0, {}] m2",
-                    num(b.free_area_m2),
-                    num(MAX_FREE_AREA_M2)
-                ),
-            ));
-        }
-        let rooms = match b.rooms {
-            None => None,
-            Some(r) if (1..=MAX_ROOMS as i64).contains(&r) => Some(r as u64),
-            Some(r) => {
-                return Err(bad(
-                    &field("rooms"),
-                    format!(
-                        "{r} is not a number of rooms in [1, {MAX_ROOMS}] (leave `rooms` out for a building without ground-truth rooms)"
-                    ),
-                ))
-            }
-        };
-        let hash = content_hash(&b.hash).map_err(|p| bad(&field("hash"), p))?;
-        buildings.push(SuiteBuilding {
-            name,
-            path: file_path,
-            kind,
-            source,
-            licence,
-            free_area_m2: b.free_area_m2,
-            rooms,
-            hash,
-        });
+    let file_path = relative_path(&b.path).map_err(|p| bad(&field("path"), p))?;
+    if !paths.insert(file_path.clone()) {
+        return Err(bad(
+            &field("path"),
+            format!("'{}' is listed twice", excerpt(&file_path)),
+        ));
     }
-    Ok(Manifest {
+    let kind = SuiteKind::parse(&b.kind).ok_or_else(|| {
+        bad(
+            &field("kind"),
+            format!(
+                "'{}' is not a kind; expected one of {}",
+                excerpt(&b.kind),
+                kinds_list()
+            ),
+        )
+    })?;
+    let source =
+        text_field(&b.source, "where the file comes from").map_err(|p| bad(&field("source"), p))?;
+    let licence =
+        text_field(&b.licence, "the file's licence").map_err(|p| bad(&field("licence"), p))?;
+    if !(b.free_area_m2.is_finite() && b.free_area_m2 > 0.0 && b.free_area_m2 <= MAX_FREE_AREA_M2) {
+        return Err(bad(
+            &field("free_area_m2"),
+            format!(
+                "{} is not a free area in (0, {}] m2",
+                num(b.free_area_m2),
+                num(MAX_FREE_AREA_M2)
+            ),
+        ));
+    }
+    let rooms = match b.rooms {
+        None => None,
+        Some(r) if (1..=MAX_ROOMS as i64).contains(&r) => Some(r as u64),
+        Some(r) => {
+            return Err(bad(
+                &field("rooms"),
+                format!(
+                    "{r} is not a number of rooms in [1, {MAX_ROOMS}] (leave `rooms` out for a building without ground-truth rooms)"
+                ),
+            ))
+        }
+    };
+    let hash = content_hash(&b.hash).map_err(|p| bad(&field("hash"), p))?;
+    Ok(SuiteBuilding {
         name,
-        description,
-        buildings,
+        path: file_path,
+        kind,
+        source,
+        licence,
+        free_area_m2: b.free_area_m2,
+        rooms,
+        hash,
     })
 }
 
@@ -598,6 +614,7 @@ hash = "fedcba9876543210fedcba9876543210"
     /// Each malformed manifest is refused with one line naming the file, the field and the
     /// words of the problem.
     #[test]
+    #[allow(clippy::too_many_lines)] // a table of cases
     fn malformed_manifests_are_refused_naming_the_field() {
         let first = GOOD.find("[[buildings]]").unwrap();
         let one = |from: &str, to: &str| {

@@ -1,5 +1,5 @@
-//! The layout runs on every real map of the shared folder without panicking and finds lines and
-//! rooms on the complete school maps.
+//! The layout runs on every real map of the repository's `maps/` without panicking and finds
+//! lines and rooms on the complete school maps.
 
 // Benchmarks, examples and integration tests run at the edge: they read files and clocks,
 // which the kernel itself may not (sim-core/clippy.toml).
@@ -14,7 +14,10 @@ use sim_core::layout::{reconstruct_layout, LayoutConfig};
 #[test]
 fn every_real_map_gives_a_layout() {
     let maps = common::all_maps();
-    assert!(maps.len() >= 15, "shared maps not found: {maps:?}");
+    assert!(
+        maps.len() >= 15,
+        "the real maps of maps/ not found: {maps:?}"
+    );
     for yaml in maps {
         let grid = common::load_map(&yaml);
         let layout = reconstruct_layout(&grid, &LayoutConfig::default());
@@ -37,7 +40,12 @@ fn every_real_map_gives_a_layout() {
 /// map, and reports the known box of its result.
 #[test]
 fn windowed_thin_fill_matches_the_reference_on_real_maps() {
-    for yaml in common::all_maps() {
+    let maps = common::all_maps();
+    assert!(
+        maps.len() >= 15,
+        "the real maps of maps/ not found: {maps:?}"
+    );
+    for yaml in maps {
         let grid = common::load_map(&yaml);
         let t = LayoutConfig::default().thin_unknown_wall_m;
         let (a, na) = fill_thin_unknown(&grid, t);

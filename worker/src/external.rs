@@ -476,6 +476,55 @@ struct Stderr {
     last_line: String,
 }
 
+/// The command that starts `program`: in a process group of its own, with floorcast's Python
+/// module (in `python`) importable, its three pipes piped.
+fn program_command(program: &StrategyProgram, python: &std::path::Path) -> Command {
+    let command_words = program.resolved_command();
+    let mut cmd = Command::new(&command_words[0]);
+    cmd.args(&command_words[1..]);
+    // A process group of its own, so that everything it starts (a wrapper script's
+    // children, a daemon it forks) is ended with it: `kill_group`.
+    std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
+    // No __pycache__ beside the programs (or in a repository's python/).
+    cmd.env("PYTHONDONTWRITEBYTECODE", "1");
+    // floorcast's Python module, importable by every strategy program, in a folder of
+    // this program's own.
+    let mut paths = vec![python.to_path_buf()];
+    if let Some(old) = std::env::var_os("PYTHONPATH") {
+        paths.extend(std::env::split_paths(&old));
+    }
+    if let Ok(joined) = std::env::join_paths(paths) {
+        cmd.env("PYTHONPATH", joined);
+    }
+    cmd.stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    cmd
+}
+
+/// Starts `cmd` and registers its process group (under one lock, so that `end_strays` never
+/// takes a program just started for a stray); an error says what to do.
+fn spawn_registered(
+    cmd: &mut Command,
+    program: &StrategyProgram,
+) -> Result<std::process::Child, String> {
+    live_groups(|g| {
+        let child = cmd.spawn()?;
+        g.insert(child.id());
+        Ok(child)
+    })
+    .map_err(|e: std::io::Error| match e.kind() {
+        std::io::ErrorKind::NotFound => format!(
+            "cannot start '{}': no such program (is it installed and on PATH?)",
+            crate::text::excerpt(&program.command[0])
+        ),
+        _ => format!(
+            "cannot start '{}': {e}",
+            crate::text::excerpt(&program.command[0])
+        ),
+    })
+}
+
 impl ExternalStrategy {
     /// Starts the program and shakes hands.
     pub fn start(program: &StrategyProgram) -> Result<Self, StrategyError> {
@@ -484,46 +533,9 @@ impl ExternalStrategy {
             command: command.clone(),
             what,
         };
-        let command_words = program.resolved_command();
-        let mut cmd = Command::new(&command_words[0]);
-        cmd.args(&command_words[1..]);
-        // A process group of its own, so that everything it starts (a wrapper script's
-        // children, a daemon it forks) is ended with it: `kill_group`.
-        std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
-        // No __pycache__ beside the programs (or in a repository's python/).
-        cmd.env("PYTHONDONTWRITEBYTECODE", "1");
-        // floorcast's Python module, importable by every strategy program, in a folder of
-        // this program's own.
         let python = python_dir().map_err(&fail)?;
-        let mut paths = vec![python.path().to_path_buf()];
-        if let Some(old) = std::env::var_os("PYTHONPATH") {
-            paths.extend(std::env::split_paths(&old));
-        }
-        if let Ok(joined) = std::env::join_paths(paths) {
-            cmd.env("PYTHONPATH", joined);
-        }
-        cmd.stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped());
-        // Started and registered under one lock, so that `end_strays` never takes a program
-        // just started for a stray.
-        let mut child = live_groups(|g| {
-            let child = cmd.spawn()?;
-            g.insert(child.id());
-            Ok(child)
-        })
-        .map_err(|e: std::io::Error| {
-            fail(match e.kind() {
-                std::io::ErrorKind::NotFound => format!(
-                    "cannot start '{}': no such program (is it installed and on PATH?)",
-                    crate::text::excerpt(&program.command[0])
-                ),
-                _ => format!(
-                    "cannot start '{}': {e}",
-                    crate::text::excerpt(&program.command[0])
-                ),
-            })
-        })?;
+        let mut cmd = program_command(program, python.path());
+        let mut child = spawn_registered(&mut cmd, program).map_err(&fail)?;
         // The pipes' threads. One the system refuses is an error, not a panic: the program is
         // stopped (the threads already started end with its pipes).
         let refused = |child: &mut std::process::Child, e: std::io::Error| {
@@ -1087,33 +1099,8 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         }
     };
     let h = s.hello().clone();
-    let mut needs: Vec<&str> = Vec::new();
-    if h.needs_layout_gain {
-        needs.push("layout_gain");
-    }
-    if h.needs_layout {
-        needs.push("layout");
-    }
-    if h.needs_map {
-        needs.push("map");
-    }
-    push(
-        "hello",
-        Ok(format!("name '{}', needs [{}]", h.name, needs.join(", "))),
-    );
-    // A room of 4 x 2 m seen from its middle, unknown beyond its open ends.
-    let map = sim_core::grid::OccupancyGrid::from_ascii(
-        "
-        ????????????????????????
-        ?######################?
-        ?.......................
-        ?.......................
-        ?......................?
-        ?......................?
-        ?######################?
-        ",
-        0.2,
-    );
+    push("hello", Ok(hello_text(&h)));
+    let map = check_room();
     let settings = crate::Settings::default();
     let start = sim_core::Pose::new(2.4, 0.7, 0.0);
     let begun = s.begin(
@@ -1131,40 +1118,14 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
     if !push("run", begun.map(|_| "ready".into()).map_err(|e| e.what)) {
         return checks;
     }
-    let candidate = |id: usize, x: i32, y: i32, path_m: f64, gain_m2: f64| {
-        let point = map.frame.world_from_cell(sim_core::grid::Cell::new(x, y));
-        CandidateView {
-            id,
-            cell: sim_core::grid::Cell::new(x, y),
-            point,
-            goal: point,
-            frontier_cells: 4,
-            distance_m: path_m,
-            path_m,
-            straight_m: (point - start.position()).norm(),
-            gain_m2,
-            layout_gain_m2: h.needs_layout_gain.then_some(gain_m2 * 0.5),
-            // Room 0 below covers cells x >= 13 (2.6 m to 4.8 m at 0.2 m per cell).
-            room: h.needs_layout.then_some(0).filter(|_| x > 12),
-        }
-    };
+    let candidate =
+        |id, x, y, path_m, gain_m2| check_candidate(&map, start, &h, id, (x, y), path_m, gain_m2);
     let three = [
         candidate(0, 23, 3, 2.2, 4.0),
         candidate(2, 23, 4, 2.3, 3.5),
         candidate(5, 1, 3, 2.0, 1.0),
     ];
-    // With the need "layout": one predicted room, the right half of the room, open.
-    let rooms = [sim_core::explore::RoomView {
-        polygon: [(2.6, 0.4), (4.8, 0.4), (4.8, 1.2), (2.6, 1.2)]
-            .iter()
-            .map(|&(x, y)| map.frame.origin_m + sim_core::Vec2::new(x, y))
-            .collect(),
-        state: sim_core::explore::RoomState::Open,
-        predicted: true,
-        area_m2: 1.76,
-        observed_area_m2: 1.6,
-        unknown_area_m2: 0.16,
-    }];
+    let rooms = [check_room_view(&map)];
     let view = |decision, attempt, candidates| DecisionView {
         decision,
         attempt,
@@ -1178,20 +1139,11 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         }),
         map: &map,
     };
-    let shown = |r: &Reply| match r {
-        Reply::Choose(id) => format!("choose {id}"),
-        Reply::Rank(ids) => format!("rank {ids:?}"),
-        Reply::Goal(p) => format!("goal [{}, {}]", p.x, p.y),
-        Reply::Drop(ids) => format!("drop {ids:?}"),
-        Reply::Stop => "stop".into(),
-        Reply::Pass => "pass".into(),
-        Reply::Fail => "failed".into(),
-    };
     let mut ask = |s: &mut ExternalStrategy, what, v: &DecisionView<'_>| {
         let (r, _) = s.decide(v);
         let outcome = match (&r, &s.error) {
             (_, Some(e)) => Err(e.clone()),
-            (r, None) => Ok(shown(r)),
+            (r, None) => Ok(reply_text(r)),
         };
         (push(what, outcome), r)
     };
@@ -1223,20 +1175,109 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         explored_fraction: 1.0,
         decisions: 2,
     });
-    let finished = s.finish();
-    let _ = match finished {
-        Ok(stats) if stats.exited && stats.left_behind => push(
-            "end, then exit when stdin closes",
-            Err("exited, but left processes it started running (floorcast killed them): a strategy ends every process it starts before it exits".into()),
-        ),
-        Ok(stats) if stats.exited => push("end, then exit when stdin closes", Ok("exited".into())),
-        Ok(_) => push(
-            "end, then exit when stdin closes",
-            Err("did not exit within 1 s of its stdin closing (it was killed)".into()),
-        ),
-        Err(e) => push("end, then exit when stdin closes", Err(e.what)),
-    };
+    let (what, outcome) = exit_check(s.finish());
+    push(what, outcome);
     checks
+}
+
+/// What the hello of a program says: its name and needs.
+fn hello_text(h: &Hello) -> String {
+    let mut needs: Vec<&str> = Vec::new();
+    if h.needs_layout_gain {
+        needs.push("layout_gain");
+    }
+    if h.needs_layout {
+        needs.push("layout");
+    }
+    if h.needs_map {
+        needs.push("map");
+    }
+    format!("name '{}', needs [{}]", h.name, needs.join(", "))
+}
+
+/// The check's map: a room of 4 x 2 m seen from its middle, unknown beyond its open ends.
+fn check_room() -> sim_core::grid::OccupancyGrid {
+    sim_core::grid::OccupancyGrid::from_ascii(
+        "
+        ????????????????????????
+        ?######################?
+        ?.......................
+        ?.......................
+        ?......................?
+        ?......................?
+        ?######################?
+        ",
+        0.2,
+    )
+}
+
+/// A candidate of the check at cell `(x, y)` of `map`, with what the program's needs ask for.
+fn check_candidate(
+    map: &sim_core::grid::OccupancyGrid,
+    start: sim_core::Pose,
+    h: &Hello,
+    id: usize,
+    (x, y): (i32, i32),
+    path_m: f64,
+    gain_m2: f64,
+) -> sim_core::explore::CandidateView {
+    let point = map.frame.world_from_cell(sim_core::grid::Cell::new(x, y));
+    sim_core::explore::CandidateView {
+        id,
+        cell: sim_core::grid::Cell::new(x, y),
+        point,
+        goal: point,
+        frontier_cells: 4,
+        distance_m: path_m,
+        path_m,
+        straight_m: (point - start.position()).norm(),
+        gain_m2,
+        layout_gain_m2: h.needs_layout_gain.then_some(gain_m2 * 0.5),
+        // Room 0 below covers cells x >= 13 (2.6 m to 4.8 m at 0.2 m per cell).
+        room: h.needs_layout.then_some(0).filter(|_| x > 12),
+    }
+}
+
+/// With the need "layout": one predicted room, the right half of the check's room, open.
+fn check_room_view(map: &sim_core::grid::OccupancyGrid) -> sim_core::explore::RoomView {
+    sim_core::explore::RoomView {
+        polygon: [(2.6, 0.4), (4.8, 0.4), (4.8, 1.2), (2.6, 1.2)]
+            .iter()
+            .map(|&(x, y)| map.frame.origin_m + sim_core::Vec2::new(x, y))
+            .collect(),
+        state: sim_core::explore::RoomState::Open,
+        predicted: true,
+        area_m2: 1.76,
+        observed_area_m2: 1.6,
+        unknown_area_m2: 0.16,
+    }
+}
+
+/// A reply as the check prints it.
+fn reply_text(r: &Reply) -> String {
+    match r {
+        Reply::Choose(id) => format!("choose {id}"),
+        Reply::Rank(ids) => format!("rank {ids:?}"),
+        Reply::Goal(p) => format!("goal [{}, {}]", p.x, p.y),
+        Reply::Drop(ids) => format!("drop {ids:?}"),
+        Reply::Stop => "stop".into(),
+        Reply::Pass => "pass".into(),
+        Reply::Fail => "failed".into(),
+    }
+}
+
+/// The check's last step: the program exits when its stdin closes, leaving nothing running.
+fn exit_check(
+    finished: Result<StrategyStats, StrategyError>,
+) -> (&'static str, Result<String, String>) {
+    let what = "end, then exit when stdin closes";
+    let outcome = match finished {
+        Ok(stats) if stats.exited && stats.left_behind => Err("exited, but left processes it started running (floorcast killed them): a strategy ends every process it starts before it exits".into()),
+        Ok(stats) if stats.exited => Ok("exited".into()),
+        Ok(_) => Err("did not exit within 1 s of its stdin closing (it was killed)".into()),
+        Err(e) => Err(e.what),
+    };
+    (what, outcome)
 }
 
 /// The run message's content (besides its type) for a run of a strategy with `params`.

@@ -1,0 +1,294 @@
+//! Modules depend one way (ARCHITECTURE.md, "Invariants"): within each crate no module uses
+//! another that uses it back, directly or round a circle.
+//!
+//! The graph is read from the sources as text: a module uses another where its code (its tests
+//! left out) names a path `crate::a::b` or `super::b`, or imports a group `crate::{a, b}`, and
+//! the longest prefix of that path that is a module of the crate is the one used. A module
+//! naming its own parent (`super::Config` in `layout/lines.rs`) is not counted: a folder's root
+//! holds what its files share, and declares them.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// The crates' source folders.
+const CRATES: &[&str] = &[
+    "sim-core/src",
+    "formats/src",
+    "render/src",
+    "worker/src",
+    "coordinator/src",
+    "src",
+];
+
+/// Module paths (`layout::directions`) of a crate's files, with their files.
+fn modules(src: &Path) -> BTreeMap<Vec<String>, PathBuf> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![src.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+                continue;
+            }
+            if path.extension().is_none_or(|e| e != "rs") {
+                continue;
+            }
+            let rel = path.strip_prefix(src).unwrap().with_extension("");
+            let mut parts: Vec<String> = rel
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            let last = parts.last().cloned().unwrap_or_default();
+            if last == "mod" || (parts.len() == 1 && (last == "lib" || last == "main")) {
+                parts.pop();
+            }
+            // A folder's `tests.rs` is test code (`#[cfg(test)] mod tests;`).
+            if last == "tests" {
+                continue;
+            }
+            out.insert(parts, path);
+        }
+    }
+    out
+}
+
+/// The code of a file without its test modules (by convention at its end: from the first
+/// `#[cfg(test)]` that opens a module).
+fn code_of(text: &str) -> String {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut end = lines.len();
+    for (i, l) in lines.iter().enumerate() {
+        if l.trim() == "#[cfg(test)]" {
+            let next = lines[i + 1..].iter().find(|l| !l.trim().is_empty());
+            if next.is_some_and(|n| {
+                let n = n.trim_start();
+                n.starts_with("mod ")
+                    || n.starts_with("pub(crate) mod ")
+                    || n.starts_with("pub mod ")
+            }) {
+                end = i;
+                break;
+            }
+        }
+    }
+    lines[..end]
+        .iter()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .copied()
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The paths a piece of code names after `prefix` (`crate::` or `super::`): each as its
+/// segments, with the first-level names of a group `prefix{a, b::c}` each a path.
+fn paths_after(code: &str, prefix: &str) -> Vec<Vec<String>> {
+    let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(at) = rest.find(prefix) {
+        // Not the tail of a longer name (`mycrate::`).
+        let before_ok = rest[..at].chars().next_back().is_none_or(|c| !ident(c));
+        rest = &rest[at + prefix.len()..];
+        if !before_ok {
+            continue;
+        }
+        if let Some(group) = rest.strip_prefix('{') {
+            // The group's first-level items, split at the commas outside nested groups.
+            let (mut depth, mut start) = (0i32, 0usize);
+            let mut items = Vec::new();
+            for (k, c) in group.char_indices() {
+                match c {
+                    '{' => depth += 1,
+                    '}' if depth == 0 => {
+                        items.push(&group[start..k]);
+                        break;
+                    }
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => {
+                        items.push(&group[start..k]);
+                        start = k + 1;
+                    }
+                    _ => {}
+                }
+            }
+            for item in items {
+                let segs: Vec<String> = item
+                    .trim()
+                    .split("::")
+                    .map(str::trim)
+                    .take_while(|s| !s.is_empty() && s.chars().all(ident))
+                    .map(str::to_string)
+                    .collect();
+                if !segs.is_empty() {
+                    out.push(segs);
+                }
+            }
+            continue;
+        }
+        let mut segs = Vec::new();
+        let mut tail = rest;
+        loop {
+            let n = tail.find(|c: char| !ident(c)).unwrap_or(tail.len());
+            if n == 0 {
+                break;
+            }
+            segs.push(tail[..n].to_string());
+            match tail[n..].strip_prefix("::") {
+                Some(t) if t.starts_with(|c: char| ident(c)) => tail = t,
+                _ => break,
+            }
+        }
+        if !segs.is_empty() {
+            out.push(segs);
+        }
+    }
+    out
+}
+
+/// The longest prefix of `path` that is a module of the crate.
+fn module_of(path: &[String], modules: &BTreeMap<Vec<String>, PathBuf>) -> Option<Vec<String>> {
+    (1..=path.len())
+        .rev()
+        .map(|n| path[..n].to_vec())
+        .find(|p| modules.contains_key(p))
+}
+
+/// Each module's uses of the crate's other modules (not of its ancestors).
+fn graph(src: &Path) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
+    let modules = modules(src);
+    let mut edges: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
+    for (module, file) in &modules {
+        let code = code_of(&std::fs::read_to_string(file).unwrap());
+        // `super::` of `a/b.rs` (module `a::b`) is `a`; of `a/mod.rs` (module `a`), `a`'s parent.
+        let parent: Vec<String> = module[..module.len().saturating_sub(1)].to_vec();
+        let mut named: Vec<Vec<String>> = paths_after(&code, "crate::");
+        for p in paths_after(&code, "super::") {
+            named.push(parent.iter().cloned().chain(p).collect());
+        }
+        let uses = edges.entry(module.clone()).or_default();
+        for p in named {
+            if let Some(m) = module_of(&p, &modules) {
+                let ancestor = m.len() < module.len() && module[..m.len()] == m[..];
+                if m != *module && !ancestor && !m.is_empty() {
+                    uses.insert(m);
+                }
+            }
+        }
+    }
+    edges
+}
+
+/// A circle of the graph, if any (depth-first search).
+fn circle(edges: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) -> Option<Vec<Vec<String>>> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum Mark {
+        Open,
+        Done,
+    }
+    fn visit(
+        m: &Vec<String>,
+        edges: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>,
+        marks: &mut BTreeMap<Vec<String>, Mark>,
+        stack: &mut Vec<Vec<String>>,
+    ) -> Option<Vec<Vec<String>>> {
+        marks.insert(m.clone(), Mark::Open);
+        stack.push(m.clone());
+        for next in edges.get(m).into_iter().flatten() {
+            match marks.get(next) {
+                Some(Mark::Open) => {
+                    let from = stack.iter().position(|s| s == next).unwrap();
+                    let mut c = stack[from..].to_vec();
+                    c.push(next.clone());
+                    return Some(c);
+                }
+                Some(Mark::Done) => {}
+                None => {
+                    if let Some(c) = visit(next, edges, marks, stack) {
+                        return Some(c);
+                    }
+                }
+            }
+        }
+        stack.pop();
+        marks.insert(m.clone(), Mark::Done);
+        None
+    }
+    let mut marks = BTreeMap::new();
+    for m in edges.keys() {
+        if !marks.contains_key(m) {
+            if let Some(c) = visit(m, edges, &mut marks, &mut Vec::new()) {
+                return Some(c);
+            }
+        }
+    }
+    None
+}
+
+#[test]
+fn no_crate_has_a_module_cycle() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for src in CRATES {
+        let edges = graph(&root.join(src));
+        // The reading finds the graph it should: a crate of more than one module has arrows.
+        assert!(
+            edges.len() < 3 || edges.values().any(|u| !u.is_empty()),
+            "{src}: no module uses another: the sources were not read"
+        );
+        if let Some(c) = circle(&edges) {
+            let names: Vec<String> = c.iter().map(|m| m.join("::")).collect();
+            panic!(
+                "{src}: modules use each other round a circle: {}",
+                names.join(" -> ")
+            );
+        }
+    }
+}
+
+/// The reading itself, on cases with a known answer.
+#[test]
+fn the_reader_finds_paths_groups_and_circles() {
+    let cases: &[(&str, &str, Vec<&str>)] = &[
+        (
+            "use crate::store::StoredResult;",
+            "crate::",
+            vec!["store::StoredResult"],
+        ),
+        (
+            "use crate::{outcome::{self, Pair}, store};",
+            "crate::",
+            vec!["outcome", "store"],
+        ),
+        (
+            "x = crate::sprt::MIN_PAIRS as u128;",
+            "crate::",
+            vec!["sprt::MIN_PAIRS"],
+        ),
+        ("use floorcast_crate::a;", "crate::", vec![]),
+        (
+            "let a = super::directions::rem_pi(a);",
+            "super::",
+            vec!["directions::rem_pi"],
+        ),
+    ];
+    for (code, prefix, want) in cases {
+        let got: Vec<String> = paths_after(code, prefix)
+            .into_iter()
+            .map(|p| p.join("::"))
+            .collect();
+        assert_eq!(got, *want, "{code}");
+    }
+    let m = |s: &str| s.split("::").map(str::to_string).collect::<Vec<_>>();
+    let mut edges: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
+    edges.entry(m("a")).or_default().insert(m("b"));
+    edges.entry(m("b")).or_default().insert(m("c"));
+    edges.entry(m("c")).or_default();
+    assert_eq!(circle(&edges), None);
+    edges.entry(m("c")).or_default().insert(m("a"));
+    assert_eq!(circle(&edges), Some(vec![m("a"), m("b"), m("c"), m("a")]));
+    assert!(
+        code_of("fn f() {}\n#[cfg(test)]\nmod tests {\n use crate::x;\n}")
+            .find("crate::x")
+            .is_none()
+    );
+}
