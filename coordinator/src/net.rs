@@ -662,7 +662,8 @@ async fn ask<T: Message>(
 
 /// Sends raw bytes as a query on `floorcast/v1/<campaign>/<key_rest>` through `connect` and
 /// returns the replies (`Err` for error replies), and puts raw bytes on the same key. For tests
-/// and diagnostics: what a foreign or broken program could send.
+/// (test support): what a foreign or broken program could send.
+#[cfg(any(test, feature = "test-support"))]
 pub fn raw_exchange(
     connect: &str,
     campaign: &str,

@@ -405,7 +405,14 @@ pub fn spawn_scoped_thread<'scope, T: Send + 'scope>(
     std::thread::Builder::new().spawn_scoped(scope, f)
 }
 
+/// Without test support no thread is refused here.
+#[cfg(not(any(test, feature = "test-support")))]
+fn refused_for_a_test() -> std::io::Result<()> {
+    Ok(())
+}
+
 /// The refusal [`refuse_threads_after`] asked for, if this is the thread to refuse.
+#[cfg(any(test, feature = "test-support"))]
 fn refused_for_a_test() -> std::io::Result<()> {
     let refuse = REFUSED_AFTER.with(|n| {
         let left = n.get();
@@ -418,6 +425,7 @@ fn refused_for_a_test() -> std::io::Result<()> {
     Ok(())
 }
 
+#[cfg(any(test, feature = "test-support"))]
 thread_local! {
     /// How many more threads [`spawn_thread`] and [`spawn_scoped_thread`] start on this thread
     /// before they refuse them (`None`, always but in tests: all).
@@ -427,7 +435,7 @@ thread_local! {
 /// For tests of what a refused thread does: [`spawn_thread`] and [`spawn_scoped_thread`],
 /// called on this thread, start the next `n` threads and refuse every one after, as a system
 /// out of threads would (`None`: refuse none).
-#[doc(hidden)]
+#[cfg(any(test, feature = "test-support"))]
 pub fn refuse_threads_after(n: Option<usize>) {
     REFUSED_AFTER.with(|r| r.set(n));
 }

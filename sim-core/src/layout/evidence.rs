@@ -1,7 +1,9 @@
 //! Wall evidence: occupied cells on the boundary of free space, each with the orientation of the
 //! local boundary, plus a mask of the cells near any occupied cell.
 
-use super::morphology::{dilate_reference, BitRows, WindowMask};
+#[cfg(any(test, feature = "test-support"))]
+use super::morphology::dilate_reference;
+use super::morphology::{BitRows, WindowMask};
 use super::LayoutConfig;
 use crate::geom::Vec2;
 use crate::grid::{Cell, Occupancy, OccupancyGrid};
@@ -421,6 +423,7 @@ pub fn fill_thin_unknown_in(
 
 /// [`fill_thin_unknown`] as it was first written, on the whole grid with
 /// [`dilate_reference`]: the baseline of the layout benchmark.
+#[cfg(any(test, feature = "test-support"))]
 pub fn fill_thin_unknown_reference(
     grid: &OccupancyGrid,
     max_thickness_m: f64,

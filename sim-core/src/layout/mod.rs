@@ -33,6 +33,7 @@ pub mod lines;
 pub mod morphology;
 pub mod predict;
 pub mod rooms;
+#[cfg(any(test, feature = "test-support"))]
 pub mod synthetic;
 
 #[cfg(test)]

@@ -148,7 +148,7 @@ impl BitRows {
     }
 
     /// Dilated by a square of half-side `radius` cells (cells outside the mask are false): the
-    /// result of [`dilate_reference`], cell for cell. Separable; each axis is a few passes that OR
+    /// result of `dilate_reference` (test support), cell for cell. Separable; each axis is a few passes that OR
     /// the mask shifted both ways (radii 1, 2, 4...: a dilation by `R` followed by one by
     /// `{-s, 0, s}`, `s <= R + 1`, is one by `R + s`, also where the mask's edge clips it), a
     /// word of 64 cells at a time.
@@ -363,6 +363,7 @@ impl WindowMask {
 
 /// The reference dilation (per cell, the last true cell before and after in each row, then in
 /// each column, over the whole mask): what [`BitRows::dilate`] replaced; kept to check it.
+#[cfg(any(test, feature = "test-support"))]
 pub fn dilate_reference(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
     let mut rows = vec![false; w * h];
     let mut line = Vec::new();
@@ -399,6 +400,7 @@ pub fn dilate_reference(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<
 }
 
 /// `out[i]` is true when some `src[j]` with `|i - j| <= radius` is.
+#[cfg(any(test, feature = "test-support"))]
 fn dilate_1d(src: &[bool], radius: usize, out: &mut Vec<bool>) {
     let n = src.len();
     out.clear();
