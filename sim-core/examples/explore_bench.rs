@@ -14,8 +14,10 @@
 #![allow(clippy::disallowed_types, clippy::disallowed_methods)]
 use std::time::Instant;
 
+use sim_core::building::Building;
 use sim_core::explore::{explore, ExploreConfig, Localization, RunResult};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
+use sim_core::Pose;
 
 fn pose_errors(r: &RunResult) -> (f64, f64) {
     let mut max_xy = 0.0f64;
@@ -74,46 +76,12 @@ fn main() {
             ..ExploreConfig::default()
         };
         cfg.calibrate_odometry = !has("nocal");
-        for a in &args {
-            if let Some(v) = a.strip_prefix("redecide=").and_then(|v| v.parse().ok()) {
-                cfg.redecide_period_s = v;
-            }
-            if let Some(v) = a.strip_prefix("upd=") {
-                let v: Vec<f64> = v.split(',').filter_map(|x| x.parse().ok()).collect();
-                if let [d, r, t] = v[..] {
-                    cfg.map_update_distance_m = d;
-                    cfg.map_update_angle_rad = r;
-                    cfg.map_update_period_s = t;
-                }
-            }
-        }
+        apply_settings(&mut cfg, &args);
         let t0 = Instant::now();
         let r = explore(&building, start, &cfg, seed, &mut |_| {});
         let wall_s = t0.elapsed().as_secs_f64();
         let speedup = r.total_time_s / wall_s;
-        let (exy, eth) = pose_errors(&r);
-        println!(
-            "{:<12} free {:6.0} m2  explored {:.3}  end {:<12}  sim {:6.0} s  wall {:6.2} s  \
-             speed-up {:6.0}x real time  decisions {:4}  path {:5.0} m  occ-prec {:.3} (aligned {:.3})  \
-             free-prec {:.3}  max pose err {:.2} m {:.1} deg  matches {}/{}  plans {}",
-            loc.as_str(),
-            r.free_area_m2,
-            r.explored_fraction,
-            r.end_reason.as_str(),
-            r.total_time_s,
-            wall_s,
-            speedup,
-            r.decisions.len(),
-            r.path_length_m,
-            r.map_quality.occupied_precision,
-            r.map_quality.occupied_precision_aligned,
-            r.map_quality.free_precision,
-            exy,
-            eth,
-            r.scan_matches_accepted,
-            r.scans,
-            r.plans,
-        );
+        print_run(loc, &r, wall_s, speedup);
         // A fingerprint of the run (every pose, decision, progress sample and map cell), so
         // that a change meant to be only faster can be checked to leave the run bit-identical.
         println!("  fingerprint {}", r.fingerprint());
@@ -122,46 +90,7 @@ fn main() {
             peak_rss_mb().map_or("n/a (Linux only)".to_string(), |m| format!("{m:.0} MB"))
         );
         if has("trace") {
-            // Wrong occupied cells by their distance to solid space.
-            let truth = building.reachable_free(r.map.frame, start.position());
-            let solid = sim_core::grid::Grid {
-                frame: truth.frame,
-                data: truth.data.iter().map(|f| !f).collect(),
-            };
-            let dist = sim_core::distance::distance_to(&solid);
-            let mut hist = [0usize; 6];
-            for (i, s) in r.map.data.iter().enumerate() {
-                if *s == sim_core::grid::Occupancy::Occupied {
-                    let d = dist.data[i];
-                    let k = if d <= 1.5 {
-                        0
-                    } else if d <= 2.5 {
-                        1
-                    } else if d <= 3.5 {
-                        2
-                    } else if d <= 5.5 {
-                        3
-                    } else if d <= 10.5 {
-                        4
-                    } else {
-                        5
-                    };
-                    hist[k] += 1;
-                }
-            }
-            println!("  occupied cells by distance to solid (<=1.5, 2, 3, 4-5, 6-10, >10 cells): {hist:?}");
-            let n = r.trajectory.len();
-            for k in (0..n).step_by((n / 60).max(1)) {
-                let (t, e) = (r.trajectory[k], r.estimated_trajectory[k]);
-                println!(
-                    "  update {k:5}  true ({:6.2}, {:6.2}, {:6.1} deg)  err {:.3} m {:+.2} deg",
-                    t.x_m,
-                    t.y_m,
-                    t.theta_rad.to_degrees(),
-                    (t.position() - e.position()).norm(),
-                    t.between(&e).theta_rad.to_degrees()
-                );
-            }
+            trace(&building, start, &r);
         }
         if loc == Localization::Slam {
             slam_speedup = speedup;
@@ -173,4 +102,93 @@ fn main() {
         }
     }
     println!("speed-up vs real time: {slam_speedup:.0}x (target >= 1000x)");
+}
+
+/// Applies the settings among `args`: `redecide=S` and `upd=D,R,T`.
+fn apply_settings(cfg: &mut ExploreConfig, args: &[String]) {
+    for a in args {
+        if let Some(v) = a.strip_prefix("redecide=").and_then(|v| v.parse().ok()) {
+            cfg.redecide_period_s = v;
+        }
+        if let Some(v) = a.strip_prefix("upd=") {
+            let v: Vec<f64> = v.split(',').filter_map(|x| x.parse().ok()).collect();
+            if let [d, r, t] = v[..] {
+                cfg.map_update_distance_m = d;
+                cfg.map_update_angle_rad = r;
+                cfg.map_update_period_s = t;
+            }
+        }
+    }
+}
+
+/// Prints a run's line: times, speed-up, quality, pose errors and counts.
+fn print_run(loc: Localization, r: &RunResult, wall_s: f64, speedup: f64) {
+    let (exy, eth) = pose_errors(r);
+    println!(
+        "{:<12} free {:6.0} m2  explored {:.3}  end {:<12}  sim {:6.0} s  wall {:6.2} s  \
+         speed-up {:6.0}x real time  decisions {:4}  path {:5.0} m  occ-prec {:.3} (aligned {:.3})  \
+         free-prec {:.3}  max pose err {:.2} m {:.1} deg  matches {}/{}  plans {}",
+        loc.as_str(),
+        r.free_area_m2,
+        r.explored_fraction,
+        r.end_reason.as_str(),
+        r.total_time_s,
+        wall_s,
+        speedup,
+        r.decisions.len(),
+        r.path_length_m,
+        r.map_quality.occupied_precision,
+        r.map_quality.occupied_precision_aligned,
+        r.map_quality.free_precision,
+        exy,
+        eth,
+        r.scan_matches_accepted,
+        r.scans,
+        r.plans,
+    );
+}
+
+/// Prints the wrong occupied cells of the run's map by their distance to solid space, and the
+/// pose error along the trajectory.
+fn trace(building: &Building, start: Pose, r: &RunResult) {
+    // Wrong occupied cells by their distance to solid space.
+    let truth = building.reachable_free(r.map.frame, start.position());
+    let solid = sim_core::grid::Grid {
+        frame: truth.frame,
+        data: truth.data.iter().map(|f| !f).collect(),
+    };
+    let dist = sim_core::distance::distance_to(&solid);
+    let mut hist = [0usize; 6];
+    for (i, s) in r.map.data.iter().enumerate() {
+        if *s == sim_core::grid::Occupancy::Occupied {
+            let d = dist.data[i];
+            let k = if d <= 1.5 {
+                0
+            } else if d <= 2.5 {
+                1
+            } else if d <= 3.5 {
+                2
+            } else if d <= 5.5 {
+                3
+            } else if d <= 10.5 {
+                4
+            } else {
+                5
+            };
+            hist[k] += 1;
+        }
+    }
+    println!("  occupied cells by distance to solid (<=1.5, 2, 3, 4-5, 6-10, >10 cells): {hist:?}");
+    let n = r.trajectory.len();
+    for k in (0..n).step_by((n / 60).max(1)) {
+        let (t, e) = (r.trajectory[k], r.estimated_trajectory[k]);
+        println!(
+            "  update {k:5}  true ({:6.2}, {:6.2}, {:6.1} deg)  err {:.3} m {:+.2} deg",
+            t.x_m,
+            t.y_m,
+            t.theta_rad.to_degrees(),
+            (t.position() - e.position()).norm(),
+            t.between(&e).theta_rad.to_degrees()
+        );
+    }
 }

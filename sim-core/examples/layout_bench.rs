@@ -175,169 +175,167 @@ fn main() {
     if let Some(d) = &png {
         std::fs::create_dir_all(d).unwrap();
     }
-    let config = LayoutConfig::default();
-    // Per class: layout times, and per map (optimised stage, reference stage, layout median).
-    let mut classes: Vec<ClassTimes> = Vec::new();
-    let mut all_median = Vec::new();
-    let mut all_max: f64 = 0.0;
+    let mut bench = Bench {
+        config: LayoutConfig::default(),
+        runs,
+        verbose,
+        png,
+        classes: Vec::new(),
+        all_median: Vec::new(),
+        all_max: 0.0,
+        acc_lines: Vec::new(),
+        iou_complete: Vec::new(),
+        iou_pred: Vec::new(),
+        iou_obs: Vec::new(),
+    };
     println!(
         "{:<44} {:>8} {:>8} {:>5} {:>5} {:>5} {:>5} {:>5} {:>8} {:>8}",
         "map", "Mcells", "known_m2", "dirs", "lines", "rooms", "part", "open", "med_ms", "max_ms"
     );
-    let mut report =
-        |class: &str, name: &str, grid: &OccupancyGrid, layout: &Layout, times: &[f64]| {
-            let known = (grid.count(Occupancy::Free) + grid.count(Occupancy::Occupied)) as f64
-                * grid.frame.cell_area_m2();
-            let part = layout
-                .rooms
-                .iter()
-                .filter(|r| r.label == RoomLabel::Partial)
-                .count();
-            let open = layout
-                .rooms
-                .iter()
-                .filter(|r| r.label == RoomLabel::Open)
-                .count();
-            let med = times[times.len() / 2];
-            let max = times[times.len() - 1];
-            let stage = stage_ms(grid, &config, runs);
-            let i = match classes.iter().position(|c| c.0 == class) {
-                Some(i) => i,
-                None => {
-                    classes.push((class.to_string(), Vec::new(), Vec::new()));
-                    classes.len() - 1
-                }
-            };
-            classes[i].1.extend_from_slice(times);
-            classes[i].2.push((stage.0, stage.1, med));
-            all_median.push(med);
-            all_max = all_max.max(max);
-            println!(
-                "{:<44} {:>8.2} {:>8.0} {:>5} {:>5} {:>5} {:>5} {:>5} {:>8.1} {:>8.1}",
-                name,
-                grid.frame.len() as f64 / 1e6,
-                known,
-                layout.diagnostics.directions,
-                layout.lines.len(),
-                layout.rooms.len(),
-                part,
-                open,
-                med,
-                max
-            );
-            if verbose {
-                println!("    {:?}", layout.diagnostics);
-            }
-            if let Some(d) = &png {
-                draw(
-                    grid,
-                    layout,
-                    &d.join(format!("{}.png", name.replace('/', "_"))),
-                );
-            }
-        };
     let only = args
         .iter()
         .position(|a| a == "--only")
         .map(|i| args[i + 1].clone());
     let wanted = |name: &str| only.as_ref().is_none_or(|o| name.contains(o.as_str()));
-    for yaml in common::all_maps() {
-        if !wanted(&yaml.to_string_lossy()) {
-            continue;
-        }
-        let grid = common::load_map(&yaml);
-        let name = format!(
-            "{}/{}",
-            yaml.parent()
-                .unwrap()
-                .file_name()
-                .unwrap()
-                .to_string_lossy(),
-            yaml.file_stem().unwrap().to_string_lossy()
+    bench.real_maps(&wanted);
+    bench.synthetic();
+    bench.generated(&wanted);
+    bench.summary();
+}
+
+/// The benchmark's settings and what it has measured so far.
+struct Bench {
+    config: LayoutConfig,
+    runs: usize,
+    verbose: bool,
+    png: Option<std::path::PathBuf>,
+    /// Per class: layout times, and per map (optimised stage, reference stage, layout median).
+    classes: Vec<ClassTimes>,
+    all_median: Vec<f64>,
+    all_max: f64,
+    /// The accuracy lines of the synthetic and generated maps.
+    acc_lines: Vec<String>,
+    /// Matched IoU of the complete generated maps; predicted and observed-only IoU of the
+    /// partial ones.
+    iou_complete: Vec<f64>,
+    iou_pred: Vec<f64>,
+    iou_obs: Vec<f64>,
+}
+
+impl Bench {
+    /// Prints a map's line (and draws it with `--png`), and records its times in `class`.
+    fn report(
+        &mut self,
+        class: &str,
+        name: &str,
+        grid: &OccupancyGrid,
+        layout: &Layout,
+        times: &[f64],
+    ) {
+        let known = (grid.count(Occupancy::Free) + grid.count(Occupancy::Occupied)) as f64
+            * grid.frame.cell_area_m2();
+        let part = layout
+            .rooms
+            .iter()
+            .filter(|r| r.label == RoomLabel::Partial)
+            .count();
+        let open = layout
+            .rooms
+            .iter()
+            .filter(|r| r.label == RoomLabel::Open)
+            .count();
+        let med = times[times.len() / 2];
+        let max = times[times.len() - 1];
+        let stage = stage_ms(grid, &self.config, self.runs);
+        let classes = &mut self.classes;
+        let i = match classes.iter().position(|c| c.0 == class) {
+            Some(i) => i,
+            None => {
+                classes.push((class.to_string(), Vec::new(), Vec::new()));
+                classes.len() - 1
+            }
+        };
+        classes[i].1.extend_from_slice(times);
+        classes[i].2.push((stage.0, stage.1, med));
+        self.all_median.push(med);
+        self.all_max = self.all_max.max(max);
+        println!(
+            "{:<44} {:>8.2} {:>8.0} {:>5} {:>5} {:>5} {:>5} {:>5} {:>8.1} {:>8.1}",
+            name,
+            grid.frame.len() as f64 / 1e6,
+            known,
+            layout.diagnostics.directions,
+            layout.lines.len(),
+            layout.rooms.len(),
+            part,
+            open,
+            med,
+            max
         );
-        let (layout, times) = time_ms(&grid, &config, runs);
-        let class = if name.starts_with("partial") {
-            "real rotated 0.10 m (partial/)"
-        } else {
-            "real other"
-        };
-        report(class, &name, &grid, &layout, &times);
-    }
-    // Synthetic: a 1100 m2 corridor building, complete and partial, axis-aligned and rotated.
-    let mut acc_lines = Vec::new();
-    for rotation_rad in [0.0, 0.4, std::f64::consts::FRAC_PI_4] {
-        let spec = BuildingSpec {
-            room_widths_m: [4.0, 4.0, 6.0, 4.0, 5.0].repeat(3),
-            room_depth_m: 6.0,
-            rotation_rad,
-            ..BuildingSpec::default()
-        };
-        let b = corridor_building(&spec);
-        let full = rasterise(&b, 0.05);
-        for fraction in [0.3, 0.5, 0.7, 1.1] {
-            let grid = if fraction > 1.0 {
-                full.clone()
-            } else {
-                observe(&full, &corridor_views(&spec, fraction), 6.0)
-            };
-            let (layout, times) = time_ms(&grid, &config, runs);
-            let name = format!("synthetic/rot{rotation_rad:.2}_seen{fraction:.1}");
-            report("synthetic corridor", &name, &grid, &layout, &times);
-            let a = evaluate(&layout, &b.rooms, grid.frame);
-            acc_lines.push(format!(
-                "{name:<34} iou {:.3} pixel {:.3} rooms {}/{} partial {} predicted_iou {} observed_only_iou {}",
-                a.matched_room_iou,
-                a.pixel_accuracy,
-                a.rooms_found,
-                a.rooms_true,
-                a.partial_rooms,
-                a.predicted_iou.map_or("-".into(), |v| format!("{v:.3}")),
-                a.observed_only_iou.map_or("-".into(), |v| format!("{v:.3}")),
-            ));
+        if self.verbose {
+            println!("    {:?}", layout.diagnostics);
+        }
+        if let Some(d) = &self.png {
+            draw(
+                grid,
+                layout,
+                &d.join(format!("{}.png", name.replace('/', "_"))),
+            );
         }
     }
-    // Generated schools and offices, 1000-3500 m2, complete and explored 30-90 %.
-    let (mut iou_complete, mut iou_pred, mut iou_obs) = (Vec::new(), Vec::new(), Vec::new());
-    for seed in 0..4u64 {
-        for kind in [BuildingKind::School, BuildingKind::Office] {
-            let area_m2 = [1000.0, 2000.0, 3500.0, 1500.0][seed as usize];
-            let rotation_rad = [0.0, 0.35, std::f64::consts::FRAC_PI_4, 0.0][seed as usize];
-            let b = generate(&GenerateConfig {
-                seed,
-                area_m2,
-                kind,
+
+    /// Every real map in `maps/` (those `wanted`).
+    fn real_maps(&mut self, wanted: &impl Fn(&str) -> bool) {
+        for yaml in common::all_maps() {
+            if !wanted(&yaml.to_string_lossy()) {
+                continue;
+            }
+            let grid = common::load_map(&yaml);
+            let name = format!(
+                "{}/{}",
+                yaml.parent()
+                    .unwrap()
+                    .file_name()
+                    .unwrap()
+                    .to_string_lossy(),
+                yaml.file_stem().unwrap().to_string_lossy()
+            );
+            let (layout, times) = time_ms(&grid, &self.config, self.runs);
+            let class = if name.starts_with("partial") {
+                "real rotated 0.10 m (partial/)"
+            } else {
+                "real other"
+            };
+            self.report(class, &name, &grid, &layout, &times);
+        }
+    }
+
+    /// The synthetic corridor buildings.
+    fn synthetic(&mut self) {
+        // Synthetic: a 1100 m2 corridor building, complete and partial, axis-aligned and rotated.
+        for rotation_rad in [0.0, 0.4, std::f64::consts::FRAC_PI_4] {
+            let spec = BuildingSpec {
+                room_widths_m: [4.0, 4.0, 6.0, 4.0, 5.0].repeat(3),
+                room_depth_m: 6.0,
                 rotation_rad,
-                ..GenerateConfig::default()
-            });
-            let full = complete_map(&b, 0.05);
-            for fraction in [0.3, 0.6, 0.9, 1.1] {
+                ..BuildingSpec::default()
+            };
+            let b = corridor_building(&spec);
+            let full = rasterise(&b, 0.05);
+            for fraction in [0.3, 0.5, 0.7, 1.1] {
                 let grid = if fraction > 1.0 {
                     full.clone()
                 } else {
-                    explored_map(&b, &full, fraction, 0.4, seed)
+                    observe(&full, &corridor_views(&spec, fraction), 6.0)
                 };
-                if !wanted(&format!("generated {kind:?}")) {
-                    continue;
-                }
-                let (layout, times) = time_ms(&grid, &config, runs);
-                let name =
-                    format!("gen/{kind:?}{seed}_{area_m2}_rot{rotation_rad:.2}_seen{fraction:.1}");
-                let class = if fraction > 1.0 {
-                    "generated complete 0.05 m"
-                } else {
-                    "generated partial 0.05 m"
-                };
-                report(class, &name, &grid, &layout, &times);
+                let (layout, times) = time_ms(&grid, &self.config, self.runs);
+                let name = format!("synthetic/rot{rotation_rad:.2}_seen{fraction:.1}");
+                self.report("synthetic corridor", &name, &grid, &layout, &times);
                 let a = evaluate(&layout, &b.rooms, grid.frame);
-                if fraction > 1.0 {
-                    iou_complete.push(a.matched_room_iou);
-                } else if let (Some(p), Some(o)) = (a.predicted_iou, a.observed_only_iou) {
-                    iou_pred.push(p);
-                    iou_obs.push(o);
-                }
-                acc_lines.push(format!(
-                    "{name:<44} iou {:.3} rooms {}/{} partial {} predicted_iou {} observed_only_iou {}",
+                self.acc_lines.push(format!(
+                    "{name:<34} iou {:.3} pixel {:.3} rooms {}/{} partial {} predicted_iou {} observed_only_iou {}",
                     a.matched_room_iou,
+                    a.pixel_accuracy,
                     a.rooms_found,
                     a.rooms_true,
                     a.partial_rooms,
@@ -347,63 +345,135 @@ fn main() {
             }
         }
     }
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    println!();
-    println!(
-        "baseline: thin-unknown fill (the costliest stage before optimisation), reference = \
-         per-cell dilation of the whole grid, optimised = vectorised dilation of the known window"
-    );
-    println!(
-        "{:<32} {:>8} {:>8} {:>6} | {:>9} {:>9} {:>7} | {:>12} {:>7}",
-        "class",
-        "med_ms",
-        "max_ms",
-        "runs",
-        "stage_ref",
-        "stage_opt",
-        "ratio",
-        "layout_w_ref",
-        "ratio"
-    );
-    for (class, mut t, stages) in classes {
-        let max = t.iter().cloned().fold(0.0, f64::max);
-        let mut opt: Vec<f64> = stages.iter().map(|s| s.0).collect();
-        let mut reference: Vec<f64> = stages.iter().map(|s| s.1).collect();
-        let mut with_ref: Vec<f64> = stages.iter().map(|s| s.2 + s.1 - s.0).collect();
-        let mut layout: Vec<f64> = stages.iter().map(|s| s.2).collect();
-        let (o, r, wr, l) = (
-            median(&mut opt),
-            median(&mut reference),
-            median(&mut with_ref),
-            median(&mut layout),
+
+    /// The generated schools and offices (those `wanted`).
+    fn generated(&mut self, wanted: &impl Fn(&str) -> bool) {
+        // Generated schools and offices, 1000-3500 m2, complete and explored 30-90 %.
+        for seed in 0..4u64 {
+            for kind in [BuildingKind::School, BuildingKind::Office] {
+                let area_m2 = [1000.0, 2000.0, 3500.0, 1500.0][seed as usize];
+                let rotation_rad = [0.0, 0.35, std::f64::consts::FRAC_PI_4, 0.0][seed as usize];
+                let b = generate(&GenerateConfig {
+                    seed,
+                    area_m2,
+                    kind,
+                    rotation_rad,
+                    ..GenerateConfig::default()
+                });
+                let full = complete_map(&b, 0.05);
+                for fraction in [0.3, 0.6, 0.9, 1.1] {
+                    let grid = if fraction > 1.0 {
+                        full.clone()
+                    } else {
+                        explored_map(&b, &full, fraction, 0.4, seed)
+                    };
+                    if !wanted(&format!("generated {kind:?}")) {
+                        continue;
+                    }
+                    let name = format!(
+                        "gen/{kind:?}{seed}_{area_m2}_rot{rotation_rad:.2}_seen{fraction:.1}"
+                    );
+                    self.generated_map(&name, &grid, &b.rooms, fraction > 1.0);
+                }
+            }
+        }
+    }
+
+    /// Times and evaluates one generated map (`complete` or partly explored) against its
+    /// building's `rooms`.
+    fn generated_map(
+        &mut self,
+        name: &str,
+        grid: &OccupancyGrid,
+        rooms: &[sim_core::building::Room],
+        complete: bool,
+    ) {
+        let (layout, times) = time_ms(grid, &self.config, self.runs);
+        let class = if complete {
+            "generated complete 0.05 m"
+        } else {
+            "generated partial 0.05 m"
+        };
+        self.report(class, name, grid, &layout, &times);
+        let a = evaluate(&layout, rooms, grid.frame);
+        if complete {
+            self.iou_complete.push(a.matched_room_iou);
+        } else if let (Some(p), Some(o)) = (a.predicted_iou, a.observed_only_iou) {
+            self.iou_pred.push(p);
+            self.iou_obs.push(o);
+        }
+        self.acc_lines.push(format!(
+            "{name:<44} iou {:.3} rooms {}/{} partial {} predicted_iou {} observed_only_iou {}",
+            a.matched_room_iou,
+            a.rooms_found,
+            a.rooms_true,
+            a.partial_rooms,
+            a.predicted_iou.map_or("-".into(), |v| format!("{v:.3}")),
+            a.observed_only_iou
+                .map_or("-".into(), |v| format!("{v:.3}")),
+        ));
+    }
+
+    /// Prints the per-class table, the generated maps' IoU, the accuracy lines and the totals.
+    fn summary(self) {
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        println!();
+        println!(
+            "baseline: thin-unknown fill (the costliest stage before optimisation), reference = \
+             per-cell dilation of the whole grid, optimised = vectorised dilation of the known window"
         );
         println!(
-            "{class:<32} {:>8.1} {:>8.1} {:>6} | {:>9.1} {:>9.1} {:>6.1}x | {:>12.1} {:>6.2}x",
-            median(&mut t),
-            max,
-            t.len(),
-            r,
-            o,
-            r / o.max(1e-9),
-            wr,
-            wr / l.max(1e-9)
+            "{:<32} {:>8} {:>8} {:>6} | {:>9} {:>9} {:>7} | {:>12} {:>7}",
+            "class",
+            "med_ms",
+            "max_ms",
+            "runs",
+            "stage_ref",
+            "stage_opt",
+            "ratio",
+            "layout_w_ref",
+            "ratio"
+        );
+        for (class, mut t, stages) in self.classes {
+            let max = t.iter().cloned().fold(0.0, f64::max);
+            let mut opt: Vec<f64> = stages.iter().map(|s| s.0).collect();
+            let mut reference: Vec<f64> = stages.iter().map(|s| s.1).collect();
+            let mut with_ref: Vec<f64> = stages.iter().map(|s| s.2 + s.1 - s.0).collect();
+            let mut layout: Vec<f64> = stages.iter().map(|s| s.2).collect();
+            let (o, r, wr, l) = (
+                median(&mut opt),
+                median(&mut reference),
+                median(&mut with_ref),
+                median(&mut layout),
+            );
+            println!(
+                "{class:<32} {:>8.1} {:>8.1} {:>6} | {:>9.1} {:>9.1} {:>6.1}x | {:>12.1} {:>6.2}x",
+                median(&mut t),
+                max,
+                t.len(),
+                r,
+                o,
+                r / o.max(1e-9),
+                wr,
+                wr / l.max(1e-9)
+            );
+        }
+        println!(
+            "generated: complete matched IoU {:.3}; partial rooms IoU predicted {:.3} vs observed only {:.3}",
+            mean(&self.iou_complete),
+            mean(&self.iou_pred),
+            mean(&self.iou_obs)
+        );
+        println!();
+        for l in self.acc_lines {
+            println!("{l}");
+        }
+        println!(
+            "\nall maps: median of medians {:.1} ms, max {:.1} ms ({} maps, {} runs each)",
+            median(&mut self.all_median.clone()),
+            self.all_max,
+            self.all_median.len(),
+            self.runs
         );
     }
-    println!(
-        "generated: complete matched IoU {:.3}; partial rooms IoU predicted {:.3} vs observed only {:.3}",
-        mean(&iou_complete),
-        mean(&iou_pred),
-        mean(&iou_obs)
-    );
-    println!();
-    for l in acc_lines {
-        println!("{l}");
-    }
-    println!(
-        "\nall maps: median of medians {:.1} ms, max {:.1} ms ({} maps, {} runs each)",
-        median(&mut all_median.clone()),
-        all_max,
-        all_median.len(),
-        runs
-    );
 }

@@ -4,7 +4,7 @@
 // Benchmarks, examples and integration tests run at the edge: they read files and clocks,
 // which the kernel itself may not (sim-core/clippy.toml).
 #![allow(clippy::disallowed_types, clippy::disallowed_methods)]
-use sim_core::frontier::detect::{detect_frontiers, detect_frontiers_in, FrontierConfig};
+use sim_core::frontier::detect::{detect_frontiers, detect_frontiers_in, Frontier, FrontierConfig};
 use sim_core::gain::information_gain;
 use sim_core::mapping::distance_field::ObstacleDistance;
 use sim_core::mapping::log_odds::{LogOddsConfig, LogOddsMap};
@@ -77,7 +77,20 @@ fn main() {
         (SIZE_M / RES_M) as u32,
     );
     let walls = building(frame);
-    // Poses on a lattice over the left 60% of the building, room centres and doorways.
+    let poses = lattice_poses(&walls);
+    let scans: Vec<Scan> = poses.iter().map(|p| cast(&walls, p)).collect();
+    let cfg = LogOddsConfig::default();
+    let map = bench_insert(frame, &poses, &scans, &cfg);
+    let (m2, field) = bench_distance_field(frame, &map, &poses, &scans, &cfg);
+    bench_scan_match(&field, &m2, &poses, &scans);
+    let fs = bench_frontiers(&map);
+    bench_planning(&map, &field, &poses, &fs);
+}
+
+/// Poses on a lattice over the left 60% of the building (room centres and doorways), those in
+/// free space.
+fn lattice_poses(walls: &Bitmap) -> Vec<Pose> {
+    let frame = walls.frame;
     let mut poses = Vec::new();
     for iy in 0..40 {
         for ix in 0..24 {
@@ -91,19 +104,38 @@ fn main() {
             }
         }
     }
-    let scans: Vec<Scan> = poses.iter().map(|p| cast(&walls, p)).collect();
+    poses
+}
+
+/// Times `insert_scan` of every scan; returns the map.
+fn bench_insert(
+    frame: GridFrame,
+    poses: &[Pose],
+    scans: &[Scan],
+    cfg: &LogOddsConfig,
+) -> LogOddsMap {
     let mut map = LogOddsMap::new(frame);
-    let cfg = LogOddsConfig::default();
     let t = Instant::now();
-    for (p, s) in poses.iter().zip(&scans) {
-        map.insert_scan(p, s, &cfg);
+    for (p, s) in poses.iter().zip(scans) {
+        map.insert_scan(p, s, cfg);
     }
     println!(
         "insert_scan (181 beams, 6 m): {:8.1} us/scan over {} scans",
         us(t, scans.len()),
         scans.len()
     );
+    map
+}
 
+/// Times the distance field built from scratch against updated per scan (checked equal);
+/// returns the map built again and its field.
+fn bench_distance_field(
+    frame: GridFrame,
+    map: &LogOddsMap,
+    poses: &[Pose],
+    scans: &[Scan],
+    cfg: &LogOddsConfig,
+) -> (LogOddsMap, ObstacleDistance) {
     // Incremental distance field: rebuild from scratch vs update per scan.
     let t = Instant::now();
     let full = ObstacleDistance::from_grid(&map.occupancy, 8);
@@ -115,9 +147,9 @@ fn main() {
     let mut field = ObstacleDistance::new(frame, 8);
     let mut t_ins = 0.0;
     let mut t_upd = 0.0;
-    for (p, s) in poses.iter().zip(&scans) {
+    for (p, s) in poses.iter().zip(scans) {
         let t = Instant::now();
-        m2.insert_scan(p, s, &cfg);
+        m2.insert_scan(p, s, cfg);
         t_ins += t.elapsed().as_secs_f64();
         let t = Instant::now();
         let flips = m2.take_occupied_flips();
@@ -130,15 +162,19 @@ fn main() {
         t_ins * 1e6 / scans.len() as f64,
         t_upd * 1e6 / scans.len() as f64
     );
+    (m2, field)
+}
 
+/// Times scan matching from perturbed priors and from the exact one.
+fn bench_scan_match(field: &ObstacleDistance, m2: &LogOddsMap, poses: &[Pose], scans: &[Scan]) {
     // Scan matching from perturbed priors.
     let mcfg = ScanMatchConfig::default();
     let (mut err_sum, mut accepted, mut searched) = (0.0, 0, 0);
     let t = Instant::now();
-    for (k, (p, s)) in poses.iter().zip(&scans).enumerate() {
+    for (k, (p, s)) in poses.iter().zip(scans).enumerate() {
         let d = [(0.05, -0.03, 1.0), (-0.04, 0.05, -1.5), (0.1, 0.0, 3.0)][k % 3];
         let prior = Pose::new(p.x_m + d.0, p.y_m + d.1, p.theta_rad + f64::to_radians(d.2));
-        let r = match_scan(&field, &m2, &prior, s, &mcfg);
+        let r = match_scan(field, m2, &prior, s, &mcfg);
         accepted += r.accepted as usize;
         searched += r.searched as usize;
         let e = p.between(&r.pose);
@@ -155,10 +191,14 @@ fn main() {
     let prior = poses[10];
     let t = Instant::now();
     for _ in 0..100 {
-        std::hint::black_box(match_scan(&field, &m2, &prior, &scans[10], &mcfg));
+        std::hint::black_box(match_scan(field, m2, &prior, &scans[10], &mcfg));
     }
     println!("  match_scan, exact prior:     {:8.1} us", us(t, 100));
+}
 
+/// Times frontier detection on the full grid and in the known box (checked equal); returns
+/// the frontiers.
+fn bench_frontiers(map: &LogOddsMap) -> Vec<Frontier> {
     // Frontiers.
     let fcfg = FrontierConfig::with_min_length_m(0.3, RES_M);
     let t = Instant::now();
@@ -173,11 +213,17 @@ fn main() {
     let fs2 = detect_frontiers_in(&map.occupancy, lo, hi, &fcfg);
     println!("detect_frontiers_in (known bb):{:8.1} us", us(t, 1));
     assert_eq!(fs, fs2);
+    fs
+}
 
+/// Times traversability, wall costs, Dijkstra (fine, with wall costs, coarse), the gains of the
+/// frontiers `fs`, the paths and waypoints to them, and the choice of the best.
+fn bench_planning(map: &LogOddsMap, field: &ObstacleDistance, poses: &[Pose], fs: &[Frontier]) {
+    let frame = map.frame;
     // Planning.
     let radius_m = 0.2;
     let t = Instant::now();
-    let trav = traversable(&map.occupancy, &field, radius_m);
+    let trav = traversable(&map.occupancy, field, radius_m);
     println!(
         "traversable (from field):      {:8.1} us, {} cells",
         us(t, 1),
@@ -186,7 +232,7 @@ fn main() {
     let start = frame.cell_from_world(poses[0].position());
     let start = nearest_traversable(&trav, start, 6).unwrap();
     let t = Instant::now();
-    let extra = wall_cost(&field, radius_m, 0.2, 5);
+    let extra = wall_cost(field, radius_m, 0.2, 5);
     println!("wall_cost:                     {:8.1} us", us(t, 1));
     let t = Instant::now();
     let costs = dijkstra(&trav, start, None);

@@ -583,6 +583,36 @@ pub fn explorable_free(
 ) -> Bitmap {
     let frame = reachable.frame;
     let res = frame.resolution_m;
+    let roomy = roomy_cells(reachable, robot_radius_m);
+    let Some(seed) = drive_seed(&roomy, start) else {
+        return reachable.clone();
+    };
+    let drivable = flood_fill(&roomy, seed);
+    let mut seen = seen_by_body(reachable, &drivable, robot_radius_m);
+    // Rays from the drivable region's boundary.
+    // A ray sees a gap of one or two cells (the speckle of a scanned map) but not through it:
+    // it shows a glimpse, not a room.
+    let narrow = narrow_gaps(reachable);
+    let dirs = ray_directions(range_m / res);
+    let class = ray_classes(reachable, &drivable, &narrow);
+    let marked = mark_rays(&class, &drivable, &dirs);
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let pw = w + 2;
+    for y in 0..h {
+        for x in 0..w {
+            if marked[(y + 1) * pw + x + 1] {
+                seen.data[y * w + x] = true;
+            }
+        }
+    }
+    seen
+}
+
+/// The cells of [`explorable_free`] where the robot's body (a disc of `robot_radius_m`) fits:
+/// those far enough from the cells outside `reachable`.
+fn roomy_cells(reachable: &Bitmap, robot_radius_m: f64) -> Bitmap {
+    let frame = reachable.frame;
+    let res = frame.resolution_m;
     let solid = Bitmap {
         frame,
         data: reachable.data.iter().map(|f| !f).collect(),
@@ -593,7 +623,7 @@ pub fn explorable_free(
     // when no solid cell lies nearer than the smallest squared distance whose distance is that
     // much; the distance transform decides when that is beyond `MAX_WINDOW_SQ`.
     let roomy_sq = (0..=MAX_WINDOW_SQ).find(|&d2| distance_of_sq(d2) >= need_cells);
-    let roomy = Bitmap {
+    Bitmap {
         frame,
         data: match roomy_sq {
             Some(t) => within_sq(&solid, t.checked_sub(1))
@@ -606,17 +636,20 @@ pub fn explorable_free(
                 .map(|&d| d as f64 >= need_cells)
                 .collect(),
         },
-    };
-    let Some(seed) = drive_seed(&roomy, start) else {
-        return reachable.clone();
-    };
-    let drivable = flood_fill(&roomy, seed);
+    }
+}
+
+/// The cells of `reachable` within the body's radius of a `drivable` cell: seen from inside
+/// the disc.
+fn seen_by_body(reachable: &Bitmap, drivable: &Bitmap, robot_radius_m: f64) -> Bitmap {
+    let frame = reachable.frame;
+    let res = frame.resolution_m;
     // Seen from inside the disc: within the body's radius of a drivable cell.
     let body_cells = robot_radius_m / res;
     // As for `roomy`: the squared distances whose distances are at most `body_cells` are those
     // up to the largest such (none when even 0 is not).
     let within: Vec<bool> = if distance_of_sq(MAX_WINDOW_SQ) <= body_cells {
-        distance_to(&drivable)
+        distance_to(drivable)
             .data
             .iter()
             .map(|&d| (d as f64) <= body_cells)
@@ -625,21 +658,21 @@ pub fn explorable_free(
         let body_sq = (0..=MAX_WINDOW_SQ)
             .take_while(|&d2| distance_of_sq(d2) <= body_cells)
             .last();
-        within_sq(&drivable, body_sq)
+        within_sq(drivable, body_sq)
     };
-    let mut seen = Bitmap {
+    Bitmap {
         frame,
         data: within
             .iter()
             .zip(&reachable.data)
             .map(|(&near, &f)| f && near)
             .collect(),
-    };
-    // Rays from the drivable region's boundary.
-    // A ray sees a gap of one or two cells (the speckle of a scanned map) but not through it:
-    // it shows a glimpse, not a room.
-    let narrow = narrow_gaps(reachable);
-    let dirs = ray_directions(range_m / res);
+    }
+}
+
+/// What a ray does on entering each cell, on the frame padded by a cell on every side.
+fn ray_classes(reachable: &Bitmap, drivable: &Bitmap, narrow: &Bitmap) -> Vec<u8> {
+    let frame = reachable.frame;
     // What a ray does on entering a cell, on the frame padded by a cell on every side (a ray
     // stops at the frame's edge): pass on, stop before it, or mark it and stop (narrow).
     let (w, h) = (frame.width as usize, frame.height as usize);
@@ -657,38 +690,24 @@ pub fn explorable_free(
             };
         }
     }
+    class
+}
+
+/// The cells (on the padded frame of `class`) that the rays in directions `dirs` from the
+/// cells of `drivable` see.
+fn mark_rays(class: &[u8], drivable: &Bitmap, dirs: &[[f64; 2]]) -> Vec<bool> {
+    let frame = drivable.frame;
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let pw = w + 2;
     let mut marked = vec![false; class.len()];
-    let padded = |(dx, dy): (i32, i32)| dx as isize + dy as isize * pw as isize;
-    // Most directions walk the same way from every start (`uniform_walk`): their walks, as
-    // steps on the padded frame, grouped by the first step (in the order of
-    // `Cell::neighbours4`). A ray marks nothing unless its first step lands on a cell it may
-    // pass, so a start walks only the groups whose first cell is in the frame, reachable and
-    // not drivable.
-    let limit = frame.width.max(frame.height) as f64 + 1.0;
-    let mut by_step: [WalkTree; 4] = Default::default();
-    let mut keyed: Vec<usize> = Vec::new();
-    for (k, d) in dirs.iter().enumerate() {
-        match uniform_walk(*d, limit) {
-            Some(walk) => {
-                if let Some(&first) = walk.first() {
-                    let n = [(1, 0), (-1, 0), (0, 1), (0, -1)]
-                        .iter()
-                        .position(|&s| s == first)
-                        .expect("a walk steps to a 4-neighbour");
-                    by_step[n].insert(walk.into_iter().map(padded));
-                }
-            }
-            None => keyed.push(k),
-        }
-    }
-    let by_step = by_step.map(|t| t.preorder());
-    // The walk of the others from the centre of a cell depends only on the end point's offset
-    // from the start in cells and on the extent `b - a` `SegmentCells` computes (the start's
-    // fraction is always one half): each direction keeps the walks it has met under that key.
-    type Key = (i32, i32, u64, u64);
-    const WALKS_PER_DIRECTION: usize = 64;
-    let mut walks: Vec<Vec<(Key, Vec<isize>)>> = vec![Vec::new(); RAYS];
-    let mut steps = Vec::new();
+    let (by_step, keyed) = uniform_walks(dirs, frame, pw);
+    let mut others = KeyedWalks {
+        dirs,
+        keyed,
+        pw,
+        walks: vec![Vec::new(); RAYS],
+        steps: Vec::new(),
+    };
     // (Row by row: no division per cell. A neighbour is open when a ray may enter it: in the
     // frame, reachable and not drivable, as `class` says.)
     for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
@@ -723,7 +742,79 @@ pub fn explorable_free(
                 };
             }
         }
-        for &k in &keyed {
+        others.mark(class, &mut marked, c, start);
+    }
+    marked
+}
+
+/// Index offset on the padded frame of width `pw` of a step `(dx, dy)`.
+#[inline]
+fn padded_offset((dx, dy): (i32, i32), pw: usize) -> isize {
+    dx as isize + dy as isize * pw as isize
+}
+
+/// The walks of the directions that walk the same way from every start, as preorder trees of
+/// steps on the padded frame of width `pw`, grouped by the first step; and the other
+/// directions (by index).
+fn uniform_walks(
+    dirs: &[[f64; 2]],
+    frame: GridFrame,
+    pw: usize,
+) -> ([Vec<(isize, usize)>; 4], Vec<usize>) {
+    let padded = |d: (i32, i32)| padded_offset(d, pw);
+    // Most directions walk the same way from every start (`uniform_walk`): their walks, as
+    // steps on the padded frame, grouped by the first step (in the order of
+    // `Cell::neighbours4`). A ray marks nothing unless its first step lands on a cell it may
+    // pass, so a start walks only the groups whose first cell is in the frame, reachable and
+    // not drivable.
+    let limit = frame.width.max(frame.height) as f64 + 1.0;
+    let mut by_step: [WalkTree; 4] = Default::default();
+    let mut keyed: Vec<usize> = Vec::new();
+    for (k, d) in dirs.iter().enumerate() {
+        match uniform_walk(*d, limit) {
+            Some(walk) => {
+                if let Some(&first) = walk.first() {
+                    let n = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                        .iter()
+                        .position(|&s| s == first)
+                        .expect("a walk steps to a 4-neighbour");
+                    by_step[n].insert(walk.into_iter().map(padded));
+                }
+            }
+            None => keyed.push(k),
+        }
+    }
+    (by_step.map(|t| t.preorder()), keyed)
+}
+
+/// A key of a walk of [`KeyedWalks`].
+type WalkKey = (i32, i32, u64, u64);
+
+/// The directions whose walk depends on the start, with the walks each has met.
+struct KeyedWalks<'a> {
+    dirs: &'a [[f64; 2]],
+    /// The directions (by index).
+    keyed: Vec<usize>,
+    /// The padded frame's width.
+    pw: usize,
+    /// Per direction, its walks met so far with their keys.
+    walks: Vec<Vec<(WalkKey, Vec<isize>)>>,
+    /// Scratch for a new walk.
+    steps: Vec<isize>,
+}
+
+impl KeyedWalks<'_> {
+    /// Marks the cells the rays of these directions from cell `c` (index `start` on the padded
+    /// frame) see.
+    fn mark(&mut self, class: &[u8], marked: &mut [bool], c: Cell, start: usize) {
+        // The walk of the others from the centre of a cell depends only on the end point's
+        // offset from the start in cells and on the extent `b - a` `SegmentCells` computes (the
+        // start's fraction is always one half): each direction keeps the walks it has met under
+        // that key.
+        const WALKS_PER_DIRECTION: usize = 64;
+        let (dirs, pw) = (self.dirs, self.pw);
+        let padded = |d: (i32, i32)| padded_offset(d, pw);
+        for &k in &self.keyed {
             let a = [c.x as f64 + 0.5, c.y as f64 + 0.5];
             let b = [a[0] + dirs[k][0], a[1] + dirs[k][1]];
             if !(b[0].is_finite() && b[1].is_finite()) {
@@ -736,31 +827,23 @@ pub fn explorable_free(
                 (b[0] - a[0]).to_bits(),
                 (b[1] - a[1]).to_bits(),
             );
-            match walks[k].iter().find(|(kk, _)| *kk == key) {
-                Some((_, walk)) => mark_along(&class, &mut marked, start, walk),
+            match self.walks[k].iter().find(|(kk, _)| *kk == key) {
+                Some((_, walk)) => mark_along(class, marked, start, walk),
                 None => {
-                    steps.clear();
+                    self.steps.clear();
                     let mut prev = c;
                     for cell in crate::mapping::ray::SegmentCells::new(a, b).skip(1) {
-                        steps.push(padded((cell.x - prev.x, cell.y - prev.y)));
+                        self.steps.push(padded((cell.x - prev.x, cell.y - prev.y)));
                         prev = cell;
                     }
-                    mark_along(&class, &mut marked, start, &steps);
-                    if walks[k].len() < WALKS_PER_DIRECTION {
-                        walks[k].push((key, steps.clone()));
+                    mark_along(class, marked, start, &self.steps);
+                    if self.walks[k].len() < WALKS_PER_DIRECTION {
+                        self.walks[k].push((key, self.steps.clone()));
                     }
                 }
             }
         }
     }
-    for y in 0..h {
-        for x in 0..w {
-            if marked[(y + 1) * pw + x + 1] {
-                seen.data[y * w + x] = true;
-            }
-        }
-    }
-    seen
 }
 
 /// How many rays [`explorable_free`] casts from each cell of the drivable region's boundary.

@@ -220,103 +220,11 @@ impl RayFan {
         let half = r_cells.ceil() as i32 + 1;
         // One ray per cell of arc at full range, so every cell at range is crossed by a ray.
         let n_rays = ((std::f64::consts::TAU * r_cells).ceil() as usize).max(8);
-        let start = [0.5, 0.5];
-        // Trie: per node its offset and its children, as a list in the order they were added
-        // (first child, next sibling; the last child to append to), in flat arrays.
-        const NONE: u32 = u32::MAX;
-        let mut offset: Vec<(i16, i16)> = vec![(0, 0)];
-        let mut first_child: Vec<u32> = vec![NONE];
-        let mut last_child: Vec<u32> = vec![NONE];
-        let mut next_sibling: Vec<u32> = vec![NONE];
-        // Each node's depth, each ray's last node, and per cell of the square the rays through
-        // it (the square's index, the ray and the cell's index in its walk), unless the walks
-        // are too long to be kept (a walk has up to `r_cells sqrt 2 + 2` cells: listed only up
-        // to twice the depth kept, then kept if no walk is deeper).
-        let mut depth: Vec<u32> = vec![0];
-        let mut ray_end: Vec<u32> = Vec::with_capacity(n_rays);
         let side = 2 * half + 1;
         let may_keep = r_cells <= 2.0 * MAX_DEPTH_KEPT as f64;
-        let mut on: Vec<(u32, u32)> = Vec::new();
-        for k in 0..n_rays {
-            let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
-            let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
-            let mut node = 0usize;
-            let mut first = true;
-            let mut step = 0u32;
-            walk_segment(start, end, |c| {
-                let o = (c.x as i16, c.y as i16);
-                if may_keep && step as usize <= MAX_DEPTH_KEPT {
-                    let j = ((c.y + half) * side + c.x + half) as u32;
-                    on.push((j, (k as u32) << 8 | step));
-                }
-                step += 1;
-                if first {
-                    first = false; // the centre: the root
-                    return true;
-                }
-                let mut ch = first_child[node];
-                while ch != NONE && offset[ch as usize] != o {
-                    ch = next_sibling[ch as usize];
-                }
-                node = if ch != NONE {
-                    ch as usize
-                } else {
-                    let id = offset.len() as u32;
-                    offset.push(o);
-                    first_child.push(NONE);
-                    last_child.push(NONE);
-                    next_sibling.push(NONE);
-                    depth.push(depth[node] + 1);
-                    match last_child[node] {
-                        NONE => first_child[node] = id,
-                        last => next_sibling[last as usize] = id,
-                    }
-                    last_child[node] = id;
-                    id as usize
-                };
-                true
-            });
-            ray_end.push(node as u32);
-        }
+        let trie = RayTrie::build(r_cells, half, n_rays, may_keep);
         // Flatten in preorder (children in the order they were added).
-        let r2 = r_cells * r_cells;
-        let mut nodes = Vec::with_capacity(offset.len());
-        let mut stack: Vec<(u32, bool)> = vec![(0, false)];
-        let mut open: Vec<usize> = Vec::new();
-        let mut children: Vec<u32> = Vec::new();
-        let mut preorder_of: Vec<u32> = vec![0; offset.len()];
-        let mut ids: Vec<u32> = Vec::with_capacity(offset.len());
-        while let Some((id, done)) = stack.pop() {
-            if done {
-                let at = open.pop().expect("opened before closed");
-                let len = nodes.len() as u32;
-                let n: &mut FanNode = &mut nodes[at];
-                n.end = len;
-                continue;
-            }
-            let (dx, dy) = offset[id as usize];
-            let d2 = (dx as i32 * dx as i32 + dy as i32 * dy as i32) as f64;
-            open.push(nodes.len());
-            preorder_of[id as usize] = nodes.len() as u32;
-            ids.push(id);
-            let seen_at = ((dy as i32 + half) * side + dx as i32 + half) as u32;
-            nodes.push(FanNode {
-                end: 0,
-                seen: seen_at | if d2 <= r2 { IN_RANGE } else { 0 },
-                offset: 0,
-                cell: (dx, dy),
-            });
-            stack.push((id, true));
-            children.clear();
-            let mut ch = first_child[id as usize];
-            while ch != NONE {
-                children.push(ch);
-                ch = next_sibling[ch as usize];
-            }
-            for &ch in children.iter().rev() {
-                stack.push((ch, false));
-            }
-        }
+        let (nodes, preorder_of, ids) = trie.preorder(r_cells, half);
         // Leaves before each node in preorder (a subtree's leaves follow its root).
         let mut leaves_before: Vec<u32> = Vec::with_capacity(nodes.len() + 1);
         let mut leaves = 0u32;
@@ -325,24 +233,14 @@ impl RayFan {
             leaves += (n.end as usize == i + 1) as u32;
         }
         leaves_before.push(leaves);
+        let depth = trie.depth;
         let deepest = depth.iter().copied().max().unwrap_or(0) as usize;
-        let ray_leaf = ray_end
+        let ray_leaf = trie
+            .ray_end
             .iter()
             .map(|&id| leaves_before[preorder_of[id as usize] as usize])
             .collect();
-        on.sort_unstable();
-        let mut starts = vec![0u32; (side * side) as usize + 1];
-        for &(j, _) in &on {
-            starts[j as usize + 1] += 1;
-        }
-        for j in 1..starts.len() {
-            starts[j] += starts[j - 1];
-        }
-        let ray_cells = RayCells {
-            half,
-            start: starts,
-            entries: on.into_iter().map(|(_, e)| e).collect(),
-        };
+        let ray_cells = RayCells::of(trie.on, half);
         let side = side as usize;
         Self {
             r_cells,
@@ -431,6 +329,160 @@ impl RayFan {
             rays,
         };
         (count, read)
+    }
+}
+
+/// No node (in [`RayTrie`]).
+const NONE: u32 = u32::MAX;
+
+/// The rays' walks from a cell's centre as a trie, [`RayFan::new`]'s first step.
+struct RayTrie {
+    // Trie: per node its offset and its children, as a list in the order they were added
+    // (first child, next sibling; the last child to append to), in flat arrays.
+    offset: Vec<(i16, i16)>,
+    first_child: Vec<u32>,
+    last_child: Vec<u32>,
+    next_sibling: Vec<u32>,
+    // Each node's depth, each ray's last node, and per cell of the square the rays through
+    // it (the square's index, the ray and the cell's index in its walk), unless the walks
+    // are too long to be kept (a walk has up to `r_cells sqrt 2 + 2` cells: listed only up
+    // to twice the depth kept, then kept if no walk is deeper).
+    depth: Vec<u32>,
+    ray_end: Vec<u32>,
+    on: Vec<(u32, u32)>,
+}
+
+impl RayTrie {
+    /// The trie of `n_rays` rays of `r_cells` in a square of `2 half + 1` cells a side, listing
+    /// the rays through each cell if `may_keep`.
+    fn build(r_cells: f64, half: i32, n_rays: usize, may_keep: bool) -> Self {
+        let start = [0.5, 0.5];
+        let mut t = RayTrie {
+            offset: vec![(0, 0)],
+            first_child: vec![NONE],
+            last_child: vec![NONE],
+            next_sibling: vec![NONE],
+            depth: vec![0],
+            ray_end: Vec::with_capacity(n_rays),
+            on: Vec::new(),
+        };
+        let side = 2 * half + 1;
+        for k in 0..n_rays {
+            let a = k as f64 * std::f64::consts::TAU / n_rays as f64;
+            let end = [start[0] + a.cos() * r_cells, start[1] + a.sin() * r_cells];
+            let mut node = 0usize;
+            let mut first = true;
+            let mut step = 0u32;
+            walk_segment(start, end, |c| {
+                let o = (c.x as i16, c.y as i16);
+                if may_keep && step as usize <= MAX_DEPTH_KEPT {
+                    let j = ((c.y + half) * side + c.x + half) as u32;
+                    t.on.push((j, (k as u32) << 8 | step));
+                }
+                step += 1;
+                if first {
+                    first = false; // the centre: the root
+                    return true;
+                }
+                node = t.child(node, o);
+                true
+            });
+            t.ray_end.push(node as u32);
+        }
+        t
+    }
+
+    /// The child of `node` at offset `o`, added if there is none.
+    #[inline]
+    fn child(&mut self, node: usize, o: (i16, i16)) -> usize {
+        let mut ch = self.first_child[node];
+        while ch != NONE && self.offset[ch as usize] != o {
+            ch = self.next_sibling[ch as usize];
+        }
+        if ch != NONE {
+            ch as usize
+        } else {
+            let id = self.offset.len() as u32;
+            self.offset.push(o);
+            self.first_child.push(NONE);
+            self.last_child.push(NONE);
+            self.next_sibling.push(NONE);
+            self.depth.push(self.depth[node] + 1);
+            match self.last_child[node] {
+                NONE => self.first_child[node] = id,
+                last => self.next_sibling[last as usize] = id,
+            }
+            self.last_child[node] = id;
+            id as usize
+        }
+    }
+
+    /// The nodes in preorder (children in the order they were added), each node's index in
+    /// it, and the nodes' ids in it.
+    fn preorder(&self, r_cells: f64, half: i32) -> (Vec<FanNode>, Vec<u32>, Vec<u32>) {
+        let (offset, first_child, next_sibling) =
+            (&self.offset, &self.first_child, &self.next_sibling);
+        let side = 2 * half + 1;
+        let r2 = r_cells * r_cells;
+        let mut nodes = Vec::with_capacity(offset.len());
+        let mut stack: Vec<(u32, bool)> = vec![(0, false)];
+        let mut open: Vec<usize> = Vec::new();
+        let mut children: Vec<u32> = Vec::new();
+        let mut preorder_of: Vec<u32> = vec![0; offset.len()];
+        let mut ids: Vec<u32> = Vec::with_capacity(offset.len());
+        while let Some((id, done)) = stack.pop() {
+            if done {
+                let at = open.pop().expect("opened before closed");
+                let len = nodes.len() as u32;
+                let n: &mut FanNode = &mut nodes[at];
+                n.end = len;
+                continue;
+            }
+            let (dx, dy) = offset[id as usize];
+            let d2 = (dx as i32 * dx as i32 + dy as i32 * dy as i32) as f64;
+            open.push(nodes.len());
+            preorder_of[id as usize] = nodes.len() as u32;
+            ids.push(id);
+            let seen_at = ((dy as i32 + half) * side + dx as i32 + half) as u32;
+            nodes.push(FanNode {
+                end: 0,
+                seen: seen_at | if d2 <= r2 { IN_RANGE } else { 0 },
+                offset: 0,
+                cell: (dx, dy),
+            });
+            stack.push((id, true));
+            children.clear();
+            let mut ch = first_child[id as usize];
+            while ch != NONE {
+                children.push(ch);
+                ch = next_sibling[ch as usize];
+            }
+            for &ch in children.iter().rev() {
+                stack.push((ch, false));
+            }
+        }
+        (nodes, preorder_of, ids)
+    }
+}
+
+impl RayCells {
+    /// The rays through each cell of the square of `2 half + 1` cells a side, from the list
+    /// `on` of (cell, entry).
+    fn of(mut on: Vec<(u32, u32)>, half: i32) -> Self {
+        let side = 2 * half + 1;
+        on.sort_unstable();
+        let mut starts = vec![0u32; (side * side) as usize + 1];
+        for &(j, _) in &on {
+            starts[j as usize + 1] += 1;
+        }
+        for j in 1..starts.len() {
+            starts[j] += starts[j - 1];
+        }
+        RayCells {
+            half,
+            start: starts,
+            entries: on.into_iter().map(|(_, e)| e).collect(),
+        }
     }
 }
 

@@ -139,62 +139,14 @@ impl Explorer<'_> {
             // Nothing seen yet: wait for the first scan.
             return true;
         }
-        // A goal just reached and looked at whose frontier is still there cannot be resolved by
-        // going there again: blacklist it.
-        if let Some(p) = self.last_reached.take() {
-            let again = self.goal.as_ref().is_some_and(|g| {
-                g.frontier
-                    .iter()
-                    .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
-                    .count()
-                    * 2
-                    > g.frontier.len()
-            });
-            if again {
-                self.blacklist.looked(p, cfg.blacklist_radius_m);
-            }
-        }
-        let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
-        let mut frontiers = self.frontiers.detect(&self.map.occupancy, &fcfg);
-        if cfg.frontier_clearance_m > 0.0 {
-            let clearance_cells = cfg.frontier_clearance_m / frame.resolution_m;
-            let obstacles = &self.obstacles;
-            frontiers = frontiers_where(frontiers, &fcfg, |c| {
-                f64::from(obstacles.get(c)) >= clearance_cells
-            });
-        }
-        let blacklist = &self.blacklist;
-        let mut frontiers: Vec<Frontier> = frontiers
-            .into_iter()
-            .filter_map(|f| {
-                if !blacklist.contains(frame.world_from_cell(f.candidate)) {
-                    Some(f)
-                } else if cfg.robust_frontiers {
-                    outside_blacklist(f, blacklist, &frame)
-                } else {
-                    None
-                }
-            })
-            .collect();
+        self.blacklist_reached_again();
+        let mut frontiers = self.candidate_frontiers();
         self.goal = None;
         self.follower = PathFollower::default();
         if frontiers.is_empty() {
             return false;
         }
-        let search = (0.5 / frame.resolution_m).ceil() as i32;
-        let mut goals: Vec<Option<Cell>> = {
-            let trav = self.traversability();
-            frontiers
-                .iter()
-                .map(|f| {
-                    if trav.at(f.candidate) {
-                        Some(f.candidate)
-                    } else {
-                        nearest_by(f.candidate, search, |c| trav.at(c))
-                    }
-                })
-                .collect()
-        };
+        let mut goals = self.goal_cells(&frontiers);
         let use_layout = self.refresh_layout();
         let targets: Vec<Cell> = goals.iter().flatten().copied().collect();
         self.plans += 1;
@@ -208,69 +160,13 @@ impl Explorer<'_> {
             plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
         }
         let (scores, best, wps) = loop {
+            let scores = self.score(&frontiers, &goals, &plan, use_layout);
             // `None` when the strategy says stop.
-            let mut scores = self.score(&frontiers, &goals, &plan, use_layout);
-            // The best candidate with a path on the planning grid: the distance grid is coarser
-            // and may connect what the planning grid does not (yet: a door seen at a slant opens
-            // as the robot comes closer), so a candidate without a path is passed over for this
-            // decision (the strategy is asked again without it), not blacklisted.
-            let mut attempt = 0;
-            // A goal point of the policy's own without a path (`Reply::Goal`), and how many.
-            let (mut unreachable_goal, mut unreachable_goals) = (None, 0);
-            let chosen = loop {
-                let asked = Asked {
-                    attempt,
-                    use_layout,
-                    unreachable_goal: unreachable_goal.take(),
-                };
-                match self.ask_policy(&frontiers, &goals, &plan, &scores, asked) {
-                    Answer::Stop => break None,
-                    Answer::Nothing => break Some(None),
-                    Answer::Drop(ids) => {
-                        let frame = self.map.frame;
-                        for id in ids {
-                            let at = frame.world_from_cell(frontiers[id].candidate);
-                            self.blacklist.add(at, cfg.blacklist_radius_m);
-                            // Not offered again in this decision, nor by its last resorts
-                            // where the blacklist holds.
-                            scores[id].distance_m = None;
-                            goals[id] = None;
-                        }
-                        attempt += 1;
-                    }
-                    Answer::Point(p) => {
-                        if let Some((goal_cell, wps)) = self.point_goal(p) {
-                            return self.set_point_goal(frontiers.len(), p, goal_cell, wps);
-                        }
-                        unreachable_goals += 1;
-                        if unreachable_goals >= MAX_UNREACHABLE_GOALS {
-                            break Some(None);
-                        }
-                        unreachable_goal = Some(p);
-                        attempt += 1;
-                    }
-                    Answer::One(best) => {
-                        let goal_cell = goals[best].expect("best candidate is reachable");
-                        match self.waypoints_to(&plan, goal_cell) {
-                            Some(wps) => {
-                                break Some(Some((std::mem::take(&mut scores), best, wps)))
-                            }
-                            None => scores[best].distance_m = None,
-                        }
-                        attempt += 1;
-                    }
-                    Answer::Ranked(ids) => {
-                        let mut found = None;
-                        for id in ids {
-                            let goal_cell = goals[id].expect("ranked candidate is reachable");
-                            if let Some(wps) = self.waypoints_to(&plan, goal_cell) {
-                                found = Some((id, wps));
-                                break;
-                            }
-                        }
-                        break Some(found.map(|(id, wps)| (std::mem::take(&mut scores), id, wps)));
-                    }
-                }
+            let chosen = match self.choose(&frontiers, &mut goals, &plan, scores, use_layout) {
+                Choice::Decided(result) => return result,
+                Choice::Stop => None,
+                Choice::Nothing => Some(None),
+                Choice::Found(scores, best, wps) => Some(Some((scores, best, wps))),
             };
             // A policy that failed ends the run at once.
             if self.policy_failed {
@@ -328,6 +224,152 @@ impl Explorer<'_> {
         let goal_cell = goals[best].expect("best candidate is reachable");
         let score = scores[best];
         self.set_goal(&frontiers, best, goal_cell, wps, Some(score))
+    }
+
+    /// Blacklists the goal just reached (and looked at) if most of its frontier is still there.
+    fn blacklist_reached_again(&mut self) {
+        // A goal just reached and looked at whose frontier is still there cannot be resolved by
+        // going there again: blacklist it.
+        if let Some(p) = self.last_reached.take() {
+            let again = self.goal.as_ref().is_some_and(|g| {
+                g.frontier
+                    .iter()
+                    .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
+                    .count()
+                    * 2
+                    > g.frontier.len()
+            });
+            if again {
+                self.blacklist.looked(p, self.cfg.blacklist_radius_m);
+            }
+        }
+    }
+
+    /// The frontiers of the map with enough clearance, those whose candidate is blacklisted
+    /// dropped (or, with robust frontiers, their candidate moved outside the blacklist).
+    fn candidate_frontiers(&mut self) -> Vec<Frontier> {
+        let cfg = self.cfg;
+        let frame = self.map.frame;
+        let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
+        let mut frontiers = self.frontiers.detect(&self.map.occupancy, &fcfg);
+        if cfg.frontier_clearance_m > 0.0 {
+            let clearance_cells = cfg.frontier_clearance_m / frame.resolution_m;
+            let obstacles = &self.obstacles;
+            frontiers = frontiers_where(frontiers, &fcfg, |c| {
+                f64::from(obstacles.get(c)) >= clearance_cells
+            });
+        }
+        let blacklist = &self.blacklist;
+        frontiers
+            .into_iter()
+            .filter_map(|f| {
+                if !blacklist.contains(frame.world_from_cell(f.candidate)) {
+                    Some(f)
+                } else if cfg.robust_frontiers {
+                    outside_blacklist(f, blacklist, &frame)
+                } else {
+                    None
+                }
+            })
+            .collect()
+    }
+
+    /// The goal cell of each frontier: its candidate if traversable, else the nearest
+    /// traversable cell within half a metre (`None` if there is none).
+    fn goal_cells(&self, frontiers: &[Frontier]) -> Vec<Option<Cell>> {
+        let search = (0.5 / self.map.frame.resolution_m).ceil() as i32;
+        let trav = self.traversability();
+        frontiers
+            .iter()
+            .map(|f| {
+                if trav.at(f.candidate) {
+                    Some(f.candidate)
+                } else {
+                    nearest_by(f.candidate, search, |c| trav.at(c))
+                }
+            })
+            .collect()
+    }
+
+    /// Asks the policy until it chooses a candidate with a path on the planning grid, passes,
+    /// or says stop; a goal point of its own with a path decides at once (`Choice::Decided`).
+    fn choose(
+        &mut self,
+        frontiers: &[Frontier],
+        goals: &mut [Option<Cell>],
+        plan: &Plan,
+        mut scores: Vec<CandidateScore>,
+        use_layout: bool,
+    ) -> Choice {
+        let cfg = self.cfg;
+        // The best candidate with a path on the planning grid: the distance grid is coarser
+        // and may connect what the planning grid does not (yet: a door seen at a slant opens
+        // as the robot comes closer), so a candidate without a path is passed over for this
+        // decision (the strategy is asked again without it), not blacklisted.
+        let mut attempt = 0;
+        // A goal point of the policy's own without a path (`Reply::Goal`), and how many.
+        let (mut unreachable_goal, mut unreachable_goals) = (None, 0);
+        loop {
+            let asked = Asked {
+                attempt,
+                use_layout,
+                unreachable_goal: unreachable_goal.take(),
+            };
+            match self.ask_policy(frontiers, goals, plan, &scores, asked) {
+                Answer::Stop => return Choice::Stop,
+                Answer::Nothing => return Choice::Nothing,
+                Answer::Drop(ids) => {
+                    let frame = self.map.frame;
+                    for id in ids {
+                        let at = frame.world_from_cell(frontiers[id].candidate);
+                        self.blacklist.add(at, cfg.blacklist_radius_m);
+                        // Not offered again in this decision, nor by its last resorts
+                        // where the blacklist holds.
+                        scores[id].distance_m = None;
+                        goals[id] = None;
+                    }
+                    attempt += 1;
+                }
+                Answer::Point(p) => {
+                    if let Some((goal_cell, wps)) = self.point_goal(p) {
+                        return Choice::Decided(self.set_point_goal(
+                            frontiers.len(),
+                            p,
+                            goal_cell,
+                            wps,
+                        ));
+                    }
+                    unreachable_goals += 1;
+                    if unreachable_goals >= MAX_UNREACHABLE_GOALS {
+                        return Choice::Nothing;
+                    }
+                    unreachable_goal = Some(p);
+                    attempt += 1;
+                }
+                Answer::One(best) => {
+                    let goal_cell = goals[best].expect("best candidate is reachable");
+                    match self.waypoints_to(plan, goal_cell) {
+                        Some(wps) => return Choice::Found(scores, best, wps),
+                        None => scores[best].distance_m = None,
+                    }
+                    attempt += 1;
+                }
+                Answer::Ranked(ids) => {
+                    let mut found = None;
+                    for id in ids {
+                        let goal_cell = goals[id].expect("ranked candidate is reachable");
+                        if let Some(wps) = self.waypoints_to(plan, goal_cell) {
+                            found = Some((id, wps));
+                            break;
+                        }
+                    }
+                    return match found {
+                        Some((id, wps)) => Choice::Found(scores, id, wps),
+                        None => Choice::Nothing,
+                    };
+                }
+            }
+        }
     }
 
     /// Heads for frontier `i` of `frontiers` through `goal_cell` (a map cell) along `wps`,
@@ -654,6 +696,18 @@ pub(super) enum Answer {
     Drop(Vec<usize>),
     Nothing,
     Stop,
+}
+
+/// What the policy chose within one round of a decision (see `Explorer::choose`).
+enum Choice {
+    /// The strategy says stop.
+    Stop,
+    /// No candidate with a path (or the policy passed).
+    Nothing,
+    /// The scores, the chosen candidate and the waypoints to its goal cell.
+    Found(Vec<CandidateScore>, usize, Vec<Vec2>),
+    /// The decision is made (a goal point of the policy's own): its result.
+    Decided(bool),
 }
 
 /// Where a goal leads (see `Goal`).

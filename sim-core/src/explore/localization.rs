@@ -30,67 +30,7 @@ impl Explorer<'_> {
         self.estimate = match cfg.localization {
             Localization::GroundTruth => self.sim.true_pose(),
             Localization::Odometry => prior,
-            Localization::Slam => {
-                // Trust odometry in proportion to the motion since the last match: its error is
-                // proportional (at most ~1 % and 2 deg/rad, and much less once calibrated), so
-                // only small corrections are plausible and large ones are mismatches (e.g. along
-                // a featureless corridor). A prior as tight as the odometry's error matters: each
-                // match is made against a map built from the previous few scans, so a matcher
-                // noisier than odometry makes the estimate random-walk (0.3 m after 15 m, bent
-                // maps and doubled walls). Driving straight does not change the odometry's
-                // heading at all, so the heading is then nearly fixed. Once calibrated, the
-                // odometry's heading is off by the residual scale error times the turn (the
-                // calibrated heading scale is within ~0.03 % of the true one on the bench), far
-                // less than a match's own heading noise: a looser heading prior let that noise
-                // random-walk the heading by degrees around the ring corridors of the paper set
-                // (maps bent until walls doubled; see PRIOR_SIGMA_THETA_*).
-                let d = moved.position().norm();
-                let a = moved.theta_rad.abs();
-                let base = &cfg.scan_match;
-                let odo = &cfg.sim.odometry;
-                let calibrated = self.calibration.calibrated();
-                let (k_xy, k_theta) = if cfg.calibrate_odometry {
-                    (
-                        if calibrated[0] {
-                            0.005
-                        } else {
-                            odo.max_translation_error
-                        },
-                        if calibrated[2] {
-                            PRIOR_SIGMA_THETA_PER_RAD_CALIBRATED
-                        } else {
-                            odo.max_rotation_error
-                        },
-                    )
-                } else {
-                    (odo.max_translation_error, odo.max_rotation_error)
-                };
-                let mc = ScanMatchConfig {
-                    prior_sigma_xy_m: base.prior_sigma_xy_m.min(0.001 + k_xy * d),
-                    prior_sigma_theta_rad: base
-                        .prior_sigma_theta_rad
-                        .min(PRIOR_SIGMA_THETA_BASE_RAD + k_theta * a),
-                    max_correction_m: base.max_correction_m.min(0.05 + 0.1 * d),
-                    max_correction_rad: base.max_correction_rad.min(0.005 + 0.05 * a),
-                    search_xy_m: base.search_xy_m.min(0.05),
-                    search_theta_rad: base.search_theta_rad.min(1.5f64.to_radians()),
-                    // Few points near the map (facing unknown space) constrain the heading
-                    // poorly: odometry is better then.
-                    min_points: base.min_points.max(80),
-                    ..*base
-                };
-                let m = match_scan(&self.obstacles, &self.map, &prior, &scan, &mc);
-                if m.accepted {
-                    self.matches_accepted += 1;
-                    self.calibration.observe(
-                        &self.update_odometry.between(&odo_pose),
-                        &self.last_update_pose.between(&m.pose),
-                    );
-                    m.pose
-                } else {
-                    prior
-                }
-            }
+            Localization::Slam => self.slam_pose(&prior, &moved, &odo_pose, &scan),
         };
         let stats = self.map.insert_scan(&self.estimate, &scan, &cfg.log_odds);
         self.known_cells += stats.cells_discovered;
@@ -135,6 +75,78 @@ impl Explorer<'_> {
         self.last_update_time_s = self.sim.time_s();
         self.trajectory.push(self.sim.true_pose());
         self.estimated_trajectory.push(self.estimate);
+    }
+
+    /// The pose estimate from scan matching `scan` at the `prior`, trusting odometry in
+    /// proportion to the motion `moved` since the last map update; `odo_pose` is the raw
+    /// odometry now (for the calibration). The prior when the match is not accepted.
+    fn slam_pose(
+        &mut self,
+        prior: &Pose,
+        moved: &Pose,
+        odo_pose: &Pose,
+        scan: &crate::scan::Scan,
+    ) -> Pose {
+        let cfg = self.cfg;
+        // Trust odometry in proportion to the motion since the last match: its error is
+        // proportional (at most ~1 % and 2 deg/rad, and much less once calibrated), so
+        // only small corrections are plausible and large ones are mismatches (e.g. along
+        // a featureless corridor). A prior as tight as the odometry's error matters: each
+        // match is made against a map built from the previous few scans, so a matcher
+        // noisier than odometry makes the estimate random-walk (0.3 m after 15 m, bent
+        // maps and doubled walls). Driving straight does not change the odometry's
+        // heading at all, so the heading is then nearly fixed. Once calibrated, the
+        // odometry's heading is off by the residual scale error times the turn (the
+        // calibrated heading scale is within ~0.03 % of the true one on the bench), far
+        // less than a match's own heading noise: a looser heading prior let that noise
+        // random-walk the heading by degrees around the ring corridors of the paper set
+        // (maps bent until walls doubled; see PRIOR_SIGMA_THETA_*).
+        let d = moved.position().norm();
+        let a = moved.theta_rad.abs();
+        let base = &cfg.scan_match;
+        let odo = &cfg.sim.odometry;
+        let calibrated = self.calibration.calibrated();
+        let (k_xy, k_theta) = if cfg.calibrate_odometry {
+            (
+                if calibrated[0] {
+                    0.005
+                } else {
+                    odo.max_translation_error
+                },
+                if calibrated[2] {
+                    PRIOR_SIGMA_THETA_PER_RAD_CALIBRATED
+                } else {
+                    odo.max_rotation_error
+                },
+            )
+        } else {
+            (odo.max_translation_error, odo.max_rotation_error)
+        };
+        let mc = ScanMatchConfig {
+            prior_sigma_xy_m: base.prior_sigma_xy_m.min(0.001 + k_xy * d),
+            prior_sigma_theta_rad: base
+                .prior_sigma_theta_rad
+                .min(PRIOR_SIGMA_THETA_BASE_RAD + k_theta * a),
+            max_correction_m: base.max_correction_m.min(0.05 + 0.1 * d),
+            max_correction_rad: base.max_correction_rad.min(0.005 + 0.05 * a),
+            search_xy_m: base.search_xy_m.min(0.05),
+            search_theta_rad: base.search_theta_rad.min(1.5f64.to_radians()),
+            // Few points near the map (facing unknown space) constrain the heading
+            // poorly: odometry is better then.
+            min_points: base.min_points.max(80),
+            ..*base
+        };
+        let m = match_scan(&self.obstacles, &self.map, prior, scan, &mc);
+        if m.accepted {
+            self.matches_accepted += 1;
+            self.calibration.observe(
+                &self.update_odometry.between(odo_pose),
+                &self.last_update_pose.between(&m.pose),
+            );
+            m.pose
+        } else {
+            *prior
+        }
     }
 
     /// Marks the map cells on the segment `from`-`to` (world) travelled. They count only when

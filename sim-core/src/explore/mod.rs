@@ -660,27 +660,9 @@ fn new_explorer<'a>(
         layout_cost,
         policy,
     } = hooks;
-    let policy = match policy {
-        Some(p) => PolicySlot::External(p),
-        None => PolicySlot::BuiltIn(strategy::BuiltInPolicy::new(
-            cfg.strategy.early_stop,
-            cfg.alpha,
-            cfg.gain_floor_m2,
-        )),
-    };
-    let policy_needs = match &policy {
-        PolicySlot::External(p) => p.needs(),
-        PolicySlot::BuiltIn(b) => built_in_needs(b, cfg),
-    };
+    let (policy, policy_needs) = policy_slot(policy, cfg);
     let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
-    let free = building.reachable_free(frame, start.position());
-    let truth = crate::building::explorable_free(
-        &free,
-        start.position(),
-        cfg.sim.robot.radius_m + cfg.safety_margin_m,
-        cfg.sim.laser.max_range_m,
-    );
-    let truth_cells = truth.count_true();
+    let referee = new_referee(building, frame, start, cfg);
     let cap_cells =
         (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
             .max(8)
@@ -698,17 +680,7 @@ fn new_explorer<'a>(
         sim,
         map: LogOddsMap::new(frame),
         obstacles: ObstacleDistance::new(frame, cap_cells),
-        referee: Referee {
-            truth,
-            free,
-            truth_cells,
-            explored_cells: 0,
-            explored: Bitmap::filled(frame, false),
-            untestable: Bitmap::filled(frame, false),
-            untestable_list: Vec::new(),
-            rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
-            doors: building.doors.iter().map(|d| (d.a, d.b)).collect(),
-        },
+        referee,
         known: Bitmap::filled(frame, false),
         fresh_known: Vec::new(),
         estimate: start,
@@ -762,6 +734,50 @@ fn new_explorer<'a>(
         planning_generation: 0,
         unreachable_memo: None,
         shared: None,
+    }
+}
+
+/// The run's policy (the caller's, or the built-in strategy's rule) and what it needs.
+fn policy_slot<'a>(
+    policy: Option<&'a mut dyn Policy>,
+    cfg: &ExploreConfig,
+) -> (PolicySlot<'a>, Needs) {
+    let policy = match policy {
+        Some(p) => PolicySlot::External(p),
+        None => PolicySlot::BuiltIn(strategy::BuiltInPolicy::new(
+            cfg.strategy.early_stop,
+            cfg.alpha,
+            cfg.gain_floor_m2,
+        )),
+    };
+    let policy_needs = match &policy {
+        PolicySlot::External(p) => p.needs(),
+        PolicySlot::BuiltIn(b) => built_in_needs(b, cfg),
+    };
+    (policy, policy_needs)
+}
+
+/// The referee of a run from `start` in `building` on the map's `frame`: the free space the
+/// robot can reach and the part of it it can explore, nothing explored yet.
+fn new_referee(building: &Building, frame: GridFrame, start: Pose, cfg: &ExploreConfig) -> Referee {
+    let free = building.reachable_free(frame, start.position());
+    let truth = crate::building::explorable_free(
+        &free,
+        start.position(),
+        cfg.sim.robot.radius_m + cfg.safety_margin_m,
+        cfg.sim.laser.max_range_m,
+    );
+    let truth_cells = truth.count_true();
+    Referee {
+        truth,
+        free,
+        truth_cells,
+        explored_cells: 0,
+        explored: Bitmap::filled(frame, false),
+        untestable: Bitmap::filled(frame, false),
+        untestable_list: Vec::new(),
+        rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
+        doors: building.doors.iter().map(|d| (d.a, d.b)).collect(),
     }
 }
 

@@ -158,7 +158,68 @@ impl BandFrame<'_> {
 
 /// Turns a skeleton into zones and openings.
 pub(super) fn fill(p: &Params, sk: &Skeleton, rng: &mut impl Rng) -> Layout {
-    let mut zones: Vec<Zone> = sk
+    let (mut zones, mut openings) = corridors(sk);
+    let mut halls_left = p.halls;
+    let mut start: Option<Pose> = None;
+    for (bi, band) in sk.bands.iter().enumerate() {
+        let f = BandFrame { band };
+        let (lo, hi) = f.span();
+        if hi - lo < MIN_ROOM_M || f.depth_m() < MIN_ROOM_M {
+            continue;
+        }
+        let is_entrance = bi == 0 && sk.entrance == Entrance::Hall;
+        // A school has at least one hall: the second band gets one if none came up yet.
+        let force_hall = p.kind == BuildingKind::School
+            && bi == 1
+            && halls_left == p.halls
+            && hi - lo >= 4.0 * p.module_m;
+        let rooms = slice(p, hi - lo, &mut halls_left, force_hall, is_entrance, rng);
+        let door_mode = rng.random_range(0..3u32);
+        let mut band_rooms = BandRooms {
+            p,
+            f,
+            zones: &mut zones,
+            openings: &mut openings,
+        };
+        if let Some(s) = band_rooms.add(&rooms, lo, hi, door_mode, rng) {
+            start = Some(s);
+        }
+    }
+    // Fill in the corridor side of each room door: the corridor sharing that edge.
+    let n_corr = sk.corridors.len();
+    for o in &mut openings {
+        if o.zones[1].is_none() && o.zones[0].is_some_and(|z| z >= n_corr) {
+            let mid = (o.a + o.b) / 2.0;
+            o.zones[1] = sk.corridors.iter().position(|c| on_boundary(c, mid));
+        }
+    }
+    extra_rooms(p, sk, &mut zones, &mut openings);
+    // Order openings: the corridor side of room doors was resolved above; make the entrance
+    // (if at a corridor end) explicit.
+    let start = match (start, &sk.entrance) {
+        (Some(s), _) => s,
+        _ => {
+            let c = &sk.corridors[0];
+            let yc = (c.min.y + c.max.y) / 2.0;
+            let half = ((c.height_m() - 0.6) / 2.0).min(0.9);
+            openings.push(Opening {
+                a: Vec2::new(c.min.x, yc - half),
+                b: Vec2::new(c.min.x, yc + half),
+                zones: [Some(0), None],
+            });
+            Pose::new(c.min.x + 1.2, yc, 0.0)
+        }
+    };
+    Layout {
+        zones,
+        openings,
+        start,
+    }
+}
+
+/// The corridors' zones, and the openings where corridors meet.
+fn corridors(sk: &Skeleton) -> (Vec<Zone>, Vec<Opening>) {
+    let zones: Vec<Zone> = sk
         .corridors
         .iter()
         .map(|r| Zone {
@@ -179,57 +240,41 @@ pub(super) fn fill(p: &Params, sk: &Skeleton, rng: &mut impl Rng) -> Layout {
             }
         }
     }
-    let mut halls_left = p.halls;
-    let mut start: Option<Pose> = None;
-    for (bi, band) in sk.bands.iter().enumerate() {
-        let f = BandFrame { band };
-        let (lo, hi) = f.span();
-        if hi - lo < MIN_ROOM_M || f.depth_m() < MIN_ROOM_M {
-            continue;
-        }
-        let is_entrance = bi == 0 && sk.entrance == Entrance::Hall;
-        // A school has at least one hall: the second band gets one if none came up yet.
-        let force_hall = p.kind == BuildingKind::School
-            && bi == 1
-            && halls_left == p.halls
-            && hi - lo >= 4.0 * p.module_m;
-        let rooms = slice(p, hi - lo, &mut halls_left, force_hall, is_entrance, rng);
-        let door_mode = rng.random_range(0..3u32);
+    (zones, openings)
+}
+
+/// The rooms of one band being added to the layout's zones and openings.
+struct BandRooms<'a, 'b> {
+    p: &'a Params,
+    f: BandFrame<'a>,
+    zones: &'b mut Vec<Zone>,
+    openings: &'b mut Vec<Opening>,
+}
+
+impl BandRooms<'_, '_> {
+    /// Adds the band's `rooms` (width, kind) from `lo` to `hi` with their doors; returns the
+    /// start pose if one of them is the entrance.
+    fn add(
+        &mut self,
+        rooms: &[(f64, &'static str)],
+        lo: f64,
+        hi: f64,
+        door_mode: u32,
+        rng: &mut impl Rng,
+    ) -> Option<Pose> {
+        let (p, f) = (self.p, &self.f);
+        let mut start = None;
         let mut t = lo;
         let mut prev: Option<(usize, &'static str)> = None;
         for (k, &(w, kind)) in rooms.iter().enumerate() {
             let t1 = if k + 1 == rooms.len() { hi } else { t + w };
-            let zi = zones.len();
-            zones.push(Zone {
+            let zi = self.zones.len();
+            self.zones.push(Zone {
                 rect: f.room(t, t1),
                 kind,
             });
-            let width = t1 - t;
-            // Doors to the corridor: halls and long rooms get two.
-            let dw = match kind {
-                "hall" | "entrance" => 1.5,
-                _ => p.door_m,
-            }
-            .min(width - 0.8)
-            .max(0.8);
-            let margin = 0.5_f64.min((width - dw) / 2.0);
-            let spans: Vec<(f64, f64)> = if kind == "entrance" {
-                let c = (t + t1) / 2.0;
-                vec![(c - 0.75, c + 0.75)]
-            } else if width >= 12.0 {
-                vec![(t + 1.0, t + 1.0 + dw), (t1 - 1.0 - dw, t1 - 1.0)]
-            } else {
-                match door_mode {
-                    0 => vec![(t + margin, t + margin + dw)],
-                    1 => vec![(t1 - margin - dw, t1 - margin)],
-                    _ => {
-                        let c = (t + t1) / 2.0;
-                        vec![(c - dw / 2.0, c + dw / 2.0)]
-                    }
-                }
-            };
-            for (s0, s1) in spans {
-                openings.push(Opening {
+            for (s0, s1) in corridor_doors(p, kind, t, t1, door_mode) {
+                self.openings.push(Opening {
                     a: f.at(s0, 0.0),
                     b: f.at(s1, 0.0),
                     zones: [Some(zi), None],
@@ -245,7 +290,7 @@ pub(super) fn fill(p: &Params, sk: &Skeleton, rng: &mut impl Rng) -> Layout {
                     && rng.random_bool(p.connect_prob)
                 {
                     let d0 = depth - 0.6 - 0.9;
-                    openings.push(Opening {
+                    self.openings.push(Opening {
                         a: f.at(t, d0),
                         b: f.at(t, d0 + 0.9),
                         zones: [Some(pi), Some(zi)],
@@ -255,8 +300,8 @@ pub(super) fn fill(p: &Params, sk: &Skeleton, rng: &mut impl Rng) -> Layout {
             if kind == "entrance" {
                 // Band 0 faces north with its south side on the outline.
                 let c = (t + t1) / 2.0;
-                let y0 = band.rect.min.y;
-                openings.push(Opening {
+                let y0 = f.band.rect.min.y;
+                self.openings.push(Opening {
                     a: Vec2::new(c - 0.9, y0),
                     b: Vec2::new(c + 0.9, y0),
                     zones: [Some(zi), None],
@@ -266,15 +311,42 @@ pub(super) fn fill(p: &Params, sk: &Skeleton, rng: &mut impl Rng) -> Layout {
             prev = Some((zi, kind));
             t = t1;
         }
+        start
     }
-    // Fill in the corridor side of each room door: the corridor sharing that edge.
-    let n_corr = sk.corridors.len();
-    for o in &mut openings {
-        if o.zones[1].is_none() && o.zones[0].is_some_and(|z| z >= n_corr) {
-            let mid = (o.a + o.b) / 2.0;
-            o.zones[1] = sk.corridors.iter().position(|c| on_boundary(c, mid));
+}
+
+/// The spans (along the band) of the doors to the corridor of a room of `kind` from `t` to
+/// `t1`.
+fn corridor_doors(p: &Params, kind: &str, t: f64, t1: f64, door_mode: u32) -> Vec<(f64, f64)> {
+    let width = t1 - t;
+    // Doors to the corridor: halls and long rooms get two.
+    let dw = match kind {
+        "hall" | "entrance" => 1.5,
+        _ => p.door_m,
+    }
+    .min(width - 0.8)
+    .max(0.8);
+    let margin = 0.5_f64.min((width - dw) / 2.0);
+    if kind == "entrance" {
+        let c = (t + t1) / 2.0;
+        vec![(c - 0.75, c + 0.75)]
+    } else if width >= 12.0 {
+        vec![(t + 1.0, t + 1.0 + dw), (t1 - 1.0 - dw, t1 - 1.0)]
+    } else {
+        match door_mode {
+            0 => vec![(t + margin, t + margin + dw)],
+            1 => vec![(t1 - margin - dw, t1 - margin)],
+            _ => {
+                let c = (t + t1) / 2.0;
+                vec![(c - dw / 2.0, c + dw / 2.0)]
+            }
         }
     }
+}
+
+/// Adds the skeleton's extra rooms, each opening into a neighbouring room (those too small or
+/// without one are left out).
+fn extra_rooms(p: &Params, sk: &Skeleton, zones: &mut Vec<Zone>, openings: &mut Vec<Opening>) {
     // Extra rooms open into a neighbouring room.
     for r in &sk.extra_rooms {
         if r.width_m() < MIN_ROOM_M || r.height_m() < MIN_ROOM_M {
@@ -301,27 +373,6 @@ pub(super) fn fill(p: &Params, sk: &Skeleton, rng: &mut impl Rng) -> Layout {
             b: a + u * (len / 2.0 + 0.45),
             zones: [Some(zi), Some(j)],
         });
-    }
-    // Order openings: the corridor side of room doors was resolved above; make the entrance
-    // (if at a corridor end) explicit.
-    let start = match (start, &sk.entrance) {
-        (Some(s), _) => s,
-        _ => {
-            let c = &sk.corridors[0];
-            let yc = (c.min.y + c.max.y) / 2.0;
-            let half = ((c.height_m() - 0.6) / 2.0).min(0.9);
-            openings.push(Opening {
-                a: Vec2::new(c.min.x, yc - half),
-                b: Vec2::new(c.min.x, yc + half),
-                zones: [Some(0), None],
-            });
-            Pose::new(c.min.x + 1.2, yc, 0.0)
-        }
-    };
-    Layout {
-        zones,
-        openings,
-        start,
     }
 }
 

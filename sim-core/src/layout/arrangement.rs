@@ -207,6 +207,39 @@ pub fn build(
     trim_m: f64,
     diag: &mut LayoutDiagnostics,
 ) -> Arrangement {
+    let gb = grown_box(grid, bbox, margin_m);
+    let (lines, mut families, line_doors) = collect_lines(wall_lines, doors, gb.min, gb.max);
+    let strides = face_strides(&mut families);
+    let (labels, mut faces, face_keys) = label_cells(grid, gb.c0, gb.c1, &families, &strides);
+    face_polygons(&mut faces, &face_keys, &families, &strides, &lines);
+    let edges = shared_edges(&mut faces, &lines, &line_doors, near_wall, trim_m, diag);
+    diag.faces = faces.len();
+    diag.edges = edges.len();
+    Arrangement {
+        lines,
+        faces,
+        edges,
+        labels,
+    }
+}
+
+/// Line families: (normal, sorted (offset, tag)).
+type Families = Vec<(Vec2, Vec<(f64, u32)>)>;
+
+/// The door gaps of each arrangement line.
+type LineDoors<'a> = Vec<&'a [(f64, f64)]>;
+
+/// The box of the known cells grown by the margin, in metres (`min`, `max`) and in cells
+/// (`c0`, `c1`, clamped to the grid).
+struct GrownBox {
+    min: Vec2,
+    max: Vec2,
+    c0: Cell,
+    c1: Cell,
+}
+
+/// The box `bbox` grown by `margin_m`, in metres and clamped to the grid in cells.
+fn grown_box(grid: &OccupancyGrid, bbox: (Cell, Cell), margin_m: f64) -> GrownBox {
     let f = grid.frame;
     let res = f.resolution_m;
     // The box of the known cells grown by `margin_m`, so that lines on the outermost walls cut
@@ -223,6 +256,17 @@ pub fn build(
         (k1.x + m).min(f.width as i32 - 1),
         (k1.y + m).min(f.height as i32 - 1),
     );
+    GrownBox { min, max, c0, c1 }
+}
+
+/// The arrangement's lines (the four box sides, then the wall lines that cut the box), their
+/// families (sorted by offset) and the door gaps of each line.
+fn collect_lines<'a>(
+    wall_lines: &[WallLine],
+    doors: &'a [Vec<(f64, f64)>],
+    min: Vec2,
+    max: Vec2,
+) -> (Vec<ArrLine>, Families, LineDoors<'a>) {
     let mut lines = vec![
         ArrLine {
             n: Vec2::new(0.0, 1.0),
@@ -246,7 +290,7 @@ pub fn build(
         },
     ];
     // Families: (normal, sorted (offset, tag)).
-    let mut families: Vec<(Vec2, Vec<(f64, u32)>)> = Vec::new();
+    let mut families: Families = Vec::new();
     let corners = [min, Vec2::new(max.x, min.y), max, Vec2::new(min.x, max.y)];
     // Door gaps per arrangement line.
     let mut line_doors: Vec<&[(f64, f64)]> = vec![&[]; 4];
@@ -279,11 +323,17 @@ pub fn build(
     for (_, v) in &mut families {
         v.sort_by(|a, b| a.0.total_cmp(&b.0));
     }
+    (lines, families, line_doors)
+}
+
+/// The strides of the mixed-radix face keys (one digit per family: its slab index); families
+/// that would overflow are dropped.
+fn face_strides(families: &mut Families) -> Vec<u64> {
     // Mixed-radix face keys; families that would overflow are dropped.
     let mut strides = Vec::new();
     let mut total: u64 = 1;
     let mut kept = 0;
-    for (_, v) in &families {
+    for (_, v) in families.iter() {
         match total.checked_mul(v.len() as u64 + 1) {
             Some(t) if t < (1u64 << 62) => {
                 strides.push(total);
@@ -294,7 +344,20 @@ pub fn build(
         }
     }
     families.truncate(kept);
+    strides
+}
 
+/// Labels the cells of the box `c0`..=`c1` with their faces (as runs along rows), creating the
+/// faces (with their cell counts) and their keys in the order the cells meet them.
+fn label_cells(
+    grid: &OccupancyGrid,
+    c0: Cell,
+    c1: Cell,
+    families: &Families,
+    strides: &[u64],
+) -> (FaceRuns, Vec<Face>, Vec<u64>) {
+    let f = grid.frame;
+    let res = f.resolution_m;
     // Label cells.
     let w = f.width as usize;
     let mut labels = FaceRuns {
@@ -353,7 +416,7 @@ pub fn build(
             } else {
                 c1.x + 1
             };
-            let fk: u64 = idx.iter().zip(&strides).map(|(i, s)| *i as u64 * s).sum();
+            let fk: u64 = idx.iter().zip(strides).map(|(i, s)| *i as u64 * s).sum();
             let id = *index.entry(fk).or_insert_with(|| {
                 faces.push(Face::default());
                 face_keys.push(fk);
@@ -374,9 +437,19 @@ pub fn build(
     }
 
     labels.row_start.push(labels.runs.len() as u32);
+    (labels, faces, face_keys)
+}
 
+/// Sets every face's polygon: the box clipped by the face's slab in each family.
+fn face_polygons(
+    faces: &mut [Face],
+    face_keys: &[u64],
+    families: &Families,
+    strides: &[u64],
+    lines: &[ArrLine],
+) {
     // Face polygons.
-    for (face, fk) in faces.iter_mut().zip(&face_keys) {
+    for (face, fk) in faces.iter_mut().zip(face_keys) {
         let mut poly: Vec<(u64, u32)> = vec![
             (key(3, 0), 0),
             (key(0, 1), 1),
@@ -386,10 +459,10 @@ pub fn build(
         for (k, (_, fam)) in families.iter().enumerate() {
             let i = ((fk / strides[k]) % (fam.len() as u64 + 1)) as usize;
             if i > 0 {
-                poly = clip(&lines, &poly, fam[i - 1].1, -1.0);
+                poly = clip(lines, &poly, fam[i - 1].1, -1.0);
             }
             if i < fam.len() {
-                poly = clip(&lines, &poly, fam[i].1, 1.0);
+                poly = clip(lines, &poly, fam[i].1, 1.0);
             }
         }
         // Drop repeated vertices (lines meeting at one point).
@@ -400,12 +473,23 @@ pub fn build(
         if poly.len() < 3 {
             continue;
         }
-        face.vertices = poly.iter().map(|(k, _)| vertex(&lines, *k)).collect();
+        face.vertices = poly.iter().map(|(k, _)| vertex(lines, *k)).collect();
         face.keys = poly.iter().map(|(k, _)| *k).collect();
         face.tags = poly.iter().map(|(_, t)| *t).collect();
         face.area_m2 = crate::geom::Polygon::new(face.vertices.clone()).area_m2();
     }
+}
 
+/// The edges, shared by key between the faces on both sides (each face's `edges` set), with
+/// the wall evidence along each.
+fn shared_edges(
+    faces: &mut [Face],
+    lines: &[ArrLine],
+    line_doors: &[&[(f64, f64)]],
+    near_wall: &WindowMask,
+    trim_m: f64,
+    diag: &mut LayoutDiagnostics,
+) -> Vec<Edge> {
     // Edges shared by key.
     let mut all: Vec<(u64, u64, u32, u32, u32)> = Vec::new();
     for (fi, face) in faces.iter().enumerate() {
@@ -459,14 +543,7 @@ pub fn build(
         });
         i = j;
     }
-    diag.faces = faces.len();
-    diag.edges = edges.len();
-    Arrangement {
-        lines,
-        faces,
-        edges,
-        labels,
-    }
+    edges
 }
 
 /// The free and the occupied cells of `cells`: two branch-free counts per block of cells short

@@ -38,35 +38,84 @@ pub fn wall_lines_and_doors(
     for (family, &phi) in normals_rad.iter().enumerate() {
         let direction_rad = (phi - PI / 2.0).rem_euclid(PI);
         let n = Vec2::new(-direction_rad.sin(), direction_rad.cos());
-        let u = Vec2::new(direction_rad.cos(), direction_rad.sin());
-        // Cells whose local normal is nearest this direction, within the tolerance.
-        let pts: Vec<Vec2> = cells
-            .iter()
-            .filter(|c| {
-                let d = angle_diff_mod_pi(c.normal_rad, phi);
-                d <= config.direction_tolerance_rad
-                    && normals_rad
-                        .iter()
-                        .all(|o| angle_diff_mod_pi(c.normal_rad, *o) >= d)
-            })
-            .map(|c| c.p)
-            .collect();
+        let pts = family_points(cells, normals_rad, phi, config);
         if pts.is_empty() {
             continue;
         }
-        let bin_m = resolution_m;
         let offs: Vec<f64> = pts.iter().map(|p| n.dot(p)).collect();
+        let Some(hist) = Histogram::of(&offs, resolution_m) else {
+            continue;
+        };
+        let peaks = hist.peaks(config);
+        let family = Family {
+            direction_rad,
+            family: family as u32,
+            pts: &pts,
+            offs: &offs,
+        };
+        family.lines(&peaks, resolution_m, config, &mut out, &mut doors);
+    }
+    let max = out.iter().map(|l| l.support_m).fold(0.0, f64::max);
+    if max > 0.0 {
+        for l in &mut out {
+            l.weight = l.support_m / max;
+        }
+    }
+    (out, doors)
+}
+
+/// The points of the boundary cells of the family of normal `phi`: those whose local normal is
+/// nearest it among `normals_rad`, within the tolerance.
+fn family_points(
+    cells: &[BoundaryCell],
+    normals_rad: &[f64],
+    phi: f64,
+    config: &LayoutConfig,
+) -> Vec<Vec2> {
+    // Cells whose local normal is nearest this direction, within the tolerance.
+    cells
+        .iter()
+        .filter(|c| {
+            let d = angle_diff_mod_pi(c.normal_rad, phi);
+            d <= config.direction_tolerance_rad
+                && normals_rad
+                    .iter()
+                    .all(|o| angle_diff_mod_pi(c.normal_rad, *o) >= d)
+        })
+        .map(|c| c.p)
+        .collect()
+}
+
+/// The histogram of a family's offsets, in bins of one cell from `lo`.
+struct Histogram {
+    lo: f64,
+    bin_m: f64,
+    hist: Vec<f64>,
+}
+
+impl Histogram {
+    /// The histogram of `offs` (each weighing one cell), `None` when it would be too long.
+    fn of(offs: &[f64], resolution_m: f64) -> Option<Histogram> {
+        let bin_m = resolution_m;
         let lo = offs.iter().cloned().fold(f64::INFINITY, f64::min) - bin_m;
         let hi = offs.iter().cloned().fold(f64::NEG_INFINITY, f64::max) + bin_m;
         let nbins = ((hi - lo) / bin_m) as usize + 2;
         if nbins > 10_000_000 {
-            continue;
+            return None;
         }
         let mut hist = vec![0f64; nbins];
         let bin_of = |o: f64| (((o - lo) / bin_m) as usize).min(nbins - 1);
-        for &o in &offs {
+        for &o in offs {
             hist[bin_of(o)] += resolution_m;
         }
+        Some(Histogram { lo, bin_m, hist })
+    }
+
+    /// The peaks (offset, support), at least the minimum separation apart and with at least the
+    /// minimum support, by offset.
+    fn peaks(&self, config: &LayoutConfig) -> Vec<(f64, f64)> {
+        let (lo, bin_m, hist) = (self.lo, self.bin_m, &self.hist);
+        let nbins = hist.len();
         // Support of a peak: evidence within half the separation.
         let half = ((config.min_line_separation_m / 2.0) / bin_m)
             .round()
@@ -95,31 +144,7 @@ pub fn wall_lines_and_doors(
             if taken[a..b].iter().any(|t| *t) {
                 continue;
             }
-            // Mean shift: the evidence-weighted mean within one separation, so that both sides
-            // of a wall give its centre.
-            let mut centre = lo + (i as f64 + 0.5) * bin_m;
-            let mut mass = 0.0;
-            for _ in 0..3 {
-                let a = (((centre - config.min_line_separation_m - lo) / bin_m)
-                    .floor()
-                    .max(0.0)) as usize;
-                let b = ((((centre + config.min_line_separation_m - lo) / bin_m).ceil()) as usize)
-                    .min(nbins);
-                let mut s = 0.0;
-                let mut m = 0.0;
-                for (j, hj) in hist.iter().enumerate().take(b).skip(a) {
-                    let o = lo + (j as f64 + 0.5) * bin_m;
-                    if (o - centre).abs() <= config.min_line_separation_m {
-                        s += hj;
-                        m += hj * o;
-                    }
-                }
-                if s <= 0.0 {
-                    break;
-                }
-                centre = m / s;
-                mass = s;
-            }
+            let (centre, mass) = self.mean_shift(i, config);
             if peaks
                 .iter()
                 .any(|(c, _)| (c - centre).abs() < config.min_line_separation_m)
@@ -132,11 +157,70 @@ pub fn wall_lines_and_doors(
             peaks.push((centre, mass.max(support[i])));
         }
         peaks.sort_by(|a, b| a.0.total_cmp(&b.0));
+        peaks
+    }
+
+    /// The centre of the peak at bin `i` and the evidence around it (0 when none).
+    fn mean_shift(&self, i: usize, config: &LayoutConfig) -> (f64, f64) {
+        let (lo, bin_m, hist) = (self.lo, self.bin_m, &self.hist);
+        let nbins = hist.len();
+        // Mean shift: the evidence-weighted mean within one separation, so that both sides
+        // of a wall give its centre.
+        let mut centre = lo + (i as f64 + 0.5) * bin_m;
+        let mut mass = 0.0;
+        for _ in 0..3 {
+            let a = (((centre - config.min_line_separation_m - lo) / bin_m)
+                .floor()
+                .max(0.0)) as usize;
+            let b = ((((centre + config.min_line_separation_m - lo) / bin_m).ceil()) as usize)
+                .min(nbins);
+            let mut s = 0.0;
+            let mut m = 0.0;
+            for (j, hj) in hist.iter().enumerate().take(b).skip(a) {
+                let o = lo + (j as f64 + 0.5) * bin_m;
+                if (o - centre).abs() <= config.min_line_separation_m {
+                    s += hj;
+                    m += hj * o;
+                }
+            }
+            if s <= 0.0 {
+                break;
+            }
+            centre = m / s;
+            mass = s;
+        }
+        (centre, mass)
+    }
+}
+
+/// A family's points and their offsets along its normal.
+struct Family<'a> {
+    direction_rad: f64,
+    family: u32,
+    pts: &'a [Vec2],
+    offs: &'a [f64],
+}
+
+impl Family<'_> {
+    /// Pushes the line of each peak (offset, support) with evidence to `out`, and its door gaps
+    /// to `doors`.
+    fn lines(
+        &self,
+        peaks: &[(f64, f64)],
+        resolution_m: f64,
+        config: &LayoutConfig,
+        out: &mut Vec<WallLine>,
+        doors: &mut Vec<Vec<(f64, f64)>>,
+    ) {
+        let (direction_rad, pts, offs) = (self.direction_rad, self.pts, self.offs);
+        let n = Vec2::new(-direction_rad.sin(), direction_rad.cos());
+        let u = Vec2::new(direction_rad.cos(), direction_rad.sin());
+        let bin_m = resolution_m;
         // The cells by offset: those near a line's offset are a run of them (`o - c` never
         // decreases as `o` grows), found from where the offset would be sorted in.
         let mut by_offset: Vec<u32> = (0..offs.len() as u32).collect();
         by_offset.sort_by(|&a, &b| offs[a as usize].total_cmp(&offs[b as usize]));
-        for (offset_m, support_m) in peaks {
+        for &(offset_m, support_m) in peaks {
             // Extent along the line of the cells that support it.
             let tol = config.min_line_separation_m / 2.0 + bin_m;
             let near = |o: f64| (o - offset_m).abs() <= tol;
@@ -167,17 +251,10 @@ pub fn wall_lines_and_doors(
                 weight: support_m,
                 support_m,
                 extent: Segment::new(foot + u * t0, foot + u * t1),
-                family: family as u32,
+                family: self.family,
             });
         }
     }
-    let max = out.iter().map(|l| l.support_m).fold(0.0, f64::max);
-    if max > 0.0 {
-        for l in &mut out {
-            l.weight = l.support_m / max;
-        }
-    }
-    (out, doors)
 }
 
 /// Door gaps along a line from the sorted coordinates `ts` of its evidence cells: runs of

@@ -68,29 +68,12 @@ pub fn aligned_occupied_precision(
         .iter()
         .map(|p| prior.compose(&Pose::new(p.x, p.y, 0.0)).position() - pivot)
         .collect();
-    // The points rotated by `theta_rad` (about the pivot), every `stride`-th.
-    let rotated = |theta_rad: f64, stride: usize| -> Vec<Vec2> {
-        let (s, c) = theta_rad.sin_cos();
-        occupied
-            .iter()
-            .step_by(stride)
-            .map(|p| Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y))
-            .collect()
+    let aligner = Aligner {
+        frame,
+        near_solid: &near_solid,
+        occupied,
+        pivot,
     };
-    // How many of the rotated points, translated by `(x_m, y_m)` (and back from the pivot),
-    // fall within one cell of solid space.
-    let count = |rotated: &[Vec2], x_m: f64, y_m: f64| -> usize {
-        let t = pivot + Vec2::new(x_m, y_m);
-        rotated
-            .iter()
-            .filter(|r| {
-                frame
-                    .index(frame.cell_from_world(t + **r))
-                    .is_none_or(|i| near_solid[i])
-            })
-            .count()
-    };
-    let hits = |pose: &Pose| count(&rotated(pose.theta_rad, 1), pose.x_m, pose.y_m);
     let steps = |max: f64, step: f64| {
         if step > 0.0 && max > 0.0 {
             (max / step).round() as i32
@@ -101,71 +84,8 @@ pub fn aligned_occupied_precision(
     let nr = steps(cfg.max_rotation_rad, cfg.rotation_step_rad);
     let nt = steps(cfg.max_translation_m, cfg.translation_step_m);
     // Coarse pass on a subsample, then the best few candidates on every cell.
-    let stride = (occupied.len() / 4000).max(1);
-    let mut scored: Vec<(usize, i32, i32, i32)> = Vec::new();
-    let (w, h) = (frame.width as i64, frame.height as i64);
-    let nl = (2 * nt + 1) as usize;
-    // Per point, its cell column (row) for every lattice column (row): a point's cell column
-    // depends only on the translation along x, so the lattice's points share them; a point's
-    // cells for all the lattice are near one another, so the lattice's counts are summed one
-    // point at a time (integers: the order does not matter).
-    let mut columns: Vec<usize> = Vec::new();
-    let mut rows: Vec<usize> = Vec::new();
-    // `near_solid` with one more column and row, solid (outside the frame), as bytes.
-    let (wu, hu) = (w as usize, h as usize);
-    let mut padded = vec![1u8; (wu + 1) * (hu + 1)];
-    for (y, row) in near_solid.chunks_exact(wu.max(1)).enumerate().take(hu) {
-        for (p, n) in padded[y * (wu + 1)..y * (wu + 1) + wu].iter_mut().zip(row) {
-            *p = *n as u8;
-        }
-    }
-    let mut lattice_hits = vec![0u32; nl * nl];
-    // As in `count`: the cell of `pivot + (x_m, y_m) + r`, one axis at a time, per lattice step.
-    let shifts: Vec<(f64, f64)> = (-nt..=nt)
-        .map(|it| {
-            let m = it as f64 * cfg.translation_step_m;
-            (pivot.x + m, pivot.y + m)
-        })
-        .collect();
-    for ir in -nr..=nr {
-        // Rotated once per angle, translated per lattice point.
-        let r = rotated(ir as f64 * cfg.rotation_step_rad, stride);
-        columns.clear();
-        rows.clear();
-        for p in &r {
-            for &(tx, ty) in &shifts {
-                // Indices into `padded`: a column or row outside the frame is its padding.
-                let x = frame.cell_from_world(Vec2::new(tx + p.x, 0.0)).x as i64;
-                columns.push((if (0..w).contains(&x) { x } else { w }) as usize);
-                let y = frame.cell_from_world(Vec2::new(0.0, ty + p.y)).y as i64;
-                rows.push((if (0..h).contains(&y) { y } else { h }) as usize * (wu + 1));
-            }
-        }
-        lattice_hits.fill(0);
-        for (cols, rws) in columns.chunks_exact(nl).zip(rows.chunks_exact(nl)) {
-            // Usually the lattice's columns are consecutive cells of the frame (a translation
-            // step of one cell): each row's counts then add a slice (vectorised).
-            let first = cols[0];
-            let consecutive = cols.iter().enumerate().all(|(k, x)| *x == first + k);
-            for (&row, hits) in rws.iter().zip(lattice_hits.chunks_exact_mut(nl)) {
-                if consecutive {
-                    let cells = &padded[row + first..row + first + nl];
-                    for (n, c) in hits.iter_mut().zip(cells) {
-                        *n += *c as u32;
-                    }
-                } else {
-                    for (&x, n) in cols.iter().zip(hits.iter_mut()) {
-                        *n += padded[row + x] as u32;
-                    }
-                }
-            }
-        }
-        for (ny, iy) in (-nt..=nt).enumerate() {
-            for (nx, ix) in (-nt..=nt).enumerate() {
-                scored.push((lattice_hits[ny * nl + nx] as usize, ir, iy, ix));
-            }
-        }
-    }
+    let stride = (aligner.occupied.len() / 4000).max(1);
+    let mut scored = aligner.lattice_scores(cfg, nr, nt, stride);
     // Most hits first; ties to the smallest motion, then lattice order (deterministic).
     scored.sort_by_key(|&(h, ir, iy, ix)| {
         (
@@ -177,7 +97,7 @@ pub fn aligned_occupied_precision(
         )
     });
     let identity = Pose::new(0.0, 0.0, 0.0);
-    let mut best = (hits(&identity), identity);
+    let mut best = (aligner.hits(&identity), identity);
     if raw > best.0 {
         // Only with a prior: the map as it is overlaps better than the prior moves it.
         best = (raw, identity);
@@ -188,12 +108,149 @@ pub fn aligned_occupied_precision(
             iy as f64 * cfg.translation_step_m,
             ir as f64 * cfg.rotation_step_rad,
         );
-        let h = hits(&pose);
+        let h = aligner.hits(&pose);
         if h > best.0 {
             best = (h, pose);
         }
     }
-    (best.0 as f64 / occupied.len() as f64, best.1)
+    (best.0 as f64 / aligner.occupied.len() as f64, best.1)
+}
+
+/// The map's occupied points (moved by the prior, relative to the pivot) and the cells near
+/// solid space they are scored against.
+struct Aligner<'a> {
+    frame: GridFrame,
+    near_solid: &'a [bool],
+    occupied: Vec<Vec2>,
+    pivot: Vec2,
+}
+
+impl Aligner<'_> {
+    /// The points rotated by `theta_rad` (about the pivot), every `stride`-th.
+    fn rotated(&self, theta_rad: f64, stride: usize) -> Vec<Vec2> {
+        let (s, c) = theta_rad.sin_cos();
+        self.occupied
+            .iter()
+            .step_by(stride)
+            .map(|p| Vec2::new(c * p.x - s * p.y, s * p.x + c * p.y))
+            .collect()
+    }
+
+    /// How many of the rotated points, translated by `(x_m, y_m)` (and back from the pivot),
+    /// fall within one cell of solid space.
+    fn count(&self, rotated: &[Vec2], x_m: f64, y_m: f64) -> usize {
+        let (frame, near_solid) = (self.frame, self.near_solid);
+        let t = self.pivot + Vec2::new(x_m, y_m);
+        rotated
+            .iter()
+            .filter(|r| {
+                frame
+                    .index(frame.cell_from_world(t + **r))
+                    .is_none_or(|i| near_solid[i])
+            })
+            .count()
+    }
+
+    /// How many of the points, moved by `pose`, fall within one cell of solid space.
+    fn hits(&self, pose: &Pose) -> usize {
+        self.count(&self.rotated(pose.theta_rad, 1), pose.x_m, pose.y_m)
+    }
+
+    /// The hits of every `stride`-th point for every motion of the search lattice (`nr`
+    /// rotation steps, `nt` translation steps either way): (hits, rotation, y, x steps).
+    fn lattice_scores(
+        &self,
+        cfg: &AlignmentConfig,
+        nr: i32,
+        nt: i32,
+        stride: usize,
+    ) -> Vec<(usize, i32, i32, i32)> {
+        let (frame, pivot) = (self.frame, self.pivot);
+        let mut scored: Vec<(usize, i32, i32, i32)> = Vec::new();
+        let (w, h) = (frame.width as i64, frame.height as i64);
+        let nl = (2 * nt + 1) as usize;
+        // Per point, its cell column (row) for every lattice column (row): a point's cell column
+        // depends only on the translation along x, so the lattice's points share them; a point's
+        // cells for all the lattice are near one another, so the lattice's counts are summed one
+        // point at a time (integers: the order does not matter).
+        let mut columns: Vec<usize> = Vec::new();
+        let mut rows: Vec<usize> = Vec::new();
+        let wu = w as usize;
+        let padded = padded_near_solid(self.near_solid, w as usize, h as usize);
+        let mut lattice_hits = vec![0u32; nl * nl];
+        // As in `count`: the cell of `pivot + (x_m, y_m) + r`, one axis at a time, per lattice step.
+        let shifts: Vec<(f64, f64)> = (-nt..=nt)
+            .map(|it| {
+                let m = it as f64 * cfg.translation_step_m;
+                (pivot.x + m, pivot.y + m)
+            })
+            .collect();
+        for ir in -nr..=nr {
+            // Rotated once per angle, translated per lattice point.
+            let r = self.rotated(ir as f64 * cfg.rotation_step_rad, stride);
+            columns.clear();
+            rows.clear();
+            for p in &r {
+                for &(tx, ty) in &shifts {
+                    // Indices into `padded`: a column or row outside the frame is its padding.
+                    let x = frame.cell_from_world(Vec2::new(tx + p.x, 0.0)).x as i64;
+                    columns.push((if (0..w).contains(&x) { x } else { w }) as usize);
+                    let y = frame.cell_from_world(Vec2::new(0.0, ty + p.y)).y as i64;
+                    rows.push((if (0..h).contains(&y) { y } else { h }) as usize * (wu + 1));
+                }
+            }
+            lattice_hits.fill(0);
+            sum_lattice_hits(&padded, &columns, &rows, nl, &mut lattice_hits);
+            for (ny, iy) in (-nt..=nt).enumerate() {
+                for (nx, ix) in (-nt..=nt).enumerate() {
+                    scored.push((lattice_hits[ny * nl + nx] as usize, ir, iy, ix));
+                }
+            }
+        }
+        scored
+    }
+}
+
+/// `near_solid` (of a `wu` x `hu` frame) with one more column and row, solid (outside the
+/// frame), as bytes.
+fn padded_near_solid(near_solid: &[bool], wu: usize, hu: usize) -> Vec<u8> {
+    // `near_solid` with one more column and row, solid (outside the frame), as bytes.
+    let mut padded = vec![1u8; (wu + 1) * (hu + 1)];
+    for (y, row) in near_solid.chunks_exact(wu.max(1)).enumerate().take(hu) {
+        for (p, n) in padded[y * (wu + 1)..y * (wu + 1) + wu].iter_mut().zip(row) {
+            *p = *n as u8;
+        }
+    }
+    padded
+}
+
+/// Adds to `lattice_hits` (`nl` x `nl`, rows by y) the cells of `padded` at each point's
+/// `columns` and `rows` (`nl` of each per point) that are near solid space.
+fn sum_lattice_hits(
+    padded: &[u8],
+    columns: &[usize],
+    rows: &[usize],
+    nl: usize,
+    lattice_hits: &mut [u32],
+) {
+    for (cols, rws) in columns.chunks_exact(nl).zip(rows.chunks_exact(nl)) {
+        // Usually the lattice's columns are consecutive cells of the frame (a translation
+        // step of one cell): each row's counts then add a slice (vectorised).
+        let first = cols[0];
+        let consecutive = cols.iter().enumerate().all(|(k, x)| *x == first + k);
+        for (&row, hits) in rws.iter().zip(lattice_hits.chunks_exact_mut(nl)) {
+            if consecutive {
+                let cells = &padded[row + first..row + first + nl];
+                for (n, c) in hits.iter_mut().zip(cells) {
+                    *n += *c as u32;
+                }
+            } else {
+                for (&x, n) in cols.iter().zip(hits.iter_mut()) {
+                    *n += padded[row + x] as u32;
+                }
+            }
+        }
+    }
 }
 
 /// For every cell of `frame`, whether it or one of its 8 neighbours is not `true` in

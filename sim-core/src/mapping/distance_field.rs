@@ -148,23 +148,10 @@ impl ObstacleDistance {
         // once: per row, the cells from the leftmost to the rightmost of their discs' rows
         // (more than the discs, maybe: a cell computed afresh gets the value it has). A cell in
         // discs of several groups is computed more than once, to the same value.
-        let (reach, cap2) = (cap - 1, cap * cap);
-        let half_width = |dy: i32| -self.disc_rows[(dy + reach) as usize].1;
+        let reach = cap - 1;
         let mut next = 0;
         while next < removed.len() {
-            let first = removed[next];
-            let (mut lo, mut hi) = (first, first);
-            let mut end = next + 1;
-            while let Some(&c) = removed.get(end) {
-                let (l, u) = (
-                    Cell::new(lo.x.min(c.x), lo.y.min(c.y)),
-                    Cell::new(hi.x.max(c.x), hi.y.max(c.y)),
-                );
-                if u.x - l.x > 2 * reach || u.y - l.y > 2 * reach {
-                    break;
-                }
-                (lo, hi, end) = (l, u, end + 1);
-            }
+            let (end, lo, hi) = group_end(removed, next, reach);
             let group = &removed[next..end];
             next = end;
             let (x0, x1) = ((lo.x - 2 * reach).max(0), (hi.x + 2 * reach).min(w - 1));
@@ -172,61 +159,59 @@ impl ObstacleDistance {
             if x0 > x1 || y0 > y1 {
                 continue;
             }
-            let nx = (x1 - x0 + 1) as usize;
-            col2.clear();
-            col2.resize((y1 - y0 + 1) as usize * nx, cap2);
-            // Downwards (the nearest obstacle at or above), then upwards (at or below).
-            let (top, bottom) = ((y0 - reach).max(0), (y1 + reach).min(h - 1));
-            for down in [true, false] {
-                last.clear();
-                last.resize(nx, if down { i32::MIN / 2 } else { i32::MAX / 2 });
-                for k in 0..=(if down { y1 - top } else { bottom - y0 }) {
-                    let y = if down { top + k } else { bottom - k };
-                    let row = &grid.data[(y * w + x0) as usize..(y * w + x1) as usize + 1];
-                    for (l, s) in last.iter_mut().zip(row) {
-                        if *s == Occupancy::Occupied {
-                            *l = y;
-                        }
-                    }
-                    if y < y0 || y > y1 {
-                        continue;
-                    }
-                    let out = &mut col2[(y - y0) as usize * nx..(y - y0 + 1) as usize * nx];
-                    for (o, &l) in out.iter_mut().zip(last.iter()) {
-                        let d = (y - l).abs();
-                        if d <= reach {
-                            *o = (*o).min(d * d);
-                        }
-                    }
-                }
+            let b = Recompute {
+                x0,
+                x1,
+                y0,
+                y1,
+                reach,
+                cap,
+            };
+            b.column_distances(grid, (w, h), col2, last);
+            self.recompute(group, &b, col2);
+        }
+    }
+
+    /// Sets the distance of the cells of the discs of the removed cells `group` within the box
+    /// `b`, from the columns' squared vertical distances `col2`.
+    fn recompute(&mut self, group: &[Cell], b: &Recompute, col2: &[i32]) {
+        let w = self.frame.width as i32;
+        let Recompute {
+            x0,
+            x1,
+            y0,
+            y1,
+            reach,
+            cap,
+        } = *b;
+        let (nx, cap2) = (b.nx(), cap * cap);
+        let half_width = |dy: i32| -self.disc_rows[(dy + reach) as usize].1;
+        for y in y0..=y1 {
+            let (mut x_from, mut x_to) = (w, 0);
+            for r in group.iter().filter(|r| (y - r.y).abs() <= reach) {
+                let hw = half_width(y - r.y);
+                (x_from, x_to) = (x_from.min(r.x - hw), x_to.max(r.x + hw + 1));
             }
-            for y in y0..=y1 {
-                let (mut x_from, mut x_to) = (w, 0);
-                for r in group.iter().filter(|r| (y - r.y).abs() <= reach) {
-                    let hw = half_width(y - r.y);
-                    (x_from, x_to) = (x_from.min(r.x - hw), x_to.max(r.x + hw + 1));
+            let (x_from, x_to) = (x_from.max(0), x_to.min(w));
+            if x_from >= x_to {
+                continue;
+            }
+            let cols = &col2[(y - y0) as usize * nx..(y - y0 + 1) as usize * nx];
+            for x in x_from..x_to {
+                let (c0, c1) = ((x - reach).max(x0), (x + reach).min(x1));
+                let mut best = cap2;
+                for (k, &v) in cols[(c0 - x0) as usize..=(c1 - x0) as usize]
+                    .iter()
+                    .enumerate()
+                {
+                    let dx = c0 + k as i32 - x;
+                    best = best.min(v + dx * dx);
                 }
-                let (x_from, x_to) = (x_from.max(0), x_to.min(w));
-                if x_from >= x_to {
-                    continue;
-                }
-                let cols = &col2[(y - y0) as usize * nx..(y - y0 + 1) as usize * nx];
-                for x in x_from..x_to {
-                    let (c0, c1) = ((x - reach).max(x0), (x + reach).min(x1));
-                    let mut best = cap2;
-                    for (k, &v) in cols[(c0 - x0) as usize..=(c1 - x0) as usize]
-                        .iter()
-                        .enumerate()
-                    {
-                        let dx = c0 + k as i32 - x;
-                        best = best.min(v + dx * dx);
-                    }
-                    self.data[(y * w + x) as usize] = if best < cap2 {
-                        (best as f32).sqrt()
-                    } else {
-                        cap as f32
-                    };
-                }
+                self.data[(y * w + x) as usize] = if best < cap2 {
+                    (best as f32).sqrt()
+                } else {
+                    cap as f32
+                };
             }
         }
     }
@@ -306,6 +291,92 @@ impl ObstacleDistance {
         let gx = ((v10 - v00) * (1.0 - fy) + (v11 - v01) * fy) * inv_res;
         let gy = ((v01 - v00) * (1.0 - fx) + (v11 - v10) * fx) * inv_res;
         (d, Vec2::new(gx, gy))
+    }
+}
+
+/// The end (exclusive) of the group of removed cells starting at `next` (consecutive cells
+/// within a box of `2 reach` cells), and the group's box (least and greatest corner).
+fn group_end(removed: &[Cell], next: usize, reach: i32) -> (usize, Cell, Cell) {
+    let first = removed[next];
+    let (mut lo, mut hi) = (first, first);
+    let mut end = next + 1;
+    while let Some(&c) = removed.get(end) {
+        let (l, u) = (
+            Cell::new(lo.x.min(c.x), lo.y.min(c.y)),
+            Cell::new(hi.x.max(c.x), hi.y.max(c.y)),
+        );
+        if u.x - l.x > 2 * reach || u.y - l.y > 2 * reach {
+            break;
+        }
+        (lo, hi, end) = (l, u, end + 1);
+    }
+    (end, lo, hi)
+}
+
+/// The box of cells (inclusive) recomputed for a group of removed cells, the reach and the cap
+/// (see `ObstacleDistance::remove_and_stamp`).
+#[derive(Debug, Clone, Copy)]
+struct Recompute {
+    x0: i32,
+    x1: i32,
+    y0: i32,
+    y1: i32,
+    reach: i32,
+    cap: i32,
+}
+
+impl Recompute {
+    /// The box's width in cells.
+    fn nx(&self) -> usize {
+        (self.x1 - self.x0 + 1) as usize
+    }
+
+    /// Per row of the box and column, the squared vertical distance to the column's nearest
+    /// obstacle within reach (the cap squared for none), into `col2`; `last` is scratch. The
+    /// grid is `w` x `h` cells.
+    fn column_distances(
+        &self,
+        grid: &OccupancyGrid,
+        (w, h): (i32, i32),
+        col2: &mut Vec<i32>,
+        last: &mut Vec<i32>,
+    ) {
+        let Recompute {
+            x0,
+            x1,
+            y0,
+            y1,
+            reach,
+            cap,
+        } = *self;
+        let (nx, cap2) = (self.nx(), cap * cap);
+        col2.clear();
+        col2.resize((y1 - y0 + 1) as usize * nx, cap2);
+        // Downwards (the nearest obstacle at or above), then upwards (at or below).
+        let (top, bottom) = ((y0 - reach).max(0), (y1 + reach).min(h - 1));
+        for down in [true, false] {
+            last.clear();
+            last.resize(nx, if down { i32::MIN / 2 } else { i32::MAX / 2 });
+            for k in 0..=(if down { y1 - top } else { bottom - y0 }) {
+                let y = if down { top + k } else { bottom - k };
+                let row = &grid.data[(y * w + x0) as usize..(y * w + x1) as usize + 1];
+                for (l, s) in last.iter_mut().zip(row) {
+                    if *s == Occupancy::Occupied {
+                        *l = y;
+                    }
+                }
+                if y < y0 || y > y1 {
+                    continue;
+                }
+                let out = &mut col2[(y - y0) as usize * nx..(y - y0 + 1) as usize * nx];
+                for (o, &l) in out.iter_mut().zip(last.iter()) {
+                    let d = (y - l).abs();
+                    if d <= reach {
+                        *o = (*o).min(d * d);
+                    }
+                }
+            }
+        }
     }
 }
 

@@ -243,13 +243,6 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
     let np = pw * (h + 2);
     assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
     let max_extra = max_extra.min(u16::MAX as u32 - 2);
-    // (Also the record of a blocked cell: its cost 0, see `Node::cost`.)
-    let unreached = Node {
-        cost: 0,
-        enter: 0,
-        parent: 255,
-        target: false,
-    };
     if !frame.contains(start) {
         return CostField {
             frame,
@@ -268,6 +261,56 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
         (lo, hi) = (Cell::new(0, 0), Cell::new(w as i32 - 1, h as i32 - 1));
     }
     let (ww, wh) = ((hi.x - lo.x + 1) as usize, (hi.y - lo.y + 1) as usize);
+    let nodes = window_nodes(enter, pw, lo, (ww, wh), max_extra);
+    let mut field = CostField {
+        frame,
+        start,
+        window: (lo, ww, wh),
+        nodes,
+        complete: true,
+    };
+    // From here on, the window padded is the grid searched.
+    let pw = ww + 2;
+    let pad = |c: Cell| ((c.y - lo.y) as usize + 1) * pw + (c.x - lo.x) as usize + 1;
+    let si = pad(start);
+    // Targets still to settle, marked in their cells (unmarked as they settle).
+    let mut targets_left = 0usize;
+    for c in targets.iter().filter(|c| frame.contains(**c)) {
+        let n = &mut field.nodes[pad(*c)];
+        if !n.target {
+            n.target = true;
+            targets_left += 1;
+        }
+    }
+    let Some(targets_left) = settle(&mut field.nodes, si, pw, max_extra, targets_left) else {
+        field.complete = false;
+        return field;
+    };
+    // (Targets never reached are left unmarked too: the field says nothing of its targets.)
+    if targets_left > 0 {
+        for c in targets.iter().filter(|c| frame.contains(**c)) {
+            field.nodes[pad(*c)].target = false;
+        }
+    }
+    field
+}
+
+/// The records of the search window from `lo`, `ww` x `wh` cells, of the padded grid `enter`
+/// (`pw` wide), padded by one blocked cell on every side.
+fn window_nodes<T: Copy + Into<u32>>(
+    enter: &[T],
+    pw: usize,
+    lo: Cell,
+    (ww, wh): (usize, usize),
+    max_extra: u32,
+) -> Vec<Node> {
+    // (Also the record of a blocked cell: its cost 0, see `Node::cost`.)
+    let unreached = Node {
+        cost: 0,
+        enter: 0,
+        parent: 255,
+        target: false,
+    };
     // The window's records, padded by one blocked cell on every side (the cells there, if in
     // the frame, are not passable: the window holds every passable cell). (Clamped, so that a
     // grid breaking the `max_extra` promise cannot overrun the bucket ring. Made from the grid
@@ -291,37 +334,29 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
         nodes.push(unreached);
     }
     nodes.resize(qw * (wh + 2), unreached);
-    let mut field = CostField {
-        frame,
-        start,
-        window: (lo, ww, wh),
-        nodes,
-        complete: true,
-    };
-    // From here on, the window padded is the grid searched.
-    let pw = qw;
-    let pad = |c: Cell| ((c.y - lo.y) as usize + 1) * pw + (c.x - lo.x) as usize + 1;
-    let si = pad(start);
-    // Targets still to settle, marked in their cells (unmarked as they settle).
-    let mut targets_left = 0usize;
-    for c in targets.iter().filter(|c| frame.contains(**c)) {
-        let n = &mut field.nodes[pad(*c)];
-        if !n.target {
-            n.target = true;
-            targets_left += 1;
-        }
-    }
+    nodes
+}
+
+/// The search itself on the padded window `nodes` (`pw` wide) from the cell of index `si`,
+/// with `targets_left` targets marked: settles cells in order of cost until every target is
+/// settled (`None`) or every reachable cell is (`Some`: the targets left).
+fn settle(
+    nodes: &mut [Node],
+    si: usize,
+    pw: usize,
+    max_extra: u32,
+    mut targets_left: usize,
+) -> Option<usize> {
     // A ring of buckets, one per cost modulo its length (a power of two at least the spread
     // of costs pending at once, `DIAGONAL + max_extra + 1`: the bucket of a cost by a mask).
     let nb = ((DIAGONAL + max_extra + 1) as usize).next_power_of_two();
     let ring = nb - 1;
     let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); nb];
     let offsets: [isize; 8] = STEPS.map(|(dx, dy, _)| dy as isize * pw as isize + dx as isize);
-    field.nodes[si].cost = 0;
+    nodes[si].cost = 0;
     buckets[0].push(si as u32);
     let mut pending = 1usize;
     let mut current = 0u32;
-    let nodes = &mut field.nodes;
     while pending > 0 {
         let b = current as usize & ring;
         // The bucket being emptied is taken out of the ring (the steps it pushes go to other
@@ -337,8 +372,7 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
                 nodes[i].target = false;
                 targets_left -= 1;
                 if targets_left == 0 {
-                    field.complete = false;
-                    return field;
+                    return None;
                 }
             }
             // The cell's neighbours, in `STEPS` order, read from the three rows around it (every
@@ -383,13 +417,7 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
         buckets[b] = bucket;
         current += 1;
     }
-    // (Targets never reached are left unmarked too: the field says nothing of its targets.)
-    if targets_left > 0 {
-        for c in targets.iter().filter(|c| frame.contains(**c)) {
-            nodes[pad(*c)].target = false;
-        }
-    }
-    field
+    Some(targets_left)
 }
 
 /// The cheapest path from `start` to `goal` on a grid given as [`dijkstra_padded`] takes it,

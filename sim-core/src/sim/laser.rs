@@ -567,6 +567,17 @@ impl Walls {
             let reach = r * (1.0 + 1e-9) + 1e-9;
             reach * reach
         };
+        let fan = Fan {
+            ix,
+            origin,
+            first_wrapped,
+            increment_rad,
+            beams_per_rad: 1.0 / increment_rad,
+            dirs,
+            max_range_m,
+            reach2,
+            n,
+        };
         TESTED.with(|t| {
             let mut t = t.borrow_mut();
             let (tested, last) = &mut *t;
@@ -580,7 +591,6 @@ impl Walls {
             *last += 1;
             let cast = *last;
             let cull = n > 1 && increment_rad > 0.0;
-            let beams_per_rad = 1.0 / increment_rad;
             // The square's rows outwards from the origin's (its row, the one below, above, two
             // below, ...), and each row's cells outwards from the origin's column: the cells
             // between a cell and the origin come before it, so that the walls nearby are found
@@ -604,88 +614,127 @@ impl Walls {
                     }
                     // (Asked only of a cell of several segments: the question costs about as
                     // much as two segments; a raster's cells hold tens of short ones.)
-                    if cull && held >= CULL_MIN_SEGMENTS {
-                        let corner = (
-                            ix.origin.x + cx as f64 * ix.cell_m - origin.x,
-                            ix.origin.y + cy as f64 * ix.cell_m - origin.y,
-                        );
-                        if let Some((lo, hi)) = ix.cell_arc(corner, first_wrapped) {
-                            let beams = || beams_in_arc(lo, hi, CELL_MARGIN_RAD, beams_per_rad, n);
-                            if beams().next().is_none() {
-                                continue;
-                            }
-                            if ix.cell_is_hidden(c, corner, beams(), &best) {
-                                #[cfg(test)]
-                                HIDDEN_CELLS.with(|h| h.set(h.get() + 1));
-                                continue;
-                            }
-                        }
+                    if cull && held >= CULL_MIN_SEGMENTS && fan.cell_is_culled(c, cx, cy, &best) {
+                        continue;
                     }
-                    for &k in &ix.ids[ix.starts[c] as usize..ix.starts[c + 1] as usize] {
-                        // Each segment once, in the first of its cells in the square.
-                        if tested[k as usize] == cast {
-                            continue;
-                        }
-                        tested[k as usize] = cast;
-                        let s = ix.segments[k as usize];
-                        let (a, e) = (s.a - origin, s.b - s.a);
-                        // Out of reach: the segment's nearest point to the origin (an end, or
-                        // the foot of the perpendicular, `|a x e|^2 / |e|^2` away squared) is
-                        // farther than the range (and the margin of `reach2`, far above any
-                        // rounding). Without a quotient: a segment kept needlessly is crossed
-                        // beyond the range, if at all.
-                        let l2 = e.dot(&e);
-                        let along = -a.dot(&e);
-                        let cross_ae = a.x * e.y - a.y * e.x;
-                        let out_of_reach = if along <= 0.0 || l2 <= 0.0 {
-                            a.norm_squared() > reach2
-                        } else if along >= l2 {
-                            (a + e).norm_squared() > reach2
-                        } else {
-                            cross_ae * cross_ae > reach2 * l2
-                        };
-                        if out_of_reach {
-                            continue;
-                        }
-                        let mut test = |i: usize| {
-                            if let Some(t) = crossing(a, e, cross_ae, dirs[i], max_range_m) {
-                                best[i] = best[i].min(t);
-                            }
-                        };
-                        let b_rel = a + e;
-                        if n == 1
-                            || increment_rad <= 0.0
-                            || a.norm_squared() < 1e-24
-                            || b_rel.norm_squared() < 1e-24
-                        {
-                            (0..n).for_each(&mut test);
-                            continue;
-                        }
-                        // The beams within the angle the segment spans seen from the origin (less
-                        // than half a turn), measured from the first beam.
-                        let pa = wrap_once(atan2_approx(a.y, a.x) - first_wrapped);
-                        let pb = wrap_once(atan2_approx(b_rel.y, b_rel.x) - first_wrapped);
-                        let span = wrap_once(pb - pa);
-                        // Nearly half a turn (a long wall passing close by): should the approximate
-                        // angles' errors not cancel (they do for opposite directions), they could
-                        // pick the other side; every beam is tested instead.
-                        if span.abs() > std::f64::consts::PI - 0.01 {
-                            (0..n).for_each(&mut test);
-                            continue;
-                        }
-                        let lo = if span >= 0.0 { pa } else { pb };
-                        let arc =
-                            beams_in_arc(lo, lo + span.abs(), BEAM_MARGIN_RAD, beams_per_rad, n);
-                        for (i0, i1) in arc {
-                            (i0..=i1).for_each(&mut test);
-                        }
-                    }
+                    let ids = &ix.ids[ix.starts[c] as usize..ix.starts[c + 1] as usize];
+                    fan.test_segments(ids, tested, cast, &mut best);
                 }
             }
         });
         best.into_iter()
             .map(|t| t.is_finite().then_some(t))
             .collect()
+    }
+}
+
+/// A fan of beams being cast by [`Walls::cast_fan`]: its origin, beams and range.
+struct Fan<'a> {
+    ix: &'a WallIndex,
+    origin: Vec2,
+    /// The first beam's angle, wrapped to (-pi, pi].
+    first_wrapped: f64,
+    increment_rad: f64,
+    beams_per_rad: f64,
+    dirs: &'a [Vec2],
+    max_range_m: f64,
+    /// The range squared, with a margin far above any rounding.
+    reach2: f64,
+    /// The number of beams.
+    n: usize,
+}
+
+impl Fan<'_> {
+    /// Whether the grid cell `c` (at column `cx`, row `cy`) can be skipped: no beam passes
+    /// through its arc, or it is hidden behind walls found nearer (`best` so far).
+    #[inline]
+    fn cell_is_culled(&self, c: usize, cx: i32, cy: i32, best: &[f64]) -> bool {
+        let (ix, origin, n) = (self.ix, self.origin, self.n);
+        let beams_per_rad = self.beams_per_rad;
+        let corner = (
+            ix.origin.x + cx as f64 * ix.cell_m - origin.x,
+            ix.origin.y + cy as f64 * ix.cell_m - origin.y,
+        );
+        if let Some((lo, hi)) = ix.cell_arc(corner, self.first_wrapped) {
+            let beams = || beams_in_arc(lo, hi, CELL_MARGIN_RAD, beams_per_rad, n);
+            if beams().next().is_none() {
+                return true;
+            }
+            if ix.cell_is_hidden(c, corner, beams(), best) {
+                #[cfg(test)]
+                HIDDEN_CELLS.with(|h| h.set(h.get() + 1));
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Tests the segments `ids` of a grid cell not tested yet in this cast (`tested[k] ==
+    /// cast` once tested) against the beams that may cross them, lowering `best`.
+    #[inline]
+    fn test_segments(&self, ids: &[u32], tested: &mut [u32], cast: u32, best: &mut [f64]) {
+        let (ix, origin, n, dirs) = (self.ix, self.origin, self.n, self.dirs);
+        let (reach2, max_range_m, increment_rad) =
+            (self.reach2, self.max_range_m, self.increment_rad);
+        let (first_wrapped, beams_per_rad) = (self.first_wrapped, self.beams_per_rad);
+        for &k in ids {
+            // Each segment once, in the first of its cells in the square.
+            if tested[k as usize] == cast {
+                continue;
+            }
+            tested[k as usize] = cast;
+            let s = ix.segments[k as usize];
+            let (a, e) = (s.a - origin, s.b - s.a);
+            // Out of reach: the segment's nearest point to the origin (an end, or
+            // the foot of the perpendicular, `|a x e|^2 / |e|^2` away squared) is
+            // farther than the range (and the margin of `reach2`, far above any
+            // rounding). Without a quotient: a segment kept needlessly is crossed
+            // beyond the range, if at all.
+            let l2 = e.dot(&e);
+            let along = -a.dot(&e);
+            let cross_ae = a.x * e.y - a.y * e.x;
+            let out_of_reach = if along <= 0.0 || l2 <= 0.0 {
+                a.norm_squared() > reach2
+            } else if along >= l2 {
+                (a + e).norm_squared() > reach2
+            } else {
+                cross_ae * cross_ae > reach2 * l2
+            };
+            if out_of_reach {
+                continue;
+            }
+            let mut test = |i: usize| {
+                if let Some(t) = crossing(a, e, cross_ae, dirs[i], max_range_m) {
+                    best[i] = best[i].min(t);
+                }
+            };
+            let b_rel = a + e;
+            if n == 1
+                || increment_rad <= 0.0
+                || a.norm_squared() < 1e-24
+                || b_rel.norm_squared() < 1e-24
+            {
+                (0..n).for_each(&mut test);
+                continue;
+            }
+            // The beams within the angle the segment spans seen from the origin (less
+            // than half a turn), measured from the first beam.
+            let pa = wrap_once(atan2_approx(a.y, a.x) - first_wrapped);
+            let pb = wrap_once(atan2_approx(b_rel.y, b_rel.x) - first_wrapped);
+            let span = wrap_once(pb - pa);
+            // Nearly half a turn (a long wall passing close by): should the approximate
+            // angles' errors not cancel (they do for opposite directions), they could
+            // pick the other side; every beam is tested instead.
+            if span.abs() > std::f64::consts::PI - 0.01 {
+                (0..n).for_each(&mut test);
+                continue;
+            }
+            let lo = if span >= 0.0 { pa } else { pb };
+            let arc = beams_in_arc(lo, lo + span.abs(), BEAM_MARGIN_RAD, beams_per_rad, n);
+            for (i0, i1) in arc {
+                (i0..=i1).for_each(&mut test);
+            }
+        }
     }
 }
 
