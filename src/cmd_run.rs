@@ -474,7 +474,7 @@ fn failed_jobs(jobs: &[floorcast_coordinator::grid::PlannedJob], store: &Store) 
     let rows = store.all()?;
     let failed: Vec<_> = rows
         .iter()
-        .filter(|r| ids.contains(r.job_id.as_str()) && r.status != "ok")
+        .filter(|r| ids.contains(r.job_id.as_str()) && !r.status.is_ok())
         .collect();
     let missing = jobs.len() - stored_of(jobs, store)?;
     if failed.is_empty() && missing == 0 {

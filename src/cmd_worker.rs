@@ -81,7 +81,7 @@ pub fn run(a: WorkerArgs) -> Result<()> {
                 reply,
             } => eprintln!(
                 "job {job}: {} in {wall_time_s:.1} s, {}",
-                shown(&status, 4000),
+                status.as_str(),
                 shown(&reply, 4000)
             ),
             WorkerEvent::Note(n) => eprintln!("note: {}", shown(&n, 4000)),

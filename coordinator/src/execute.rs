@@ -59,7 +59,7 @@ pub fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult
         label: job.label.clone(),
         seed: job.seed,
         settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
-        status: "ok".into(),
+        status: crate::store::JobStatus::Ok,
         error: None,
         summary_json: None,
         progress_csv: None,
@@ -89,7 +89,7 @@ pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> S
             row.progress_csv = Some(csv);
         }
         JobOutcome::Failed { error } => {
-            row.status = "failed".into();
+            row.status = crate::store::JobStatus::Failed;
             // A remote worker's or a program's text: no control characters, bounded.
             row.error = Some(floorcast_worker::text::shown(error, MAX_ERROR_BYTES));
         }
@@ -166,7 +166,7 @@ pub(crate) mod tests {
             serde_json::from_str(&serde_json::to_string(&remote).unwrap()).unwrap();
         let local = execute(&plan, a);
         for r in [&remote, &local] {
-            assert_eq!(r.status(), "ok", "{r:?}");
+            assert_eq!(r.status(), crate::store::JobStatus::Ok, "{r:?}");
             let JobOutcome::Ok { summary, .. } = &r.outcome else {
                 unreachable!()
             };

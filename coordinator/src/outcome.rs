@@ -124,7 +124,7 @@ pub fn achieves(s: &RunSummary, coverage: f64) -> bool {
 
 /// The outcome of `r` at `coverage`, its building named by `building`.
 pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome {
-    let summary = (r.status == "ok")
+    let summary = (r.status.is_ok())
         .then(|| RunSummary::from_json(r.summary_json.as_deref()?).ok())
         .flatten();
     let limit = summary

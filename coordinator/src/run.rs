@@ -552,7 +552,7 @@ impl<'a> LoopState<'a> {
         }
         match (r.answer, result) {
             (Verdict::Store, Some(result)) => {
-                if result.status != "ok" {
+                if !result.status.is_ok() {
                     self.failed += 1;
                     on_log(&format!(
                         "job {} ({} {} seed {}) failed on {worker}: {}",
@@ -592,7 +592,7 @@ impl<'a> LoopState<'a> {
         }
         match outcome {
             Ok(()) => self.checks.verified += 1,
-            Err(why) if ours.status != "ok" => on_log(&format!(
+            Err(why) if !ours.status.is_ok() => on_log(&format!(
                 "job {job}: its re-run on this machine failed ({}), so {worker}'s result is kept unverified ({why})",
                 ours.error.as_deref().unwrap_or("")
             )),
@@ -835,7 +835,7 @@ pub(crate) mod tests {
         assert_eq!(rows.len(), 4);
         for r in rows {
             let failed = r.seed % 2 == 0;
-            assert_eq!(r.status == "failed", failed, "{r:?}");
+            assert_eq!(r.status == crate::store::JobStatus::Failed, failed, "{r:?}");
             let boom = format!("boom at seed {}", r.seed);
             assert_eq!(
                 r.error.as_deref().is_some_and(|e| e.contains(&boom)),
@@ -916,7 +916,7 @@ pub(crate) mod tests {
         assert_eq!(rows[0].len(), rows[1].len());
         for (together, alone) in rows[0].iter().zip(&rows[1]) {
             assert_eq!(together.job_id, alone.job_id);
-            assert_eq!(together.status, "ok", "{together:?}");
+            assert_eq!(together.status, crate::store::JobStatus::Ok, "{together:?}");
             crate::verify::compare(together, alone)
                 .unwrap_or_else(|e| panic!("{} {}: {e}", together.strategy, together.seed));
         }

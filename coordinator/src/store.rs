@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 
 use rusqlite::{params, Connection, OptionalExtension};
 
+pub use floorcast_worker::wire::JobStatus;
+
 /// Version of the database layout.
 pub const STORE_VERSION: u32 = 1;
 pub const DB_FILE: &str = "results.sqlite";
@@ -76,8 +78,7 @@ pub struct StoredResult {
     pub label: String,
     pub seed: u64,
     pub settings_json: String,
-    /// `ok` or `failed`.
-    pub status: String,
+    pub status: JobStatus,
     pub error: Option<String>,
     pub summary_json: Option<String>,
     pub progress_csv: Option<String>,
@@ -623,7 +624,7 @@ impl Store {
              VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)",
             params![
                 r.job_id, r.grid, r.building, r.building_hash, r.strategy, r.label, r.seed as i64,
-                r.settings_json, r.status, r.error, r.summary_json, r.progress_csv, r.worker,
+                r.settings_json, r.status.as_str(), r.error, r.summary_json, r.progress_csv, r.worker,
                 r.wall_time_s, r.floorcast_version, now
             ],
         ))
@@ -692,6 +693,10 @@ impl Store {
             };
             let (seed, mut row) = match self.sql(r)? {
                 Ok(read) => read,
+                // An unknown status says what it is.
+                Err((job, rusqlite::Error::FromSqlConversionFailure(8, _, e))) => {
+                    return Err(tampered(&job, "", e.to_string()))
+                }
                 Err((job, e)) => {
                     return Err(tampered(
                         &job,
@@ -878,7 +883,20 @@ fn read_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<(i64, StoredResult)> {
             label: r.get(5)?,
             seed: 0,
             settings_json: r.get(7)?,
-            status: r.get(8)?,
+            status: {
+                let word: String = r.get(8)?;
+                JobStatus::parse(&word).ok_or_else(|| {
+                    rusqlite::Error::FromSqlConversionFailure(
+                        8,
+                        rusqlite::types::Type::Text,
+                        format!(
+                            "field status is '{}', expected ok or failed",
+                            floorcast_worker::text::excerpt(&word)
+                        )
+                        .into(),
+                    )
+                })?
+            },
             error: r.get(9)?,
             summary_json: r.get(10)?,
             progress_csv: r.get(11)?,
@@ -903,8 +921,8 @@ pub fn check_row(r: &StoredResult) -> Result<(), String> {
         Ok(serde_json::Value::Object(_)) => {}
         _ => return Err("field settings_json is not a JSON object".into()),
     }
-    match r.status.as_str() {
-        "ok" => {
+    match r.status {
+        JobStatus::Ok => {
             let text = r
                 .summary_json
                 .as_deref()
@@ -927,22 +945,15 @@ pub fn check_row(r: &StoredResult) -> Result<(), String> {
                 );
             }
         }
-        "failed" => {
+        JobStatus::Failed => {
             if r.error.as_deref().is_none_or(|e| e.trim().is_empty()) {
                 return Err("field error is empty, expected why the job failed".into());
             }
-        }
-        other => {
-            return Err(format!(
-                "field status is '{}', expected ok or failed",
-                floorcast_worker::text::excerpt(other)
-            ))
         }
     }
     Ok(())
 }
 
-/// This machine's name (or "unknown").
 /// Seconds since the Unix epoch (when a row was stored).
 fn unix_now_s() -> f64 {
     std::time::SystemTime::now()
@@ -1029,7 +1040,7 @@ pub(crate) mod fixtures {
             label: label.into(),
             seed,
             settings_json: "{}".into(),
-            status: "ok".into(),
+            status: super::JobStatus::Ok,
             error: None,
             summary_json: Some(summary.to_string()),
             progress_csv: None,
@@ -1054,7 +1065,7 @@ mod tests {
             label: "baseline".into(),
             seed: 1,
             settings_json: "{}".into(),
-            status: "failed".into(),
+            status: JobStatus::Failed,
             error: Some("no free space at the start".into()),
             summary_json: None,
             progress_csv: Some("time_s\n".into()),

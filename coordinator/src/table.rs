@@ -478,7 +478,7 @@ pub fn table_against(
                 }
                 let summaries: Vec<RunSummary> = mine
                     .iter()
-                    .filter(|r| r.status == "ok")
+                    .filter(|r| r.status.is_ok())
                     .filter_map(|r| {
                         r.summary_json
                             .as_deref()
@@ -689,7 +689,7 @@ type PairKey = (String, u64, [u64; 3]);
 fn metric_by_pair(subset: &[&StoredResult], label: &str, name: &str) -> BTreeMap<PairKey, f64> {
     subset
         .iter()
-        .filter(|r| r.label == label && r.status == "ok")
+        .filter(|r| r.label == label && r.status.is_ok())
         .filter_map(|r| {
             let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
             let v = metric_of(name, &s, r.progress_csv.as_deref().unwrap_or(""))?;
@@ -1015,7 +1015,7 @@ fn label_metrics<'a>(
     label: &str,
 ) -> serde_json::Value {
     let runs: Vec<(RunSummary, &str)> = results
-        .filter(|r| r.label == label && r.status == "ok")
+        .filter(|r| r.label == label && r.status.is_ok())
         .filter_map(|r| {
             let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
             Some((s, r.progress_csv.as_deref().unwrap_or("")))
@@ -1167,7 +1167,7 @@ pub fn progress_curves(
     let mut curves: BTreeMap<&str, Curves> = BTreeMap::new();
     for r in results
         .iter()
-        .filter(|r| r.building == building && r.status == "ok")
+        .filter(|r| r.building == building && r.status.is_ok())
     {
         let Some(csv) = r.progress_csv.as_deref() else {
             continue;
@@ -1306,7 +1306,7 @@ pub fn results_csv(results: &[StoredResult]) -> String {
             r.strategy.clone(),
             r.label.clone(),
             r.seed.to_string(),
-            r.status.clone(),
+            r.status.as_str().to_string(),
             f(sum.as_ref().map(|s| s.exploration_time_s)),
             f(sum.as_ref().map(|s| s.explored_area_m2)),
             f(sum.as_ref().map(|s| s.free_area_m2)),
@@ -1458,7 +1458,7 @@ mod tests {
         // A failed job stored no program: the same as any, and not the label's reference.
         let mut failed = b.clone();
         failed.summary_json = None;
-        failed.status = "failed".into();
+        failed.status = crate::store::JobStatus::Failed;
         assert_eq!(
             check_label_configurations(&[failed.clone(), with_program("a.py")]),
             Ok(())
@@ -1682,7 +1682,7 @@ mod tests {
                     let mut r = stored_end(label, seed, t, "complete", f, s0);
                     r.building = building.into();
                     if rng.random::<f64>() < 0.05 {
-                        r.status = "failed".into();
+                        r.status = crate::store::JobStatus::Failed;
                         r.summary_json = None;
                     }
                     results.push(r);

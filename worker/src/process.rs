@@ -65,7 +65,7 @@ pub enum WorkerEvent {
     },
     Finished {
         job: String,
-        status: String,
+        status: crate::wire::JobStatus,
         wall_time_s: f64,
         reply: String,
     },
@@ -320,7 +320,7 @@ fn run_one(x: &State<'_>, job: WireJob, lease_s: f64) -> Result<(), WorkerError>
         result
     })?;
     x.run.fetch_add(1, Ordering::SeqCst);
-    let status = result.status().to_string();
+    let status = result.status();
     let wall_time_s = result.wall_time_s;
     let submission = Submission {
         worker: x.worker().to_string(),

@@ -311,12 +311,49 @@ impl JobReport {
         }
     }
 
-    /// "ok" or "failed", as the store says it.
-    pub fn status(&self) -> &'static str {
+    /// Whether the job ran to its end or failed.
+    pub fn status(&self) -> JobStatus {
         match self.outcome {
-            JobOutcome::Ok { .. } => "ok",
-            JobOutcome::Failed { .. } => "failed",
+            JobOutcome::Ok { .. } => JobStatus::Ok,
+            JobOutcome::Failed { .. } => JobStatus::Failed,
         }
+    }
+}
+
+/// A job's status: it ran to its end (its record holds the run), or it failed (its record says
+/// why). Stored as `ok` or `failed`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum JobStatus {
+    Ok,
+    Failed,
+}
+
+impl JobStatus {
+    /// The word the store and the CSV export write.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JobStatus::Ok => "ok",
+            JobStatus::Failed => "failed",
+        }
+    }
+
+    /// The status of a stored word (`None`: not a status).
+    pub fn parse(word: &str) -> Option<JobStatus> {
+        match word {
+            "ok" => Some(JobStatus::Ok),
+            "failed" => Some(JobStatus::Failed),
+            _ => None,
+        }
+    }
+
+    pub fn is_ok(self) -> bool {
+        self == JobStatus::Ok
+    }
+}
+
+impl std::fmt::Display for JobStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
     }
 }
 
