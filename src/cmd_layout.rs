@@ -147,16 +147,8 @@ pub fn run(a: LayoutArgs) -> Result<()> {
     layout_figure(&grid, &layout)
         .save(&picture)
         .with_context(|| format!("cannot write {}", picture.display()))?;
-    let full = layout
-        .rooms
-        .iter()
-        .filter(|r| r.label == RoomLabel::Full)
-        .count();
-    let open = layout
-        .rooms
-        .iter()
-        .filter(|r| r.label == RoomLabel::Open)
-        .count();
+    let full = layout.rooms_labelled(RoomLabel::Full);
+    let open = layout.rooms_labelled(RoomLabel::Open);
     say!(
         "{}: {} rooms ({} full, {} partial, {} open), {} wall lines, in {:.0} ms",
         a.map.display(),

@@ -334,25 +334,33 @@ fn check_is_store(path: &Path) -> Result<Connection, StoreError> {
     Ok(conn)
 }
 
+/// The store at `path` is another program's file.
+fn foreign(path: &Path, why: &str) -> StoreError {
+    StoreError::Foreign {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    }
+}
+
+/// The store at `path` is damaged.
+fn damaged(path: &Path, why: &str) -> StoreError {
+    StoreError::Damaged {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    }
+}
+
 /// The file at `path` is a regular, non-empty file starting with SQLite's header.
 fn check_sqlite_file(path: &Path) -> Result<(), StoreError> {
-    let foreign = |why: &str| StoreError::Foreign {
-        path: path.to_path_buf(),
-        why: why.to_string(),
-    };
-    let damaged = |why: &str| StoreError::Damaged {
-        path: path.to_path_buf(),
-        why: why.to_string(),
-    };
     let meta = std::fs::metadata(path).map_err(|e| StoreError::Unreadable {
         path: path.to_path_buf(),
         why: e.to_string(),
     })?;
     if !meta.is_file() {
-        return Err(foreign("not a regular file"));
+        return Err(foreign(path, "not a regular file"));
     }
     if meta.len() == 0 {
-        return Err(damaged("an empty file"));
+        return Err(damaged(path, "an empty file"));
     }
     let mut header = [0u8; 16];
     {
@@ -371,9 +379,12 @@ fn check_sqlite_file(path: &Path) -> Result<(), StoreError> {
                 .parent()
                 .is_some_and(|d| std::fs::symlink_metadata(d.join(LOCK_FILE)).is_ok());
             return Err(if used {
-                damaged("its first bytes are not SQLite's header, in a folder floorcast has run in")
+                damaged(
+                    path,
+                    "its first bytes are not SQLite's header, in a folder floorcast has run in",
+                )
             } else {
-                foreign("not an SQLite database: a store damaged at its start, or another program's file")
+                foreign(path, "not an SQLite database: a store damaged at its start, or another program's file")
             });
         }
     }
@@ -386,16 +397,11 @@ fn check_floorcast_tables(
     tables: &[String],
     path: &Path,
 ) -> Result<(), StoreError> {
-    let foreign = |why: &str| StoreError::Foreign {
-        path: path.to_path_buf(),
-        why: why.to_string(),
-    };
-    let damaged = |why: &str| StoreError::Damaged {
-        path: path.to_path_buf(),
-        why: why.to_string(),
-    };
     if !tables.iter().any(|t| t == "meta") {
-        return Err(foreign("an SQLite database without floorcast's tables"));
+        return Err(foreign(
+            path,
+            "an SQLite database without floorcast's tables",
+        ));
     }
     let version: Option<String> = conn
         .query_row(
@@ -408,6 +414,7 @@ fn check_floorcast_tables(
     match version {
         None => {
             return Err(foreign(
+                path,
                 "an SQLite database without a floorcast store version",
             ))
         }
@@ -420,7 +427,7 @@ fn check_floorcast_tables(
         Some(_) => {}
     }
     if !tables.iter().any(|t| t == "results") {
-        return Err(damaged("its results table is missing"));
+        return Err(damaged(path, "its results table is missing"));
     }
     let problems: Vec<String> = conn
         .prepare("PRAGMA integrity_check(3)")
@@ -430,10 +437,13 @@ fn check_floorcast_tables(
         })
         .map_err(|e| classify(path, e))?;
     if problems != ["ok"] {
-        return Err(damaged(&format!(
-            "PRAGMA integrity_check: {}",
-            floorcast_worker::text::shown(&problems.join("; "), 200)
-        )));
+        return Err(damaged(
+            path,
+            &format!(
+                "PRAGMA integrity_check: {}",
+                floorcast_worker::text::shown(&problems.join("; "), 200)
+            ),
+        ));
     }
     Ok(())
 }

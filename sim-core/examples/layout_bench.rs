@@ -234,16 +234,8 @@ impl Bench {
     ) {
         let known = (grid.count(Occupancy::Free) + grid.count(Occupancy::Occupied)) as f64
             * grid.frame.cell_area_m2();
-        let part = layout
-            .rooms
-            .iter()
-            .filter(|r| r.label == RoomLabel::Partial)
-            .count();
-        let open = layout
-            .rooms
-            .iter()
-            .filter(|r| r.label == RoomLabel::Open)
-            .count();
+        let part = layout.rooms_labelled(RoomLabel::Partial);
+        let open = layout.rooms_labelled(RoomLabel::Open);
         let med = times[times.len() / 2];
         let max = times[times.len() - 1];
         let stage = stage_ms(grid, &self.config, self.runs);

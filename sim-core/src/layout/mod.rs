@@ -139,6 +139,13 @@ pub struct Layout {
     pub diagnostics: LayoutDiagnostics,
 }
 
+impl Layout {
+    /// How many of its rooms carry `label`.
+    pub fn rooms_labelled(&self, label: RoomLabel) -> usize {
+        self.rooms.iter().filter(|r| r.label == label).count()
+    }
+}
+
 /// Parameters. Lengths in metres, angles in radians.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LayoutConfig {
