@@ -351,16 +351,14 @@ fn parse_start(s: &str) -> Result<StartArg, String> {
     Ok(StartArg::Pose(pose))
 }
 
+/// `progress.csv`: as the results store keeps a run's curve.
 fn progress_csv(r: &RunResult) -> String {
-    let mut s = String::from("time_s,explored_area_m2,explored_fraction\n");
-    for p in &r.progress {
-        let _ = writeln!(
-            s,
-            "{:.1},{:.3},{:.5}",
-            p.time_s, p.explored_area_m2, p.explored_fraction
-        );
-    }
-    s
+    let samples: Vec<[f64; 3]> = r
+        .progress
+        .iter()
+        .map(|p| [p.time_s, p.explored_area_m2, p.explored_fraction])
+        .collect();
+    floorcast_coordinator::progress::encode(&samples)
 }
 
 fn decisions_csv(r: &RunResult) -> String {

@@ -2,7 +2,6 @@
 //! (which run it with [`floorcast_worker::execute::execute_wire`]), and the store row of a job
 //! from its report: its identity always comes from the plan, never from the worker.
 
-use std::fmt::Write as _;
 
 use floorcast_worker::wire::{JobOutcome, JobReport, WireJob, WireProgram, WireStart};
 use floorcast_worker::{GivenStart, Job};
@@ -82,11 +81,7 @@ pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> S
             summary.suite = suite.map(|s| s.name.clone());
             summary.suite_hash = suite.map(|s| s.hash.clone());
             row.summary_json = serde_json::to_string(&summary).ok();
-            let mut csv = String::from("time_s,explored_area_m2,explored_fraction\n");
-            for [t, area, fraction] in progress {
-                let _ = writeln!(csv, "{t:.1},{area:.3},{fraction:.5}");
-            }
-            row.progress_csv = Some(csv);
+            row.progress_csv = Some(crate::progress::encode(progress));
         }
         JobOutcome::Failed { error } => {
             row.status = crate::store::JobStatus::Failed;

@@ -20,6 +20,7 @@
 //! - [`suite`]: suites named by grids (found by name or path), and the suites of a store's
 //!   runs.
 //! - [`verify`]: results of remote workers checked by running their jobs again here.
+//! - [`progress`]: a run's progress curve as stored (the one codec of `progress.csv`).
 //! - [`outcome`]: what a run achieved at a coverage level, and the pairs of two labels' runs
 //!   (a run that did not achieve the outcome is a loss against one that did).
 //! - [`stats`]: Wilcoxon, bootstrap, Holm, effect size of paired differences, the anytime-valid
@@ -36,6 +37,7 @@ pub mod inbox;
 pub mod names;
 pub mod net;
 pub mod outcome;
+pub mod progress;
 pub mod run;
 pub mod schedule;
 pub mod sequential;

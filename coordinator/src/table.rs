@@ -1238,12 +1238,7 @@ pub fn progress_curves(
 /// The `(time_s, explored_fraction)` samples of a stored `progress.csv`
 /// (`time_s,explored_area_m2,explored_fraction`); unreadable lines are skipped.
 fn progress_curve(progress_csv: &str) -> impl Iterator<Item = (f64, f64)> + '_ {
-    progress_csv.lines().skip(1).filter_map(|line| {
-        let mut it = line.split(',');
-        let t: f64 = it.next()?.trim().parse().ok()?;
-        let f: f64 = it.nth(1)?.trim().parse().ok()?;
-        Some((t, f))
-    })
+    crate::progress::decode(progress_csv).map(|[t, _, f]| (t, f))
 }
 
 /// The first simulated time at which a stored progress curve reaches `fraction` explored.
