@@ -2,7 +2,6 @@
 //! (which run it with [`floorcast_worker::execute::execute_wire`]), and the store row of a job
 //! from its report: its identity always comes from the plan, never from the worker.
 
-
 use floorcast_worker::wire::{JobOutcome, JobReport, WireJob, WireProgram, WireStart};
 use floorcast_worker::{GivenStart, Job};
 

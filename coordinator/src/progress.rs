@@ -45,7 +45,11 @@ mod tests {
     /// The curve is stored as it always was, and reads back as what was stored.
     #[test]
     fn curves_are_stored_as_before_and_read_back() {
-        let samples = [[0.0, 0.0, 0.0], [10.04, 12.3456, 0.123456], [606.25, 407.98, 0.99944]];
+        let samples = [
+            [0.0, 0.0, 0.0],
+            [10.04, 12.3456, 0.123456],
+            [606.25, 407.98, 0.99944],
+        ];
         let text = encode(&samples);
         let mut before = String::from("time_s,explored_area_m2,explored_fraction\n");
         for [t, area, fraction] in samples {
