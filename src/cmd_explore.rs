@@ -10,7 +10,7 @@ use floorcast_worker::settings::{LocalizationSetting, UtilityDistanceSetting};
 use floorcast_worker::{
     check_job, check_start, run_job, GivenStart, Job, Settings, StrategyProgram, STRATEGIES,
 };
-use sim_core::explore::RunResult;
+use sim_core::explore::{EndReason, RunResult};
 
 use crate::output::{parse_pose, progress_bar, write_text, Picture};
 
@@ -312,14 +312,14 @@ fn write_outputs(
 /// of the reachable free area: a silent short run misleads.
 fn short_run_warning(s: &floorcast_worker::RunSummary) -> Option<String> {
     let explored = s.explored_fraction * 100.0;
-    let why = match s.end_reason.as_str() {
-        "time limit" => "it reached the time limit (raise time_limit_s)".to_string(),
+    let why = match s.end_reason {
+        EndReason::TimeLimit => "it reached the time limit (raise time_limit_s)".to_string(),
         _ if s.explored_fraction >= 0.97 => return None,
-        "stuck" => format!(
+        EndReason::Stuck => format!(
             "it gave up every goal toward the {} frontier cells left (magenta in final.png)",
             s.frontier_cells_left
         ),
-        "frontiers unreachable" => format!(
+        EndReason::Unreachable => format!(
             "no path leads to the {} frontier cells left (magenta in final.png; a passage narrower than the robot?)",
             s.frontier_cells_left
         ),

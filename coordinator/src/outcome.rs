@@ -53,13 +53,10 @@ pub fn end_classes() -> [&'static str; 5] {
     EndReason::ALL.map(EndReason::as_str)
 }
 
-/// The end class of a stored summary: its `end_reason`, with the "no frontiers" of summaries
-/// written before the classes existed read as "complete".
-pub fn end_class(s: &RunSummary) -> &str {
-    match s.end_reason.as_str() {
-        "no frontiers" => EndReason::Complete.as_str(),
-        other => other,
-    }
+/// The end class of a stored summary (the "no frontiers" of summaries written before the
+/// classes existed reads as "complete": [`RunSummary`]'s reading).
+pub fn end_class(s: &RunSummary) -> &'static str {
+    s.end_reason.as_str()
 }
 
 /// A gain as a percentage of the reference's time from a mean log ratio `m = ln t_ref - ln t`:

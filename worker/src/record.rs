@@ -2,7 +2,7 @@
 //! check `format` and `version` before trusting the rest.
 
 use serde::{Deserialize, Serialize};
-use sim_core::explore::RunResult;
+use sim_core::explore::{EndReason, RunResult};
 
 use crate::{Job, Settings, FLOORCAST_VERSION};
 
@@ -95,8 +95,10 @@ pub struct RunSummary {
     /// Why the run ended: "complete" (no frontier left that the robot had not looked into),
     /// "early stop", "time limit", "stuck" (frontiers left that a path leads to, every goal
     /// toward them given up) or "frontiers unreachable". Summaries before 0.4 say "no
-    /// frontiers" for the last three of these alike.
-    pub end_reason: String,
+    /// frontiers" for the last three of these alike, read as "complete" (what reports always
+    /// counted them as).
+    #[serde(with = "end_reason_name")]
+    pub end_reason: EndReason,
     /// Frontier cells left on the map at the end that the robot had not looked into (0 when
     /// complete, early stop or time limit; absent before 0.4).
     #[serde(default)]
@@ -152,7 +154,7 @@ impl RunSummary {
             layouts_computed: r.layouts_computed,
             layout_compute_s: r.layout_compute_s,
             charge_compute: job.settings.charge_compute,
-            end_reason: r.end_reason.as_str().to_string(),
+            end_reason: r.end_reason,
             frontier_cells_left: r.frontier_cells_left,
             blacklisted_goals: r.blacklisted_goals,
             scans: r.scans,
@@ -265,5 +267,53 @@ impl RunSummary {
             }
         }
         Ok(())
+    }
+}
+
+/// A summary's `end_reason` as its name ([`EndReason::as_str`]); the "no frontiers" of summaries
+/// before 0.4 reads as complete.
+mod end_reason_name {
+    use serde::{Deserialize, Deserializer, Serializer};
+    use sim_core::explore::EndReason;
+
+    pub fn serialize<S: Serializer>(r: &EndReason, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(r.as_str())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<EndReason, D::Error> {
+        let name = String::deserialize(d)?;
+        match name.as_str() {
+            "no frontiers" => Ok(EndReason::Complete),
+            other => EndReason::from_name(other).ok_or_else(|| {
+                serde::de::Error::custom(format!(
+                    "end_reason '{}' is not one of complete, early stop, time limit, stuck, frontiers unreachable",
+                    crate::text::excerpt(other)
+                ))
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::end_reason_name;
+    use sim_core::explore::EndReason;
+
+    #[derive(serde::Serialize, serde::Deserialize)]
+    struct R(#[serde(with = "end_reason_name")] EndReason);
+
+    /// Every class is written by its name and read back; the "no frontiers" of old summaries
+    /// reads as complete; any other word is refused, naming it.
+    #[test]
+    fn end_reasons_are_written_by_name_and_read_back() {
+        for r in EndReason::ALL {
+            let text = serde_json::to_string(&R(r)).unwrap();
+            assert_eq!(text, format!("\"{}\"", r.as_str()));
+            assert_eq!(serde_json::from_str::<R>(&text).unwrap().0, r);
+        }
+        let old: R = serde_json::from_str("\"no frontiers\"").unwrap();
+        assert_eq!(old.0, EndReason::Complete);
+        let e = serde_json::from_str::<R>("\"finished\"").err().unwrap();
+        assert!(e.to_string().contains("end_reason 'finished'"), "{e}");
     }
 }

@@ -156,10 +156,21 @@ impl EndReason {
         }
     }
 
+    /// The class of a name [`EndReason::as_str`] gives (`None`: not a class's name).
+    pub fn from_name(name: &str) -> Option<EndReason> {
+        EndReason::ALL.into_iter().find(|r| r.as_str() == name)
+    }
+
     /// Whether the run ended because it had explored everything it could see (complete) or
     /// by the strategy's own choice (early stop), as opposed to being cut short.
     pub fn is_normal(self) -> bool {
         matches!(self, EndReason::Complete | EndReason::EarlyStop)
+    }
+}
+
+impl std::fmt::Display for EndReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
     }
 }
 
