@@ -223,7 +223,7 @@ fn given_start(
                 .with_context(|| format!("{}: cannot explore", a.building.display()))?;
             Some(GivenStart {
                 pose,
-                source: GivenStart::COMMAND_LINE.into(),
+                source: floorcast_worker::GivenSource::CommandLine,
             })
         }
         Some(StartArg::Random) => Some(GivenStart {
@@ -235,7 +235,7 @@ fn given_start(
                         a.building.display()
                     )
                 })?,
-            source: GivenStart::RANDOM.into(),
+            source: floorcast_worker::GivenSource::Random,
         }),
     })
 }

@@ -3,7 +3,7 @@
 //! from its report: its identity always comes from the plan, never from the worker.
 
 use floorcast_worker::wire::{JobOutcome, JobReport, WireJob, WireProgram, WireStart};
-use floorcast_worker::{GivenStart, Job};
+use floorcast_worker::Job;
 
 use crate::grid::{Plan, PlannedJob};
 use crate::store::StoredResult;
@@ -39,7 +39,7 @@ pub fn identity(plan: &Plan, job: &PlannedJob) -> WireJob {
         settings: job.settings.clone(),
         start: job.start.as_ref().map(|s| WireStart {
             pose: [s.pose.x_m, s.pose.y_m, s.pose.theta_rad],
-            source: s.source.clone(),
+            source: s.source.as_str().to_string(),
         }),
         program: None,
     }
@@ -115,10 +115,7 @@ pub(crate) fn spec<'p>(plan: &'p Plan, job: &PlannedJob) -> Job<'p> {
         program: job.program.clone(),
         seed: job.seed,
         settings: job.settings.clone(),
-        start: job.start.as_ref().map(|s| GivenStart {
-            pose: s.pose,
-            source: s.source.clone(),
-        }),
+        start: job.start.clone(),
         snapshot_fractions: Vec::new(),
     }
 }

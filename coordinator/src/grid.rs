@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use floorcast_worker::{
-    check_start, GivenStart, Settings, StrategyProgram, FLOORCAST_VERSION, JOB_ID_RESULT_FORMAT,
-    STRATEGIES,
+    check_start, GivenSource, GivenStart, Settings, StrategyProgram, FLOORCAST_VERSION,
+    JOB_ID_RESULT_FORMAT, STRATEGIES,
 };
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
@@ -202,15 +202,7 @@ pub struct PlannedJob {
     pub seed: u64,
     pub settings: Settings,
     /// The start pose, when the grid sets one (`[starts]`); `None`: the building's own.
-    pub start: Option<PlannedStart>,
-}
-
-/// A start pose set by the grid.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PlannedStart {
-    pub pose: Pose,
-    /// "random" (drawn by [`Building::random_start`]) or "grid" (listed in `[[starts.poses]]`).
-    pub source: String,
+    pub start: Option<GivenStart>,
 }
 
 /// A validated grid.
@@ -235,7 +227,7 @@ pub struct Plan {
     pub coverage: f64,
     /// The strategies and each building's start poses, for [`Plan::jobs_for`].
     strategies: Vec<Resolved>,
-    starts: Vec<Vec<Option<PlannedStart>>>,
+    starts: Vec<Vec<Option<GivenStart>>>,
 }
 
 impl Plan {
@@ -869,7 +861,7 @@ fn finish_sequential(
     q: &mut crate::sprt::SequentialPlan,
     coverage: f64,
     labels: &[String],
-    starts: &[Vec<Option<PlannedStart>>],
+    starts: &[Vec<Option<GivenStart>>],
     invalid: &dyn Fn(&str, String) -> GridError,
 ) -> Result<(), GridError> {
     q.coverage = coverage;
@@ -1102,8 +1094,8 @@ fn plan_starts(
     buildings: &[PlannedBuilding],
     radius_m: f64,
     invalid: &dyn Fn(&str, String) -> GridError,
-) -> Result<Vec<Vec<Option<PlannedStart>>>, GridError> {
-    let mut out: Vec<Vec<Option<PlannedStart>>> = vec![Vec::new(); buildings.len()];
+) -> Result<Vec<Vec<Option<GivenStart>>>, GridError> {
+    let mut out: Vec<Vec<Option<GivenStart>>> = vec![Vec::new(); buildings.len()];
     if let Some(spec) = spec {
         if spec.random > MAX_RANDOM_STARTS {
             return Err(invalid(
@@ -1127,9 +1119,9 @@ fn plan_starts(
                 let sampler = sim_core::building::StartSampler::new(&b.building, radius_m)
                     .map_err(|e| invalid("starts.random", format!("building {}: {e}", b.name)))?;
                 for k in 0..spec.random {
-                    out[bi].push(Some(PlannedStart {
+                    out[bi].push(Some(GivenStart {
                         pose: sampler.draw(spec.seed, k as u64),
-                        source: GivenStart::RANDOM.into(),
+                        source: GivenSource::Random,
                     }));
                 }
             }
@@ -1169,9 +1161,9 @@ fn plan_starts(
                 &format!("{field}.pose"),
             )
             .map_err(|e| invalid(&format!("{field}.pose"), e.to_string()))?;
-            let start = Some(PlannedStart {
+            let start = Some(GivenStart {
                 pose,
-                source: GivenStart::GRID.into(),
+                source: GivenSource::Grid,
             });
             if out[bi].contains(&start) {
                 return Err(invalid(
@@ -1232,7 +1224,7 @@ pub fn job_id_from(
     strategy: &str,
     seed: u64,
     settings: &Settings,
-    start: Option<&PlannedStart>,
+    start: Option<&GivenStart>,
 ) -> String {
     let mut canonical = serde_json::json!({
         "floorcast_version": FLOORCAST_VERSION,
@@ -1245,7 +1237,7 @@ pub fn job_id_from(
     if let Some(s) = start {
         let bits =
             [s.pose.x_m, s.pose.y_m, s.pose.theta_rad].map(|v| format!("{:016x}", v.to_bits()));
-        canonical["start"] = serde_json::json!({ "pose_bits": bits, "source": s.source });
+        canonical["start"] = serde_json::json!({ "pose_bits": bits, "source": s.source.as_str() });
     }
     let digest = Sha256::digest(canonical.to_string().as_bytes());
     digest[..16].iter().map(|b| format!("{b:02x}")).collect()
@@ -1798,7 +1790,7 @@ time_limit_s = 600
                 .filter(|j| j.building == bi)
                 .map(|j| {
                     let s = j.start.as_ref().expect("a start pose");
-                    assert_eq!(s.source, "random");
+                    assert_eq!(s.source, GivenSource::Random);
                     assert!(b.building.check_start(s.pose, radius).is_ok(), "{}", b.name);
                     [s.pose.x_m, s.pose.y_m, s.pose.theta_rad].map(f64::to_bits)
                 })
@@ -1848,14 +1840,13 @@ time_limit_s = 600
              [[starts.poses]]\nbuilding = \"small\"\npose = [5.0, 3.0, -45.0]\n",
         )
         .unwrap();
-        let starts: Vec<Option<PlannedStart>> =
-            listed.jobs.iter().map(|j| j.start.clone()).collect();
+        let starts: Vec<Option<GivenStart>> = listed.jobs.iter().map(|j| j.start.clone()).collect();
         assert_eq!(listed.jobs.len(), 2 * 6 + 6);
         assert_eq!(
             starts[0],
-            Some(PlannedStart {
+            Some(GivenStart {
                 pose: Pose::new(3.0, 3.0, 90f64.to_radians()),
-                source: "grid".into()
+                source: GivenSource::Grid
             })
         );
         assert!(starts[12..].iter().all(|s| s.is_none()));
@@ -2041,9 +2032,9 @@ time_limit_s = 600
                 "baseline",
                 j.seed,
                 &j.settings,
-                Some(&PlannedStart {
+                Some(&GivenStart {
                     pose: Pose::new(3.0, 3.0, 90f64.to_radians()),
-                    source: "grid".into()
+                    source: GivenSource::Grid
                 })
             )
         );

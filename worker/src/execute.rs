@@ -7,7 +7,7 @@ use std::time::Instant;
 use sim_core::{Building, Pose};
 
 use crate::wire::{JobOutcome, JobReport, WireJob};
-use crate::{run_job, run_jobs_shared, GivenStart, Job, JobError, JobOutput};
+use crate::{run_job, run_jobs_shared, GivenSource, GivenStart, Job, JobError, JobOutput};
 
 /// Runs a job received from the network (see [`crate::process`]) in its building (already
 /// checked against the job's building hash).
@@ -27,6 +27,22 @@ pub fn execute_wire(job: &WireJob, building: &Building) -> JobReport {
         },
         None => None,
     };
+    // The start's source is checked as the job comes in: a word of none is the job's error.
+    let start = match &job.start {
+        None => None,
+        Some(s) => match GivenSource::from_name(&s.source) {
+            Some(source) => Some(GivenStart {
+                pose: Pose::new(s.pose[0], s.pose[1], s.pose[2]),
+                source,
+            }),
+            None => {
+                return JobReport::failed(format!(
+                    "its start's source '{}' is not one of command line, random, grid",
+                    crate::text::excerpt(&s.source)
+                ))
+            }
+        },
+    };
     let out = report(&Job {
         building,
         building_name: job.building_name.clone(),
@@ -34,10 +50,7 @@ pub fn execute_wire(job: &WireJob, building: &Building) -> JobReport {
         program,
         seed: job.seed,
         settings: job.settings.clone(),
-        start: job.start.as_ref().map(|s| GivenStart {
-            pose: Pose::new(s.pose[0], s.pose[1], s.pose[2]),
-            source: s.source.clone(),
-        }),
+        start,
         snapshot_fractions: Vec::new(),
     });
     drop(dir);

@@ -58,19 +58,45 @@ pub struct Job<'a> {
     pub snapshot_fractions: Vec<f64>,
 }
 
-/// A start pose chosen outside the building file.
+/// A start pose chosen outside the building file (on the command line, or by a grid): the one
+/// start type of a job, planned or run here (its wire form is [`wire::WireStart`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GivenStart {
     pub pose: Pose,
-    /// Where it came from, as the summary's `start_source` records it: "command line",
-    /// "random" (drawn by [`Building::random_start`]) or "grid" (listed in a grid file).
-    pub source: String,
+    pub source: GivenSource,
 }
 
-impl GivenStart {
-    pub const COMMAND_LINE: &'static str = "command line";
-    pub const RANDOM: &'static str = "random";
-    pub const GRID: &'static str = "grid";
+/// Where a given start pose came from, as the summary's `start_source` records it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GivenSource {
+    /// `explore --start X,Y,THETA`.
+    CommandLine,
+    /// Drawn by [`Building::random_start`] (`--start random`, a grid's random starts).
+    Random,
+    /// Listed in a grid file (`[[starts.poses]]`).
+    Grid,
+}
+
+impl GivenSource {
+    /// The words of `start_source` (and of the wire's `WireStart::source`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            GivenSource::CommandLine => "command line",
+            GivenSource::Random => "random",
+            GivenSource::Grid => "grid",
+        }
+    }
+
+    /// The source of its words (`None`: not a given start's source).
+    pub fn from_name(name: &str) -> Option<GivenSource> {
+        [
+            GivenSource::CommandLine,
+            GivenSource::Random,
+            GivenSource::Grid,
+        ]
+        .into_iter()
+        .find(|s| s.as_str() == name)
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -177,7 +203,11 @@ pub fn check_job(
     check_size(job.building, &job.building_name, config.map_resolution_m)?;
     let radius_m = job.settings.robot_radius_m;
     let (start, source, origin) = match &job.start {
-        Some(g) => (g.pose, g.source.clone(), format!("the {} start", g.source)),
+        Some(g) => (
+            g.pose,
+            g.source.as_str().to_string(),
+            format!("the {} start", g.source.as_str()),
+        ),
         None => match job.building.default_start(radius_m) {
             Ok((p, StartSource::File)) => (
                 p,
@@ -576,10 +606,10 @@ mod tests {
 
     #[test]
     fn every_start_is_checked_and_named_by_where_it_came_from() {
-        let given = |x, y, source: &str| {
+        let given = |x, y, source| {
             Some(GivenStart {
                 pose: Pose::new(x, y, 0.0),
-                source: source.into(),
+                source,
             })
         };
         // (building's start, given start, error wanted (None = runs), start_source)
@@ -598,10 +628,10 @@ mod tests {
                 Some("the building file's [start] is not in free space in building box; the nearest free position with room for the robot is 3.7"),
                 "",
             ),
-            (None, given(1.0, 1.0, GivenStart::GRID), None, "grid"),
+            (None, given(1.0, 1.0, GivenSource::Grid), None, "grid"),
             (
                 None,
-                given(1.0, 0.15, GivenStart::RANDOM),
+                given(1.0, 0.15, GivenSource::Random),
                 Some("from the random start is 0.150 m"),
                 "",
             ),
