@@ -1304,6 +1304,10 @@ mod tests {
                 &["summary_json.seed is 2"],
             ),
             (
+                "UPDATE results SET summary_json = json_set(summary_json, '$.end_reason', 'meteor') WHERE status = 'ok'",
+                &["field summary_json", "end_reason 'meteor'"],
+            ),
+            (
                 "UPDATE results SET summary_json = NULL WHERE status = 'ok'",
                 &["summary_json is empty"],
             ),

@@ -96,3 +96,44 @@ fn outcome(r: Result<JobOutput, JobError>) -> JobOutcome {
         },
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::WireStart;
+    use crate::Settings;
+
+    /// A job whose start names no source it can have fails, saying so; the sources a grid
+    /// sends are taken.
+    #[test]
+    fn a_wire_start_is_checked_as_it_comes_in() {
+        let b = crate::small_building();
+        let job = |source: &str| WireJob {
+            job_id: "j".into(),
+            grid: "g".into(),
+            building_name: "small".into(),
+            building_hash: b.content_hash(),
+            strategy: "baseline".into(),
+            label: "baseline".into(),
+            seed: 1,
+            settings: Settings {
+                time_limit_s: 5.0,
+                ..Settings::default()
+            },
+            start: Some(WireStart {
+                pose: [1.2, 9.8, 0.0],
+                source: source.into(),
+            }),
+            program: None,
+        };
+        let bad = execute_wire(&job("sideways"), &b);
+        match &bad.outcome {
+            JobOutcome::Failed { error } => {
+                assert!(error.contains("start's source 'sideways'"), "{error}")
+            }
+            other => panic!("{other:?}"),
+        }
+        let good = execute_wire(&job("grid"), &b);
+        assert!(matches!(good.outcome, JobOutcome::Ok { .. }), "{good:?}");
+    }
+}
