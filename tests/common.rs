@@ -220,3 +220,51 @@ pub fn explore_with(
     assert!(o.status.success(), "{}", stderr(&o));
     serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
 }
+
+/// The crates' source folders, for the tests that read the code itself.
+pub const CRATE_SOURCES: &[&str] = &[
+    "sim-core/src",
+    "formats/src",
+    "render/src",
+    "worker/src",
+    "coordinator/src",
+    "src",
+];
+
+/// Every `.rs` file under `dir`.
+pub fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let p = entry.unwrap().path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|e| e == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// The numbered lines of a file's code: its test modules left out (by convention at its end:
+/// from the first `#[cfg(test)]` that opens a module) and comment lines skipped.
+pub fn code_lines(text: &str) -> Vec<(usize, &str)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        if l.trim() == "#[cfg(test)]"
+            && lines[i + 1..]
+                .iter()
+                .find(|n| !n.trim().is_empty())
+                .is_some_and(|n| {
+                    let n = n.trim_start();
+                    n.starts_with("mod ")
+                        || n.starts_with("pub(crate) mod ")
+                        || n.starts_with("pub mod ")
+                })
+        {
+            break;
+        }
+        if !l.trim_start().starts_with("//") {
+            out.push((i + 1, *l));
+        }
+    }
+    out
+}

@@ -7,18 +7,10 @@
 //! naming its own parent (`super::Config` in `layout/lines.rs`) is not counted: a folder's root
 //! holds what its files share, and declares them.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-
-/// The crates' source folders.
-const CRATES: &[&str] = &[
-    "sim-core/src",
-    "formats/src",
-    "render/src",
-    "worker/src",
-    "coordinator/src",
-    "src",
-];
 
 /// Module paths (`layout::directions`) of a crate's files, with their files.
 fn modules(src: &Path) -> BTreeMap<Vec<String>, PathBuf> {
@@ -53,29 +45,11 @@ fn modules(src: &Path) -> BTreeMap<Vec<String>, PathBuf> {
     out
 }
 
-/// The code of a file without its test modules (by convention at its end: from the first
-/// `#[cfg(test)]` that opens a module).
+/// The code of a file without its test modules and comments ([`common::code_lines`]).
 fn code_of(text: &str) -> String {
-    let lines: Vec<&str> = text.lines().collect();
-    let mut end = lines.len();
-    for (i, l) in lines.iter().enumerate() {
-        if l.trim() == "#[cfg(test)]" {
-            let next = lines[i + 1..].iter().find(|l| !l.trim().is_empty());
-            if next.is_some_and(|n| {
-                let n = n.trim_start();
-                n.starts_with("mod ")
-                    || n.starts_with("pub(crate) mod ")
-                    || n.starts_with("pub mod ")
-            }) {
-                end = i;
-                break;
-            }
-        }
-    }
-    lines[..end]
-        .iter()
-        .filter(|l| !l.trim_start().starts_with("//"))
-        .copied()
+    common::code_lines(text)
+        .into_iter()
+        .map(|(_, l)| l)
         .collect::<Vec<_>>()
         .join("\n")
 }
@@ -228,7 +202,7 @@ fn circle(edges: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) -> Option<Vec<Ve
 #[test]
 fn no_crate_has_a_module_cycle() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    for src in CRATES {
+    for src in common::CRATE_SOURCES {
         let edges = graph(&root.join(src));
         // The reading finds the graph it should: a crate of more than one module has arrows.
         assert!(

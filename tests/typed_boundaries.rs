@@ -3,17 +3,11 @@
 //! they are read; only their codecs name their words. This test keeps their words out of the
 //! rest of the code: no comparison of them with a string, no string-typed field for them.
 
+mod common;
+
 use std::path::Path;
 
-/// The crates' source folders.
-const CRATES: &[&str] = &[
-    "sim-core/src",
-    "formats/src",
-    "render/src",
-    "worker/src",
-    "coordinator/src",
-    "src",
-];
+use common::{code_lines, rust_files};
 
 /// (what is refused, why) as plain substrings of a line of code.
 const REFUSED: &[(&str, &str)] = &[
@@ -32,43 +26,11 @@ const REFUSED: &[(&str, &str)] = &[
     ("PlannedStart", "a start is one type, GivenStart"),
 ];
 
-/// The lines of a file's code, its test module left out (by convention at its end) and
-/// comments skipped.
-fn code_lines(text: &str) -> Vec<(usize, &str)> {
-    let mut out = Vec::new();
-    let lines: Vec<&str> = text.lines().collect();
-    for (i, l) in lines.iter().enumerate() {
-        if l.trim() == "#[cfg(test)]"
-            && lines[i + 1..]
-                .iter()
-                .find(|n| !n.trim().is_empty())
-                .is_some_and(|n| n.trim_start().starts_with("mod "))
-        {
-            break;
-        }
-        if !l.trim_start().starts_with("//") {
-            out.push((i + 1, *l));
-        }
-    }
-    out
-}
-
-fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let p = entry.unwrap().path();
-        if p.is_dir() {
-            rust_files(&p, out);
-        } else if p.extension().is_some_and(|e| e == "rs") {
-            out.push(p);
-        }
-    }
-}
-
 #[test]
 fn typed_values_are_not_compared_as_strings() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
-    for c in CRATES {
+    for c in common::CRATE_SOURCES {
         rust_files(&root.join(c), &mut files);
     }
     assert!(
