@@ -106,27 +106,38 @@ fn scratch() -> (tempfile::TempDir, PathBuf) {
     (tmp, root)
 }
 
+/// `suite update NAME` of `files` as generated buildings made here under MIT, with `more` flags.
+fn update_generated(
+    root: &std::path::Path,
+    name: &str,
+    more: &[&str],
+    files: &[&str],
+) -> std::process::Output {
+    let mut args = vec![
+        "suite",
+        "update",
+        name,
+        "--kind",
+        "generated",
+        "--source",
+        "made here",
+        "--licence",
+        "MIT",
+    ];
+    args.extend_from_slice(more);
+    args.extend_from_slice(files);
+    run_in(root, &args)
+}
+
 #[test]
 fn a_suite_is_written_checked_and_fails_naming_each_building() {
     let (_tmp, root) = scratch();
     // Made from files.
-    let o = run_in(
+    let o = update_generated(
         &root,
-        &[
-            "suite",
-            "update",
-            "mine",
-            "--kind",
-            "generated",
-            "--source",
-            "made here",
-            "--licence",
-            "MIT",
-            "--description",
-            "Two buildings",
-            "buildings/small.toml",
-            "buildings/halves.toml",
-        ],
+        "mine",
+        &["--description", "Two buildings"],
+        &["buildings/small.toml", "buildings/halves.toml"],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("(new)"), "{}", stdout(&o));
@@ -211,25 +222,13 @@ fn a_suite_is_written_checked_and_fails_naming_each_building() {
 /// and hash; a grid whose suite changed is refused by that results directory, and a grid whose
 /// suite's file changed is refused until the manifest is refreshed.
 #[test]
-#[allow(clippy::too_many_lines)] // a table of cases
 fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
     let (_tmp, root) = scratch();
-    let o = run_in(
+    let o = update_generated(
         &root,
-        &[
-            "suite",
-            "update",
-            "one",
-            "--kind",
-            "generated",
-            "--source",
-            "made here",
-            "--licence",
-            "MIT",
-            "--description",
-            "One building",
-            "buildings/small.toml",
-        ],
+        "one",
+        &["--description", "One building"],
+        &["buildings/small.toml"],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let hash = floorcast_formats::suite::read_manifest(&root.join("suites/one.toml"))
@@ -276,21 +275,11 @@ fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
         assert_eq!(s.suite_hash.as_deref(), Some(hash.as_str()));
     }
     // Another version of the suite (another building added): refused in that directory.
-    let o = run_in(
+    let o = update_generated(
         &root,
-        &[
-            "suite",
-            "update",
-            "one",
-            "buildings/small.toml",
-            "buildings/halves.toml",
-            "--kind",
-            "generated",
-            "--source",
-            "made here",
-            "--licence",
-            "MIT",
-        ],
+        "one",
+        &[],
+        &["buildings/small.toml", "buildings/halves.toml"],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let o = run_in(&root, &["run", "grids/g.toml", "--quiet"]);
