@@ -426,12 +426,10 @@ fn count_ends<'a>(summaries: impl Iterator<Item = &'a RunSummary>) -> Vec<(Strin
     for s in summaries {
         *counts.entry(end_class(s)).or_default() += 1;
     }
-    let mut out: Vec<(String, usize)> = end_classes()
+    end_classes()
         .iter()
         .map(|c| (c.to_string(), counts.remove(c).unwrap_or(0)))
-        .collect();
-    out.extend(counts.into_iter().map(|(c, n)| (c.to_string(), n)));
-    out
+        .collect()
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -1092,23 +1090,7 @@ pub fn render_text(t: &Table) -> String {
 /// several), the successful runs of each end class and those below the coverage level.
 pub fn render_ends(t: &Table) -> String {
     let mut out = String::new();
-    let extra: Vec<String> = std::iter::once(&t.overall)
-        .chain(t.per_building.values())
-        .flatten()
-        .flat_map(|r| {
-            r.ends
-                .iter()
-                .skip(end_classes().len())
-                .map(|(c, _)| c.clone())
-        })
-        .collect::<std::collections::BTreeSet<_>>()
-        .into_iter()
-        .collect();
-    let classes: Vec<&str> = end_classes()
-        .iter()
-        .copied()
-        .chain(extra.iter().map(String::as_str))
-        .collect();
+    let classes = end_classes();
     let below = format!("< {}", coverage_text(t.coverage));
     let rows = |out: &mut String, rows: &[LabelRow]| {
         let mut head = format!("  {:<16}", "strategy");
