@@ -59,12 +59,6 @@ pub fn end_class(s: &RunSummary) -> &'static str {
     s.end_reason.as_str()
 }
 
-/// A gain as a percentage of the reference's time from a mean log ratio `m = ln t_ref - ln t`:
-/// `100 (1 - exp(-m))` (positive: faster).
-pub fn gain_pct(mean_log_ratio: f64) -> f64 {
-    100.0 * (1.0 - (-mean_log_ratio).exp())
-}
-
 /// The labels of `labels` then those of `results` not among them, in the order they appear.
 pub fn label_order(results: &[StoredResult], labels: &[String]) -> Vec<String> {
     let mut order: Vec<String> = labels.to_vec();

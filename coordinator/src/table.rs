@@ -15,9 +15,9 @@ use std::fmt::Write as _;
 
 use floorcast_worker::RunSummary;
 
-use crate::outcome::{
-    self, coverage_text, end_class, end_classes, gain_pct, label_order, Pair, PairCounts,
-};
+use crate::outcome::{self, coverage_text, end_class, end_classes, label_order, Pair, PairCounts};
+// A gain in per cent of the reference's time from a mean log ratio `m = ln t_ref - ln t`.
+use crate::sprt::gain_pct_of_effect as gain_pct;
 use crate::store::StoredResult;
 
 /// Mean and sample standard deviation.
