@@ -8,7 +8,7 @@ use clap::Args;
 use floorcast_worker::external::ExternalStrategy;
 use floorcast_worker::settings::{LocalizationSetting, UtilityDistanceSetting};
 use floorcast_worker::{
-    check_job, check_start, run_job, GivenStart, Job, Settings, StrategyProgram, STRATEGIES,
+    check_job, check_start, run_job, strategy_names, GivenStart, Job, Settings, StrategyProgram,
 };
 use sim_core::explore::{EndReason, RunResult};
 
@@ -25,7 +25,7 @@ pub struct ExploreArgs {
     #[arg(long, value_name = "FILE")]
     building: PathBuf,
     /// Exploration strategy (built in).
-    #[arg(long, default_value = "baseline", value_parser = clap::builder::PossibleValuesParser::new(STRATEGIES))]
+    #[arg(long, default_value = "baseline", value_parser = clap::builder::PossibleValuesParser::new(strategy_names()))]
     strategy: String,
     /// Your own strategy: a program speaking floorcast's strategy protocol
     /// (docs/strategy-protocol.md) on its stdin and stdout, e.g. "python3 my_strategy.py"

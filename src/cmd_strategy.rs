@@ -13,6 +13,16 @@ pub enum StrategyCommand {
     /// scripted session through every message and rule, then a real exploration with it.
     /// Prints each check; exits 2 at the first the program fails.
     Check(CheckArgs),
+    /// List the built-in strategies: how each estimates the information gain I(p) and when it
+    /// stops (the README's table).
+    List(ListArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ListArgs {
+    /// Print the list as the markdown table of the README.
+    #[arg(long)]
+    markdown: bool,
 }
 
 #[derive(Debug, Args)]
@@ -35,6 +45,24 @@ pub struct CheckArgs {
 pub fn run(c: StrategyCommand) -> Result<()> {
     match c {
         StrategyCommand::Check(a) => check(a),
+        StrategyCommand::List(a) => {
+            list(&a);
+            Ok(())
+        }
+    }
+}
+
+fn list(a: &ListArgs) {
+    use sim_core::explore::strategy::{strategies_markdown, BUILT_IN};
+    if a.markdown {
+        say_raw!("{}", strategies_markdown());
+        return;
+    }
+    let width = BUILT_IN.iter().map(|b| b.name.len()).max().unwrap_or(0);
+    for b in BUILT_IN {
+        let gain = b.gain.replace('`', "");
+        let stops = b.stops.replace('`', "");
+        say_raw!("{:width$}  I(p): {gain}; stops: {stops}\n", b.name);
     }
 }
 

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use floorcast_worker::{
-    check_start, GivenSource, GivenStart, Settings, StrategyProgram, FLOORCAST_VERSION,
-    JOB_ID_RESULT_FORMAT, STRATEGIES,
+    check_start, strategy_names, GivenSource, GivenStart, Settings, StrategyProgram,
+    FLOORCAST_VERSION, JOB_ID_RESULT_FORMAT,
 };
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
@@ -717,7 +717,7 @@ fn plan_strategies(
                     &field,
                     format!(
                         "names no strategy: give name = one of {}, or command = [\"python3\", \"my_strategy.py\"] with a label",
-                        STRATEGIES.join(", ")
+                        strategy_names().join(", ")
                     ),
                 ))
             }
@@ -777,13 +777,13 @@ fn built_in_strategy(
     field: &str,
     invalid: &dyn Fn(&str, String) -> GridError,
 ) -> Result<String, GridError> {
-    if !STRATEGIES.contains(&name) {
+    if !strategy_names().contains(&name) {
         return Err(invalid(
             &format!("{field}.name"),
             format!(
                 "unknown strategy '{}' (available: {})",
                 excerpt(name),
-                STRATEGIES.join(", ")
+                strategy_names().join(", ")
             ),
         ));
     }
@@ -1052,7 +1052,9 @@ fn check_strategy_fits(
     buildings: &[PlannedBuilding],
     path: &Path,
 ) -> Result<(), (String, String)> {
-    let truth = sim_core::explore::Strategy::by_name(name).is_some_and(|s| s.layout_from_truth);
+    let params = settings.strategy_params();
+    let truth =
+        sim_core::explore::Strategy::by_name(name, &params).is_some_and(|s| s.layout_from_truth());
     for b in buildings {
         if truth && b.building.rooms.is_empty() {
             return Err((

@@ -273,7 +273,7 @@ struct LoopState<'a> {
     progress: crate::sequential::Progress,
     /// Embedded workers run jobs that share their beginning together.
     share: bool,
-    share_keys: BTreeMap<String, Option<String>>,
+    share_keys: BTreeMap<String, Option<sim_core::explore::ExploreConfig>>,
     /// Remote workers' results to check go here (`None`: none are checked).
     verify_tx: Option<mpsc::Sender<(PlannedJob, StoredResult, String)>>,
     resumed: usize,
@@ -724,7 +724,7 @@ fn partners(
     plan: &Plan,
     job: &PlannedJob,
     jobs: &BTreeMap<String, PlannedJob>,
-    keys: &mut BTreeMap<String, Option<String>>,
+    keys: &mut BTreeMap<String, Option<sim_core::explore::ExploreConfig>>,
 ) -> Vec<String> {
     let mut key = |j: &PlannedJob| {
         keys.entry(j.id.clone())

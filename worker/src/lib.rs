@@ -116,7 +116,7 @@ pub enum JobError {
         /// The nearest position with room for the robot's body.
         hint: Option<sim_core::Vec2>,
     },
-    #[error("unknown strategy '{0}' (available: {list})", list = STRATEGIES.join(", "))]
+    #[error("unknown strategy '{0}' (available: {list})", list = strategy_names().join(", "))]
     UnknownStrategy(String),
     #[error("strategy {strategy} takes its layout from the building's ground-truth rooms, and building {name} has none (a map without rooms); use it with a floorcast building file that lists rooms, or choose another strategy")]
     NoRooms { strategy: String, name: String },
@@ -140,7 +140,9 @@ pub struct JobOutput {
 }
 
 /// The strategies this version implements.
-pub const STRATEGIES: &[&str] = sim_core::explore::Strategy::NAMES;
+pub fn strategy_names() -> Vec<&'static str> {
+    sim_core::explore::Strategy::names()
+}
 
 /// This build's bench signature (fishtest's "bench"): the fingerprint of one short, fixed
 /// exploration (a generated 300 m2 school, `layout-es`, seed 1, 300 s simulated: mapping, scan
@@ -189,11 +191,11 @@ pub fn check_job(
         Some(_) => "baseline",
         None => job.strategy.as_str(),
     };
-    if !STRATEGIES.contains(&built_in) {
+    if !strategy_names().contains(&built_in) {
         return Err(JobError::UnknownStrategy(job.strategy.clone()));
     }
     let mut config = job.settings.to_explore_config_for(built_in)?;
-    if config.strategy.layout_from_truth && job.building.rooms.is_empty() {
+    if config.strategy.layout_from_truth() && job.building.rooms.is_empty() {
         return Err(JobError::NoRooms {
             strategy: job.strategy.clone(),
             name: job.building_name.clone(),
@@ -324,26 +326,24 @@ pub fn run_job(
     })
 }
 
-/// Whether a job's run can share its beginning with runs of other strategies (see
+/// Whether a job's run may share its beginning with runs of other strategies (see
 /// [`run_jobs_shared`]): a built-in strategy, compute not charged (charged runs depend on the
-/// machine). Returns the settings the shared runs must have in common: the job's explore
-/// settings with the strategy's early stop left out, as text, so that jobs with equal keys (and
-/// the same building, seed and start) can run together.
-pub fn share_key(job: &Job<'_>) -> Option<String> {
-    if job.program.is_some() || job.settings.charge_compute {
+/// machine).
+fn may_run_together(job: &Job<'_>) -> bool {
+    job.program.is_none() && !job.settings.charge_compute
+}
+
+/// What the runs sharing a job's beginning must have in common (`None`: it runs alone): its
+/// explore configuration without the strategy's early stop
+/// ([`sim_core::explore::shared_part`]). Jobs with equal keys and the same building, seed and
+/// start can run together.
+pub fn share_key(job: &Job<'_>) -> Option<sim_core::explore::ExploreConfig> {
+    if !may_run_together(job) {
         return None;
     }
     let mut config = job.settings.to_explore_config_for(&job.strategy).ok()?;
-    config.strategy.early_stop = sim_core::explore::strategy::EarlyStop::Never;
     config.snapshot_fractions = job.snapshot_fractions.clone();
-    Some(format!("{config:?}"))
-}
-
-/// Whether a job's strategy has no early stop (it leads a shared run: it runs longest).
-fn runs_to_the_end(job: &Job<'_>) -> bool {
-    job.settings
-        .to_explore_config_for(&job.strategy)
-        .is_ok_and(|c| c.strategy.early_stop == sim_core::explore::strategy::EarlyStop::Never)
+    Some(sim_core::explore::shared_part(&config))
 }
 
 /// [`run_job`] for each of `jobs`, with the wall time each took. Jobs of the same building,
@@ -358,24 +358,26 @@ pub fn run_jobs_shared(jobs: &[Job<'_>]) -> Vec<(Result<JobOutput, JobError>, f6
         let r = run_job(job, &mut |_| {});
         (r, t.elapsed().as_secs_f64())
     };
-    let key = jobs.first().and_then(share_key);
-    let together = jobs.len() >= 2
-        && key.is_some()
+    let same_run = jobs.len() >= 2
         && jobs.iter().all(|j| {
-            std::ptr::eq(j.building, jobs[0].building)
+            may_run_together(j)
+                && std::ptr::eq(j.building, jobs[0].building)
                 && j.seed == jobs[0].seed
                 && j.start == jobs[0].start
-                && share_key(j) == key
         });
+    if !same_run {
+        return jobs.iter().map(alone).collect();
+    }
     let checked: Vec<_> = jobs.iter().map(check_job).collect();
-    if !together || checked.iter().any(|c| c.is_err()) {
+    if checked.iter().any(|c| c.is_err()) {
         return jobs.iter().map(alone).collect();
     }
     let checked: Vec<_> = checked.into_iter().map(|c| c.expect("checked")).collect();
     let start = checked[0].1;
     // The one without an early stop leads (it runs longest); the others follow in their order.
     let mut order: Vec<usize> = (0..jobs.len()).collect();
-    order.sort_by_key(|&i| !runs_to_the_end(&jobs[i]));
+    let no_early_stop = sim_core::explore::EarlyStop::Never;
+    order.sort_by_key(|&i| checked[i].0.strategy.early_stop != no_early_stop);
     let configs: Vec<_> = order.iter().map(|&i| checked[i].0.clone()).collect();
     if !sim_core::explore::can_share(&configs) || checked.iter().any(|c| c.1 != start) {
         return jobs.iter().map(alone).collect();

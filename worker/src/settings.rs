@@ -3,7 +3,7 @@
 //! job's identity hashes. Converted by hand into `sim-core`'s config and validated on the way.
 
 use serde::{Deserialize, Serialize};
-use sim_core::explore::{EarlyStop, ExploreConfig, Localization, Strategy, UtilityDistance};
+use sim_core::explore::{ExploreConfig, Localization, Strategy, StrategyParams, UtilityDistance};
 
 /// Where the map's poses come from (setting `localization`, flag `--localization`): written as
 /// `slam`, `odometry` or `ground-truth`.
@@ -196,6 +196,7 @@ fn is_zero(v: &f64) -> bool {
 impl Default for Settings {
     fn default() -> Self {
         let c = ExploreConfig::default();
+        let p = StrategyParams::default();
         Self {
             robot_radius_m: c.sim.robot.radius_m,
             max_speed_mps: c.sim.robot.max_speed_mps,
@@ -212,24 +213,24 @@ impl Default for Settings {
             map_update_distance_m: c.map_update_distance_m,
             map_update_angle_rad: c.map_update_angle_rad,
             map_update_period_s: c.map_update_period_s,
-            alpha: c.alpha,
-            gain_floor_m2: c.gain_floor_m2,
+            alpha: p.alpha,
+            gain_floor_m2: p.gain_floor_m2,
             utility_distance: c.utility_distance.into(),
             min_frontier_m: c.min_frontier_m,
             frontier_clearance_m: c.frontier_clearance_m,
             candidate_from_reachable_part: c.candidate_from_reachable_part,
             paper_frontiers: !c.robust_frontiers,
-            paper_layout_gain: !c.strategy.gain_through_openings,
+            paper_layout_gain: !c.layout_use.through_openings,
             redecide_period_s: c.redecide_period_s,
             redecide_min_growth_m2: c.redecide_min_growth_m2,
             blacklist_radius_m: c.blacklist_radius_m,
             progress_timeout_s: c.progress_timeout_s,
             time_limit_s: c.time_limit_s,
             return_home: c.return_home,
-            es_threshold_m2: 1.0,
-            aes_min_gain_m2: 2.0,
-            layout_update_m2: c.strategy.layout_update_m2,
-            max_wall_gap_m: c.strategy.max_wall_gap_m,
+            es_threshold_m2: p.es_threshold_m2,
+            aes_min_gain_m2: p.aes_min_gain_m2,
+            layout_update_m2: c.layout_use.update_m2,
+            max_wall_gap_m: c.layout_use.max_wall_gap_m,
             charge_compute: false,
         }
     }
@@ -247,7 +248,7 @@ pub enum SettingsError {
     Localization(String),
     #[error("settings.utility_distance: unknown value '{0}', expected path or euclidean")]
     UtilityDistance(String),
-    #[error("unknown strategy '{0}' (available: {list})", list = Strategy::NAMES.join(", "))]
+    #[error("unknown strategy '{0}' (available: {list})", list = Strategy::names().join(", "))]
     Strategy(String),
     #[error("settings.{field}: expected {expected}, got {got}")]
     Type {
@@ -797,22 +798,22 @@ impl Settings {
     /// with this file's thresholds.
     pub fn to_explore_config_for(&self, name: &str) -> Result<ExploreConfig, SettingsError> {
         let mut c = self.to_explore_config()?;
-        let mut st = Strategy::by_name(name).ok_or_else(|| SettingsError::Strategy(shown(name)))?;
-        st.layout_update_m2 = c.strategy.layout_update_m2;
-        st.max_wall_gap_m = c.strategy.max_wall_gap_m;
-        st.gain_through_openings = c.strategy.gain_through_openings;
-        st.early_stop = match st.early_stop {
-            EarlyStop::TotalGainBelow(_) => EarlyStop::TotalGainBelow(self.es_threshold_m2),
-            EarlyStop::DropCandidatesBelow(_) => {
-                EarlyStop::DropCandidatesBelow(self.aes_min_gain_m2)
-            }
-            EarlyStop::Never => EarlyStop::Never,
-        };
-        c.strategy = st;
+        c.strategy = Strategy::by_name(name, &self.strategy_params())
+            .ok_or_else(|| SettingsError::Strategy(shown(name)))?;
         Ok(c)
     }
 
-    /// Checks every field and builds the simulation config.
+    /// The settings a strategy's definition reads.
+    pub fn strategy_params(&self) -> StrategyParams {
+        StrategyParams {
+            alpha: self.alpha,
+            gain_floor_m2: self.gain_floor_m2,
+            es_threshold_m2: self.es_threshold_m2,
+            aes_min_gain_m2: self.aes_min_gain_m2,
+        }
+    }
+
+    /// Checks every field and builds the simulation config, with the baseline for a strategy.
     pub fn to_explore_config(&self) -> Result<ExploreConfig, SettingsError> {
         self.validate()?;
         fn check(
@@ -875,19 +876,12 @@ impl Settings {
         c.map_update_distance_m = pos("map_update_distance_m", self.map_update_distance_m)?;
         c.map_update_angle_rad = pos("map_update_angle_rad", self.map_update_angle_rad)?;
         c.map_update_period_s = pos("map_update_period_s", self.map_update_period_s)?;
-        c.alpha = check(
-            "alpha",
-            self.alpha,
-            (0.0..=1.0).contains(&self.alpha),
-            "a number in [0, 1]",
-        )?;
-        c.gain_floor_m2 = nonneg("gain_floor_m2", self.gain_floor_m2)?;
         c.utility_distance = self.utility_distance.into();
         c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
         c.frontier_clearance_m = nonneg("frontier_clearance_m", self.frontier_clearance_m)?;
         c.candidate_from_reachable_part = self.candidate_from_reachable_part;
         c.robust_frontiers = !self.paper_frontiers;
-        c.strategy.gain_through_openings = !self.paper_layout_gain;
+        c.layout_use.through_openings = !self.paper_layout_gain;
         c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
         c.redecide_min_growth_m2 = nonneg("redecide_min_growth_m2", self.redecide_min_growth_m2)?;
         c.blacklist_radius_m = nonneg("blacklist_radius_m", self.blacklist_radius_m)?;
@@ -896,8 +890,9 @@ impl Settings {
         c.return_home = self.return_home;
         nonneg("es_threshold_m2", self.es_threshold_m2)?;
         nonneg("aes_min_gain_m2", self.aes_min_gain_m2)?;
-        c.strategy.layout_update_m2 = pos("layout_update_m2", self.layout_update_m2)?;
-        c.strategy.max_wall_gap_m = nonneg("max_wall_gap_m", self.max_wall_gap_m)?;
+        c.layout_use.update_m2 = pos("layout_update_m2", self.layout_update_m2)?;
+        c.layout_use.max_wall_gap_m = nonneg("max_wall_gap_m", self.max_wall_gap_m)?;
+        c.strategy = Strategy::baseline_with(&self.strategy_params());
         Ok(c)
     }
 }
@@ -914,7 +909,8 @@ mod tests {
         assert_eq!(c.sim.laser.beams, d.sim.laser.beams);
         assert!((c.sim.laser.fov_rad - d.sim.laser.fov_rad).abs() < 1e-12);
         assert_eq!(c.localization, d.localization);
-        assert_eq!(c.alpha, d.alpha);
+        assert_eq!(c.strategy, d.strategy);
+        assert_eq!(c.layout_use, d.layout_use);
     }
 
     #[test]
@@ -1029,7 +1025,7 @@ mod tests {
         for name in ["baseline", "layout-es", "layout-aes"] {
             let c = default.to_explore_config_for(name).unwrap();
             assert!(
-                c.robust_frontiers && c.strategy.gain_through_openings,
+                c.robust_frontiers && c.layout_use.through_openings,
                 "{name}"
             );
         }
@@ -1043,7 +1039,7 @@ mod tests {
         for name in ["baseline", "layout-es", "layout-aes"] {
             let c = paper.to_explore_config_for(name).unwrap();
             assert!(
-                !c.robust_frontiers && !c.strategy.gain_through_openings,
+                !c.robust_frontiers && !c.layout_use.through_openings,
                 "{name}"
             );
         }
@@ -1280,6 +1276,29 @@ mod tests {
             &readme[a..b],
             settings_reference_markdown(),
             "docs/settings.md's settings block is stale: replace it with the output of `floorcast settings --markdown`"
+        );
+    }
+
+    /// The README carries the table generated from sim-core's `BUILT_IN`.
+    #[test]
+    fn the_readme_holds_the_strategies_table() {
+        let readme = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"),
+        )
+        .unwrap();
+        let (begin, end) = ("<!-- strategies:begin -->\n", "<!-- strategies:end -->");
+        let a = readme
+            .find(begin)
+            .expect("README.md has no strategies:begin line")
+            + begin.len();
+        let b = readme[a..]
+            .find(end)
+            .expect("README.md has no strategies:end line")
+            + a;
+        assert_eq!(
+            &readme[a..b],
+            sim_core::explore::strategy::strategies_markdown(),
+            "README.md's strategies table is stale: replace it with `floorcast strategy list --markdown`"
         );
     }
 

@@ -83,7 +83,7 @@ impl Explorer<'_> {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
                 let (c, now) = (f.candidate, self.scans);
                 match (&self.layout, use_layout) {
-                    (Some(l), true) if cfg.strategy.rank_by_predicted_rooms => {
+                    (Some(l), true) if cfg.strategy.gain.ranks_by_predicted_rooms() => {
                         layout_gain_cached(&mut self.gains, grid, &l.raster, c, range_m, now)
                     }
                     (Some(l), true) => {
@@ -507,7 +507,7 @@ impl Explorer<'_> {
             self.policy_decisions += 1;
         }
         // (The policy is taken out while it looks at the view, which borrows the explorer.)
-        let placeholder = strategy::BuiltInPolicy::new(strategy::EarlyStop::Never, 0.0, 0.0);
+        let placeholder = strategy::BuiltInPolicy::new(&Strategy::baseline());
         let mut policy = std::mem::replace(&mut self.policy, PolicySlot::BuiltIn(placeholder));
         let view = self.decision_view(&views, &asked, needs);
         let (reply, charged_s) = policy.get().decide(&view);

@@ -7,7 +7,7 @@ impl Explorer<'_> {
     /// Recomputes the layout when the strategy uses it and the map has grown enough since the
     /// last one. Returns whether gains should use the layout now.
     pub(super) fn refresh_layout(&mut self) -> bool {
-        let st = &self.cfg.strategy;
+        let (st, layout_use) = (&self.cfg.strategy, &self.cfg.layout_use);
         let needs = self.policy_needs;
         if !st.uses_layout() && !needs.layout_gain && !needs.layout {
             return false;
@@ -16,10 +16,17 @@ impl Explorer<'_> {
         let grown_m2 = self.layout.as_ref().map_or(f64::INFINITY, |l| {
             (self.known_cells.saturating_sub(l.known_cells_at)) as f64 * cell_area
         });
-        if grown_m2 >= st.layout_update_m2 {
+        if grown_m2 >= layout_use.update_m2 {
             let grid = &self.map.occupancy;
             // Judge the previous layout by what was revealed since (for the switch strategy).
-            if let Some(prev) = &self.layout {
+            if let (
+                Some(prev),
+                GainModel::Switch {
+                    agreement,
+                    min_area_m2,
+                },
+            ) = (&self.layout, st.gain)
+            {
                 let (mut known, mut free) = (0usize, 0usize);
                 for &i in &prev.predicted_unknown {
                     match grid.data[i as usize] {
@@ -31,8 +38,8 @@ impl Explorer<'_> {
                         Occupancy::Unknown => {}
                     }
                 }
-                if known as f64 * cell_area >= st.switch_min_area_m2
-                    && free as f64 >= st.switch_agreement * known as f64
+                if known as f64 * cell_area >= min_area_m2
+                    && free as f64 >= agreement * known as f64
                 {
                     self.layout_trusted = true;
                 }
@@ -41,7 +48,7 @@ impl Explorer<'_> {
             self.layout = None;
             // The rooms a policy is shown: only a layout predicted from the map.
             let mut rooms = Vec::new();
-            let mut raster = if st.layout_from_truth {
+            let mut raster = if st.layout_from_truth() {
                 // The oracle: nothing to compute (and nothing to charge).
                 let to_map = MapToWorld::new(&self.estimate, &self.sim.true_pose());
                 let mut raster =
@@ -63,11 +70,11 @@ impl Explorer<'_> {
                 if needs.layout {
                     rooms = layout.rooms.iter().map(room_view).collect();
                 }
-                LayoutRaster::new(&layout, grid, st.max_wall_gap_m)
+                LayoutRaster::new(&layout, grid, layout_use.max_wall_gap_m)
             };
-            raster.through_openings = st.gain_through_openings;
+            raster.through_openings = layout_use.through_openings;
             // Only the switch judges a layout by what it predicted (a scan of the whole map).
-            let predicted_unknown = if st.gain == GainModel::Switch {
+            let predicted_unknown = if matches!(st.gain, GainModel::Switch { .. }) {
                 grid.data
                     .iter()
                     .enumerate()
@@ -92,8 +99,34 @@ impl Explorer<'_> {
         }
         match st.gain {
             GainModel::Baseline => false,
-            GainModel::Layout => true,
-            GainModel::Switch => self.layout_trusted,
+            GainModel::PredictedRooms(_) | GainModel::ClosedGaps(_) => true,
+            GainModel::Switch { .. } => self.layout_trusted,
+        }
+    }
+}
+
+/// How the explorer keeps the layout and draws it for the gains (for a layout strategy, or a
+/// policy that needs the layout).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayoutUse {
+    /// The layout is recomputed at a decision when the known area changed by at least this much
+    /// since the last layout (m2), so it follows the map without being rebuilt at every step.
+    pub update_m2: f64,
+    /// Layout walls close gaps of unknown cells up to this long in an observed wall (m).
+    pub max_wall_gap_m: f64,
+    /// The paper's `I(p)` sees through openings of the layout's wall lines (see
+    /// [`crate::layout_gain::LayoutRaster::through_openings`]): an early stop then drops only
+    /// what the layout predicts, never a room beyond a doorway the robot has seen. On by default
+    /// since 0.4 (off: the paper's rule, setting `paper_layout_gain`).
+    pub through_openings: bool,
+}
+
+impl Default for LayoutUse {
+    fn default() -> Self {
+        Self {
+            update_m2: 20.0,
+            max_wall_gap_m: 1.0,
+            through_openings: true,
         }
     }
 }

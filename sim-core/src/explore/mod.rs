@@ -56,11 +56,14 @@ pub mod strategy;
 
 pub use crate::utility::UtilityDistance;
 pub use follow::{Command, FollowConfig, PathFollower};
+pub use layout_state::LayoutUse;
 pub use policy::{
     CandidateView, DecisionView, LayoutView, Needs, Policy, Reply, RoomState, RoomView, RunEnd,
     MAX_UNREACHABLE_GOALS,
 };
-pub use strategy::{EarlyStop, GainModel, Strategy};
+pub use strategy::{
+    BuiltIn, Choice, EarlyStop, GainModel, LayoutSource, Strategy, StrategyParams, BUILT_IN,
+};
 
 use self::calibration::OdometryCalibration;
 use self::decision::*;
@@ -68,7 +71,7 @@ use self::gain_cache::{GainCache, GainKind};
 use self::layout_state::*;
 use self::navigation::*;
 use self::referee::*;
-pub use self::shared::{can_share, explore_shared};
+pub use self::shared::{can_share, explore_shared, shared_part};
 use crate::building::Building;
 use crate::frontier::blacklist::Blacklist;
 use crate::frontier::detect::{
@@ -178,21 +181,19 @@ impl std::fmt::Display for EndReason {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExploreConfig {
     pub sim: SimConfig,
-    /// How candidates are scored and when to stop early.
+    /// How candidates' gains are estimated, when to stop early and how to choose.
     pub strategy: Strategy,
     /// Parameters of the layout reconstruction (for layout-informed strategies).
     pub layout: crate::layout::LayoutConfig,
+    /// How the layout is kept and drawn for the gains, whoever asks for it (a layout strategy or
+    /// a policy that needs the layout).
+    pub layout_use: LayoutUse,
     pub localization: Localization,
     pub map_resolution_m: f64,
     pub log_odds: LogOddsConfig,
     pub scan_match: ScanMatchConfig,
     /// With SLAM: learn the odometry's proportional error from the scan matches and correct it.
     pub calibrate_odometry: bool,
-    /// Weight of distance against information gain in the utility (paper: 0.5).
-    pub alpha: f64,
-    /// In the utility, a candidate's gain counts as at least this much (m2); 0 = the paper's
-    /// utility. See [`crate::utility::with_gain_floor`].
-    pub gain_floor_m2: f64,
     /// What the utility's `D(p)` measures: the planned path's length (default) or, as in the
     /// paper, the straight line from the robot to the candidate.
     pub utility_distance: UtilityDistance,
@@ -269,8 +270,7 @@ impl Default for ExploreConfig {
             calibrate_odometry: true,
             strategy: Strategy::baseline(),
             layout: crate::layout::LayoutConfig::default(),
-            alpha: 0.5,
-            gain_floor_m2: 0.0,
+            layout_use: LayoutUse::default(),
             utility_distance: UtilityDistance::Path,
             min_frontier_m: 0.5,
             frontier_clearance_m: 0.0,
@@ -755,11 +755,7 @@ fn policy_slot<'a>(
 ) -> (PolicySlot<'a>, Needs) {
     let policy = match policy {
         Some(p) => PolicySlot::External(p),
-        None => PolicySlot::BuiltIn(strategy::BuiltInPolicy::new(
-            cfg.strategy.early_stop,
-            cfg.alpha,
-            cfg.gain_floor_m2,
-        )),
+        None => PolicySlot::BuiltIn(strategy::BuiltInPolicy::new(&cfg.strategy)),
     };
     let policy_needs = match &policy {
         PolicySlot::External(p) => p.needs(),

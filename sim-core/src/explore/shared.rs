@@ -42,15 +42,20 @@ struct Member<'a> {
     parted: Option<(Rc<Explorer<'a>>, BuiltInPolicy, f64)>,
 }
 
+/// What runs that share their beginning have in common: the configuration without the
+/// strategy's early stop. Runs of equal shared parts (and the same building, start and seed) can
+/// be made together by [`explore_shared`].
+pub fn shared_part(cfg: &ExploreConfig) -> ExploreConfig {
+    ExploreConfig {
+        strategy: cfg.strategy.without_early_stop(),
+        ..cfg.clone()
+    }
+}
+
 /// Whether the runs of `cfgs` can be made by [`explore_shared`] (at least two, all with the same
 /// settings but for the strategy's early stop).
 pub fn can_share(cfgs: &[ExploreConfig]) -> bool {
-    let plain = |c: &ExploreConfig| {
-        let mut c = c.clone();
-        c.strategy.early_stop = strategy::EarlyStop::Never;
-        c
-    };
-    cfgs.len() >= 2 && cfgs.iter().all(|c| plain(c) == plain(&cfgs[0]))
+    cfgs.len() >= 2 && cfgs.iter().all(|c| shared_part(c) == shared_part(&cfgs[0]))
 }
 
 /// One exploration of `building` from `start` with `seed` per configuration of `cfgs`, each
@@ -81,7 +86,7 @@ pub fn explore_shared<'a>(
         .iter()
         .enumerate()
         .map(|(k, cfg)| {
-            let policy = BuiltInPolicy::new(cfg.strategy.early_stop, cfg.alpha, cfg.gain_floor_m2);
+            let policy = BuiltInPolicy::new(&cfg.strategy);
             Member {
                 index: k + 1,
                 cfg,
@@ -215,11 +220,7 @@ impl<'a> Explorer<'a> {
             // (The previous copy dropped first, unless a member that parted holds it: two
             // copies of a large map at once are a lot.)
             shared.checkpoint = None;
-            let policy = BuiltInPolicy::new(
-                self.cfg.strategy.early_stop,
-                self.cfg.alpha,
-                self.cfg.gain_floor_m2,
-            );
+            let policy = BuiltInPolicy::new(&self.cfg.strategy);
             let copy = Rc::new(self.fork(self.cfg, policy));
             shared.checkpoint = Some((copy, (shared.clock)()));
             shared.checkpoint_decisions = self.policy_decisions;
@@ -269,7 +270,7 @@ mod tests {
 
     fn cfg(name: &str) -> ExploreConfig {
         ExploreConfig {
-            strategy: Strategy::by_name(name).unwrap(),
+            strategy: Strategy::by_name(name, &StrategyParams::default()).unwrap(),
             ..ExploreConfig::default()
         }
     }

@@ -1,24 +1,64 @@
-//! Exploration strategies: how the information gain `I(p)` of a candidate is estimated and when
-//! exploration may stop before the last frontier is visited; their choice among the candidates
-//! is a [`Policy`] ([`BuiltInPolicy`]), as an external strategy's is.
+//! Exploration strategies as values. A [`Strategy`] is a gain model (how the information gain
+//! `I(p)` of a candidate is estimated, and from which layout), an early-stopping rule and a
+//! choice rule (how the candidates the stop rule keeps are weighed); the combinations that mean
+//! nothing (an oracle layout without a layout gain, the switch's thresholds on another model)
+//! cannot be written. The built-in strategies are the rows of [`BUILT_IN`]: a name, what it
+//! does in words and the function that makes its value from the user's settings. Their choice
+//! is made by a [`Policy`] ([`BuiltInPolicy`]), as an external strategy's is.
+//!
+//! Adding a strategy: a row of [`BUILT_IN`] (and, for a new way of choosing, a variant of
+//! [`Choice`] with its arm in [`BuiltInPolicy::decide`]), plus its test (ARCHITECTURE.md).
 
 use super::policy::{CandidateView, DecisionView, Needs, Policy, Reply};
 use crate::utility::{best_candidate, with_gain_floor, CandidateScore};
 
-/// How `I(p)` is estimated.
+/// Where a layout comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LayoutSource {
+    /// Predicted from the map as it is explored (the paper's method).
+    Predicted,
+    /// The building's ground-truth rooms, brought into the map's frame by the current pose
+    /// error: an oracle, so that the paper's gain can be judged apart from the errors of the
+    /// layout prediction. Needs a building with rooms.
+    Truth,
+}
+
+/// How `I(p)` is estimated.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum GainModel {
     /// Unknown cells within laser range visible from `p`, unknown counted as free ("no L").
     Baseline,
-    /// "With L": candidates are ranked by the baseline gain through the map with the layout's
-    /// wall lines closing short gaps in observed walls; early stopping judges the paper's `I(p)`
-    /// (the unknown area inside the predicted rooms visible in `M^L`; rooms with an open frontier
-    /// fall back to the baseline). See `layout_gain` for why the ranking does not use the
-    /// predicted room shapes.
-    Layout,
-    /// Baseline until the layout is judged reliable (its predictions agree with what later scans
-    /// revealed), layout afterwards: the dynamic switch of the paper's conclusion.
-    Switch,
+    /// "With L", the paper's `I(p)`: the unknown area inside the predicted rooms visible in
+    /// `M^L` (rooms with an open frontier fall back to the baseline).
+    PredictedRooms(LayoutSource),
+    /// The baseline gain through the map with the layout's wall lines closing short gaps in
+    /// observed walls (`layout-gaps`); an early stop still judges the paper's `I(p)`. See
+    /// `layout_gain` for why this ranking does not use the predicted room shapes.
+    ClosedGaps(LayoutSource),
+    /// The baseline until the predicted layout is judged reliable, then the paper's `I(p)`: the
+    /// dynamic switch of the paper's conclusion. The layout is trusted once at least
+    /// `agreement` of the cells it predicted inside rooms, and that were observed since, turned
+    /// out free, measured over at least `min_area_m2`.
+    Switch { agreement: f64, min_area_m2: f64 },
+}
+
+impl GainModel {
+    /// Where its layout comes from (`None`: it uses none).
+    pub fn layout_source(self) -> Option<LayoutSource> {
+        match self {
+            GainModel::Baseline => None,
+            GainModel::PredictedRooms(s) | GainModel::ClosedGaps(s) => Some(s),
+            GainModel::Switch { .. } => Some(LayoutSource::Predicted),
+        }
+    }
+
+    /// Whether candidates are ranked by the paper's `I(p)` while the layout is in use.
+    pub fn ranks_by_predicted_rooms(self) -> bool {
+        matches!(
+            self,
+            GainModel::PredictedRooms(_) | GainModel::Switch { .. }
+        )
+    }
 }
 
 /// When to stop early.
@@ -33,119 +73,203 @@ pub enum EarlyStop {
     DropCandidatesBelow(f64),
 }
 
-/// A strategy: a gain model and an early-stopping rule, plus how often the layout is rebuilt.
+/// How a built-in strategy chooses among the candidates its early stop keeps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Choice {
+    /// The paper's utility `alpha * (1 - D/D_max) + (1 - alpha) * I/I_max`
+    /// ([`crate::utility`]), each candidate's gain counted as at least `gain_floor_m2`.
+    Utility { alpha: f64, gain_floor_m2: f64 },
+}
+
+/// A strategy: how gains are estimated, when to stop early, how to choose.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Strategy {
     pub gain: GainModel,
     pub early_stop: EarlyStop,
-    /// The layout is recomputed at a decision when the known area changed by at least this much
-    /// since the last layout (m2), so it follows the map without being rebuilt at every step.
-    pub layout_update_m2: f64,
-    /// For [`GainModel::Switch`]: the layout is trusted once this fraction of the cells it
-    /// predicted inside rooms, and that were observed since, turned out free...
-    pub switch_agreement: f64,
-    /// ...measured over at least this many square metres.
-    pub switch_min_area_m2: f64,
-    /// Layout walls close gaps of unknown cells up to this long in an observed wall.
-    pub max_wall_gap_m: f64,
-    /// With a layout gain model: rank candidates by the paper's `I(p)` (unknown area inside the
-    /// predicted rooms visible in `M^L`; open rooms use the baseline) rather than by the baseline
-    /// gain through the map whose short wall gaps the layout closes (`layout-gaps`).
-    pub rank_by_predicted_rooms: bool,
-    /// The layout is the building's ground-truth rooms (brought into the map's frame by the
-    /// current pose error) instead of a prediction from the map: an oracle, so that the paper's
-    /// gain can be judged apart from the errors of the layout prediction (`layout-truth`). Needs
-    /// a building with rooms.
-    pub layout_from_truth: bool,
-    /// The paper's `I(p)` sees through openings of the layout's wall lines (see
-    /// [`crate::layout_gain::LayoutRaster::through_openings`]): an early stop then drops only
-    /// what the layout predicts, never a room beyond a doorway the robot has seen. On by default
-    /// since 0.4 (off: the paper's rule, setting `paper_layout_gain`).
-    pub gain_through_openings: bool,
+    pub choice: Choice,
 }
 
-impl Strategy {
-    pub fn baseline() -> Self {
+/// The user's settings a strategy's definition reads.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StrategyParams {
+    /// The utility's weight of distance (the paper's alpha).
+    pub alpha: f64,
+    /// The utility's floor on a candidate's gain (m2).
+    pub gain_floor_m2: f64,
+    /// The paper's ES threshold (m2).
+    pub es_threshold_m2: f64,
+    /// The aggressive ES's least gain of a candidate (m2).
+    pub aes_min_gain_m2: f64,
+}
+
+impl Default for StrategyParams {
+    fn default() -> Self {
         Self {
-            gain: GainModel::Baseline,
-            early_stop: EarlyStop::Never,
-            layout_update_m2: 20.0,
-            switch_agreement: 0.9,
-            switch_min_area_m2: 5.0,
-            max_wall_gap_m: 1.0,
-            rank_by_predicted_rooms: false,
-            layout_from_truth: false,
-            gain_through_openings: true,
+            alpha: 0.5,
+            gain_floor_m2: 0.0,
+            es_threshold_m2: 1.0,
+            aes_min_gain_m2: 2.0,
         }
     }
+}
 
-    /// The strategies by name: `baseline`; the paper's `layout` and `layout-es` (ES threshold
-    /// 1 m2); `layout-aes` (aggressive ES, 2 m2 per candidate) and `layout-switch` (dynamic
-    /// switch) from its discussion; `layout-gaps` and `layout-gaps-es`, which rank candidates by
-    /// the baseline gain through the map with short wall gaps closed by the layout's walls;
-    /// `layout-truth` and `layout-truth-es`, the paper's two with the true rooms for a layout
-    /// (an oracle: the most a perfect layout prediction could give the paper's method).
-    pub fn by_name(name: &str) -> Option<Self> {
-        let b = Self::baseline();
-        let paper = Self {
-            gain: GainModel::Layout,
-            rank_by_predicted_rooms: true,
-            ..b.clone()
-        };
-        Some(match name {
-            "baseline" => b,
-            "layout" => paper,
-            "layout-es" => Self {
-                early_stop: EarlyStop::TotalGainBelow(1.0),
-                ..paper
-            },
-            "layout-aes" => Self {
-                early_stop: EarlyStop::DropCandidatesBelow(2.0),
-                ..paper
-            },
-            "layout-switch" => Self {
-                gain: GainModel::Switch,
-                ..paper
-            },
-            "layout-gaps" => Self {
-                gain: GainModel::Layout,
-                ..b
-            },
-            "layout-gaps-es" => Self {
-                gain: GainModel::Layout,
-                early_stop: EarlyStop::TotalGainBelow(1.0),
-                ..b
-            },
-            "layout-truth" => Self {
-                layout_from_truth: true,
-                ..paper
-            },
-            "layout-truth-es" => Self {
-                early_stop: EarlyStop::TotalGainBelow(1.0),
-                layout_from_truth: true,
-                ..paper
-            },
-            _ => return None,
-        })
+/// A built-in strategy: its name, what it does in words (the README's table), and its value.
+#[derive(Debug, Clone, Copy)]
+pub struct BuiltIn {
+    pub name: &'static str,
+    /// How `I(p)` is estimated, in words.
+    pub gain: &'static str,
+    /// When it stops, in words.
+    pub stops: &'static str,
+    pub make: fn(&StrategyParams) -> Strategy,
+}
+
+/// The utility of the settings.
+fn utility(p: &StrategyParams) -> Choice {
+    Choice::Utility {
+        alpha: p.alpha,
+        gain_floor_m2: p.gain_floor_m2,
+    }
+}
+
+/// A strategy choosing by the utility of the settings.
+fn by_utility(gain: GainModel, early_stop: EarlyStop, p: &StrategyParams) -> Strategy {
+    Strategy {
+        gain,
+        early_stop,
+        choice: utility(p),
+    }
+}
+
+const PREDICTED: GainModel = GainModel::PredictedRooms(LayoutSource::Predicted);
+const TRUTH: GainModel = GainModel::PredictedRooms(LayoutSource::Truth);
+const GAPS: GainModel = GainModel::ClosedGaps(LayoutSource::Predicted);
+const NO_FRONTIER: &str = "when no frontier is left";
+const PAPER_ES: &str = "also when the summed `I(p)` of all candidates is below `es_threshold_m2` (1 m², the paper's ES)";
+
+fn es(p: &StrategyParams) -> EarlyStop {
+    EarlyStop::TotalGainBelow(p.es_threshold_m2)
+}
+
+/// The built-in strategies, in the order of the README's table: `baseline`; the paper's
+/// `layout` and `layout-es`; `layout-aes` (aggressive ES) and `layout-switch` (dynamic switch)
+/// from its discussion; floorcast's `layout-gaps` and `layout-gaps-es`; the oracle's
+/// `layout-truth` and `layout-truth-es` (the most a perfect layout prediction could give the
+/// paper's method).
+pub const BUILT_IN: &[BuiltIn] = &[
+    BuiltIn {
+        name: "baseline",
+        gain: "unknown cells within laser range visible from `p`, unknown counted as free (the paper's \"no L\")",
+        stops: NO_FRONTIER,
+        make: Strategy::baseline_with,
+    },
+    BuiltIn {
+        name: "layout",
+        gain: "the layout's room walls drawn into a copy of the map as obstacles; unknown cells in range, inside the predicted rooms and visible in that copy (\"with L\"); rooms with an open frontier use the baseline",
+        stops: NO_FRONTIER,
+        make: |p| by_utility(PREDICTED, EarlyStop::Never, p),
+    },
+    BuiltIn {
+        name: "layout-es",
+        gain: "as `layout`",
+        stops: PAPER_ES,
+        make: |p| by_utility(PREDICTED, es(p), p),
+    },
+    BuiltIn {
+        name: "layout-aes",
+        gain: "as `layout`",
+        stops: "candidates with `I(p)` below `aes_min_gain_m2` (2 m²) are dropped; stops when none is left (the paper's \"more aggressive ES\")",
+        make: |p| by_utility(PREDICTED, EarlyStop::DropCandidatesBelow(p.aes_min_gain_m2), p),
+    },
+    BuiltIn {
+        name: "layout-switch",
+        gain: "baseline until the layout's predictions prove right (90 % of 5 m² seen since), then `layout` (the paper's \"dynamic switch\")",
+        stops: NO_FRONTIER,
+        make: |p| {
+            let switch = GainModel::Switch {
+                agreement: 0.9,
+                min_area_m2: 5.0,
+            };
+            by_utility(switch, EarlyStop::Never, p)
+        },
+    },
+    BuiltIn {
+        name: "layout-gaps",
+        gain: "the baseline gain through the map with gaps of up to `max_wall_gap_m` (1 m) in observed walls closed by the layout's wall lines",
+        stops: NO_FRONTIER,
+        make: |p| by_utility(GAPS, EarlyStop::Never, p),
+    },
+    BuiltIn {
+        name: "layout-gaps-es",
+        gain: "as `layout-gaps`; the stop judges the paper's `I(p)`",
+        stops: "as `layout-es`",
+        make: |p| by_utility(GAPS, es(p), p),
+    },
+    BuiltIn {
+        name: "layout-truth",
+        gain: "as `layout`, with the building's true rooms for a layout (an oracle: needs a building with rooms)",
+        stops: NO_FRONTIER,
+        make: |p| by_utility(TRUTH, EarlyStop::Never, p),
+    },
+    BuiltIn {
+        name: "layout-truth-es",
+        gain: "as `layout-truth`",
+        stops: "as `layout-es`",
+        make: |p| by_utility(TRUTH, es(p), p),
+    },
+];
+
+impl Strategy {
+    /// The paper's baseline with the default settings.
+    pub fn baseline() -> Self {
+        Self::baseline_with(&StrategyParams::default())
     }
 
-    /// Names accepted by [`Strategy::by_name`].
-    pub const NAMES: &'static [&'static str] = &[
-        "baseline",
-        "layout",
-        "layout-es",
-        "layout-aes",
-        "layout-switch",
-        "layout-gaps",
-        "layout-gaps-es",
-        "layout-truth",
-        "layout-truth-es",
-    ];
+    /// The paper's baseline with the settings `params`.
+    pub fn baseline_with(params: &StrategyParams) -> Self {
+        by_utility(GainModel::Baseline, EarlyStop::Never, params)
+    }
+
+    /// The built-in strategy `name` ([`BUILT_IN`]) with the settings `params`.
+    pub fn by_name(name: &str, params: &StrategyParams) -> Option<Self> {
+        BUILT_IN
+            .iter()
+            .find(|b| b.name == name)
+            .map(|b| (b.make)(params))
+    }
+
+    /// The names of the built-in strategies, in [`BUILT_IN`]'s order.
+    pub fn names() -> Vec<&'static str> {
+        BUILT_IN.iter().map(|b| b.name).collect()
+    }
 
     /// Whether this strategy needs the layout at all.
     pub fn uses_layout(&self) -> bool {
-        self.gain != GainModel::Baseline
+        self.gain.layout_source().is_some()
     }
+
+    /// Whether its layout is the building's true rooms (an oracle).
+    pub fn layout_from_truth(&self) -> bool {
+        self.gain.layout_source() == Some(LayoutSource::Truth)
+    }
+
+    /// The same strategy without its early stop: runs of strategies whose plain forms are equal
+    /// share their beginning ([`super::can_share`]).
+    pub fn without_early_stop(&self) -> Self {
+        Self {
+            early_stop: EarlyStop::Never,
+            ..self.clone()
+        }
+    }
+}
+
+/// The README's table of the built-in strategies (name, `I(p)`, stops), from [`BUILT_IN`].
+pub fn strategies_markdown() -> String {
+    let mut s = String::from("| name | information gain `I(p)` | stops |\n|---|---|---|\n");
+    for b in BUILT_IN {
+        s.push_str(&format!("| `{}` | {} | {} |\n", b.name, b.gain, b.stops));
+    }
+    s
 }
 
 /// Applies the early-stopping rule to the candidates' gains: returns which candidates stay and
@@ -170,24 +294,22 @@ pub fn early_stop(rule: EarlyStop, gains_m2: &[f64]) -> (Vec<bool>, bool) {
 
 /// A built-in strategy's decision rule as a [`Policy`]: its early-stopping rule on the
 /// candidates' gains (the paper's `I(p)` inside the predicted rooms when the layout is in use,
-/// [`CandidateView::layout_gain_m2`], else the ranking gain), then the paper's utility with the
-/// gain floor over the candidates the rule keeps. The explorer computes the gains the
-/// strategy's gain model defines ([`CandidateView::gain_m2`]).
+/// [`CandidateView::layout_gain_m2`], else the ranking gain), then its [`Choice`] over the
+/// candidates the rule keeps. The explorer computes the gains the strategy's gain model defines
+/// ([`CandidateView::gain_m2`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BuiltInPolicy {
     pub early_stop: EarlyStop,
-    pub alpha: f64,
-    pub gain_floor_m2: f64,
+    pub choice: Choice,
     /// The candidates the rule kept at this decision's first attempt.
     kept: Vec<usize>,
 }
 
 impl BuiltInPolicy {
-    pub fn new(early_stop: EarlyStop, alpha: f64, gain_floor_m2: f64) -> Self {
+    pub fn new(strategy: &Strategy) -> Self {
         Self {
-            early_stop,
-            alpha,
-            gain_floor_m2,
+            early_stop: strategy.early_stop,
+            choice: strategy.choice,
             kept: Vec::new(),
         }
     }
@@ -225,15 +347,13 @@ impl Policy for BuiltInPolicy {
             .iter()
             .filter(|c| self.kept.contains(&c.id))
             .collect();
-        let scores: Vec<CandidateScore> = shown
-            .iter()
-            .map(|c| CandidateScore {
-                distance_m: Some(c.distance_m),
-                gain_m2: c.gain_m2,
-            })
-            .collect();
-        let reply = match best_candidate(&with_gain_floor(&scores, self.gain_floor_m2), self.alpha)
-        {
+        let chosen = match self.choice {
+            Choice::Utility {
+                alpha,
+                gain_floor_m2,
+            } => by_utility_of(&shown, alpha, gain_floor_m2),
+        };
+        let reply = match chosen {
             Some(i) => Reply::Choose(shown[i].id),
             None => Reply::Pass,
         };
@@ -241,22 +361,88 @@ impl Policy for BuiltInPolicy {
     }
 }
 
+/// The index in `shown` of the candidate of best utility, if any is reachable.
+fn by_utility_of(shown: &[&CandidateView], alpha: f64, gain_floor_m2: f64) -> Option<usize> {
+    let scores: Vec<CandidateScore> = shown
+        .iter()
+        .map(|c| CandidateScore {
+            distance_m: Some(c.distance_m),
+            gain_m2: c.gain_m2,
+        })
+        .collect();
+    best_candidate(&with_gain_floor(&scores, gain_floor_m2), alpha)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// Each name makes the value it stands for, with the settings' thresholds.
     #[test]
-    fn names_resolve() {
-        for n in Strategy::NAMES {
-            assert!(Strategy::by_name(n).is_some(), "{n}");
+    fn names_make_their_strategies() {
+        let p = StrategyParams {
+            alpha: 0.3,
+            gain_floor_m2: 0.5,
+            es_threshold_m2: 1.5,
+            aes_min_gain_m2: 2.5,
+        };
+        let choice = Choice::Utility {
+            alpha: 0.3,
+            gain_floor_m2: 0.5,
+        };
+        let cases: &[(&str, GainModel, EarlyStop)] = &[
+            ("baseline", GainModel::Baseline, EarlyStop::Never),
+            ("layout", PREDICTED, EarlyStop::Never),
+            ("layout-es", PREDICTED, EarlyStop::TotalGainBelow(1.5)),
+            ("layout-aes", PREDICTED, EarlyStop::DropCandidatesBelow(2.5)),
+            (
+                "layout-switch",
+                GainModel::Switch {
+                    agreement: 0.9,
+                    min_area_m2: 5.0,
+                },
+                EarlyStop::Never,
+            ),
+            ("layout-gaps", GAPS, EarlyStop::Never),
+            ("layout-gaps-es", GAPS, EarlyStop::TotalGainBelow(1.5)),
+            ("layout-truth", TRUTH, EarlyStop::Never),
+            ("layout-truth-es", TRUTH, EarlyStop::TotalGainBelow(1.5)),
+        ];
+        assert_eq!(
+            Strategy::names(),
+            cases.iter().map(|c| c.0).collect::<Vec<_>>()
+        );
+        for &(name, gain, stop) in cases {
+            let s = Strategy::by_name(name, &p).unwrap();
+            assert_eq!(
+                s,
+                Strategy {
+                    gain,
+                    early_stop: stop,
+                    choice
+                },
+                "{name}"
+            );
+            assert_eq!(s.uses_layout(), name != "baseline", "{name}");
+            assert_eq!(s.layout_from_truth(), name.contains("truth"), "{name}");
         }
-        assert!(Strategy::by_name("nope").is_none());
-        assert!(!Strategy::by_name("baseline").unwrap().uses_layout());
-        assert!(Strategy::by_name("layout-es").unwrap().uses_layout());
-        let truth = Strategy::by_name("layout-truth-es").unwrap();
-        assert!(truth.layout_from_truth && truth.rank_by_predicted_rooms);
-        assert_eq!(truth.early_stop, EarlyStop::TotalGainBelow(1.0));
-        assert!(!Strategy::by_name("layout-es").unwrap().layout_from_truth);
+        assert!(Strategy::by_name("nope", &p).is_none());
+        assert_eq!(
+            Strategy::by_name("baseline", &StrategyParams::default()),
+            Some(Strategy::baseline())
+        );
+    }
+
+    #[test]
+    fn names_are_unique_and_tabled() {
+        let mut names = Strategy::names();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), BUILT_IN.len());
+        let table = strategies_markdown();
+        for b in BUILT_IN {
+            assert!(table.contains(&format!("| `{}` |", b.name)), "{}", b.name);
+        }
     }
 
     #[test]

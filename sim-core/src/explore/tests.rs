@@ -116,11 +116,11 @@ fn same_seed_same_run_and_seeds_differ() {
 #[test]
 fn layout_strategies_run_and_are_reproducible() {
     let b = corridor_building(4);
-    let layout_strategies = Strategy::NAMES.iter().filter(|n| **n != "baseline");
+    let layout_strategies = Strategy::names().into_iter().filter(|n| *n != "baseline");
     assert_eq!(layout_strategies.clone().count(), 8);
-    for &name in layout_strategies {
+    for name in layout_strategies {
         let cfg = ExploreConfig {
-            strategy: Strategy::by_name(name).unwrap(),
+            strategy: Strategy::by_name(name, &StrategyParams::default()).unwrap(),
             ..ExploreConfig::default()
         };
         let r = explore(&b, b.start.unwrap(), &cfg, 3, &mut |_| {});
@@ -141,7 +141,7 @@ fn layout_strategies_run_and_are_reproducible() {
 fn layout_es_stops_early_with_the_building_nearly_explored() {
     let b = corridor_building(4);
     let cfg = ExploreConfig {
-        strategy: Strategy::by_name("layout-es").unwrap(),
+        strategy: Strategy::by_name("layout-es", &StrategyParams::default()).unwrap(),
         ..ExploreConfig::default()
     };
     let runs: Vec<RunResult> = (1..=3)
@@ -254,7 +254,7 @@ fn the_true_layout_oracle_explores_and_its_early_stop_leaves_little_unseen() {
     let b = corridor_building_with_rooms(4);
     for name in ["layout-truth", "layout-truth-es"] {
         let cfg = ExploreConfig {
-            strategy: Strategy::by_name(name).unwrap(),
+            strategy: Strategy::by_name(name, &StrategyParams::default()).unwrap(),
             ..ExploreConfig::default()
         };
         for seed in 1..=2 {
@@ -323,7 +323,7 @@ fn frontiers_kept_clear_of_walls_skip_the_corners() {
 fn charged_layout_compute_delays_the_robot() {
     let b = corridor_building(3);
     let cfg = ExploreConfig {
-        strategy: Strategy::by_name("layout").unwrap(),
+        strategy: Strategy::by_name("layout", &StrategyParams::default()).unwrap(),
         ..ExploreConfig::default()
     };
     let free = explore(&b, b.start.unwrap(), &cfg, 2, &mut |_| {});
