@@ -1,6 +1,7 @@
 //! The user-facing run settings (robot, laser, odometry, mapping, strategy parameters): what a
 //! grid file's `[settings]` or the command line sets, what every summary records, and what a
-//! job's identity hashes. Converted by hand into `sim-core`'s config and validated on the way.
+//! job's identity hashes. Each setting is declared once (`declare_settings!`): its field, default,
+//! range, unit, meaning and place in `sim-core`'s config.
 
 use serde::{Deserialize, Serialize};
 use sim_core::explore::{ExploreConfig, Localization, Strategy, StrategyParams, UtilityDistance};
@@ -89,100 +90,338 @@ impl From<UtilityDistance> for UtilityDistanceSetting {
     }
 }
 
-/// Settings as written in files and records. Every field has the documented default.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct Settings {
+/// The type of a setting's value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SettingKind {
+    /// A number in `[min, max]`.
+    Number {
+        min: f64,
+        max: f64,
+    },
+    /// A whole number in `[min, max]`.
+    Integer {
+        min: u64,
+        max: u64,
+    },
+    Bool,
+    /// One of these words.
+    Choice(&'static [&'static str]),
+}
+
+/// One setting: name, type and range, unit, meaning. The default is [`Settings::default`]'s.
+#[derive(Debug, Clone, Copy)]
+pub struct SettingInfo {
+    pub name: &'static str,
+    pub kind: SettingKind,
+    /// Unit of the value ("m", "m/s"; "" for none).
+    pub unit: &'static str,
+    /// One line saying what it does.
+    pub meaning: &'static str,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Every setting is declared once, below: its field (doc and serde attributes), its default, its
+// type and range, unit and meaning (the table behind validation, `--help` and the reference),
+// and where it goes in the core's config. The macro makes the struct, its `Default`, the table
+// (`SETTINGS`), `Settings::value` and the conversion from that one declaration.
+
+/// Declares the settings (see the block above).
+macro_rules! declare_settings {
+    (
+        defaults($c:ident, $p:ident);
+        apply($cfg:ident);
+        $(
+            $(#[$attr:meta])*
+            $name:ident: $ty:ty = $default:expr,
+                $kind:expr, $unit:literal,
+                $meaning:expr $(, apply $apply:expr)?;
+        )*
+    ) => {
+        /// Settings as written in files and records. Every field has the documented default.
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        #[serde(default, deny_unknown_fields)]
+        pub struct Settings {
+            $( $(#[$attr])* pub $name: $ty, )*
+        }
+
+        impl Default for Settings {
+            fn default() -> Self {
+                let $c = ExploreConfig::default();
+                let $p = StrategyParams::default();
+                Self { $( $name: $default, )* }
+            }
+        }
+
+        /// Every setting, in the order of [`Settings`]' fields. Ranges are physically sensible:
+        /// a value outside them is refused on every path (command line, settings file, grid
+        /// file, wire).
+        pub const SETTINGS: &[SettingInfo] = &[
+            $(
+                SettingInfo {
+                    name: stringify!($name),
+                    kind: $kind,
+                    unit: $unit,
+                    meaning: $meaning,
+                },
+            )*
+        ];
+
+        impl Settings {
+            /// The value of setting `name` (a row of [`SETTINGS`]).
+            pub fn value(&self, name: &str) -> Option<SettingValue> {
+                match name {
+                    $( stringify!($name) => Some(self.$name.setting_value()), )*
+                    _ => None,
+                }
+            }
+
+            /// Writes the settings that shape a run into the core's config (those without a
+            /// place there shape the strategy, [`Settings::strategy_params`], or the worker).
+            fn apply(&self, $cfg: &mut ExploreConfig) {
+                $( $( {
+                    let $name = self.$name;
+                    $apply;
+                } )? )*
+            }
+        }
+    };
+}
+
+/// A setting's type: how its value is shown and checked.
+trait SettingType {
+    fn setting_value(&self) -> SettingValue;
+}
+
+impl SettingType for f64 {
+    fn setting_value(&self) -> SettingValue {
+        SettingValue::Number(*self)
+    }
+}
+
+impl SettingType for usize {
+    fn setting_value(&self) -> SettingValue {
+        SettingValue::Number(*self as f64)
+    }
+}
+
+impl SettingType for bool {
+    fn setting_value(&self) -> SettingValue {
+        SettingValue::Bool(*self)
+    }
+}
+
+impl SettingType for LocalizationSetting {
+    fn setting_value(&self) -> SettingValue {
+        SettingValue::Word(self.as_str().to_string())
+    }
+}
+
+impl SettingType for UtilityDistanceSetting {
+    fn setting_value(&self) -> SettingValue {
+        SettingValue::Word(self.as_str().to_string())
+    }
+}
+
+const fn number(min: f64, max: f64) -> SettingKind {
+    SettingKind::Number { min, max }
+}
+
+const fn integer(min: u64, max: u64) -> SettingKind {
+    SettingKind::Integer { min, max }
+}
+
+const BOOL: SettingKind = SettingKind::Bool;
+
+declare_settings! {
+    defaults(c, p);
+    apply(cfg);
     /// Robot radius (m).
-    pub robot_radius_m: f64,
+    robot_radius_m: f64 = c.sim.robot.radius_m,
+        number(0.05, 2.0), "m",
+        "Robot radius.",
+        apply cfg.sim.robot.radius_m = robot_radius_m;
     /// Maximum forward speed (m/s).
-    pub max_speed_mps: f64,
+    max_speed_mps: f64 = c.sim.robot.max_speed_mps,
+        number(0.01, 5.0), "m/s",
+        "Maximum forward speed.",
+        apply cfg.sim.robot.max_speed_mps = max_speed_mps;
     /// Maximum turn rate (rad/s).
-    pub max_turn_rate_radps: f64,
+    max_turn_rate_radps: f64 = c.sim.robot.max_turn_rate_radps,
+        number(0.01, 10.0), "rad/s",
+        "Maximum turn rate.",
+        apply cfg.sim.robot.max_turn_rate_radps = max_turn_rate_radps;
     /// Laser field of view (degrees).
-    pub laser_fov_deg: f64,
+    laser_fov_deg: f64 = c.sim.laser.fov_rad.to_degrees(),
+        number(1.0, 360.0), "deg",
+        "Laser field of view.",
+        apply cfg.sim.laser.fov_rad = laser_fov_deg.to_radians();
     /// Laser range (m).
-    pub laser_range_m: f64,
+    laser_range_m: f64 = c.sim.laser.max_range_m,
+        number(0.5, 30.0), "m",
+        "Laser range.",
+        apply cfg.sim.laser.max_range_m = laser_range_m;
     /// Number of beams per scan.
-    pub laser_beams: usize,
+    laser_beams: usize = c.sim.laser.beams,
+        integer(2, 3600), "",
+        "Beams per scan.",
+        apply cfg.sim.laser.beams = laser_beams;
     /// Scans per second available to the mapper.
-    pub laser_rate_hz: f64,
+    laser_rate_hz: f64 = c.sim.laser.rate_hz,
+        number(1.0, 100.0), "Hz",
+        "Scans per second (also the simulation step).",
+        apply cfg.sim.laser.rate_hz = laser_rate_hz;
     /// Standard deviation of the Gaussian range noise (m).
-    pub laser_noise_sd_m: f64,
+    laser_noise_sd_m: f64 = c.sim.laser.range_noise_sd_m,
+        number(0.0, 1.0), "m",
+        "Standard deviation of the Gaussian range noise.",
+        apply cfg.sim.laser.range_noise_sd_m = laser_noise_sd_m;
     /// Maximum proportional translation error of odometry (m per m).
-    pub odometry_translation_error: f64,
+    odometry_translation_error: f64 = c.sim.odometry.max_translation_error,
+        number(0.0, 0.5), "m/m",
+        "Largest proportional translation error of odometry.",
+        apply cfg.sim.odometry.max_translation_error = odometry_translation_error;
     /// Maximum proportional rotation error of odometry (degrees per radian).
-    pub odometry_rotation_error_deg_per_rad: f64,
+    odometry_rotation_error_deg_per_rad: f64 = c.sim.odometry.max_rotation_error.to_degrees(),
+        number(0.0, 30.0), "deg/rad",
+        "Largest proportional rotation error of odometry.",
+        apply cfg.sim.odometry.max_rotation_error = odometry_rotation_error_deg_per_rad.to_radians();
     /// Where the map's poses come from.
-    pub localization: LocalizationSetting,
+    localization: LocalizationSetting = c.localization.into(),
+        SettingKind::Choice(&["slam", "odometry", "ground-truth"]), "",
+        "Where the map's poses come from.",
+        apply cfg.localization = localization.into();
     /// Occupancy grid cell size (m).
-    pub map_resolution_m: f64,
+    map_resolution_m: f64 = c.map_resolution_m,
+        number(0.01, 0.5), "m",
+        "Occupancy grid cell size.",
+        apply cfg.map_resolution_m = map_resolution_m;
     /// The map is updated (and the scan matched) after this much motion (m)...
-    pub map_update_distance_m: f64,
+    map_update_distance_m: f64 = c.map_update_distance_m,
+        number(0.01, 10.0), "m",
+        "Update the map (and match the scan) after this much motion...",
+        apply cfg.map_update_distance_m = map_update_distance_m;
     /// ...or this much turning (rad)...
-    pub map_update_angle_rad: f64,
+    map_update_angle_rad: f64 = c.map_update_angle_rad,
+        number(0.01, 6.3), "rad",
+        "...or this much turning...",
+        apply cfg.map_update_angle_rad = map_update_angle_rad;
     /// ...or this much simulated time (s), whichever comes first.
-    pub map_update_period_s: f64,
+    map_update_period_s: f64 = c.map_update_period_s,
+        number(0.01, 100.0), "s",
+        "...or this much simulated time, whichever comes first.",
+        apply cfg.map_update_period_s = map_update_period_s;
     /// Weight of distance in the utility (the paper's alpha).
-    pub alpha: f64,
+    alpha: f64 = p.alpha,
+        number(0.0, 1.0), "",
+        "Weight of distance against gain in the utility (the paper's alpha).";
     /// In the utility, a candidate's gain counts as at least this much (m2); 0 = the paper's
     /// utility. Not in the paper: it keeps the robot from crossing the building for one small
     /// residual frontier while leaving another behind (see the README).
-    pub gain_floor_m2: f64,
+    gain_floor_m2: f64 = p.gain_floor_m2,
+        number(0.0, 10000.0), "m2",
+        "In the utility a candidate's gain counts as at least this much (0 = the paper's utility).";
     /// What the utility's distance `D(p)` measures: "path" (default: the planned path's length)
     /// or "euclidean" (the straight line from the robot to the candidate, as the paper defines
     /// it). Written only when not "path", so that the records and job identities of runs with
     /// the default are those of earlier versions.
     #[serde(skip_serializing_if = "is_path")]
-    pub utility_distance: UtilityDistanceSetting,
+    utility_distance: UtilityDistanceSetting = c.utility_distance.into(),
+        SettingKind::Choice(&["path", "euclidean"]), "",
+        "The utility's distance: the planned path's length, or the straight line (the paper's).",
+        apply cfg.utility_distance = utility_distance.into();
     /// Frontiers shorter than this are ignored (m).
-    pub min_frontier_m: f64,
+    min_frontier_m: f64 = c.min_frontier_m,
+        number(0.0, 100.0), "m",
+        "Frontiers shorter than this are ignored.",
+        apply cfg.min_frontier_m = min_frontier_m;
     /// Frontier cells closer than this to an observed wall are ignored (m; 0 = none), as by
     /// explorers that look for frontiers in an inflated costmap. Not in floorcast's default
     /// explorer. Written only when set, so that the records and job identities of runs without
     /// it are those of earlier versions.
     #[serde(skip_serializing_if = "is_zero")]
-    pub frontier_clearance_m: f64,
+    frontier_clearance_m: f64 = c.frontier_clearance_m,
+        number(0.0, 5.0), "m",
+        "Frontier cells nearer than this to an observed wall are ignored (0 = none).",
+        apply cfg.frontier_clearance_m = frontier_clearance_m;
     /// When a frontier's candidate (its middle cell, or a traversable cell within 0.5 m) cannot
     /// be reached, aim at the reachable cell of the frontier nearest to it instead of passing
     /// the frontier over. Not in the paper (false = its rule). Written only when true, so that
     /// the records and job identities of runs without it are those of earlier versions.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
-    pub candidate_from_reachable_part: bool,
+    candidate_from_reachable_part: bool = c.candidate_from_reachable_part,
+        BOOL, "",
+        "Aim at a frontier's reachable part when its middle cell cannot be reached (not the paper's rule).",
+        apply cfg.candidate_from_reachable_part = candidate_from_reachable_part;
     /// Resolve frontiers by the paper's rule (false = floorcast's since 0.4): a frontier whose
     /// middle cell is blacklisted is dropped whole, and a goal whose unknown side surrounds the
     /// robot counts as seen without a turn. Written only when true.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
-    pub paper_frontiers: bool,
+    paper_frontiers: bool = !c.robust_frontiers,
+        BOOL, "",
+        "The paper's frontier rule: a frontier whose middle cell is blacklisted is dropped whole, a goal around the robot counts as seen without a turn, an early stop weighs only the frontiers whose goal is reachable as they stand (before 0.4).",
+        apply cfg.robust_frontiers = !paper_frontiers;
     /// The layout gain I(p) by the paper's rule (false = floorcast's since 0.4): predicted
     /// walls block the gain's rays also across doorways, and unknown space outside the
     /// predicted rooms counts nothing. Written only when true.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
-    pub paper_layout_gain: bool,
+    paper_layout_gain: bool = !c.layout_use.through_openings,
+        BOOL, "",
+        "The paper's layout gain: predicted walls block it across doorways, unknown space outside predicted rooms counts nothing (before 0.4).",
+        apply cfg.layout_use.through_openings = !paper_layout_gain;
     /// Re-decide this often while driving to a goal (s of simulated time)...
-    pub redecide_period_s: f64,
+    redecide_period_s: f64 = c.redecide_period_s,
+        number(0.1, 1000000000.0), "s",
+        "Re-decide this often while driving to a goal (simulated time)...",
+        apply cfg.redecide_period_s = redecide_period_s;
     /// ...once the map has grown by at least this much since the last decision (m2; 0 = at
     /// every period).
-    pub redecide_min_growth_m2: f64,
+    redecide_min_growth_m2: f64 = c.redecide_min_growth_m2,
+        number(0.0, 1000000.0), "m2",
+        "...once the map grew by at least this much since the last decision (0 = every period).",
+        apply cfg.redecide_min_growth_m2 = redecide_min_growth_m2;
     /// Radius of the blacklist around unreachable goals (m).
-    pub blacklist_radius_m: f64,
+    blacklist_radius_m: f64 = c.blacklist_radius_m,
+        number(0.0, 10.0), "m",
+        "Radius of the blacklist around unreachable goals.",
+        apply cfg.blacklist_radius_m = blacklist_radius_m;
     /// Abandon a goal after this long without progress (s).
-    pub progress_timeout_s: f64,
+    progress_timeout_s: f64 = c.progress_timeout_s,
+        number(0.5, 3600.0), "s",
+        "Abandon a goal after this long without progress.",
+        apply cfg.progress_timeout_s = progress_timeout_s;
     /// Stop a run at this simulated time (s).
-    pub time_limit_s: f64,
+    time_limit_s: f64 = c.time_limit_s,
+        number(1.0, 100000.0), "s",
+        "Stop a run at this simulated time.",
+        apply cfg.time_limit_s = time_limit_s;
     /// Drive back to the start after exploring.
-    pub return_home: bool,
+    return_home: bool = c.return_home,
+        BOOL, "",
+        "Drive back to the start after exploring.",
+        apply cfg.return_home = return_home;
     /// `layout-es`: stop when the summed gain of all candidates is below this (m2; paper: 1).
-    pub es_threshold_m2: f64,
+    es_threshold_m2: f64 = p.es_threshold_m2,
+        number(0.0, 10000.0), "m2",
+        "layout-es: stop when the summed gain of all candidates is below this.";
     /// `layout-aes`: drop candidates whose gain is below this (m2); stop when none is left.
-    pub aes_min_gain_m2: f64,
+    aes_min_gain_m2: f64 = p.aes_min_gain_m2,
+        number(0.0, 10000.0), "m2",
+        "layout-aes: drop candidates whose gain is below this; stop when none is left.";
     /// Layout strategies: rebuild the layout when the known area grew by this much (m2).
-    pub layout_update_m2: f64,
+    layout_update_m2: f64 = c.layout_use.update_m2,
+        number(0.1, 1000000.0), "m2",
+        "Layout strategies: rebuild the layout when the known area grew by this much.",
+        apply cfg.layout_use.update_m2 = layout_update_m2;
     /// Layout strategies: the layout's wall lines close gaps in observed walls up to this long (m).
-    pub max_wall_gap_m: f64,
+    max_wall_gap_m: f64 = c.layout_use.max_wall_gap_m,
+        number(0.0, 20.0), "m",
+        "Layout strategies: the layout's wall lines close gaps in observed walls up to this long.",
+        apply cfg.layout_use.max_wall_gap_m = max_wall_gap_m;
     /// Add the measured wall time of every layout computation to simulated time (the robot
     /// waits for it). The result then depends on the machine: not reproducible.
-    pub charge_compute: bool,
+    charge_compute: bool = false,
+        BOOL, "",
+        "Add the measured wall time of every layout to simulated time (not reproducible).";
 }
 
 fn is_path(d: &UtilityDistanceSetting) -> bool {
@@ -191,49 +430,6 @@ fn is_path(d: &UtilityDistanceSetting) -> bool {
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
-}
-
-impl Default for Settings {
-    fn default() -> Self {
-        let c = ExploreConfig::default();
-        let p = StrategyParams::default();
-        Self {
-            robot_radius_m: c.sim.robot.radius_m,
-            max_speed_mps: c.sim.robot.max_speed_mps,
-            max_turn_rate_radps: c.sim.robot.max_turn_rate_radps,
-            laser_fov_deg: c.sim.laser.fov_rad.to_degrees(),
-            laser_range_m: c.sim.laser.max_range_m,
-            laser_beams: c.sim.laser.beams,
-            laser_rate_hz: c.sim.laser.rate_hz,
-            laser_noise_sd_m: c.sim.laser.range_noise_sd_m,
-            odometry_translation_error: c.sim.odometry.max_translation_error,
-            odometry_rotation_error_deg_per_rad: c.sim.odometry.max_rotation_error.to_degrees(),
-            localization: c.localization.into(),
-            map_resolution_m: c.map_resolution_m,
-            map_update_distance_m: c.map_update_distance_m,
-            map_update_angle_rad: c.map_update_angle_rad,
-            map_update_period_s: c.map_update_period_s,
-            alpha: p.alpha,
-            gain_floor_m2: p.gain_floor_m2,
-            utility_distance: c.utility_distance.into(),
-            min_frontier_m: c.min_frontier_m,
-            frontier_clearance_m: c.frontier_clearance_m,
-            candidate_from_reachable_part: c.candidate_from_reachable_part,
-            paper_frontiers: !c.robust_frontiers,
-            paper_layout_gain: !c.layout_use.through_openings,
-            redecide_period_s: c.redecide_period_s,
-            redecide_min_growth_m2: c.redecide_min_growth_m2,
-            blacklist_radius_m: c.blacklist_radius_m,
-            progress_timeout_s: c.progress_timeout_s,
-            time_limit_s: c.time_limit_s,
-            return_home: c.return_home,
-            es_threshold_m2: p.es_threshold_m2,
-            aes_min_gain_m2: p.aes_min_gain_m2,
-            layout_update_m2: c.layout_use.update_m2,
-            max_wall_gap_m: c.layout_use.max_wall_gap_m,
-            charge_compute: false,
-        }
-    }
 }
 
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -289,200 +485,6 @@ impl SettingsError {
         }
     }
 }
-
-// ---------------------------------------------------------------------------------------------
-// The settings table: one row per setting drives validation, `--help` and the reference.
-
-/// The type of a setting's value.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SettingKind {
-    /// A number in `[min, max]`.
-    Number {
-        min: f64,
-        max: f64,
-    },
-    /// A whole number in `[min, max]`.
-    Integer {
-        min: u64,
-        max: u64,
-    },
-    Bool,
-    /// One of these words.
-    Choice(&'static [&'static str]),
-}
-
-/// One setting: name, type and range, unit, meaning. The default is [`Settings::default`]'s.
-#[derive(Debug, Clone, Copy)]
-pub struct SettingInfo {
-    pub name: &'static str,
-    pub kind: SettingKind,
-    /// Unit of the value ("m", "m/s"; "" for none).
-    pub unit: &'static str,
-    /// One line saying what it does.
-    pub meaning: &'static str,
-}
-
-const fn num(
-    name: &'static str,
-    unit: &'static str,
-    min: f64,
-    max: f64,
-    meaning: &'static str,
-) -> SettingInfo {
-    SettingInfo {
-        name,
-        kind: SettingKind::Number { min, max },
-        unit,
-        meaning,
-    }
-}
-
-const fn flag(name: &'static str, meaning: &'static str) -> SettingInfo {
-    SettingInfo {
-        name,
-        kind: SettingKind::Bool,
-        unit: "",
-        meaning,
-    }
-}
-
-/// Every setting, in the order of [`Settings`]' fields. Ranges are physically sensible: a value
-/// outside them is refused on every path (command line, settings file, grid file, wire).
-pub const SETTINGS: &[SettingInfo] = &[
-    num("robot_radius_m", "m", 0.05, 2.0, "Robot radius."),
-    num("max_speed_mps", "m/s", 0.01, 5.0, "Maximum forward speed."),
-    num("max_turn_rate_radps", "rad/s", 0.01, 10.0, "Maximum turn rate."),
-    num("laser_fov_deg", "deg", 1.0, 360.0, "Laser field of view."),
-    num("laser_range_m", "m", 0.5, 30.0, "Laser range."),
-    SettingInfo {
-        name: "laser_beams",
-        kind: SettingKind::Integer { min: 2, max: 3600 },
-        unit: "",
-        meaning: "Beams per scan.",
-    },
-    num("laser_rate_hz", "Hz", 1.0, 100.0, "Scans per second (also the simulation step)."),
-    num("laser_noise_sd_m", "m", 0.0, 1.0, "Standard deviation of the Gaussian range noise."),
-    num(
-        "odometry_translation_error",
-        "m/m",
-        0.0,
-        0.5,
-        "Largest proportional translation error of odometry.",
-    ),
-    num(
-        "odometry_rotation_error_deg_per_rad",
-        "deg/rad",
-        0.0,
-        30.0,
-        "Largest proportional rotation error of odometry.",
-    ),
-    SettingInfo {
-        name: "localization",
-        kind: SettingKind::Choice(&["slam", "odometry", "ground-truth"]),
-        unit: "",
-        meaning: "Where the map's poses come from.",
-    },
-    num("map_resolution_m", "m", 0.01, 0.5, "Occupancy grid cell size."),
-    num(
-        "map_update_distance_m",
-        "m",
-        0.01,
-        10.0,
-        "Update the map (and match the scan) after this much motion...",
-    ),
-    num("map_update_angle_rad", "rad", 0.01, 6.3, "...or this much turning...",),
-    num(
-        "map_update_period_s",
-        "s",
-        0.01,
-        100.0,
-        "...or this much simulated time, whichever comes first.",
-    ),
-    num("alpha", "", 0.0, 1.0, "Weight of distance against gain in the utility (the paper's alpha)."),
-    num(
-        "gain_floor_m2",
-        "m2",
-        0.0,
-        10_000.0,
-        "In the utility a candidate's gain counts as at least this much (0 = the paper's utility).",
-    ),
-    SettingInfo {
-        name: "utility_distance",
-        kind: SettingKind::Choice(&["path", "euclidean"]),
-        unit: "",
-        meaning: "The utility's distance: the planned path's length, or the straight line (the paper's).",
-    },
-    num("min_frontier_m", "m", 0.0, 100.0, "Frontiers shorter than this are ignored."),
-    num(
-        "frontier_clearance_m",
-        "m",
-        0.0,
-        5.0,
-        "Frontier cells nearer than this to an observed wall are ignored (0 = none).",
-    ),
-    flag(
-        "candidate_from_reachable_part",
-        "Aim at a frontier's reachable part when its middle cell cannot be reached (not the paper's rule).",
-    ),
-    flag(
-        "paper_frontiers",
-        "The paper's frontier rule: a frontier whose middle cell is blacklisted is dropped whole, a goal around the robot counts as seen without a turn, an early stop weighs only the frontiers whose goal is reachable as they stand (before 0.4).",
-    ),
-    flag(
-        "paper_layout_gain",
-        "The paper's layout gain: predicted walls block it across doorways, unknown space outside predicted rooms counts nothing (before 0.4).",
-    ),
-    num(
-        "redecide_period_s",
-        "s",
-        0.1,
-        1e9,
-        "Re-decide this often while driving to a goal (simulated time)...",
-    ),
-    num(
-        "redecide_min_growth_m2",
-        "m2",
-        0.0,
-        1e6,
-        "...once the map grew by at least this much since the last decision (0 = every period).",
-    ),
-    num("blacklist_radius_m", "m", 0.0, 10.0, "Radius of the blacklist around unreachable goals."),
-    num("progress_timeout_s", "s", 0.5, 3600.0, "Abandon a goal after this long without progress."),
-    num("time_limit_s", "s", 1.0, 100_000.0, "Stop a run at this simulated time."),
-    flag("return_home", "Drive back to the start after exploring."),
-    num(
-        "es_threshold_m2",
-        "m2",
-        0.0,
-        10_000.0,
-        "layout-es: stop when the summed gain of all candidates is below this.",
-    ),
-    num(
-        "aes_min_gain_m2",
-        "m2",
-        0.0,
-        10_000.0,
-        "layout-aes: drop candidates whose gain is below this; stop when none is left.",
-    ),
-    num(
-        "layout_update_m2",
-        "m2",
-        0.1,
-        1e6,
-        "Layout strategies: rebuild the layout when the known area grew by this much.",
-    ),
-    num(
-        "max_wall_gap_m",
-        "m",
-        0.0,
-        20.0,
-        "Layout strategies: the layout's wall lines close gaps in observed walls up to this long.",
-    ),
-    flag(
-        "charge_compute",
-        "Add the measured wall time of every layout to simulated time (not reproducible).",
-    ),
-];
 
 /// The names of every setting, in table order.
 pub fn setting_names() -> Vec<&'static str> {
@@ -737,50 +739,6 @@ pub fn settings_help_text() -> String {
 }
 
 impl Settings {
-    /// The value of setting `name` (a row of [`SETTINGS`]).
-    pub fn value(&self, name: &str) -> Option<SettingValue> {
-        use SettingValue::{Bool, Number, Word};
-        Some(match name {
-            "robot_radius_m" => Number(self.robot_radius_m),
-            "max_speed_mps" => Number(self.max_speed_mps),
-            "max_turn_rate_radps" => Number(self.max_turn_rate_radps),
-            "laser_fov_deg" => Number(self.laser_fov_deg),
-            "laser_range_m" => Number(self.laser_range_m),
-            "laser_beams" => Number(self.laser_beams as f64),
-            "laser_rate_hz" => Number(self.laser_rate_hz),
-            "laser_noise_sd_m" => Number(self.laser_noise_sd_m),
-            "odometry_translation_error" => Number(self.odometry_translation_error),
-            "odometry_rotation_error_deg_per_rad" => {
-                Number(self.odometry_rotation_error_deg_per_rad)
-            }
-            "localization" => Word(self.localization.as_str().to_string()),
-            "map_resolution_m" => Number(self.map_resolution_m),
-            "map_update_distance_m" => Number(self.map_update_distance_m),
-            "map_update_angle_rad" => Number(self.map_update_angle_rad),
-            "map_update_period_s" => Number(self.map_update_period_s),
-            "alpha" => Number(self.alpha),
-            "gain_floor_m2" => Number(self.gain_floor_m2),
-            "utility_distance" => Word(self.utility_distance.as_str().to_string()),
-            "min_frontier_m" => Number(self.min_frontier_m),
-            "frontier_clearance_m" => Number(self.frontier_clearance_m),
-            "candidate_from_reachable_part" => Bool(self.candidate_from_reachable_part),
-            "paper_frontiers" => Bool(self.paper_frontiers),
-            "paper_layout_gain" => Bool(self.paper_layout_gain),
-            "redecide_period_s" => Number(self.redecide_period_s),
-            "redecide_min_growth_m2" => Number(self.redecide_min_growth_m2),
-            "blacklist_radius_m" => Number(self.blacklist_radius_m),
-            "progress_timeout_s" => Number(self.progress_timeout_s),
-            "time_limit_s" => Number(self.time_limit_s),
-            "return_home" => Bool(self.return_home),
-            "es_threshold_m2" => Number(self.es_threshold_m2),
-            "aes_min_gain_m2" => Number(self.aes_min_gain_m2),
-            "layout_update_m2" => Number(self.layout_update_m2),
-            "max_wall_gap_m" => Number(self.max_wall_gap_m),
-            "charge_compute" => Bool(self.charge_compute),
-            _ => return None,
-        })
-    }
-
     /// Checks every setting against its row of [`SETTINGS`] (type and range).
     pub fn validate(&self) -> Result<(), SettingsError> {
         for info in SETTINGS {
@@ -813,85 +771,12 @@ impl Settings {
         }
     }
 
-    /// Checks every field and builds the simulation config, with the baseline for a strategy.
+    /// Checks every setting and builds the simulation config, with the baseline for a strategy.
     pub fn to_explore_config(&self) -> Result<ExploreConfig, SettingsError> {
         self.validate()?;
-        fn check(
-            field: &'static str,
-            v: f64,
-            ok: bool,
-            expected: &'static str,
-        ) -> Result<f64, SettingsError> {
-            if v.is_finite() && ok {
-                Ok(v)
-            } else {
-                Err(SettingsError::OutOfRange {
-                    field,
-                    value: v.to_string(),
-                    expected: expected.to_string(),
-                })
-            }
-        }
-        let pos = |field, v: f64| check(field, v, v > 0.0, "a positive number");
-        let nonneg = |field, v: f64| check(field, v, v >= 0.0, "a number >= 0");
         let mut c = ExploreConfig::default();
-        c.sim.robot.radius_m = pos("robot_radius_m", self.robot_radius_m)?;
-        c.sim.robot.max_speed_mps = pos("max_speed_mps", self.max_speed_mps)?;
-        c.sim.robot.max_turn_rate_radps = pos("max_turn_rate_radps", self.max_turn_rate_radps)?;
-        c.sim.laser.fov_rad = check(
-            "laser_fov_deg",
-            self.laser_fov_deg,
-            self.laser_fov_deg > 0.0 && self.laser_fov_deg <= 360.0,
-            "degrees in (0, 360]",
-        )?
-        .to_radians();
-        c.sim.laser.max_range_m = pos("laser_range_m", self.laser_range_m)?;
-        if !(2..=10_000).contains(&self.laser_beams) {
-            return Err(SettingsError::OutOfRange {
-                field: "laser_beams",
-                value: self.laser_beams.to_string(),
-                expected: "an integer from 2 to 10000".to_string(),
-            });
-        }
-        c.sim.laser.beams = self.laser_beams;
-        c.sim.laser.rate_hz = pos("laser_rate_hz", self.laser_rate_hz)?;
-        c.sim.laser.range_noise_sd_m = nonneg("laser_noise_sd_m", self.laser_noise_sd_m)?;
-        c.sim.odometry.max_translation_error = nonneg(
-            "odometry_translation_error",
-            self.odometry_translation_error,
-        )?;
-        c.sim.odometry.max_rotation_error = nonneg(
-            "odometry_rotation_error_deg_per_rad",
-            self.odometry_rotation_error_deg_per_rad,
-        )?
-        .to_radians();
+        self.apply(&mut c);
         c.sim.step_s = 1.0 / c.sim.laser.rate_hz;
-        c.localization = self.localization.into();
-        c.map_resolution_m = check(
-            "map_resolution_m",
-            self.map_resolution_m,
-            self.map_resolution_m >= 0.01 && self.map_resolution_m <= 0.5,
-            "metres in [0.01, 0.5]",
-        )?;
-        c.map_update_distance_m = pos("map_update_distance_m", self.map_update_distance_m)?;
-        c.map_update_angle_rad = pos("map_update_angle_rad", self.map_update_angle_rad)?;
-        c.map_update_period_s = pos("map_update_period_s", self.map_update_period_s)?;
-        c.utility_distance = self.utility_distance.into();
-        c.min_frontier_m = nonneg("min_frontier_m", self.min_frontier_m)?;
-        c.frontier_clearance_m = nonneg("frontier_clearance_m", self.frontier_clearance_m)?;
-        c.candidate_from_reachable_part = self.candidate_from_reachable_part;
-        c.robust_frontiers = !self.paper_frontiers;
-        c.layout_use.through_openings = !self.paper_layout_gain;
-        c.redecide_period_s = pos("redecide_period_s", self.redecide_period_s)?;
-        c.redecide_min_growth_m2 = nonneg("redecide_min_growth_m2", self.redecide_min_growth_m2)?;
-        c.blacklist_radius_m = nonneg("blacklist_radius_m", self.blacklist_radius_m)?;
-        c.progress_timeout_s = pos("progress_timeout_s", self.progress_timeout_s)?;
-        c.time_limit_s = pos("time_limit_s", self.time_limit_s)?;
-        c.return_home = self.return_home;
-        nonneg("es_threshold_m2", self.es_threshold_m2)?;
-        nonneg("aes_min_gain_m2", self.aes_min_gain_m2)?;
-        c.layout_use.update_m2 = pos("layout_update_m2", self.layout_update_m2)?;
-        c.layout_use.max_wall_gap_m = nonneg("max_wall_gap_m", self.max_wall_gap_m)?;
         c.strategy = Strategy::baseline_with(&self.strategy_params());
         Ok(c)
     }
@@ -1300,6 +1185,41 @@ mod tests {
             sim_core::explore::strategy::strategies_markdown(),
             "README.md's strategies table is stale: replace it with `floorcast strategy list --markdown`"
         );
+    }
+
+    /// Every setting but `charge_compute` (the worker's) reaches the run: a value other than
+    /// the default changes the core's config of `layout-es` or of `layout-aes`.
+    #[test]
+    fn every_setting_reaches_the_run() {
+        let default = serde_json::to_value(Settings::default()).unwrap();
+        let configs =
+            |s: &Settings| ["layout-es", "layout-aes"].map(|n| s.to_explore_config_for(n).unwrap());
+        let before = configs(&Settings::default());
+        for info in SETTINGS {
+            let now = info.default_value();
+            let other = match (info.kind, &now) {
+                (SettingKind::Number { min, max }, SettingValue::Number(v)) => {
+                    serde_json::json!(if *v == max { min } else { max })
+                }
+                (SettingKind::Integer { min, max }, SettingValue::Number(v)) => {
+                    serde_json::json!(if *v == max as f64 { min } else { max })
+                }
+                (SettingKind::Bool, SettingValue::Bool(b)) => serde_json::json!(!b),
+                (SettingKind::Choice(words), SettingValue::Word(w)) => {
+                    serde_json::json!(words.iter().find(|x| *x != w).unwrap())
+                }
+                (kind, v) => panic!("{}: {kind:?} with the default {v}", info.name),
+            };
+            let mut map = default.as_object().unwrap().clone();
+            map.insert(info.name.to_string(), other);
+            let changed = settings_from_map(&map).unwrap();
+            assert_eq!(
+                configs(&changed) != before,
+                info.name != "charge_compute",
+                "{}",
+                info.name
+            );
+        }
     }
 
     #[test]
