@@ -1308,20 +1308,19 @@ pub fn run_message(
 
 /// The settings with every key, those a summary leaves out at their defaults too.
 fn every_setting(settings: &crate::Settings) -> Value {
+    use crate::settings::{SettingKind, SettingValue, SETTINGS};
     let mut v = json!(settings);
     if let Value::Object(map) = &mut v {
-        let full = [
-            ("utility_distance", json!(settings.utility_distance)),
-            ("frontier_clearance_m", json!(settings.frontier_clearance_m)),
-            (
-                "candidate_from_reachable_part",
-                json!(settings.candidate_from_reachable_part),
-            ),
-            ("paper_frontiers", json!(settings.paper_frontiers)),
-            ("paper_layout_gain", json!(settings.paper_layout_gain)),
-        ];
-        for (k, value) in full {
-            map.entry(k).or_insert(value);
+        // The settings a record leaves out at their defaults.
+        for info in SETTINGS {
+            let value = match (settings.value(info.name), info.kind) {
+                (Some(SettingValue::Number(x)), SettingKind::Integer { .. }) => json!(x as u64),
+                (Some(SettingValue::Number(x)), _) => json!(x),
+                (Some(SettingValue::Bool(b)), _) => json!(b),
+                (Some(SettingValue::Word(w)), _) => json!(w),
+                (None, _) => continue,
+            };
+            map.entry(info.name).or_insert(value);
         }
     }
     v

@@ -407,6 +407,19 @@ declare_settings! {
     aes_min_gain_m2: f64 = p.aes_min_gain_m2,
         number(0.0, 10000.0), "m2",
         "layout-aes: drop candidates whose gain is below this; stop when none is left.";
+    /// `utility-exp`: the weight of path length in `I * exp(-lambda * L)` (per m). Written only
+    /// when not the default, so that the records and job identities of runs with the default
+    /// are those of earlier versions.
+    #[serde(skip_serializing_if = "is_default_lambda")]
+    utility_exp_lambda_per_m: f64 = p.utility_exp_lambda_per_m,
+        number(0.0, 100.0), "1/m",
+        "utility-exp: the weight of path length L in I * exp(-lambda * L).";
+    /// `cost-utility`: the price of path length in `I - beta * L` (m2 per m). Written only when
+    /// not the default.
+    #[serde(skip_serializing_if = "is_default_beta")]
+    cost_utility_beta_m2_per_m: f64 = p.cost_utility_beta_m2_per_m,
+        number(0.0, 10000.0), "m2/m",
+        "cost-utility: the price of path length L in I - beta * L.";
     /// Layout strategies: rebuild the layout when the known area grew by this much (m2).
     layout_update_m2: f64 = c.layout_use.update_m2,
         number(0.1, 1000000.0), "m2",
@@ -430,6 +443,14 @@ fn is_path(d: &UtilityDistanceSetting) -> bool {
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
+}
+
+fn is_default_lambda(v: &f64) -> bool {
+    *v == StrategyParams::default().utility_exp_lambda_per_m
+}
+
+fn is_default_beta(v: &f64) -> bool {
+    *v == StrategyParams::default().cost_utility_beta_m2_per_m
 }
 
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -768,6 +789,8 @@ impl Settings {
             gain_floor_m2: self.gain_floor_m2,
             es_threshold_m2: self.es_threshold_m2,
             aes_min_gain_m2: self.aes_min_gain_m2,
+            utility_exp_lambda_per_m: self.utility_exp_lambda_per_m,
+            cost_utility_beta_m2_per_m: self.cost_utility_beta_m2_per_m,
         }
     }
 
@@ -999,6 +1022,8 @@ mod tests {
             candidate_from_reachable_part: true,
             paper_frontiers: true,
             paper_layout_gain: true,
+            utility_exp_lambda_per_m: 0.5,
+            cost_utility_beta_m2_per_m: 2.0,
             ..Settings::default()
         };
         let v = serde_json::to_value(&all_written).unwrap();
@@ -1188,12 +1213,16 @@ mod tests {
     }
 
     /// Every setting but `charge_compute` (the worker's) reaches the run: a value other than
-    /// the default changes the core's config of `layout-es` or of `layout-aes`.
+    /// the default changes the core's config of at least one built-in strategy.
     #[test]
     fn every_setting_reaches_the_run() {
         let default = serde_json::to_value(Settings::default()).unwrap();
-        let configs =
-            |s: &Settings| ["layout-es", "layout-aes"].map(|n| s.to_explore_config_for(n).unwrap());
+        let configs = |s: &Settings| -> Vec<ExploreConfig> {
+            crate::strategy_names()
+                .into_iter()
+                .map(|n| s.to_explore_config_for(n).unwrap())
+                .collect()
+        };
         let before = configs(&Settings::default());
         for info in SETTINGS {
             let now = info.default_value();

@@ -507,7 +507,7 @@ impl Explorer<'_> {
             self.policy_decisions += 1;
         }
         // (The policy is taken out while it looks at the view, which borrows the explorer.)
-        let placeholder = strategy::BuiltInPolicy::new(&Strategy::baseline());
+        let placeholder = strategy::BuiltInPolicy::new(&Strategy::baseline(), 0);
         let mut policy = std::mem::replace(&mut self.policy, PolicySlot::BuiltIn(placeholder));
         let view = self.decision_view(&views, &asked, needs);
         let (reply, charged_s) = policy.get().decide(&view);

@@ -671,7 +671,7 @@ fn new_explorer<'a>(
         layout_cost,
         policy,
     } = hooks;
-    let (policy, policy_needs) = policy_slot(policy, cfg);
+    let (policy, policy_needs) = policy_slot(policy, cfg, seed);
     let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
     let referee = new_referee(building, frame, start, cfg);
     let cap_cells =
@@ -752,10 +752,11 @@ fn new_explorer<'a>(
 fn policy_slot<'a>(
     policy: Option<&'a mut dyn Policy>,
     cfg: &ExploreConfig,
+    seed: u64,
 ) -> (PolicySlot<'a>, Needs) {
     let policy = match policy {
         Some(p) => PolicySlot::External(p),
-        None => PolicySlot::BuiltIn(strategy::BuiltInPolicy::new(&cfg.strategy)),
+        None => PolicySlot::BuiltIn(strategy::BuiltInPolicy::new(&cfg.strategy, seed)),
     };
     let policy_needs = match &policy {
         PolicySlot::External(p) => p.needs(),

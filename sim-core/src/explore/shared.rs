@@ -86,7 +86,7 @@ pub fn explore_shared<'a>(
         .iter()
         .enumerate()
         .map(|(k, cfg)| {
-            let policy = BuiltInPolicy::new(&cfg.strategy);
+            let policy = BuiltInPolicy::new(&cfg.strategy, seed);
             Member {
                 index: k + 1,
                 cfg,
@@ -220,7 +220,8 @@ impl<'a> Explorer<'a> {
             // (The previous copy dropped first, unless a member that parted holds it: two
             // copies of a large map at once are a lot.)
             shared.checkpoint = None;
-            let policy = BuiltInPolicy::new(&self.cfg.strategy);
+            // (Its policy is never asked: a member that parts goes on with its own.)
+            let policy = BuiltInPolicy::new(&self.cfg.strategy, 0);
             let copy = Rc::new(self.fork(self.cfg, policy));
             shared.checkpoint = Some((copy, (shared.clock)()));
             shared.checkpoint_decisions = self.policy_decisions;

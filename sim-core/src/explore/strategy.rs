@@ -73,12 +73,27 @@ pub enum EarlyStop {
     DropCandidatesBelow(f64),
 }
 
-/// How a built-in strategy chooses among the candidates its early stop keeps.
+/// How a built-in strategy chooses among the candidates its early stop keeps. `L` below is the
+/// planned path's length to the candidate's goal ([`CandidateView::path_m`]), `I` its gain as
+/// the gain model estimates it; ties go to the candidate listed first.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Choice {
     /// The paper's utility `alpha * (1 - D/D_max) + (1 - alpha) * I/I_max`
-    /// ([`crate::utility`]), each candidate's gain counted as at least `gain_floor_m2`.
+    /// ([`crate::utility`]; `D` as the setting `utility_distance` defines it), each candidate's
+    /// gain counted as at least `gain_floor_m2`.
     Utility { alpha: f64, gain_floor_m2: f64 },
+    /// The nearest candidate by path: Yamauchi, "A frontier-based approach for autonomous
+    /// exploration", CIRA 1997.
+    Nearest,
+    /// The largest `I * exp(-lambda_per_m * L)`: González-Baños and Latombe, "Navigation
+    /// strategies for exploring indoor environments", IJRR 21(10-11), 2002.
+    UtilityExp { lambda_per_m: f64 },
+    /// The largest `I - beta_m2_per_m * L`: Burgard, Moors, Stachniss and Schneider,
+    /// "Coordinated multi-robot exploration", IEEE T-RO 21(3), 2005, with one robot.
+    CostUtility { beta_m2_per_m: f64 },
+    /// A candidate drawn at random (uniformly, from the run's seed and the decision): the floor
+    /// every strategy must beat.
+    Random,
 }
 
 /// A strategy: how gains are estimated, when to stop early, how to choose.
@@ -100,6 +115,10 @@ pub struct StrategyParams {
     pub es_threshold_m2: f64,
     /// The aggressive ES's least gain of a candidate (m2).
     pub aes_min_gain_m2: f64,
+    /// `utility-exp`'s weight of path length (per m).
+    pub utility_exp_lambda_per_m: f64,
+    /// `cost-utility`'s price of path length (m2 per m).
+    pub cost_utility_beta_m2_per_m: f64,
 }
 
 impl Default for StrategyParams {
@@ -109,6 +128,8 @@ impl Default for StrategyParams {
             gain_floor_m2: 0.0,
             es_threshold_m2: 1.0,
             aes_min_gain_m2: 2.0,
+            utility_exp_lambda_per_m: 0.2,
+            cost_utility_beta_m2_per_m: 1.0,
         }
     }
 }
@@ -217,7 +238,48 @@ pub const BUILT_IN: &[BuiltIn] = &[
         stops: "as `layout-es`",
         make: |p| by_utility(TRUTH, es(p), p),
     },
+    BuiltIn {
+        name: "nearest",
+        gain: "not used: the nearest candidate by path (Yamauchi, CIRA 1997)",
+        stops: NO_FRONTIER,
+        make: |_| plain(Choice::Nearest),
+    },
+    BuiltIn {
+        name: "utility-exp",
+        gain: "as `baseline`; the largest `I(p) * exp(-lambda * L(p))`, `L` the path length, lambda `utility_exp_lambda_per_m` (0.2 per m) (González-Baños and Latombe, IJRR 2002)",
+        stops: NO_FRONTIER,
+        make: |p| {
+            plain(Choice::UtilityExp {
+                lambda_per_m: p.utility_exp_lambda_per_m,
+            })
+        },
+    },
+    BuiltIn {
+        name: "cost-utility",
+        gain: "as `baseline`; the largest `I(p) - beta * L(p)`, `L` the path length, beta `cost_utility_beta_m2_per_m` (1 m² per m) (Burgard, Moors, Stachniss and Schneider, IEEE T-RO 2005, one robot)",
+        stops: NO_FRONTIER,
+        make: |p| {
+            plain(Choice::CostUtility {
+                beta_m2_per_m: p.cost_utility_beta_m2_per_m,
+            })
+        },
+    },
+    BuiltIn {
+        name: "random-frontier",
+        gain: "not used: a reachable candidate drawn at random from the run's seed (the floor every strategy must beat)",
+        stops: NO_FRONTIER,
+        make: |_| plain(Choice::Random),
+    },
 ];
+
+/// A strategy of the baseline's gains choosing by `choice`, without an early stop.
+fn plain(choice: Choice) -> Strategy {
+    Strategy {
+        gain: GainModel::Baseline,
+        early_stop: EarlyStop::Never,
+        choice,
+    }
+}
 
 impl Strategy {
     /// The paper's baseline with the default settings.
@@ -301,15 +363,19 @@ pub fn early_stop(rule: EarlyStop, gains_m2: &[f64]) -> (Vec<bool>, bool) {
 pub struct BuiltInPolicy {
     pub early_stop: EarlyStop,
     pub choice: Choice,
+    /// The run's seed (for [`Choice::Random`]).
+    seed: u64,
     /// The candidates the rule kept at this decision's first attempt.
     kept: Vec<usize>,
 }
 
 impl BuiltInPolicy {
-    pub fn new(strategy: &Strategy) -> Self {
+    /// The rule of `strategy` in a run of `seed`.
+    pub fn new(strategy: &Strategy, seed: u64) -> Self {
         Self {
             early_stop: strategy.early_stop,
             choice: strategy.choice,
+            seed,
             kept: Vec::new(),
         }
     }
@@ -352,6 +418,17 @@ impl Policy for BuiltInPolicy {
                 alpha,
                 gain_floor_m2,
             } => by_utility_of(&shown, alpha, gain_floor_m2),
+            Choice::Nearest => best_of(&shown, |c| -c.path_m),
+            Choice::UtilityExp { lambda_per_m } => {
+                best_of(&shown, |c| c.gain_m2 * (-lambda_per_m * c.path_m).exp())
+            }
+            Choice::CostUtility { beta_m2_per_m } => {
+                best_of(&shown, |c| c.gain_m2 - beta_m2_per_m * c.path_m)
+            }
+            Choice::Random => {
+                let draw = random_draw(self.seed, view.decision, view.attempt);
+                (!shown.is_empty()).then(|| (draw % shown.len() as u64) as usize)
+            }
         };
         let reply = match chosen {
             Some(i) => Reply::Choose(shown[i].id),
@@ -359,6 +436,30 @@ impl Policy for BuiltInPolicy {
         };
         (reply, 0.0)
     }
+}
+
+/// The index in `shown` of the candidate of the largest finite `score` (the first of equals).
+fn best_of(shown: &[&CandidateView], score: impl Fn(&CandidateView) -> f64) -> Option<usize> {
+    let mut best: Option<(usize, f64)> = None;
+    for (i, c) in shown.iter().enumerate() {
+        let v = score(c);
+        if v.is_finite() && best.is_none_or(|(_, b)| v > b) {
+            best = Some((i, v));
+        }
+    }
+    best.map(|(i, _)| i)
+}
+
+/// A number drawn from the run's seed and the decision (SplitMix64 of their mix): the same at
+/// the same decision of the same run, whatever was asked before.
+fn random_draw(seed: u64, decision: usize, attempt: usize) -> u64 {
+    let mut z = seed
+        ^ (decision as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ (attempt as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
 }
 
 /// The index in `shown` of the candidate of best utility, if any is reachable.
@@ -385,34 +486,77 @@ mod tests {
             gain_floor_m2: 0.5,
             es_threshold_m2: 1.5,
             aes_min_gain_m2: 2.5,
+            utility_exp_lambda_per_m: 0.7,
+            cost_utility_beta_m2_per_m: 3.0,
         };
         let choice = Choice::Utility {
             alpha: 0.3,
             gain_floor_m2: 0.5,
         };
-        let cases: &[(&str, GainModel, EarlyStop)] = &[
-            ("baseline", GainModel::Baseline, EarlyStop::Never),
-            ("layout", PREDICTED, EarlyStop::Never),
-            ("layout-es", PREDICTED, EarlyStop::TotalGainBelow(1.5)),
-            ("layout-aes", PREDICTED, EarlyStop::DropCandidatesBelow(2.5)),
+        let never = EarlyStop::Never;
+        let cases: &[(&str, GainModel, EarlyStop, Choice)] = &[
+            ("baseline", GainModel::Baseline, never, choice),
+            ("layout", PREDICTED, never, choice),
+            (
+                "layout-es",
+                PREDICTED,
+                EarlyStop::TotalGainBelow(1.5),
+                choice,
+            ),
+            (
+                "layout-aes",
+                PREDICTED,
+                EarlyStop::DropCandidatesBelow(2.5),
+                choice,
+            ),
             (
                 "layout-switch",
                 GainModel::Switch {
                     agreement: 0.9,
                     min_area_m2: 5.0,
                 },
-                EarlyStop::Never,
+                never,
+                choice,
             ),
-            ("layout-gaps", GAPS, EarlyStop::Never),
-            ("layout-gaps-es", GAPS, EarlyStop::TotalGainBelow(1.5)),
-            ("layout-truth", TRUTH, EarlyStop::Never),
-            ("layout-truth-es", TRUTH, EarlyStop::TotalGainBelow(1.5)),
+            ("layout-gaps", GAPS, never, choice),
+            (
+                "layout-gaps-es",
+                GAPS,
+                EarlyStop::TotalGainBelow(1.5),
+                choice,
+            ),
+            ("layout-truth", TRUTH, never, choice),
+            (
+                "layout-truth-es",
+                TRUTH,
+                EarlyStop::TotalGainBelow(1.5),
+                choice,
+            ),
+            ("nearest", GainModel::Baseline, never, Choice::Nearest),
+            (
+                "utility-exp",
+                GainModel::Baseline,
+                never,
+                Choice::UtilityExp { lambda_per_m: 0.7 },
+            ),
+            (
+                "cost-utility",
+                GainModel::Baseline,
+                never,
+                Choice::CostUtility { beta_m2_per_m: 3.0 },
+            ),
+            (
+                "random-frontier",
+                GainModel::Baseline,
+                never,
+                Choice::Random,
+            ),
         ];
         assert_eq!(
             Strategy::names(),
             cases.iter().map(|c| c.0).collect::<Vec<_>>()
         );
-        for &(name, gain, stop) in cases {
+        for &(name, gain, stop, choice) in cases {
             let s = Strategy::by_name(name, &p).unwrap();
             assert_eq!(
                 s,
@@ -423,7 +567,7 @@ mod tests {
                 },
                 "{name}"
             );
-            assert_eq!(s.uses_layout(), name != "baseline", "{name}");
+            assert_eq!(s.uses_layout(), name.starts_with("layout"), "{name}");
             assert_eq!(s.layout_from_truth(), name.contains("truth"), "{name}");
         }
         assert!(Strategy::by_name("nope", &p).is_none());
@@ -442,6 +586,101 @@ mod tests {
         let table = strategies_markdown();
         for b in BUILT_IN {
             assert!(table.contains(&format!("| `{}` |", b.name)), "{}", b.name);
+        }
+    }
+
+    /// Two reachable candidates: `near` (2 m of path, 1 m2 of gain) and `far` (20 m, 30 m2).
+    fn two_candidates() -> [CandidateView; 2] {
+        let c = |id, path_m, gain_m2| CandidateView {
+            id,
+            cell: crate::grid::Cell::new(0, 0),
+            point: crate::geom::Vec2::zeros(),
+            goal: crate::geom::Vec2::zeros(),
+            frontier_cells: 10,
+            distance_m: path_m,
+            path_m,
+            straight_m: path_m,
+            gain_m2,
+            layout_gain_m2: None,
+            room: None,
+        };
+        [c(3, 2.0, 1.0), c(7, 20.0, 30.0)]
+    }
+
+    /// The choice of `strategy` (with the settings `p`) among `candidates`, at `decision`.
+    fn choice_of(
+        strategy: &str,
+        p: &StrategyParams,
+        seed: u64,
+        decision: usize,
+        candidates: &[CandidateView],
+    ) -> Reply {
+        let map = crate::grid::OccupancyGrid::filled(
+            crate::grid::GridFrame::new(crate::geom::Vec2::zeros(), 0.05, 4, 4),
+            crate::grid::Occupancy::Unknown,
+        );
+        let view = DecisionView {
+            decision,
+            attempt: 0,
+            time_s: 1.0,
+            pose: crate::geom::Pose::new(0.0, 0.0, 0.0),
+            candidates,
+            unreachable_goal: None,
+            layout: None,
+            map: &map,
+        };
+        let s = Strategy::by_name(strategy, p).unwrap();
+        BuiltInPolicy::new(&s, seed).decide(&view).0
+    }
+
+    /// What distinguishes each literature strategy: the nearest goes near whatever the gains;
+    /// the exponential utility and the cost utility go far for a large gain when path is cheap
+    /// (small lambda, small beta) and near when it is dear.
+    #[test]
+    fn the_literature_strategies_weigh_path_and_gain_as_their_papers_do() {
+        let two = two_candidates();
+        let (near, far) = (Reply::Choose(3), Reply::Choose(7));
+        let with = |lambda: f64, beta: f64| StrategyParams {
+            utility_exp_lambda_per_m: lambda,
+            cost_utility_beta_m2_per_m: beta,
+            ..StrategyParams::default()
+        };
+        // (strategy, lambda, beta, the choice): 30 e^(-20 l) against e^(-2 l) turns at
+        // l = ln(30) / 18 = 0.189 per m; 30 - 20 b against 1 - 2 b at b = 29 / 18 = 1.61.
+        let cases = [
+            ("nearest", 0.0, 0.0, &near),
+            ("utility-exp", 0.1, 1.0, &far),
+            ("utility-exp", 0.2, 1.0, &near),
+            ("cost-utility", 0.2, 1.5, &far),
+            ("cost-utility", 0.2, 1.7, &near),
+            ("baseline", 0.2, 1.0, &far),
+        ];
+        for (name, lambda, beta, expected) in cases {
+            let got = choice_of(name, &with(lambda, beta), 1, 0, &two);
+            assert_eq!(&got, expected, "{name} lambda {lambda} beta {beta}");
+        }
+    }
+
+    /// The random choice is the run's: the same seed and decision give the same candidate,
+    /// every candidate is drawn over the decisions, and other seeds draw otherwise.
+    #[test]
+    fn the_random_frontier_is_drawn_from_the_seed() {
+        let two = two_candidates();
+        let p = StrategyParams::default();
+        let draws = |seed| -> Vec<Reply> {
+            (0..64)
+                .map(|d| choice_of("random-frontier", &p, seed, d, &two))
+                .collect()
+        };
+        let a = draws(1);
+        assert_eq!(a, draws(1));
+        assert_ne!(a, draws(2));
+        for id in [3, 7] {
+            let n = a.iter().filter(|r| **r == Reply::Choose(id)).count();
+            assert!(
+                (16..=48).contains(&n),
+                "candidate {id} drawn {n} times of 64"
+            );
         }
     }
 
