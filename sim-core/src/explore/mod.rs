@@ -799,11 +799,11 @@ struct UnreachableMemo {
 }
 
 /// What a built-in strategy's rule needs: the paper's I(p) only when the strategy uses the
-/// layout.
+/// layout; the layout's rooms when its choice asks for them (`room-first`).
 fn built_in_needs(policy: &strategy::BuiltInPolicy, cfg: &ExploreConfig) -> Needs {
     Needs {
         layout_gain: policy.needs().layout_gain && cfg.strategy.uses_layout(),
-        layout: false,
+        layout: policy.needs().layout,
     }
 }
 

@@ -9,7 +9,7 @@
 //! Adding a strategy: a row of [`BUILT_IN`] (and, for a new way of choosing, a variant of
 //! [`Choice`] with its arm in [`BuiltInPolicy::decide`]), plus its test (ARCHITECTURE.md).
 
-use super::policy::{CandidateView, DecisionView, Needs, Policy, Reply};
+use super::policy::{CandidateView, DecisionView, Needs, Policy, Reply, RoomView};
 use crate::utility::{best_candidate, with_gain_floor, CandidateScore};
 
 /// Where a layout comes from.
@@ -91,6 +91,12 @@ pub enum Choice {
     /// The largest `I - beta_m2_per_m * L`: Burgard, Moors, Stachniss and Schneider,
     /// "Coordinated multi-robot exploration", IEEE T-RO 21(3), 2005, with one robot.
     CostUtility { beta_m2_per_m: f64 },
+    /// The nearest candidate by path in the robot's room, while one is left there; then the
+    /// nearest: Holz, Basilico, Amigoni and Behnke, "Evaluating the efficiency of
+    /// frontier-based exploration strategies", ISR/ROBOTIK 2010. Rooms are those of the layout
+    /// predicted from the map (never the building's true rooms); a candidate is in the room
+    /// that holds its cell, the robot in the room whose polygon holds its estimated position.
+    RoomFirst,
     /// A candidate drawn at random (uniformly, from the run's seed and the decision): the floor
     /// every strategy must beat.
     Random,
@@ -265,6 +271,12 @@ pub const BUILT_IN: &[BuiltIn] = &[
         },
     },
     BuiltIn {
+        name: "room-first",
+        gain: "not used: the nearest candidate by path in the robot's room while one is left there, then the nearest; rooms from the layout predicted from the map (Holz, Basilico, Amigoni and Behnke, ISR/ROBOTIK 2010)",
+        stops: NO_FRONTIER,
+        make: |_| plain(Choice::RoomFirst),
+    },
+    BuiltIn {
         name: "random-frontier",
         gain: "not used: a reachable candidate drawn at random from the run's seed (the floor every strategy must beat)",
         stops: NO_FRONTIER,
@@ -385,7 +397,7 @@ impl Policy for BuiltInPolicy {
     fn needs(&self) -> Needs {
         Needs {
             layout_gain: self.early_stop != EarlyStop::Never,
-            layout: false,
+            layout: self.choice == Choice::RoomFirst,
         }
     }
 
@@ -419,6 +431,17 @@ impl Policy for BuiltInPolicy {
                 gain_floor_m2,
             } => by_utility_of(&shown, alpha, gain_floor_m2),
             Choice::Nearest => best_of(&shown, |c| -c.path_m),
+            Choice::RoomFirst => {
+                let here = view
+                    .layout
+                    .and_then(|l| room_holding(l.rooms, view.pose.position()));
+                let in_here = |c: &CandidateView| here.is_some() && c.room == here;
+                if shown.iter().any(|c| in_here(c)) {
+                    best_of(&shown, |c| if in_here(c) { -c.path_m } else { f64::NAN })
+                } else {
+                    best_of(&shown, |c| -c.path_m)
+                }
+            }
             Choice::UtilityExp { lambda_per_m } => {
                 best_of(&shown, |c| c.gain_m2 * (-lambda_per_m * c.path_m).exp())
             }
@@ -448,6 +471,16 @@ fn best_of(shown: &[&CandidateView], score: impl Fn(&CandidateView) -> f64) -> O
         }
     }
     best.map(|(i, _)| i)
+}
+
+/// The index of the first room whose polygon holds `p`.
+fn room_holding(rooms: &[RoomView], p: crate::geom::Vec2) -> Option<usize> {
+    rooms.iter().position(|r| {
+        crate::geom::Polygon {
+            vertices: r.polygon.clone(),
+        }
+        .contains(p)
+    })
 }
 
 /// A number drawn from the run's seed and the decision (SplitMix64 of their mix): the same at
@@ -545,6 +578,7 @@ mod tests {
                 never,
                 Choice::CostUtility { beta_m2_per_m: 3.0 },
             ),
+            ("room-first", GainModel::Baseline, never, Choice::RoomFirst),
             (
                 "random-frontier",
                 GainModel::Baseline,
@@ -658,6 +692,62 @@ mod tests {
         for (name, lambda, beta, expected) in cases {
             let got = choice_of(name, &with(lambda, beta), 1, 0, &two);
             assert_eq!(&got, expected, "{name} lambda {lambda} beta {beta}");
+        }
+    }
+
+    /// `room-first` finishes the robot's room: a far candidate there goes before a near one
+    /// elsewhere; with none left in its room (or outside every room) it takes the nearest. It
+    /// asks for the layout; the others of its kind do not.
+    #[test]
+    fn room_first_finishes_the_robots_room() {
+        use crate::geom::Vec2;
+        let room = |x0: f64, x1: f64| RoomView {
+            polygon: vec![
+                Vec2::new(x0, 0.0),
+                Vec2::new(x1, 0.0),
+                Vec2::new(x1, 10.0),
+                Vec2::new(x0, 10.0),
+            ],
+            state: super::super::policy::RoomState::Partial,
+            predicted: false,
+            area_m2: 100.0,
+            observed_area_m2: 50.0,
+            unknown_area_m2: 50.0,
+        };
+        let rooms = [room(0.0, 10.0), room(10.0, 20.0)];
+        let [mut near, mut far] = two_candidates();
+        let map = crate::grid::OccupancyGrid::filled(
+            crate::grid::GridFrame::new(crate::geom::Vec2::zeros(), 0.05, 4, 4),
+            crate::grid::Occupancy::Unknown,
+        );
+        let s = Strategy::by_name("room-first", &StrategyParams::default()).unwrap();
+        assert!(BuiltInPolicy::new(&s, 1).needs().layout);
+        assert!(!BuiltInPolicy::new(&Strategy::baseline(), 1).needs().layout);
+        // (robot's x, near's room, far's room, the choice)
+        let cases = [
+            (5.0, Some(1), Some(0), 7),
+            (15.0, Some(1), Some(0), 3),
+            (5.0, Some(1), None, 3),
+            (25.0, Some(1), Some(0), 3),
+        ];
+        for (x, near_room, far_room, expected) in cases {
+            (near.room, far.room) = (near_room, far_room);
+            let candidates = [near, far];
+            let view = DecisionView {
+                decision: 0,
+                attempt: 0,
+                time_s: 1.0,
+                pose: crate::geom::Pose::new(x, 5.0, 0.0),
+                candidates: &candidates,
+                unreachable_goal: None,
+                layout: Some(super::super::policy::LayoutView {
+                    number: 1,
+                    rooms: &rooms,
+                }),
+                map: &map,
+            };
+            let got = BuiltInPolicy::new(&s, 1).decide(&view).0;
+            assert_eq!(got, Reply::Choose(expected), "robot at x = {x}");
         }
     }
 
