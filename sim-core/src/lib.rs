@@ -19,6 +19,7 @@ pub mod mapping;
 pub mod plan;
 pub mod scan;
 pub mod sim;
+pub mod tsp;
 pub mod utility;
 
 pub use building::{Building, Door, Geometry, Room};

@@ -1029,6 +1029,7 @@ impl Policy for ExternalStrategy {
         Needs {
             layout_gain: self.hello.needs_layout_gain,
             layout: self.hello.needs_layout,
+            paths_between: false,
         }
     }
 
@@ -1138,6 +1139,7 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
             rooms: &rooms,
         }),
         map: &map,
+        between_m: None,
     };
     let mut ask = |s: &mut ExternalStrategy, what, v: &DecisionView<'_>| {
         let (r, _) = s.decide(v);

@@ -509,7 +509,8 @@ impl Explorer<'_> {
         // (The policy is taken out while it looks at the view, which borrows the explorer.)
         let placeholder = strategy::BuiltInPolicy::new(&Strategy::baseline(), 0);
         let mut policy = std::mem::replace(&mut self.policy, PolicySlot::BuiltIn(placeholder));
-        let view = self.decision_view(&views, &asked, needs);
+        let between = needs.paths_between.then(|| self.paths_between(&views));
+        let view = self.decision_view(&views, &asked, needs, between.as_deref());
         let (reply, charged_s) = policy.get().decide(&view);
         self.policy = policy;
         if charged_s.is_finite() && charged_s > 0.0 {
@@ -601,6 +602,7 @@ impl Explorer<'_> {
         views: &'v [CandidateView],
         asked: &Asked,
         needs: Needs,
+        between_m: Option<&'v [f64]>,
     ) -> DecisionView<'v> {
         DecisionView {
             decision: self.policy_decisions - 1,
@@ -618,6 +620,7 @@ impl Explorer<'_> {
                     rooms: &l.rooms,
                 }),
             map: &self.map.occupancy,
+            between_m,
         }
     }
 

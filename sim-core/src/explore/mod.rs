@@ -804,6 +804,7 @@ fn built_in_needs(policy: &strategy::BuiltInPolicy, cfg: &ExploreConfig) -> Need
     Needs {
         layout_gain: policy.needs().layout_gain && cfg.strategy.uses_layout(),
         layout: policy.needs().layout,
+        paths_between: policy.needs().paths_between,
     }
 }
 

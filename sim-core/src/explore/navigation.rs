@@ -229,6 +229,40 @@ impl Explorer<'_> {
         }
     }
 
+    /// The planned path lengths (m) on the distance grid between the goals of `views`,
+    /// row-major (`n * n`; 0 on the diagonal, infinite where no path leads): one search from each
+    /// goal to the goals after it, its lengths used both ways. Call after [`Self::plan`] at the
+    /// same decision (the grids are then up to date).
+    pub(super) fn paths_between(&self, views: &[CandidateView]) -> Vec<f64> {
+        let (far, frame) = (&self.far, self.map.frame);
+        let on_far: Vec<Option<Cell>> = views
+            .iter()
+            .map(|v| far.passable_near(frame.cell_from_world(v.goal), far_search_cells()))
+            .collect();
+        let n = views.len();
+        let mut out = vec![f64::INFINITY; n * n];
+        let window = self.far_window();
+        for i in 0..n {
+            out[i * n + i] = 0.0;
+            let Some(from) = on_far[i] else {
+                continue;
+            };
+            let later: Vec<Cell> = on_far[i + 1..].iter().flatten().copied().collect();
+            if later.is_empty() {
+                continue;
+            }
+            let field =
+                dijkstra_padded_within(far.frame, from, far.padded(), MAX_EXTRA, &later, window);
+            for j in i + 1..n {
+                if let Some(d) = on_far[j].and_then(|c| field.distance_m(c)) {
+                    out[i * n + j] = d;
+                    out[j * n + i] = d;
+                }
+            }
+        }
+        out
+    }
+
     /// The distance grid's cells that can be passable: those under the box of the map's cells
     /// observed so far (a passable cell covers a traversable map cell, which is free, or one
     /// travelled and free). The whole grid before the first scan.

@@ -23,6 +23,9 @@ pub struct Needs {
     /// candidate's room ([`CandidateView::room`]); the layout is rebuilt as for the layout
     /// strategies.
     pub layout: bool,
+    /// The planned path lengths between the candidates' goals
+    /// ([`DecisionView::between_m`]): one search of the distance grid per candidate.
+    pub paths_between: bool,
 }
 
 /// One reachable frontier candidate.
@@ -116,6 +119,9 @@ pub struct DecisionView<'a> {
     pub layout: Option<LayoutView<'a>>,
     /// The map as the robot has built it.
     pub map: &'a OccupancyGrid,
+    /// When the policy needs them: the planned path lengths (m) between the candidates' goals,
+    /// row-major in the order of `candidates` (`n * n` values; infinite where no path leads).
+    pub between_m: Option<&'a [f64]>,
 }
 
 /// How many [`Reply::Goal`] points without a drivable path one decision takes: the last of them

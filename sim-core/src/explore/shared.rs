@@ -250,7 +250,8 @@ impl<'a> Explorer<'a> {
         for m in shared.members.iter_mut().filter(|m| m.parted.is_none()) {
             let views =
                 self.candidate_views(frontiers, goals, plan, scores, m.needs, asked.use_layout);
-            let view = self.decision_view(&views, asked, m.needs);
+            let between = m.needs.paths_between.then(|| self.paths_between(&views));
+            let view = self.decision_view(&views, asked, m.needs, between.as_deref());
             let (theirs, _) = m.policy.decide(&view);
             if theirs != *reply {
                 let (from, at_s) = shared

@@ -97,6 +97,11 @@ pub enum Choice {
     /// predicted from the map (never the building's true rooms); a candidate is in the room
     /// that holds its cell, the robot in the room whose polygon holds its estimated position.
     RoomFirst,
+    /// The first candidate of a short open travelling-salesman path from the robot through every
+    /// candidate ([`crate::tsp::open_path`], by the planned path lengths between their goals),
+    /// instead of the greedy nearest: Kulich, Faigl and Přeučil, "On distance utility in the
+    /// exploration task", ICRA 2011.
+    FrontierTsp,
     /// A candidate drawn at random (uniformly, from the run's seed and the decision): the floor
     /// every strategy must beat.
     Random,
@@ -271,6 +276,12 @@ pub const BUILT_IN: &[BuiltIn] = &[
         },
     },
     BuiltIn {
+        name: "frontier-tsp",
+        gain: "not used: the first goal of a short travelling-salesman path from the robot through every candidate, by planned path lengths (nearest neighbour, 2-opt, Or-opt) (Kulich, Faigl and Přeučil, ICRA 2011)",
+        stops: NO_FRONTIER,
+        make: |_| plain(Choice::FrontierTsp),
+    },
+    BuiltIn {
         name: "room-first",
         gain: "not used: the nearest candidate by path in the robot's room while one is left there, then the nearest; rooms from the layout predicted from the map (Holz, Basilico, Amigoni and Behnke, ISR/ROBOTIK 2010)",
         stops: NO_FRONTIER,
@@ -398,6 +409,7 @@ impl Policy for BuiltInPolicy {
         Needs {
             layout_gain: self.early_stop != EarlyStop::Never,
             layout: self.choice == Choice::RoomFirst,
+            paths_between: self.choice == Choice::FrontierTsp,
         }
     }
 
@@ -431,6 +443,10 @@ impl Policy for BuiltInPolicy {
                 gain_floor_m2,
             } => by_utility_of(&shown, alpha, gain_floor_m2),
             Choice::Nearest => best_of(&shown, |c| -c.path_m),
+            Choice::FrontierTsp => match view.between_m {
+                Some(between) => first_of_tour(view.candidates, &self.kept, between),
+                None => best_of(&shown, |c| -c.path_m),
+            },
             Choice::RoomFirst => {
                 let here = view
                     .layout
@@ -472,6 +488,27 @@ fn best_of(shown: &[&CandidateView], score: impl Fn(&CandidateView) -> f64) -> O
     }
     best.map(|(i, _)| i)
 }
+
+/// The index among the `kept` candidates (in the order of `all`) of the first goal of a short
+/// open tour from the robot through them all; `between` holds the path lengths between all
+/// of `all` (row-major).
+fn first_of_tour(all: &[CandidateView], kept: &[usize], between: &[f64]) -> Option<usize> {
+    let n = all.len();
+    let idx: Vec<usize> = (0..n).filter(|&k| kept.contains(&all[k].id)).collect();
+    let from: Vec<f64> = idx.iter().map(|&k| all[k].path_m).collect();
+    let mut sub = Vec::with_capacity(idx.len() * idx.len());
+    for &a in &idx {
+        for &b in &idx {
+            sub.push(between.get(a * n + b).copied().unwrap_or(f64::INFINITY));
+        }
+    }
+    crate::tsp::open_path(&from, &sub, TOUR_PASSES)
+        .first()
+        .copied()
+}
+
+/// Rounds of improving moves of `frontier-tsp`'s tour at most.
+const TOUR_PASSES: usize = 50;
 
 /// The index of the first room whose polygon holds `p`.
 fn room_holding(rooms: &[RoomView], p: crate::geom::Vec2) -> Option<usize> {
@@ -578,6 +615,12 @@ mod tests {
                 never,
                 Choice::CostUtility { beta_m2_per_m: 3.0 },
             ),
+            (
+                "frontier-tsp",
+                GainModel::Baseline,
+                never,
+                Choice::FrontierTsp,
+            ),
             ("room-first", GainModel::Baseline, never, Choice::RoomFirst),
             (
                 "random-frontier",
@@ -662,6 +705,7 @@ mod tests {
             unreachable_goal: None,
             layout: None,
             map: &map,
+            between_m: None,
         };
         let s = Strategy::by_name(strategy, p).unwrap();
         BuiltInPolicy::new(&s, seed).decide(&view).0
@@ -692,6 +736,55 @@ mod tests {
         for (name, lambda, beta, expected) in cases {
             let got = choice_of(name, &with(lambda, beta), 1, 0, &two);
             assert_eq!(&got, expected, "{name} lambda {lambda} beta {beta}");
+        }
+    }
+
+    /// `frontier-tsp` goes where a short tour through every candidate starts, not to the
+    /// nearest: candidates on a line at 1, -1.2, 3, -2 and 6 m from the robot; the nearest
+    /// (1 m) leaves -1.2 and -2 to come back for (12 m in all), the tour takes them first (10 m,
+    /// either of them first). Without the lengths between the candidates it takes the nearest.
+    #[test]
+    fn frontier_tsp_starts_the_shortest_tour() {
+        let xs = [1.0, -1.2, 3.0, -2.0, 6.0_f64];
+        let candidates: Vec<CandidateView> = xs
+            .iter()
+            .enumerate()
+            .map(|(i, x)| CandidateView {
+                id: 10 + i,
+                distance_m: x.abs(),
+                path_m: x.abs(),
+                straight_m: x.abs(),
+                ..two_candidates()[0]
+            })
+            .collect();
+        let between: Vec<f64> = xs
+            .iter()
+            .flat_map(|a| xs.iter().map(move |b| (a - b).abs()))
+            .collect();
+        let map = crate::grid::OccupancyGrid::filled(
+            crate::grid::GridFrame::new(crate::geom::Vec2::zeros(), 0.05, 4, 4),
+            crate::grid::Occupancy::Unknown,
+        );
+        let s = Strategy::by_name("frontier-tsp", &StrategyParams::default()).unwrap();
+        assert!(BuiltInPolicy::new(&s, 1).needs().paths_between);
+        for (given, expected) in [(Some(&between[..]), [11, 13]), (None, [10, 10])] {
+            let view = DecisionView {
+                decision: 0,
+                attempt: 0,
+                time_s: 1.0,
+                pose: crate::geom::Pose::new(0.0, 0.0, 0.0),
+                candidates: &candidates,
+                unreachable_goal: None,
+                layout: None,
+                map: &map,
+                between_m: given,
+            };
+            let got = BuiltInPolicy::new(&s, 1).decide(&view).0;
+            let chosen = match got {
+                Reply::Choose(id) => id,
+                other => panic!("{other:?}"),
+            };
+            assert!(expected.contains(&chosen), "{chosen} {:?}", given.is_some());
         }
     }
 
@@ -745,6 +838,7 @@ mod tests {
                     rooms: &rooms,
                 }),
                 map: &map,
+                between_m: None,
             };
             let got = BuiltInPolicy::new(&s, 1).decide(&view).0;
             assert_eq!(got, Reply::Choose(expected), "robot at x = {x}");
