@@ -550,6 +550,7 @@ mod tests {
 
     /// Each name makes the value it stands for, with the settings' thresholds.
     #[test]
+    #[allow(clippy::too_many_lines)] // a table of cases
     fn names_make_their_strategies() {
         let p = StrategyParams {
             alpha: 0.3,
