@@ -17,8 +17,8 @@ use floorcast_worker::RunSummary;
 
 use crate::metric::{time_to_fraction, Metric};
 use crate::outcome::{self, coverage_text, end_class, end_classes, label_order, Pair, PairCounts};
-// A gain in per cent of the reference's time from a mean log ratio `m = ln t_ref - ln t`.
 use crate::progress::Sample;
+// A gain in per cent of the reference's time from a mean log ratio `m = ln t_ref - ln t`.
 use crate::sprt::gain_pct_of_effect as gain_pct;
 use crate::store::StoredResult;
 
