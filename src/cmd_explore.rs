@@ -353,10 +353,15 @@ fn parse_start(s: &str) -> Result<StartArg, String> {
 
 /// `progress.csv`: as the results store keeps a run's curve.
 fn progress_csv(r: &RunResult) -> String {
-    let samples: Vec<[f64; 3]> = r
+    use floorcast_coordinator::progress::Sample;
+    let samples: Vec<Sample> = r
         .progress
         .iter()
-        .map(|p| [p.time_s, p.explored_area_m2, p.explored_fraction])
+        .map(|p| Sample {
+            time_s: p.time_s,
+            explored_area_m2: p.explored_area_m2,
+            explored_fraction: p.explored_fraction,
+        })
         .collect();
     floorcast_coordinator::progress::encode(&samples)
 }

@@ -268,8 +268,7 @@ fn a_grid_runs_a_suite_and_its_records_carry_the_suite() {
         .all()
         .unwrap();
     for r in &stored {
-        let s =
-            floorcast_worker::RunSummary::from_json(r.summary_json.as_deref().unwrap()).unwrap();
+        let s = r.summary.as_ref().unwrap();
         assert_eq!(s.version, 2);
         assert_eq!(s.suite.as_deref(), Some("one"));
         assert_eq!(s.suite_hash.as_deref(), Some(hash.as_str()));

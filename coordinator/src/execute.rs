@@ -6,6 +6,7 @@ use floorcast_worker::wire::{JobOutcome, JobReport, WireJob, WireProgram, WireSt
 use floorcast_worker::Job;
 
 use crate::grid::{Plan, PlannedJob};
+use crate::progress::Sample;
 use crate::store::StoredResult;
 
 /// A planned job as it is handed to a remote worker: [`identity`] with its program's files.
@@ -56,11 +57,11 @@ pub fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult
         strategy: job.strategy.clone(),
         label: job.label.clone(),
         seed: job.seed,
-        settings_json: serde_json::to_string(&job.settings).unwrap_or_default(),
+        settings: job.settings.clone(),
         status: crate::store::JobStatus::Ok,
         error: None,
-        summary_json: None,
-        progress_csv: None,
+        summary: None,
+        progress: None,
         worker: worker.to_string(),
         wall_time_s: 0.0,
         floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
@@ -79,8 +80,9 @@ pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> S
             let mut summary = summary.clone();
             summary.suite = suite.map(|s| s.name.clone());
             summary.suite_hash = suite.map(|s| s.hash.clone());
-            row.summary_json = serde_json::to_string(&summary).ok();
-            row.progress_csv = Some(crate::progress::encode(progress));
+            row.summary = Some(*summary);
+            let samples: Vec<Sample> = progress.iter().copied().map(Sample::from).collect();
+            row.progress = Some(crate::progress::stored(&samples));
         }
         JobOutcome::Failed { error } => {
             row.status = crate::store::JobStatus::Failed;

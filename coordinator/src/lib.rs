@@ -21,6 +21,7 @@
 //!   runs.
 //! - [`verify`]: results of remote workers checked by running their jobs again here.
 //! - [`progress`]: a run's progress curve as stored (the one codec of `progress.csv`).
+//! - [`metric`]: the metrics `report` compares besides the exploration time (one enum).
 //! - [`outcome`]: what a run achieved at a coverage level, and the pairs of two labels' runs
 //!   (a run that did not achieve the outcome is a loss against one that did).
 //! - [`stats`]: Wilcoxon, bootstrap, Holm, effect size of paired differences, the anytime-valid
@@ -34,6 +35,7 @@ pub mod aggregate;
 pub mod execute;
 pub mod grid;
 pub mod inbox;
+pub mod metric;
 pub mod names;
 pub mod net;
 pub mod outcome;

@@ -34,7 +34,7 @@ use crate::store::StoredResult;
 /// area explored at its end.
 pub const DEFAULT_COVERAGE: f64 = 0.99;
 
-/// The time limit assumed for a run whose settings do not say (floorcast's default).
+/// The time limit assumed for a run whose settings hold none usable (floorcast's default).
 const DEFAULT_TIME_LIMIT_S: f64 = 14_400.0;
 
 /// Checks a coverage level (a grid's `coverage`, `report --coverage`): a fraction in (0, 1].
@@ -98,14 +98,6 @@ pub struct RunOutcome {
     pub horizon_s: f64,
 }
 
-/// The time limit in a stored job's settings JSON.
-fn time_limit_of(settings_json: &str) -> Option<f64> {
-    let v: serde_json::Value = serde_json::from_str(settings_json).ok()?;
-    v.get("time_limit_s")?
-        .as_f64()
-        .filter(|t| t.is_finite() && *t > 0.0)
-}
-
 /// Whether a run with summary `s` achieved the outcome: at least `coverage` explored, with an
 /// exploration time.
 pub fn achieves(s: &RunSummary, coverage: f64) -> bool {
@@ -115,14 +107,12 @@ pub fn achieves(s: &RunSummary, coverage: f64) -> bool {
 
 /// The outcome of `r` at `coverage`, its building named by `building`.
 pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome {
-    let summary = (r.status.is_ok())
-        .then(|| RunSummary::from_json(r.summary_json.as_deref()?).ok())
-        .flatten();
+    let summary = r.summary.as_ref().filter(|_| r.status.is_ok());
+    let usable = |t: &f64| t.is_finite() && *t > 0.0;
     let limit = summary
-        .as_ref()
         .map(|s| s.settings.time_limit_s)
-        .filter(|t| t.is_finite() && *t > 0.0)
-        .or_else(|| time_limit_of(&r.settings_json))
+        .filter(usable)
+        .or(Some(r.settings.time_limit_s).filter(usable))
         .unwrap_or(DEFAULT_TIME_LIMIT_S);
     let mut out = RunOutcome {
         building: building.to_string(),
@@ -140,11 +130,11 @@ pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome
         if t.is_finite() && t > 0.0 {
             out.horizon_s = limit.max(t);
         }
-        if achieves(&s, coverage) {
+        if achieves(s, coverage) {
             out.achieved_s = Some(t);
             out.not_achieved = None;
         } else {
-            out.not_achieved = Some(end_class(&s).to_string());
+            out.not_achieved = Some(end_class(s).to_string());
         }
     }
     out

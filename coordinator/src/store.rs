@@ -8,6 +8,9 @@ use std::path::{Path, PathBuf};
 use rusqlite::{params, Connection, OptionalExtension};
 
 pub use floorcast_worker::wire::JobStatus;
+use floorcast_worker::{RunSummary, Settings};
+
+use crate::progress::Sample;
 
 /// Version of the database layout.
 pub const STORE_VERSION: u32 = 1;
@@ -67,7 +70,10 @@ pub enum StoreError {
     },
 }
 
-/// One stored job: its identity (from the grid's plan), outcome and provenance.
+/// One stored job: its identity (from the grid's plan), outcome and provenance. Its contents
+/// are typed: the store decodes a row's text once, when it reads it ([`Store::all`],
+/// [`decode_row`]), and encodes them when it writes it (columns `settings_json`,
+/// `summary_json` and `progress_csv`); no other module reads that text.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StoredResult {
     pub job_id: String,
@@ -77,11 +83,15 @@ pub struct StoredResult {
     pub strategy: String,
     pub label: String,
     pub seed: u64,
-    pub settings_json: String,
+    /// The settings the job ran with: each setting a row written by an earlier version does
+    /// not hold is at its default (the value that version ran with).
+    pub settings: Settings,
     pub status: JobStatus,
     pub error: Option<String>,
-    pub summary_json: Option<String>,
-    pub progress_csv: Option<String>,
+    /// The run's record (a successful job's; checked against the row's seed and building).
+    pub summary: Option<RunSummary>,
+    /// The run's progress curve as stored ([`crate::progress`]: rounded as the store keeps it).
+    pub progress: Option<Vec<Sample>>,
     pub worker: String,
     pub wall_time_s: f64,
     pub floorcast_version: String,
@@ -627,6 +637,12 @@ impl Store {
         r: &StoredResult,
         now: f64,
     ) -> Result<usize, StoreError> {
+        let settings_json = serde_json::to_string(&r.settings).unwrap_or_default();
+        let summary_json = r
+            .summary
+            .as_ref()
+            .and_then(|s| serde_json::to_string(s).ok());
+        let progress_csv = r.progress.as_deref().map(crate::progress::encode);
         self.sql(conn.execute(
             "INSERT OR IGNORE INTO results (job_id, grid, building, building_hash, strategy, label, seed,
                 settings_json, status, error, summary_json, progress_csv, worker, wall_time_s,
@@ -634,7 +650,7 @@ impl Store {
              VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)",
             params![
                 r.job_id, r.grid, r.building, r.building_hash, r.strategy, r.label, r.seed as i64,
-                r.settings_json, r.status.as_str(), r.error, r.summary_json, r.progress_csv, r.worker,
+                settings_json, r.status.as_str(), r.error, summary_json, progress_csv, r.worker,
                 r.wall_time_s, r.floorcast_version, now
             ],
         ))
@@ -677,9 +693,9 @@ impl Store {
         Ok(out)
     }
 
-    /// Every stored result, ordered by building, label, seed, each checked ([`check_row`]): a
-    /// row changed outside floorcast is an error naming its job and field, never a silent
-    /// failure.
+    /// Every stored result, ordered by building, label, seed, each checked and its contents
+    /// decoded ([`decode_row`]): a row changed outside floorcast is an error naming its job and
+    /// field, never a silent failure.
     pub fn all(&self) -> Result<Vec<StoredResult>, StoreError> {
         let mut st = self.sql(self.conn.prepare(
             "SELECT job_id, grid, building, building_hash, strategy, label, seed, settings_json, status,
@@ -701,7 +717,7 @@ impl Store {
                     floorcast_worker::text::excerpt(job),
                 ),
             };
-            let (seed, mut row) = match self.sql(r)? {
+            let (seed, raw) = match self.sql(r)? {
                 Ok(read) => read,
                 // An unknown status says what it is.
                 Err((job, rusqlite::Error::FromSqlConversionFailure(8, _, e))) => {
@@ -717,15 +733,14 @@ impl Store {
             };
             let what = format!(
                 " ({}, {}, seed {seed})",
-                floorcast_worker::text::excerpt(&row.building),
-                floorcast_worker::text::excerpt(&row.label),
+                floorcast_worker::text::excerpt(&raw.row.building),
+                floorcast_worker::text::excerpt(&raw.row.label),
             );
-            let job = row.job_id.clone();
+            let job = raw.row.job_id.clone();
             let tampered = |problem: String| tampered(&job, &what, problem);
-            row.seed = u64::try_from(seed)
+            let seed = u64::try_from(seed)
                 .map_err(|_| tampered(format!("field seed is {seed}, expected 0 or more")))?;
-            check_row(&row).map_err(tampered)?;
-            out.push(row);
+            out.push(decode_row(raw, seed).map_err(tampered)?);
         }
         Ok(out)
     }
@@ -880,88 +895,132 @@ impl Store {
     }
 }
 
+/// A row of the results table as SQLite holds it: its text columns not yet decoded (`row` holds
+/// the rest, its contents empty).
+#[derive(Debug)]
+pub struct RawRow {
+    pub row: StoredResult,
+    pub settings_json: String,
+    pub summary_json: Option<String>,
+    pub progress_csv: Option<String>,
+}
+
 /// One row of the results table as read, its seed apart (checked by the caller).
-fn read_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<(i64, StoredResult)> {
+fn read_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<(i64, RawRow)> {
+    let row = StoredResult {
+        job_id: r.get(0)?,
+        grid: r.get(1)?,
+        building: r.get(2)?,
+        building_hash: r.get(3)?,
+        strategy: r.get(4)?,
+        label: r.get(5)?,
+        seed: 0,
+        settings: Settings::default(),
+        status: {
+            let word: String = r.get(8)?;
+            JobStatus::parse(&word).ok_or_else(|| {
+                rusqlite::Error::FromSqlConversionFailure(
+                    8,
+                    rusqlite::types::Type::Text,
+                    format!(
+                        "field status is '{}', expected ok or failed",
+                        floorcast_worker::text::excerpt(&word)
+                    )
+                    .into(),
+                )
+            })?
+        },
+        error: r.get(9)?,
+        summary: None,
+        progress: None,
+        worker: r.get(12)?,
+        wall_time_s: r.get(13)?,
+        floorcast_version: r.get(14)?,
+    };
     Ok((
         r.get::<_, i64>(6)?,
-        StoredResult {
-            job_id: r.get(0)?,
-            grid: r.get(1)?,
-            building: r.get(2)?,
-            building_hash: r.get(3)?,
-            strategy: r.get(4)?,
-            label: r.get(5)?,
-            seed: 0,
+        RawRow {
+            row,
             settings_json: r.get(7)?,
-            status: {
-                let word: String = r.get(8)?;
-                JobStatus::parse(&word).ok_or_else(|| {
-                    rusqlite::Error::FromSqlConversionFailure(
-                        8,
-                        rusqlite::types::Type::Text,
-                        format!(
-                            "field status is '{}', expected ok or failed",
-                            floorcast_worker::text::excerpt(&word)
-                        )
-                        .into(),
-                    )
-                })?
-            },
-            error: r.get(9)?,
             summary_json: r.get(10)?,
             progress_csv: r.get(11)?,
-            worker: r.get(12)?,
-            wall_time_s: r.get(13)?,
-            floorcast_version: r.get(14)?,
         },
     ))
 }
 
-/// What a stored row must hold: a status of `ok` with a valid run summary of the row's seed
-/// and building ([`RunSummary::check`](floorcast_worker::RunSummary::check)), or `failed` with
-/// its error; settings that are a JSON object; a finite wall time. The error names the field.
-pub fn check_row(r: &StoredResult) -> Result<(), String> {
-    if !(r.wall_time_s.is_finite() && r.wall_time_s >= 0.0) {
+/// A stored row with its seed (checked by the caller), decoded: what it must hold is a status of
+/// `ok` with a valid run summary of the row's seed and building
+/// ([`RunSummary::from_json`](floorcast_worker::RunSummary::from_json)), or `failed` with its
+/// error; settings that are a JSON object of settings (those it lacks at their defaults); a
+/// progress curve, if any, that [`crate::progress::decode`] reads; a finite wall time. The
+/// error names the field.
+pub fn decode_row(raw: RawRow, seed: u64) -> Result<StoredResult, String> {
+    let RawRow {
+        mut row,
+        settings_json,
+        summary_json,
+        progress_csv,
+    } = raw;
+    row.seed = seed;
+    if !(row.wall_time_s.is_finite() && row.wall_time_s >= 0.0) {
         return Err(format!(
             "field wall_time_s is {}, expected a finite number of seconds, 0 or more",
-            r.wall_time_s
+            row.wall_time_s
         ));
     }
-    match serde_json::from_str::<serde_json::Value>(&r.settings_json) {
-        Ok(serde_json::Value::Object(_)) => {}
-        _ => return Err("field settings_json is not a JSON object".into()),
+    row.settings = decode_settings(&settings_json)?;
+    if row.status == JobStatus::Ok && summary_json.is_none() {
+        return Err("field summary_json is empty, expected the run's summary".into());
     }
-    match r.status {
-        JobStatus::Ok => {
-            let text = r
-                .summary_json
-                .as_deref()
-                .ok_or("field summary_json is empty, expected the run's summary")?;
-            let s = floorcast_worker::RunSummary::from_json(text).map_err(|e| {
-                format!(
-                    "field summary_json: {}",
-                    floorcast_worker::text::shown(&e, 200)
-                )
-            })?;
-            if s.seed != r.seed {
-                return Err(format!(
-                    "field summary_json.seed is {}, the row's seed is {}",
-                    s.seed, r.seed
-                ));
-            }
-            if s.building_hash != r.building_hash {
-                return Err(
-                    "field summary_json.building_hash differs from the row's building_hash".into(),
-                );
-            }
-        }
-        JobStatus::Failed => {
-            if r.error.as_deref().is_none_or(|e| e.trim().is_empty()) {
-                return Err("field error is empty, expected why the job failed".into());
-            }
-        }
+    if let Some(text) = summary_json {
+        row.summary = Some(decode_summary(&text, &row)?);
     }
-    Ok(())
+    if row.status == JobStatus::Failed && row.error.as_deref().is_none_or(|e| e.trim().is_empty()) {
+        return Err("field error is empty, expected why the job failed".into());
+    }
+    if let Some(text) = progress_csv {
+        row.progress = Some(crate::progress::decode(&text).map_err(|e| {
+            format!(
+                "field progress_csv: {}",
+                floorcast_worker::text::shown(&e, 200)
+            )
+        })?);
+    }
+    Ok(row)
+}
+
+/// A row's settings from its `settings_json`: a JSON object of settings, each one it lacks at
+/// its default.
+fn decode_settings(text: &str) -> Result<Settings, String> {
+    match serde_json::from_str::<serde_json::Value>(text) {
+        Ok(v @ serde_json::Value::Object(_)) => serde_json::from_value(v).map_err(|e| {
+            format!(
+                "field settings_json: {}",
+                floorcast_worker::text::shown(&e.to_string(), 200)
+            )
+        }),
+        _ => Err("field settings_json is not a JSON object".into()),
+    }
+}
+
+/// A row's run summary from its `summary_json`, checked against the row's seed and building.
+fn decode_summary(text: &str, row: &StoredResult) -> Result<RunSummary, String> {
+    let s = RunSummary::from_json(text).map_err(|e| {
+        format!(
+            "field summary_json: {}",
+            floorcast_worker::text::shown(&e, 200)
+        )
+    })?;
+    if s.seed != row.seed {
+        return Err(format!(
+            "field summary_json.seed is {}, the row's seed is {}",
+            s.seed, row.seed
+        ));
+    }
+    if s.building_hash != row.building_hash {
+        return Err("field summary_json.building_hash differs from the row's building_hash".into());
+    }
+    Ok(s)
 }
 
 /// Seconds since the Unix epoch (when a row was stored).
@@ -1049,15 +1108,30 @@ pub(crate) mod fixtures {
             strategy: label.into(),
             label: label.into(),
             seed,
-            settings_json: "{}".into(),
+            settings: floorcast_worker::Settings::default(),
             status: super::JobStatus::Ok,
             error: None,
-            summary_json: Some(summary.to_string()),
-            progress_csv: None,
+            summary: Some(floorcast_worker::RunSummary::from_json(&summary.to_string()).unwrap()),
+            progress: None,
             worker: "w".into(),
             wall_time_s: 1.0,
             floorcast_version: "0".into(),
         }
+    }
+
+    /// A stored row's summary as its JSON, to edit it as a record's text.
+    pub(crate) fn summary_value(r: &StoredResult) -> serde_json::Value {
+        serde_json::to_value(r.summary.as_ref().unwrap()).unwrap()
+    }
+
+    /// Sets a row's summary from its JSON, read as the store reads it.
+    pub(crate) fn set_summary(r: &mut StoredResult, v: &serde_json::Value) {
+        r.summary = Some(floorcast_worker::RunSummary::from_json(&v.to_string()).unwrap());
+    }
+
+    /// A progress curve from its stored text.
+    pub(crate) fn progress(text: &str) -> Vec<crate::progress::Sample> {
+        crate::progress::decode(text).unwrap()
     }
 }
 
@@ -1074,11 +1148,11 @@ mod tests {
             strategy: "baseline".into(),
             label: "baseline".into(),
             seed: 1,
-            settings_json: "{}".into(),
+            settings: Settings::default(),
             status: JobStatus::Failed,
             error: Some("no free space at the start".into()),
-            summary_json: None,
-            progress_csv: Some("time_s\n".into()),
+            summary: None,
+            progress: Some(vec![Sample::from([0.0, 0.0, 0.0])]),
             worker: "local-0".into(),
             wall_time_s: 1.0,
             floorcast_version: "0".into(),
@@ -1332,6 +1406,22 @@ mod tests {
                 &["settings_json is not a JSON object"],
             ),
             (
+                "UPDATE results SET settings_json = '{\"alpah\": 0.3}' WHERE status = 'failed'",
+                &["field settings_json", "unknown field `alpah`"],
+            ),
+            (
+                "UPDATE results SET settings_json = '{\"alpha\": \"high\"}' WHERE status = 'ok'",
+                &["field settings_json", "invalid type"],
+            ),
+            (
+                "UPDATE results SET progress_csv = 'time_s,explored_area_m2,explored_fraction\n1.0,2.0' WHERE status = 'failed'",
+                &["field progress_csv", "line 2 is not three numbers"],
+            ),
+            (
+                "UPDATE results SET progress_csv = '' WHERE status = 'failed'",
+                &["field progress_csv", "empty"],
+            ),
+            (
                 "UPDATE results SET wall_time_s = 'slow' WHERE status = 'failed'",
                 &["wrong type"],
             ),
@@ -1379,5 +1469,58 @@ mod tests {
         let s = Store::open(dir.path()).unwrap();
         assert_eq!(s.stored_ids().unwrap().len(), 4);
         assert_eq!(s.all().unwrap()[0], row("a"));
+    }
+
+    /// A row reads back as it was written, its contents typed, and is written as before: the
+    /// settings, summary and progress curve as their JSON and CSV.
+    #[test]
+    fn contents_are_typed_and_written_as_before() {
+        let dir = tempfile::tempdir().unwrap();
+        good_store(dir.path());
+        let s = Store::open_existing(dir.path()).unwrap();
+        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
+        ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
+        assert_eq!(s.all().unwrap(), vec![ok.clone(), row("failed-job")]);
+        let text: (String, String, Option<String>) = s
+            .conn
+            .query_row(
+                "SELECT settings_json, summary_json, progress_csv FROM results WHERE status = 'failed'",
+                [],
+                |r| Ok((r.get(0)?, r.get::<_, Option<String>>(1)?.unwrap_or_default(), r.get(2)?)),
+            )
+            .unwrap();
+        assert_eq!(text.0, serde_json::to_string(&Settings::default()).unwrap());
+        assert_eq!(text.1, "");
+        assert_eq!(
+            text.2.as_deref(),
+            Some("time_s,explored_area_m2,explored_fraction\n0.0,0.000,0.00000\n")
+        );
+        let summary: String = s
+            .conn
+            .query_row(
+                "SELECT summary_json FROM results WHERE status = 'ok'",
+                [],
+                |r| r.get(0),
+            )
+            .unwrap();
+        assert_eq!(summary, serde_json::to_string(&ok.summary).unwrap());
+    }
+
+    /// A row written before a setting existed reads with that setting at its default.
+    #[test]
+    fn settings_a_row_lacks_are_at_their_defaults() {
+        let dir = tempfile::tempdir().unwrap();
+        good_store(dir.path());
+        Connection::open(dir.path().join(DB_FILE))
+            .unwrap()
+            .execute_batch("UPDATE results SET settings_json = '{\"alpha\": 0.7}'")
+            .unwrap();
+        for r in Store::open_existing(dir.path()).unwrap().all().unwrap() {
+            let want = Settings {
+                alpha: 0.7,
+                ..Settings::default()
+            };
+            assert_eq!(r.settings, want, "{}", r.job_id);
+        }
     }
 }

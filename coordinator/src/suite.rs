@@ -14,7 +14,6 @@ use std::path::{Path, PathBuf};
 
 use floorcast_formats::suite::suite_name;
 use floorcast_worker::text::excerpt;
-use floorcast_worker::RunSummary;
 
 use crate::store::StoredResult;
 
@@ -119,15 +118,11 @@ fn shown_dir(base: &Path) -> String {
 pub fn stored_suites(results: &[StoredResult]) -> Vec<(String, String, usize)> {
     let mut count: BTreeMap<(String, String), usize> = BTreeMap::new();
     for r in results {
-        let Some(s) = r
-            .summary_json
-            .as_deref()
-            .and_then(|j| RunSummary::from_json(j).ok())
-        else {
+        let Some(s) = &r.summary else {
             continue;
         };
-        if let (Some(name), Some(hash)) = (s.suite, s.suite_hash) {
-            *count.entry((name, hash)).or_default() += 1;
+        if let (Some(name), Some(hash)) = (&s.suite, &s.suite_hash) {
+            *count.entry((name.clone(), hash.clone())).or_default() += 1;
         }
     }
     count.into_iter().map(|((n, h), c)| (n, h, c)).collect()
@@ -174,28 +169,29 @@ mod tests {
     /// Records of version 1 (no suite) and 2 read; a store holds one hash of a suite name.
     #[test]
     fn a_store_holds_one_version_of_a_suite_and_old_records_read() {
+        use floorcast_worker::RunSummary;
+        // A record as written (text), edited.
         let edit = |r: &StoredResult, f: &dyn Fn(&mut serde_json::Value)| {
-            let mut v: serde_json::Value =
-                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            let mut v = serde_json::to_value(r.summary.as_ref().unwrap()).unwrap();
             f(&mut v);
-            let mut r = r.clone();
-            r.summary_json = Some(v.to_string());
-            r
+            v.to_string()
+        };
+        // The row holding a record read from its text.
+        let with = |r: &StoredResult, text: &str| StoredResult {
+            summary: Some(RunSummary::from_json(text).unwrap()),
+            ..r.clone()
         };
         let (ha, hb) = ("a".repeat(32), "b".repeat(32));
         let old = crate::store::fixtures::stored("small", "baseline", 1, 100.0);
-        let tagged = edit(
-            &crate::store::fixtures::stored("small", "baseline", 2, 100.0),
-            &|v| {
-                v["version"] = 2.into();
-                v["suite"] = "s".into();
-                v["suite_hash"] = ha.as_str().into();
-            },
-        );
-        let read = |r: &StoredResult| RunSummary::from_json(r.summary_json.as_deref().unwrap());
-        for r in [&old, &tagged] {
-            read(r).unwrap();
-        }
+        let second = crate::store::fixtures::stored("small", "baseline", 2, 100.0);
+        let tagged_text = edit(&second, &|v| {
+            v["version"] = 2.into();
+            v["suite"] = "s".into();
+            v["suite_hash"] = ha.as_str().into();
+        });
+        let tagged = with(&second, &tagged_text);
+        let read = |text: &str| RunSummary::from_json(text);
+        read(&edit(&old, &|_| {})).unwrap();
         let both = [old.clone(), tagged.clone()];
         assert_eq!(stored_suites(&both), vec![("s".to_string(), ha.clone(), 1)]);
         assert_eq!(
@@ -214,7 +210,10 @@ mod tests {
         let e = check_stored_suites(&planned(&hb), &both).unwrap_err();
         assert!(e.contains("one version of a suite"), "{e}");
         // Two versions in one store (written by hand): said.
-        let other = edit(&tagged, &|v| v["suite_hash"] = hb.as_str().into());
+        let other = with(
+            &tagged,
+            &edit(&tagged, &|v| v["suite_hash"] = hb.as_str().into()),
+        );
         let lines = describe_suites(&[tagged.clone(), other]);
         assert!(lines[0].contains("has 2 versions here"), "{lines:?}");
         // A version 1 record with a suite, a suite without its hash: refused (a tampered row).
@@ -232,8 +231,8 @@ mod tests {
                 "version 1 to 2",
             ),
         ];
-        for (row, words) in &cases {
-            let e = read(row).unwrap_err();
+        for (text, words) in &cases {
+            let e = read(text).unwrap_err();
             assert!(e.contains(words), "{words}: {e}");
         }
     }

@@ -15,7 +15,9 @@ use std::fmt::Write as _;
 
 use floorcast_worker::RunSummary;
 
+use crate::metric::{time_to_fraction, Metric};
 use crate::outcome::{self, coverage_text, end_class, end_classes, label_order, Pair, PairCounts};
+use crate::progress::Sample;
 // A gain in per cent of the reference's time from a mean log ratio `m = ln t_ref - ln t`.
 use crate::sprt::gain_pct_of_effect as gain_pct;
 use crate::store::StoredResult;
@@ -171,57 +173,36 @@ pub struct Configuration {
 }
 
 impl Configuration {
-    /// The configuration of a stored row.
+    /// The configuration of a stored row (the store has put each setting the row does not hold
+    /// at its default).
     pub fn of_row(r: &StoredResult) -> Configuration {
-        let settings = match serde_json::from_str::<serde_json::Value>(&r.settings_json) {
-            Ok(serde_json::Value::Object(m)) => m,
-            _ => {
-                let mut m = serde_json::Map::new();
-                m.insert(
-                    "settings_json".into(),
-                    serde_json::Value::String(r.settings_json.clone()),
-                );
-                m
-            }
-        };
-        let program = r
-            .summary_json
-            .as_deref()
-            .and_then(|s| serde_json::from_str::<serde_json::Value>(s).ok())
-            .and_then(|v| v.get("strategy_program").cloned());
-        Self::new(&r.strategy, settings, program)
+        let program = r.summary.as_ref().and_then(|s| s.strategy_program.as_ref());
+        Self::new(&r.strategy, &r.settings, program)
     }
 
     /// The configuration of a planned job.
     pub fn of_job(j: &crate::grid::PlannedJob) -> Configuration {
-        let settings = match serde_json::to_value(&j.settings) {
-            Ok(serde_json::Value::Object(m)) => m,
-            _ => serde_json::Map::new(),
-        };
-        let program = j
-            .program
-            .as_ref()
-            .and_then(|p| serde_json::to_value(p).ok());
-        Self::new(&j.strategy, settings, program)
+        Self::new(&j.strategy, &j.settings, j.program.as_ref())
     }
 
+    /// The configuration of `settings` and `program`, each as it is written (a setting by its
+    /// name, the program's identity by its fields).
     fn new(
         strategy: &str,
-        stored: serde_json::Map<String, serde_json::Value>,
-        program: Option<serde_json::Value>,
+        settings: &floorcast_worker::Settings,
+        program: Option<&floorcast_worker::StrategyProgram>,
     ) -> Configuration {
-        let mut settings = match serde_json::to_value(floorcast_worker::Settings::default()) {
+        let settings = match serde_json::to_value(settings) {
             Ok(serde_json::Value::Object(m)) => m,
             _ => serde_json::Map::new(),
         };
-        settings.extend(stored);
-        let program = program.filter(|p| !p.is_null()).map(|p| {
-            let field = |k: &str, empty: serde_json::Value| p.get(k).cloned().unwrap_or(empty);
+        // Its identity: all but the timeout.
+        let program = program.map(|p| {
             serde_json::json!({
-                "command": field("command", serde_json::json!([])),
-                "files": field("files", serde_json::json!([])),
-                "files_sha256": field("files_sha256", serde_json::json!("")),
-                "params": field("params", serde_json::json!({})),
+                "command": p.command,
+                "files": p.files,
+                "files_sha256": p.files_sha256,
+                "params": p.params,
             })
         });
         Configuration {
@@ -474,14 +455,10 @@ pub fn table_against(
                 if mine.is_empty() {
                     return None;
                 }
-                let summaries: Vec<RunSummary> = mine
+                let summaries: Vec<&RunSummary> = mine
                     .iter()
                     .filter(|r| r.status.is_ok())
-                    .filter_map(|r| {
-                        r.summary_json
-                            .as_deref()
-                            .and_then(|s| RunSummary::from_json(s).ok())
-                    })
+                    .filter_map(|r| r.summary.as_ref())
                     .collect();
                 let achieves = |s: &RunSummary| outcome::achieves(s, coverage);
                 let times: Vec<f64> = summaries
@@ -501,12 +478,14 @@ pub fn table_against(
                     explored_fraction: Stat::of(&fracs),
                     stopped_early: summaries.iter().filter(|s| s.stopped_early).count(),
                     failed: mine.len() - summaries.len(),
-                    ends: count_ends(summaries.iter()),
+                    ends: count_ends(summaries.iter().copied()),
                     not_achieved: summaries.len() - times.len(),
-                    not_achieved_ends: count_ends(summaries.iter().filter(|s| !achieves(s)))
-                        .into_iter()
-                        .filter(|(_, n)| *n > 0)
-                        .collect(),
+                    not_achieved_ends: count_ends(
+                        summaries.iter().copied().filter(|s| !achieves(s)),
+                    )
+                    .into_iter()
+                    .filter(|(_, n)| *n > 0)
+                    .collect(),
                     paired,
                 })
             })
@@ -641,8 +620,8 @@ pub struct Comparison {
     pub family: &'static str,
     /// Cohen's d_z of the log ratios: their mean over their standard deviation.
     pub effect_size_dz: Option<f64>,
-    /// The other metrics, paired the same way over the successful runs (see [`METRICS`]).
-    pub metrics: BTreeMap<String, MetricGain>,
+    /// The other metrics, paired the same way over the successful runs (see [`Metric`]).
+    pub metrics: BTreeMap<Metric, MetricGain>,
 }
 
 /// A paired comparison of one metric: per pair, the log ratio `ln ref - ln x` for the metrics
@@ -657,58 +636,35 @@ pub struct MetricGain {
     pub t_ci95: Option<[f64; 2]>,
 }
 
-/// The metrics compared besides the exploration time: name, and its value of a successful run
-/// (summary, progress CSV); all lower-is-better gains but the explored fraction's points.
-pub const METRICS: [&str; 6] = [
-    "time_to_90_s",
-    "time_to_95_s",
-    "time_to_99_s",
-    "unexplored_area_s",
-    "path_length_m",
-    "explored_fraction_points",
-];
-
-fn metric_of(name: &str, s: &RunSummary, progress_csv: &str) -> Option<f64> {
-    match name {
-        "time_to_90_s" => time_to_fraction(progress_csv, 0.90),
-        "time_to_95_s" => time_to_fraction(progress_csv, 0.95),
-        "time_to_99_s" => time_to_fraction(progress_csv, 0.99),
-        "unexplored_area_s" => unexplored_area_s(progress_csv),
-        "path_length_m" => Some(s.path_length_m),
-        "explored_fraction_points" => Some(s.explored_fraction * 100.0),
-        _ => None,
-    }
-}
-
 /// What pairs a run with the reference's for the other metrics: building, seed and start pose.
 type PairKey = (String, u64, [u64; 3]);
 
-/// `name` of `label`'s successful runs in `subset` (those that have it), by pair key.
-fn metric_by_pair(subset: &[&StoredResult], label: &str, name: &str) -> BTreeMap<PairKey, f64> {
+/// `metric` of `label`'s successful runs in `subset` (those that have it), by pair key.
+fn metric_by_pair(subset: &[&StoredResult], label: &str, metric: Metric) -> BTreeMap<PairKey, f64> {
     subset
         .iter()
         .filter(|r| r.label == label && r.status.is_ok())
         .filter_map(|r| {
-            let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
-            let v = metric_of(name, &s, r.progress_csv.as_deref().unwrap_or(""))?;
+            let s = r.summary.as_ref()?;
+            let v = metric.of(s, r.progress.as_deref().unwrap_or_default())?;
             v.is_finite()
                 .then(|| ((r.building.clone(), r.seed, s.start.map(f64::to_bits)), v))
         })
         .collect()
 }
 
-/// The paired comparisons of every metric of [`METRICS`] of `label` with `reference`.
+/// The paired comparisons of every [`Metric`] of `label` with `reference`.
 fn metric_gains(
     subset: &[&StoredResult],
     label: &str,
     reference: &str,
-) -> BTreeMap<String, MetricGain> {
-    METRICS
-        .iter()
-        .map(|name| {
-            let mine = metric_by_pair(subset, label, name);
-            let theirs = metric_by_pair(subset, reference, name);
-            let points = *name == "explored_fraction_points";
+) -> BTreeMap<Metric, MetricGain> {
+    Metric::ALL
+        .into_iter()
+        .map(|metric| {
+            let mine = metric_by_pair(subset, label, metric);
+            let theirs = metric_by_pair(subset, reference, metric);
+            let points = metric.in_points();
             let diffs: Vec<f64> = mine
                 .iter()
                 .filter_map(|(k, v)| {
@@ -732,7 +688,7 @@ fn metric_gains(
                     ]
                 }),
             };
-            (name.to_string(), gain)
+            (metric, gain)
         })
         .collect()
 }
@@ -990,21 +946,6 @@ pub fn report_json(
     })
 }
 
-/// The area above a run's explored-fraction curve up to its end, `∫ (1 - f(t)) dt` in seconds
-/// (trapezoids between the samples): how long the building stays unseen on average, lower is
-/// better; it weighs early progress, where the exploration time sees only the end.
-pub fn unexplored_area_s(progress_csv: &str) -> Option<f64> {
-    let mut prev: Option<(f64, f64)> = None;
-    let mut area = 0.0;
-    for (t, f) in progress_curve(progress_csv) {
-        if let Some((t0, f0)) = prev {
-            area += (t - t0) * (2.0 - f0 - f) / 2.0;
-        }
-        prev = Some((t, f));
-    }
-    prev.map(|_| area)
-}
-
 /// A label's other metrics, as means over its successful runs (`null` without one): times to
 /// 90, 95 and 99 % explored (over the runs that reached them, with how many did), the
 /// unexplored area, path length, explored fraction, rooms left unexplored, map quality.
@@ -1012,28 +953,33 @@ fn label_metrics<'a>(
     results: impl Iterator<Item = &'a StoredResult>,
     label: &str,
 ) -> serde_json::Value {
-    let runs: Vec<(RunSummary, &str)> = results
+    let runs: Vec<(&RunSummary, &[Sample])> = results
         .filter(|r| r.label == label && r.status.is_ok())
         .filter_map(|r| {
-            let s = RunSummary::from_json(r.summary_json.as_deref()?).ok()?;
-            Some((s, r.progress_csv.as_deref().unwrap_or("")))
+            Some((
+                r.summary.as_ref()?,
+                r.progress.as_deref().unwrap_or_default(),
+            ))
         })
         .collect();
     let mean = |xs: Vec<f64>| finite(Stat::of(&xs).mean).filter(|_| !xs.is_empty());
+    let values = |m: Metric| -> Vec<f64> { runs.iter().filter_map(|(s, p)| m.of(s, p)).collect() };
     let mut v = serde_json::json!({
-        "unexplored_area_s_mean": mean(runs.iter().filter_map(|(_, p)| unexplored_area_s(p)).collect()),
-        "path_length_m_mean": mean(runs.iter().map(|(s, _)| s.path_length_m).collect()),
         "explored_fraction_min": runs.iter().map(|(s, _)| s.explored_fraction).reduce(f64::min),
         "rooms_unexplored_total": runs.iter().filter_map(|(s, _)| s.rooms_unexplored).reduce(|a, b| a + b),
         "map_occupied_precision_aligned_mean": mean(runs.iter().map(|(s, _)| s.map_occupied_precision_aligned).collect()),
     });
-    for pct in [90u32, 95, 99] {
-        let times: Vec<f64> = runs
-            .iter()
-            .filter_map(|(_, p)| time_to_fraction(p, pct as f64 / 100.0))
-            .collect();
+    for m in [Metric::UnexploredArea, Metric::PathLength] {
+        v[format!("{m}_mean")] = serde_json::json!(mean(values(m)));
+    }
+    for (m, pct) in [
+        (Metric::TimeTo90, 90),
+        (Metric::TimeTo95, 95),
+        (Metric::TimeTo99, 99),
+    ] {
+        let times = values(m);
         v[format!("runs_reaching_{pct}")] = serde_json::json!(times.len());
-        v[format!("time_to_{pct}_s_mean")] = serde_json::json!(mean(times));
+        v[format!("{m}_mean")] = serde_json::json!(mean(times));
     }
     v
 }
@@ -1151,20 +1097,19 @@ pub fn progress_curves(
         .iter()
         .filter(|r| r.building == building && r.status.is_ok())
     {
-        let Some(csv) = r.progress_csv.as_deref() else {
+        let Some(samples) = r.progress.as_deref() else {
             continue;
         };
-        let curve: Vec<(f64, f64)> = progress_curve(csv).collect();
+        let curve: Vec<(f64, f64)> = samples
+            .iter()
+            .map(|s| (s.time_s, s.explored_fraction))
+            .collect();
         if curve.is_empty() {
             continue;
         }
         let entry = curves.entry(r.label.as_str()).or_default();
         entry.0.push(curve);
-        if let Some(s) = r
-            .summary_json
-            .as_deref()
-            .and_then(|j| RunSummary::from_json(j).ok())
-        {
+        if let Some(s) = &r.summary {
             if s.stopped_early {
                 entry.1.push((s.exploration_time_s, s.explored_fraction));
             }
@@ -1217,17 +1162,6 @@ pub fn progress_curves(
         .collect()
 }
 
-/// The `(time_s, explored_fraction)` samples of a stored `progress.csv`
-/// (`time_s,explored_area_m2,explored_fraction`); unreadable lines are skipped.
-fn progress_curve(progress_csv: &str) -> impl Iterator<Item = (f64, f64)> + '_ {
-    crate::progress::decode(progress_csv).map(|[t, _, f]| (t, f))
-}
-
-/// The first simulated time at which a stored progress curve reaches `fraction` explored.
-pub fn time_to_fraction(progress_csv: &str, fraction: f64) -> Option<f64> {
-    progress_curve(progress_csv).find_map(|(t, f)| (f >= fraction).then_some(t))
-}
-
 /// One line per stored job, for pandas or R. `time_to_90_s` is the simulated time at which the
 /// run had explored 90 % (the paper's point from which layout knowledge pays off), empty if it
 /// never did. `rooms_never_entered` and `rooms_unexplored` are empty without ground-truth rooms.
@@ -1246,7 +1180,7 @@ pub fn results_csv(results: &[StoredResult]) -> String {
         "explored_area_m2",
         "free_area_m2",
         "explored_fraction",
-        "time_to_90_s",
+        Metric::TimeTo90.as_str(),
         "path_length_m",
         "decisions",
         "stopped_early",
@@ -1270,10 +1204,7 @@ pub fn results_csv(results: &[StoredResult]) -> String {
     // Writing to memory fails only on a record of another length, which the arrays rule out.
     let _ = w.write_record(HEADER);
     for r in results {
-        let sum = r
-            .summary_json
-            .as_deref()
-            .and_then(|j| RunSummary::from_json(j).ok());
+        let sum = r.summary.as_ref();
         let f = |v: Option<f64>| v.map(|x| format!("{x}")).unwrap_or_default();
         let count = |v: Option<usize>| v.map(|x| x.to_string()).unwrap_or_default();
         let row: [String; HEADER.len()] = [
@@ -1284,39 +1215,27 @@ pub fn results_csv(results: &[StoredResult]) -> String {
             r.label.clone(),
             r.seed.to_string(),
             r.status.as_str().to_string(),
-            f(sum.as_ref().map(|s| s.exploration_time_s)),
-            f(sum.as_ref().map(|s| s.explored_area_m2)),
-            f(sum.as_ref().map(|s| s.free_area_m2)),
-            f(sum.as_ref().map(|s| s.explored_fraction)),
-            f(r.progress_csv
-                .as_deref()
-                .and_then(|p| time_to_fraction(p, 0.9))),
-            f(sum.as_ref().map(|s| s.path_length_m)),
-            sum.as_ref()
-                .map(|s| s.decisions.to_string())
-                .unwrap_or_default(),
-            sum.as_ref()
-                .map(|s| s.stopped_early.to_string())
-                .unwrap_or_default(),
-            sum.as_ref().map(end_class).unwrap_or("").to_string(),
-            f(sum.as_ref().map(|s| s.unexplored_free_m2)),
-            count(sum.as_ref().and_then(|s| s.rooms_never_entered)),
-            count(sum.as_ref().and_then(|s| s.rooms_unexplored)),
+            f(sum.map(|s| s.exploration_time_s)),
+            f(sum.map(|s| s.explored_area_m2)),
+            f(sum.map(|s| s.free_area_m2)),
+            f(sum.map(|s| s.explored_fraction)),
+            f(r.progress.as_deref().and_then(|p| time_to_fraction(p, 0.9))),
+            f(sum.map(|s| s.path_length_m)),
+            sum.map(|s| s.decisions.to_string()).unwrap_or_default(),
+            sum.map(|s| s.stopped_early.to_string()).unwrap_or_default(),
+            sum.map(end_class).unwrap_or("").to_string(),
+            f(sum.map(|s| s.unexplored_free_m2)),
+            count(sum.and_then(|s| s.rooms_never_entered)),
+            count(sum.and_then(|s| s.rooms_unexplored)),
             r.wall_time_s.to_string(),
             r.worker.clone(),
             r.floorcast_version.clone(),
-            f(sum.as_ref().map(|s| s.start[0])),
-            f(sum.as_ref().map(|s| s.start[1])),
-            f(sum.as_ref().map(|s| s.start[2])),
-            sum.as_ref()
-                .map(|s| s.start_source.clone())
-                .unwrap_or_default(),
-            sum.as_ref()
-                .and_then(|s| s.suite.clone())
-                .unwrap_or_default(),
-            sum.as_ref()
-                .and_then(|s| s.suite_hash.clone())
-                .unwrap_or_default(),
+            f(sum.map(|s| s.start[0])),
+            f(sum.map(|s| s.start[1])),
+            f(sum.map(|s| s.start[2])),
+            sum.map(|s| s.start_source.clone()).unwrap_or_default(),
+            sum.and_then(|s| s.suite.clone()).unwrap_or_default(),
+            sum.and_then(|s| s.suite_hash.clone()).unwrap_or_default(),
         ];
         let _ = w.write_record(&row);
     }
@@ -1326,7 +1245,8 @@ pub fn results_csv(results: &[StoredResult]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::store::fixtures::stored;
+    use crate::metric::unexplored_area_s;
+    use crate::store::fixtures::{progress, set_summary, stored, summary_value};
 
     #[test]
     fn stat_mean_and_sd() {
@@ -1391,15 +1311,9 @@ mod tests {
         let a = stored("small", "near", 1, 100.0);
         let b = stored("small", "near", 2, 110.0);
         assert_eq!(check_label_configurations(&[a.clone(), b.clone()]), Ok(()));
-        // A setting at its default, stored explicitly or not, is the same configuration.
-        let mut explicit = b.clone();
-        explicit.settings_json = serde_json::json!({
-            "alpha": floorcast_worker::Settings::default().alpha
-        })
-        .to_string();
-        assert_eq!(check_label_configurations(&[a.clone(), explicit]), Ok(()));
+        // (A setting a row lacks is at its default: the store reads it so.)
         let mut changed = b.clone();
-        changed.settings_json = r#"{"alpha": 0.123}"#.into();
+        changed.settings.alpha = 0.123;
         let e = check_label_configurations(&[a.clone(), changed.clone()]).unwrap_err();
         for w in [
             "'near'",
@@ -1421,12 +1335,11 @@ mod tests {
         // An external program's identity is part of it.
         let with_program = |cmd: &str| {
             let mut r = b.clone();
-            let mut v: serde_json::Value =
-                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            let mut v: serde_json::Value = summary_value(&r);
             v["strategy_program"] = serde_json::json!({
                 "command": ["python3", cmd], "files_sha256": "ab", "timeout_s": 10.0
             });
-            r.summary_json = Some(v.to_string());
+            set_summary(&mut r, &v);
             r
         };
         let e =
@@ -1434,7 +1347,7 @@ mod tests {
         assert!(e.contains("external program"), "{e}");
         // A failed job stored no program: the same as any, and not the label's reference.
         let mut failed = b.clone();
-        failed.summary_json = None;
+        failed.summary = None;
         failed.status = crate::store::JobStatus::Failed;
         assert_eq!(
             check_label_configurations(&[failed.clone(), with_program("a.py")]),
@@ -1445,9 +1358,13 @@ mod tests {
                 .is_err()
         );
         let mut slower = with_program("a.py");
-        slower.summary_json = slower
-            .summary_json
-            .map(|s| s.replace("\"timeout_s\":10.0", "\"timeout_s\":20.0"));
+        if let Some(p) = slower
+            .summary
+            .as_mut()
+            .and_then(|s| s.strategy_program.as_mut())
+        {
+            p.timeout_s = 20.0;
+        }
         assert_eq!(
             check_label_configurations(&[with_program("a.py"), slower]),
             Ok(())
@@ -1498,16 +1415,15 @@ mod tests {
     /// to a fraction pair only the runs that reached it.
     #[test]
     fn other_metrics_are_paired_like_the_time() {
-        let run = |label: &str, seed: u64, path_m: f64, fraction: f64, progress: &str| {
+        let run = |label: &str, seed: u64, path_m: f64, fraction: f64, curve: &str| {
             let mut r = stored("a", label, seed, 100.0);
-            let mut v: serde_json::Value =
-                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            let mut v: serde_json::Value = summary_value(&r);
             v["path_length_m"] = serde_json::json!(path_m);
             v["explored_fraction"] = serde_json::json!(fraction);
-            r.summary_json = Some(v.to_string());
-            r.progress_csv = Some(format!(
-                "time_s,explored_area_m2,explored_fraction\n{progress}"
-            ));
+            set_summary(&mut r, &v);
+            r.progress = Some(progress(&format!(
+                "time_s,explored_area_m2,explored_fraction\n{curve}"
+            )));
             r
         };
         let results = vec![
@@ -1523,20 +1439,37 @@ mod tests {
             .unwrap();
         let m = &overall.metrics;
         let close = |a: Option<f64>, b: f64| a.is_some_and(|a| (a - b).abs() < 1e-9);
-        assert_eq!(m["path_length_m"].pairs, 2);
-        assert!(close(m["path_length_m"].mean, 20.0), "{m:?}");
-        let ci = m["path_length_m"].t_ci95.unwrap();
+        assert_eq!(m[&Metric::PathLength].pairs, 2);
+        assert!(close(m[&Metric::PathLength].mean, 20.0), "{m:?}");
+        let ci = m[&Metric::PathLength].t_ci95.unwrap();
         assert!(
             close(Some(ci[0]), 20.0) && close(Some(ci[1]), 20.0),
             "{ci:?}"
         );
-        assert!(close(m["explored_fraction_points"].mean, -1.0), "{m:?}");
+        assert!(
+            close(m[&Metric::ExploredFractionPoints].mean, -1.0),
+            "{m:?}"
+        );
         // Seed 1 reaches 90 % at 40 s against 50 s; seed 2's layout never does.
-        assert_eq!(m["time_to_90_s"].pairs, 1);
-        assert!(close(m["time_to_90_s"].mean, 20.0), "{m:?}");
-        assert_eq!(m["time_to_90_s"].t_ci95, None);
-        assert_eq!(m["time_to_99_s"].pairs, 1);
-        assert_eq!(m.len(), METRICS.len());
+        assert_eq!(m[&Metric::TimeTo90].pairs, 1);
+        assert!(close(m[&Metric::TimeTo90].mean, 20.0), "{m:?}");
+        assert_eq!(m[&Metric::TimeTo90].t_ci95, None);
+        assert_eq!(m[&Metric::TimeTo99].pairs, 1);
+        assert_eq!(m.len(), Metric::ALL.len());
+        // In the JSON report, by their words.
+        let v = serde_json::to_value(overall).unwrap();
+        let words: Vec<&String> = v["metrics"].as_object().unwrap().keys().collect();
+        assert_eq!(
+            words,
+            [
+                "explored_fraction_points",
+                "path_length_m",
+                "time_to_90_s",
+                "time_to_95_s",
+                "time_to_99_s",
+                "unexplored_area_s"
+            ]
+        );
     }
 
     /// A stored run with its end class, explored fraction and start pose replaced.
@@ -1549,13 +1482,12 @@ mod tests {
         start: [f64; 3],
     ) -> StoredResult {
         let mut r = stored("b", label, seed, time_s);
-        let mut v: serde_json::Value =
-            serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+        let mut v: serde_json::Value = summary_value(&r);
         v["end_reason"] = serde_json::json!(end_reason);
         v["explored_fraction"] = serde_json::json!(fraction);
         v["stopped_early"] = serde_json::json!(end_reason == "early stop");
         v["start"] = serde_json::json!(start);
-        r.summary_json = Some(v.to_string());
+        set_summary(&mut r, &v);
         r.job_id = format!("{label}-{seed}-{}", start[0]);
         r
     }
@@ -1660,7 +1592,7 @@ mod tests {
                     r.building = building.into();
                     if rng.random::<f64>() < 0.05 {
                         r.status = crate::store::JobStatus::Failed;
-                        r.summary_json = None;
+                        r.summary = None;
                     }
                     results.push(r);
                 }
@@ -1716,10 +1648,9 @@ mod tests {
                 (t * 0.95, "complete", 1.0)
             };
             let mut r = stored_end("cut", seed, time, end, f, s0);
-            let mut v: serde_json::Value =
-                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
+            let mut v: serde_json::Value = summary_value(&r);
             v["settings"]["time_limit_s"] = serde_json::json!(580.0);
-            r.summary_json = Some(v.to_string());
+            set_summary(&mut r, &v);
             results.push(r);
         }
         let cs = comparisons(&results, &[], "baseline", 0.99);
@@ -1815,24 +1746,25 @@ mod tests {
 
     #[test]
     fn the_unexplored_area_integrates_what_is_left_to_see() {
-        let csv = "time_s,explored_area_m2,explored_fraction\n0,0,0\n10,5,0.5\n20,10,1.0\n";
+        let p = progress("time_s,explored_area_m2,explored_fraction\n0,0,0\n10,5,0.5\n20,10,1.0\n");
         // 10 s at 1 -> 0.5 unexplored (7.5 s), 10 s at 0.5 -> 0 (2.5 s).
-        assert_eq!(unexplored_area_s(csv), Some(10.0));
+        assert_eq!(unexplored_area_s(&p), Some(10.0));
         assert_eq!(
-            unexplored_area_s("time_s,explored_area_m2,explored_fraction\n"),
+            unexplored_area_s(&progress("time_s,explored_area_m2,explored_fraction\n")),
             None
         );
     }
 
     #[test]
     fn time_to_a_fraction_is_the_first_sample_reaching_it() {
-        let p = "time_s,explored_area_m2,explored_fraction\n0,0,0\n2,5,0.5\n4,9,0.9\n6,10,1\n";
-        assert_eq!(time_to_fraction(p, 0.9), Some(4.0));
-        assert_eq!(time_to_fraction(p, 0.4), Some(2.0));
-        assert_eq!(time_to_fraction(p, 1.1), None);
-        assert_eq!(time_to_fraction("time_s\nnot,a,number\n", 0.5), None);
+        let p = progress(
+            "time_s,explored_area_m2,explored_fraction\n0,0,0\n2,5,0.5\n4,9,0.9\n6,10,1\n",
+        );
+        assert_eq!(time_to_fraction(&p, 0.9), Some(4.0));
+        assert_eq!(time_to_fraction(&p, 0.4), Some(2.0));
+        assert_eq!(time_to_fraction(&p, 1.1), None);
         let mut r = stored("b", "baseline", 1, 6.0);
-        r.progress_csv = Some(p.into());
+        r.progress = Some(p);
         let csv = results_csv(&[r]);
         let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
         let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
@@ -1853,18 +1785,21 @@ mod tests {
     #[test]
     fn progress_curves_hold_the_final_fraction_of_runs_that_ended_and_mark_early_stops() {
         let mut a = stored("b1", "baseline", 1, 4.0);
-        a.progress_csv =
-            Some("time_s,explored_area_m2,explored_fraction\n0,0,0\n2,5,0.5\n4,10,1\n".into());
+        a.progress = Some(progress(
+            "time_s,explored_area_m2,explored_fraction\n0,0,0\n2,5,0.5\n4,10,1\n",
+        ));
         let mut b = stored("b1", "baseline", 2, 2.0);
-        b.progress_csv =
-            Some("time_s,explored_area_m2,explored_fraction\n0,0,0.2\n2,8,0.8\n".into());
+        b.progress = Some(progress(
+            "time_s,explored_area_m2,explored_fraction\n0,0,0.2\n2,8,0.8\n",
+        ));
         let mut c = stored("b1", "layout", 1, 2.0);
-        c.progress_csv = Some("time_s,explored_area_m2,explored_fraction\n0,0,0\n2,1,1\n".into());
-        let mut summary: serde_json::Value =
-            serde_json::from_str(c.summary_json.as_deref().unwrap()).unwrap();
+        c.progress = Some(progress(
+            "time_s,explored_area_m2,explored_fraction\n0,0,0\n2,1,1\n",
+        ));
+        let mut summary: serde_json::Value = summary_value(&c);
         summary["stopped_early"] = true.into();
         summary["explored_fraction"] = 0.97.into();
-        c.summary_json = Some(summary.to_string());
+        set_summary(&mut c, &summary);
         let other = stored("b2", "baseline", 1, 1.0);
         let curves = progress_curves(&[c, a, b, other], "b1", &["baseline".into()], 3);
         let labels: Vec<&str> = curves.iter().map(|c| c.label.as_str()).collect();

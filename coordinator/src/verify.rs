@@ -34,9 +34,12 @@ pub fn compare(theirs: &StoredResult, ours: &StoredResult) -> Result<(), String>
     if theirs.error != ours.error {
         return differ("error", &theirs.error, &ours.error);
     }
+    // Field by field, as the summary is written.
     let summary = |r: &StoredResult| -> Option<serde_json::Map<String, serde_json::Value>> {
-        let mut m: serde_json::Map<String, serde_json::Value> =
-            serde_json::from_str(r.summary_json.as_deref()?).ok()?;
+        let serde_json::Value::Object(mut m) = serde_json::to_value(r.summary.as_ref()?).ok()?
+        else {
+            return None;
+        };
         for k in MEASURED {
             m.remove(k);
         }
@@ -56,17 +59,24 @@ pub fn compare(theirs: &StoredResult, ours: &StoredResult) -> Result<(), String>
         }
         _ => {}
     }
-    if theirs.progress_csv != ours.progress_csv {
-        let (a, b) = (
-            theirs.progress_csv.as_deref().unwrap_or(""),
-            ours.progress_csv.as_deref().unwrap_or(""),
-        );
-        return Err(match a.lines().zip(b.lines()).position(|(x, y)| x != y) {
+    let (a, b) = (lines(&theirs.progress), lines(&ours.progress));
+    if a != b {
+        return Err(match a.iter().zip(&b).position(|(x, y)| x != y) {
             Some(i) => format!("the progress curve differs from its line {}", i + 1),
             None => "the progress curve differs in length".into(),
         });
     }
     Ok(())
+}
+
+/// The lines of a stored progress curve, as they are stored: its header (`None`), then each
+/// sample by its values' bits (none without a curve).
+fn lines(progress: &Option<Vec<crate::progress::Sample>>) -> Vec<Option<[u64; 3]>> {
+    progress.as_ref().map_or_else(Vec::new, |p| {
+        std::iter::once(None)
+            .chain(p.iter().map(|s| Some(s.bits())))
+            .collect()
+    })
 }
 
 #[cfg(test)]
@@ -86,42 +96,55 @@ mod tests {
         let theirs = row(&plan, job, "there", &execute(&plan, job));
         assert!(verifiable(job, &theirs));
         assert_eq!(compare(&theirs, &ours), Ok(()));
-        let edit = |f: &dyn Fn(&mut serde_json::Value)| {
+        let edit = |f: &dyn Fn(&mut floorcast_worker::RunSummary)| {
             let mut r = theirs.clone();
-            let mut v: serde_json::Value =
-                serde_json::from_str(r.summary_json.as_deref().unwrap()).unwrap();
-            f(&mut v);
-            r.summary_json = Some(v.to_string());
+            f(r.summary.as_mut().unwrap());
             r
         };
         let cases: Vec<(StoredResult, Option<&str>)> = vec![
-            (edit(&|v| v["wall_time_s"] = 99.0.into()), None),
-            (edit(&|v| v["speedup"] = 1.0.into()), None),
+            (edit(&|s| s.wall_time_s = 99.0), None),
+            (edit(&|s| s.speedup = 1.0), None),
             (
-                edit(&|v| v["explored_fraction"] = 0.5.into()),
+                edit(&|s| s.explored_fraction = 0.5),
                 Some("summary field explored_fraction"),
             ),
             (
-                edit(&|v| {
-                    v["path_length_m"] = (v["path_length_m"].as_f64().unwrap() + 1e-12).into()
-                }),
+                edit(&|s| s.path_length_m += 1e-12),
                 Some("summary field path_length_m"),
             ),
+            (edit(&|s| s.decisions += 1), Some("summary field decisions")),
             (
-                edit(&|v| {
-                    v.as_object_mut().unwrap().remove("decisions");
-                }),
-                Some("summary field decisions"),
+                edit(&|s| s.rooms_unexplored = Some(1000)),
+                Some("summary field rooms_unexplored"),
             ),
             (
                 StoredResult {
-                    progress_csv: theirs
-                        .progress_csv
-                        .as_ref()
-                        .map(|c| c.replacen("0.0,", "0.1,", 1)),
+                    progress: theirs.progress.as_ref().map(|p| {
+                        let mut p = p.clone();
+                        p[0].time_s = 0.1;
+                        p
+                    }),
                     ..theirs.clone()
                 },
-                Some("progress curve"),
+                Some("progress curve differs from its line 2"),
+            ),
+            (
+                StoredResult {
+                    progress: theirs.progress.as_ref().map(|p| p[1..].to_vec()),
+                    ..theirs.clone()
+                },
+                Some("progress curve differs from its line 2"),
+            ),
+            (
+                StoredResult {
+                    progress: theirs.progress.as_ref().map(|p| {
+                        let mut p = p.clone();
+                        p.push(p[p.len() - 1]);
+                        p
+                    }),
+                    ..theirs.clone()
+                },
+                Some("progress curve differs in length"),
             ),
             (
                 StoredResult {
