@@ -8,6 +8,7 @@ mod cmd_layout;
 mod cmd_run;
 mod cmd_strategy;
 mod cmd_suite;
+mod cmd_tour;
 mod cmd_worker;
 mod values;
 
@@ -67,6 +68,9 @@ enum Command {
     Suite(cmd_suite::SuiteCommand),
     /// Print the reference of every run setting (type, unit, default, range, meaning).
     Settings(SettingsArgs),
+    /// The known-map yardstick: the time of a tour that sees the building's explorable area
+    /// with the run's robot and laser, knowing the whole building (docs/known-map-tour.md).
+    Tour(cmd_tour::TourArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -93,6 +97,7 @@ fn main() -> ExitCode {
         Command::Report(a) => cmd_run::report(a),
         Command::Strategy(c) => cmd_strategy::run(c),
         Command::Suite(c) => cmd_suite::run(c),
+        Command::Tour(a) => cmd_tour::run(a),
         Command::Settings(a) => {
             if a.markdown {
                 say_raw!(

@@ -19,6 +19,7 @@ pub mod mapping;
 pub mod plan;
 pub mod scan;
 pub mod sim;
+pub mod tour;
 pub mod tsp;
 pub mod utility;
 

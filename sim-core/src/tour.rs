@@ -1,0 +1,657 @@
+//! The known-map yardstick: with the whole building known, exploring becomes an inspection tour.
+//! [`known_map_tour`] chooses viewpoints (a position and the laser's heading) from which the
+//! run's laser sees at least the wanted share of the explorable area (a greedy set cover over
+//! a lattice of drivable places), orders them by a short open travelling-salesman path from the
+//! start ([`crate::tsp::open_path`], by planned path lengths), and times the tour with the
+//! robot's speed and turn rate. The tour is a heuristic's, an upper bound on the best possible:
+//! `tour time / exploration time` says how close a strategy comes to a robot that knew the
+//! building (slightly above 1 is possible on a lucky run).
+//!
+//! Approximations (documented in docs/known-map-tour.md): places every `spacing_m` on a lattice;
+//! the laser's `fov` at one of `headings` directions per place; what a place sees is found by
+//! `rays` rays through the true free space (the explorer's referee uses the same free space);
+//! the set cover counts cells of `cover_cell_m` (a cell seen counts all its explorable cells) and
+//! goes on until the fine cells its viewpoints see reach the wanted share; the robot scans only
+//! at viewpoints (what it sees on the way is not counted) and drives the grid's shortest paths
+//! at full speed, turning in place where they turn.
+
+use crate::building::{explorable_free, Building};
+use crate::explore::ExploreConfig;
+use crate::geom::{wrap_angle, Pose, Vec2};
+use crate::grid::{Bitmap, Cell, GridFrame};
+use crate::plan::dijkstra::{dijkstra, dijkstra_by, CostField};
+
+/// How the tour is made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TourSettings {
+    /// The share of the explorable area the tour must see (0.99).
+    pub coverage: f64,
+    /// Distance between candidate places (m).
+    pub spacing_m: f64,
+    /// Size of the cells the set cover counts (m).
+    pub cover_cell_m: f64,
+    /// Headings tried at each place.
+    pub headings: usize,
+    /// Rays cast from each place over a full turn.
+    pub rays: usize,
+}
+
+impl Default for TourSettings {
+    fn default() -> Self {
+        Self {
+            coverage: 0.99,
+            spacing_m: 1.0,
+            cover_cell_m: 0.2,
+            headings: 8,
+            rays: 720,
+        }
+    }
+}
+
+/// A tour of the known building.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KnownMapTour {
+    /// Where the robot scans, in the order visited (the start first), each with its heading.
+    pub viewpoints: Vec<Pose>,
+    /// The path driven, from the start through every viewpoint (m, world frame).
+    pub path: Vec<Vec2>,
+    pub length_m: f64,
+    /// Driving at full speed plus turning in place at the full turn rate (s).
+    pub time_s: f64,
+    /// Of the explorable area, the share the viewpoints see.
+    pub covered_fraction: f64,
+    pub explorable_m2: f64,
+}
+
+/// What the places see: per place, the cover cells it sees with the headings that see them.
+struct Sight {
+    frame: GridFrame,
+    truth: Bitmap,
+    /// The free space rays pass through.
+    free: Bitmap,
+    range_cells: f64,
+    fov_rad: f64,
+    headings: usize,
+    rays: usize,
+}
+
+impl Sight {
+    /// The fine cells of `truth` a laser at `cell` facing `heading` sees.
+    fn fine_cells(&self, cell: Cell, heading: f64) -> Vec<usize> {
+        let mut out = Vec::new();
+        self.cast(cell, |bearing, i| {
+            if wrap_angle(bearing - heading).abs() <= self.fov_rad / 2.0 {
+                out.push(i);
+            }
+        });
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// Calls `seen(bearing, fine index)` for every explorable cell each ray from `cell` passes
+    /// through the free space, up to the laser's range.
+    fn cast(&self, cell: Cell, mut seen: impl FnMut(f64, usize)) {
+        let origin = Vec2::new(cell.x as f64 + 0.5, cell.y as f64 + 0.5);
+        let step = 0.5;
+        for r in 0..self.rays {
+            let bearing = std::f64::consts::TAU * r as f64 / self.rays as f64;
+            let dir = Vec2::new(bearing.cos(), bearing.sin());
+            let mut t = 0.0;
+            while t <= self.range_cells {
+                let p = origin + dir * t;
+                let c = Cell::new(p.x.floor() as i32, p.y.floor() as i32);
+                let Some(i) = self.frame.index(c) else {
+                    break;
+                };
+                if !self.free.data[i] {
+                    break;
+                }
+                if self.truth.data[i] {
+                    seen(bearing, i);
+                }
+                t += step;
+            }
+        }
+    }
+
+    /// Per heading (a bit each), whether a ray of `bearing` is within the laser's view.
+    fn heading_mask(&self, bearing: f64) -> u16 {
+        let mut mask = 0u16;
+        for k in 0..self.headings {
+            if wrap_angle(bearing - self.heading(k)).abs() <= self.fov_rad / 2.0 {
+                mask |= 1 << k;
+            }
+        }
+        mask
+    }
+
+    fn heading(&self, k: usize) -> f64 {
+        std::f64::consts::TAU * k as f64 / self.headings as f64
+    }
+}
+
+/// The tour of `building` from `start` for the robot and laser of `cfg` (see the module doc).
+pub fn known_map_tour(
+    building: &Building,
+    start: Pose,
+    cfg: &ExploreConfig,
+    ts: &TourSettings,
+) -> KnownMapTour {
+    let frame = crate::explore::map_frame(&building.bounds(), cfg.map_resolution_m);
+    let res = frame.resolution_m;
+    let reachable = building.reachable_free(frame, start.position());
+    let body_m = cfg.sim.robot.radius_m + cfg.safety_margin_m;
+    let range_m = cfg.sim.laser.max_range_m;
+    let truth = explorable_free(&reachable, start.position(), body_m, range_m);
+    let roomy = roomy(&reachable, body_m);
+    let start_cell = frame.cell_from_world(start.position());
+    let from_start = dijkstra(&roomy, start_cell, None);
+    let sight = Sight {
+        frame,
+        truth,
+        free: reachable,
+        range_cells: range_m / res,
+        fov_rad: cfg.sim.laser.fov_rad,
+        headings: ts.headings.clamp(1, 16),
+        rays: ts.rays.max(8),
+    };
+    let step = ((ts.spacing_m / res).round() as i32).max(1);
+    let places: Vec<Cell> = (0..frame.len())
+        .map(|i| frame.cell_of_index(i))
+        .filter(|c| c.x % step == 0 && c.y % step == 0)
+        .filter(|c| roomy.get(*c) == Some(&true) && from_start.distance_m(*c).is_some())
+        .collect();
+    let cover = Cover::new(&sight, ts.cover_cell_m);
+    let (chosen, _) = cover.choose(&sight, &places, start, ts.coverage);
+    let explorable = sight.truth.count_true();
+    let wanted = (ts.coverage * explorable as f64).ceil() as usize;
+    let ordered = order(&roomy, &chosen, &from_start);
+    let robot = &cfg.sim.robot;
+    let driver = Driver {
+        roomy: &roomy,
+        sight: &sight,
+        from_start: &from_start,
+        start,
+        speed_mps: robot.max_speed_mps,
+        turn_radps: robot.max_turn_rate_radps,
+    };
+    let mut tour = driver.tour(&ordered);
+    tour.prune(&driver, wanted);
+    let mut path = vec![start.position()];
+    let (mut length_m, mut time_s) = (0.0, 0.0);
+    for leg in &tour.legs {
+        path.extend(&leg.points);
+        length_m += leg.length_m;
+        time_s += driver.time_of(leg);
+    }
+    KnownMapTour {
+        viewpoints: std::iter::once(start)
+            .chain(tour.legs.iter().map(|l| l.to))
+            .collect(),
+        path,
+        length_m,
+        time_s,
+        covered_fraction: if explorable == 0 {
+            1.0
+        } else {
+            tour.total as f64 / explorable as f64
+        },
+        explorable_m2: explorable as f64 * frame.cell_area_m2(),
+    }
+}
+
+/// The cells where the robot's body and safety margin fit (clear of everything not free).
+fn roomy(reachable: &Bitmap, body_m: f64) -> Bitmap {
+    let solid = Bitmap {
+        frame: reachable.frame,
+        data: reachable.data.iter().map(|f| !f).collect(),
+    };
+    let need = body_m / reachable.frame.resolution_m;
+    Bitmap {
+        frame: reachable.frame,
+        data: crate::distance::distance_to(&solid)
+            .data
+            .iter()
+            .map(|&d| d as f64 >= need)
+            .collect(),
+    }
+}
+
+/// The greedy set cover's cells: the fine cells grouped `k` by `k`, each weighing its
+/// explorable cells.
+struct Cover {
+    k: i32,
+    width: usize,
+    weight: Vec<u32>,
+}
+
+impl Cover {
+    fn new(sight: &Sight, cover_cell_m: f64) -> Self {
+        let f = sight.frame;
+        let k = ((cover_cell_m / f.resolution_m).round() as i32).max(1);
+        let width = (f.width as usize).div_ceil(k as usize);
+        let height = (f.height as usize).div_ceil(k as usize);
+        let mut weight = vec![0u32; width * height];
+        for (i, &t) in sight.truth.data.iter().enumerate() {
+            if t {
+                weight[Self::of(k, width, f.cell_of_index(i))] += 1;
+            }
+        }
+        Self { k, width, weight }
+    }
+
+    fn of(k: i32, width: usize, c: Cell) -> usize {
+        (c.y / k) as usize * width + (c.x / k) as usize
+    }
+
+    /// What a place sees: each cover cell with the headings that see it.
+    fn seen_from(&self, sight: &Sight, place: Cell) -> Vec<(u32, u16)> {
+        let mut seen = Vec::new();
+        let f = sight.frame;
+        sight.cast(place, |bearing, i| {
+            let c = Self::of(self.k, self.width, f.cell_of_index(i)) as u32;
+            seen.push((c, sight.heading_mask(bearing)));
+        });
+        seen.sort_unstable_by_key(|s| s.0);
+        let mut merged: Vec<(u32, u16)> = Vec::with_capacity(seen.len());
+        for (c, m) in seen {
+            match merged.last_mut() {
+                Some(last) if last.0 == c => last.1 |= m,
+                _ => merged.push((c, m)),
+            }
+        }
+        merged
+    }
+
+    /// Viewpoints (place, heading) chosen greedily, each the one that sees the most cover
+    /// cells' weight not yet seen, after what the start sees, until the fine cells seen reach
+    /// `coverage` of the explorable ones or nothing more is seen. Returns them and the number
+    /// of fine cells seen.
+    fn choose(
+        &self,
+        sight: &Sight,
+        places: &[Cell],
+        start: Pose,
+        coverage: f64,
+    ) -> (Vec<Pose>, usize) {
+        let f = sight.frame;
+        let wanted = (coverage * sight.truth.count_true() as f64).ceil() as usize;
+        let mut seen = Seen {
+            fine: vec![false; f.len()],
+            fine_seen: 0,
+            covered: vec![false; self.weight.len()],
+        };
+        seen.see(
+            self,
+            sight,
+            f.cell_from_world(start.position()),
+            start.theta_rad,
+        );
+        let lists: Vec<Vec<(u32, u16)>> =
+            places.iter().map(|p| self.seen_from(sight, *p)).collect();
+        let gain = |item: usize, covered: &[bool]| -> u64 {
+            let (p, k) = (item / sight.headings, item % sight.headings);
+            lists[p]
+                .iter()
+                .filter(|(c, m)| m & (1 << k) != 0 && !covered[*c as usize])
+                .map(|(c, _)| u64::from(self.weight[*c as usize]))
+                .sum()
+        };
+        // Lazy greedy: gains only fall as cells are covered, so a stale gain bounds the true.
+        let mut heap: std::collections::BinaryHeap<(u64, std::cmp::Reverse<usize>)> =
+            (0..places.len() * sight.headings)
+                .map(|i| (gain(i, &seen.covered), std::cmp::Reverse(i)))
+                .collect();
+        let mut chosen = Vec::new();
+        while seen.fine_seen < wanted {
+            let Some((stale, std::cmp::Reverse(item))) = heap.pop() else {
+                break;
+            };
+            let now = gain(item, &seen.covered);
+            if now == 0 {
+                continue;
+            }
+            if now < stale && heap.peek().is_some_and(|top| top.0 > now) {
+                heap.push((now, std::cmp::Reverse(item)));
+                continue;
+            }
+            let (p, k) = (item / sight.headings, item % sight.headings);
+            let heading = sight.heading(k);
+            seen.see(self, sight, places[p], heading);
+            let at = f.world_from_cell(places[p]);
+            chosen.push(Pose::new(at.x, at.y, wrap_angle(heading)));
+        }
+        (chosen, seen.fine_seen)
+    }
+}
+
+/// What the chosen viewpoints see: fine cells (and their number) and cover cells.
+struct Seen {
+    fine: Vec<bool>,
+    fine_seen: usize,
+    covered: Vec<bool>,
+}
+
+impl Seen {
+    fn see(&mut self, cover: &Cover, sight: &Sight, cell: Cell, heading: f64) {
+        for i in sight.fine_cells(cell, heading) {
+            self.covered[Cover::of(cover.k, cover.width, sight.frame.cell_of_index(i))] = true;
+            if !self.fine[i] {
+                self.fine[i] = true;
+                self.fine_seen += 1;
+            }
+        }
+    }
+}
+
+/// `chosen` in the order of a short open path from the start (over the planned path lengths
+/// between them on the `roomy` cells; `from_start` is the search from the start's cell).
+fn order(roomy: &Bitmap, chosen: &[Pose], from_start: &CostField) -> Vec<Pose> {
+    let frame = roomy.frame;
+    let cells: Vec<Cell> = chosen
+        .iter()
+        .map(|p| frame.cell_from_world(p.position()))
+        .collect();
+    let n = cells.len();
+    let first: Vec<f64> = cells
+        .iter()
+        .map(|c| from_start.distance_m(*c).unwrap_or(f64::INFINITY))
+        .collect();
+    let mut between = vec![f64::INFINITY; n * n];
+    for i in 0..n {
+        between[i * n + i] = 0.0;
+        if i + 1 < n {
+            let field = dijkstra_by(
+                frame,
+                cells[i],
+                |k| roomy.data[k],
+                |_| 0,
+                0,
+                &cells[i + 1..],
+            );
+            for j in i + 1..n {
+                if let Some(d) = field.distance_m(cells[j]) {
+                    between[i * n + j] = d;
+                    between[j * n + i] = d;
+                }
+            }
+        }
+    }
+    crate::tsp::open_path(&first, &between, 50)
+        .into_iter()
+        .map(|i| chosen[i])
+        .collect()
+}
+
+/// The robot scans this often on its way (m): about the explorer's map updates (0.25 m).
+const SENSE_EVERY_M: f64 = 0.25;
+
+/// One leg of a tour: driven from the previous viewpoint to `to`, and what it sees on the way
+/// (facing where it drives, every [`SENSE_EVERY_M`]) and at `to`.
+struct Leg {
+    to: Pose,
+    points: Vec<Vec2>,
+    length_m: f64,
+    turn_rad: f64,
+    seen: Vec<usize>,
+}
+
+/// Drives legs: along the shortest paths of the `roomy` cells, pulled straight, at full speed,
+/// turning in place at the full turn rate.
+struct Driver<'a> {
+    roomy: &'a Bitmap,
+    sight: &'a Sight,
+    from_start: &'a CostField,
+    start: Pose,
+    speed_mps: f64,
+    turn_radps: f64,
+}
+
+impl Driver<'_> {
+    fn time_of(&self, leg: &Leg) -> f64 {
+        leg.length_m / self.speed_mps + leg.turn_rad / self.turn_radps
+    }
+
+    /// The leg from `from` (`None`: the start) to `to`, if a path leads there.
+    fn leg(&self, from: Option<Pose>, to: Pose) -> Option<Leg> {
+        let frame = self.roomy.frame;
+        let goal = frame.cell_from_world(to.position());
+        let searched;
+        let (field, origin) = match from {
+            None => (self.from_start, self.start),
+            Some(f) => {
+                let cell = frame.cell_from_world(f.position());
+                searched = dijkstra_by(frame, cell, |k| self.roomy.data[k], |_| 0, 0, &[goal]);
+                (&searched, f)
+            }
+        };
+        let points = smooth(self.roomy, &field.path_to(goal)?);
+        let mut leg = Leg {
+            to,
+            points: Vec::new(),
+            length_m: 0.0,
+            turn_rad: 0.0,
+            seen: Vec::new(),
+        };
+        let (mut at, mut heading) = (origin.position(), origin.theta_rad);
+        for p in points {
+            let d = p - at;
+            if d.norm() > 1e-9 {
+                let dir = d.y.atan2(d.x);
+                leg.turn_rad += wrap_angle(dir - heading).abs();
+                leg.length_m += d.norm();
+                let n = (d.norm() / SENSE_EVERY_M).ceil() as usize;
+                for s in 1..=n {
+                    let q = at + d * (s as f64 / n as f64);
+                    leg.seen
+                        .extend(self.sight.fine_cells(frame.cell_from_world(q), dir));
+                }
+                leg.points.push(p);
+                (at, heading) = (p, dir);
+            }
+        }
+        leg.turn_rad += wrap_angle(to.theta_rad - heading).abs();
+        leg.seen.extend(self.sight.fine_cells(goal, to.theta_rad));
+        leg.seen.sort_unstable();
+        leg.seen.dedup();
+        Some(leg)
+    }
+
+    /// The tour through `ordered` (viewpoints no path leads to are left out).
+    fn tour(&self, ordered: &[Pose]) -> Tour {
+        let f = self.sight.frame;
+        let mut tour = Tour {
+            legs: Vec::new(),
+            counts: vec![0u32; f.len()],
+            total: 0,
+        };
+        let start_cell = f.cell_from_world(self.start.position());
+        tour.add(&self.sight.fine_cells(start_cell, self.start.theta_rad), 1);
+        for &v in ordered {
+            if let Some(leg) = self.leg(tour.legs.last().map(|l| l.to), v) {
+                tour.add(&leg.seen, 1);
+                tour.legs.push(leg);
+            }
+        }
+        tour
+    }
+}
+
+/// A tour as legs, with how many of its scans see each explorable cell.
+struct Tour {
+    legs: Vec<Leg>,
+    counts: Vec<u32>,
+    /// Explorable cells seen.
+    total: usize,
+}
+
+impl Tour {
+    /// Counts the scans of `cells` once more (`by` 1) or once less (-1).
+    fn add(&mut self, cells: &[usize], by: i32) {
+        for &i in cells {
+            let before = self.counts[i];
+            self.counts[i] = before.wrapping_add_signed(by);
+            match (before, self.counts[i]) {
+                (0, _) => self.total += 1,
+                (_, 0) => self.total -= 1,
+                _ => {}
+            }
+        }
+    }
+
+    /// Drops viewpoints the rest of the tour makes needless (what the robot sees on its way
+    /// covers them), one at a time in the order visited, each drop joining its neighbours by a
+    /// new leg, while the tour still sees `wanted` cells and takes less time.
+    fn prune(&mut self, driver: &Driver<'_>, wanted: usize) {
+        let mut k = 0;
+        while k < self.legs.len() {
+            let end = (k + 2).min(self.legs.len());
+            let from = k.checked_sub(1).map(|p| self.legs[p].to);
+            let joined = match self.legs.get(k + 1) {
+                None => None,
+                Some(next) => match driver.leg(from, next.to) {
+                    Some(leg) => Some(leg),
+                    None => {
+                        k += 1;
+                        continue;
+                    }
+                },
+            };
+            let removed_s: f64 = self.legs[k..end].iter().map(|l| driver.time_of(l)).sum();
+            let added_s = joined.as_ref().map_or(0.0, |l| driver.time_of(l));
+            let old: Vec<usize> = self.legs[k..end]
+                .iter()
+                .flat_map(|l| l.seen.iter().copied())
+                .collect();
+            self.add(&old, -1);
+            if let Some(j) = &joined {
+                self.add(&j.seen, 1);
+            }
+            if self.total >= wanted && added_s < removed_s {
+                self.legs.splice(k..end, joined);
+            } else {
+                if let Some(j) = &joined {
+                    self.add(&j.seen, -1);
+                }
+                self.add(&old, 1);
+                k += 1;
+            }
+        }
+    }
+}
+
+/// The grid path `cells` pulled straight: from each corner, the farthest cell of the path in
+/// a straight line through `roomy` cells (the grid's zigzag is neither driven nor turned).
+fn smooth(roomy: &Bitmap, cells: &[Cell]) -> Vec<Vec2> {
+    let frame = roomy.frame;
+    let Some(&last) = cells.last() else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i + 1 < cells.len() {
+        let mut j = i + 1;
+        while j + 1 < cells.len() && clear(roomy, cells[i], cells[j + 1]) {
+            j += 1;
+        }
+        out.push(frame.world_from_cell(cells[j]));
+        i = j;
+    }
+    if out.is_empty() {
+        out.push(frame.world_from_cell(last));
+    }
+    out
+}
+
+/// Whether the straight line between the centres of `a` and `b` stays in `roomy` cells.
+fn clear(roomy: &Bitmap, a: Cell, b: Cell) -> bool {
+    let (dx, dy) = ((b.x - a.x) as f64, (b.y - a.y) as f64);
+    let steps = (dx.abs().max(dy.abs()) * 2.0).ceil() as i32;
+    (0..=steps).all(|s| {
+        let t = if steps == 0 {
+            0.0
+        } else {
+            s as f64 / steps as f64
+        };
+        let c = Cell::new(
+            (a.x as f64 + 0.5 + dx * t).floor() as i32,
+            (a.y as f64 + 0.5 + dy * t).floor() as i32,
+        );
+        roomy.get(c) == Some(&true)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::{generate, BuildingKind, GenerateConfig};
+
+    fn building(seed: u64, kind: BuildingKind, area_m2: f64) -> Building {
+        generate(&GenerateConfig {
+            seed,
+            area_m2,
+            kind,
+            ..GenerateConfig::default()
+        })
+    }
+
+    /// On generated buildings of both kinds: the tour sees the wanted share, starts at the
+    /// start, is timed no faster than its length at full speed, and beats the nearest frontier
+    /// (which must discover what the tour knows).
+    #[test]
+    fn the_tour_covers_the_building_and_beats_exploring_it() {
+        for (seed, kind) in [(3, BuildingKind::Office), (5, BuildingKind::School)] {
+            let b = building(seed, kind, 300.0);
+            let start = b.start.unwrap();
+            let cfg = ExploreConfig::default();
+            let tour = known_map_tour(&b, start, &cfg, &TourSettings::default());
+            assert!(
+                tour.covered_fraction >= 0.99,
+                "{kind:?}: {}",
+                tour.covered_fraction
+            );
+            assert_eq!(tour.viewpoints[0], start);
+            assert!(tour.viewpoints.len() >= 2);
+            assert!(tour.time_s >= tour.length_m / cfg.sim.robot.max_speed_mps);
+            assert!(tour.explorable_m2 > 100.0);
+            let nearest = ExploreConfig {
+                strategy: crate::explore::Strategy::by_name(
+                    "nearest",
+                    &crate::explore::StrategyParams::default(),
+                )
+                .unwrap(),
+                ..ExploreConfig::default()
+            };
+            let run = crate::explore::explore(&b, start, &nearest, 1, &mut |_| {});
+            assert!(
+                tour.time_s < run.exploration_time_s,
+                "{kind:?}: the tour {} s ({} viewpoints, {} m), nearest {} s",
+                tour.time_s,
+                tour.viewpoints.len(),
+                tour.length_m,
+                run.exploration_time_s
+            );
+        }
+    }
+
+    /// A wider laser needs no more viewpoints, and asking for less coverage no more either.
+    #[test]
+    fn fewer_viewpoints_with_a_wider_view_or_less_coverage() {
+        let b = building(7, BuildingKind::Office, 300.0);
+        let start = b.start.unwrap();
+        let narrow = ExploreConfig::default();
+        let mut wide = ExploreConfig::default();
+        wide.sim.laser.fov_rad = std::f64::consts::TAU;
+        let ts = TourSettings::default();
+        let n = |cfg: &ExploreConfig, coverage: f64| {
+            let ts = TourSettings {
+                coverage,
+                ..ts.clone()
+            };
+            known_map_tour(&b, start, cfg, &ts).viewpoints.len()
+        };
+        assert!(n(&wide, 0.99) <= n(&narrow, 0.99));
+        assert!(n(&narrow, 0.8) <= n(&narrow, 0.99));
+    }
+}
