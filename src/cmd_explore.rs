@@ -182,15 +182,20 @@ pub fn run(a: ExploreArgs) -> Result<()> {
 }
 
 /// The run's settings: the file's (or the defaults), with the flags on top.
-fn explore_settings(a: &ExploreArgs) -> Result<Settings> {
-    let mut settings = match &a.settings {
+/// The settings of a `--settings` file (the defaults without one).
+pub fn settings_file(path: Option<&std::path::Path>) -> Result<Settings> {
+    Ok(match path {
         Some(p) => {
             let text = floorcast_formats::limits::read_text(p)?;
             floorcast_worker::settings::settings_from_json_text(&text)
                 .map_err(|e| anyhow::anyhow!("{}: {e} (see `floorcast settings`)", p.display()))?
         }
         None => Settings::default(),
-    };
+    })
+}
+
+fn explore_settings(a: &ExploreArgs) -> Result<Settings> {
+    let mut settings = settings_file(a.settings.as_deref())?;
     if let Some(l) = a.localization {
         settings.localization = l;
     }

@@ -58,14 +58,7 @@ pub fn run(a: TourArgs) -> Result<()> {
         );
     }
     let building = floorcast_formats::read_building(&a.building)?;
-    let settings = match &a.settings {
-        Some(p) => {
-            let text = floorcast_formats::limits::read_text(p)?;
-            floorcast_worker::settings::settings_from_json_text(&text)
-                .map_err(|e| anyhow::anyhow!("{}: {e} (see `floorcast settings`)", p.display()))?
-        }
-        None => Settings::default(),
-    };
+    let settings = crate::cmd_explore::settings_file(a.settings.as_deref())?;
     let config = settings.to_explore_config()?;
     let name = a.building.display().to_string();
     floorcast_formats::limits::check_building(
