@@ -610,7 +610,7 @@ pub fn explorable_free(
 
 /// The cells of [`explorable_free`] where the robot's body (a disc of `robot_radius_m`) fits:
 /// those far enough from the cells outside `reachable`.
-fn roomy_cells(reachable: &Bitmap, robot_radius_m: f64) -> Bitmap {
+pub(crate) fn roomy_cells(reachable: &Bitmap, robot_radius_m: f64) -> Bitmap {
     let frame = reachable.frame;
     let res = frame.resolution_m;
     let solid = Bitmap {

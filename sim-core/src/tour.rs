@@ -15,11 +15,11 @@
 //! at viewpoints (what it sees on the way is not counted) and drives the grid's shortest paths
 //! at full speed, turning in place where they turn.
 
-use crate::building::{explorable_free, Building};
+use crate::building::{explorable_free, roomy_cells, Building};
 use crate::explore::ExploreConfig;
 use crate::geom::{wrap_angle, Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame};
-use crate::plan::dijkstra::{dijkstra, dijkstra_by, CostField};
+use crate::plan::dijkstra::{dijkstra, dijkstra_by, lengths_between, CostField};
 
 /// How the tour is made.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,23 +79,26 @@ impl Sight {
     /// The fine cells of `truth` a laser at `cell` facing `heading` sees.
     fn fine_cells(&self, cell: Cell, heading: f64) -> Vec<usize> {
         let mut out = Vec::new();
-        self.cast(cell, |bearing, i| {
-            if wrap_angle(bearing - heading).abs() <= self.fov_rad / 2.0 {
-                out.push(i);
-            }
-        });
+        let in_view =
+            |bearing: f64| u16::from(wrap_angle(bearing - heading).abs() <= self.fov_rad / 2.0);
+        self.cast(cell, in_view, |_, i| out.push(i));
         out.sort_unstable();
         out.dedup();
         out
     }
 
-    /// Calls `seen(bearing, fine index)` for every explorable cell each ray from `cell` passes
-    /// through the free space, up to the laser's range.
-    fn cast(&self, cell: Cell, mut seen: impl FnMut(f64, usize)) {
+    /// Calls `seen(mask, fine index)` for every explorable cell each ray from `cell` passes
+    /// through the free space, up to the laser's range, `mask` being `mask_of` the ray's bearing
+    /// (computed once per ray; a ray whose mask is 0 is not cast).
+    fn cast(&self, cell: Cell, mask_of: impl Fn(f64) -> u16, mut seen: impl FnMut(u16, usize)) {
         let origin = Vec2::new(cell.x as f64 + 0.5, cell.y as f64 + 0.5);
         let step = 0.5;
         for r in 0..self.rays {
             let bearing = std::f64::consts::TAU * r as f64 / self.rays as f64;
+            let mask = mask_of(bearing);
+            if mask == 0 {
+                continue;
+            }
             let dir = Vec2::new(bearing.cos(), bearing.sin());
             let mut t = 0.0;
             while t <= self.range_cells {
@@ -108,7 +111,7 @@ impl Sight {
                     break;
                 }
                 if self.truth.data[i] {
-                    seen(bearing, i);
+                    seen(mask, i);
                 }
                 t += step;
             }
@@ -144,7 +147,7 @@ pub fn known_map_tour(
     let body_m = cfg.sim.robot.radius_m + cfg.safety_margin_m;
     let range_m = cfg.sim.laser.max_range_m;
     let truth = explorable_free(&reachable, start.position(), body_m, range_m);
-    let roomy = roomy(&reachable, body_m);
+    let roomy = roomy_cells(&reachable, body_m);
     let start_cell = frame.cell_from_world(start.position());
     let from_start = dijkstra(&roomy, start_cell, None);
     let sight = Sight {
@@ -163,9 +166,9 @@ pub fn known_map_tour(
         .filter(|c| roomy.get(*c) == Some(&true) && from_start.distance_m(*c).is_some())
         .collect();
     let cover = Cover::new(&sight, ts.cover_cell_m);
-    let (chosen, _) = cover.choose(&sight, &places, start, ts.coverage);
     let explorable = sight.truth.count_true();
     let wanted = (ts.coverage * explorable as f64).ceil() as usize;
+    let chosen = cover.choose(&sight, &places, start, wanted);
     let ordered = order(&roomy, &chosen, &from_start);
     let robot = &cfg.sim.robot;
     let driver = Driver {
@@ -201,23 +204,6 @@ pub fn known_map_tour(
     }
 }
 
-/// The cells where the robot's body and safety margin fit (clear of everything not free).
-fn roomy(reachable: &Bitmap, body_m: f64) -> Bitmap {
-    let solid = Bitmap {
-        frame: reachable.frame,
-        data: reachable.data.iter().map(|f| !f).collect(),
-    };
-    let need = body_m / reachable.frame.resolution_m;
-    Bitmap {
-        frame: reachable.frame,
-        data: crate::distance::distance_to(&solid)
-            .data
-            .iter()
-            .map(|&d| d as f64 >= need)
-            .collect(),
-    }
-}
-
 /// The greedy set cover's cells: the fine cells grouped `k` by `k`, each weighing its
 /// explorable cells.
 struct Cover {
@@ -249,9 +235,10 @@ impl Cover {
     fn seen_from(&self, sight: &Sight, place: Cell) -> Vec<(u32, u16)> {
         let mut seen = Vec::new();
         let f = sight.frame;
-        sight.cast(place, |bearing, i| {
+        let mask_of = |bearing| sight.heading_mask(bearing);
+        sight.cast(place, mask_of, |mask, i| {
             let c = Self::of(self.k, self.width, f.cell_of_index(i)) as u32;
-            seen.push((c, sight.heading_mask(bearing)));
+            seen.push((c, mask));
         });
         seen.sort_unstable_by_key(|s| s.0);
         let mut merged: Vec<(u32, u16)> = Vec::with_capacity(seen.len());
@@ -266,17 +253,9 @@ impl Cover {
 
     /// Viewpoints (place, heading) chosen greedily, each the one that sees the most cover
     /// cells' weight not yet seen, after what the start sees, until the fine cells seen reach
-    /// `coverage` of the explorable ones or nothing more is seen. Returns them and the number
-    /// of fine cells seen.
-    fn choose(
-        &self,
-        sight: &Sight,
-        places: &[Cell],
-        start: Pose,
-        coverage: f64,
-    ) -> (Vec<Pose>, usize) {
+    /// `wanted` or nothing more is seen.
+    fn choose(&self, sight: &Sight, places: &[Cell], start: Pose, wanted: usize) -> Vec<Pose> {
         let f = sight.frame;
-        let wanted = (coverage * sight.truth.count_true() as f64).ceil() as usize;
         let mut seen = Seen {
             fine: vec![false; f.len()],
             fine_seen: 0,
@@ -322,7 +301,7 @@ impl Cover {
             let at = f.world_from_cell(places[p]);
             chosen.push(Pose::new(at.x, at.y, wrap_angle(heading)));
         }
-        (chosen, seen.fine_seen)
+        chosen
     }
 }
 
@@ -353,31 +332,14 @@ fn order(roomy: &Bitmap, chosen: &[Pose], from_start: &CostField) -> Vec<Pose> {
         .iter()
         .map(|p| frame.cell_from_world(p.position()))
         .collect();
-    let n = cells.len();
     let first: Vec<f64> = cells
         .iter()
         .map(|c| from_start.distance_m(*c).unwrap_or(f64::INFINITY))
         .collect();
-    let mut between = vec![f64::INFINITY; n * n];
-    for i in 0..n {
-        between[i * n + i] = 0.0;
-        if i + 1 < n {
-            let field = dijkstra_by(
-                frame,
-                cells[i],
-                |k| roomy.data[k],
-                |_| 0,
-                0,
-                &cells[i + 1..],
-            );
-            for j in i + 1..n {
-                if let Some(d) = field.distance_m(cells[j]) {
-                    between[i * n + j] = d;
-                    between[j * n + i] = d;
-                }
-            }
-        }
-    }
+    let some: Vec<Option<Cell>> = cells.iter().copied().map(Some).collect();
+    let between = lengths_between(&some, |from, to| {
+        dijkstra_by(frame, from, |k| roomy.data[k], |_| 0, 0, to)
+    });
     crate::tsp::open_path(&first, &between, 50)
         .into_iter()
         .map(|i| chosen[i])

@@ -191,10 +191,12 @@ pub fn check_job(
         Some(_) => "baseline",
         None => job.strategy.as_str(),
     };
-    if !strategy_names().contains(&built_in) {
+    let params = job.settings.strategy_params();
+    let Some(strategy) = sim_core::explore::Strategy::by_name(built_in, &params) else {
         return Err(JobError::UnknownStrategy(job.strategy.clone()));
-    }
-    let mut config = job.settings.to_explore_config_for(built_in)?;
+    };
+    let mut config = job.settings.to_explore_config()?;
+    config.strategy = strategy;
     if config.strategy.layout_from_truth() && job.building.rooms.is_empty() {
         return Err(JobError::NoRooms {
             strategy: job.strategy.clone(),

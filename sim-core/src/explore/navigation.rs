@@ -239,28 +239,10 @@ impl Explorer<'_> {
             .iter()
             .map(|v| far.passable_near(frame.cell_from_world(v.goal), far_search_cells()))
             .collect();
-        let n = views.len();
-        let mut out = vec![f64::INFINITY; n * n];
         let window = self.far_window();
-        for i in 0..n {
-            out[i * n + i] = 0.0;
-            let Some(from) = on_far[i] else {
-                continue;
-            };
-            let later: Vec<Cell> = on_far[i + 1..].iter().flatten().copied().collect();
-            if later.is_empty() {
-                continue;
-            }
-            let field =
-                dijkstra_padded_within(far.frame, from, far.padded(), MAX_EXTRA, &later, window);
-            for j in i + 1..n {
-                if let Some(d) = on_far[j].and_then(|c| field.distance_m(c)) {
-                    out[i * n + j] = d;
-                    out[j * n + i] = d;
-                }
-            }
-        }
-        out
+        crate::plan::dijkstra::lengths_between(&on_far, |from, to| {
+            dijkstra_padded_within(far.frame, from, far.padded(), MAX_EXTRA, to, window)
+        })
     }
 
     /// The distance grid's cells that can be passable: those under the box of the map's cells

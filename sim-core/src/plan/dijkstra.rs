@@ -204,6 +204,35 @@ pub fn dijkstra_by(
     dijkstra_padded(frame, start, &enter, max_extra, targets)
 }
 
+/// The path lengths (m) between `cells`, row-major (`n * n`; 0 on the diagonal, infinite where
+/// no path leads or a cell is `None`): one `search` from each cell to the cells after it (which
+/// may stop once it has settled them), its lengths used both ways.
+pub fn lengths_between(
+    cells: &[Option<Cell>],
+    mut search: impl FnMut(Cell, &[Cell]) -> CostField,
+) -> Vec<f64> {
+    let n = cells.len();
+    let mut out = vec![f64::INFINITY; n * n];
+    for i in 0..n {
+        out[i * n + i] = 0.0;
+        let Some(from) = cells[i] else {
+            continue;
+        };
+        let later: Vec<Cell> = cells[i + 1..].iter().flatten().copied().collect();
+        if later.is_empty() {
+            continue;
+        }
+        let field = search(from, &later);
+        for j in i + 1..n {
+            if let Some(d) = cells[j].and_then(|c| field.distance_m(c)) {
+                out[i * n + j] = d;
+                out[j * n + i] = d;
+            }
+        }
+    }
+    out
+}
+
 /// [`dijkstra_by`] on a grid given as it searches it: `enter` covers `frame` padded by one
 /// cell on every side (row-major, `frame.width + 2` wide; the padding must be 0), with 0 for a
 /// blocked cell and otherwise 1 + the extra cost of entering the cell, at most `max_extra`.
