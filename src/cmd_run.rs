@@ -85,6 +85,12 @@ pub struct RunArgs {
     /// Only print the table of what is stored so far; run nothing.
     #[arg(long)]
     summary: bool,
+    /// Make no known-map tours. By default, once its jobs are done, `run` makes the tour of
+    /// each building, start pose and robot the grid's runs used (docs/known-map-tour.md; about
+    /// 1 to 40 s each, on the --workers threads) unless the store has it, so that `report`
+    /// shows each run's efficiency.
+    #[arg(long)]
+    no_tours: bool,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -215,14 +221,14 @@ pub fn run(a: RunArgs) -> Result<()> {
             render_text(&table(&store.all()?, &plan.labels, plan.coverage))
         );
         print_sequential(&plan, &progress);
+        if !a.no_tours {
+            let threads = a.workers.unwrap_or_else(crate::values::cores).max(1);
+            crate::cmd_tour::make_grid_tours(&plan, &jobs, &store, threads)?;
+        }
         return failed_jobs(&jobs, &store);
     }
     let networked = !a.listen.is_empty() || !a.connect.is_empty() || a.net.zenoh_config.is_some();
-    let workers = a.workers.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    });
+    let workers = a.workers.unwrap_or_else(crate::values::cores);
     if workers == 0 && !networked {
         anyhow::bail!(
             "--workers 0 runs nothing on this machine; add --listen ENDPOINT so that remote workers can join, or give --workers N"
@@ -236,7 +242,8 @@ pub fn run(a: RunArgs) -> Result<()> {
     announce(&plan, jobs.len(), before, workers);
     let interrupt = interrupt_on_ctrl_c();
     let (outcome, counts) = run_with_progress(&plan, &store, &opts, &interrupt, a.quiet)?;
-    finish(&plan, &store, outcome, counts, networked)
+    let tour_threads = (!a.no_tours).then_some(workers.max(1));
+    finish(&plan, &store, outcome, counts, networked, tour_threads)
 }
 
 /// The options checked once the grid is read (before the results directory is made).
@@ -424,6 +431,7 @@ fn finish(
     outcome: Outcome,
     counts: floorcast_coordinator::run::Counts,
     networked: bool,
+    tour_threads: Option<usize>,
 ) -> Result<()> {
     match outcome {
         Outcome::Complete => {
@@ -453,6 +461,9 @@ fn finish(
             );
             let (progress, jobs) = floorcast_coordinator::sequential::replay(plan, &store.all()?);
             print_sequential(plan, &progress);
+            if let Some(threads) = tour_threads {
+                crate::cmd_tour::make_grid_tours(plan, &jobs, store, threads)?;
+            }
             failed_jobs(&jobs, store)
         }
         Outcome::Interrupted => {
@@ -541,20 +552,7 @@ impl ChartPicture {
 }
 
 pub fn report(a: ReportArgs) -> Result<()> {
-    if let Some(f) = a.font_pt {
-        if !(4.0..=36.0).contains(&f) {
-            anyhow::bail!("--font-pt: expected a text size in points from 4 to 36, got {f}");
-        }
-    }
-    let style = floorcast_render::chart::ChartStyle {
-        width_in: a.plot_width,
-        font_pt: a.font_pt.unwrap_or(8.0),
-        titles: !a.no_titles,
-    };
-    if let Some(c) = a.coverage {
-        floorcast_coordinator::outcome::check_coverage(c)
-            .map_err(|e| anyhow::anyhow!("--coverage: {e}"))?;
-    }
+    let style = report_style(&a)?;
     let store = Store::open_existing(&a.results)?;
     refuse_overwrites(&a)?;
     let results = store.all()?;
@@ -592,13 +590,17 @@ pub fn report(a: ReportArgs) -> Result<()> {
         floorcast_coordinator::table::comparisons(&results, &order, &reference, coverage);
     let aggregates =
         floorcast_coordinator::aggregate::aggregates(&results, &order, &reference, coverage);
+    let tours = store.tours()?;
+    let (run_efficiency, efficiency) =
+        floorcast_coordinator::yardstick::efficiencies(&results, &tours, &order, coverage);
     // What is printed, kept for --html.
     let mut text = format!(
-        "{}{}{}{}",
+        "{}{}{}{}{}",
         render_text(&t),
         render_ends(&t),
         floorcast_coordinator::table::render_comparisons(&comparisons, &sequential_labels),
-        floorcast_coordinator::aggregate::render(&aggregates)
+        floorcast_coordinator::aggregate::render(&aggregates),
+        floorcast_coordinator::yardstick::render(&efficiency, coverage)
     );
     say_raw!("{}", text);
     for v in &verdicts {
@@ -627,6 +629,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         if let Some((dir, gains)) = &cross {
             v["against"] = floorcast_coordinator::table::against_json(gains, dir);
         }
+        v["efficiency"] = serde_json::json!({"labels": efficiency, "runs": run_efficiency});
         write_text(path, &(serde_json::to_string_pretty(&v)? + "\n"))
             .with_context(|| format!("cannot write {}", path.display()))?;
         say!("wrote {}", path.display());
@@ -641,6 +644,24 @@ pub fn report(a: ReportArgs) -> Result<()> {
         write_pictures(&a, results.len(), &text, &charts)?;
     }
     Ok(())
+}
+
+/// The charts' style, with the report's options checked.
+fn report_style(a: &ReportArgs) -> Result<floorcast_render::chart::ChartStyle> {
+    if let Some(f) = a.font_pt {
+        if !(4.0..=36.0).contains(&f) {
+            anyhow::bail!("--font-pt: expected a text size in points from 4 to 36, got {f}");
+        }
+    }
+    if let Some(c) = a.coverage {
+        floorcast_coordinator::outcome::check_coverage(c)
+            .map_err(|e| anyhow::anyhow!("--coverage: {e}"))?;
+    }
+    Ok(floorcast_render::chart::ChartStyle {
+        width_in: a.plot_width,
+        font_pt: a.font_pt.unwrap_or(8.0),
+        titles: !a.no_titles,
+    })
 }
 
 /// No export may overwrite the store or a file of it (checked before anything is written).

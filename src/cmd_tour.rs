@@ -4,9 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use floorcast_worker::Settings;
-use serde::Serialize;
-use sim_core::tour::{known_map_tour, TourSettings};
+use floorcast_render::{building_figure, Color, Figure, Style};
+use floorcast_worker::tour::{make_tour, TourRecord};
+use sim_core::{Pose, Vec2};
 
 use crate::output::write_text;
 
@@ -25,29 +25,10 @@ pub struct TourArgs {
     /// Also write the tour (viewpoints, path, time, length) as JSON to this file.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
-}
-
-pub const TOUR_FORMAT: &str = "floorcast-tour";
-pub const TOUR_VERSION: u32 = 1;
-
-/// The `--json` file.
-#[derive(Debug, Serialize)]
-struct TourFile {
-    format: &'static str,
-    version: u32,
-    floorcast_version: &'static str,
-    building: String,
-    building_hash: String,
-    settings: Settings,
-    coverage: f64,
-    time_s: f64,
-    length_m: f64,
-    covered_fraction: f64,
-    explorable_m2: f64,
-    /// `[x_m, y_m, heading_rad]`, the start first, in the order visited.
-    viewpoints: Vec<[f64; 3]>,
-    /// `[x_m, y_m]` points of the path driven.
-    path: Vec<[f64; 2]>,
+    /// Also draw the tour over the building to this file (.png, .svg or .pdf): its path in
+    /// blue, each viewpoint an orange arrow in the laser's heading, the start red.
+    #[arg(long, value_name = "FILE")]
+    picture: Option<PathBuf>,
 }
 
 pub fn run(a: TourArgs) -> Result<()> {
@@ -59,7 +40,6 @@ pub fn run(a: TourArgs) -> Result<()> {
     }
     let building = floorcast_formats::read_building(&a.building)?;
     let settings = crate::cmd_explore::settings_file(a.settings.as_deref())?;
-    let config = settings.to_explore_config()?;
     let name = a.building.display().to_string();
     floorcast_formats::limits::check_building(
         &building,
@@ -70,11 +50,7 @@ pub fn run(a: TourArgs) -> Result<()> {
     let (start, _) = building
         .default_start(settings.robot_radius_m)
         .map_err(|e| anyhow::anyhow!("{name}: no start for the tour: {e}"))?;
-    let ts = TourSettings {
-        coverage: a.coverage,
-        ..TourSettings::default()
-    };
-    let tour = known_map_tour(&building, start, &config, &ts);
+    let tour = make_tour(&building, &name, start, &settings, a.coverage)?;
     say!(
         "{name}: a tour that knows the building sees {:.1} % of its {:.0} m2 explorable in {:.0} s ({:.1} m, {} viewpoints)",
         100.0 * tour.covered_fraction,
@@ -84,27 +60,85 @@ pub fn run(a: TourArgs) -> Result<()> {
         tour.viewpoints.len()
     );
     if let Some(path) = &a.json {
-        let file = TourFile {
-            format: TOUR_FORMAT,
-            version: TOUR_VERSION,
-            floorcast_version: floorcast_worker::FLOORCAST_VERSION,
-            building: name.clone(),
-            building_hash: building.content_hash(),
-            settings,
-            coverage: a.coverage,
-            time_s: tour.time_s,
-            length_m: tour.length_m,
-            covered_fraction: tour.covered_fraction,
-            explorable_m2: tour.explorable_m2,
-            viewpoints: tour
-                .viewpoints
-                .iter()
-                .map(|v| [v.x_m, v.y_m, v.theta_rad])
-                .collect(),
-            path: tour.path.iter().map(|p| [p.x, p.y]).collect(),
-        };
-        let text = serde_json::to_string_pretty(&file).context("cannot encode the tour")?;
+        let text = serde_json::to_string_pretty(&tour).context("cannot encode the tour")?;
         write_text(path, &text)?;
     }
+    if let Some(path) = &a.picture {
+        tour_figure(&building, &tour)
+            .save(path)
+            .with_context(|| format!("--picture: cannot draw the tour to {}", path.display()))?;
+        say!("drew {}", path.display());
+    }
     Ok(())
+}
+
+/// The building ([`building_figure`]) with the tour's path and viewpoints.
+fn tour_figure(building: &sim_core::Building, tour: &TourRecord) -> Figure {
+    let mut fig = building_figure(building);
+    let px = fig.px_per_m();
+    let path: Vec<Vec2> = tour.path.iter().map(|p| Vec2::new(p[0], p[1])).collect();
+    fig.polyline(&path, &Style::stroke(Color::BLUE, (0.08 * px).max(1.5)));
+    let orange = Style::stroke(Color::rgb(240, 140, 20), (0.08 * px).max(1.5));
+    for v in tour.viewpoints.iter().skip(1) {
+        fig.arrow(&Pose::new(v[0], v[1], v[2]), 0.6, &orange);
+    }
+    fig
+}
+
+/// Makes and stores the known-map tours `jobs` need that `store` lacks
+/// (`floorcast_coordinator::yardstick`), on `workers` threads, saying what it does.
+pub fn make_grid_tours(
+    plan: &floorcast_coordinator::grid::Plan,
+    jobs: &[floorcast_coordinator::grid::PlannedJob],
+    store: &floorcast_coordinator::store::Store,
+    workers: usize,
+) -> Result<()> {
+    use floorcast_coordinator::yardstick::{missing, planned_tours};
+    let planned = planned_tours(plan, jobs);
+    let stored = store.tours()?;
+    let todo = missing(plan, &planned, &stored);
+    if todo.is_empty() {
+        return Ok(());
+    }
+    let threads = workers.clamp(1, todo.len());
+    say!(
+        "making {} known-map tour{} (the yardstick of efficiency, docs/known-map-tour.md) on {threads} thread{}",
+        todo.len(),
+        if todo.len() == 1 { "" } else { "s" },
+        if threads == 1 { "" } else { "s" },
+    );
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::scope(|scope| -> Result<()> {
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let (next, todo) = (&next, &todo);
+            scope.spawn(move || loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(t) = todo.get(i) else { break };
+                let b = &plan.buildings[t.building];
+                let began = std::time::Instant::now();
+                let made = make_tour(&b.building, &b.name, t.start, &t.settings, t.key.coverage);
+                if tx.send((made, began.elapsed().as_secs_f64())).is_err() {
+                    break;
+                }
+            });
+        }
+        drop(tx);
+        for (k, (made, wall_s)) in rx.iter().enumerate() {
+            let tour = made?;
+            store.record_tour(&tour)?;
+            say!(
+                "tour {}/{}: {}: {:.0} s, {:.1} % of {:.0} m2 seen ({:.1} s to make)",
+                k + 1,
+                todo.len(),
+                tour.building,
+                tour.time_s,
+                100.0 * tour.covered_fraction,
+                tour.explorable_m2,
+                wall_s
+            );
+        }
+        Ok(())
+    })
 }

@@ -51,11 +51,7 @@ pub fn run(a: WorkerArgs) -> Result<()> {
             floorcast_worker::settings::fmt_num(a.wait_s)
         );
     }
-    let jobs = a.jobs.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    });
+    let jobs = a.jobs.unwrap_or_else(crate::values::cores);
     let net = NetConfig {
         listen: Vec::new(),
         connect: a.connect.clone(),

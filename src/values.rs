@@ -51,6 +51,13 @@ pub fn length_in(s: &str) -> Result<f64, String> {
         .ok_or_else(expected)
 }
 
+/// The cores of this machine (1 when unknown): the default number of worker threads.
+pub fn cores() -> usize {
+    std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

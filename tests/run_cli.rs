@@ -499,3 +499,78 @@ settings = {{ alpha = 0.9 }}
         assert!(!svg.contains("over baseline"), "{chart}: a title was drawn");
     }
 }
+
+/// `run` makes the known-map tour its runs need once (the one building and start here) and
+/// stores it; `report` shows each label's efficiency (tour time / exploration time) and
+/// `--json` holds it per label and per run; `--no-tours` makes none, and the report then has
+/// no efficiency section.
+#[test]
+fn a_grid_run_stores_its_tour_and_report_shows_efficiency() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = grid(dir.path(), "[1]");
+    let text = std::fs::read_to_string(&g).unwrap();
+    std::fs::write(&g, text.replace("time_limit_s = 60", "time_limit_s = 1200")).unwrap();
+    let res = dir.path().join("res");
+    let args = [
+        "run",
+        g.to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+        "-q",
+    ];
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("making 1 known-map tour "),
+        "{}",
+        stdout(&o)
+    );
+    let again = run(&args);
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert!(
+        !stdout(&again).contains("known-map tour"),
+        "{}",
+        stdout(&again)
+    );
+    let json = dir.path().join("r.json");
+    let o = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("efficiency at 99 %"), "{}", stdout(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let labels = v["efficiency"]["labels"].as_array().unwrap();
+    let names: Vec<&str> = labels
+        .iter()
+        .map(|l| l["label"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["baseline", "near"]);
+    for l in labels {
+        let median = l["median"].as_f64().unwrap();
+        assert!(median > 0.0 && median <= 1.05, "{l}");
+        assert_eq!(l["runs"], 1);
+    }
+    assert_eq!(v["efficiency"]["runs"].as_array().unwrap().len(), 2);
+
+    let bare = dir.path().join("bare");
+    let mut args = args.to_vec();
+    args[3] = bare.to_str().unwrap();
+    args.push("--no-tours");
+    let o = run(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stdout(&o).contains("known-map tour"), "{}", stdout(&o));
+    let o = run(&[
+        "report",
+        bare.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(!stdout(&o).contains("efficiency at"), "{}", stdout(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["efficiency"]["labels"].as_array().unwrap().len(), 0);
+}

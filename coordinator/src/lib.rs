@@ -30,6 +30,8 @@
 //!   profiles).
 //! - [`sprt`]: the sequential test (GSPRT) that decides a comparison from paired runs.
 //! - [`sequential`]: a sequential grid's progress, batch by batch, replayed from the store.
+//! - [`yardstick`]: the known-map tours a grid's runs are measured against, and their
+//!   efficiency.
 
 pub mod aggregate;
 pub mod execute;
@@ -49,3 +51,4 @@ pub mod store;
 pub mod suite;
 pub mod table;
 pub mod verify;
+pub mod yardstick;

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use rusqlite::{params, Connection, OptionalExtension};
 
+use floorcast_worker::tour::TourRecord;
 pub use floorcast_worker::wire::JobStatus;
 use floorcast_worker::{RunSummary, Settings};
 
@@ -881,6 +882,58 @@ impl Store {
                     problem: format!("grid '{grid}': labels_json is not a list of labels ({e})"),
                 })?;
             out.push((grid, labels, coverage));
+        }
+        Ok(out)
+    }
+
+    /// Stores a building's known-map tour under its building hash, start and key (replacing
+    /// one stored under the same).
+    pub fn record_tour(&self, t: &TourRecord) -> Result<(), StoreError> {
+        // Made by the run that writes it, as `grids`: opening a store to read it changes nothing.
+        self.sql(self.conn.execute_batch(
+            "CREATE TABLE IF NOT EXISTS tours (
+                building_hash TEXT NOT NULL,
+                start_json TEXT NOT NULL,
+                key_json TEXT NOT NULL,
+                tour_json TEXT NOT NULL,
+                PRIMARY KEY (building_hash, start_json, key_json)
+             );",
+        ))?;
+        let start = serde_json::to_string(&t.start).unwrap_or_default();
+        let tour = serde_json::to_string(t).unwrap_or_default();
+        self.sql(self.conn.execute(
+            "INSERT INTO tours (building_hash, start_json, key_json, tour_json) VALUES (?1, ?2, ?3, ?4)
+             ON CONFLICT(building_hash, start_json, key_json) DO UPDATE SET tour_json = ?4",
+            params![t.building_hash, start, t.key.text(), tour],
+        ))?;
+        Ok(())
+    }
+
+    /// The stored tours, each decoded and checked ([`TourRecord::validate`]); stores written
+    /// before tours were stored have none.
+    pub fn tours(&self) -> Result<Vec<TourRecord>, StoreError> {
+        if !self.has_table("tours")? {
+            return Ok(Vec::new());
+        }
+        let mut st = self.sql(self.conn.prepare(
+            "SELECT building_hash, tour_json FROM tours ORDER BY building_hash, start_json, key_json",
+        ))?;
+        let rows =
+            self.sql(st.query_map([], |r| Ok((r.get::<_, String>(0)?, r.get::<_, String>(1)?))))?;
+        let mut out = Vec::new();
+        for r in rows {
+            let (hash, text) = self.sql(r)?;
+            let bad = |problem: String| StoreError::Row {
+                path: self.path.clone(),
+                problem: format!("the tour of building {hash}: {problem}"),
+            };
+            let t: TourRecord = serde_json::from_str(&text)
+                .map_err(|e| bad(format!("tour_json is not a tour record ({e})")))?;
+            t.validate().map_err(bad)?;
+            if t.building_hash != hash {
+                return Err(bad(format!("tour_json is of building {}", t.building_hash)));
+            }
+            out.push(t);
         }
         Ok(out)
     }

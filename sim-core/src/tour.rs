@@ -15,6 +15,8 @@
 //! at viewpoints (what it sees on the way is not counted) and drives the grid's shortest paths
 //! at full speed, turning in place where they turn.
 
+use std::cell::RefCell;
+
 use crate::building::{explorable_free, roomy_cells, Building};
 use crate::explore::ExploreConfig;
 use crate::geom::{wrap_angle, Pose, Vec2};
@@ -69,42 +71,109 @@ struct Sight {
     truth: Bitmap,
     /// The free space rays pass through.
     free: Bitmap,
-    range_cells: f64,
     fov_rad: f64,
     headings: usize,
-    rays: usize,
+    rays: Vec<Ray>,
+    /// Marks of the fine cells already listed (scratch of `fine_cells` and `see_into`).
+    marks: RefCell<Marks>,
+}
+
+/// One ray of a sweep: its bearing and the cells it passes through from a cell's centre, as
+/// offsets from that cell, in order, out to the laser's range (the same for every cell).
+struct Ray {
+    bearing: f64,
+    cells: Vec<(i32, i32)>,
+}
+
+impl Ray {
+    /// The `rays` rays of a full turn, sampled every half cell out to `range_cells`.
+    fn sweep(rays: usize, range_cells: f64) -> Vec<Ray> {
+        (0..rays)
+            .map(|r| {
+                let bearing = std::f64::consts::TAU * r as f64 / rays as f64;
+                let dir = Vec2::new(bearing.cos(), bearing.sin());
+                let mut cells: Vec<(i32, i32)> = Vec::new();
+                let mut t = 0.0;
+                while t <= range_cells {
+                    let p = Vec2::new(0.5, 0.5) + dir * t;
+                    let c = (p.x.floor() as i32, p.y.floor() as i32);
+                    if cells.last() != Some(&c) {
+                        cells.push(c);
+                    }
+                    t += 0.5;
+                }
+                Ray { bearing, cells }
+            })
+            .collect()
+    }
+}
+
+/// Marks over a grid's cells that are all cleared at once (a new generation): the cells a
+/// sweep of rays already listed, without sorting the many repeats of rays crossing near their
+/// origin.
+struct Marks {
+    stamp: Vec<u32>,
+    generation: u32,
+}
+
+impl Marks {
+    fn new(len: usize) -> Self {
+        Self {
+            stamp: vec![0; len],
+            generation: 0,
+        }
+    }
+
+    /// Clears every mark.
+    fn clear(&mut self) {
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.stamp.fill(0);
+            self.generation = 1;
+        }
+    }
+
+    /// Marks `i`; whether it was not marked yet.
+    fn first(&mut self, i: usize) -> bool {
+        let fresh = self.stamp[i] != self.generation;
+        self.stamp[i] = self.generation;
+        fresh
+    }
 }
 
 impl Sight {
     /// The fine cells of `truth` a laser at `cell` facing `heading` sees.
     fn fine_cells(&self, cell: Cell, heading: f64) -> Vec<usize> {
         let mut out = Vec::new();
+        self.marks.borrow_mut().clear();
+        self.see_into(cell, heading, &mut out);
+        out
+    }
+
+    /// Adds to `out` the fine cells a laser at `cell` facing `heading` sees that are not marked
+    /// yet, and marks them.
+    fn see_into(&self, cell: Cell, heading: f64, out: &mut Vec<usize>) {
+        let mut marks = self.marks.borrow_mut();
         let in_view =
             |bearing: f64| u16::from(wrap_angle(bearing - heading).abs() <= self.fov_rad / 2.0);
-        self.cast(cell, in_view, |_, i| out.push(i));
-        out.sort_unstable();
-        out.dedup();
-        out
+        self.cast(cell, in_view, |_, i| {
+            if marks.first(i) {
+                out.push(i);
+            }
+        });
     }
 
     /// Calls `seen(mask, fine index)` for every explorable cell each ray from `cell` passes
     /// through the free space, up to the laser's range, `mask` being `mask_of` the ray's bearing
     /// (computed once per ray; a ray whose mask is 0 is not cast).
     fn cast(&self, cell: Cell, mask_of: impl Fn(f64) -> u16, mut seen: impl FnMut(u16, usize)) {
-        let origin = Vec2::new(cell.x as f64 + 0.5, cell.y as f64 + 0.5);
-        let step = 0.5;
-        for r in 0..self.rays {
-            let bearing = std::f64::consts::TAU * r as f64 / self.rays as f64;
-            let mask = mask_of(bearing);
+        for ray in &self.rays {
+            let mask = mask_of(ray.bearing);
             if mask == 0 {
                 continue;
             }
-            let dir = Vec2::new(bearing.cos(), bearing.sin());
-            let mut t = 0.0;
-            while t <= self.range_cells {
-                let p = origin + dir * t;
-                let c = Cell::new(p.x.floor() as i32, p.y.floor() as i32);
-                let Some(i) = self.frame.index(c) else {
+            for &(dx, dy) in &ray.cells {
+                let Some(i) = self.frame.index(Cell::new(cell.x + dx, cell.y + dy)) else {
                     break;
                 };
                 if !self.free.data[i] {
@@ -113,7 +182,6 @@ impl Sight {
                 if self.truth.data[i] {
                     seen(mask, i);
                 }
-                t += step;
             }
         }
     }
@@ -154,10 +222,10 @@ pub fn known_map_tour(
         frame,
         truth,
         free: reachable,
-        range_cells: range_m / res,
         fov_rad: cfg.sim.laser.fov_rad,
         headings: ts.headings.clamp(1, 16),
-        rays: ts.rays.max(8),
+        rays: Ray::sweep(ts.rays.max(8), range_m / res),
+        marks: RefCell::new(Marks::new(frame.len())),
     };
     let step = ((ts.spacing_m / res).round() as i32).max(1);
     let places: Vec<Cell> = (0..frame.len())
@@ -181,6 +249,17 @@ pub fn known_map_tour(
     };
     let mut tour = driver.tour(&ordered);
     tour.prune(&driver, wanted);
+    // What is seen on the way made viewpoints needless: order what is left afresh, and again
+    // while that makes the tour faster.
+    for _ in 0..3 {
+        let kept: Vec<Pose> = tour.legs.iter().map(|l| l.to).collect();
+        let mut again = driver.tour(&order(&roomy, &kept, &from_start));
+        again.prune(&driver, wanted);
+        if again.total < wanted || again.time_s(&driver) >= tour.time_s(&driver) - 1e-9 {
+            break;
+        }
+        tour = again;
+    }
     let mut path = vec![start.position()];
     let (mut length_m, mut time_s) = (0.0, 0.0);
     for leg in &tour.legs {
@@ -210,6 +289,8 @@ struct Cover {
     k: i32,
     width: usize,
     weight: Vec<u32>,
+    /// Scratch of `seen_from`: the cover cells listed, and where.
+    listed: RefCell<(Marks, Vec<u32>)>,
 }
 
 impl Cover {
@@ -224,7 +305,13 @@ impl Cover {
                 weight[Self::of(k, width, f.cell_of_index(i))] += 1;
             }
         }
-        Self { k, width, weight }
+        let listed = RefCell::new((Marks::new(weight.len()), vec![0; weight.len()]));
+        Self {
+            k,
+            width,
+            weight,
+            listed,
+        }
     }
 
     fn of(k: i32, width: usize, c: Cell) -> usize {
@@ -233,21 +320,21 @@ impl Cover {
 
     /// What a place sees: each cover cell with the headings that see it.
     fn seen_from(&self, sight: &Sight, place: Cell) -> Vec<(u32, u16)> {
-        let mut seen = Vec::new();
+        let mut merged: Vec<(u32, u16)> = Vec::new();
         let f = sight.frame;
         let mask_of = |bearing| sight.heading_mask(bearing);
+        let mut listed = self.listed.borrow_mut();
+        let (marks, at) = &mut *listed;
+        marks.clear();
         sight.cast(place, mask_of, |mask, i| {
-            let c = Self::of(self.k, self.width, f.cell_of_index(i)) as u32;
-            seen.push((c, mask));
-        });
-        seen.sort_unstable_by_key(|s| s.0);
-        let mut merged: Vec<(u32, u16)> = Vec::with_capacity(seen.len());
-        for (c, m) in seen {
-            match merged.last_mut() {
-                Some(last) if last.0 == c => last.1 |= m,
-                _ => merged.push((c, m)),
+            let c = Self::of(self.k, self.width, f.cell_of_index(i));
+            if marks.first(c) {
+                at[c] = merged.len() as u32;
+                merged.push((c as u32, mask));
+            } else {
+                merged[at[c] as usize].1 |= mask;
             }
-        }
+        });
         merged
     }
 
@@ -397,6 +484,7 @@ impl Driver<'_> {
             seen: Vec::new(),
         };
         let (mut at, mut heading) = (origin.position(), origin.theta_rad);
+        self.sight.marks.borrow_mut().clear();
         for p in points {
             let d = p - at;
             if d.norm() > 1e-9 {
@@ -406,17 +494,15 @@ impl Driver<'_> {
                 let n = (d.norm() / SENSE_EVERY_M).ceil() as usize;
                 for s in 1..=n {
                     let q = at + d * (s as f64 / n as f64);
-                    leg.seen
-                        .extend(self.sight.fine_cells(frame.cell_from_world(q), dir));
+                    let cell = frame.cell_from_world(q);
+                    self.sight.see_into(cell, dir, &mut leg.seen);
                 }
                 leg.points.push(p);
                 (at, heading) = (p, dir);
             }
         }
         leg.turn_rad += wrap_angle(to.theta_rad - heading).abs();
-        leg.seen.extend(self.sight.fine_cells(goal, to.theta_rad));
-        leg.seen.sort_unstable();
-        leg.seen.dedup();
+        self.sight.see_into(goal, to.theta_rad, &mut leg.seen);
         Some(leg)
     }
 
@@ -449,6 +535,10 @@ struct Tour {
 }
 
 impl Tour {
+    fn time_s(&self, driver: &Driver<'_>) -> f64 {
+        self.legs.iter().map(|l| driver.time_of(l)).sum()
+    }
+
     /// Counts the scans of `cells` once more (`by` 1) or once less (-1).
     fn add(&mut self, cells: &[usize], by: i32) {
         for &i in cells {

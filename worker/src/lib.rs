@@ -9,6 +9,7 @@
 //!   coordinator that the caller supplies (it knows no transport).
 //! - [`wire`]: the versioned messages between coordinator and workers.
 //! - [`settings`], [`record`], [`external`]: the settings, the run record, external strategies.
+//! - [`tour`]: the known-map yardstick's record (a building's tour for a run's robot and laser).
 //! - [`text`]: outside text (a program's output, a remote worker's error) made safe to print
 //!   and store.
 //!
@@ -23,6 +24,7 @@ pub mod process;
 pub mod record;
 pub mod settings;
 pub mod text;
+pub mod tour;
 pub mod wire;
 
 use std::time::Instant;

@@ -1,0 +1,200 @@
+//! The known-map yardstick as a record: a tour of a building ([`sim_core::tour`]) for the robot
+//! and laser of a run's settings, from its start, kept beside the runs it measures.
+//!
+//! A tour depends on the building, the start pose, the coverage it must reach and six settings
+//! (the robot's radius, speed and turn rate, the laser's range and field of view, the map
+//! resolution): its [`TourKey`]. `floorcast tour --json` writes a [`TourRecord`], and a grid's
+//! results store one per key, which `report` divides by each run's exploration time (its
+//! efficiency).
+
+use serde::{Deserialize, Serialize};
+use sim_core::tour::{known_map_tour, TourSettings};
+use sim_core::{Building, Pose};
+
+use crate::{Settings, SettingsError};
+
+pub const TOUR_FORMAT: &str = "floorcast-tour";
+/// 2: the key and the start in the record (1: `floorcast tour --json` of 0.7.0).
+pub const TOUR_VERSION: u32 = 2;
+
+/// What a tour depends on besides its building: the settings it reads and the coverage wanted.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TourKey {
+    pub robot_radius_m: f64,
+    pub max_speed_mps: f64,
+    pub max_turn_rate_radps: f64,
+    pub laser_fov_deg: f64,
+    pub laser_range_m: f64,
+    pub map_resolution_m: f64,
+    /// The share of the explorable area the tour sees.
+    pub coverage: f64,
+}
+
+impl TourKey {
+    /// The key of a tour for runs with `settings`, seeing `coverage` of the explorable area.
+    pub fn of(settings: &Settings, coverage: f64) -> TourKey {
+        TourKey {
+            robot_radius_m: settings.robot_radius_m,
+            max_speed_mps: settings.max_speed_mps,
+            max_turn_rate_radps: settings.max_turn_rate_radps,
+            laser_fov_deg: settings.laser_fov_deg,
+            laser_range_m: settings.laser_range_m,
+            map_resolution_m: settings.map_resolution_m,
+            coverage,
+        }
+    }
+
+    /// The key as stored: its JSON (fields in declaration order, numbers round-tripping).
+    pub fn text(&self) -> String {
+        serde_json::to_string(self).expect("a tour key encodes")
+    }
+}
+
+/// A tour of a building and what it was made for.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TourRecord {
+    pub format: String,
+    pub version: u32,
+    pub floorcast_version: String,
+    /// The building as named where the tour was made (its file, or a grid's name for it).
+    pub building: String,
+    pub building_hash: String,
+    /// `[x_m, y_m, heading_rad]`: the start pose, as a run's summary records it.
+    pub start: [f64; 3],
+    pub key: TourKey,
+    pub time_s: f64,
+    pub length_m: f64,
+    pub covered_fraction: f64,
+    pub explorable_m2: f64,
+    /// `[x_m, y_m, heading_rad]`, the start first, in the order visited.
+    pub viewpoints: Vec<[f64; 3]>,
+    /// `[x_m, y_m]` points of the path driven.
+    pub path: Vec<[f64; 2]>,
+}
+
+impl TourRecord {
+    /// Checks a record read from outside (a store's row): its format, version and numbers.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.format != TOUR_FORMAT {
+            return Err(format!(
+                "format: expected \"{TOUR_FORMAT}\", got \"{}\"",
+                crate::text::excerpt(&self.format)
+            ));
+        }
+        if self.version != TOUR_VERSION {
+            return Err(format!(
+                "version: expected {TOUR_VERSION}, got {}",
+                self.version
+            ));
+        }
+        let positive = [
+            ("time_s", self.time_s),
+            ("explorable_m2", self.explorable_m2),
+        ];
+        for (field, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{field}: expected a positive number, got {v}"));
+            }
+        }
+        if !(self.length_m.is_finite() && self.length_m >= 0.0) {
+            return Err(format!(
+                "length_m: expected a number at least 0, got {}",
+                self.length_m
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.covered_fraction) {
+            return Err(format!(
+                "covered_fraction: expected a fraction in [0, 1], got {}",
+                self.covered_fraction
+            ));
+        }
+        if self.start.iter().any(|v| !v.is_finite()) {
+            return Err("start: expected three finite numbers".into());
+        }
+        Ok(())
+    }
+
+    /// Whether this tour measures a run from `start` (the summary's, bit for bit).
+    pub fn starts_at(&self, start: &[f64; 3]) -> bool {
+        self.start
+            .iter()
+            .zip(start)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    }
+}
+
+/// The tour of `building` (named `name`) from `start` for the robot and laser of `settings`,
+/// seeing `coverage` of its explorable area (docs/known-map-tour.md).
+pub fn make_tour(
+    building: &Building,
+    name: &str,
+    start: Pose,
+    settings: &Settings,
+    coverage: f64,
+) -> Result<TourRecord, SettingsError> {
+    let config = settings.to_explore_config()?;
+    let ts = TourSettings {
+        coverage,
+        ..TourSettings::default()
+    };
+    let tour = known_map_tour(building, start, &config, &ts);
+    Ok(TourRecord {
+        format: TOUR_FORMAT.to_string(),
+        version: TOUR_VERSION,
+        floorcast_version: crate::FLOORCAST_VERSION.to_string(),
+        building: name.to_string(),
+        building_hash: building.content_hash(),
+        start: [start.x_m, start.y_m, start.theta_rad],
+        key: TourKey::of(settings, coverage),
+        time_s: tour.time_s,
+        length_m: tour.length_m,
+        covered_fraction: tour.covered_fraction,
+        explorable_m2: tour.explorable_m2,
+        viewpoints: tour
+            .viewpoints
+            .iter()
+            .map(|v| [v.x_m, v.y_m, v.theta_rad])
+            .collect(),
+        path: tour.path.iter().map(|p| [p.x, p.y]).collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_record_round_trips_and_bad_ones_are_refused() {
+        let b = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
+            seed: 2,
+            area_m2: 150.0,
+            ..Default::default()
+        });
+        let start = b.start.unwrap();
+        let settings = Settings::default();
+        let t = make_tour(&b, "b", start, &settings, 0.99).unwrap();
+        t.validate().unwrap();
+        assert!(t.starts_at(&[start.x_m, start.y_m, start.theta_rad]));
+        assert!(!t.starts_at(&[start.x_m + 1e-9, start.y_m, start.theta_rad]));
+        let text = serde_json::to_string(&t).unwrap();
+        let back: TourRecord = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, t);
+        assert_eq!(t.key, TourKey::of(&settings, 0.99));
+        type Spoil = fn(&mut TourRecord);
+        let cases: [(&str, Spoil); 5] = [
+            ("format", |r| r.format = "x".into()),
+            ("version", |r| r.version = 99),
+            ("time_s", |r| r.time_s = f64::NAN),
+            ("covered_fraction", |r| r.covered_fraction = 1.5),
+            ("start", |r| r.start[1] = f64::INFINITY),
+        ];
+        for (field, spoil) in cases {
+            let mut bad = t.clone();
+            spoil(&mut bad);
+            let e = bad.validate().unwrap_err();
+            assert!(e.starts_with(field), "{field}: {e}");
+        }
+    }
+}
