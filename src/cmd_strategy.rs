@@ -21,8 +21,12 @@ pub enum StrategyCommand {
 #[derive(Debug, Args)]
 pub struct ListArgs {
     /// Print the list as the markdown table of the README.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "json")]
     markdown: bool,
+    /// Print the list as JSON: per strategy its name, gain, stop, citation and the settings it
+    /// reads with their defaults (those of the layout's use without a value: the run's).
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -58,12 +62,46 @@ fn list(a: &ListArgs) {
         say_raw!("{}", strategies_markdown());
         return;
     }
+    if a.json {
+        say_raw!("{}\n", strategies_json());
+        return;
+    }
     let width = BUILT_IN.iter().map(|b| b.name.len()).max().unwrap_or(0);
     for b in BUILT_IN {
-        let gain = b.gain.replace('`', "");
+        let gain = b.gain_cited().replace('`', "");
         let stops = b.stops.replace('`', "");
         say_raw!("{:width$}  I(p): {gain}; stops: {stops}\n", b.name);
     }
+}
+
+/// `strategy list --json`: the built-in strategies with the default settings' parameters.
+fn strategies_json() -> String {
+    use sim_core::explore::strategy::BUILT_IN;
+    let params = Settings::default().strategy_params();
+    let list: Vec<serde_json::Value> = BUILT_IN
+        .iter()
+        .map(|b| {
+            let strategy = (b.make)(&params);
+            let parameters: Vec<serde_json::Value> = strategy
+                .parameters()
+                .into_iter()
+                .map(|(name, default)| serde_json::json!({"setting": name, "default": default}))
+                .collect();
+            serde_json::json!({
+                "name": b.name,
+                "gain": b.gain.replace('`', ""),
+                "stops": b.stops.replace('`', ""),
+                "citation": b.citation,
+                "parameters": parameters,
+            })
+        })
+        .collect();
+    serde_json::to_string_pretty(&serde_json::json!({
+        "format": "floorcast-strategies",
+        "version": 1,
+        "strategies": list,
+    }))
+    .expect("the list encodes")
 }
 
 fn check(a: CheckArgs) -> Result<()> {

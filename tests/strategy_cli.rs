@@ -407,3 +407,58 @@ fn the_compliance_check_names_the_rule_a_program_breaks() {
         assert!(!stderr(&o).contains("panicked"), "{script}");
     }
 }
+
+/// `strategy list --json` lists every built-in strategy (the names `explore --strategy`
+/// accepts) with a citation, and each literature strategy with its paper and the setting it
+/// reads at its default.
+#[test]
+fn the_strategy_list_in_json_cites_each_strategy_and_its_parameters() {
+    let o = floorcast()
+        .args(["strategy", "list", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["format"], "floorcast-strategies");
+    let list = v["strategies"].as_array().unwrap();
+    let names: Vec<&str> = list.iter().map(|s| s["name"].as_str().unwrap()).collect();
+    assert_eq!(names, floorcast_worker::strategy_names());
+    let cases = [
+        ("nearest", "Yamauchi", None),
+        (
+            "utility-exp",
+            "González-Baños",
+            Some(("utility_exp_lambda_per_m", 0.2)),
+        ),
+        (
+            "cost-utility",
+            "Burgard",
+            Some(("cost_utility_beta_m2_per_m", 1.0)),
+        ),
+        ("frontier-tsp", "Kulich", None),
+        ("room-first", "Holz", None),
+        ("baseline", "Luperto", Some(("alpha", 0.5))),
+        ("layout-es", "Luperto", Some(("es_threshold_m2", 1.0))),
+        ("layout-aes", "Luperto", Some(("aes_min_gain_m2", 2.0))),
+    ];
+    for (name, cited, param) in cases {
+        let s = list.iter().find(|s| s["name"] == name).unwrap();
+        assert!(s["citation"].as_str().unwrap().contains(cited), "{s}");
+        let params = s["parameters"].as_array().unwrap();
+        match param {
+            Some((setting, default)) => assert!(
+                params
+                    .iter()
+                    .any(|p| p["setting"] == setting && p["default"].as_f64() == Some(default)),
+                "{s}"
+            ),
+            None => assert!(
+                params.iter().all(|p| p["setting"] == "layout_update_m2"),
+                "{s}"
+            ),
+        }
+    }
+    for s in list {
+        assert!(!s["citation"].as_str().unwrap().is_empty(), "{s}");
+    }
+}

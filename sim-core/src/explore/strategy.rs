@@ -153,7 +153,25 @@ pub struct BuiltIn {
     pub gain: &'static str,
     /// When it stops, in words.
     pub stops: &'static str,
+    /// Where it comes from ([`PAPER`]: the paper floorcast first studies).
+    pub citation: &'static str,
     pub make: fn(&StrategyParams) -> Strategy,
+}
+
+/// The paper whose strategies floorcast first studied.
+pub const PAPER: &str = "Luperto, Fochetta and Amigoni, \"Exploration of indoor environments through predicting the layout of partially observed rooms\"";
+/// floorcast's own variants of the paper's strategies.
+const FLOORCAST: &str = "floorcast, after Luperto, Fochetta and Amigoni";
+
+impl BuiltIn {
+    /// How `I(p)` is estimated, with the citation unless it is the paper's or floorcast's.
+    pub fn gain_cited(&self) -> String {
+        if self.citation == PAPER || self.citation.starts_with("floorcast") {
+            self.gain.to_string()
+        } else {
+            format!("{} ({})", self.gain, self.citation)
+        }
+    }
 }
 
 /// The utility of the settings.
@@ -193,30 +211,35 @@ pub const BUILT_IN: &[BuiltIn] = &[
         name: "baseline",
         gain: "unknown cells within laser range visible from `p`, unknown counted as free (the paper's \"no L\")",
         stops: NO_FRONTIER,
+        citation: PAPER,
         make: Strategy::baseline_with,
     },
     BuiltIn {
         name: "layout",
         gain: "the layout's room walls drawn into a copy of the map as obstacles; unknown cells in range, inside the predicted rooms and visible in that copy (\"with L\"); rooms with an open frontier use the baseline",
         stops: NO_FRONTIER,
+        citation: PAPER,
         make: |p| by_utility(PREDICTED, EarlyStop::Never, p),
     },
     BuiltIn {
         name: "layout-es",
         gain: "as `layout`",
         stops: PAPER_ES,
+        citation: PAPER,
         make: |p| by_utility(PREDICTED, es(p), p),
     },
     BuiltIn {
         name: "layout-aes",
         gain: "as `layout`",
         stops: "candidates with `I(p)` below `aes_min_gain_m2` (2 m²) are dropped; stops when none is left (the paper's \"more aggressive ES\")",
+        citation: PAPER,
         make: |p| by_utility(PREDICTED, EarlyStop::DropCandidatesBelow(p.aes_min_gain_m2), p),
     },
     BuiltIn {
         name: "layout-switch",
         gain: "baseline until the layout's predictions prove right (90 % of 5 m² seen since), then `layout` (the paper's \"dynamic switch\")",
         stops: NO_FRONTIER,
+        citation: PAPER,
         make: |p| {
             let switch = GainModel::Switch {
                 agreement: 0.9,
@@ -229,36 +252,42 @@ pub const BUILT_IN: &[BuiltIn] = &[
         name: "layout-gaps",
         gain: "the baseline gain through the map with gaps of up to `max_wall_gap_m` (1 m) in observed walls closed by the layout's wall lines",
         stops: NO_FRONTIER,
+        citation: FLOORCAST,
         make: |p| by_utility(GAPS, EarlyStop::Never, p),
     },
     BuiltIn {
         name: "layout-gaps-es",
         gain: "as `layout-gaps`; the stop judges the paper's `I(p)`",
         stops: "as `layout-es`",
+        citation: FLOORCAST,
         make: |p| by_utility(GAPS, es(p), p),
     },
     BuiltIn {
         name: "layout-truth",
         gain: "as `layout`, with the building's true rooms for a layout (an oracle: needs a building with rooms)",
         stops: NO_FRONTIER,
+        citation: FLOORCAST,
         make: |p| by_utility(TRUTH, EarlyStop::Never, p),
     },
     BuiltIn {
         name: "layout-truth-es",
         gain: "as `layout-truth`",
         stops: "as `layout-es`",
+        citation: FLOORCAST,
         make: |p| by_utility(TRUTH, es(p), p),
     },
     BuiltIn {
         name: "nearest",
-        gain: "not used: the nearest candidate by path (Yamauchi, CIRA 1997)",
+        gain: "not used: the nearest candidate by path",
         stops: NO_FRONTIER,
+        citation: "Yamauchi, CIRA 1997",
         make: |_| plain(Choice::Nearest),
     },
     BuiltIn {
         name: "utility-exp",
-        gain: "as `baseline`; the largest `I(p) * exp(-lambda * L(p))`, `L` the path length, lambda `utility_exp_lambda_per_m` (0.2 per m) (González-Baños and Latombe, IJRR 2002)",
+        gain: "as `baseline`; the largest `I(p) * exp(-lambda * L(p))`, `L` the path length, lambda `utility_exp_lambda_per_m` (0.2 per m)",
         stops: NO_FRONTIER,
+        citation: "González-Baños and Latombe, IJRR 2002",
         make: |p| {
             plain(Choice::UtilityExp {
                 lambda_per_m: p.utility_exp_lambda_per_m,
@@ -267,8 +296,9 @@ pub const BUILT_IN: &[BuiltIn] = &[
     },
     BuiltIn {
         name: "cost-utility",
-        gain: "as `baseline`; the largest `I(p) - beta * L(p)`, `L` the path length, beta `cost_utility_beta_m2_per_m` (1 m² per m) (Burgard, Moors, Stachniss and Schneider, IEEE T-RO 2005, one robot)",
+        gain: "as `baseline`; the largest `I(p) - beta * L(p)`, `L` the path length, beta `cost_utility_beta_m2_per_m` (1 m² per m)",
         stops: NO_FRONTIER,
+        citation: "Burgard, Moors, Stachniss and Schneider, IEEE T-RO 2005, one robot",
         make: |p| {
             plain(Choice::CostUtility {
                 beta_m2_per_m: p.cost_utility_beta_m2_per_m,
@@ -277,20 +307,23 @@ pub const BUILT_IN: &[BuiltIn] = &[
     },
     BuiltIn {
         name: "frontier-tsp",
-        gain: "not used: the first goal of a short travelling-salesman path from the robot through every candidate, by planned path lengths (nearest neighbour, 2-opt, Or-opt) (Kulich, Faigl and Přeučil, ICRA 2011)",
+        gain: "not used: the first goal of a short travelling-salesman path from the robot through every candidate, by planned path lengths (nearest neighbour, 2-opt, Or-opt)",
         stops: NO_FRONTIER,
+        citation: "Kulich, Faigl and Přeučil, ICRA 2011",
         make: |_| plain(Choice::FrontierTsp),
     },
     BuiltIn {
         name: "room-first",
-        gain: "not used: the nearest candidate by path in the robot's room while one is left there, then the nearest; rooms from the layout predicted from the map (Holz, Basilico, Amigoni and Behnke, ISR/ROBOTIK 2010)",
+        gain: "not used: the nearest candidate by path in the robot's room while one is left there, then the nearest; rooms from the layout predicted from the map",
         stops: NO_FRONTIER,
+        citation: "Holz, Basilico, Amigoni and Behnke, ISR/ROBOTIK 2010",
         make: |_| plain(Choice::RoomFirst),
     },
     BuiltIn {
         name: "random-frontier",
         gain: "not used: a reachable candidate drawn at random from the run's seed (the floor every strategy must beat)",
         stops: NO_FRONTIER,
+        citation: "floorcast",
         make: |_| plain(Choice::Random),
     },
 ];
@@ -305,6 +338,42 @@ fn plain(choice: Choice) -> Strategy {
 }
 
 impl Strategy {
+    /// The settings this strategy reads, by their names, with its values of them: those of
+    /// its choice, its early stop and, when it uses the layout, how the layout is used
+    /// (`layout_update_m2`, `max_wall_gap_m` for closed gaps; their values are the run's, not
+    /// the strategy's, so only their names are listed there).
+    pub fn parameters(&self) -> Vec<(&'static str, Option<f64>)> {
+        let mut out = Vec::new();
+        match self.choice {
+            Choice::Utility {
+                alpha,
+                gain_floor_m2,
+            } => {
+                out.push(("alpha", Some(alpha)));
+                out.push(("gain_floor_m2", Some(gain_floor_m2)));
+            }
+            Choice::UtilityExp { lambda_per_m } => {
+                out.push(("utility_exp_lambda_per_m", Some(lambda_per_m)));
+            }
+            Choice::CostUtility { beta_m2_per_m } => {
+                out.push(("cost_utility_beta_m2_per_m", Some(beta_m2_per_m)));
+            }
+            Choice::Nearest | Choice::RoomFirst | Choice::FrontierTsp | Choice::Random => {}
+        }
+        match self.early_stop {
+            EarlyStop::Never => {}
+            EarlyStop::TotalGainBelow(t) => out.push(("es_threshold_m2", Some(t))),
+            EarlyStop::DropCandidatesBelow(t) => out.push(("aes_min_gain_m2", Some(t))),
+        }
+        if self.gain.layout_source().is_some() || self.choice == Choice::RoomFirst {
+            out.push(("layout_update_m2", None));
+        }
+        if matches!(self.gain, GainModel::ClosedGaps(_)) {
+            out.push(("max_wall_gap_m", None));
+        }
+        out
+    }
+
     /// The paper's baseline with the default settings.
     pub fn baseline() -> Self {
         Self::baseline_with(&StrategyParams::default())
@@ -352,7 +421,12 @@ impl Strategy {
 pub fn strategies_markdown() -> String {
     let mut s = String::from("| name | information gain `I(p)` | stops |\n|---|---|---|\n");
     for b in BUILT_IN {
-        s.push_str(&format!("| `{}` | {} | {} |\n", b.name, b.gain, b.stops));
+        s.push_str(&format!(
+            "| `{}` | {} | {} |\n",
+            b.name,
+            b.gain_cited(),
+            b.stops
+        ));
     }
     s
 }
