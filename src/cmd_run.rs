@@ -593,14 +593,16 @@ pub fn report(a: ReportArgs) -> Result<()> {
     let tours = store.tours()?;
     let (run_efficiency, efficiency) =
         floorcast_coordinator::yardstick::efficiencies(&results, &tours, &order, coverage);
+    let ranking = floorcast_coordinator::ranking::ranking(&aggregates, &efficiency);
     // What is printed, kept for --html.
     let mut text = format!(
-        "{}{}{}{}{}",
+        "{}{}{}{}{}{}",
         render_text(&t),
         render_ends(&t),
         floorcast_coordinator::table::render_comparisons(&comparisons, &sequential_labels),
         floorcast_coordinator::aggregate::render(&aggregates),
-        floorcast_coordinator::yardstick::render(&efficiency, coverage)
+        floorcast_coordinator::yardstick::render(&efficiency, coverage),
+        floorcast_coordinator::ranking::render(&ranking, &reference)
     );
     say_raw!("{}", text);
     for v in &verdicts {
@@ -630,6 +632,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
             v["against"] = floorcast_coordinator::table::against_json(gains, dir);
         }
         v["efficiency"] = serde_json::json!({"labels": efficiency, "runs": run_efficiency});
+        v["ranking"] = serde_json::to_value(&ranking)?;
         write_text(path, &(serde_json::to_string_pretty(&v)? + "\n"))
             .with_context(|| format!("cannot write {}", path.display()))?;
         say!("wrote {}", path.display());

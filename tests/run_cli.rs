@@ -555,6 +555,16 @@ fn a_grid_run_stores_its_tour_and_report_shows_efficiency() {
         assert_eq!(l["runs"], 1);
     }
     assert_eq!(v["efficiency"]["runs"].as_array().unwrap().len(), 2);
+    // The ranking: both labels, ranked 1 and 2, each with its median efficiency.
+    let ranking = v["ranking"].as_array().unwrap();
+    let ranks: Vec<u64> = ranking
+        .iter()
+        .map(|p| p["rank"].as_u64().unwrap())
+        .collect();
+    assert_eq!(ranks, [1, 2]);
+    assert!(ranking
+        .iter()
+        .all(|p| p["median_efficiency"].as_f64().is_some()));
 
     let bare = dir.path().join("bare");
     let mut args = args.to_vec();

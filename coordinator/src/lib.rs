@@ -30,6 +30,7 @@
 //!   profiles).
 //! - [`sprt`]: the sequential test (GSPRT) that decides a comparison from paired runs.
 //! - [`sequential`]: a sequential grid's progress, batch by batch, replayed from the store.
+//! - [`ranking`]: the report's leaderboard (labels by their aggregates, with efficiency).
 //! - [`yardstick`]: the known-map tours a grid's runs are measured against, and their
 //!   efficiency.
 
@@ -42,6 +43,7 @@ pub mod names;
 pub mod net;
 pub mod outcome;
 pub mod progress;
+pub mod ranking;
 pub mod run;
 pub mod schedule;
 pub mod sequential;
