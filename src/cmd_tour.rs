@@ -52,12 +52,13 @@ pub fn run(a: TourArgs) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{name}: no start for the tour: {e}"))?;
     let tour = make_tour(&building, &name, start, &settings, a.coverage)?;
     say!(
-        "{name}: a tour that knows the building sees {:.1} % of its {:.0} m2 explorable in {:.0} s ({:.1} m, {} viewpoints)",
+        "{name}: a tour that knows the building sees {:.1} % of its {:.0} m2 explorable in {:.0} s ({:.1} m, {} viewpoints; replayed with the laser: {:.1} %)",
         100.0 * tour.covered_fraction,
         tour.explorable_m2,
         tour.time_s,
         tour.length_m,
-        tour.viewpoints.len()
+        tour.viewpoints.len(),
+        100.0 * tour.replayed_fraction
     );
     if let Some(path) = &a.json {
         let text = serde_json::to_string_pretty(&tour).context("cannot encode the tour")?;

@@ -626,3 +626,38 @@ fn annotated_plans_are_explored_with_no_room_left() {
         }
     }
 }
+
+/// `floorcast tour` on real buildings of three kinds (a SLAM map with clutter, an annotated
+/// plan): the tour sees at least 99 % of the explorable area by its own sweeps and when
+/// replayed with the run's laser, and its record and picture are written.
+#[test]
+fn the_tour_of_real_buildings_is_seen_when_replayed() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        "maps/radish/freiburg_building79.yaml",
+        "maps/plans/Borchen4_updated.xml",
+    ];
+    for building in cases {
+        let json = dir.path().join("tour.json");
+        let png = dir.path().join("tour.png");
+        let o = run(&[
+            "tour",
+            "--building",
+            repo().join(building).to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+            "--picture",
+            png.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{building}: {}", stderr(&o));
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(v["format"], "floorcast-tour", "{building}");
+        for field in ["covered_fraction", "replayed_fraction"] {
+            let f = v[field].as_f64().unwrap();
+            assert!(f >= 0.99, "{building}: {field} {f}");
+        }
+        assert!(v["time_s"].as_f64().unwrap() > 0.0, "{building}");
+        assert!(std::fs::metadata(&png).unwrap().len() > 1000, "{building}");
+    }
+}

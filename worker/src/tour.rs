@@ -67,6 +67,9 @@ pub struct TourRecord {
     pub time_s: f64,
     pub length_m: f64,
     pub covered_fraction: f64,
+    /// The share the run's laser sees when the tour is replayed ([`sim_core::tour::replay`]):
+    /// the check of `covered_fraction`, at least `key.coverage` unless three tries fell short.
+    pub replayed_fraction: f64,
     pub explorable_m2: f64,
     /// `[x_m, y_m, heading_rad]`, the start first, in the order visited.
     pub viewpoints: Vec<[f64; 3]>,
@@ -104,11 +107,13 @@ impl TourRecord {
                 self.length_m
             ));
         }
-        if !(0.0..=1.0).contains(&self.covered_fraction) {
-            return Err(format!(
-                "covered_fraction: expected a fraction in [0, 1], got {}",
-                self.covered_fraction
-            ));
+        for (field, v) in [
+            ("covered_fraction", self.covered_fraction),
+            ("replayed_fraction", self.replayed_fraction),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(format!("{field}: expected a fraction in [0, 1], got {v}"));
+            }
         }
         if self.start.iter().any(|v| !v.is_finite()) {
             return Err("start: expected three finite numbers".into());
@@ -151,6 +156,7 @@ pub fn make_tour(
         time_s: tour.time_s,
         length_m: tour.length_m,
         covered_fraction: tour.covered_fraction,
+        replayed_fraction: tour.replayed_fraction,
         explorable_m2: tour.explorable_m2,
         viewpoints: tour
             .viewpoints
