@@ -80,7 +80,8 @@ impl Default for SprtConfig {
     }
 }
 
-/// What a sequential test has decided so far.
+/// What a sequential test has decided so far. Its serde words are [`Decision::as_str`]'s, the
+/// words the store keeps.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Decision {
     /// The gain is at most `h0_gain_pct`.
@@ -88,6 +89,7 @@ pub enum Decision {
     /// The gain is at least `h1_gain_pct`.
     H1,
     /// Not yet (or never, when the pairs ran out).
+    #[serde(rename = "undecided")]
     Undecided,
 }
 

@@ -800,11 +800,7 @@ impl Store {
              FROM sequential ORDER BY grid, label, through_seed",
         ))?;
         let rows = self.sql(st.query_map([], |r| {
-            let decision = match r.get::<_, String>(10)?.as_str() {
-                "H0" => Decision::H0,
-                "H1" => Decision::H1,
-                _ => Decision::Undecided,
-            };
+            let decision: Decision = r.get(10)?;
             Ok((
                 r.get::<_, String>(0)?,
                 LabelTest {
@@ -1120,6 +1116,18 @@ pub fn provenance(grid: &str, command: &str) -> Provenance {
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| d.as_secs_f64())
             .unwrap_or(0.0),
+    }
+}
+
+/// The `sequential.decision` column: the words `Decision::as_str` writes, decoded by
+/// `Decision`'s serde codec (a word it does not know is an error naming it).
+impl rusqlite::types::FromSql for crate::sprt::Decision {
+    fn column_result(v: rusqlite::types::ValueRef<'_>) -> rusqlite::types::FromSqlResult<Self> {
+        use serde::de::IntoDeserializer;
+        use serde::Deserialize;
+        let word: serde::de::value::StrDeserializer<'_, serde::de::value::Error> =
+            v.as_str()?.into_deserializer();
+        Self::deserialize(word).map_err(|e| rusqlite::types::FromSqlError::Other(Box::new(e)))
     }
 }
 
@@ -1575,5 +1583,53 @@ mod tests {
             };
             assert_eq!(r.settings, want, "{}", r.job_id);
         }
+    }
+
+    /// A sequential test's decision is stored as its word (`Decision::as_str`) and read back
+    /// by its serde codec; a word that is no decision is an error naming it.
+    #[test]
+    fn sequential_decisions_are_stored_as_words_and_read_back() {
+        use crate::sprt::{Decision, LabelTest, SprtState};
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path()).unwrap();
+        let test = |label: &str, decision| LabelTest {
+            label: label.into(),
+            reference: "baseline".into(),
+            through_seed: 4,
+            state: SprtState {
+                pairs: 4,
+                mean: 0.25,
+                variance: 0.5,
+                llr: 1.5,
+                lower: -2.0,
+                upper: 3.0,
+                decision,
+            },
+        };
+        let tests = vec![
+            test("a", Decision::H0),
+            test("b", Decision::H1),
+            test("c", Decision::Undecided),
+        ];
+        s.record_tests("g", &tests).unwrap();
+        let read: Vec<LabelTest> = s.tests().unwrap().into_iter().map(|(_, t)| t).collect();
+        assert_eq!(read, tests);
+        let words: Vec<String> = s
+            .conn
+            .prepare("SELECT decision FROM sequential ORDER BY label")
+            .unwrap()
+            .query_map([], |r| r.get(0))
+            .unwrap()
+            .map(Result::unwrap)
+            .collect();
+        assert_eq!(words, ["H0", "H1", "undecided"]);
+        s.conn
+            .execute(
+                "UPDATE sequential SET decision = 'maybe' WHERE label = 'c'",
+                [],
+            )
+            .unwrap();
+        let e = s.tests().unwrap_err().to_string();
+        assert!(e.contains("unknown variant `maybe`"), "{e}");
     }
 }

@@ -272,7 +272,7 @@ impl RunSummary {
 
 /// A summary's `end_reason` as its name ([`EndReason::as_str`]); the "no frontiers" of summaries
 /// before 0.4 reads as complete.
-mod end_reason_name {
+pub(crate) mod end_reason_name {
     use serde::{Deserialize, Deserializer, Serializer};
     use sim_core::explore::EndReason;
 

@@ -1,0 +1,258 @@
+//! A strategy program's process: started in a process group of its own with floorcast's Python
+//! module importable ([`spawn`]), its stdin written and its stdout and stderr read by threads of
+//! their own ([`Pipes`]), so that a program that stops reading or writing blocks a thread,
+//! never the run.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc::{self, Receiver};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use super::groups::{kill_group, live_groups};
+use super::program::StrategyProgram;
+
+/// The longest reply line read (bytes).
+pub(super) const MAX_LINE: usize = 1 << 20;
+/// Stderr kept from a program (bytes; the rest is dropped).
+const MAX_STDERR: usize = 1 << 20;
+
+/// floorcast's Python module for strategies (`python/floorcast_strategy.py`, built into the
+/// binary): every strategy program finds it on its `PYTHONPATH`, so `import
+/// floorcast_strategy` works wherever the program lives, remote workers included, and always
+/// speaks this floorcast's protocol.
+pub const PYTHON_MODULE: &str = include_str!("../../../python/floorcast_strategy.py");
+
+/// A new folder of this process's own in the temporary directory (`TMPDIR`): a name no one
+/// else chose, mode 0700, removed when dropped. A folder with a name known in advance could be
+/// made first by another user, with modules of theirs that our programs would import.
+pub fn private_temp_dir(prefix: &str) -> Result<tempfile::TempDir, String> {
+    use std::os::unix::fs::PermissionsExt;
+    let tmp = std::env::temp_dir();
+    tempfile::Builder::new()
+        .prefix(prefix)
+        .permissions(std::fs::Permissions::from_mode(0o700))
+        .tempdir_in(&tmp)
+        .map_err(|e| {
+            format!(
+                "cannot create a folder in the temporary directory {} ({e}); set TMPDIR to a directory you can write",
+                tmp.display()
+            )
+        })
+}
+
+/// A private folder ([`private_temp_dir`]) holding [`PYTHON_MODULE`], for one program.
+fn python_dir() -> Result<tempfile::TempDir, String> {
+    let dir = private_temp_dir("floorcast-python-")?;
+    let file = dir.path().join("floorcast_strategy.py");
+    std::fs::write(&file, PYTHON_MODULE).map_err(|e| {
+        format!(
+            "cannot write {} ({e}); set TMPDIR to a directory you can write",
+            file.display()
+        )
+    })?;
+    Ok(dir)
+}
+
+/// A line of the program's stdout, as its reader thread passes it on.
+pub(super) enum Line {
+    Text(String),
+    TooLong,
+    Eof,
+    Failed(String),
+}
+
+/// What the program wrote to stderr: the text kept and its last line.
+#[derive(Default)]
+pub(super) struct Stderr {
+    pub(super) text: String,
+    pub(super) last_line: String,
+}
+
+/// A started program's pipes, each served by a thread of its own.
+pub(super) struct Pipes {
+    /// Lines to write to the program's stdin (`None` once closed).
+    pub(super) stdin: Option<mpsc::Sender<String>>,
+    /// The program's stdout, line by line.
+    pub(super) lines: Receiver<Line>,
+    pub(super) stderr: Arc<Mutex<Stderr>>,
+    stderr_reader: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Pipes {
+    /// Waits (at most a second) for the stderr reader to take in what the program wrote before
+    /// it ended.
+    pub(super) fn join_stderr(&mut self) {
+        if let Some(h) = self.stderr_reader.take() {
+            let deadline = Instant::now() + Duration::from_secs(1);
+            while !h.is_finished() && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+            if h.is_finished() {
+                let _ = h.join();
+            }
+        }
+    }
+}
+
+/// Starts `program` with floorcast's Python module importable (in the folder returned, removed
+/// with it) and its pipes' threads; an error says what to do.
+pub(super) fn spawn(
+    program: &StrategyProgram,
+) -> Result<(Child, tempfile::TempDir, Pipes), String> {
+    let python = python_dir()?;
+    let mut cmd = program_command(program, python.path());
+    let mut child = spawn_registered(&mut cmd, program)?;
+    match start_pipes(&mut child) {
+        Ok(pipes) => Ok((child, python, pipes)),
+        // One the system refuses is an error, not a panic: the program is stopped (the threads
+        // already started end with its pipes).
+        Err(e) => {
+            kill_group(child.id());
+            live_groups(|g| g.remove(&child.id()));
+            let _ = child.kill();
+            let _ = child.wait();
+            Err(format!(
+                "cannot start a thread for the program's pipes ({e}): the system is out of threads or memory; run fewer jobs at once"
+            ))
+        }
+    }
+}
+
+/// The threads that serve `child`'s three pipes.
+fn start_pipes(child: &mut Child) -> std::io::Result<Pipes> {
+    let stdin = match child.stdin.take() {
+        Some(pipe) => {
+            let (tx, rx) = mpsc::channel::<String>();
+            crate::spawn_thread(move || write_lines(pipe, rx))?;
+            Some(tx)
+        }
+        None => None,
+    };
+    let stdout = child.stdout.take().expect("stdout is piped");
+    let stderr_pipe = child.stderr.take().expect("stderr is piped");
+    let (tx, lines) = mpsc::channel();
+    crate::spawn_thread(move || read_lines(stdout, tx))?;
+    let stderr = Arc::new(Mutex::new(Stderr::default()));
+    let sink = Arc::clone(&stderr);
+    let stderr_reader = Some(crate::spawn_thread(move || read_stderr(stderr_pipe, sink))?);
+    Ok(Pipes {
+        stdin,
+        lines,
+        stderr,
+        stderr_reader,
+    })
+}
+
+/// The command that starts `program`: in a process group of its own, with floorcast's Python
+/// module (in `python`) importable, its three pipes piped.
+fn program_command(program: &StrategyProgram, python: &std::path::Path) -> Command {
+    let command_words = program.resolved_command();
+    let mut cmd = Command::new(&command_words[0]);
+    cmd.args(&command_words[1..]);
+    // A process group of its own, so that everything it starts (a wrapper script's
+    // children, a daemon it forks) is ended with it: `kill_group`.
+    std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
+    // No __pycache__ beside the programs (or in a repository's python/).
+    cmd.env("PYTHONDONTWRITEBYTECODE", "1");
+    // floorcast's Python module, importable by every strategy program, in a folder of
+    // this program's own.
+    let mut paths = vec![python.to_path_buf()];
+    if let Some(old) = std::env::var_os("PYTHONPATH") {
+        paths.extend(std::env::split_paths(&old));
+    }
+    if let Ok(joined) = std::env::join_paths(paths) {
+        cmd.env("PYTHONPATH", joined);
+    }
+    cmd.stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    cmd
+}
+
+/// Starts `cmd` and registers its process group (under one lock, so that `end_strays` never
+/// takes a program just started for a stray); an error says what to do.
+fn spawn_registered(
+    cmd: &mut Command,
+    program: &StrategyProgram,
+) -> Result<std::process::Child, String> {
+    live_groups(|g| {
+        let child = cmd.spawn()?;
+        g.insert(child.id());
+        Ok(child)
+    })
+    .map_err(|e: std::io::Error| match e.kind() {
+        std::io::ErrorKind::NotFound => format!(
+            "cannot start '{}': no such program (is it installed and on PATH?)",
+            crate::text::excerpt(&program.command[0])
+        ),
+        _ => format!(
+            "cannot start '{}': {e}",
+            crate::text::excerpt(&program.command[0])
+        ),
+    })
+}
+
+fn write_lines(mut pipe: ChildStdin, lines: mpsc::Receiver<String>) {
+    for line in lines {
+        if pipe.write_all(line.as_bytes()).is_err() || pipe.flush().is_err() {
+            return;
+        }
+    }
+}
+
+fn read_lines(stdout: impl Read, tx: mpsc::Sender<Line>) {
+    let mut r = BufReader::new(stdout);
+    loop {
+        let mut buf = Vec::new();
+        let line = match (&mut r)
+            .take(MAX_LINE as u64 + 1)
+            .read_until(b'\n', &mut buf)
+        {
+            Ok(0) => Line::Eof,
+            Ok(_) if buf.last() != Some(&b'\n') && buf.len() > MAX_LINE => Line::TooLong,
+            Ok(_) => {
+                let text = String::from_utf8_lossy(&buf);
+                Line::Text(text.trim_end_matches(['\n', '\r']).to_string())
+            }
+            Err(e) => Line::Failed(e.to_string()),
+        };
+        let done = !matches!(line, Line::Text(_));
+        if tx.send(line).is_err() || done {
+            return;
+        }
+    }
+}
+
+fn read_stderr(mut stderr: impl Read, sink: Arc<Mutex<Stderr>>) {
+    let mut chunk = [0u8; 8192];
+    let mut current = Vec::new();
+    let last = |current: &[u8], s: &mut Stderr| {
+        let line = String::from_utf8_lossy(current).trim().to_string();
+        if !line.is_empty() {
+            s.last_line = line;
+        }
+    };
+    loop {
+        let n = match stderr.read(&mut chunk) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => n,
+        };
+        let Ok(mut s) = sink.lock() else { return };
+        let text = String::from_utf8_lossy(&chunk[..n]);
+        if s.text.len() + text.len() <= MAX_STDERR {
+            s.text.push_str(&text);
+        }
+        for &b in &chunk[..n] {
+            if b == b'\n' {
+                last(&current, &mut s);
+                current.clear();
+            } else if current.len() < 4096 {
+                current.push(b);
+            }
+        }
+    }
+    if let Ok(mut s) = sink.lock() {
+        last(&current, &mut s);
+    }
+}
