@@ -69,7 +69,7 @@ impl Explorer<'_> {
     ) -> Vec<CandidateScore> {
         let cfg = self.cfg;
         let mut scores = Vec::with_capacity(frontiers.len());
-        let (frame, robot) = (self.map.frame, self.estimate.position());
+        let (frame, robot) = (self.map.frame, self.localizer.estimate().position());
         for (f, goal_cell) in frontiers.iter().zip(goals) {
             let distance_m = goal_cell.and_then(|c| plan.distance_m(c)).map(|path_m| {
                 match cfg.utility_distance {
@@ -81,7 +81,7 @@ impl Explorer<'_> {
             });
             let gain_m2 = if distance_m.is_some() {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
-                let (c, now) = (f.candidate, self.scans);
+                let (c, now) = (f.candidate, self.localizer.scans());
                 match (&self.layout, use_layout) {
                     (Some(l), true) if cfg.strategy.gain.ranks_by_predicted_rooms() => {
                         layout_gain_cached(&mut self.gains, grid, &l.raster, c, range_m, now)
@@ -460,11 +460,13 @@ impl Explorer<'_> {
     /// path's length). Returns true.
     fn head_for(&mut self, target: Target, recorded: Recorded, wps: Vec<Vec2>) -> bool {
         let now = self.sim.time_s();
-        self.follower = PathFollower::from(self.estimate.position(), wps);
-        let dist = self.follower.remaining_length_m(self.estimate.position());
+        self.follower = PathFollower::from(self.localizer.estimate().position(), wps);
+        let dist = self
+            .follower
+            .remaining_length_m(self.localizer.estimate().position());
         self.decisions.push(Decision {
             time_s: now,
-            pose: self.estimate,
+            pose: self.localizer.estimate(),
             goal: recorded.goal,
             candidates: recorded.candidates,
             gain_m2: recorded.gain_m2,
@@ -553,7 +555,7 @@ impl Explorer<'_> {
     ) -> Vec<CandidateView> {
         let layout_gain = needs.layout_gain && use_layout;
         let frame = self.map.frame;
-        let robot = self.estimate.position();
+        let robot = self.localizer.estimate().position();
         let range_m = self.cfg.sim.laser.max_range_m;
         let mut views = Vec::new();
         for (i, s) in scores.iter().enumerate() {
@@ -571,7 +573,7 @@ impl Explorer<'_> {
                         &l.raster,
                         f.candidate,
                         range_m,
-                        self.scans,
+                        self.localizer.scans(),
                     ))
                 }
                 _ => None,
@@ -608,7 +610,7 @@ impl Explorer<'_> {
             decision: self.policy_decisions - 1,
             attempt: asked.attempt,
             time_s: self.sim.time_s(),
-            pose: self.estimate,
+            pose: self.localizer.estimate(),
             candidates: views,
             unreachable_goal: asked.unreachable_goal,
             layout: self
@@ -642,7 +644,7 @@ impl Explorer<'_> {
         let frame = self.map.frame;
         let near = &self.coarse;
         let field = dijkstra_padded(near.frame, plan.near_start, near.padded(), MAX_EXTRA, &[]);
-        let robot = self.estimate.position();
+        let robot = self.localizer.estimate().position();
         let range_m = self.cfg.sim.laser.max_range_m;
         let r = (range_m / near.frame.resolution_m).ceil() as i32;
         let mut best: Option<(f64, usize, Cell)> = None;

@@ -69,6 +69,7 @@ use self::calibration::OdometryCalibration;
 use self::decision::*;
 use self::gain_cache::{GainCache, GainKind};
 use self::layout_state::*;
+use self::localization::*;
 use self::navigation::*;
 use self::referee::*;
 pub use self::shared::{can_share, explore_shared, shared_part};
@@ -434,17 +435,6 @@ impl RunResult {
     }
 }
 
-/// Heading prior of a scan match (standard deviation, rad) for any update, on top of the part
-/// proportional to the turn since the last one. 0.001 until 0.3.0: on the paper set (300 runs)
-/// the median aligned wall precision was 0.89 and the worst run's map 0.31, the heading having
-/// random-walked by up to 7 degrees; with 0.0002 and [`PRIOR_SIGMA_THETA_PER_RAD_CALIBRATED`]
-/// the median is 0.94 and the worst 0.79 (README, "Map quality").
-const PRIOR_SIGMA_THETA_BASE_RAD: f64 = 0.0002;
-
-/// Heading prior per radian turned once the odometry's heading scale is calibrated (0.01 until
-/// 0.3.0).
-const PRIOR_SIGMA_THETA_PER_RAD_CALIBRATED: f64 = 0.003;
-
 /// The mutable state of one exploration.
 struct Explorer<'a> {
     cfg: &'a ExploreConfig,
@@ -458,13 +448,8 @@ struct Explorer<'a> {
     known: Bitmap,
     /// The map cells the last update made known (a buffer kept between updates).
     fresh_known: Vec<usize>,
-    estimate: Pose,
-    last_odometry: Pose,
-    /// Odometry reading at the last map update.
-    update_odometry: Pose,
-    calibration: OdometryCalibration,
-    last_update_pose: Pose,
-    last_update_time_s: f64,
+    /// The pose estimate (see `localization`).
+    localizer: Localizer,
     blacklist: Blacklist,
     /// The goal reached (and looked at) just before the current decision.
     last_reached: Option<Vec2>,
@@ -473,9 +458,6 @@ struct Explorer<'a> {
     decisions: Vec<Decision>,
     progress: Vec<ProgressSample>,
     trajectory: Vec<Pose>,
-    estimated_trajectory: Vec<Pose>,
-    scans: u64,
-    matches_accepted: u64,
     plans: u64,
     /// Candidates' gains of every kind (the paper's room-bounded `I(p)` for ranking and early
     /// stopping among them).
@@ -682,21 +664,13 @@ fn new_explorer<'a>(
     Explorer {
         cfg,
         seed,
-        last_odometry: sim.odometry(),
-        update_odometry: sim.odometry(),
-        calibration: OdometryCalibration::new(
-            cfg.sim.odometry.max_translation_error * 1.5,
-            cfg.sim.odometry.max_rotation_error * 1.5,
-        ),
+        localizer: Localizer::new(start, sim.odometry(), cfg),
         sim,
         map: LogOddsMap::new(frame),
         obstacles: ObstacleDistance::new(frame, cap_cells),
         referee,
         known: Bitmap::filled(frame, false),
         fresh_known: Vec::new(),
-        estimate: start,
-        last_update_pose: start,
-        last_update_time_s: f64::NEG_INFINITY,
         blacklist: Blacklist::new(),
         last_reached: None,
         follower: PathFollower::default(),
@@ -704,9 +678,6 @@ fn new_explorer<'a>(
         decisions: Vec::new(),
         progress: Vec::new(),
         trajectory: Vec::new(),
-        estimated_trajectory: Vec::new(),
-        scans: 0,
-        matches_accepted: 0,
         plans: 0,
         gains: GainCache::new(frame),
         next_progress_s: 0.0,

@@ -15,7 +15,7 @@ impl Explorer<'_> {
         // Whatever the goals, a robot that has not moved for long is stuck (e.g. alternating
         // between goals it cannot approach, each new one restarting the progress timeout):
         // abandon the current goal.
-        let position = self.estimate.position();
+        let position = self.localizer.estimate().position();
         if (position - self.still_at).norm() > STILL_RADIUS_M {
             self.still_at = position;
             self.still_since_s = now;
@@ -30,8 +30,9 @@ impl Explorer<'_> {
         }
         if goal.arrived {
             // Turning toward the frontier; done when facing it.
-            let to = look_vector(goal, &self.estimate, cfg.robust_frontiers);
-            let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
+            let to = look_vector(goal, &self.localizer.estimate(), cfg.robust_frontiers);
+            let err =
+                crate::geom::wrap_angle(to.y.atan2(to.x) - self.localizer.estimate().theta_rad);
             if err.abs() > 0.15 && to.norm() > 0.05 && now - goal.best_distance_at_s < 10.0 {
                 return false;
             }
@@ -58,7 +59,9 @@ impl Explorer<'_> {
         }
         // No progress along the path for too long: abandon the goal. (The length of the path
         // left, not the straight line to the goal: a path around a wall first leads away.)
-        let d = self.follower.remaining_length_m(self.estimate.position());
+        let d = self
+            .follower
+            .remaining_length_m(self.localizer.estimate().position());
         if d < goal.best_distance_m - 0.1 {
             goal.best_distance_m = d;
             goal.best_distance_at_s = now;
@@ -75,8 +78,10 @@ impl Explorer<'_> {
             let Some(wps) = self.path_to(to) else {
                 return true;
             };
-            self.follower = PathFollower::from(self.estimate.position(), wps);
-            let d = self.follower.remaining_length_m(self.estimate.position());
+            self.follower = PathFollower::from(self.localizer.estimate().position(), wps);
+            let d = self
+                .follower
+                .remaining_length_m(self.localizer.estimate().position());
             if let Some(goal) = &mut self.goal {
                 goal.best_distance_m = d;
             }
@@ -205,7 +210,10 @@ impl Explorer<'_> {
         #[cfg(test)]
         self.check_planning_grids();
         let radius_m = self.inflation_m();
-        let robot = self.map.frame.cell_from_world(self.estimate.position());
+        let robot = self
+            .map
+            .frame
+            .cell_from_world(self.localizer.estimate().position());
         let start_on = |grid: &CoarseCosts| start_cell(grid, robot, radius_m);
         let far = Arc::clone(&self.far);
         let start = start_on(&far);
@@ -380,7 +388,9 @@ impl Explorer<'_> {
         };
         let grid = &self.coarse;
         let to_grid = |p: Vec2| grid_from_world(&grid.frame, p);
-        let robot = grid.frame.cell_from_world(self.estimate.position());
+        let robot = grid
+            .frame
+            .cell_from_world(self.localizer.estimate().position());
         let mut from = to_grid(start);
         let mut blocked = false;
         for &w in rest {
@@ -479,8 +489,9 @@ impl Explorer<'_> {
     pub(super) fn drive(&mut self) {
         let cfg = self.cfg;
         if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
-            let to = look_vector(goal, &self.estimate, cfg.robust_frontiers);
-            let err = crate::geom::wrap_angle(to.y.atan2(to.x) - self.estimate.theta_rad);
+            let to = look_vector(goal, &self.localizer.estimate(), cfg.robust_frontiers);
+            let err =
+                crate::geom::wrap_angle(to.y.atan2(to.x) - self.localizer.estimate().theta_rad);
             let w = (cfg.follow.heading_gain * err).clamp(
                 -cfg.sim.robot.max_turn_rate_radps,
                 cfg.sim.robot.max_turn_rate_radps,
@@ -489,7 +500,7 @@ impl Explorer<'_> {
             return;
         }
         match self.follower.command(
-            &self.estimate,
+            &self.localizer.estimate(),
             &cfg.follow,
             cfg.sim.robot.max_speed_mps,
             cfg.sim.robot.max_turn_rate_radps,
@@ -509,7 +520,11 @@ impl Explorer<'_> {
     pub(super) fn return_home(&mut self) {
         let cfg = self.cfg;
         let frame = self.map.frame;
-        let start = self.trajectory.first().copied().unwrap_or(self.estimate);
+        let start = self
+            .trajectory
+            .first()
+            .copied()
+            .unwrap_or(self.localizer.estimate());
         let home = frame.cell_from_world(start.position());
         let plan = self.plan(&[home]);
         let Some(wps) = self.waypoints_to(&plan, home) else {
@@ -518,7 +533,7 @@ impl Explorer<'_> {
         self.follower = PathFollower::new(wps);
         while self.sim.time_s() < cfg.time_limit_s {
             match self.follower.command(
-                &self.estimate,
+                &self.localizer.estimate(),
                 &cfg.follow,
                 cfg.sim.robot.max_speed_mps,
                 cfg.sim.robot.max_turn_rate_radps,
