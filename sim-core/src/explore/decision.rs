@@ -200,7 +200,7 @@ impl Explorer<'_> {
             // (a crowded room, a narrow corridor), the robot is in a pocket of the planning grid
             // and reaches nothing (freiburg_building101 and intel_map from random starts,
             // stuck at 95 % explored). Its body fitted there: it leaves the way it came.
-            if let Some(looser) = self.planning.looser().filter(|_| last_resorts) {
+            if let Some(looser) = self.nav.planning().looser().filter(|_| last_resorts) {
                 self.set_planning(looser);
                 return self.decide_planned();
             }
@@ -642,7 +642,7 @@ impl Explorer<'_> {
         plan: &Plan,
     ) -> Option<(usize, Cell, Vec<Vec2>)> {
         let frame = self.map.frame;
-        let near = &self.coarse;
+        let near = self.nav.coarse();
         let field = dijkstra_padded(near.frame, plan.near_start, near.padded(), MAX_EXTRA, &[]);
         let robot = self.localizer.estimate().position();
         let range_m = self.cfg.sim.laser.max_range_m;

@@ -236,12 +236,10 @@ impl Explorer<'_> {
         let stats = self.map.insert_scan(&estimate, &scan, &cfg.log_odds);
         self.known_cells += stats.cells_discovered;
         let flips = self.map.take_occupied_flips();
-        self.walls_changed |= !flips.is_empty();
-        let mut distance_changes = std::mem::take(&mut self.distance_changes);
-        distance_changes.clear();
-        self.obstacles
-            .update_reporting(&self.map.occupancy, &flips, &mut distance_changes);
         let free_changes = self.map.take_free_changes();
+        // (The obstacle distances too, and the planning cells of every change.)
+        self.nav
+            .map_updated(&self.map, &mut self.obstacles, &flips, &free_changes);
         // (The layout gains too: the layout they are computed with changes less often than the
         // map, and clears them when it does.)
         for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
@@ -254,8 +252,6 @@ impl Explorer<'_> {
                 .chain(free_changes.iter().map(|(i, _)| i))
                 .copied(),
         );
-        self.mark_planning_cells(&flips, &distance_changes, &free_changes);
-        self.distance_changes = distance_changes;
         // A cell never goes back to unknown, and every change from unknown is in one of the
         // two lists.
         let mut fresh = std::mem::take(&mut self.fresh_known);
@@ -273,33 +269,6 @@ impl Explorer<'_> {
         let (from, to) = self.localizer.close_update(due, self.sim.time_s());
         self.mark_travelled(from, to);
         self.trajectory.push(self.sim.true_pose());
-    }
-
-    /// Marks the map cells on the segment `from`-`to` (world) travelled. They count only when
-    /// planning the way the robot came (`Planning::Travelled`), so only that level's grids
-    /// (in use or kept) have the new ones' planning cells marked for recomputing.
-    pub(super) fn mark_travelled(&mut self, from: Vec2, to: Vec2) {
-        let frame = self.map.frame;
-        let mut new = Vec::new();
-        let travelled = &mut self.travelled.data;
-        walk_segment(
-            grid_from_world(&frame, from),
-            grid_from_world(&frame, to),
-            |c| {
-                if let Some(i) = frame.index(c) {
-                    if !travelled[i] {
-                        travelled[i] = true;
-                        new.push((i as u32, true));
-                    }
-                }
-                true
-            },
-        );
-        if !new.is_empty() {
-            self.mark_planning_cells_at(new.iter().map(|&(i, _)| i), |level| {
-                level == Planning::Travelled
-            });
-        }
     }
 }
 

@@ -489,48 +489,12 @@ struct Explorer<'a> {
     snapshots: Vec<MapSnapshot>,
     /// The map's frontier cells, updated with each map update.
     frontiers: FrontierTracker,
-    /// The planning grid, brought up to date before each plan from the planning cells whose
-    /// map cells changed (occupancy or obstacle distance) since the last one.
-    coarse: CoarseCosts,
-    coarse_dirty: Vec<u32>,
-    coarse_dirty_mark: Vec<bool>,
-    /// The map cells whose obstacle distance the last map update changed (kept for its
-    /// allocation).
-    distance_changes: Vec<u32>,
-    /// Per cell of `far`: listed among the cells to recompute (all false between updates).
-    far_dirty_mark: Vec<bool>,
-    /// How permissive path planning is (see `decide_planned`'s last resorts).
-    planning: Planning,
-    /// Map cells the robot's estimated centre passed through (the segments between its poses at
-    /// map updates): its body fitted there, whatever the map shows now.
-    travelled: Bitmap,
-    /// The coarser grid the candidates' distances are searched on, updated with `coarse`. Shared
-    /// with the plans made on it (a plan lasts while the map stands still; the grid is copied
-    /// only when it changes while a plan, a parked level or a snapshot still holds it).
-    far: Arc<CoarseCosts>,
-    /// The planning and distance grids of the planning levels used before and not in use now,
-    /// with the planning cells to recompute before one is used again (marked with every map
-    /// update, as `coarse_dirty`): a relaxed plan lasts one decision, and recomputing every
-    /// planning cell at each change of level was most of the grids' upkeep on maps with
-    /// passages narrow for the robot.
-    parked: Vec<navigation::ParkedGrids>,
-    /// Whether a cell became or stopped being occupied since the path was last checked.
-    walls_changed: bool,
+    /// The planning grids and path search (see `navigation`).
+    nav: Navigator,
     /// `known_cells` when goals given up were last given another chance (see `forgive`).
     forgiven_at: Option<usize>,
     /// Frontier cells left at the end that the robot had not looked into (see `classify_end`).
     frontier_cells_left: usize,
-    /// The path search on `coarse`, and per cell of `far` whether it is in the corridor the
-    /// search is confined to first (all false between searches).
-    astar: AStar,
-    corridor: Vec<bool>,
-    /// Bumped whenever the planning grid (`coarse`) changes.
-    planning_generation: u64,
-    /// The planning cells reachable from a start, as a search of the whole planning grid that
-    /// failed found them, with the grid's generation and the start: a goal not among them has
-    /// no path either (a decision whose best candidates lie beyond a gap too narrow for the
-    /// planning grid asks for many).
-    unreachable_memo: Option<UnreachableMemo>,
     /// The runs sharing this one's beginning (see `shared`), when it leads them.
     shared: Option<Box<shared::Shared<'a>>>,
 }
@@ -699,22 +663,9 @@ fn new_explorer<'a>(
         start,
         snapshots: Vec::new(),
         frontiers: FrontierTracker::default(),
-        coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
-        coarse_dirty: Vec::new(),
-        coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
-        distance_changes: Vec::new(),
-        far_dirty_mark: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
-        planning: Planning::WithMargin,
-        travelled: Bitmap::filled(frame, false),
-        far: Arc::new(CoarseCosts::blocked(frame, DISTANCE_FACTOR)),
-        parked: Vec::new(),
-        walls_changed: false,
+        nav: Navigator::new(frame, cfg.sim.robot.radius_m, cfg.safety_margin_m),
         forgiven_at: None,
         frontier_cells_left: 0,
-        astar: AStar::default(),
-        corridor: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
-        planning_generation: 0,
-        unreachable_memo: None,
         shared: None,
     }
 }
@@ -758,15 +709,6 @@ fn new_referee(building: &Building, frame: GridFrame, start: Pose, cfg: &Explore
         rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
         doors: building.doors.iter().map(|d| (d.a, d.b)).collect(),
     }
-}
-
-/// See [`Explorer::unreachable_memo`].
-#[derive(Debug, Clone)]
-struct UnreachableMemo {
-    generation: u64,
-    start: Cell,
-    /// One bit per cell of the padded planning grid: reachable from `start`.
-    reached: Vec<u64>,
 }
 
 /// What a built-in strategy's rule needs: the paper's I(p) only when the strategy uses the
