@@ -129,22 +129,31 @@ impl Explorer<'_> {
     pub(super) fn decide(&mut self) -> bool {
         // A relaxed plan (see below) holds for one decision.
         self.set_planning(Planning::WithMargin);
-        self.decide_planned()
+        // The decision at each planning level in turn while no frontier is reachable (the last
+        // resorts 2 and 3 of `decide_planned`).
+        loop {
+            match self.decide_planned() {
+                Planned::Done(result) => return result,
+                Planned::Looser(level) => self.set_planning(level),
+            }
+        }
     }
 
-    pub(super) fn decide_planned(&mut self) -> bool {
+    /// The decision at the planning level in use: its result, or the looser level to decide at
+    /// instead.
+    pub(super) fn decide_planned(&mut self) -> Planned {
         let cfg = self.cfg;
         let frame = self.map.frame;
         if self.map.known_bounds.is_none() {
             // Nothing seen yet: wait for the first scan.
-            return true;
+            return Planned::Done(true);
         }
         self.blacklist_reached_again();
         let mut frontiers = self.candidate_frontiers();
         self.goal = None;
         self.follower = PathFollower::default();
         if frontiers.is_empty() {
-            return false;
+            return Planned::Done(false);
         }
         let mut goals = self.goal_cells(&frontiers);
         let use_layout = self.refresh_layout();
@@ -163,14 +172,14 @@ impl Explorer<'_> {
             let scores = self.score(&frontiers, &goals, &plan, use_layout);
             // `None` when the strategy says stop.
             let chosen = match self.choose(&frontiers, &mut goals, &plan, scores, use_layout) {
-                Choice::Decided(result) => return result,
+                Choice::Decided(result) => return Planned::Done(result),
                 Choice::Stop => None,
                 Choice::Nothing => Some(None),
                 Choice::Found(scores, best, wps) => Some(Some((scores, best, wps))),
             };
             // A policy that failed ends the run at once.
             if self.policy_failed {
-                return false;
+                return Planned::Done(false);
             }
             let early_stop = match chosen {
                 Some(Some(found)) => break found,
@@ -201,13 +210,12 @@ impl Explorer<'_> {
             // and reaches nothing (freiburg_building101 and intel_map from random starts,
             // stuck at 95 % explored). Its body fitted there: it leaves the way it came.
             if let Some(looser) = self.nav.planning().looser().filter(|_| last_resorts) {
-                self.set_planning(looser);
-                return self.decide_planned();
+                return Planned::Looser(looser);
             }
             // 4. A closer look (see `approach`).
             if !early_stop {
                 if let Some((i, goal_cell, wps)) = self.approach(&frontiers, &goals, &plan) {
-                    return self.set_goal(&frontiers, i, goal_cell, wps, None);
+                    return Planned::Done(self.set_goal(&frontiers, i, goal_cell, wps, None));
                 }
             }
             if early_stop {
@@ -219,11 +227,11 @@ impl Explorer<'_> {
                         .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
                 }
             }
-            return false;
+            return Planned::Done(false);
         };
         let goal_cell = goals[best].expect("best candidate is reachable");
         let score = scores[best];
-        self.set_goal(&frontiers, best, goal_cell, wps, Some(score))
+        Planned::Done(self.set_goal(&frontiers, best, goal_cell, wps, Some(score)))
     }
 
     /// Blacklists the goal just reached (and looked at) if most of its frontier is still there.
@@ -701,6 +709,14 @@ pub(super) enum Answer {
     Drop(Vec<usize>),
     Nothing,
     Stop,
+}
+
+/// What a decision at one planning level came to (see `Explorer::decide_planned`).
+pub(super) enum Planned {
+    /// Decided: whether a goal was set.
+    Done(bool),
+    /// No frontier reachable at this level: decide again at this looser one.
+    Looser(Planning),
 }
 
 /// What the policy chose within one round of a decision (see `Explorer::choose`).
