@@ -37,10 +37,12 @@
 //! These incremental structures (frontier tracker, gain cache, planning cells) change no result:
 //! runs are bit-identical to full recomputation.
 //!
-//! The explorer's work is split over files, each an `impl Explorer` block: `localization`
-//! (sensing, pose estimate, map), `navigation` (planning grids and plans, driving, the goal
-//! while driving), `layout_state`, `decision` (frontiers, scores, the policy, the last resorts)
-//! and `referee` (what reads ground truth: the explored area, how the run ended, its scores).
+//! The explorer's work is split over files: `localization` (the `Localizer`, which owns the pose
+//! estimate, and the explorer's sensing and map), `navigation` (the `Navigator`, which owns the
+//! planning grids and plans on the map it is given; driving, the goal while driving),
+//! `layout_state`, `decision` (frontiers, scores, the policy, the last resorts) and `referee`
+//! (what reads ground truth: the explored area, how the run ended, its scores); the last three
+//! are `impl Explorer` blocks.
 
 mod calibration;
 mod decision;
