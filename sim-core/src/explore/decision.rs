@@ -69,7 +69,7 @@ impl Explorer<'_> {
     ) -> Vec<CandidateScore> {
         let cfg = self.cfg;
         let mut scores = Vec::with_capacity(frontiers.len());
-        let (frame, robot) = (self.map.frame, self.estimate.position());
+        let (frame, robot) = (self.map.frame, self.localizer.estimate().position());
         for (f, goal_cell) in frontiers.iter().zip(goals) {
             let distance_m = goal_cell.and_then(|c| plan.distance_m(c)).map(|path_m| {
                 match cfg.utility_distance {
@@ -81,7 +81,7 @@ impl Explorer<'_> {
             });
             let gain_m2 = if distance_m.is_some() {
                 let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
-                let (c, now) = (f.candidate, self.scans);
+                let (c, now) = (f.candidate, self.localizer.scans());
                 match (&self.layout, use_layout) {
                     (Some(l), true) if cfg.strategy.gain.ranks_by_predicted_rooms() => {
                         layout_gain_cached(&mut self.gains, grid, &l.raster, c, range_m, now)
@@ -129,22 +129,31 @@ impl Explorer<'_> {
     pub(super) fn decide(&mut self) -> bool {
         // A relaxed plan (see below) holds for one decision.
         self.set_planning(Planning::WithMargin);
-        self.decide_planned()
+        // The decision at each planning level in turn while no frontier is reachable (the last
+        // resorts 2 and 3 of `decide_planned`).
+        loop {
+            match self.decide_planned() {
+                Planned::Done(result) => return result,
+                Planned::Looser(level) => self.set_planning(level),
+            }
+        }
     }
 
-    pub(super) fn decide_planned(&mut self) -> bool {
+    /// The decision at the planning level in use: its result, or the looser level to decide at
+    /// instead.
+    pub(super) fn decide_planned(&mut self) -> Planned {
         let cfg = self.cfg;
         let frame = self.map.frame;
         if self.map.known_bounds.is_none() {
             // Nothing seen yet: wait for the first scan.
-            return true;
+            return Planned::Done(true);
         }
         self.blacklist_reached_again();
         let mut frontiers = self.candidate_frontiers();
         self.goal = None;
         self.follower = PathFollower::default();
         if frontiers.is_empty() {
-            return false;
+            return Planned::Done(false);
         }
         let mut goals = self.goal_cells(&frontiers);
         let use_layout = self.refresh_layout();
@@ -163,14 +172,14 @@ impl Explorer<'_> {
             let scores = self.score(&frontiers, &goals, &plan, use_layout);
             // `None` when the strategy says stop.
             let chosen = match self.choose(&frontiers, &mut goals, &plan, scores, use_layout) {
-                Choice::Decided(result) => return result,
+                Choice::Decided(result) => return Planned::Done(result),
                 Choice::Stop => None,
                 Choice::Nothing => Some(None),
                 Choice::Found(scores, best, wps) => Some(Some((scores, best, wps))),
             };
             // A policy that failed ends the run at once.
             if self.policy_failed {
-                return false;
+                return Planned::Done(false);
             }
             let early_stop = match chosen {
                 Some(Some(found)) => break found,
@@ -200,14 +209,13 @@ impl Explorer<'_> {
             // (a crowded room, a narrow corridor), the robot is in a pocket of the planning grid
             // and reaches nothing (freiburg_building101 and intel_map from random starts,
             // stuck at 95 % explored). Its body fitted there: it leaves the way it came.
-            if let Some(looser) = self.planning.looser().filter(|_| last_resorts) {
-                self.set_planning(looser);
-                return self.decide_planned();
+            if let Some(looser) = self.nav.planning().looser().filter(|_| last_resorts) {
+                return Planned::Looser(looser);
             }
             // 4. A closer look (see `approach`).
             if !early_stop {
                 if let Some((i, goal_cell, wps)) = self.approach(&frontiers, &goals, &plan) {
-                    return self.set_goal(&frontiers, i, goal_cell, wps, None);
+                    return Planned::Done(self.set_goal(&frontiers, i, goal_cell, wps, None));
                 }
             }
             if early_stop {
@@ -219,11 +227,11 @@ impl Explorer<'_> {
                         .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
                 }
             }
-            return false;
+            return Planned::Done(false);
         };
         let goal_cell = goals[best].expect("best candidate is reachable");
         let score = scores[best];
-        self.set_goal(&frontiers, best, goal_cell, wps, Some(score))
+        Planned::Done(self.set_goal(&frontiers, best, goal_cell, wps, Some(score)))
     }
 
     /// Blacklists the goal just reached (and looked at) if most of its frontier is still there.
@@ -460,11 +468,13 @@ impl Explorer<'_> {
     /// path's length). Returns true.
     fn head_for(&mut self, target: Target, recorded: Recorded, wps: Vec<Vec2>) -> bool {
         let now = self.sim.time_s();
-        self.follower = PathFollower::from(self.estimate.position(), wps);
-        let dist = self.follower.remaining_length_m(self.estimate.position());
+        self.follower = PathFollower::from(self.localizer.estimate().position(), wps);
+        let dist = self
+            .follower
+            .remaining_length_m(self.localizer.estimate().position());
         self.decisions.push(Decision {
             time_s: now,
-            pose: self.estimate,
+            pose: self.localizer.estimate(),
             goal: recorded.goal,
             candidates: recorded.candidates,
             gain_m2: recorded.gain_m2,
@@ -553,7 +563,7 @@ impl Explorer<'_> {
     ) -> Vec<CandidateView> {
         let layout_gain = needs.layout_gain && use_layout;
         let frame = self.map.frame;
-        let robot = self.estimate.position();
+        let robot = self.localizer.estimate().position();
         let range_m = self.cfg.sim.laser.max_range_m;
         let mut views = Vec::new();
         for (i, s) in scores.iter().enumerate() {
@@ -571,7 +581,7 @@ impl Explorer<'_> {
                         &l.raster,
                         f.candidate,
                         range_m,
-                        self.scans,
+                        self.localizer.scans(),
                     ))
                 }
                 _ => None,
@@ -608,7 +618,7 @@ impl Explorer<'_> {
             decision: self.policy_decisions - 1,
             attempt: asked.attempt,
             time_s: self.sim.time_s(),
-            pose: self.estimate,
+            pose: self.localizer.estimate(),
             candidates: views,
             unreachable_goal: asked.unreachable_goal,
             layout: self
@@ -640,9 +650,9 @@ impl Explorer<'_> {
         plan: &Plan,
     ) -> Option<(usize, Cell, Vec<Vec2>)> {
         let frame = self.map.frame;
-        let near = &self.coarse;
+        let near = self.nav.coarse();
         let field = dijkstra_padded(near.frame, plan.near_start, near.padded(), MAX_EXTRA, &[]);
-        let robot = self.estimate.position();
+        let robot = self.localizer.estimate().position();
         let range_m = self.cfg.sim.laser.max_range_m;
         let r = (range_m / near.frame.resolution_m).ceil() as i32;
         let mut best: Option<(f64, usize, Cell)> = None;
@@ -699,6 +709,14 @@ pub(super) enum Answer {
     Drop(Vec<usize>),
     Nothing,
     Stop,
+}
+
+/// What a decision at one planning level came to (see `Explorer::decide_planned`).
+pub(super) enum Planned {
+    /// Decided: whether a goal was set.
+    Done(bool),
+    /// No frontier reachable at this level: decide again at this looser one.
+    Looser(Planning),
 }
 
 /// What the policy chose within one round of a decision (see `Explorer::choose`).

@@ -50,7 +50,7 @@ impl Explorer<'_> {
             let mut rooms = Vec::new();
             let mut raster = if st.layout_from_truth() {
                 // The oracle: nothing to compute (and nothing to charge).
-                let to_map = MapToWorld::new(&self.estimate, &self.sim.true_pose());
+                let to_map = MapToWorld::new(&self.localizer.estimate(), &self.sim.true_pose());
                 let mut raster =
                     LayoutRaster::exact(&true_layout(&self.referee.rooms, &to_map), grid);
                 open_true_doors(&mut raster.walls, &self.referee.doors, &to_map);

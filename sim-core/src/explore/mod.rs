@@ -37,10 +37,12 @@
 //! These incremental structures (frontier tracker, gain cache, planning cells) change no result:
 //! runs are bit-identical to full recomputation.
 //!
-//! The explorer's work is split over files, each an `impl Explorer` block: `localization`
-//! (sensing, pose estimate, map), `navigation` (planning grids and plans, driving, the goal
-//! while driving), `layout_state`, `decision` (frontiers, scores, the policy, the last resorts)
-//! and `referee` (what reads ground truth: the explored area, how the run ended, its scores).
+//! The explorer's work is split over files: `localization` (the `Localizer`, which owns the pose
+//! estimate, and the explorer's sensing and map), `navigation` (the `Navigator`, which owns the
+//! planning grids and plans on the map it is given; driving, the goal while driving),
+//! `layout_state`, `decision` (frontiers, scores, the policy, the last resorts) and `referee`
+//! (what reads ground truth: the explored area, how the run ended, its scores); the last three
+//! are `impl Explorer` blocks.
 
 mod calibration;
 mod decision;
@@ -69,6 +71,7 @@ use self::calibration::OdometryCalibration;
 use self::decision::*;
 use self::gain_cache::{GainCache, GainKind};
 use self::layout_state::*;
+use self::localization::*;
 use self::navigation::*;
 use self::referee::*;
 pub use self::shared::{can_share, explore_shared, shared_part};
@@ -434,17 +437,6 @@ impl RunResult {
     }
 }
 
-/// Heading prior of a scan match (standard deviation, rad) for any update, on top of the part
-/// proportional to the turn since the last one. 0.001 until 0.3.0: on the paper set (300 runs)
-/// the median aligned wall precision was 0.89 and the worst run's map 0.31, the heading having
-/// random-walked by up to 7 degrees; with 0.0002 and [`PRIOR_SIGMA_THETA_PER_RAD_CALIBRATED`]
-/// the median is 0.94 and the worst 0.79 (README, "Map quality").
-const PRIOR_SIGMA_THETA_BASE_RAD: f64 = 0.0002;
-
-/// Heading prior per radian turned once the odometry's heading scale is calibrated (0.01 until
-/// 0.3.0).
-const PRIOR_SIGMA_THETA_PER_RAD_CALIBRATED: f64 = 0.003;
-
 /// The mutable state of one exploration.
 struct Explorer<'a> {
     cfg: &'a ExploreConfig,
@@ -458,13 +450,8 @@ struct Explorer<'a> {
     known: Bitmap,
     /// The map cells the last update made known (a buffer kept between updates).
     fresh_known: Vec<usize>,
-    estimate: Pose,
-    last_odometry: Pose,
-    /// Odometry reading at the last map update.
-    update_odometry: Pose,
-    calibration: OdometryCalibration,
-    last_update_pose: Pose,
-    last_update_time_s: f64,
+    /// The pose estimate (see `localization`).
+    localizer: Localizer,
     blacklist: Blacklist,
     /// The goal reached (and looked at) just before the current decision.
     last_reached: Option<Vec2>,
@@ -473,9 +460,6 @@ struct Explorer<'a> {
     decisions: Vec<Decision>,
     progress: Vec<ProgressSample>,
     trajectory: Vec<Pose>,
-    estimated_trajectory: Vec<Pose>,
-    scans: u64,
-    matches_accepted: u64,
     plans: u64,
     /// Candidates' gains of every kind (the paper's room-bounded `I(p)` for ranking and early
     /// stopping among them).
@@ -507,48 +491,12 @@ struct Explorer<'a> {
     snapshots: Vec<MapSnapshot>,
     /// The map's frontier cells, updated with each map update.
     frontiers: FrontierTracker,
-    /// The planning grid, brought up to date before each plan from the planning cells whose
-    /// map cells changed (occupancy or obstacle distance) since the last one.
-    coarse: CoarseCosts,
-    coarse_dirty: Vec<u32>,
-    coarse_dirty_mark: Vec<bool>,
-    /// The map cells whose obstacle distance the last map update changed (kept for its
-    /// allocation).
-    distance_changes: Vec<u32>,
-    /// Per cell of `far`: listed among the cells to recompute (all false between updates).
-    far_dirty_mark: Vec<bool>,
-    /// How permissive path planning is (see `decide_planned`'s last resorts).
-    planning: Planning,
-    /// Map cells the robot's estimated centre passed through (the segments between its poses at
-    /// map updates): its body fitted there, whatever the map shows now.
-    travelled: Bitmap,
-    /// The coarser grid the candidates' distances are searched on, updated with `coarse`. Shared
-    /// with the plans made on it (a plan lasts while the map stands still; the grid is copied
-    /// only when it changes while a plan, a parked level or a snapshot still holds it).
-    far: Arc<CoarseCosts>,
-    /// The planning and distance grids of the planning levels used before and not in use now,
-    /// with the planning cells to recompute before one is used again (marked with every map
-    /// update, as `coarse_dirty`): a relaxed plan lasts one decision, and recomputing every
-    /// planning cell at each change of level was most of the grids' upkeep on maps with
-    /// passages narrow for the robot.
-    parked: Vec<navigation::ParkedGrids>,
-    /// Whether a cell became or stopped being occupied since the path was last checked.
-    walls_changed: bool,
+    /// The planning grids and path search (see `navigation`).
+    nav: Navigator,
     /// `known_cells` when goals given up were last given another chance (see `forgive`).
     forgiven_at: Option<usize>,
     /// Frontier cells left at the end that the robot had not looked into (see `classify_end`).
     frontier_cells_left: usize,
-    /// The path search on `coarse`, and per cell of `far` whether it is in the corridor the
-    /// search is confined to first (all false between searches).
-    astar: AStar,
-    corridor: Vec<bool>,
-    /// Bumped whenever the planning grid (`coarse`) changes.
-    planning_generation: u64,
-    /// The planning cells reachable from a start, as a search of the whole planning grid that
-    /// failed found them, with the grid's generation and the start: a goal not among them has
-    /// no path either (a decision whose best candidates lie beyond a gap too narrow for the
-    /// planning grid asks for many).
-    unreachable_memo: Option<UnreachableMemo>,
     /// The runs sharing this one's beginning (see `shared`), when it leads them.
     shared: Option<Box<shared::Shared<'a>>>,
 }
@@ -682,21 +630,13 @@ fn new_explorer<'a>(
     Explorer {
         cfg,
         seed,
-        last_odometry: sim.odometry(),
-        update_odometry: sim.odometry(),
-        calibration: OdometryCalibration::new(
-            cfg.sim.odometry.max_translation_error * 1.5,
-            cfg.sim.odometry.max_rotation_error * 1.5,
-        ),
+        localizer: Localizer::new(start, sim.odometry(), cfg),
         sim,
         map: LogOddsMap::new(frame),
         obstacles: ObstacleDistance::new(frame, cap_cells),
         referee,
         known: Bitmap::filled(frame, false),
         fresh_known: Vec::new(),
-        estimate: start,
-        last_update_pose: start,
-        last_update_time_s: f64::NEG_INFINITY,
         blacklist: Blacklist::new(),
         last_reached: None,
         follower: PathFollower::default(),
@@ -704,9 +644,6 @@ fn new_explorer<'a>(
         decisions: Vec::new(),
         progress: Vec::new(),
         trajectory: Vec::new(),
-        estimated_trajectory: Vec::new(),
-        scans: 0,
-        matches_accepted: 0,
         plans: 0,
         gains: GainCache::new(frame),
         next_progress_s: 0.0,
@@ -728,22 +665,9 @@ fn new_explorer<'a>(
         start,
         snapshots: Vec::new(),
         frontiers: FrontierTracker::default(),
-        coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
-        coarse_dirty: Vec::new(),
-        coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
-        distance_changes: Vec::new(),
-        far_dirty_mark: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
-        planning: Planning::WithMargin,
-        travelled: Bitmap::filled(frame, false),
-        far: Arc::new(CoarseCosts::blocked(frame, DISTANCE_FACTOR)),
-        parked: Vec::new(),
-        walls_changed: false,
+        nav: Navigator::new(frame, cfg.sim.robot.radius_m, cfg.safety_margin_m),
         forgiven_at: None,
         frontier_cells_left: 0,
-        astar: AStar::default(),
-        corridor: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
-        planning_generation: 0,
-        unreachable_memo: None,
         shared: None,
     }
 }
@@ -787,15 +711,6 @@ fn new_referee(building: &Building, frame: GridFrame, start: Pose, cfg: &Explore
         rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
         doors: building.doors.iter().map(|d| (d.a, d.b)).collect(),
     }
-}
-
-/// See [`Explorer::unreachable_memo`].
-#[derive(Debug, Clone)]
-struct UnreachableMemo {
-    generation: u64,
-    start: Cell,
-    /// One bit per cell of the padded planning grid: reachable from `start`.
-    reached: Vec<u64>,
 }
 
 /// What a built-in strategy's rule needs: the paper's I(p) only when the strategy uses the

@@ -214,7 +214,7 @@ impl Explorer<'_> {
         // that only inconsistencies (doubled or bent walls) lower the score.
         let positions = |t: &[Pose]| t.iter().map(|p| p.position()).collect::<Vec<_>>();
         let prior = crate::mapping::alignment::fit_rigid(
-            &positions(&self.estimated_trajectory),
+            &positions(self.localizer.estimated_trajectory()),
             &positions(&self.trajectory),
         );
         map_quality.occupied_precision_aligned =
@@ -273,11 +273,11 @@ impl Explorer<'_> {
             decisions: self.decisions,
             progress: self.progress,
             trajectory: self.trajectory,
-            estimated_trajectory: self.estimated_trajectory,
+            scans: self.localizer.scans(),
+            scan_matches_accepted: self.localizer.matches_accepted(),
+            estimated_trajectory: self.localizer.into_estimated_trajectory(),
             map: self.map.occupancy,
             map_quality,
-            scans: self.scans,
-            scan_matches_accepted: self.matches_accepted,
             plans: self.plans,
             snapshots: self.snapshots,
         }

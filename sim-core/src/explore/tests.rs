@@ -592,7 +592,7 @@ fn cells_travelled_while_the_travelled_grids_are_kept_are_planned_with() {
     PLANNING_CHECKS.with(|c| c.set(Some([0; 3])));
     e.set_planning(Planning::Travelled);
     e.plan(&[]);
-    let before = e.coarse.clone();
+    let before = e.nav.coarse().clone();
     e.set_planning(Planning::WithMargin);
     e.plan(&[]);
     // Along the wall, 0.1-0.15 m from its face: free in the map, closer than the robot's
@@ -612,7 +612,8 @@ fn cells_travelled_while_the_travelled_grids_are_kept_are_planned_with() {
     let checks = PLANNING_CHECKS.with(|c| c.replace(None)).expect("on");
     assert_eq!(checks, [2, 0, 2]);
     assert_ne!(
-        e.coarse, before,
+        *e.nav.coarse(),
+        before,
         "the travelled strip changed no planning cell"
     );
 }
