@@ -95,7 +95,19 @@ pub fn make_grid_tours(
     workers: usize,
 ) -> Result<()> {
     use floorcast_coordinator::yardstick::{missing, planned_tours};
-    let planned = planned_tours(plan, jobs);
+    // Only the runs that succeeded are measured (a failed job's start may be no start at all).
+    let ok: std::collections::BTreeSet<String> = store
+        .all()?
+        .into_iter()
+        .filter(|r| r.status.is_ok())
+        .map(|r| r.job_id)
+        .collect();
+    let jobs: Vec<_> = jobs
+        .iter()
+        .filter(|j| ok.contains(&j.id))
+        .cloned()
+        .collect();
+    let planned = planned_tours(plan, &jobs);
     let stored = store.tours()?;
     let todo = missing(plan, &planned, &stored);
     if todo.is_empty() {
@@ -119,7 +131,14 @@ pub fn make_grid_tours(
                 let Some(t) = todo.get(i) else { break };
                 let b = &plan.buildings[t.building];
                 let began = std::time::Instant::now();
-                let made = make_tour(&b.building, &b.name, t.start, &t.settings, t.key.coverage);
+                // A tour is a yardstick, not a result: one that cannot be made (a setting
+                // refused, a building the method cannot handle) is reported and skipped.
+                let made = std::panic::catch_unwind(|| {
+                    make_tour(&b.building, &b.name, t.start, &t.settings, t.key.coverage)
+                })
+                .map_err(|_| "the tour's computation failed".to_string())
+                .and_then(|r| r.map_err(|e| e.to_string()))
+                .map_err(|e| format!("{}: {e}; its runs get no efficiency", b.name));
                 if tx.send((made, began.elapsed().as_secs_f64())).is_err() {
                     break;
                 }
@@ -127,7 +146,13 @@ pub fn make_grid_tours(
         }
         drop(tx);
         for (k, (made, wall_s)) in rx.iter().enumerate() {
-            let tour = made?;
+            let tour = match made {
+                Ok(tour) => tour,
+                Err(e) => {
+                    eprintln!("tour {}/{}: {e}", k + 1, todo.len());
+                    continue;
+                }
+            };
             store.record_tour(&tour)?;
             say!(
                 "tour {}/{}: {}: {:.0} s, {:.1} % of {:.0} m2 seen ({:.1} s to make)",
