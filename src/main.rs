@@ -17,6 +17,28 @@ use std::process::ExitCode;
 use clap::error::ErrorKind;
 use clap::{Parser, Subcommand};
 
+/// `--version`: the version, and the commit, dirty flag and profile the binary was built from
+/// (`build.rs`).
+const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (commit ",
+    env!("FLOORCAST_GIT_COMMIT"),
+    ", dirty ",
+    env!("FLOORCAST_GIT_DIRTY"),
+    ", ",
+    env!("FLOORCAST_BUILD_PROFILE"),
+    " build)"
+);
+
+/// What this binary was built from, recorded with every grid run's provenance.
+pub fn build_info() -> floorcast_coordinator::store::BuildInfo {
+    floorcast_coordinator::store::BuildInfo {
+        git_commit: env!("FLOORCAST_GIT_COMMIT").to_string(),
+        git_dirty: env!("FLOORCAST_GIT_DIRTY") == "true",
+        profile: env!("FLOORCAST_BUILD_PROFILE").to_string(),
+    }
+}
+
 /// Does this exploration strategy map an unknown building faster than that one?
 ///
 /// floorcast simulates a differential-drive robot with a 2D laser exploring a building (laser,
@@ -27,7 +49,7 @@ use clap::{Parser, Subcommand};
 // names the flag, rather than taken for an unknown flag.)
 #[command(
     name = "floorcast",
-    version,
+    version = VERSION,
     about,
     long_about = None,
     propagate_version = true,

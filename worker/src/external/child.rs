@@ -11,10 +11,11 @@ use std::time::{Duration, Instant};
 
 use super::groups::{kill_group, live_groups};
 use super::program::StrategyProgram;
+use super::temp::private_temp_dir;
 
 /// The longest reply line read (bytes).
 pub(super) const MAX_LINE: usize = 1 << 20;
-/// Stderr kept from a program (bytes; the rest is dropped).
+/// Stderr kept from a program (bytes): its end, the earlier bytes are dropped.
 const MAX_STDERR: usize = 1 << 20;
 
 /// floorcast's Python module for strategies (`python/floorcast_strategy.py`, built into the
@@ -22,24 +23,6 @@ const MAX_STDERR: usize = 1 << 20;
 /// floorcast_strategy` works wherever the program lives, remote workers included, and always
 /// speaks this floorcast's protocol.
 pub const PYTHON_MODULE: &str = include_str!("../../../python/floorcast_strategy.py");
-
-/// A new folder of this process's own in the temporary directory (`TMPDIR`): a name no one
-/// else chose, mode 0700, removed when dropped. A folder with a name known in advance could be
-/// made first by another user, with modules of theirs that our programs would import.
-pub fn private_temp_dir(prefix: &str) -> Result<tempfile::TempDir, String> {
-    use std::os::unix::fs::PermissionsExt;
-    let tmp = std::env::temp_dir();
-    tempfile::Builder::new()
-        .prefix(prefix)
-        .permissions(std::fs::Permissions::from_mode(0o700))
-        .tempdir_in(&tmp)
-        .map_err(|e| {
-            format!(
-                "cannot create a folder in the temporary directory {} ({e}); set TMPDIR to a directory you can write",
-                tmp.display()
-            )
-        })
-}
 
 /// A private folder ([`private_temp_dir`]) holding [`PYTHON_MODULE`], for one program.
 fn python_dir() -> Result<tempfile::TempDir, String> {
@@ -62,11 +45,45 @@ pub(super) enum Line {
     Failed(String),
 }
 
-/// What the program wrote to stderr: the text kept and its last line.
+/// What the program wrote to stderr: the text kept (its last [`MAX_STDERR`] bytes, up to twice
+/// that between two cuts), how many bytes before it were dropped, and its last line.
 #[derive(Default)]
 pub(super) struct Stderr {
-    pub(super) text: String,
+    text: String,
+    dropped: usize,
     pub(super) last_line: String,
+}
+
+impl Stderr {
+    /// The end of what the program wrote, at most [`MAX_STDERR`] bytes, after a line saying
+    /// how many bytes were left out before it, if any.
+    pub(super) fn kept(&self) -> String {
+        let mut cut = self.text.len().saturating_sub(MAX_STDERR);
+        while !self.text.is_char_boundary(cut) {
+            cut += 1;
+        }
+        match self.dropped + cut {
+            0 => self.text.clone(),
+            left_out => format!(
+                "[floorcast: the first {left_out} bytes are left out]\n{}",
+                &self.text[cut..]
+            ),
+        }
+    }
+
+    /// Adds what the program wrote, dropping the oldest bytes once twice [`MAX_STDERR`] are held
+    /// (so that a program that writes a lot costs one copy per megabyte).
+    fn push(&mut self, text: &str) {
+        self.text.push_str(text);
+        if self.text.len() > 2 * MAX_STDERR {
+            let mut cut = self.text.len() - MAX_STDERR;
+            while !self.text.is_char_boundary(cut) {
+                cut += 1;
+            }
+            self.text.drain(..cut);
+            self.dropped += cut;
+        }
+    }
 }
 
 /// A started program's pipes, each served by a thread of its own.
@@ -239,10 +256,7 @@ fn read_stderr(mut stderr: impl Read, sink: Arc<Mutex<Stderr>>) {
             Ok(n) => n,
         };
         let Ok(mut s) = sink.lock() else { return };
-        let text = String::from_utf8_lossy(&chunk[..n]);
-        if s.text.len() + text.len() <= MAX_STDERR {
-            s.text.push_str(&text);
-        }
+        s.push(&String::from_utf8_lossy(&chunk[..n]));
         for &b in &chunk[..n] {
             if b == b'\n' {
                 last(&current, &mut s);
