@@ -11,13 +11,14 @@ use std::time::Duration;
 use common::*;
 
 /// A strategy that raises (a Python traceback on stderr) at its first decision while the file
-/// `broken` lies beside it, sleeps there while `slow` does (after writing its process id to
+/// `broken` lies beside it (or in `FLAKY_DIR`), sleeps there while `slow` does (after writing its process id to
 /// `started`), and else ranks the candidates as `nearest` does. Its files do not change when
 /// it is "fixed" (the flag files are not its files), so its jobs keep their ids.
 const FLAKY: &str = r#"import os, time
 from floorcast_strategy import Strategy, run
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+# Beside the program, or where FLAKY_DIR says (a remote worker runs a copy of it).
+HERE = os.environ.get("FLAKY_DIR") or os.path.dirname(os.path.abspath(__file__))
 
 
 class Flaky(Strategy):
@@ -336,6 +337,127 @@ fn a_run_killed_mid_job_leaves_no_folder_after_a_restart() {
         "{err}"
     );
     assert_eq!(floorcast_folders(tmp.path()), Vec::<String>::new());
+}
+
+/// Waits until the flaky strategy, sleeping mid-job, wrote its process id to `started`.
+fn wait_started(started: &Path, child: &mut std::process::Child) -> String {
+    let t0 = std::time::Instant::now();
+    loop {
+        if let Ok(pid) = std::fs::read_to_string(started) {
+            if !pid.is_empty() {
+                return pid.trim().to_string();
+            }
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(120),
+            "the job did not start"
+        );
+        assert!(child.try_wait().unwrap().is_none(), "it ended early");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// Waits for `child` to end (at most `s` seconds); its exit code.
+fn wait_for(child: &mut std::process::Child, s: u64) -> Option<i32> {
+    let t0 = std::time::Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status.code();
+        }
+        if t0.elapsed() > Duration::from_secs(s) {
+            let _ = child.kill();
+            panic!("did not end within {s} s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn a_worker_killed_mid_job_leaves_no_folder_after_a_restart() {
+    let dir = tempfile::tempdir().unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let g = project(dir.path(), "[1]", &["slow"]);
+    let flags = dir.path().join("strategies");
+    let res = dir.path().join("res");
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let mut coordinator = floorcast()
+        .args([
+            "run",
+            g.to_str().unwrap(),
+            "--results",
+            res.to_str().unwrap(),
+        ])
+        .args([
+            "--workers",
+            "0",
+            "-q",
+            "--lease-s",
+            "2",
+            "--listen",
+            &endpoint,
+        ])
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let worker = |stderr: std::process::Stdio| {
+        floorcast()
+            .args([
+                "worker",
+                "--connect",
+                &endpoint,
+                "--jobs",
+                "1",
+                "--wait-s",
+                "60",
+            ])
+            .current_dir(dir.path())
+            .env("TMPDIR", tmp.path())
+            .env("FLAKY_DIR", &flags)
+            .stdout(std::process::Stdio::null())
+            .stderr(stderr)
+            .spawn()
+            .unwrap()
+    };
+    let mut first = worker(std::process::Stdio::null());
+    let program = wait_started(&flags.join("started"), &mut first);
+    let left = floorcast_folders(tmp.path());
+    assert!(
+        left.iter().any(|n| n.starts_with("floorcast-job-")),
+        "the job's folder: {left:?}"
+    );
+    for pid in [first.id().to_string(), program] {
+        let _ = std::process::Command::new("kill")
+            .args(["-9", &pid])
+            .status();
+    }
+    first.wait().unwrap();
+    assert_eq!(
+        floorcast_folders(tmp.path()),
+        left,
+        "kill -9 leaves the folders"
+    );
+
+    // A new worker (the strategy no longer sleeps) removes them, and takes the job again once
+    // its lease ran out.
+    std::fs::remove_file(flags.join("slow")).unwrap();
+    let second = worker(std::process::Stdio::piped());
+    let out = second.wait_with_output().unwrap();
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains(&format!("removed {} temporary folder(s)", left.len())),
+        "{err}"
+    );
+    assert_eq!(wait_for(&mut coordinator, 120), Some(0));
+    assert_eq!(floorcast_folders(tmp.path()), Vec::<String>::new());
+    assert_eq!(report_rows(&res)[0]["status"], "ok");
 }
 
 /// `git ARGS` in `dir`, its output trimmed.

@@ -270,3 +270,48 @@ fn read_stderr(mut stderr: impl Read, sink: Arc<Mutex<Stderr>>) {
         last(&current, &mut s);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A program's stderr is kept to its end: up to [`MAX_STDERR`] bytes as written, more cut
+    /// from the front (at a character boundary) after a line saying how much was left out.
+    #[test]
+    fn stderr_keeps_its_end() {
+        let line = "é".repeat(1000) + "\n"; // 2001 bytes
+                                            // Lines written: within the bound, at it, just past it.
+        for lines in &[1, 524, 525] {
+            let mut s = Stderr::default();
+            for _ in 0..*lines {
+                s.push(&line);
+            }
+            let kept = s.kept();
+            let written = 2001 * lines;
+            if written <= MAX_STDERR {
+                assert_eq!(kept, line.repeat(*lines), "{lines} lines");
+                continue;
+            }
+            let (note, rest) = kept.split_once('\n').unwrap();
+            let left_out = written - rest.len();
+            assert_eq!(
+                note,
+                format!("[floorcast: the first {left_out} bytes are left out]")
+            );
+            assert!(
+                rest.len() <= MAX_STDERR && rest.len() + 1 >= MAX_STDERR,
+                "{lines}"
+            );
+            assert!(line.repeat(*lines).ends_with(rest));
+        }
+        // Written by the megabyte: the text held stays within twice the bound, the end kept.
+        let mut s = Stderr::default();
+        for i in 0..2000 {
+            s.push(&format!("{i:06} {line}"));
+            assert!(s.text.len() <= 2 * MAX_STDERR + line.len() + 7);
+        }
+        let kept = s.kept();
+        assert!(kept.ends_with(&format!("001999 {line}")), "the last line");
+        assert!(kept.starts_with("[floorcast: the first "));
+    }
+}
