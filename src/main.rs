@@ -77,10 +77,18 @@ enum Command {
     Layout(cmd_layout::LayoutArgs),
     /// Run an experiment grid (buildings x seeds x strategies) on this machine and, with
     /// --listen, on remote workers; resumable.
+    ///
+    /// As it starts, it removes the private folders (floorcast-job-*, floorcast-python-*) that
+    /// floorcast processes killed on this machine left in the temporary directory (TMPDIR),
+    /// never a live process's (docs/failures.md).
     Run(cmd_run::RunArgs),
     /// Join a grid run elsewhere (`floorcast run GRID --listen ...`): take jobs, return results.
+    ///
+    /// As it starts, it removes the private folders (floorcast-job-*, floorcast-python-*) that
+    /// floorcast processes killed on this machine left in the temporary directory (TMPDIR),
+    /// never a live process's (docs/failures.md).
     Worker(cmd_worker::WorkerArgs),
-    /// Print the table of a results directory and export it as CSV.
+    /// Print the table of a results directory and export it as CSV; list its failed jobs.
     Report(cmd_run::ReportArgs),
     /// Tools for your own strategies (the strategy protocol): check a program's compliance.
     #[command(subcommand)]

@@ -159,6 +159,8 @@ pub struct Provenance {
 pub struct Store {
     path: PathBuf,
     conn: Connection,
+    /// The tables and columns added since the first layout are there ([`Store::upgrade`]).
+    upgraded: std::sync::atomic::AtomicBool,
 }
 
 impl Store {
@@ -181,7 +183,11 @@ impl Store {
             }
         }
         let conn = Connection::open(&path).map_err(|e| classify(&path, e))?;
-        let s = Store { path, conn };
+        let s = Store {
+            path,
+            conn,
+            upgraded: false.into(),
+        };
         s.init()?;
         Ok(s)
     }
@@ -194,7 +200,11 @@ impl Store {
             return Err(StoreError::Missing(dir.to_path_buf()));
         }
         let conn = check_is_store(&path)?;
-        Ok(Store { path, conn })
+        Ok(Store {
+            path,
+            conn,
+            upgraded: false.into(),
+        })
     }
 
     pub fn path(&self) -> &Path {
@@ -624,25 +634,8 @@ impl Store {
                 upper REAL NOT NULL,
                 decision TEXT NOT NULL,
                 PRIMARY KEY (grid, label, reference, through_seed)
-             );
-             CREATE TABLE IF NOT EXISTS failures (
-                job_id TEXT NOT NULL,
-                attempt INTEGER NOT NULL,
-                grid TEXT NOT NULL,
-                building TEXT NOT NULL,
-                strategy TEXT NOT NULL,
-                label TEXT NOT NULL,
-                seed INTEGER NOT NULL,
-                error TEXT NOT NULL,
-                stderr_tail TEXT,
-                worker TEXT NOT NULL,
-                wall_time_s REAL NOT NULL,
-                floorcast_version TEXT NOT NULL,
-                stored_unix_s REAL NOT NULL,
-                PRIMARY KEY (job_id, attempt)
              );",
         ))?;
-        self.add_missing_columns()?;
         let found: Option<String> = self.sql(
             self.conn
                 .query_row(
@@ -670,9 +663,33 @@ impl Store {
         Ok(())
     }
 
-    /// Adds the columns a store written by an earlier version lacks (each nullable: its old rows
-    /// hold none).
-    fn add_missing_columns(&self) -> Result<(), StoreError> {
+    /// Adds what a store written by an earlier version lacks: the `failures` table and the
+    /// columns of [`ADDED_COLUMNS`] (each nullable: its old rows hold none). Done once, by the
+    /// first write (as `grids` and `tours` are made): opening a store changes nothing in it,
+    /// so that a store refused after it was opened (a tampered row) is left as it was.
+    fn upgrade(&self) -> Result<(), StoreError> {
+        use std::sync::atomic::Ordering;
+        if self.upgraded.load(Ordering::SeqCst) {
+            return Ok(());
+        }
+        self.sql(self.conn.execute_batch(
+            "CREATE TABLE IF NOT EXISTS failures (
+                job_id TEXT NOT NULL,
+                attempt INTEGER NOT NULL,
+                grid TEXT NOT NULL,
+                building TEXT NOT NULL,
+                strategy TEXT NOT NULL,
+                label TEXT NOT NULL,
+                seed INTEGER NOT NULL,
+                error TEXT NOT NULL,
+                stderr_tail TEXT,
+                worker TEXT NOT NULL,
+                wall_time_s REAL NOT NULL,
+                floorcast_version TEXT NOT NULL,
+                stored_unix_s REAL NOT NULL,
+                PRIMARY KEY (job_id, attempt)
+             );",
+        ))?;
         for (table, column, kind) in ADDED_COLUMNS {
             if !self.has_column(table, column)? {
                 self.sql(
@@ -681,6 +698,7 @@ impl Store {
                 )?;
             }
         }
+        self.upgraded.store(true, Ordering::SeqCst);
         Ok(())
     }
 
@@ -719,6 +737,7 @@ impl Store {
         if rows.is_empty() {
             return Ok(0);
         }
+        self.upgrade()?;
         let now = unix_now_s();
         let tx = self.sql(self.conn.unchecked_transaction())?;
         let mut inserted = 0;
@@ -820,6 +839,7 @@ impl Store {
 
     /// Stores `row`, replacing its job's row if one is stored.
     pub fn replace(&self, row: &StoredResult) -> Result<(), StoreError> {
+        self.upgrade()?;
         let tx = self.sql(self.conn.unchecked_transaction())?;
         self.sql(tx.execute("DELETE FROM results WHERE job_id = ?1", [&row.job_id]))?;
         self.insert_row(&tx, row, unix_now_s(), false)?;
@@ -1159,6 +1179,7 @@ impl Store {
     }
 
     pub fn record_run(&self, p: &Provenance) -> Result<(), StoreError> {
+        self.upgrade()?;
         self.sql(self.conn.execute(
             "INSERT INTO runs (grid, command, git_commit, git_dirty, rustc, host, floorcast_version,
                 started_unix_s, build_profile, cwd_git_commit, cwd_git_dirty)
@@ -1907,9 +1928,9 @@ mod tests {
         assert!(!read.has_column("runs", "cwd_git_commit").unwrap());
         drop(read);
         let s = Store::open(dir.path()).unwrap();
-        for (table, column, _) in ADDED_COLUMNS {
-            assert!(s.has_column(table, column).unwrap(), "{table}.{column}");
-        }
+        // Opened to be written, it is changed by its first write only.
+        assert!(!s.has_table("failures").unwrap());
+        assert!(!s.has_column("results", "stderr_tail").unwrap());
         let build = BuildInfo {
             git_commit: "c".repeat(40),
             git_dirty: true,
@@ -1917,6 +1938,10 @@ mod tests {
         };
         s.record_run(&provenance("g", "floorcast run g", &build))
             .unwrap();
+        assert!(s.has_table("failures").unwrap());
+        for (table, column, _) in ADDED_COLUMNS {
+            assert!(s.has_column(table, column).unwrap(), "{table}.{column}");
+        }
         let runs: (String, i64, String) = s
             .conn
             .query_row(
