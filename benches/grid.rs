@@ -124,6 +124,7 @@ fn timed_run(plan: &Plan, local: usize, role: Option<&str>, procs: usize) -> f64
         verify_fraction: 0.0,
         // Every job alone: what is measured is the coordinator and the scaling.
         share: false,
+        retry_failed: false,
     };
     let mut children: Vec<Child> = Vec::new();
     if let Some(role) = role {

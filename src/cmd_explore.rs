@@ -153,11 +153,17 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     let dir = staged.dir();
 
     let pb = progress_bar(1000, a.quiet, "{spinner} {msg} [{bar:40}] {pos}‰ explored");
-    let output = run_job(&job, &mut |s| {
+    let output = match run_job(&job, &mut |s| {
         pb.set_position((s.explored_fraction * 1000.0) as u64);
         pb.set_message(format!("t = {:.0} s", s.time_s));
-    })
-    .with_context(|| format!("{}: cannot explore", a.building.display()))?;
+    }) {
+        Ok(output) => output,
+        Err(e) => {
+            pb.finish_and_clear();
+            return Err(failed_run(staged, &out, e))
+                .with_context(|| format!("{}: cannot explore", a.building.display()));
+        }
+    };
     pb.finish_and_clear();
 
     write_outputs(&a, dir, &job, &output)?;
@@ -179,6 +185,31 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     }
     say!("results in {}", out.display());
     Ok(())
+}
+
+/// A run that failed: an external strategy's stderr is kept in `out` (`strategy-stderr.txt`, the
+/// run's only file: the directory holds what this run left, as after a successful run), and the
+/// error says where; otherwise nothing is written.
+fn failed_run(
+    staged: crate::output::StagedOut,
+    out: &std::path::Path,
+    e: floorcast_worker::JobError,
+) -> anyhow::Error {
+    let floorcast_worker::JobError::Strategy(se) = &e else {
+        return e.into();
+    };
+    if se.stderr.is_empty() {
+        return e.into();
+    }
+    let file = staged.dir().join("strategy-stderr.txt");
+    let kept = write_text(&file, &se.stderr).and_then(|()| staged.commit());
+    match kept {
+        Ok(()) => anyhow::anyhow!(
+            "{e} (its stderr: {})",
+            out.join("strategy-stderr.txt").display()
+        ),
+        Err(w) => anyhow::anyhow!("{e} (its stderr could not be kept: {w:#})"),
+    }
 }
 
 /// The run's settings: the file's (or the defaults), with the flags on top.

@@ -85,6 +85,13 @@ pub struct RunArgs {
     /// Only print the table of what is stored so far; run nothing.
     #[arg(long)]
     summary: bool,
+    /// Run the stored failed jobs again (a crashed or timed-out strategy program, fixed since),
+    /// besides the jobs not stored yet; the other stored jobs are skipped as always. Each new
+    /// outcome replaces the job's failed row in results.sqlite; every failure stays recorded in
+    /// its `failures` table (`report RESULTS --failures` lists them). Off by default: a failed
+    /// job is stored and not run again.
+    #[arg(long, conflicts_with = "summary")]
+    retry_failed: bool,
     /// Make no known-map tours. By default, once its jobs are done, `run` makes the tour of
     /// each building, start pose and robot the grid's runs used (docs/known-map-tour.md; about
     /// 1 to 40 s each, on the --workers threads) unless the store has it, so that `report`
@@ -154,6 +161,13 @@ pub struct ReportArgs {
     /// probability of improvement, performance profile).
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+    /// Also list the failed jobs (building, label and strategy, seed, attempts, each attempt's
+    /// error) with the first 5 and last 10 lines of the stored stderr of their strategy
+    /// program (its last 64 KiB are stored), and the earlier failures of jobs that later
+    /// succeeded (`run --retry-failed`), marked as such. Failed jobs do not make report fail
+    /// (exit code 0).
+    #[arg(long)]
+    failures: bool,
     /// The coverage level, a fraction in (0, 1]: a run achieves the outcome when it ended with
     /// at least this fraction of the explorable area explored; a run below it counts as a loss
     /// against a run that reached it (a tie against one that did not). Default: the grids'
@@ -177,6 +191,10 @@ pub fn run(a: RunArgs) -> Result<()> {
     )?;
     check_options(&a)?;
     let (_lock, store) = open_store(&plan, a.summary)?;
+    if !a.summary {
+        // Before any job of ours starts: what killed floorcast processes left.
+        crate::output::remove_stale_temp_dirs(a.quiet);
+    }
     let stored = store.all()?;
     check_stored(&plan, &store, &stored)?;
     for s in &plan.suites {
@@ -207,11 +225,20 @@ pub fn run(a: RunArgs) -> Result<()> {
         return Ok(());
     }
     let before = stored_of(&jobs, &store)?;
+    let to_retry = if a.retry_failed {
+        failed_of(&jobs, &store)?
+    } else {
+        0
+    };
     // The grid's label order and coverage level, for `report`.
     store.record_grid(&plan.name, &plan.labels, plan.coverage)?;
-    if before == jobs.len() && progress.finished {
+    if before == jobs.len() && progress.finished && to_retry == 0 {
+        let failed = match failed_of(&jobs, &store)? {
+            0 => String::new(),
+            n => format!(" ({n} of them failed: --retry-failed runs them again)"),
+        };
         say!(
-            "nothing to do: all {} jobs of grid '{}' are already stored in {}",
+            "nothing to do: all {} jobs of grid '{}' are already stored in {}{failed}",
             jobs.len(),
             plan.name,
             store.path().display()
@@ -225,7 +252,7 @@ pub fn run(a: RunArgs) -> Result<()> {
             let threads = a.workers.unwrap_or_else(crate::values::cores).max(1);
             crate::cmd_tour::make_grid_tours(&plan, &jobs, &store, threads)?;
         }
-        return failed_jobs(&jobs, &store);
+        return failed_jobs(&plan, &jobs, &store);
     }
     let networked = !a.listen.is_empty() || !a.connect.is_empty() || a.net.zenoh_config.is_some();
     let workers = a.workers.unwrap_or_else(crate::values::cores);
@@ -238,8 +265,12 @@ pub fn run(a: RunArgs) -> Result<()> {
     store.record_run(&provenance(
         &a.grid.display().to_string(),
         &std::env::args().collect::<Vec<_>>().join(" "),
+        &crate::build_info(),
     ))?;
     announce(&plan, jobs.len(), before, workers);
+    if to_retry > 0 {
+        say!("--retry-failed: {to_retry} failed jobs run again (their failures stay recorded)");
+    }
     let interrupt = interrupt_on_ctrl_c();
     let (outcome, counts) = run_with_progress(&plan, &store, &opts, &interrupt, a.quiet)?;
     let tour_threads = (!a.no_tours).then_some(workers.max(1));
@@ -332,6 +363,7 @@ fn run_options(a: &RunArgs, networked: bool, workers: usize) -> RunOptions {
         // Without remote workers nothing is checked (`run_plan` starts no verifier).
         verify_fraction: a.verify_fraction,
         share: !a.no_share,
+        retry_failed: a.retry_failed,
         ..RunOptions::default()
     }
 }
@@ -464,7 +496,7 @@ fn finish(
             if let Some(threads) = tour_threads {
                 crate::cmd_tour::make_grid_tours(plan, &jobs, store, threads)?;
             }
-            failed_jobs(&jobs, store)
+            failed_jobs(plan, &jobs, store)
         }
         Outcome::Interrupted => {
             eprintln!(
@@ -479,8 +511,12 @@ fn finish(
 }
 
 /// An error naming the plan's failed jobs (building, strategy, seed, error) and the jobs that did
-/// not run, if any.
-fn failed_jobs(jobs: &[floorcast_coordinator::grid::PlannedJob], store: &Store) -> Result<()> {
+/// not run, if any, and saying how to see and rerun the failed ones.
+fn failed_jobs(
+    plan: &Plan,
+    jobs: &[floorcast_coordinator::grid::PlannedJob],
+    store: &Store,
+) -> Result<()> {
     let ids: std::collections::BTreeSet<&str> = jobs.iter().map(|j| j.id.as_str()).collect();
     let rows = store.all()?;
     let failed: Vec<_> = rows
@@ -512,13 +548,27 @@ fn failed_jobs(jobs: &[floorcast_coordinator::grid::PlannedJob], store: &Store) 
             "{missing} jobs did not run; run the same command again"
         ));
     }
+    let how = if failed.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; `floorcast report {} --failures` shows their stderr; this `run` with --retry-failed runs them again",
+            plan.results_dir.display()
+        )
+    };
     anyhow::bail!(
-        "{} of {} jobs failed ({}); their rows in {} say why",
+        "{} of {} jobs failed ({}); their rows in {} say why{how}",
         failed.len(),
         jobs.len(),
         parts.join("; "),
         store.path().display()
     )
+}
+
+/// How many of `jobs` are stored as failed.
+fn failed_of(jobs: &[floorcast_coordinator::grid::PlannedJob], store: &Store) -> Result<usize> {
+    let ids = store.failed_ids()?;
+    Ok(jobs.iter().filter(|j| ids.contains(&j.id)).count())
 }
 
 fn stored_of(jobs: &[floorcast_coordinator::grid::PlannedJob], store: &Store) -> Result<usize> {
@@ -556,6 +606,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
     let store = Store::open_existing(&a.results)?;
     refuse_overwrites(&a)?;
     let results = store.all()?;
+    let failed = floorcast_coordinator::failures::failed_jobs(&results, &store.failures()?);
     // A label stands for one configuration: runs of two are never merged into one row.
     floorcast_coordinator::table::check_label_configurations(&results)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.results.join(DB_FILE).display()))?;
@@ -633,6 +684,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         }
         v["efficiency"] = serde_json::json!({"labels": efficiency, "runs": run_efficiency});
         v["ranking"] = serde_json::to_value(&ranking)?;
+        v["failures"] = floorcast_coordinator::failures::to_json(&failed);
         write_text(path, &(serde_json::to_string_pretty(&v)? + "\n"))
             .with_context(|| format!("cannot write {}", path.display()))?;
         say!("wrote {}", path.display());
@@ -645,6 +697,9 @@ pub fn report(a: ReportArgs) -> Result<()> {
     if a.plots.is_some() || a.html.is_some() {
         let charts = charts(&results, &t, &aggregates, &style);
         write_pictures(&a, results.len(), &text, &charts)?;
+    }
+    if a.failures {
+        say_raw!("{}", floorcast_coordinator::failures::render(&failed));
     }
     Ok(())
 }

@@ -52,6 +52,7 @@ pub fn run(a: WorkerArgs) -> Result<()> {
         );
     }
     let jobs = a.jobs.unwrap_or_else(crate::values::cores);
+    crate::output::remove_stale_temp_dirs(a.quiet);
     let net = NetConfig {
         listen: Vec::new(),
         connect: a.connect.clone(),

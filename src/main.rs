@@ -17,6 +17,28 @@ use std::process::ExitCode;
 use clap::error::ErrorKind;
 use clap::{Parser, Subcommand};
 
+/// `--version`: the version, and the commit, dirty flag and profile the binary was built from
+/// (`build.rs`).
+const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (commit ",
+    env!("FLOORCAST_GIT_COMMIT"),
+    ", dirty ",
+    env!("FLOORCAST_GIT_DIRTY"),
+    ", ",
+    env!("FLOORCAST_BUILD_PROFILE"),
+    " build)"
+);
+
+/// What this binary was built from, recorded with every grid run's provenance.
+pub fn build_info() -> floorcast_coordinator::store::BuildInfo {
+    floorcast_coordinator::store::BuildInfo {
+        git_commit: env!("FLOORCAST_GIT_COMMIT").to_string(),
+        git_dirty: env!("FLOORCAST_GIT_DIRTY") == "true",
+        profile: env!("FLOORCAST_BUILD_PROFILE").to_string(),
+    }
+}
+
 /// Does this exploration strategy map an unknown building faster than that one?
 ///
 /// floorcast simulates a differential-drive robot with a 2D laser exploring a building (laser,
@@ -27,7 +49,7 @@ use clap::{Parser, Subcommand};
 // names the flag, rather than taken for an unknown flag.)
 #[command(
     name = "floorcast",
-    version,
+    version = VERSION,
     about,
     long_about = None,
     propagate_version = true,
@@ -55,10 +77,18 @@ enum Command {
     Layout(cmd_layout::LayoutArgs),
     /// Run an experiment grid (buildings x seeds x strategies) on this machine and, with
     /// --listen, on remote workers; resumable.
+    ///
+    /// As it starts, it removes the private folders (floorcast-job-*, floorcast-python-*) that
+    /// floorcast processes killed on this machine left in the temporary directory (TMPDIR),
+    /// never a live process's (docs/failures.md).
     Run(cmd_run::RunArgs),
     /// Join a grid run elsewhere (`floorcast run GRID --listen ...`): take jobs, return results.
+    ///
+    /// As it starts, it removes the private folders (floorcast-job-*, floorcast-python-*) that
+    /// floorcast processes killed on this machine left in the temporary directory (TMPDIR),
+    /// never a live process's (docs/failures.md).
     Worker(cmd_worker::WorkerArgs),
-    /// Print the table of a results directory and export it as CSV.
+    /// Print the table of a results directory and export it as CSV; list its failed jobs.
     Report(cmd_run::ReportArgs),
     /// Tools for your own strategies (the strategy protocol): check a program's compliance.
     #[command(subcommand)]

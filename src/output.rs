@@ -82,6 +82,19 @@ pub fn stop_programs_on_ctrl_c() {
     });
 }
 
+/// Removes the private folders (`floorcast-job-*`, `floorcast-python-*`) that floorcast
+/// processes killed on this machine left in the temporary directory, saying so unless `quiet`
+/// (`floorcast_worker::external::remove_stale_temp_dirs`: never a live process's).
+pub fn remove_stale_temp_dirs(quiet: bool) {
+    let n = floorcast_worker::external::remove_stale_temp_dirs();
+    if n > 0 && !quiet {
+        eprintln!(
+            "removed {n} temporary folder(s) left in {} by floorcast processes that were killed",
+            std::env::temp_dir().display()
+        );
+    }
+}
+
 /// The staging folders of the [`StagedOut`]s not yet committed, each with its `--out` if it was
 /// made for it (what a stop removes).
 type Staged = Vec<(PathBuf, Option<PathBuf>)>;

@@ -244,7 +244,8 @@ fn a_strategy_that_stops_ends_the_run_as_an_early_stop() {
 }
 
 /// A program that breaks the protocol fails the run: exit 2, one line naming the program and
-/// what it did, no output directory left behind.
+/// what it did, no output directory left behind but, for a program that wrote to stderr during
+/// the run, one holding only `strategy-stderr.txt` (its traceback), which the error names.
 fn fails_cleanly(command: &str, needles: &[&str]) {
     fails_cleanly_with(command, &[], needles);
 }
@@ -269,7 +270,20 @@ fn fails_cleanly_with(command: &str, extra: &[&str], needles: &[&str]) {
     args.extend_from_slice(extra);
     let o = run(&args);
     assert_clean_failure(&o, needles);
-    assert!(!out.exists(), "an output directory was left behind");
+    if !stderr(&o).contains("strategy-stderr.txt") {
+        assert!(!out.exists(), "an output directory was left behind");
+        return;
+    }
+    let files: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(files, ["strategy-stderr.txt"], "only the program's stderr");
+    let text = std::fs::read_to_string(out.join("strategy-stderr.txt")).unwrap();
+    assert!(
+        text.starts_with("Traceback (most recent call last):"),
+        "{text}"
+    );
 }
 
 macro_rules! broken_strategy_cases {
@@ -285,7 +299,7 @@ broken_strategy_cases! {
     crash_at_hello: python_command("tests/strategies/crash_at_hello.py") =>
         ["crash_at_hello.py", "exited with status 3 before answering the hello message", "something went wrong"];
     crash_mid_run: python_command("tests/strategies/crash_mid_run.py") =>
-        ["crash_mid_run.py", "exited with status 1 before answering decision 2", "strategy bug at decision 3"];
+        ["crash_mid_run.py", "exited with status 1 before answering decision 2", "strategy bug at decision 3", "(its stderr: ", "strategy-stderr.txt)"];
     hang: python_command("tests/strategies/hang.py") =>
         ["hang.py", "did not answer decision 0 within 2 s"];
     nonsense: python_command("tests/strategies/nonsense.py") =>

@@ -65,6 +65,7 @@ pub fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult
         worker: worker.to_string(),
         wall_time_s: 0.0,
         floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
+        stderr_tail: None,
     }
 }
 
@@ -88,6 +89,11 @@ pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> S
             row.status = crate::store::JobStatus::Failed;
             // A remote worker's or a program's text: no control characters, bounded.
             row.error = Some(floorcast_worker::text::shown(error, MAX_ERROR_BYTES));
+            // Kept as the program wrote it (its lines; escaped when shown), its end only.
+            row.stderr_tail = report
+                .stderr_tail
+                .as_deref()
+                .map(|t| floorcast_worker::text::tail(t, floorcast_worker::wire::MAX_STDERR_TAIL));
         }
     }
     row

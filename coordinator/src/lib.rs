@@ -33,9 +33,11 @@
 //! - [`ranking`]: the report's leaderboard (labels by their aggregates, with efficiency).
 //! - [`yardstick`]: the known-map tours a grid's runs are measured against, and their
 //!   efficiency.
+//! - [`failures`]: the failed jobs and their attempts, as `report --failures` lists them.
 
 pub mod aggregate;
 pub mod execute;
+pub mod failures;
 pub mod grid;
 pub mod inbox;
 pub mod metric;

@@ -757,6 +757,7 @@ mod tests {
                 executor: None,
                 verify_fraction,
                 share: true,
+                retry_failed: false,
             };
             let mut log = Vec::new();
             let (_, counts) = run_plan(
@@ -982,6 +983,7 @@ mod tests {
             executor: None,
             verify_fraction: 0.5,
             share: true,
+            retry_failed: false,
         };
         floorcast_worker::refuse_threads_after(Some(0));
         let r = crate::run::tests::run_quietly(&p, &store, &opts);

@@ -69,6 +69,9 @@ pub struct RunOptions {
     /// result is the one made alone, in less time. Off: every job alone (its wall time all its
     /// own). Ignored with a custom `executor`.
     pub share: bool,
+    /// Run the stored failed jobs again (`run --retry-failed`): each new outcome replaces the
+    /// failed row; the failures stay in the store's `failures` table.
+    pub retry_failed: bool,
 }
 
 impl std::fmt::Debug for RunOptions {
@@ -81,6 +84,7 @@ impl std::fmt::Debug for RunOptions {
             .field("executor", &self.executor.as_ref().map(|_| "custom"))
             .field("verify_fraction", &self.verify_fraction)
             .field("share", &self.share)
+            .field("retry_failed", &self.retry_failed)
             .finish()
     }
 }
@@ -95,6 +99,7 @@ impl Default for RunOptions {
             executor: None,
             verify_fraction: 0.05,
             share: true,
+            retry_failed: false,
         }
     }
 }
@@ -125,6 +130,7 @@ fn advance(
     progress: &mut crate::sequential::Progress,
     sched: &mut Scheduler,
     jobs: &mut BTreeMap<String, PlannedJob>,
+    retried: &BTreeSet<String>,
     on_log: &mut dyn FnMut(&str),
 ) -> Result<(), RunError> {
     // A batch counts once its results are verified (a verification may send jobs back).
@@ -145,7 +151,7 @@ fn advance(
                 ));
             }
         }
-        let stored = store.stored_ids()?;
+        let stored = done_ids(store, retried)?;
         sched.add(next.iter().map(|j| j.id.clone()).collect(), &stored);
         jobs.extend(next.into_iter().map(|j| (j.id.clone(), j)));
         if progress.finished {
@@ -155,7 +161,16 @@ fn advance(
     Ok(())
 }
 
-/// Runs every job of `plan` not yet in `store`. `interrupt` stops the run (jobs already stored
+/// The stored jobs that are not to run: every stored job but those `retried` (failed jobs run
+/// again).
+fn done_ids(store: &Store, retried: &BTreeSet<String>) -> Result<BTreeSet<String>, RunError> {
+    let mut stored = store.stored_ids()?;
+    stored.retain(|id| !retried.contains(id));
+    Ok(stored)
+}
+
+/// Runs every job of `plan` not yet in `store` (and its failed ones with
+/// [`RunOptions::retry_failed`]). `interrupt` stops the run (jobs already stored
 /// stay stored; running ones are abandoned and run again next time). `on_log` receives lines
 /// for the user (workers joining or refused, requeued jobs, dropped messages).
 pub fn run_plan(
@@ -280,6 +295,8 @@ struct LoopState<'a> {
     failed: usize,
     remote: BTreeSet<String>,
     checks: Checks,
+    /// Failed jobs run again whose new outcome is not stored yet (it replaces the failed row).
+    retried: BTreeSet<String>,
 }
 
 impl<'a> LoopState<'a> {
@@ -290,7 +307,12 @@ impl<'a> LoopState<'a> {
         opts: &'a RunOptions,
         on_log: &mut dyn FnMut(&str),
     ) -> Result<LoopState<'a>, RunError> {
-        let stored = store.stored_ids()?;
+        let retried = if opts.retry_failed {
+            store.failed_ids()?
+        } else {
+            BTreeSet::new()
+        };
+        let stored = done_ids(store, &retried)?;
         let ids: Vec<String> = plan.jobs.iter().map(|j| j.id.clone()).collect();
         let mut sched = Scheduler::new(ids, &stored, opts.lease_s);
         let mut jobs: BTreeMap<String, PlannedJob> = plan
@@ -301,7 +323,15 @@ impl<'a> LoopState<'a> {
         // A sequential grid: batches of seeds added as the tests go (replaying those already run).
         let mut progress = crate::sequential::Progress::start(plan);
         sched.expect_more(!progress.finished);
-        advance(plan, store, &mut progress, &mut sched, &mut jobs, on_log)?;
+        advance(
+            plan,
+            store,
+            &mut progress,
+            &mut sched,
+            &mut jobs,
+            &retried,
+            on_log,
+        )?;
         Ok(LoopState {
             plan: Arc::new(plan.clone()),
             store,
@@ -316,6 +346,7 @@ impl<'a> LoopState<'a> {
             failed: 0,
             remote: BTreeSet::new(),
             checks: Checks::default(),
+            retried,
         })
     }
 
@@ -389,6 +420,7 @@ impl<'a> LoopState<'a> {
                 &mut self.progress,
                 &mut self.sched,
                 &mut self.jobs,
+                &self.retried,
                 on_log,
             )?;
             if self.sched.is_finished() && finished_at.is_none() {
@@ -630,7 +662,11 @@ impl<'a> LoopState<'a> {
     /// Stores the batch's results (durable first, acknowledged second) and logs its notes;
     /// true when the scheduler said the grid is finished.
     fn flush(&mut self, batch: Batch, on_log: &mut dyn FnMut(&str)) -> Result<bool, RunError> {
-        self.store.insert_many(&batch.to_store)?;
+        self.store
+            .insert_many_replacing(&batch.to_store, &self.retried)?;
+        for r in &batch.to_store {
+            self.retried.remove(&r.job_id);
+        }
         for (r, a) in batch.acks {
             let _ = r.send(a);
         }
@@ -904,6 +940,7 @@ pub(crate) mod tests {
             let opts = RunOptions {
                 workers: 2,
                 share,
+                retry_failed: false,
                 ..RunOptions::default()
             };
             let (outcome, counts) = run_quietly(&plan, &store, &opts).unwrap();

@@ -96,6 +96,44 @@ pub struct StoredResult {
     pub worker: String,
     pub wall_time_s: f64,
     pub floorcast_version: String,
+    /// The end of what an external strategy wrote to stderr (at most
+    /// [`floorcast_worker::wire::MAX_STDERR_TAIL`] bytes), kept for failed jobs only: a
+    /// successful run's stderr is not stored (`explore` writes it to `strategy-stderr.txt`).
+    pub stderr_tail: Option<String>,
+}
+
+/// One failed attempt of a job, as the `failures` table keeps it: every failure is recorded
+/// when it is stored (first attempts included), and kept when the job is run again
+/// (`run --retry-failed`), whatever the new attempt gives.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Failure {
+    pub job_id: String,
+    /// 1 for the job's first failure, then 2, 3...
+    pub attempt: u32,
+    pub grid: String,
+    pub building: String,
+    pub strategy: String,
+    pub label: String,
+    pub seed: u64,
+    pub error: String,
+    /// The end of the strategy program's stderr, if it had one.
+    pub stderr_tail: Option<String>,
+    pub worker: String,
+    pub wall_time_s: f64,
+    pub floorcast_version: String,
+    pub stored_unix_s: f64,
+}
+
+/// What the running floorcast was built from: its own commit (not the current directory's),
+/// whether its code differed from that commit, and the build profile. The binary embeds them
+/// at build time (its `build.rs`) and hands them to [`provenance`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct BuildInfo {
+    /// floorcast's commit (40 hex digits), or "unknown" when not built from a git checkout.
+    pub git_commit: String,
+    pub git_dirty: bool,
+    /// "release" or "debug".
+    pub profile: String,
 }
 
 /// Where a grid run came from.
@@ -103,8 +141,14 @@ pub struct StoredResult {
 pub struct Provenance {
     pub grid: String,
     pub command: String,
+    /// floorcast's own commit and dirty flag ([`BuildInfo`]).
     pub git_commit: String,
     pub git_dirty: bool,
+    pub build_profile: String,
+    /// The commit of the repository of the directory `run` ran in (the user's experiments,
+    /// say), "none" outside one.
+    pub cwd_git_commit: String,
+    pub cwd_git_dirty: bool,
     pub rustc: String,
     pub host: String,
     pub floorcast_version: String,
@@ -115,6 +159,8 @@ pub struct Provenance {
 pub struct Store {
     path: PathBuf,
     conn: Connection,
+    /// The tables and columns added since the first layout are there ([`Store::upgrade`]).
+    upgraded: std::sync::atomic::AtomicBool,
 }
 
 impl Store {
@@ -137,7 +183,11 @@ impl Store {
             }
         }
         let conn = Connection::open(&path).map_err(|e| classify(&path, e))?;
-        let s = Store { path, conn };
+        let s = Store {
+            path,
+            conn,
+            upgraded: false.into(),
+        };
         s.init()?;
         Ok(s)
     }
@@ -150,7 +200,11 @@ impl Store {
             return Err(StoreError::Missing(dir.to_path_buf()));
         }
         let conn = check_is_store(&path)?;
-        Ok(Store { path, conn })
+        Ok(Store {
+            path,
+            conn,
+            upgraded: false.into(),
+        })
     }
 
     pub fn path(&self) -> &Path {
@@ -609,6 +663,55 @@ impl Store {
         Ok(())
     }
 
+    /// Adds what a store written by an earlier version lacks: the `failures` table and the
+    /// columns of [`ADDED_COLUMNS`] (each nullable: its old rows hold none). Done once, by the
+    /// first write (as `grids` and `tours` are made): opening a store changes nothing in it,
+    /// so that a store refused after it was opened (a tampered row) is left as it was.
+    fn upgrade(&self) -> Result<(), StoreError> {
+        use std::sync::atomic::Ordering;
+        if self.upgraded.load(Ordering::SeqCst) {
+            return Ok(());
+        }
+        self.sql(self.conn.execute_batch(
+            "CREATE TABLE IF NOT EXISTS failures (
+                job_id TEXT NOT NULL,
+                attempt INTEGER NOT NULL,
+                grid TEXT NOT NULL,
+                building TEXT NOT NULL,
+                strategy TEXT NOT NULL,
+                label TEXT NOT NULL,
+                seed INTEGER NOT NULL,
+                error TEXT NOT NULL,
+                stderr_tail TEXT,
+                worker TEXT NOT NULL,
+                wall_time_s REAL NOT NULL,
+                floorcast_version TEXT NOT NULL,
+                stored_unix_s REAL NOT NULL,
+                PRIMARY KEY (job_id, attempt)
+             );",
+        ))?;
+        for (table, column, kind) in ADDED_COLUMNS {
+            if !self.has_column(table, column)? {
+                self.sql(
+                    self.conn
+                        .execute_batch(&format!("ALTER TABLE {table} ADD COLUMN {column} {kind};")),
+                )?;
+            }
+        }
+        self.upgraded.store(true, Ordering::SeqCst);
+        Ok(())
+    }
+
+    /// Whether `table` has `column` (stores of earlier builds lack the newer ones).
+    fn has_column(&self, table: &str, column: &str) -> Result<bool, StoreError> {
+        let n: i64 = self.sql(self.conn.query_row(
+            "SELECT count(*) FROM pragma_table_info(?1) WHERE name = ?2",
+            [table, column],
+            |r| r.get(0),
+        ))?;
+        Ok(n > 0)
+    }
+
     /// Stores a result unless one for the same job exists. Returns whether it was inserted.
     /// The row is committed (durable) when this returns.
     pub fn insert(&self, r: &StoredResult) -> Result<bool, StoreError> {
@@ -616,17 +719,30 @@ impl Store {
     }
 
     /// Stores results (skipping jobs already stored) in one transaction, so that a burst of
-    /// results costs one disk sync. Every row is committed when this returns; returns how many
-    /// were inserted.
+    /// results costs one disk sync. Every failure stored is also recorded in the `failures`
+    /// table, with its attempt number. Every row is committed when this returns; returns how
+    /// many were stored.
     pub fn insert_many(&self, rows: &[StoredResult]) -> Result<usize, StoreError> {
+        self.insert_many_replacing(rows, &BTreeSet::new())
+    }
+
+    /// [`Store::insert_many`], where a row of a job in `retried` (a job run again by `run
+    /// --retry-failed`) replaces the job's failed row; the failure it replaces stays in the
+    /// `failures` table.
+    pub fn insert_many_replacing(
+        &self,
+        rows: &[StoredResult],
+        retried: &BTreeSet<String>,
+    ) -> Result<usize, StoreError> {
         if rows.is_empty() {
             return Ok(0);
         }
+        self.upgrade()?;
         let now = unix_now_s();
         let tx = self.sql(self.conn.unchecked_transaction())?;
         let mut inserted = 0;
         for r in rows {
-            inserted += self.insert_row(&tx, r, now)?;
+            inserted += self.insert_row(&tx, r, now, retried.contains(&r.job_id))?;
         }
         self.sql(tx.commit())?;
         Ok(inserted)
@@ -637,6 +753,7 @@ impl Store {
         conn: &Connection,
         r: &StoredResult,
         now: f64,
+        replace_failed: bool,
     ) -> Result<usize, StoreError> {
         let settings_json = serde_json::to_string(&r.settings).unwrap_or_default();
         let summary_json = r
@@ -644,17 +761,62 @@ impl Store {
             .as_ref()
             .and_then(|s| serde_json::to_string(s).ok());
         let progress_csv = r.progress.as_deref().map(crate::progress::encode);
-        self.sql(conn.execute(
-            "INSERT OR IGNORE INTO results (job_id, grid, building, building_hash, strategy, label, seed,
+        // A failed row about to be replaced keeps its place in the history: one written before
+        // failures were recorded becomes the job's first attempt.
+        if replace_failed {
+            self.sql(conn.execute(
+            "INSERT INTO failures (job_id, attempt, grid, building, strategy, label, seed, error,
+                stderr_tail, worker, wall_time_s, floorcast_version, stored_unix_s)
+             SELECT job_id, 1, grid, building, strategy, label, seed, COALESCE(error, ''),
+                stderr_tail, worker, wall_time_s, floorcast_version, stored_unix_s
+             FROM results WHERE job_id = ?1 AND status = 'failed'
+                AND NOT EXISTS (SELECT 1 FROM failures WHERE job_id = ?1)",
+                [&r.job_id],
+            ))?;
+        }
+        let stored = self.sql(conn.execute(
+            "INSERT INTO results (job_id, grid, building, building_hash, strategy, label, seed,
                 settings_json, status, error, summary_json, progress_csv, worker, wall_time_s,
-                floorcast_version, stored_unix_s)
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)",
+                floorcast_version, stored_unix_s, stderr_tail)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)
+             ON CONFLICT(job_id) DO UPDATE SET grid = excluded.grid, building = excluded.building,
+                building_hash = excluded.building_hash, strategy = excluded.strategy,
+                label = excluded.label, seed = excluded.seed, settings_json = excluded.settings_json,
+                status = excluded.status, error = excluded.error,
+                summary_json = excluded.summary_json, progress_csv = excluded.progress_csv,
+                worker = excluded.worker, wall_time_s = excluded.wall_time_s,
+                floorcast_version = excluded.floorcast_version,
+                stored_unix_s = excluded.stored_unix_s, stderr_tail = excluded.stderr_tail
+             WHERE results.status = 'failed' AND ?18",
             params![
                 r.job_id, r.grid, r.building, r.building_hash, r.strategy, r.label, r.seed as i64,
                 settings_json, r.status.as_str(), r.error, summary_json, progress_csv, r.worker,
-                r.wall_time_s, r.floorcast_version, now
+                r.wall_time_s, r.floorcast_version, now, r.stderr_tail, replace_failed
             ],
-        ))
+        ))?;
+        if stored == 1 && r.status == JobStatus::Failed {
+            self.sql(conn.execute(
+                "INSERT INTO failures (job_id, attempt, grid, building, strategy, label, seed,
+                    error, stderr_tail, worker, wall_time_s, floorcast_version, stored_unix_s)
+                 VALUES (?1, (SELECT COALESCE(MAX(attempt), 0) + 1 FROM failures WHERE job_id = ?1),
+                    ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+                params![
+                    r.job_id,
+                    r.grid,
+                    r.building,
+                    r.strategy,
+                    r.label,
+                    r.seed as i64,
+                    r.error.as_deref().unwrap_or(""),
+                    r.stderr_tail,
+                    r.worker,
+                    r.wall_time_s,
+                    r.floorcast_version,
+                    now
+                ],
+            ))?;
+        }
+        Ok(stored)
     }
 
     /// Deletes every row `worker` returned (its results were found wrong) in one transaction
@@ -677,10 +839,25 @@ impl Store {
 
     /// Stores `row`, replacing its job's row if one is stored.
     pub fn replace(&self, row: &StoredResult) -> Result<(), StoreError> {
+        self.upgrade()?;
         let tx = self.sql(self.conn.unchecked_transaction())?;
         self.sql(tx.execute("DELETE FROM results WHERE job_id = ?1", [&row.job_id]))?;
-        self.insert_row(&tx, row, unix_now_s())?;
+        self.insert_row(&tx, row, unix_now_s(), false)?;
         self.sql(tx.commit())
+    }
+
+    /// Ids of the stored jobs that failed (what `run --retry-failed` runs again).
+    pub fn failed_ids(&self) -> Result<BTreeSet<String>, StoreError> {
+        let mut st = self.sql(
+            self.conn
+                .prepare("SELECT job_id FROM results WHERE status = 'failed'"),
+        )?;
+        let rows = self.sql(st.query_map([], |r| r.get::<_, String>(0)))?;
+        let mut out = BTreeSet::new();
+        for r in rows {
+            out.insert(self.sql(r)?);
+        }
+        Ok(out)
     }
 
     /// Ids of every stored job.
@@ -698,11 +875,18 @@ impl Store {
     /// decoded ([`decode_row`]): a row changed outside floorcast is an error naming its job and
     /// field, never a silent failure.
     pub fn all(&self) -> Result<Vec<StoredResult>, StoreError> {
-        let mut st = self.sql(self.conn.prepare(
+        // Stores of earlier builds have no stderr column (read as none; nothing is added to a
+        // store read).
+        let stderr = if self.has_column("results", "stderr_tail")? {
+            "stderr_tail"
+        } else {
+            "NULL"
+        };
+        let mut st = self.sql(self.conn.prepare(&format!(
             "SELECT job_id, grid, building, building_hash, strategy, label, seed, settings_json, status,
-                    error, summary_json, progress_csv, worker, wall_time_s, floorcast_version
+                    error, summary_json, progress_csv, worker, wall_time_s, floorcast_version, {stderr}
              FROM results ORDER BY building, label, seed, job_id",
-        ))?;
+        )))?;
         let rows = self.sql(st.query_map([], |r| {
             // A value of the wrong type is the row's problem, named with its job.
             let id = r.get::<_, String>(0).unwrap_or_default();
@@ -934,15 +1118,87 @@ impl Store {
         Ok(out)
     }
 
+    /// Every recorded failure, ordered by building, label, seed, job and attempt, each checked
+    /// as read (a row changed outside floorcast is an error naming it). Stores written before
+    /// failures were recorded have none (their failed rows are in [`Store::all`]).
+    pub fn failures(&self) -> Result<Vec<Failure>, StoreError> {
+        if !self.has_table("failures")? {
+            return Ok(Vec::new());
+        }
+        let mut st = self.sql(self.conn.prepare(
+            "SELECT job_id, attempt, grid, building, strategy, label, seed, error, stderr_tail,
+                    worker, wall_time_s, floorcast_version, stored_unix_s
+             FROM failures ORDER BY building, label, seed, job_id, attempt",
+        ))?;
+        let rows = self.sql(st.query_map([], |r| {
+            Ok((
+                r.get::<_, i64>(1)?,
+                r.get::<_, i64>(6)?,
+                Failure {
+                    job_id: r.get(0)?,
+                    attempt: 0,
+                    grid: r.get(2)?,
+                    building: r.get(3)?,
+                    strategy: r.get(4)?,
+                    label: r.get(5)?,
+                    seed: 0,
+                    error: r.get(7)?,
+                    stderr_tail: r.get(8)?,
+                    worker: r.get(9)?,
+                    wall_time_s: r.get(10)?,
+                    floorcast_version: r.get(11)?,
+                    stored_unix_s: r.get(12)?,
+                },
+            ))
+        }))?;
+        let mut out = Vec::new();
+        for r in rows {
+            let (attempt, seed, mut f) = self.sql(r)?;
+            let bad = |what: String| StoreError::Row {
+                path: self.path.clone(),
+                problem: format!(
+                    "failure of job {}: {what}; the row was changed outside floorcast",
+                    floorcast_worker::text::excerpt(&f.job_id)
+                ),
+            };
+            f.attempt = u32::try_from(attempt)
+                .ok()
+                .filter(|a| *a >= 1)
+                .ok_or_else(|| bad(format!("field attempt is {attempt}, expected 1 or more")))?;
+            f.seed = u64::try_from(seed)
+                .map_err(|_| bad(format!("field seed is {seed}, expected 0 or more")))?;
+            if !(f.wall_time_s.is_finite() && f.wall_time_s >= 0.0) {
+                return Err(bad(format!(
+                    "field wall_time_s is {}, expected a finite number of seconds, 0 or more",
+                    f.wall_time_s
+                )));
+            }
+            out.push(f);
+        }
+        Ok(out)
+    }
+
     pub fn record_run(&self, p: &Provenance) -> Result<(), StoreError> {
+        self.upgrade()?;
         self.sql(self.conn.execute(
-            "INSERT INTO runs (grid, command, git_commit, git_dirty, rustc, host, floorcast_version, started_unix_s)
-             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)",
-            params![p.grid, p.command, p.git_commit, p.git_dirty as i64, p.rustc, p.host, p.floorcast_version, p.started_unix_s],
+            "INSERT INTO runs (grid, command, git_commit, git_dirty, rustc, host, floorcast_version,
+                started_unix_s, build_profile, cwd_git_commit, cwd_git_dirty)
+             VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
+            params![p.grid, p.command, p.git_commit, p.git_dirty as i64, p.rustc, p.host, p.floorcast_version,
+                p.started_unix_s, p.build_profile, p.cwd_git_commit, p.cwd_git_dirty as i64],
         ))?;
         Ok(())
     }
 }
+
+/// Columns added since the first layout (table, column, type), added to a store that lacks them
+/// when it is opened to be written: a store of an earlier build stays readable and writable.
+const ADDED_COLUMNS: [(&str, &str, &str); 4] = [
+    ("results", "stderr_tail", "TEXT"),
+    ("runs", "build_profile", "TEXT"),
+    ("runs", "cwd_git_commit", "TEXT"),
+    ("runs", "cwd_git_dirty", "INTEGER"),
+];
 
 /// A row of the results table as SQLite holds it: its text columns not yet decoded (`row` holds
 /// the rest, its contents empty).
@@ -985,6 +1241,7 @@ fn read_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<(i64, RawRow)> {
         worker: r.get(12)?,
         wall_time_s: r.get(13)?,
         floorcast_version: r.get(14)?,
+        stderr_tail: r.get(15)?,
     };
     Ok((
         r.get::<_, i64>(6)?,
@@ -1089,26 +1346,31 @@ pub fn host_name() -> String {
         .unwrap_or_else(|| "unknown".into())
 }
 
-/// Provenance of this process: git commit and dirty flag of the current directory's repository
-/// (or "unknown"), compiler, host, version.
-pub fn provenance(grid: &str, command: &str) -> Provenance {
+/// Provenance of this process: floorcast's own build (`build`: commit, dirty flag, profile),
+/// the commit and dirty flag of the current directory's repository (or "none"), compiler, host,
+/// version.
+pub fn provenance(grid: &str, command: &str, build: &BuildInfo) -> Provenance {
     let git = |args: &[&str]| {
         std::process::Command::new("git")
             .args(args)
+            .stderr(std::process::Stdio::null())
             .output()
             .ok()
             .filter(|o| o.status.success())
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
     };
-    let git_commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
-    let git_dirty =
+    let cwd_git_commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "none".into());
+    let cwd_git_dirty =
         git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
     let host = host_name();
     Provenance {
         grid: grid.to_string(),
         command: command.to_string(),
-        git_commit,
-        git_dirty,
+        git_commit: build.git_commit.clone(),
+        git_dirty: build.git_dirty,
+        build_profile: build.profile.clone(),
+        cwd_git_commit,
+        cwd_git_dirty,
         rustc: env!("FLOORCAST_RUSTC_VERSION").to_string(),
         host,
         floorcast_version: floorcast_worker::FLOORCAST_VERSION.to_string(),
@@ -1177,6 +1439,7 @@ pub(crate) mod fixtures {
             worker: "w".into(),
             wall_time_s: 1.0,
             floorcast_version: "0".into(),
+            stderr_tail: None,
         }
     }
 
@@ -1217,6 +1480,7 @@ mod tests {
             worker: "local-0".into(),
             wall_time_s: 1.0,
             floorcast_version: "0".into(),
+            stderr_tail: None,
         }
     }
 
@@ -1583,6 +1847,121 @@ mod tests {
             };
             assert_eq!(r.settings, want, "{}", r.job_id);
         }
+    }
+
+    /// Every failure is recorded with its attempt number; a row is replaced only for a job
+    /// retried, and only when its stored row failed; the failures it replaces stay.
+    #[test]
+    fn failures_are_kept_when_a_retried_job_replaces_its_row() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path()).unwrap();
+        let mut failed = row("j");
+        failed.stderr_tail = Some("Traceback (most recent call last):\nValueError: x\n".into());
+        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
+        ok.job_id = "j".into();
+        ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
+        let retry: BTreeSet<String> = ["j".to_string()].into();
+        // (row, retried, stored, status after, attempts recorded after)
+        let steps = [
+            (&failed, false, 1, JobStatus::Failed, 1),
+            (&failed, false, 0, JobStatus::Failed, 1),
+            (&ok, false, 0, JobStatus::Failed, 1),
+            (&failed, true, 1, JobStatus::Failed, 2),
+            (&ok, true, 1, JobStatus::Ok, 2),
+            (&failed, true, 0, JobStatus::Ok, 2),
+        ];
+        for (i, (r, retried, stored, status, attempts)) in steps.into_iter().enumerate() {
+            let set = if retried {
+                retry.clone()
+            } else {
+                BTreeSet::new()
+            };
+            let n = s
+                .insert_many_replacing(std::slice::from_ref(r), &set)
+                .unwrap();
+            assert_eq!(n, stored, "step {i}");
+            assert_eq!(s.all().unwrap()[0].status, status, "step {i}");
+            let f = s.failures().unwrap();
+            assert_eq!(f.len(), attempts, "step {i}");
+            assert_eq!(
+                f.iter().map(|f| f.attempt).collect::<Vec<_>>(),
+                (1..=attempts as u32).collect::<Vec<_>>()
+            );
+        }
+        let f = &s.failures().unwrap()[1];
+        assert_eq!(f.error, "no free space at the start");
+        assert_eq!(f.stderr_tail, failed.stderr_tail);
+        assert_eq!((f.building.as_str(), f.seed), ("b", 1));
+        assert_eq!(s.failed_ids().unwrap().len(), 0);
+    }
+
+    /// A store written before failures, stderr and floorcast's own commit were recorded opens
+    /// to be read as it is (nothing added), and to be written with the table and columns
+    /// added; its failed row becomes the first attempt when the job is retried.
+    #[test]
+    fn a_store_of_the_earlier_layout_gains_the_new_table_and_columns() {
+        let dir = tempfile::tempdir().unwrap();
+        {
+            let conn = Connection::open(dir.path().join(DB_FILE)).unwrap();
+            conn.execute_batch(
+                "CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+                 INSERT INTO meta VALUES ('store_version', '1');
+                 CREATE TABLE results (job_id TEXT PRIMARY KEY, grid TEXT NOT NULL,
+                    building TEXT NOT NULL, building_hash TEXT NOT NULL, strategy TEXT NOT NULL,
+                    label TEXT NOT NULL, seed INTEGER NOT NULL, settings_json TEXT NOT NULL,
+                    status TEXT NOT NULL, error TEXT, summary_json TEXT, progress_csv TEXT,
+                    worker TEXT NOT NULL, wall_time_s REAL NOT NULL,
+                    floorcast_version TEXT NOT NULL, stored_unix_s REAL NOT NULL);
+                 CREATE TABLE runs (id INTEGER PRIMARY KEY AUTOINCREMENT, grid TEXT NOT NULL,
+                    command TEXT NOT NULL, git_commit TEXT NOT NULL, git_dirty INTEGER NOT NULL,
+                    rustc TEXT NOT NULL, host TEXT NOT NULL, floorcast_version TEXT NOT NULL,
+                    started_unix_s REAL NOT NULL);
+                 INSERT INTO results VALUES ('j', 'g', 'b', 'h', 'baseline', 'baseline', 1, '{}',
+                    'failed', 'it crashed', NULL, NULL, 'w', 2.0, '0.6.0', 5.0);",
+            )
+            .unwrap();
+        }
+        let read = Store::open_existing(dir.path()).unwrap();
+        assert_eq!(read.all().unwrap()[0].stderr_tail, None);
+        assert_eq!(read.failures().unwrap(), vec![]);
+        assert!(!read.has_table("failures").unwrap());
+        assert!(!read.has_column("runs", "cwd_git_commit").unwrap());
+        drop(read);
+        let s = Store::open(dir.path()).unwrap();
+        // Opened to be written, it is changed by its first write only.
+        assert!(!s.has_table("failures").unwrap());
+        assert!(!s.has_column("results", "stderr_tail").unwrap());
+        let build = BuildInfo {
+            git_commit: "c".repeat(40),
+            git_dirty: true,
+            profile: "release".into(),
+        };
+        s.record_run(&provenance("g", "floorcast run g", &build))
+            .unwrap();
+        assert!(s.has_table("failures").unwrap());
+        for (table, column, _) in ADDED_COLUMNS {
+            assert!(s.has_column(table, column).unwrap(), "{table}.{column}");
+        }
+        let runs: (String, i64, String) = s
+            .conn
+            .query_row(
+                "SELECT git_commit, git_dirty, build_profile FROM runs",
+                [],
+                |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)),
+            )
+            .unwrap();
+        assert_eq!(runs, ("c".repeat(40), 1, "release".to_string()));
+        let mut again = row("j");
+        again.error = Some("it crashed again".into());
+        let retry: BTreeSet<String> = ["j".to_string()].into();
+        assert_eq!(s.insert_many_replacing(&[again], &retry).unwrap(), 1);
+        let f = s.failures().unwrap();
+        let got: Vec<(u32, &str, f64)> = f
+            .iter()
+            .map(|f| (f.attempt, f.error.as_str(), f.stored_unix_s))
+            .collect();
+        assert_eq!(got[0], (1, "it crashed", 5.0));
+        assert_eq!((got[1].0, got[1].1), (2, "it crashed again"));
     }
 
     /// A sequential test's decision is stored as its word (`Decision::as_str`) and read back

@@ -60,10 +60,11 @@ pub fn execute_wire(job: &WireJob, building: &Building) -> JobReport {
 /// Runs `spec` and reports its outcome (success or the job's error) and wall time.
 pub fn report(spec: &Job<'_>) -> JobReport {
     let t = Instant::now();
-    let outcome = outcome(run_job(spec, &mut |_| {}));
+    let (outcome, stderr_tail) = outcome(run_job(spec, &mut |_| {}));
     JobReport {
         wall_time_s: t.elapsed().as_secs_f64(),
         outcome,
+        stderr_tail,
     }
 }
 
@@ -72,16 +73,28 @@ pub fn report(spec: &Job<'_>) -> JobReport {
 pub fn reports_shared(specs: &[Job<'_>]) -> Vec<JobReport> {
     run_jobs_shared(specs)
         .into_iter()
-        .map(|(r, wall_time_s)| JobReport {
-            wall_time_s,
-            outcome: outcome(r),
+        .map(|(r, wall_time_s)| {
+            let (outcome, stderr_tail) = outcome(r);
+            JobReport {
+                wall_time_s,
+                outcome,
+                stderr_tail,
+            }
         })
         .collect()
 }
 
-/// A job's outcome as reported.
-fn outcome(r: Result<JobOutput, JobError>) -> JobOutcome {
-    match r {
+/// A job's outcome as reported, with the end of its strategy program's stderr if it failed
+/// (a successful run's stderr is not reported: `explore` writes it to a file, a grid does not
+/// keep it).
+fn outcome(r: Result<JobOutput, JobError>) -> (JobOutcome, Option<String>) {
+    let stderr_tail = match &r {
+        Err(JobError::Strategy(e)) if !e.stderr.is_empty() => {
+            Some(crate::text::tail(&e.stderr, crate::wire::MAX_STDERR_TAIL))
+        }
+        _ => None,
+    };
+    let outcome = match r {
         Ok(out) => JobOutcome::Ok {
             progress: out
                 .result
@@ -94,7 +107,8 @@ fn outcome(r: Result<JobOutput, JobError>) -> JobOutcome {
         Err(e) => JobOutcome::Failed {
             error: e.to_string(),
         },
-    }
+    };
+    (outcome, stderr_tail)
 }
 
 #[cfg(test)]

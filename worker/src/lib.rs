@@ -269,6 +269,7 @@ pub fn run_job(
             program.check_files().map_err(|what| StrategyError {
                 command: program.display(),
                 what,
+                stderr: String::new(),
             })?;
             let mut s = external::ExternalStrategy::start(program)?;
             let frame =

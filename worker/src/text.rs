@@ -58,6 +58,23 @@ pub fn unprintable(c: char) -> Option<&'static str> {
     }
 }
 
+/// The last `max_bytes` bytes (at most) of `s`, cut at a character boundary, after a line
+/// saying how many bytes were left out before them, if any: the end of a program's stderr (a
+/// traceback's last line says what went wrong).
+pub fn tail(s: &str, max_bytes: usize) -> String {
+    if s.len() <= max_bytes {
+        return s.to_string();
+    }
+    let mut cut = s.len() - max_bytes;
+    while !s.is_char_boundary(cut) {
+        cut += 1;
+    }
+    format!(
+        "[floorcast: the first {cut} bytes are left out]\n{}",
+        &s[cut..]
+    )
+}
+
 /// The most characters of outside text an error message quotes ([`excerpt`]).
 pub const EXCERPT_CHARS: usize = 80;
 

@@ -277,6 +277,10 @@ pub struct Submission {
     pub report: JobReport,
 }
 
+/// The most bytes of an external strategy's stderr a report carries and the store keeps: its
+/// end ([`crate::text::tail`]).
+pub const MAX_STDERR_TAIL: usize = 64 * 1024;
+
 /// What running a job gave: its outcome and the wall time it took.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -284,6 +288,10 @@ pub struct JobReport {
     /// Wall-clock seconds (the only part that differs between identical runs).
     pub wall_time_s: f64,
     pub outcome: JobOutcome,
+    /// A failed job's external strategy's stderr, its last [`MAX_STDERR_TAIL`] bytes at most
+    /// (a successful job's is not sent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stderr_tail: Option<String>,
 }
 
 /// A job's outcome: its run record and progress, or the error that stopped it.
@@ -308,6 +316,7 @@ impl JobReport {
             outcome: JobOutcome::Failed {
                 error: error.into(),
             },
+            stderr_tail: None,
         }
     }
 
@@ -363,6 +372,15 @@ impl std::fmt::Display for JobStatus {
 pub fn check_report(report: &JobReport, job: &WireJob) -> Result<(), String> {
     if !(report.wall_time_s.is_finite() && report.wall_time_s >= 0.0) {
         return Err(format!("wall_time_s is {}", report.wall_time_s));
+    }
+    // The tail and the line saying what was cut before it.
+    if let Some(t) = &report.stderr_tail {
+        if t.len() > MAX_STDERR_TAIL + 100 {
+            return Err(format!(
+                "stderr_tail holds {} bytes, at most {MAX_STDERR_TAIL} are sent",
+                t.len()
+            ));
+        }
     }
     let (summary, progress) = match &report.outcome {
         JobOutcome::Failed { error } if error.trim().is_empty() => {

@@ -11,10 +11,11 @@ use std::time::{Duration, Instant};
 
 use super::groups::{kill_group, live_groups};
 use super::program::StrategyProgram;
+use super::temp::private_temp_dir;
 
 /// The longest reply line read (bytes).
 pub(super) const MAX_LINE: usize = 1 << 20;
-/// Stderr kept from a program (bytes; the rest is dropped).
+/// Stderr kept from a program (bytes): its end, the earlier bytes are dropped.
 const MAX_STDERR: usize = 1 << 20;
 
 /// floorcast's Python module for strategies (`python/floorcast_strategy.py`, built into the
@@ -22,24 +23,6 @@ const MAX_STDERR: usize = 1 << 20;
 /// floorcast_strategy` works wherever the program lives, remote workers included, and always
 /// speaks this floorcast's protocol.
 pub const PYTHON_MODULE: &str = include_str!("../../../python/floorcast_strategy.py");
-
-/// A new folder of this process's own in the temporary directory (`TMPDIR`): a name no one
-/// else chose, mode 0700, removed when dropped. A folder with a name known in advance could be
-/// made first by another user, with modules of theirs that our programs would import.
-pub fn private_temp_dir(prefix: &str) -> Result<tempfile::TempDir, String> {
-    use std::os::unix::fs::PermissionsExt;
-    let tmp = std::env::temp_dir();
-    tempfile::Builder::new()
-        .prefix(prefix)
-        .permissions(std::fs::Permissions::from_mode(0o700))
-        .tempdir_in(&tmp)
-        .map_err(|e| {
-            format!(
-                "cannot create a folder in the temporary directory {} ({e}); set TMPDIR to a directory you can write",
-                tmp.display()
-            )
-        })
-}
 
 /// A private folder ([`private_temp_dir`]) holding [`PYTHON_MODULE`], for one program.
 fn python_dir() -> Result<tempfile::TempDir, String> {
@@ -62,11 +45,45 @@ pub(super) enum Line {
     Failed(String),
 }
 
-/// What the program wrote to stderr: the text kept and its last line.
+/// What the program wrote to stderr: the text kept (its last [`MAX_STDERR`] bytes, up to twice
+/// that between two cuts), how many bytes before it were dropped, and its last line.
 #[derive(Default)]
 pub(super) struct Stderr {
-    pub(super) text: String,
+    text: String,
+    dropped: usize,
     pub(super) last_line: String,
+}
+
+impl Stderr {
+    /// The end of what the program wrote, at most [`MAX_STDERR`] bytes, after a line saying
+    /// how many bytes were left out before it, if any.
+    pub(super) fn kept(&self) -> String {
+        let mut cut = self.text.len().saturating_sub(MAX_STDERR);
+        while !self.text.is_char_boundary(cut) {
+            cut += 1;
+        }
+        match self.dropped + cut {
+            0 => self.text.clone(),
+            left_out => format!(
+                "[floorcast: the first {left_out} bytes are left out]\n{}",
+                &self.text[cut..]
+            ),
+        }
+    }
+
+    /// Adds what the program wrote, dropping the oldest bytes once twice [`MAX_STDERR`] are held
+    /// (so that a program that writes a lot costs one copy per megabyte).
+    fn push(&mut self, text: &str) {
+        self.text.push_str(text);
+        if self.text.len() > 2 * MAX_STDERR {
+            let mut cut = self.text.len() - MAX_STDERR;
+            while !self.text.is_char_boundary(cut) {
+                cut += 1;
+            }
+            self.text.drain(..cut);
+            self.dropped += cut;
+        }
+    }
 }
 
 /// A started program's pipes, each served by a thread of its own.
@@ -239,10 +256,7 @@ fn read_stderr(mut stderr: impl Read, sink: Arc<Mutex<Stderr>>) {
             Ok(n) => n,
         };
         let Ok(mut s) = sink.lock() else { return };
-        let text = String::from_utf8_lossy(&chunk[..n]);
-        if s.text.len() + text.len() <= MAX_STDERR {
-            s.text.push_str(&text);
-        }
+        s.push(&String::from_utf8_lossy(&chunk[..n]));
         for &b in &chunk[..n] {
             if b == b'\n' {
                 last(&current, &mut s);
@@ -254,5 +268,50 @@ fn read_stderr(mut stderr: impl Read, sink: Arc<Mutex<Stderr>>) {
     }
     if let Ok(mut s) = sink.lock() {
         last(&current, &mut s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A program's stderr is kept to its end: up to [`MAX_STDERR`] bytes as written, more cut
+    /// from the front (at a character boundary) after a line saying how much was left out.
+    #[test]
+    fn stderr_keeps_its_end() {
+        let line = "é".repeat(1000) + "\n"; // 2001 bytes
+                                            // Lines written: within the bound, at it, just past it.
+        for lines in &[1, 524, 525] {
+            let mut s = Stderr::default();
+            for _ in 0..*lines {
+                s.push(&line);
+            }
+            let kept = s.kept();
+            let written = 2001 * lines;
+            if written <= MAX_STDERR {
+                assert_eq!(kept, line.repeat(*lines), "{lines} lines");
+                continue;
+            }
+            let (note, rest) = kept.split_once('\n').unwrap();
+            let left_out = written - rest.len();
+            assert_eq!(
+                note,
+                format!("[floorcast: the first {left_out} bytes are left out]")
+            );
+            assert!(
+                rest.len() <= MAX_STDERR && rest.len() + 1 >= MAX_STDERR,
+                "{lines}"
+            );
+            assert!(line.repeat(*lines).ends_with(rest));
+        }
+        // Written by the megabyte: the text held stays within twice the bound, the end kept.
+        let mut s = Stderr::default();
+        for i in 0..2000 {
+            s.push(&format!("{i:06} {line}"));
+            assert!(s.text.len() <= 2 * MAX_STDERR + line.len() + 7);
+        }
+        let kept = s.kept();
+        assert!(kept.ends_with(&format!("001999 {line}")), "the last line");
+        assert!(kept.starts_with("[floorcast: the first "));
     }
 }

@@ -9,6 +9,8 @@
 //! - [`groups`]: the programs' process groups, and the strays they leave.
 //! - [`session`]: [`ExternalStrategy`], a running program asked at every decision (a `Policy`).
 //! - [`check`]: the compliance checker (`floorcast strategy check`).
+//! - [`temp`]: the programs' private folders, each naming its owner, and those of killed
+//!   processes removed.
 
 mod check;
 mod child;
@@ -16,9 +18,10 @@ mod groups;
 mod program;
 pub mod protocol;
 mod session;
+mod temp;
 
 pub use check::{check_program, Check};
-pub use child::{private_temp_dir, PYTHON_MODULE};
+pub use child::PYTHON_MODULE;
 pub use groups::{adopt_orphans, end_strays, kill_all_programs, stopping};
 pub use program::{
     check_file, check_timeout, ProgramFiles, StrategyProgram, DEFAULT_TIMEOUT_S, MAX_PARAMS_BYTES,
@@ -26,6 +29,9 @@ pub use program::{
 };
 pub use protocol::{run_message, Hello, PROTOCOL_VERSION};
 pub use session::{ExternalStrategy, StrategyError, StrategyStats};
+pub use temp::{
+    private_temp_dir, remove_stale_temp_dirs, remove_stale_temp_dirs_in, TEMP_PREFIXES,
+};
 
 /// At most `n` bytes of `s` (a program's output, echoed in a message), its control characters
 /// escaped ([`crate::text::shown`]).

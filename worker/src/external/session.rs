@@ -26,6 +26,9 @@ use super::protocol::{self, Hello, Received, RunMessage, Sent, ToStrategy};
 pub struct StrategyError {
     pub command: String,
     pub what: String,
+    /// What the program wrote to stderr until then (its last MiB; empty if it wrote nothing or
+    /// never started), so that its traceback is not lost with the run.
+    pub stderr: String,
 }
 
 /// What a finished program leaves.
@@ -35,7 +38,7 @@ pub struct StrategyStats {
     pub compute_s: f64,
     /// Decision messages answered.
     pub replies: u64,
-    /// What it wrote to stderr (at most 1 MiB).
+    /// What it wrote to stderr (its last MiB).
     pub stderr: String,
     /// Whether it exited by itself within a second of its stdin closing (else it was killed).
     pub exited: bool,
@@ -84,6 +87,7 @@ impl ExternalStrategy {
         let fail = |what: String| StrategyError {
             command: command.clone(),
             what,
+            stderr: String::new(),
         };
         let (child, python, pipes) = child::spawn(program).map_err(&fail)?;
         let mut s = Self {
@@ -109,7 +113,7 @@ impl ExternalStrategy {
                 s.hello = hello;
                 Ok(s)
             }
-            Err(what) => Err(fail(what)),
+            Err(what) => Err(s.error(what)),
         }
     }
 
@@ -168,19 +172,22 @@ impl ExternalStrategy {
         })
     }
 
-    /// What the program wrote to stderr so far.
+    /// What the program wrote to stderr so far (its last MiB).
     pub fn stderr_text(&self) -> String {
         self.pipes
             .stderr
             .lock()
-            .map(|s| s.text.clone())
+            .map(|s| s.kept())
             .unwrap_or_default()
     }
 
+    /// The error `what` with what the program wrote to stderr so far (all of it when it has
+    /// ended: `ended` and `finish` wait for its stderr to be read).
     fn error(&self, what: String) -> StrategyError {
         StrategyError {
             command: self.command.clone(),
             what,
+            stderr: self.stderr_text(),
         }
     }
 
