@@ -58,6 +58,7 @@ const NOT_RUN: &[(&str, Check)] = &[
     ("run grids/layout-update.toml", Check::LongGrid("grids/layout-update.toml", 1000)),
     ("run grids/real-schools.toml", Check::LongGrid("grids/real-schools.toml", 1620)),
     ("run grids/plans.toml", Check::LongGrid("grids/plans.toml", 124)),
+    ("run grids/leaderboard.toml", Check::LongGrid("grids/leaderboard.toml", 1215)),
     (
         "run grids/paper.toml --listen tcp/0.0.0.0:7447 --workers 0",
         Check::Network(Some("grids/paper.toml")),
@@ -100,7 +101,7 @@ const NOT_RUN: &[(&str, Check)] = &[
 
 /// At most this many printed commands may be left unrun (each reference grid's `run` line is
 /// one: they take minutes to hours and are planned instead).
-const MAX_NOT_RUN: usize = 25;
+const MAX_NOT_RUN: usize = 26;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
