@@ -98,6 +98,15 @@ pub struct RunArgs {
     /// shows each run's efficiency.
     #[arg(long)]
     no_tours: bool,
+    /// Before running, store the runs and tours of FILE (written by `report DIR --export-runs
+    /// FILE`, e.g. results/reference/leaderboard/runs.jsonl.gz) that are jobs of this grid and
+    /// not stored yet: only the grid's other jobs are run. A run matches a job only when
+    /// everything that determines it matches (building content, strategy, seed, settings,
+    /// start, floorcast version); it is stored under this grid's label for the job, with its
+    /// worker marked `import`. Its progress curve is the file's thinned one (times to each
+    /// whole percent exact).
+    #[arg(long, value_name = "FILE", conflicts_with = "summary")]
+    import: Option<PathBuf>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -174,6 +183,12 @@ pub struct ReportArgs {
     /// `coverage` as recorded in the store (0.99 unless a grid set another).
     #[arg(long, value_name = "F", value_parser = crate::values::number)]
     coverage: Option<f64>,
+    /// Also write the store's successful runs and its tours to FILE (gzip-compressed JSON
+    /// lines: a header, then a line per run and per tour), each progress curve thinned to its times to every whole
+    /// percent (every tenth from 95 %): small enough to commit, e.g. a leaderboard's runs, and
+    /// read by `run GRID --import FILE`, which then runs only the grid's other jobs.
+    #[arg(long, value_name = "FILE")]
+    export_runs: Option<PathBuf>,
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
@@ -190,10 +205,15 @@ pub fn run(a: RunArgs) -> Result<()> {
         },
     )?;
     check_options(&a)?;
+    // Read and checked before the results directory is made.
+    let imported = a.import.as_deref().map(read_import).transpose()?;
     let (_lock, store) = open_store(&plan, a.summary)?;
     if !a.summary {
         // Before any job of ours starts: what killed floorcast processes left.
         crate::output::remove_stale_temp_dirs(a.quiet);
+    }
+    if let Some((path, file)) = imported {
+        import_runs(&plan, &store, path, file)?;
     }
     let stored = store.all()?;
     check_stored(&plan, &store, &stored)?;
@@ -275,6 +295,76 @@ pub fn run(a: RunArgs) -> Result<()> {
     let (outcome, counts) = run_with_progress(&plan, &store, &opts, &interrupt, a.quiet)?;
     let tour_threads = (!a.no_tours).then_some(workers.max(1));
     finish(&plan, &store, outcome, counts, networked, tour_threads)
+}
+
+/// The `--import` file at `path`, read and checked.
+fn read_import(
+    path: &std::path::Path,
+) -> Result<(&std::path::Path, floorcast_coordinator::board::Exported)> {
+    floorcast_coordinator::board::read(path)
+        .map(|file| (path, file))
+        .map_err(|e| anyhow::anyhow!("--import {}: {e}", path.display()))
+}
+
+/// Stores the runs of an `--import` file that are jobs of `plan` not stored yet (under the
+/// plan's grid name and label, the worker marked), and its tours of the plan's buildings that
+/// the store lacks.
+fn import_runs(
+    plan: &Plan,
+    store: &Store,
+    path: &std::path::Path,
+    file: floorcast_coordinator::board::Exported,
+) -> Result<()> {
+    let jobs = match &plan.sequential {
+        Some(q) => plan.jobs_for(&(1..=q.max_seeds).collect::<Vec<_>>(), None),
+        None => plan.jobs.clone(),
+    };
+    let labels: std::collections::BTreeMap<&str, &str> = jobs
+        .iter()
+        .map(|j| (j.id.as_str(), j.label.as_str()))
+        .collect();
+    let stored = store.stored_ids()?;
+    let worker = format!(
+        "import:{}",
+        path.file_name().unwrap_or_default().to_string_lossy()
+    );
+    let rows: Vec<_> = file
+        .runs
+        .into_iter()
+        .filter(|r| !stored.contains(&r.job_id))
+        .filter_map(|mut r| {
+            let label = labels.get(r.job_id.as_str())?;
+            r.label = (*label).to_string();
+            r.grid.clone_from(&plan.name);
+            r.worker.clone_from(&worker);
+            Some(r)
+        })
+        .collect();
+    let n = store.insert_many(&rows)?;
+    let hashes: std::collections::BTreeSet<&str> =
+        plan.buildings.iter().map(|b| b.hash.as_str()).collect();
+    let have = store.tours()?;
+    let mut tours = 0;
+    for t in file
+        .tours
+        .iter()
+        .filter(|t| hashes.contains(t.building_hash.as_str()))
+    {
+        if !have
+            .iter()
+            .any(|h| h.building_hash == t.building_hash && h.starts_at(&t.start) && h.key == t.key)
+        {
+            store.record_tour(t)?;
+            tours += 1;
+        }
+    }
+    say!(
+        "--import {}: {n} of its {} runs stored as jobs of this grid ({} jobs), {tours} tours",
+        path.display(),
+        file.header.runs,
+        jobs.len()
+    );
+    Ok(())
 }
 
 /// The options checked once the grid is read (before the results directory is made).
@@ -701,6 +791,21 @@ pub fn report(a: ReportArgs) -> Result<()> {
     if a.failures {
         say_raw!("{}", floorcast_coordinator::failures::render(&failed));
     }
+    if let Some(path) = &a.export_runs {
+        export_runs(path, &results, &tours)?;
+    }
+    Ok(())
+}
+
+/// `report --export-runs`: the store's successful runs and tours, written to `path`.
+fn export_runs(
+    path: &std::path::Path,
+    results: &[floorcast_coordinator::store::StoredResult],
+    tours: &[floorcast_worker::tour::TourRecord],
+) -> Result<()> {
+    let (runs, tours) = floorcast_coordinator::board::export(results, tours, path)
+        .map_err(|e| anyhow::anyhow!("--export-runs: {e}"))?;
+    say!("wrote {} ({runs} runs, {tours} tours)", path.display());
     Ok(())
 }
 
@@ -728,6 +833,7 @@ fn refuse_overwrites(a: &ReportArgs) -> Result<()> {
     refuse_owned("--csv", a.csv.as_deref(), &a.results)?;
     refuse_owned("--json", a.json.as_deref(), &a.results)?;
     refuse_owned("--html", a.html.as_deref(), &a.results)?;
+    refuse_owned("--export-runs", a.export_runs.as_deref(), &a.results)?;
     for picture in &a.picture {
         refuse_owned_in(
             "--plots",

@@ -424,6 +424,9 @@ fn run_document(doc: &Path) -> Vec<String> {
                 not_run.push(args.to_string());
                 continue;
             }
+            if args.starts_with("run ") && args.contains(" --import ") {
+                import_covers_its_grid(args, &root);
+            }
             let script = cmd_with(&block, &cmd);
             let start = std::time::Instant::now();
             let out = sh(&script, &root, &bin_dir);
@@ -443,6 +446,35 @@ fn run_document(doc: &Path) -> Vec<String> {
         }
     }
     not_run
+}
+
+/// Panics unless `run GRID ... --import FILE` (arguments as printed, relative to `root`) finds
+/// every job of its grid in the file: else it would run them all (hours for a leaderboard),
+/// e.g. after a version change, when the file must be written again.
+fn import_covers_its_grid(args: &str, root: &Path) {
+    let words: Vec<&str> = args.split_whitespace().collect();
+    let file = words
+        .iter()
+        .position(|w| *w == "--import")
+        .and_then(|i| words.get(i + 1))
+        .unwrap_or_else(|| panic!("`{args}`: --import names no file"));
+    let plan = Plan::load(&root.join(words[1]), None)
+        .unwrap_or_else(|e| panic!("`{args}`: the grid does not plan: {e}"));
+    let runs = floorcast_coordinator::board::read(&root.join(file))
+        .unwrap_or_else(|e| panic!("`{args}`: {file}: {e}"));
+    let ids: std::collections::BTreeSet<&str> =
+        runs.runs.iter().map(|r| r.job_id.as_str()).collect();
+    let missing = plan
+        .jobs
+        .iter()
+        .filter(|j| !ids.contains(j.id.as_str()))
+        .count();
+    assert_eq!(
+        missing,
+        0,
+        "`{args}`: {missing} of the grid's {} jobs are not in {file}: run the grid and write the file again (`report DIR --export-runs FILE`)",
+        plan.jobs.len()
+    );
 }
 
 /// The block's assignments, then the command.

@@ -36,6 +36,7 @@
 //! - [`failures`]: the failed jobs and their attempts, as `report --failures` lists them.
 
 pub mod aggregate;
+pub mod board;
 pub mod execute;
 pub mod failures;
 pub mod grid;

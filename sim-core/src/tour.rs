@@ -23,6 +23,10 @@ use crate::geom::{wrap_angle, Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame};
 use crate::plan::dijkstra::{dijkstra, dijkstra_by, lengths_between, CostField};
 
+/// The tour's method: raised whenever a change to how tours are made changes a tour, so that
+/// stores keep no tour of an older method as the yardstick (it is part of a stored tour's key).
+pub const TOUR_METHOD: u32 = 1;
+
 /// How the tour is made.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TourSettings {

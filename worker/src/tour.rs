@@ -1,9 +1,9 @@
 //! The known-map yardstick as a record: a tour of a building ([`sim_core::tour`]) for the robot
 //! and laser of a run's settings, from its start, kept beside the runs it measures.
 //!
-//! A tour depends on the building, the start pose, the coverage it must reach and six settings
+//! A tour depends on the building, the start pose, the coverage it must reach, six settings
 //! (the robot's radius, speed and turn rate, the laser's range and field of view, the map
-//! resolution): its [`TourKey`]. `floorcast tour --json` writes a [`TourRecord`], and a grid's
+//! resolution) and the method that made it ([`sim_core::tour::TOUR_METHOD`]): its [`TourKey`]. `floorcast tour --json` writes a [`TourRecord`], and a grid's
 //! results store one per key, which `report` divides by each run's exploration time (its
 //! efficiency).
 
@@ -14,8 +14,10 @@ use sim_core::{Building, Pose};
 use crate::{Settings, SettingsError};
 
 pub const TOUR_FORMAT: &str = "floorcast-tour";
-/// 2: the key and the start in the record (1: `floorcast tour --json` of 0.7.0).
-pub const TOUR_VERSION: u32 = 2;
+/// 3: the tour's method in the key; 2: the key and the start in the record (1: `floorcast tour
+/// --json` of 0.7.0). Records of version 2 are read, as of method 0 (made before methods were
+/// numbered: a store recomputes them).
+pub const TOUR_VERSION: u32 = 3;
 
 /// What a tour depends on besides its building: the settings it reads and the coverage wanted.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -29,6 +31,10 @@ pub struct TourKey {
     pub map_resolution_m: f64,
     /// The share of the explorable area the tour sees.
     pub coverage: f64,
+    /// The method that made the tour ([`sim_core::tour::TOUR_METHOD`]; 0 in records of
+    /// version 2, made before methods were numbered).
+    #[serde(default)]
+    pub method: u32,
 }
 
 impl TourKey {
@@ -42,6 +48,7 @@ impl TourKey {
             laser_range_m: settings.laser_range_m,
             map_resolution_m: settings.map_resolution_m,
             coverage,
+            method: sim_core::tour::TOUR_METHOD,
         }
     }
 
@@ -86,10 +93,10 @@ impl TourRecord {
                 crate::text::excerpt(&self.format)
             ));
         }
-        if self.version != TOUR_VERSION {
+        if !(self.version == TOUR_VERSION || self.version == 2 && self.key.method == 0) {
             return Err(format!(
-                "version: expected {TOUR_VERSION}, got {}",
-                self.version
+                "version: expected {TOUR_VERSION} (or 2, of method 0), got {} (of method {})",
+                self.version, self.key.method
             ));
         }
         let positive = [
@@ -189,9 +196,10 @@ mod tests {
         assert_eq!(back, t);
         assert_eq!(t.key, TourKey::of(&settings, 0.99));
         type Spoil = fn(&mut TourRecord);
-        let cases: [(&str, Spoil); 5] = [
+        let cases: [(&str, Spoil); 6] = [
             ("format", |r| r.format = "x".into()),
             ("version", |r| r.version = 99),
+            ("version", |r| r.version = 2),
             ("time_s", |r| r.time_s = f64::NAN),
             ("covered_fraction", |r| r.covered_fraction = 1.5),
             ("start", |r| r.start[1] = f64::INFINITY),
@@ -202,5 +210,26 @@ mod tests {
             let e = bad.validate().unwrap_err();
             assert!(e.starts_with(field), "{field}: {e}");
         }
+    }
+
+    /// A record of version 2 (no method in its key) is read as one of method 0, valid, and
+    /// its key is not the current one: a store makes the tour again.
+    #[test]
+    fn a_tour_of_an_older_method_is_read_but_not_used() {
+        let b = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
+            seed: 2,
+            area_m2: 150.0,
+            ..Default::default()
+        });
+        let settings = Settings::default();
+        let t = make_tour(&b, "b", b.start.unwrap(), &settings, 0.99).unwrap();
+        assert_eq!(t.key.method, sim_core::tour::TOUR_METHOD);
+        let mut v = serde_json::to_value(&t).unwrap();
+        v["version"] = 2.into();
+        v["key"].as_object_mut().unwrap().remove("method");
+        let old: TourRecord = serde_json::from_value(v).unwrap();
+        old.validate().unwrap();
+        assert_eq!(old.key.method, 0);
+        assert_ne!(old.key, TourKey::of(&settings, 0.99));
     }
 }

@@ -102,8 +102,9 @@ pub enum Choice {
     /// instead of the greedy nearest: Kulich, Faigl and Přeučil, "On distance utility in the
     /// exploration task", ICRA 2011.
     FrontierTsp,
-    /// A candidate drawn at random (uniformly, from the run's seed and the decision): the floor
-    /// every strategy must beat.
+    /// A candidate drawn at random (uniformly, from the run's seed and the decision), driven
+    /// to until it is reached or gone (a random walk over the frontiers, each goal kept as a
+    /// frontier strategy keeps its goal): the floor every strategy must beat.
     Random,
 }
 
@@ -321,7 +322,7 @@ pub const BUILT_IN: &[BuiltIn] = &[
     },
     BuiltIn {
         name: "random-frontier",
-        gain: "not used: a reachable candidate drawn at random from the run's seed (the floor every strategy must beat)",
+        gain: "not used: a reachable candidate drawn at random from the run's seed, kept until reached or gone (the floor every strategy must beat)",
         stops: NO_FRONTIER,
         citation: "floorcast",
         make: |_| plain(Choice::Random),
@@ -464,7 +465,14 @@ pub struct BuiltInPolicy {
     seed: u64,
     /// The candidates the rule kept at this decision's first attempt.
     kept: Vec<usize>,
+    /// [`Choice::Random`]'s goal: the point of the candidate drawn last (map frame, m).
+    drawn: Option<crate::geom::Vec2>,
 }
+
+/// [`Choice::Random`] keeps its goal while a candidate lies this close to the point drawn
+/// (the frontier, moved a little as the map grows) and the robot is farther than this from it
+/// (m).
+const RANDOM_KEEP_M: f64 = 3.0;
 
 impl BuiltInPolicy {
     /// The rule of `strategy` in a run of `seed`.
@@ -474,6 +482,7 @@ impl BuiltInPolicy {
             choice: strategy.choice,
             seed,
             kept: Vec::new(),
+            drawn: None,
         }
     }
 }
@@ -539,8 +548,25 @@ impl Policy for BuiltInPolicy {
                 best_of(&shown, |c| c.gain_m2 - beta_m2_per_m * c.path_m)
             }
             Choice::Random => {
-                let draw = random_draw(self.seed, view.decision, view.attempt);
-                (!shown.is_empty()).then(|| (draw % shown.len() as u64) as usize)
+                // The goal drawn before while it stands (a refused goal, attempt > 0, does
+                // not); else a new draw.
+                let robot = view.pose.position();
+                let standing = self.drawn.filter(|_| view.attempt == 0).and_then(|at| {
+                    best_of(&shown, |c| {
+                        let off = (c.point - at).norm();
+                        if off <= RANDOM_KEEP_M && (c.goal - robot).norm() > RANDOM_KEEP_M {
+                            -off
+                        } else {
+                            f64::NAN
+                        }
+                    })
+                });
+                let chosen = standing.or_else(|| {
+                    let draw = random_draw(self.seed, view.decision, view.attempt);
+                    (!shown.is_empty()).then(|| (draw % shown.len() as u64) as usize)
+                });
+                self.drawn = chosen.map(|i| shown[i].point);
+                chosen
             }
         };
         let reply = match chosen {
@@ -940,6 +966,85 @@ mod tests {
                 (16..=48).contains(&n),
                 "candidate {id} drawn {n} times of 64"
             );
+        }
+    }
+
+    /// The random walk keeps its goal: while the frontier drawn stands (its candidate moved by
+    /// at most 3 m) and the robot is not there, every decision goes to it; once the robot
+    /// is there, or the goal was refused (a second attempt), it draws again.
+    #[test]
+    fn the_random_frontier_keeps_its_goal_until_reached() {
+        use crate::geom::{Pose, Vec2};
+        let mut cands = two_candidates();
+        cands[0].point = Vec2::new(10.0, 0.0);
+        cands[0].goal = cands[0].point;
+        cands[1].point = Vec2::new(0.0, 10.0);
+        cands[1].goal = cands[1].point;
+        let map = crate::grid::OccupancyGrid::filled(
+            crate::grid::GridFrame::new(Vec2::zeros(), 0.05, 4, 4),
+            crate::grid::Occupancy::Unknown,
+        );
+        let s = Strategy::by_name("random-frontier", &StrategyParams::default()).unwrap();
+        let ask = |policy: &mut BuiltInPolicy, decision, attempt, at: Vec2, c: &[CandidateView]| {
+            let view = DecisionView {
+                decision,
+                attempt,
+                time_s: 1.0,
+                pose: Pose::new(at.x, at.y, 0.0),
+                candidates: c,
+                unreachable_goal: None,
+                layout: None,
+                map: &map,
+                between_m: None,
+            };
+            policy.decide(&view).0
+        };
+        for seed in 1..=8 {
+            let mut policy = BuiltInPolicy::new(&s, seed);
+            let first = ask(&mut policy, 0, 0, Vec2::zeros(), &cands);
+            let Reply::Choose(id) = first else {
+                panic!("seed {seed}: {first:?}")
+            };
+            let k = usize::from(id == 7);
+            // (decision, robot, how far the chosen frontier moved, whether it is kept)
+            let cases = [
+                (1, Vec2::new(1.0, 1.0), 0.0, true),
+                (2, Vec2::new(2.0, 2.0), 1.0, true),
+                (3, Vec2::new(2.0, 2.0), 1.0, true),
+            ];
+            let mut moved = cands;
+            for (decision, robot, shift, kept) in cases {
+                moved[k].point += Vec2::new(shift, 0.0);
+                moved[k].goal = moved[k].point;
+                let got = ask(&mut policy, decision, 0, robot, &moved);
+                assert_eq!(
+                    got == Reply::Choose(id),
+                    kept,
+                    "seed {seed}, decision {decision}"
+                );
+            }
+            // The goal's frontier moved by 4 m at once: gone, so 64 later decisions of a
+            // policy that goes on from here draw both candidates. Likewise with the robot at
+            // the goal, and for a refused goal.
+            for (robot, shift, attempt) in [
+                (Vec2::zeros(), 4.0, 0),
+                (moved[k].goal, 0.0, 0),
+                (Vec2::zeros(), 0.0, 1),
+            ] {
+                let mut gone = moved;
+                gone[k].point += Vec2::new(shift, 0.0);
+                gone[k].goal = gone[k].point;
+                let mut drawn = [0usize; 2];
+                for decision in 10..74 {
+                    let mut p = policy.clone();
+                    let got = ask(&mut p, decision, attempt, robot, &gone);
+                    drawn[usize::from(got == Reply::Choose(7))] += 1;
+                }
+                assert!(
+                    drawn.iter().all(|n| (16..=48).contains(n)),
+                    "seed {seed}, robot {robot:?}, shift {shift}, attempt {attempt}: {drawn:?}"
+                );
+            }
         }
     }
 

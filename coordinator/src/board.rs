@@ -1,0 +1,323 @@
+//! A store's runs as a file small enough to commit: `report DIR --export-runs FILE` writes the
+//! successful runs and the tours of a results store, `run GRID --import FILE` stores those of
+//! them that are jobs of the grid before running the others. A leaderboard's runs travel with
+//! the repository this way, so that a new strategy's author runs only their own jobs.
+//!
+//! The file is gzip-compressed JSON lines: a header (`format = "floorcast-runs"`, `version`,
+//! floorcast's version, how many runs and tours follow), then one line per run (the store's
+//! columns, the settings and summary as JSON) and one per tour ([`TourRecord`]). Each progress
+//! curve is thinned ([`thin`]) to the first sample at each whole percent explored below 95 %
+//! and at each tenth of a percent from there, and the last sample: a run's times to whole
+//! percents (and to every tenth from 95 %) are those of the full curve, its exploration time,
+//! end and summary too; the area above the curve (`unexplored_area_s`) and the progress charts
+//! are approximations. Every line is checked on the way in as a store's row is (the row's
+//! summary against its seed and building, the tour's record), and sizes are bounded before
+//! anything is allocated.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::path::Path;
+
+use floorcast_worker::tour::TourRecord;
+use floorcast_worker::FLOORCAST_VERSION;
+use serde::{Deserialize, Serialize};
+
+use crate::progress::Sample;
+use crate::store::{decode_row, JobStatus, RawRow, StoredResult};
+
+pub const RUNS_FORMAT: &str = "floorcast-runs";
+pub const RUNS_VERSION: u32 = 1;
+/// Most bytes of one line once decompressed (a run's summary and its thinned curve take a few
+/// kilobytes; a tour's path a few hundred).
+pub const MAX_LINE_BYTES: u64 = 4 << 20;
+/// Most bytes of the whole file once decompressed.
+pub const MAX_TOTAL_BYTES: u64 = 1 << 30;
+
+/// The first line of the file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Header {
+    pub format: String,
+    pub version: u32,
+    /// The floorcast that wrote the file (the runs' own versions are in their lines).
+    pub floorcast_version: String,
+    pub runs: u64,
+    pub tours: u64,
+}
+
+/// A run as the file holds it: a store's row, its JSON columns as JSON.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RunLine {
+    job_id: String,
+    grid: String,
+    building: String,
+    building_hash: String,
+    strategy: String,
+    label: String,
+    seed: u64,
+    settings: serde_json::Value,
+    summary: serde_json::Value,
+    /// The thinned curve, as the store's `progress_csv`.
+    progress_csv: String,
+    worker: String,
+    wall_time_s: f64,
+    floorcast_version: String,
+}
+
+/// One line after the header.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+enum Line {
+    Run(Box<RunLine>),
+    Tour(Box<TourRecord>),
+}
+
+/// What a file holds, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Exported {
+    pub header: Header,
+    /// Successful runs, each with its thinned curve.
+    pub runs: Vec<StoredResult>,
+    pub tours: Vec<TourRecord>,
+}
+
+/// The samples of `curve` that the file keeps: the first, the first at or above each whole
+/// percent explored below 95 % and each tenth of a percent from 95 %, and the last. Times to
+/// those fractions ([`crate::metric::time_to_fraction`]) are kept exactly.
+pub fn thin(curve: &[Sample]) -> Vec<Sample> {
+    // The level a fraction has reached: whole percents, then tenths of a percent from 95 %.
+    let level = |f: f64| -> i64 {
+        let per_mille = (f * 1000.0 + 1e-9).floor() as i64;
+        if per_mille < 950 {
+            per_mille / 10
+        } else {
+            95 + (per_mille - 950)
+        }
+    };
+    let mut out: Vec<Sample> = Vec::new();
+    let mut reached = i64::MIN;
+    for (i, s) in curve.iter().enumerate() {
+        let l = level(s.explored_fraction);
+        if i == 0 || l > reached || i + 1 == curve.len() {
+            out.push(*s);
+        }
+        reached = reached.max(l);
+    }
+    out
+}
+
+/// Writes the successful runs among `rows` and the `tours` of the current method to `path`
+/// (gzip JSON lines), through a file beside it renamed into place. Returns how many runs and
+/// tours were written.
+pub fn export(
+    rows: &[StoredResult],
+    tours: &[TourRecord],
+    path: &Path,
+) -> Result<(usize, usize), String> {
+    let runs: Vec<&StoredResult> = rows.iter().filter(|r| r.status == JobStatus::Ok).collect();
+    // A tour of an older method is never used again.
+    let tours: Vec<&TourRecord> = tours
+        .iter()
+        .filter(|t| t.key.method == sim_core::tour::TOUR_METHOD)
+        .collect();
+    let header = Header {
+        format: RUNS_FORMAT.into(),
+        version: RUNS_VERSION,
+        floorcast_version: FLOORCAST_VERSION.into(),
+        runs: runs.len() as u64,
+        tours: tours.len() as u64,
+    };
+    let mut lines = vec![serde_json::to_string(&header).map_err(|e| e.to_string())?];
+    for r in &runs {
+        let line = Line::Run(Box::new(RunLine {
+            job_id: r.job_id.clone(),
+            grid: r.grid.clone(),
+            building: r.building.clone(),
+            building_hash: r.building_hash.clone(),
+            strategy: r.strategy.clone(),
+            label: r.label.clone(),
+            seed: r.seed,
+            settings: serde_json::to_value(&r.settings).map_err(|e| e.to_string())?,
+            summary: serde_json::to_value(&r.summary).map_err(|e| e.to_string())?,
+            progress_csv: crate::progress::encode(&thin(r.progress.as_deref().unwrap_or(&[]))),
+            worker: r.worker.clone(),
+            wall_time_s: r.wall_time_s,
+            floorcast_version: r.floorcast_version.clone(),
+        }));
+        lines.push(serde_json::to_string(&line).map_err(|e| e.to_string())?);
+    }
+    for t in &tours {
+        lines.push(
+            serde_json::to_string(&Line::Tour(Box::new((*t).clone())))
+                .map_err(|e| e.to_string())?,
+        );
+    }
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(format!(".part-{}", std::process::id()));
+    let tmp = std::path::PathBuf::from(tmp);
+    let write = || -> std::io::Result<()> {
+        let file = std::fs::File::create(&tmp)?;
+        let mut gz = flate2::write::GzEncoder::new(file, flate2::Compression::best());
+        for l in &lines {
+            gz.write_all(l.as_bytes())?;
+            gz.write_all(b"\n")?;
+        }
+        gz.finish()?.sync_all()?;
+        std::fs::rename(&tmp, path)
+    };
+    write().map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("cannot write {}: {e}", path.display())
+    })?;
+    Ok((runs.len(), tours.len()))
+}
+
+/// Reads and checks a file [`export`] wrote. The error names the line and what was expected.
+pub fn read(path: &Path) -> Result<Exported, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot open it ({e})"))?;
+    let gz = flate2::read::GzDecoder::new(file);
+    let mut input = BufReader::new(gz.take(MAX_TOTAL_BYTES + 1));
+    let mut header: Option<Header> = None;
+    let (mut runs, mut tours) = (Vec::new(), Vec::new());
+    let mut buf = Vec::new();
+    let mut total = 0u64;
+    for n in 1.. {
+        buf.clear();
+        let got = (&mut input)
+            .take(MAX_LINE_BYTES + 1)
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| format!("line {n}: cannot read it ({e}); expected a gzip file of JSON lines that `floorcast report DIR --export-runs FILE` writes"))?;
+        if got == 0 {
+            break;
+        }
+        total += got as u64;
+        if got as u64 > MAX_LINE_BYTES {
+            return Err(format!("line {n}: longer than {MAX_LINE_BYTES} bytes"));
+        }
+        if total > MAX_TOTAL_BYTES {
+            return Err(format!(
+                "more than {MAX_TOTAL_BYTES} bytes once decompressed"
+            ));
+        }
+        let text = std::str::from_utf8(&buf)
+            .map_err(|_| format!("line {n}: not UTF-8"))?
+            .trim_end();
+        if n == 1 {
+            let h: Header = serde_json::from_str(text).map_err(|e| {
+                format!("line 1: expected the header {{\"format\": \"{RUNS_FORMAT}\", ...}} ({e})")
+            })?;
+            if h.format != RUNS_FORMAT {
+                return Err(format!(
+                    "line 1: format is \"{}\", expected \"{RUNS_FORMAT}\"",
+                    floorcast_worker::text::excerpt(&h.format)
+                ));
+            }
+            if h.version != RUNS_VERSION {
+                return Err(format!(
+                    "line 1: version is {}, expected {RUNS_VERSION}",
+                    h.version
+                ));
+            }
+            header = Some(h);
+            continue;
+        }
+        let line: Line = serde_json::from_str(text)
+            .map_err(|e| format!("line {n}: expected a run or a tour ({e})"))?;
+        match line {
+            Line::Run(r) => runs.push(run_of(*r).map_err(|e| format!("line {n}: {e}"))?),
+            Line::Tour(t) => {
+                t.validate().map_err(|e| format!("line {n}: tour: {e}"))?;
+                tours.push(*t);
+            }
+        }
+    }
+    let header = header.ok_or("it is empty, expected the header line")?;
+    if (header.runs, header.tours) != (runs.len() as u64, tours.len() as u64) {
+        return Err(format!(
+            "the header announces {} runs and {} tours, the file holds {} and {}: it was cut short or changed",
+            header.runs,
+            header.tours,
+            runs.len(),
+            tours.len()
+        ));
+    }
+    Ok(Exported {
+        header,
+        runs,
+        tours,
+    })
+}
+
+/// A run line as a store's row, checked as a store's row is read.
+fn run_of(r: RunLine) -> Result<StoredResult, String> {
+    let raw = RawRow {
+        row: StoredResult {
+            job_id: r.job_id,
+            grid: r.grid,
+            building: r.building,
+            building_hash: r.building_hash,
+            strategy: r.strategy,
+            label: r.label,
+            seed: 0,
+            settings: floorcast_worker::Settings::default(),
+            status: JobStatus::Ok,
+            error: None,
+            summary: None,
+            progress: None,
+            worker: r.worker,
+            wall_time_s: r.wall_time_s,
+            floorcast_version: r.floorcast_version,
+            stderr_tail: None,
+        },
+        settings_json: r.settings.to_string(),
+        summary_json: Some(r.summary.to_string()),
+        progress_csv: Some(r.progress_csv),
+    };
+    decode_row(raw, r.seed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metric::time_to_fraction;
+
+    fn curve(points: &[(f64, f64)]) -> Vec<Sample> {
+        points
+            .iter()
+            .map(|&(t, f)| Sample {
+                time_s: t,
+                explored_area_m2: f * 100.0,
+                explored_fraction: f,
+            })
+            .collect()
+    }
+
+    /// The thinned curve keeps the first sample, the last, and the time to every whole percent
+    /// and every tenth of a percent from 95 %, whatever the sampling.
+    #[test]
+    fn thinning_keeps_the_times_to_each_level() {
+        // A curve sampled every second, rising unevenly, flat at the end.
+        let full: Vec<Sample> = curve(
+            &(0..3000)
+                .map(|i| {
+                    let t = i as f64;
+                    (t, (1.0 - (-t / 400.0).exp()).min(0.9987))
+                })
+                .collect::<Vec<_>>(),
+        );
+        let thin = thin(&full);
+        assert!(thin.len() < 160, "{} samples kept", thin.len());
+        assert_eq!(thin.first(), full.first());
+        assert_eq!(thin.last(), full.last());
+        for level in (1..95)
+            .map(|p| p as f64 / 100.0)
+            .chain((950..=1000).map(|m| m as f64 / 1000.0))
+        {
+            assert_eq!(
+                time_to_fraction(&thin, level),
+                time_to_fraction(&full, level),
+                "level {level}"
+            );
+        }
+    }
+}
