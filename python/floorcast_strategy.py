@@ -1,4 +1,5 @@
-"""Write a floorcast exploration strategy in Python (protocol 1, standard library only).
+"""Write a floorcast exploration strategy in Python (protocol 2, or 1 with an older floorcast;
+standard library only).
 
 floorcast starts the strategy program once per run and talks to it in JSON lines over its
 stdin and stdout (the protocol: docs/strategy-protocol.md). This module does the talking;
@@ -8,7 +9,7 @@ a strategy only decides:
 
     class Nearest(Strategy):
         name = "nearest"
-        needs = ()  # or ("layout_gain", "layout", "map")
+        needs = ()  # or ("layout_gain", "layout", "map"); see also needs_for(params)
 
         def decide(self, d):
             if d["time_s"] > 3600:
@@ -28,13 +29,14 @@ import operator
 import sys
 import unicodedata
 
-PROTOCOL = 1
+PROTOCOL = 2
 
 _NEEDS = ("layout_gain", "layout", "map")
 
 
 class Strategy:
-    """Subclass it and override `decide` (and `name`, `needs`, `new_run`, `end_run`)."""
+    """Subclass it and override `decide` (and `name`, `needs`, `needs_for`, `new_run`,
+    `end_run`)."""
 
     #: Shown in floorcast's results: non-empty, at most 100 characters, no control characters.
     name = "unnamed"
@@ -45,6 +47,12 @@ class Strategy:
     #: The strategy's own parameters for the current run (the run message's `params`: a
     #: grid's `params` table, or `explore --strategy-params`); set before `new_run`.
     params = {}
+
+    def needs_for(self, params):
+        """The run's needs once its `params` are known (protocol 2: sent in the ready reply,
+        replacing `needs`), e.g. ("layout",) only when a parameter asks for rooms. By default
+        `needs`."""
+        return self.needs
 
     def new_run(self, run):
         """The run message (building, seed, start, settings, params, map geometry)."""
@@ -204,19 +212,24 @@ def _reply_to_decide(result, d):
     return {"type": "choose", "id": _as_id(result, ids)}
 
 
-def _check_hello(strategy):
+def _check_needs(needs, where):
+    if isinstance(needs, str):
+        raise ValueError("%s must be a tuple of strings, e.g. (%r,)" % (where, needs))
+    needs = list(needs)
+    for n in needs:
+        if n not in _NEEDS:
+            raise ValueError("unknown need %r in %s (known: %s)" % (n, where, ", ".join(_NEEDS)))
+    return needs
+
+
+def _check_hello(strategy, protocol):
     name = strategy.name
     if not isinstance(name, str) or not name.strip() or len(name) > 100:
         raise ValueError("Strategy.name must be a non-empty string of at most 100 characters")
     if any(unicodedata.category(ch) == "Cc" for ch in name):
         raise ValueError("Strategy.name must not contain control characters")
-    if isinstance(strategy.needs, str):
-        raise ValueError("Strategy.needs must be a tuple of strings, e.g. (%r,)" % strategy.needs)
-    needs = list(strategy.needs)
-    for n in needs:
-        if n not in _NEEDS:
-            raise ValueError("unknown need %r (known: %s)" % (n, ", ".join(_NEEDS)))
-    return {"type": "hello", "protocol": PROTOCOL, "name": name, "needs": needs}
+    needs = _check_needs(strategy.needs, "Strategy.needs")
+    return {"type": "hello", "protocol": protocol, "name": name, "needs": needs}
 
 
 def run(strategy):
@@ -232,6 +245,8 @@ def run(strategy):
         out.buffer.write(line.encode("ascii"))
         out.buffer.flush()
 
+    # The version spoken: this module's, or an older floorcast's.
+    protocol = PROTOCOL
     while True:
         raw = inp.readline()
         if not raw:
@@ -242,18 +257,24 @@ def run(strategy):
         msg = json.loads(text)
         kind = msg.get("type") if isinstance(msg, dict) else None
         if kind == "hello":
-            if msg.get("protocol") != PROTOCOL:
+            theirs = msg.get("protocol")
+            if theirs == 1:
+                protocol = 1
+            elif theirs != PROTOCOL:
                 sys.stderr.write(
                     "floorcast_strategy: floorcast speaks protocol %r, this module %d\n"
-                    % (msg.get("protocol"), PROTOCOL)
+                    % (theirs, PROTOCOL)
                 )
                 sys.stderr.flush()
-            send(_check_hello(strategy))
+            send(_check_hello(strategy, protocol))
         elif kind == "run":
             params = msg.get("params")
             strategy.params = params if isinstance(params, dict) else {}
             strategy.new_run(msg)
-            send({"type": "ready"})
+            ready = {"type": "ready"}
+            if protocol >= 2:
+                ready["needs"] = _check_needs(strategy.needs_for(strategy.params), "needs_for()")
+            send(ready)
         elif kind == "decide":
             send(_reply_to_decide(strategy.decide(msg), msg))
         elif kind == "end":

@@ -436,7 +436,9 @@ fn trajectory_csv(r: &RunResult) -> String {
 }
 
 /// `--strategy-params`: a JSON object.
-fn strategy_params(text: &str) -> anyhow::Result<serde_json::Map<String, serde_json::Value>> {
+pub(crate) fn strategy_params(
+    text: &str,
+) -> anyhow::Result<serde_json::Map<String, serde_json::Value>> {
     match serde_json::from_str::<serde_json::Value>(text) {
         Ok(serde_json::Value::Object(map)) => Ok(map),
         Ok(_) => Err(anyhow::anyhow!(

@@ -38,6 +38,11 @@ pub struct CheckArgs {
     /// Seconds the program has for each reply, 0.01 to 3600.
     #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_TIMEOUT_S, value_parser = crate::values::number)]
     strategy_timeout_s: f64,
+    /// The program's own parameters, a JSON object (at most 64 KiB), e.g. '{"stop_below_m2":
+    /// 5}': sent in the run messages of the check and of its exploration (in protocol 2 the
+    /// needs of the program's ready reply may depend on them).
+    #[arg(long, value_name = "JSON")]
+    strategy_params: Option<String>,
     /// Building of the exploration (default: a generated school of about 400 m2, seed 1).
     #[arg(long, value_name = "FILE")]
     building: Option<PathBuf>,
@@ -112,9 +117,16 @@ fn check(a: CheckArgs) -> Result<()> {
         a.strategy_timeout_s,
     )
     .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let program = match &a.strategy_params {
+        Some(text) => program
+            .with_params(crate::cmd_explore::strategy_params(text)?)
+            .map_err(|e| anyhow::anyhow!("--strategy-params: {e}"))?,
+        None => program,
+    };
     let shown = program.display();
     let mut failed = None;
-    for c in check_program(&program) {
+    let (checks, protocol) = check_program(&program);
+    for c in checks {
         match &c.outcome {
             Ok(what) => say!("ok    {}: {what}", c.what),
             Err(what) => {
@@ -179,7 +191,7 @@ fn check(a: CheckArgs) -> Result<()> {
     );
     say!(
         "strategy '{shown}' keeps to the strategy protocol version {}",
-        floorcast_worker::external::PROTOCOL_VERSION
+        protocol.unwrap_or_default()
     );
     Ok(())
 }

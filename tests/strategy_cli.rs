@@ -225,6 +225,59 @@ fn a_strategy_that_needs_the_layout_and_the_map_gets_them() {
     assert!(!log.contains(", 0 rooms"), "{log}");
 }
 
+/// Protocol 2: a program's needs may depend on its params (its ready reply lists the run's),
+/// and with the need "layout" every decide message carries the robot's predicted room. The
+/// program checks each message and fails the run otherwise.
+#[test]
+fn a_strategy_needs_what_its_params_ask_for() {
+    let command = python_command("tests/strategies/needs_by_params.py");
+    // (params, whether the run has the layout)
+    for (params, rooms) in [(r#"{"rooms": true}"#, true), ("{}", false)] {
+        let dir = tempfile::tempdir().unwrap();
+        let s = explore(
+            &repo().join("buildings/small.toml"),
+            1,
+            "",
+            dir.path(),
+            &["--strategy-command", &command, "--strategy-params", params],
+        );
+        assert_eq!(s["end_reason"], "complete", "{params}: {s}");
+        let log = read(dir.path().join("strategy-stderr.txt"));
+        let line = log
+            .lines()
+            .find(|l| l.starts_with("needs_by_params: "))
+            .unwrap_or_else(|| panic!("{params}: {log}"));
+        let numbers: Vec<u64> = line
+            .split(|c: char| !c.is_ascii_digit())
+            .filter_map(|w| w.parse().ok())
+            .collect();
+        let [decisions, with_room, in_room] = numbers[..] else {
+            panic!("{line}")
+        };
+        assert!(
+            line.contains(&format!("rooms {}", if rooms { "True" } else { "False" })),
+            "{line}"
+        );
+        assert!(decisions > 3, "{line}");
+        assert_eq!(with_room, if rooms { decisions } else { 0 }, "{line}");
+        // The robot starts in a room of the small building and stays in rooms a while.
+        assert_eq!(in_room > 0, rooms, "{line}");
+        assert!(in_room <= with_room, "{line}");
+    }
+    // The compliance check runs the same session: the run's needs are its ready reply's.
+    for (params, needs) in [(r#"{"rooms": true}"#, "needs [layout]"), ("{}", "needs []")] {
+        let o = run(&["strategy", "check", &command, "--strategy-params", params]);
+        let out = stdout(&o);
+        assert!(o.status.success(), "{out}{}", stderr(&o));
+        assert!(out.contains(&format!("ok    run: ready, {needs}")), "{out}");
+        assert!(out.contains("protocol 2, needs []"), "{out}");
+        assert!(
+            out.contains("keeps to the strategy protocol version 2"),
+            "{out}"
+        );
+    }
+}
+
 #[test]
 fn a_strategy_that_stops_ends_the_run_as_an_early_stop() {
     let dir = tempfile::tempdir().unwrap();
@@ -313,7 +366,7 @@ broken_strategy_cases! {
     illegal_id: python_command("tests/strategies/illegal_id.py") =>
         ["illegal_id.py", "chose candidate 99999, which decision 0 did not offer"];
     wrong_protocol: python_command("tests/strategies/wrong_protocol.py") =>
-        ["wrong_protocol.py", "speaks protocol version 99; this floorcast speaks version 1"];
+        ["wrong_protocol.py", "speaks protocol version 99; this floorcast speaks versions 1 to 2"];
     missing_interpreter: "no-such-interpreter-x7 strategy.py" =>
         ["cannot start 'no-such-interpreter-x7': no such program"];
     unclosed_quote: "python3 'my strategy.py" =>
@@ -365,16 +418,21 @@ fn the_compliance_check_names_the_rule_a_program_breaks() {
     let cases = [
         (
             "examples/strategies/baseline.py",
-            "keeps to the strategy protocol version 1",
+            "keeps to the strategy protocol version 2",
             0,
         ),
         (
             "examples/strategies/nearest.py",
-            "keeps to the strategy protocol version 1",
+            "keeps to the strategy protocol version 2",
             0,
         ),
         (
             "tests/strategies/needs_everything.py",
+            "keeps to the strategy protocol version 2",
+            0,
+        ),
+        (
+            "tests/strategies/plain_v1.py",
             "keeps to the strategy protocol version 1",
             0,
         ),

@@ -22,7 +22,7 @@ use floorcast_worker::FLOORCAST_VERSION;
 use serde::{Deserialize, Serialize};
 
 use crate::progress::Sample;
-use crate::store::{decode_row, JobStatus, RawRow, StoredResult};
+use crate::store::{decode_exported, JobStatus, StoredResult};
 
 pub const RUNS_FORMAT: &str = "floorcast-runs";
 pub const RUNS_VERSION: u32 = 1;
@@ -57,8 +57,8 @@ struct RunLine {
     seed: u64,
     settings: serde_json::Value,
     summary: serde_json::Value,
-    /// The thinned curve, as the store's `progress_csv`.
-    progress_csv: String,
+    /// The thinned curve, as the store's CSV.
+    progress: String,
     worker: String,
     wall_time_s: f64,
     floorcast_version: String,
@@ -139,7 +139,7 @@ pub fn export(
             seed: r.seed,
             settings: serde_json::to_value(&r.settings).map_err(|e| e.to_string())?,
             summary: serde_json::to_value(&r.summary).map_err(|e| e.to_string())?,
-            progress_csv: crate::progress::encode(&thin(r.progress.as_deref().unwrap_or(&[]))),
+            progress: crate::progress::encode(&thin(r.progress.as_deref().unwrap_or(&[]))),
             worker: r.worker.clone(),
             wall_time_s: r.wall_time_s,
             floorcast_version: r.floorcast_version.clone(),
@@ -250,30 +250,25 @@ pub fn read(path: &Path) -> Result<Exported, String> {
 
 /// A run line as a store's row, checked as a store's row is read.
 fn run_of(r: RunLine) -> Result<StoredResult, String> {
-    let raw = RawRow {
-        row: StoredResult {
-            job_id: r.job_id,
-            grid: r.grid,
-            building: r.building,
-            building_hash: r.building_hash,
-            strategy: r.strategy,
-            label: r.label,
-            seed: 0,
-            settings: floorcast_worker::Settings::default(),
-            status: JobStatus::Ok,
-            error: None,
-            summary: None,
-            progress: None,
-            worker: r.worker,
-            wall_time_s: r.wall_time_s,
-            floorcast_version: r.floorcast_version,
-            stderr_tail: None,
-        },
-        settings_json: r.settings.to_string(),
-        summary_json: Some(r.summary.to_string()),
-        progress_csv: Some(r.progress_csv),
+    let row = StoredResult {
+        job_id: r.job_id,
+        grid: r.grid,
+        building: r.building,
+        building_hash: r.building_hash,
+        strategy: r.strategy,
+        label: r.label,
+        seed: 0,
+        settings: floorcast_worker::Settings::default(),
+        status: JobStatus::Ok,
+        error: None,
+        summary: None,
+        progress: None,
+        worker: r.worker,
+        wall_time_s: r.wall_time_s,
+        floorcast_version: r.floorcast_version,
+        stderr_tail: None,
     };
-    decode_row(raw, r.seed)
+    decode_exported(row, r.seed, &r.settings, &r.summary, r.progress)
 }
 
 #[cfg(test)]

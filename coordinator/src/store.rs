@@ -1295,6 +1295,25 @@ pub fn decode_row(raw: RawRow, seed: u64) -> Result<StoredResult, String> {
     Ok(row)
 }
 
+/// A run as an export file holds it (`board.rs`): `row` (its seed apart, and its settings,
+/// summary and curve empty) with its settings and summary as JSON and its curve as the store's
+/// CSV, decoded and checked as a stored row is ([`decode_row`]).
+pub fn decode_exported(
+    row: StoredResult,
+    seed: u64,
+    settings: &serde_json::Value,
+    summary: &serde_json::Value,
+    progress: String,
+) -> Result<StoredResult, String> {
+    let raw = RawRow {
+        row,
+        settings_json: settings.to_string(),
+        summary_json: Some(summary.to_string()),
+        progress_csv: Some(progress),
+    };
+    decode_row(raw, seed)
+}
+
 /// A row's settings from its `settings_json`: a JSON object of settings, each one it lacks at
 /// its default.
 fn decode_settings(text: &str) -> Result<Settings, String> {

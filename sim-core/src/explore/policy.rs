@@ -99,6 +99,18 @@ pub struct LayoutView<'a> {
     pub rooms: &'a [RoomView],
 }
 
+impl LayoutView<'_> {
+    /// The index of the first room whose polygon holds `p`.
+    pub fn room_holding(&self, p: Vec2) -> Option<usize> {
+        self.rooms.iter().position(|r| {
+            crate::geom::Polygon {
+                vertices: r.polygon.clone(),
+            }
+            .contains(p)
+        })
+    }
+}
+
 /// What a policy is shown at a decision.
 #[derive(Debug, Clone, Copy)]
 pub struct DecisionView<'a> {

@@ -9,7 +9,7 @@
 //! Adding a strategy: a row of [`BUILT_IN`] (and, for a new way of choosing, a variant of
 //! [`Choice`] with its arm in [`BuiltInPolicy::decide`]), plus its test (ARCHITECTURE.md).
 
-use super::policy::{CandidateView, DecisionView, Needs, Policy, Reply, RoomView};
+use super::policy::{CandidateView, DecisionView, Needs, Policy, Reply};
 use crate::utility::{best_candidate, with_gain_floor, CandidateScore};
 
 /// Where a layout comes from.
@@ -533,7 +533,7 @@ impl Policy for BuiltInPolicy {
             Choice::RoomFirst => {
                 let here = view
                     .layout
-                    .and_then(|l| room_holding(l.rooms, view.pose.position()));
+                    .and_then(|l| l.room_holding(view.pose.position()));
                 let in_here = |c: &CandidateView| here.is_some() && c.room == here;
                 if shown.iter().any(|c| in_here(c)) {
                     best_of(&shown, |c| if in_here(c) { -c.path_m } else { f64::NAN })
@@ -610,16 +610,6 @@ fn first_of_tour(all: &[CandidateView], kept: &[usize], between: &[f64]) -> Opti
 /// Rounds of improving moves of `frontier-tsp`'s tour at most.
 const TOUR_PASSES: usize = 50;
 
-/// The index of the first room whose polygon holds `p`.
-fn room_holding(rooms: &[RoomView], p: crate::geom::Vec2) -> Option<usize> {
-    rooms.iter().position(|r| {
-        crate::geom::Polygon {
-            vertices: r.polygon.clone(),
-        }
-        .contains(p)
-    })
-}
-
 /// A number drawn from the run's seed and the decision (SplitMix64 of their mix): the same at
 /// the same decision of the same run, whatever was asked before.
 fn random_draw(seed: u64, decision: usize, attempt: usize) -> u64 {
@@ -646,6 +636,7 @@ fn by_utility_of(shown: &[&CandidateView], alpha: f64, gain_floor_m2: f64) -> Op
 
 #[cfg(test)]
 mod tests {
+    use super::super::policy::RoomView;
     use super::*;
 
     /// Each name makes the value it stands for, with the settings' thresholds.

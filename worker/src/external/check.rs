@@ -18,8 +18,10 @@ pub struct Check {
 /// Runs a program through a scripted session that touches every message and rule of the
 /// protocol (the handshake, a run, a decision and a second attempt at it, a decision with one
 /// candidate whose id is not its position, the end, exiting when stdin closes) and returns
-/// every check, stopping at the first the program fails: floorcast's compliance checker.
-pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
+/// every check, stopping at the first the program fails, and the protocol version the program
+/// speaks (`None`: its hello failed): floorcast's compliance checker. The session is the
+/// version the program answers with (1 or 2: in 2, the ready reply's needs are the run's).
+pub fn check_program(program: &StrategyProgram) -> (Vec<Check>, Option<u64>) {
     let mut checks = Vec::new();
     let mut push = |what, outcome: Result<String, String>| {
         let ok = outcome.is_ok();
@@ -30,9 +32,10 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         Ok(s) => s,
         Err(e) => {
             push("hello", Err(e.what));
-            return checks;
+            return (checks, None);
         }
     };
+    let protocol = Some(s.hello().protocol);
     push("hello", Ok(hello_text(s.hello())));
     let map = check_room();
     let settings = crate::Settings::default();
@@ -48,11 +51,17 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
         ),
         false,
     );
-    if !push("run", begun.map(|_| "ready".into()).map_err(|e| e.what)) {
-        return checks;
+    let ready = begun
+        .map(|()| match s.hello().protocol {
+            1 => "ready".into(),
+            _ => format!("ready, {}", needs_text(s.hello())),
+        })
+        .map_err(|e| e.what);
+    if !push("run", ready) {
+        return (checks, protocol);
     }
     if !check_decisions(&mut s, &map, &mut push) {
-        return checks;
+        return (checks, protocol);
     }
     s.end(&RunEnd {
         reason: sim_core::explore::EndReason::Complete,
@@ -62,14 +71,17 @@ pub fn check_program(program: &StrategyProgram) -> Vec<Check> {
     });
     let (what, outcome) = exit_check(s.finish());
     push(what, outcome);
-    checks
+    (checks, protocol)
 }
 
 /// Where the check's robot stands.
 const CHECK_START: sim_core::Pose = sim_core::Pose::new(2.4, 0.7, 0.0);
+/// Where it stands at the second decision: inside the predicted room of [`check_room_view`].
+const IN_THE_ROOM: sim_core::Pose = sim_core::Pose::new(3.6, 0.7, 0.0);
 
 /// The check's decisions: one of three candidates, a second attempt without the one chosen,
-/// then one candidate whose id (7) is not its position. Each check is `push`ed; whether all
+/// then one candidate whose id (7) is not its position, the robot moved into the predicted room
+/// (protocol 2's `robot_room` is then 0, before `null`). Each check is `push`ed; whether all
 /// passed.
 fn check_decisions(
     s: &mut ExternalStrategy,
@@ -91,7 +103,11 @@ fn check_decisions(
         decision,
         attempt,
         time_s: 1.0 + decision as f64,
-        pose: CHECK_START,
+        pose: if decision == 0 {
+            CHECK_START
+        } else {
+            IN_THE_ROOM
+        },
         candidates,
         unreachable_goal: None,
         layout: h.needs_layout.then_some(sim_core::explore::LayoutView {
@@ -125,8 +141,18 @@ fn check_decisions(
     ask("decide with one candidate (id 7)", &view(1, 0, &one)).0
 }
 
-/// What the hello of a program says: its name and needs.
+/// What the hello of a program says: its name, protocol and needs.
 fn hello_text(h: &Hello) -> String {
+    format!(
+        "name '{}', protocol {}, {}",
+        h.name,
+        h.protocol,
+        needs_text(h)
+    )
+}
+
+/// A program's needs as the check prints them.
+fn needs_text(h: &Hello) -> String {
     let mut needs: Vec<&str> = Vec::new();
     if h.needs_layout_gain {
         needs.push("layout_gain");
@@ -137,7 +163,7 @@ fn hello_text(h: &Hello) -> String {
     if h.needs_map {
         needs.push("map");
     }
-    format!("name '{}', needs [{}]", h.name, needs.join(", "))
+    format!("needs [{}]", needs.join(", "))
 }
 
 /// The check's map: a room of 4 x 2 m seen from its middle, unknown beyond its open ends.

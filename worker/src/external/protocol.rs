@@ -22,8 +22,13 @@ use sim_core::grid::{GridFrame, Occupancy};
 
 use super::clip;
 
-/// The protocol version this floorcast speaks.
-pub const PROTOCOL_VERSION: u64 = 1;
+/// The newest protocol version this floorcast speaks (its hello says it); a program answers
+/// with the version it speaks, [`OLDEST_PROTOCOL`] to this one. Version 2 adds the robot's
+/// room to each decide message (`robot_room`, with the need "layout") and needs in the ready
+/// reply, once the run's `params` are known.
+pub const PROTOCOL_VERSION: u64 = 2;
+/// The oldest protocol version this floorcast still speaks.
+pub const OLDEST_PROTOCOL: u64 = 1;
 
 /// A message floorcast sends.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -82,6 +87,15 @@ pub struct DecideMessage {
     /// With the need "map".
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub map_changes: Option<MapChanges>,
+    /// Protocol 2, with the need "layout" (`Some`): the index into the last layout's rooms of
+    /// the predicted room holding the robot's estimated position, `null` when none does or no
+    /// layout exists yet (`Some(None)`).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "present"
+    )]
+    pub robot_room: Option<Option<usize>>,
 }
 
 /// A candidate of a decide message.
@@ -277,6 +291,10 @@ impl Sent {
             unreachable_goal: view.unreachable_goal.map(|p| [p.x, p.y]),
             layout: self.layout(view),
             map_changes: hello.needs_map.then(|| self.map_changes(view)),
+            robot_room: (hello.protocol >= 2 && hello.needs_layout).then(|| {
+                view.layout
+                    .and_then(|l| l.room_holding(view.pose.position()))
+            }),
         }
     }
 
@@ -338,8 +356,11 @@ pub enum FromStrategy {
         #[serde(default, skip_serializing_if = "Field::is_missing")]
         needs: Field<Vec<Field<Need>>>,
     },
-    /// Ready for the run.
-    Ready,
+    /// Ready for the run; in protocol 2, with the run's needs (replacing the hello's).
+    Ready {
+        #[serde(default, skip_serializing_if = "Field::is_missing")]
+        needs: Field<Vec<Field<Need>>>,
+    },
     /// Drive to this candidate.
     Choose {
         #[serde(default, skip_serializing_if = "Field::is_missing")]
@@ -439,9 +460,11 @@ fn quote_json(v: &Value) -> String {
     clip(&v.to_string(), 80)
 }
 
-/// What the program said of itself.
+/// What the program said of itself (its needs as its ready reply set them, in protocol 2).
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Hello {
+    /// The protocol version it speaks.
+    pub protocol: u64,
     pub name: String,
     pub needs_layout_gain: bool,
     pub needs_layout: bool,
@@ -460,20 +483,20 @@ pub fn hello_of(r: &Received) -> Result<Hello, String> {
     else {
         return Err(format!("{} (expected a hello message)", what()));
     };
-    match protocol {
-        Field::Given(PROTOCOL_VERSION) => {}
+    let protocol = match protocol {
+        Field::Given(p) if (OLDEST_PROTOCOL..=PROTOCOL_VERSION).contains(p) => *p,
         Field::Given(p) => {
             return Err(format!(
-                "speaks protocol version {p}; this floorcast speaks version {PROTOCOL_VERSION} (docs/strategy-protocol.md)"
+                "speaks protocol version {p}; this floorcast speaks versions {OLDEST_PROTOCOL} to {PROTOCOL_VERSION} (docs/strategy-protocol.md)"
             ))
         }
         _ => {
             return Err(format!(
-                "{} (expected \"protocol\": {PROTOCOL_VERSION})",
+                "{} (expected \"protocol\": {OLDEST_PROTOCOL} to {PROTOCOL_VERSION})",
                 what()
             ))
         }
-    }
+    };
     let name = match name {
         Field::Given(n) => n.as_str(),
         _ => "",
@@ -485,17 +508,21 @@ pub fn hello_of(r: &Received) -> Result<Hello, String> {
         ));
     }
     let mut hello = Hello {
+        protocol,
         name: name.to_string(),
         ..Hello::default()
     };
-    for need in needs_of(needs)? {
-        match need {
-            Need::LayoutGain => hello.needs_layout_gain = true,
-            Need::Layout => hello.needs_layout = true,
-            Need::Map => hello.needs_map = true,
-        }
-    }
+    hello.set_needs(&needs_of(needs)?);
     Ok(hello)
+}
+
+impl Hello {
+    /// Needs exactly `needs`.
+    fn set_needs(&mut self, needs: &[Need]) {
+        self.needs_layout_gain = needs.contains(&Need::LayoutGain);
+        self.needs_layout = needs.contains(&Need::Layout);
+        self.needs_map = needs.contains(&Need::Map);
+    }
 }
 
 /// The needs a hello lists (none when it has no `needs`).
@@ -523,10 +550,19 @@ fn needs_of(needs: &Field<Vec<Field<Need>>>) -> Result<Vec<Need>, String> {
     }
 }
 
-/// The program's answer to the run message, checked: ready.
-pub fn ready_of(r: &Received) -> Result<(), String> {
-    match r.message {
-        Some(FromStrategy::Ready) => Ok(()),
+/// The program's answer to the run message, checked: ready. In protocol 2, needs it lists
+/// replace those of its hello (they may depend on the run's `params`); in protocol 1 a ready
+/// reply's other fields are ignored.
+pub fn ready_of(r: &Received, hello: &mut Hello) -> Result<(), String> {
+    match &r.message {
+        Some(FromStrategy::Ready { needs }) => {
+            if hello.protocol >= 2 && !needs.is_missing() {
+                let needs =
+                    needs_of(needs).map_err(|e| format!("answered the run message: {e}"))?;
+                hello.set_needs(&needs);
+            }
+            Ok(())
+        }
         _ => Err(format!(
             "answered the run message with {} (expected {{\"type\":\"ready\"}})",
             r.quoted()
@@ -673,10 +709,11 @@ mod tests {
         let version = crate::FLOORCAST_VERSION;
         assert_eq!(
             hello,
-            format!("{{\"floorcast\":\"{version}\",\"protocol\":1,\"type\":\"hello\"}}\n")
+            format!("{{\"floorcast\":\"{version}\",\"protocol\":2,\"type\":\"hello\"}}\n")
         );
         let (cs, rooms, map) = ([candidate(0, 2), candidate(4, 1)], [room()], map());
         let all = Hello {
+            protocol: 1,
             name: "x".into(),
             needs_layout_gain: true,
             needs_layout: true,
@@ -715,6 +752,26 @@ mod tests {
             "{none}"
         );
         assert!(!none.contains("map_changes"), "{none}");
+        // Protocol 2 adds the robot's room with the need "layout": null outside every room,
+        // else the room's index; not without the need.
+        let v2 = Hello {
+            protocol: 2,
+            ..all.clone()
+        };
+        let outside = Sent::default().decide(&view(&cs, &rooms, &map), &v2);
+        assert_eq!(outside.robot_room, Some(None));
+        assert!(text(&ToStrategy::Decide(outside)).contains(r#""robot_room":null,"#));
+        let mut inside = view(&cs, &rooms, &map);
+        inside.pose = sim_core::Pose::new(0.8, 0.2, 0.0);
+        assert_eq!(
+            Sent::default().decide(&inside, &v2).robot_room,
+            Some(Some(0))
+        );
+        let unasked = Hello {
+            needs_layout: false,
+            ..v2.clone()
+        };
+        assert_eq!(Sent::default().decide(&inside, &unasked).robot_room, None);
         let end = text(&ToStrategy::end(&RunEnd {
             reason: EndReason::EarlyStop,
             exploration_time_s: 812.4,
@@ -875,6 +932,7 @@ mod tests {
     fn a_hello_is_checked() {
         let h = hello(r#"{"type":"hello","protocol":1,"name":"n","needs":["map","layout"],"x":1}"#);
         let want = Hello {
+            protocol: 1,
             name: "n".into(),
             needs_layout_gain: false,
             needs_layout: true,
@@ -891,9 +949,10 @@ mod tests {
         let refused = [
             (r#"{"type":"ready"}"#, r#"answered the hello message with {"type":"ready"} (expected a hello message)"#),
             (r#"{"protocol":1,"name":"n"}"#, "(expected a hello message)"),
-            (r#"{"type":"hello","protocol":99,"name":"n"}"#, "speaks protocol version 99; this floorcast speaks version 1 (docs/strategy-protocol.md)"),
-            (r#"{"type":"hello","protocol":1.0,"name":"n"}"#, r#"(expected "protocol": 1)"#),
-            (r#"{"type":"hello","name":"n"}"#, r#"(expected "protocol": 1)"#),
+            (r#"{"type":"hello","protocol":99,"name":"n"}"#, "speaks protocol version 99; this floorcast speaks versions 1 to 2 (docs/strategy-protocol.md)"),
+            (r#"{"type":"hello","protocol":0,"name":"n"}"#, "speaks protocol version 0; this floorcast speaks versions 1 to 2"),
+            (r#"{"type":"hello","protocol":1.0,"name":"n"}"#, r#"(expected "protocol": 1 to 2)"#),
+            (r#"{"type":"hello","name":"n"}"#, r#"(expected "protocol": 1 to 2)"#),
             (r#"{"type":"hello","protocol":1}"#, r#"(expected "name": a non-empty string"#),
             (r#"{"type":"hello","protocol":1,"name":"  "}"#, r#"(expected "name": a non-empty string"#),
             (r#"{"type":"hello","protocol":1,"name":"a\u0007"}"#, "no control characters)"),
@@ -912,12 +971,39 @@ mod tests {
             "x".repeat(101)
         );
         assert!(hello(&long).is_err());
-        let ready = |line| ready_of(&Received::decode(line).unwrap());
-        assert_eq!(ready(r#"{"type":"ready","x":[]}"#), Ok(()));
-        let e = ready(r#"{"type":"choose","id":1}"#).unwrap_err();
+        let ready = |line, h: &mut Hello| ready_of(&Received::decode(line).unwrap(), h);
+        let mut h = hello(r#"{"type":"hello","protocol":1,"name":"n","needs":["map"]}"#).unwrap();
+        assert_eq!(ready(r#"{"type":"ready","x":[]}"#, &mut h), Ok(()));
+        let e = ready(r#"{"type":"choose","id":1}"#, &mut h).unwrap_err();
         assert_eq!(
             e,
             r#"answered the run message with {"id":1,"type":"choose"} (expected {"type":"ready"})"#
+        );
+        // Needs in the ready reply: ignored in protocol 1, the run's needs in protocol 2
+        // (replacing the hello's; none listed keeps them).
+        let v1 = h.clone();
+        assert_eq!(
+            ready(r#"{"type":"ready","needs":["layout"]}"#, &mut h),
+            Ok(())
+        );
+        assert_eq!(h, v1);
+        let mut h = hello(r#"{"type":"hello","protocol":2,"name":"n","needs":["map"]}"#).unwrap();
+        assert_eq!(ready(r#"{"type":"ready"}"#, &mut h), Ok(()));
+        assert!(h.needs_map && !h.needs_layout);
+        assert_eq!(
+            ready(
+                r#"{"type":"ready","needs":["layout","layout_gain"]}"#,
+                &mut h
+            ),
+            Ok(())
+        );
+        assert!(!h.needs_map && h.needs_layout && h.needs_layout_gain);
+        assert_eq!(ready(r#"{"type":"ready","needs":[]}"#, &mut h), Ok(()));
+        assert!(!h.needs_map && !h.needs_layout && !h.needs_layout_gain);
+        let e = ready(r#"{"type":"ready","needs":["maps"]}"#, &mut h).unwrap_err();
+        assert!(
+            e.contains(r#"answered the run message: needs "maps" (floorcast offers"#),
+            "{e}"
         );
     }
 }

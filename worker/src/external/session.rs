@@ -131,9 +131,11 @@ impl ExternalStrategy {
     /// time is charged to simulated time.
     pub fn begin(&mut self, run: RunMessage, charge: bool) -> Result<(), StrategyError> {
         self.charge = charge;
+        let mut hello = self.hello.clone();
         let r = self
             .exchange(&ToStrategy::Run(run), "the run message")
-            .and_then(|r| protocol::ready_of(&r));
+            .and_then(|r| protocol::ready_of(&r, &mut hello));
+        self.hello = hello;
         r.map_err(|what| self.error(what))
     }
 
