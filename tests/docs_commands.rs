@@ -59,6 +59,7 @@ const NOT_RUN: &[(&str, Check)] = &[
     ("run grids/real-schools.toml", Check::LongGrid("grids/real-schools.toml", 1620)),
     ("run grids/plans.toml", Check::LongGrid("grids/plans.toml", 124)),
     ("run grids/leaderboard.toml", Check::LongGrid("grids/leaderboard.toml", 1215)),
+    ("run grids/beat-nearest.toml", Check::LongGrid("grids/beat-nearest.toml", 54)),
     (
         "run grids/paper.toml --listen tcp/0.0.0.0:7447 --workers 0",
         Check::Network(Some("grids/paper.toml")),
@@ -101,7 +102,7 @@ const NOT_RUN: &[(&str, Check)] = &[
 
 /// At most this many printed commands may be left unrun (each reference grid's `run` line is
 /// one: they take minutes to hours and are planned instead).
-const MAX_NOT_RUN: usize = 26;
+const MAX_NOT_RUN: usize = 27;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
