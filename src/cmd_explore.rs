@@ -31,7 +31,8 @@ pub struct ExploreArgs {
     /// (docs/strategy-protocol.md) on its stdin and stdout, e.g. "python3 my_strategy.py"
     /// (split into words as a shell splits them; files it names are hashed into the run's
     /// record). It chooses among the baseline's candidates; its stderr goes to
-    /// strategy-stderr.txt in the output directory.
+    /// strategy-stderr.txt in the output directory, also when it fails (when it fails as it
+    /// starts, its name unknown: --out, or results/explore/BUILDING-strategy-command-SEED).
     #[arg(long, value_name = "COMMAND", conflicts_with = "strategy")]
     strategy_command: Option<String>,
     /// Seconds the --strategy-command program has for each reply (the first includes its start),
@@ -117,7 +118,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .unwrap_or_else(|| building.name.clone());
     let settings = explore_settings(&a)?;
     let start = given_start(&a, &building, &name, &settings)?;
-    let (label, program) = strategy_of(&a)?;
+    let (label, program) = strategy_of(&a).map_err(|e| failed_start(&a, &name, e))?;
     let job = Job {
         building: &building,
         building_name: name.clone(),
@@ -138,16 +139,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .validate()
         .map_err(|e| anyhow::anyhow!("{e} (given on the command line)"))?;
     check_job(&job).with_context(|| format!("{}: cannot explore", a.building.display()))?;
-    let out = a.out.clone().unwrap_or_else(|| {
-        let label: String = label
-            .chars()
-            .map(|c| match c {
-                'a'..='z' | 'A'..='Z' | '0'..='9' | '.' | '_' | '-' => c,
-                _ => '_',
-            })
-            .collect();
-        PathBuf::from(format!("results/explore/{name}-{label}-{}", a.seed))
-    });
+    let out = out_dir(&a, &name, &label);
     // Written whole or not at all, one explore at a time (`StagedOut`).
     let staged = crate::output::StagedOut::begin(&out)?;
     let dir = staged.dir();
@@ -185,6 +177,41 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     }
     say!("results in {}", out.display());
     Ok(())
+}
+
+/// The output directory: `--out`, else results/explore/BUILDING-STRATEGY-SEED.
+fn out_dir(a: &ExploreArgs, name: &str, label: &str) -> PathBuf {
+    a.out.clone().unwrap_or_else(|| {
+        let label: String = label
+            .chars()
+            .map(|c| match c {
+                'a'..='z' | 'A'..='Z' | '0'..='9' | '.' | '_' | '-' => c,
+                _ => '_',
+            })
+            .collect();
+        PathBuf::from(format!("results/explore/{name}-{label}-{}", a.seed))
+    })
+}
+
+/// A strategy program that failed as it started (before or at its hello): what it wrote to
+/// stderr is kept as for a run that failed ([`failed_run`]), in `--out` or, its name unknown,
+/// results/explore/BUILDING-strategy-command-SEED.
+fn failed_start(a: &ExploreArgs, name: &str, e: anyhow::Error) -> anyhow::Error {
+    let Some(se) = e.downcast_ref::<floorcast_worker::external::StrategyError>() else {
+        return e;
+    };
+    if se.stderr.is_empty() {
+        return e;
+    }
+    let out = out_dir(a, name, "strategy-command");
+    match crate::output::StagedOut::begin(&out) {
+        Ok(staged) => failed_run(
+            staged,
+            &out,
+            floorcast_worker::JobError::Strategy(se.clone()),
+        ),
+        Err(w) => anyhow::anyhow!("{e} (its stderr could not be kept: {w:#})"),
+    }
 }
 
 /// A run that failed: an external strategy's stderr is kept in `out` (`strategy-stderr.txt`, the

@@ -102,8 +102,8 @@ pub struct RunArgs {
     /// FILE`, e.g. results/reference/leaderboard/runs.jsonl.gz) that are jobs of this grid and
     /// not stored yet: only the grid's other jobs are run. A run matches a job only when
     /// everything that determines it matches (building content, strategy, seed, settings,
-    /// start, floorcast version); it is stored under this grid's label for the job, with its
-    /// worker marked `import`. Its progress curve is the file's thinned one (times to each
+    /// start, floorcast version); it is stored under this grid's label and building name for
+    /// the job, with its worker marked `import`. Its progress curve is the file's thinned one (times to each
     /// whole percent exact).
     #[arg(long, value_name = "FILE", conflicts_with = "summary")]
     import: Option<PathBuf>,
@@ -184,9 +184,10 @@ pub struct ReportArgs {
     #[arg(long, value_name = "F", value_parser = crate::values::number)]
     coverage: Option<f64>,
     /// Also write the store's successful runs and its tours to FILE (gzip-compressed JSON
-    /// lines: a header, then a line per run and per tour), each progress curve thinned to its times to every whole
-    /// percent (every tenth from 95 %): small enough to commit, e.g. a leaderboard's runs, and
-    /// read by `run GRID --import FILE`, which then runs only the grid's other jobs.
+    /// lines: a header, then a line per run and per tour), each progress curve thinned to its
+    /// times to every whole percent (every tenth from 95 %): small enough to commit, e.g. a
+    /// leaderboard's runs, and read by `run GRID --import FILE`, which then runs only the
+    /// grid's other jobs.
     #[arg(long, value_name = "FILE")]
     export_runs: Option<PathBuf>,
 }
@@ -319,9 +320,13 @@ fn import_runs(
         Some(q) => plan.jobs_for(&(1..=q.max_seeds).collect::<Vec<_>>(), None),
         None => plan.jobs.clone(),
     };
-    let labels: std::collections::BTreeMap<&str, &str> = jobs
+    // Each job's label and building as this grid names them.
+    let names: std::collections::BTreeMap<&str, (&str, &str)> = jobs
         .iter()
-        .map(|j| (j.id.as_str(), j.label.as_str()))
+        .map(|j| {
+            let building = plan.buildings[j.building].name.as_str();
+            (j.id.as_str(), (j.label.as_str(), building))
+        })
         .collect();
     let stored = store.stored_ids()?;
     let worker = format!(
@@ -333,8 +338,9 @@ fn import_runs(
         .into_iter()
         .filter(|r| !stored.contains(&r.job_id))
         .filter_map(|mut r| {
-            let label = labels.get(r.job_id.as_str())?;
+            let (label, building) = names.get(r.job_id.as_str())?;
             r.label = (*label).to_string();
+            r.building = (*building).to_string();
             r.grid.clone_from(&plan.name);
             r.worker.clone_from(&worker);
             Some(r)

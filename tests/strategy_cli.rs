@@ -332,11 +332,15 @@ fn fails_cleanly_with(command: &str, extra: &[&str], needles: &[&str]) {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     assert_eq!(files, ["strategy-stderr.txt"], "only the program's stderr");
+    // The file holds what the program wrote, down to the last line the error quotes.
     let text = std::fs::read_to_string(out.join("strategy-stderr.txt")).unwrap();
-    assert!(
-        text.starts_with("Traceback (most recent call last):"),
-        "{text}"
-    );
+    let err = stderr(&o);
+    let quoted = err
+        .split("its last stderr line: '")
+        .nth(1)
+        .and_then(|rest| rest.split('\'').next())
+        .unwrap_or_else(|| panic!("no stderr line quoted: {err}"));
+    assert!(text.trim_end().ends_with(quoted), "{text}");
 }
 
 macro_rules! broken_strategy_cases {
@@ -350,7 +354,7 @@ macro_rules! broken_strategy_cases {
 
 broken_strategy_cases! {
     crash_at_hello: python_command("tests/strategies/crash_at_hello.py") =>
-        ["crash_at_hello.py", "exited with status 3 before answering the hello message", "something went wrong"];
+        ["crash_at_hello.py", "exited with status 3 before answering the hello message", "something went wrong", "(its stderr: ", "strategy-stderr.txt)"];
     crash_mid_run: python_command("tests/strategies/crash_mid_run.py") =>
         ["crash_mid_run.py", "exited with status 1 before answering decision 2", "strategy bug at decision 3", "(its stderr: ", "strategy-stderr.txt)"];
     hang: python_command("tests/strategies/hang.py") =>

@@ -178,16 +178,22 @@ pub fn make_tour(
 mod tests {
     use super::*;
 
-    #[test]
-    fn a_record_round_trips_and_bad_ones_are_refused() {
+    /// A generated building of 150 m2 and its tour from its start with the default settings.
+    fn small_tour() -> (Building, TourRecord) {
         let b = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
             seed: 2,
             area_m2: 150.0,
             ..Default::default()
         });
+        let t = make_tour(&b, "b", b.start.unwrap(), &Settings::default(), 0.99).unwrap();
+        (b, t)
+    }
+
+    #[test]
+    fn a_record_round_trips_and_bad_ones_are_refused() {
+        let (b, t) = small_tour();
         let start = b.start.unwrap();
         let settings = Settings::default();
-        let t = make_tour(&b, "b", start, &settings, 0.99).unwrap();
         t.validate().unwrap();
         assert!(t.starts_at(&[start.x_m, start.y_m, start.theta_rad]));
         assert!(!t.starts_at(&[start.x_m + 1e-9, start.y_m, start.theta_rad]));
@@ -216,13 +222,8 @@ mod tests {
     /// its key is not the current one: a store makes the tour again.
     #[test]
     fn a_tour_of_an_older_method_is_read_but_not_used() {
-        let b = sim_core::generate::generate(&sim_core::generate::GenerateConfig {
-            seed: 2,
-            area_m2: 150.0,
-            ..Default::default()
-        });
+        let (_, t) = small_tour();
         let settings = Settings::default();
-        let t = make_tour(&b, "b", b.start.unwrap(), &settings, 0.99).unwrap();
         assert_eq!(t.key.method, sim_core::tour::TOUR_METHOD);
         let mut v = serde_json::to_value(&t).unwrap();
         v["version"] = 2.into();
