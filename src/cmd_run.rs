@@ -206,6 +206,9 @@ pub fn run(a: RunArgs) -> Result<()> {
         },
     )?;
     check_options(&a)?;
+    if a.summary && nothing_stored(&a, &plan) {
+        return Ok(());
+    }
     // Read and checked before the results directory is made.
     let imported = a.import.as_deref().map(read_import).transpose()?;
     let (_lock, store) = open_store(&plan, a.summary)?;
@@ -218,15 +221,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     }
     let stored = store.all()?;
     check_stored(&plan, &store, &stored)?;
-    for s in &plan.suites {
-        say!(
-            "suite {}: {} buildings, hash {} ({})",
-            s.name,
-            s.buildings,
-            s.hash,
-            s.manifest.display()
-        );
-    }
+    say_suites(&plan);
     // A sequential grid's jobs so far: those of every batch whose predecessors are all stored.
     let (progress, jobs) = floorcast_coordinator::sequential::replay(&plan, &stored);
     drop(stored);
@@ -296,6 +291,36 @@ pub fn run(a: RunArgs) -> Result<()> {
     let (outcome, counts) = run_with_progress(&plan, &store, &opts, &interrupt, a.quiet)?;
     let tour_threads = (!a.no_tours).then_some(workers.max(1));
     finish(&plan, &store, outcome, counts, networked, tour_threads)
+}
+
+/// `--summary` of a grid whose results directory holds no store yet: says so (nothing is
+/// created) and returns true.
+fn nothing_stored(a: &RunArgs, plan: &Plan) -> bool {
+    let db = plan.results_dir.join(floorcast_coordinator::store::DB_FILE);
+    if std::fs::symlink_metadata(&db).is_ok() {
+        return false;
+    }
+    say_suites(plan);
+    say!(
+        "0 of {} jobs stored in {} (nothing run yet: `floorcast run {}` runs them)",
+        plan.jobs.len(),
+        db.display(),
+        a.grid.display()
+    );
+    true
+}
+
+/// The suites the grid names: name, size, hash and manifest.
+fn say_suites(plan: &Plan) {
+    for s in &plan.suites {
+        say!(
+            "suite {}: {} buildings, hash {} ({})",
+            s.name,
+            s.buildings,
+            s.hash,
+            s.manifest.display()
+        );
+    }
 }
 
 /// The `--import` file at `path`, read and checked.
@@ -404,11 +429,9 @@ fn open_store(
     let lock = (!summary)
         .then(|| floorcast_coordinator::store::lock_results(&plan.results_dir))
         .transpose()?;
-    // `--summary` reads a store as it is (nothing written, nothing created beside it).
-    let store = if summary
-        && std::fs::symlink_metadata(plan.results_dir.join(floorcast_coordinator::store::DB_FILE))
-            .is_ok()
-    {
+    // `--summary` reads a store as it is (nothing written, nothing created beside it; `run`
+    // returned before this when there is none).
+    let store = if summary {
         Store::open_existing(&plan.results_dir)?
     } else {
         Store::open(&plan.results_dir)?

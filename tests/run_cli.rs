@@ -360,10 +360,16 @@ fn every_shipped_grid_plans() {
         ]);
         assert!(o.status.success(), "{}: {}", g.display(), stderr(&o));
         assert!(
-            stdout(&o).contains("jobs stored in"),
+            stdout(&o).contains("0 of ") && stdout(&o).contains("jobs stored in"),
             "{}: {}",
             g.display(),
             stdout(&o)
+        );
+        // A summary of a grid not run yet creates nothing.
+        assert!(
+            !res.path().join("results.sqlite").exists(),
+            "{}: --summary made a store",
+            g.display()
         );
     }
 }
