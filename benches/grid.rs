@@ -125,6 +125,7 @@ fn timed_run(plan: &Plan, local: usize, role: Option<&str>, procs: usize) -> f64
         // Every job alone: what is measured is the coordinator and the scaling.
         share: false,
         retry_failed: false,
+        live: None,
     };
     let mut children: Vec<Child> = Vec::new();
     if let Some(role) = role {

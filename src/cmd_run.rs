@@ -107,6 +107,14 @@ pub struct RunArgs {
     /// whole percent exact).
     #[arg(long, value_name = "FILE", conflicts_with = "summary")]
     import: Option<PathBuf>,
+    /// Serve a live view of the run over HTTP at ADDR: a page (`/`, reloading itself every 5 s)
+    /// and JSON (`/status.json`, docs/live-view.md) with jobs stored, running, failed and left,
+    /// the ETA, the workers (rates, last contact, jobs held), the failures and a sequential
+    /// grid's tests. ADDR is a port (8080: on loopback only), HOST:PORT, or 0.0.0.0:PORT to be
+    /// reached from other machines (anyone who reaches it can read the grid's state; it
+    /// changes nothing); port 0 takes any free one. Off by default.
+    #[arg(long, value_name = "ADDR", conflicts_with = "summary", value_parser = floorcast_coordinator::http::parse_addr)]
+    http: Option<std::net::SocketAddr>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -249,26 +257,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     // The grid's label order and coverage level, for `report`.
     store.record_grid(&plan.name, &plan.labels, plan.coverage)?;
     if before == jobs.len() && progress.finished && to_retry == 0 {
-        let failed = match failed_of(&jobs, &store)? {
-            0 => String::new(),
-            n => format!(" ({n} of them failed: --retry-failed runs them again)"),
-        };
-        say!(
-            "nothing to do: all {} jobs of grid '{}' are already stored in {}{failed}",
-            jobs.len(),
-            plan.name,
-            store.path().display()
-        );
-        say_raw!(
-            "{}",
-            render_text(&table(&store.all()?, &plan.labels, plan.coverage))
-        );
-        print_sequential(&plan, &progress);
-        if !a.no_tours {
-            let threads = a.workers.unwrap_or_else(crate::values::cores).max(1);
-            crate::cmd_tour::make_grid_tours(&plan, &jobs, &store, threads)?;
-        }
-        return failed_jobs(&plan, &jobs, &store);
+        return nothing_to_do(&a, &plan, &store, &progress, &jobs);
     }
     let networked = !a.listen.is_empty() || !a.connect.is_empty() || a.net.zenoh_config.is_some();
     let workers = a.workers.unwrap_or_else(crate::values::cores);
@@ -277,7 +266,8 @@ pub fn run(a: RunArgs) -> Result<()> {
             "--workers 0 runs nothing on this machine; add --listen ENDPOINT so that remote workers can join, or give --workers N"
         );
     }
-    let opts = run_options(&a, networked, workers);
+    let mut opts = run_options(&a, networked, workers);
+    let live = start_live(&a, &plan, &mut opts)?;
     store.record_run(&provenance(
         &a.grid.display().to_string(),
         &std::env::args().collect::<Vec<_>>().join(" "),
@@ -290,7 +280,68 @@ pub fn run(a: RunArgs) -> Result<()> {
     let interrupt = interrupt_on_ctrl_c();
     let (outcome, counts) = run_with_progress(&plan, &store, &opts, &interrupt, a.quiet)?;
     let tour_threads = (!a.no_tours).then_some(workers.max(1));
-    finish(&plan, &store, outcome, counts, networked, tour_threads)
+    if let Some(live) = &opts.live {
+        live.set_state(match (outcome, tour_threads) {
+            (Outcome::Interrupted, _) => "interrupted",
+            (Outcome::Complete, Some(_)) => "making tours",
+            (Outcome::Complete, None) => "complete",
+        });
+    }
+    finish(&plan, &store, outcome, counts, networked, tour_threads)?;
+    if let Some(live) = &opts.live {
+        live.set_state("complete");
+    }
+    drop(live);
+    Ok(())
+}
+
+/// Every job of the grid is stored already: says so, prints the table and the tests, makes the
+/// tours still missing, and fails when jobs failed.
+fn nothing_to_do(
+    a: &RunArgs,
+    plan: &Plan,
+    store: &Store,
+    progress: &floorcast_coordinator::sequential::Progress,
+    jobs: &[floorcast_coordinator::grid::PlannedJob],
+) -> Result<()> {
+    let failed = match failed_of(jobs, store)? {
+        0 => String::new(),
+        n => format!(" ({n} of them failed: --retry-failed runs them again)"),
+    };
+    say!(
+        "nothing to do: all {} jobs of grid '{}' are already stored in {}{failed}",
+        jobs.len(),
+        plan.name,
+        store.path().display()
+    );
+    say_raw!(
+        "{}",
+        render_text(&table(&store.all()?, &plan.labels, plan.coverage))
+    );
+    print_sequential(plan, progress);
+    if !a.no_tours {
+        let threads = a.workers.unwrap_or_else(crate::values::cores).max(1);
+        crate::cmd_tour::make_grid_tours(plan, jobs, store, threads)?;
+    }
+    failed_jobs(plan, jobs, store)
+}
+
+/// `--http`: the live view's server, started before anything runs (a port in use is an error
+/// then); the run tells `opts.live` what happens.
+fn start_live(
+    a: &RunArgs,
+    plan: &Plan,
+    opts: &mut RunOptions,
+) -> Result<Option<floorcast_coordinator::http::LiveServer>> {
+    let Some(addr) = a.http else {
+        return Ok(None);
+    };
+    let live = Arc::new(floorcast_coordinator::live::Live::new(&plan.name));
+    let server =
+        floorcast_coordinator::http::serve(addr, Arc::clone(&live)).map_err(anyhow::Error::msg)?;
+    say!("live view: http://{}/ (and /status.json)", server.addr());
+    opts.live = Some(live);
+    Ok(Some(server))
 }
 
 /// `--summary` of a grid whose results directory holds no store yet: says so (nothing is

@@ -134,7 +134,7 @@ pub fn head_and_tail(stderr: &str) -> (Vec<&str>, Vec<&str>, usize) {
 
 /// The listing of `report --failures`: a summary line, then per job its identity, where it
 /// stands and its attempts (each with its error), and its last failure's stderr, head and
-/// tail. Text from programs and workers is escaped ([`floorcast_worker::text::shown`]).
+/// tail (and how many earlier attempts left another stderr: the JSON holds every one's). Text from programs and workers is escaped ([`floorcast_worker::text::shown`]).
 pub fn render(jobs: &[FailedJob]) -> String {
     use floorcast_worker::text::shown;
     use std::fmt::Write as _;
@@ -192,6 +192,16 @@ pub fn render(jobs: &[FailedJob]) -> String {
                     }
                 }
             }
+        }
+        let differing = j.attempts[..j.attempts.len() - 1]
+            .iter()
+            .filter(|f| f.stderr_tail != last.stderr_tail)
+            .count();
+        if differing > 0 {
+            let _ = writeln!(
+                out,
+                "  (the stderr of {differing} earlier attempt(s) differs: `report --json FILE` holds each)"
+            );
         }
     }
     out
@@ -303,6 +313,7 @@ mod tests {
             "  attempt 2 (worker local-0, 0.5 s): boom 2",
             "    | line 5\n    | ... (15 lines)\n    | line 21\n",
             "    | line 30\n",
+            "    | line 30\n  (the stderr of 1 earlier attempt(s) differs: `report --json FILE` holds each)\n",
             "b recovered (strategy baseline) seed 1: later succeeded (attempt 2); earlier failures:",
             "    | ValueError: x\n",
             "b old (strategy baseline) seed 1: failed, 1 attempt(s):\n  attempt 1 (worker w, 1.0 s): boom 2\n  stderr: none stored",
@@ -310,6 +321,11 @@ mod tests {
             assert!(text.contains(want), "{want:?} missing from:\n{text}");
         }
         assert!(!text.contains("line 6\n"), "{text}");
+        assert_eq!(
+            text.matches("earlier attempt(s) differs").count(),
+            1,
+            "{text}"
+        );
         let json = to_json(&jobs);
         assert_eq!(json[0]["attempts"][1]["stderr_lines"], 30);
         assert_eq!(json[0]["attempts"][1]["stderr_tail"][9], "line 30");

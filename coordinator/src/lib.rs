@@ -34,13 +34,18 @@
 //! - [`yardstick`]: the known-map tours a grid's runs are measured against, and their
 //!   efficiency.
 //! - [`failures`]: the failed jobs and their attempts, as `report --failures` lists them.
+//! - [`live`]: a running grid's state for the live view; [`live_page`] its HTML page;
+//!   [`http`] serves both (`run --http`; the only module that knows HTTP).
 
 pub mod aggregate;
 pub mod board;
 pub mod execute;
 pub mod failures;
 pub mod grid;
+pub mod http;
 pub mod inbox;
+pub mod live;
+pub mod live_page;
 pub mod metric;
 pub mod names;
 pub mod net;

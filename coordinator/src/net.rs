@@ -758,6 +758,7 @@ mod tests {
                 verify_fraction,
                 share: true,
                 retry_failed: false,
+                live: None,
             };
             let mut log = Vec::new();
             let (_, counts) = run_plan(
@@ -984,6 +985,7 @@ mod tests {
             verify_fraction: 0.5,
             share: true,
             retry_failed: false,
+            live: None,
         };
         floorcast_worker::refuse_threads_after(Some(0));
         let r = crate::run::tests::run_quietly(&p, &store, &opts);

@@ -72,6 +72,8 @@ pub struct RunOptions {
     /// Run the stored failed jobs again (`run --retry-failed`): each new outcome replaces the
     /// failed row; the failures stay in the store's `failures` table.
     pub retry_failed: bool,
+    /// Tell this live view what happens (`run --http`).
+    pub live: Option<Arc<crate::live::Live>>,
 }
 
 impl std::fmt::Debug for RunOptions {
@@ -85,6 +87,7 @@ impl std::fmt::Debug for RunOptions {
             .field("verify_fraction", &self.verify_fraction)
             .field("share", &self.share)
             .field("retry_failed", &self.retry_failed)
+            .field("live", &self.live.is_some())
             .finish()
     }
 }
@@ -100,6 +103,7 @@ impl Default for RunOptions {
             verify_fraction: 0.05,
             share: true,
             retry_failed: false,
+            live: None,
         }
     }
 }
@@ -185,7 +189,13 @@ pub fn run_plan(
         return Err(RunError::NoWorkers);
     }
     // Lines holding remote workers' and programs' text reach a terminal: escaped, bounded.
-    let on_log = &mut |line: &str| on_log(&floorcast_worker::text::shown(line, 4000));
+    let on_log = &mut |line: &str| {
+        let line = floorcast_worker::text::shown(line, 4000);
+        if let Some(live) = &opts.live {
+            live.log(&line);
+        }
+        on_log(&line)
+    };
     let mut state = LoopState::start(plan, store, opts, on_log)?;
     on_progress(state.counts());
     if state.sched.is_finished() {
@@ -426,8 +436,30 @@ impl<'a> LoopState<'a> {
             if self.sched.is_finished() && finished_at.is_none() {
                 finished_at = Some(Instant::now());
             }
+            if let Some(live) = &self.opts.live {
+                live.counts(self.counts(), self.running_jobs());
+                live.tests(&self.progress.path);
+            }
             on_progress(self.counts());
         }
+    }
+
+    /// The jobs leased now, as (worker, job), for the live view.
+    fn running_jobs(&self) -> Vec<(String, crate::live::RunningJob)> {
+        self.sched
+            .leases()
+            .map(|(id, worker)| {
+                let job = self.jobs.get(id);
+                let building = job.and_then(|j| self.plan.buildings.get(j.building));
+                let running = crate::live::RunningJob {
+                    job_id: id.clone(),
+                    building: building.map_or(String::new(), |b| b.name.clone()),
+                    label: job.map_or(String::new(), |j| j.label.clone()),
+                    seed: job.map_or(0, |j| j.seed),
+                };
+                (worker.clone(), running)
+            })
+            .collect()
     }
 
     /// Renews the leases of the embedded workers' jobs.
@@ -453,6 +485,16 @@ impl<'a> LoopState<'a> {
         batch: &mut Batch,
         on_log: &mut dyn FnMut(&str),
     ) -> Result<(), RunError> {
+        if let Some(live) = &self.opts.live {
+            match &msg {
+                Inbox::Request { worker, .. }
+                | Inbox::Submit { worker, .. }
+                | Inbox::Renew { worker, .. }
+                | Inbox::Joined(worker) => live.contact(worker, worker.starts_with(LOCAL)),
+                Inbox::Left(worker) => live.left(worker),
+                Inbox::Verified { .. } | Inbox::Log(_) => {}
+            }
+        }
         let refused = &self.checks.refused;
         match msg {
             Inbox::Request { worker, reply } if refused.contains_key(&worker) => {
@@ -584,6 +626,9 @@ impl<'a> LoopState<'a> {
         }
         match (r.answer, result) {
             (Verdict::Store, Some(result)) => {
+                if let Some(live) = &self.opts.live {
+                    live.stored(&worker, crate::live::failure_of(&result));
+                }
                 if !result.status.is_ok() {
                     self.failed += 1;
                     on_log(&format!(

@@ -1,0 +1,227 @@
+//! How the cost grows with the building (issue 61): for generated buildings of 1000, 4000,
+//! 12000 and 50000 m² of both kinds, each strategy's speed (simulated seconds per wall second,
+//! "x real time") over the first `--sim-s` simulated seconds and its process's peak memory, and
+//! the ratios to the 1000 m² building of the same kind and strategy (the goals: a 12000 m²
+//! building at least 0.67 of the 1000 m² speed, 50000 m² at least 0.5, peak memory at most
+//! 1 GB; a layout strategy at least 0.8 of `baseline`'s speed on the same building).
+//!
+//! `cargo bench --bench scale -- [--sim-s 3000] [--seed 77] [--run-seed 1] [--areas
+//! 1000,4000,12000,50000] [--kinds office,school] [--strategies baseline,layout-es]`
+//!
+//! Each run is a process of its own (this program again, with `--case`), so that its peak
+//! resident memory (`VmHWM`, Linux) is its own; the building is generated in it, before the
+//! clock starts. The strategies run alternately per building, so a change of the machine's
+//! speed during the benchmark touches them alike. A run that ends (explored, or stopped early)
+//! before `--sim-s` is timed over its whole length.
+
+use std::process::Command;
+use std::time::Instant;
+
+use floorcast_worker::{run_job, Job, Settings};
+use sim_core::generate::{generate, BuildingKind, GenerateConfig};
+
+fn arg<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1))
+        .map(String::as_str)
+}
+
+fn list(args: &[String], name: &str, default: &str) -> Vec<String> {
+    arg(args, name)
+        .unwrap_or(default)
+        .split(',')
+        .map(str::to_string)
+        .collect()
+}
+
+fn kind_of(k: &str) -> BuildingKind {
+    match k {
+        "office" => BuildingKind::Office,
+        "school" => BuildingKind::School,
+        _ => panic!("--kinds: '{k}' is not office or school"),
+    }
+}
+
+/// The process's peak resident memory (`VmHWM` of `/proc/self/status`), in MB.
+fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb / 1024.0)
+}
+
+/// One run in this process: prints `case SIM_S WALL_S FREE_M2 EXPLORED PEAK_MB END`.
+fn case(args: &[String]) {
+    let kind = kind_of(arg(args, "--kind").expect("--kind"));
+    let area: f64 = arg(args, "--area").expect("--area").parse().expect("area");
+    let seed: u64 = arg(args, "--seed").unwrap_or("77").parse().expect("seed");
+    let run_seed: u64 = arg(args, "--run-seed")
+        .unwrap_or("1")
+        .parse()
+        .expect("run seed");
+    let sim_s: f64 = arg(args, "--sim-s")
+        .unwrap_or("3000")
+        .parse()
+        .expect("sim s");
+    let strategy = arg(args, "--strategy").expect("--strategy").to_string();
+    // The largest buildings need more cells than the default budget (documented in the output).
+    floorcast_formats::limits::set_max_cells(200_000_000);
+    let building = generate(&GenerateConfig {
+        seed,
+        area_m2: area,
+        kind,
+        ..Default::default()
+    });
+    let settings = Settings {
+        time_limit_s: sim_s,
+        ..Settings::default()
+    };
+    let job = Job {
+        building: &building,
+        building_name: format!("gen-{area}"),
+        strategy,
+        program: None,
+        seed: run_seed,
+        settings,
+        start: None,
+        snapshot_fractions: Vec::new(),
+    };
+    let t = Instant::now();
+    let out = run_job(&job, &mut |_| {}).expect("the run");
+    let wall = t.elapsed().as_secs_f64();
+    println!(
+        "case {} {} {} {} {} {:?}",
+        out.summary.total_time_s,
+        wall,
+        out.result.free_area_m2,
+        out.summary.explored_fraction,
+        peak_rss_mb().unwrap_or(f64::NAN),
+        out.summary.end_reason
+    );
+}
+
+#[derive(Debug, Clone)]
+struct Row {
+    kind: String,
+    area: f64,
+    strategy: String,
+    free_m2: f64,
+    sim_s: f64,
+    speed: f64,
+    peak_mb: f64,
+    explored: f64,
+    end: String,
+}
+
+fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
+    let exe = std::env::current_exe().expect("this program");
+    let mut cmd = Command::new(exe);
+    cmd.args([
+        "--case",
+        "--kind",
+        kind,
+        "--area",
+        area,
+        "--strategy",
+        strategy,
+    ]);
+    for k in ["--sim-s", "--seed", "--run-seed"] {
+        if let Some(v) = arg(args, k) {
+            cmd.args([k, v]);
+        }
+    }
+    let o = cmd.output().expect("the case runs");
+    let text = String::from_utf8_lossy(&o.stdout);
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix("case "))
+        .unwrap_or_else(|| {
+            panic!(
+                "{kind} {area} {strategy}: no result: {}",
+                String::from_utf8_lossy(&o.stderr)
+            )
+        });
+    let f: Vec<&str> = line.split_whitespace().collect();
+    let num = |i: usize| f[i].parse::<f64>().unwrap_or(f64::NAN);
+    Row {
+        kind: kind.into(),
+        area: area.parse().unwrap_or(f64::NAN),
+        strategy: strategy.into(),
+        sim_s: num(0),
+        speed: num(0) / num(1),
+        free_m2: num(2),
+        explored: num(3),
+        peak_mb: num(4),
+        end: f.get(5).unwrap_or(&"?").to_string(),
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.iter().any(|a| a == "--case") {
+        return case(&args);
+    }
+    let areas = list(&args, "--areas", "1000,4000,12000,50000");
+    let kinds = list(&args, "--kinds", "office,school");
+    let strategies = list(&args, "--strategies", "baseline,layout-es");
+    println!(
+        "generated buildings (seed {}), run seed {}, first {} simulated s of each run; cell budget 200 M (the default is {} M)",
+        arg(&args, "--seed").unwrap_or("77"),
+        arg(&args, "--run-seed").unwrap_or("1"),
+        arg(&args, "--sim-s").unwrap_or("3000"),
+        floorcast_formats::limits::DEFAULT_MAX_CELLS / 1_000_000
+    );
+    println!(
+        "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10}",
+        "kind",
+        "area",
+        "free m2",
+        "strategy",
+        "sim s",
+        "x real",
+        "peak MB",
+        "explored",
+        "vs 1000",
+        "vs base",
+        "end"
+    );
+    let mut rows: Vec<Row> = Vec::new();
+    for kind in &kinds {
+        for area in &areas {
+            for strategy in &strategies {
+                let r = measure(&args, kind, area, strategy);
+                let small = rows
+                    .iter()
+                    .find(|s| s.kind == r.kind && s.strategy == r.strategy)
+                    .map_or(r.speed, |s| s.speed);
+                let base = rows
+                    .iter()
+                    .find(|s| s.kind == r.kind && s.area == r.area && s.strategy == strategies[0])
+                    .map_or(r.speed, |s| s.speed);
+                println!(
+                    "{:<7} {:>7} {:>8.0} {:<10} {:>7.0} {:>8.0}x {:>8.0} {:>9.4} {:>8.2} {:>9.2} {:>10}",
+                    r.kind,
+                    r.area,
+                    r.free_m2,
+                    r.strategy,
+                    r.sim_s,
+                    r.speed,
+                    r.peak_mb,
+                    r.explored,
+                    r.speed / small,
+                    r.speed / base,
+                    r.end
+                );
+                rows.push(r);
+            }
+        }
+    }
+    println!("vs 1000: speed / the same kind's and strategy's first area's; vs base: speed / the first strategy's on the same building");
+}
