@@ -71,8 +71,6 @@ fn case(args: &[String]) {
         .parse()
         .expect("sim s");
     let strategy = arg(args, "--strategy").expect("--strategy").to_string();
-    // The largest buildings need more cells than the default budget (documented in the output).
-    floorcast_formats::limits::set_max_cells(200_000_000);
     let building = generate(&GenerateConfig {
         seed,
         area_m2: area,
@@ -172,11 +170,10 @@ fn main() {
     let kinds = list(&args, "--kinds", "office,school");
     let strategies = list(&args, "--strategies", "baseline,layout-es");
     println!(
-        "generated buildings (seed {}), run seed {}, first {} simulated s of each run; cell budget 200 M (the default is {} M)",
+        "generated buildings (seed {}), run seed {}, first {} simulated s of each run",
         arg(&args, "--seed").unwrap_or("77"),
         arg(&args, "--run-seed").unwrap_or("1"),
         arg(&args, "--sim-s").unwrap_or("3000"),
-        floorcast_formats::limits::DEFAULT_MAX_CELLS / 1_000_000
     );
     println!(
         "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10}",
