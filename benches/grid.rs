@@ -184,7 +184,7 @@ fn worker_process(role: &str) {
         zenoh_config: None,
         campaign: "bench".into(),
     };
-    let outcome = join(&net, Some(name))
+    let outcome = join(&net, Some(name), 60.0)
         .map_err(|e| e.to_string())
         .and_then(|link| {
             let report = run_worker(

@@ -23,8 +23,8 @@ use crate::output::{progress_bar, write_text};
 #[derive(Debug, Args)]
 pub struct NetArgs {
     /// A zenoh configuration file (JSON5 or YAML) for TLS, mutual TLS, user/password or a
-    /// router deployment (see README, "Remote workers"). Endpoints given with --listen /
-    /// --connect are added to it.
+    /// router deployment (docs/many-machines.md). Endpoints given with --listen / --connect are
+    /// added to it. A worker is always a zenoh client (the file's `mode` is ignored there).
     #[arg(long, value_name = "FILE")]
     pub zenoh_config: Option<PathBuf>,
     /// Name separating grids that share one zenoh router; coordinator and workers must agree.

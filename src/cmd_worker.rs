@@ -84,14 +84,18 @@ pub fn run(a: WorkerArgs) -> Result<()> {
             WorkerEvent::Note(n) => eprintln!("note: {}", shown(&n, 4000)),
         }
     };
-    let link = join(&net, a.name.as_deref())?;
+    let t0 = std::time::Instant::now();
+    let link = join(&net, a.name.as_deref(), a.wait_s)?;
+    // The time spent reaching the coordinator (or router) counts towards --wait-s.
+    let wait_s = if a.wait_s > 0.0 {
+        (a.wait_s - t0.elapsed().as_secs_f64()).max(1.0)
+    } else {
+        0.0
+    };
     let report = run_worker(
         &link,
         &floorcast_coordinator::store::host_name(),
-        WorkerOptions {
-            jobs,
-            wait_s: a.wait_s,
-        },
+        WorkerOptions { jobs, wait_s },
         &execute_wire,
         &events,
     );

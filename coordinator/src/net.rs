@@ -59,6 +59,8 @@ pub enum NetError {
     Option { what: String, message: String },
     #[error("cannot open the zenoh session ({0}); check the endpoints (is the port free? is the address reachable?) and --zenoh-config")]
     Open(String),
+    #[error("no coordinator answered on {whereabouts} for {waited_s:.0} s: check that `floorcast run GRID --listen ...` runs there (or the router it connects to), the address, and the credentials/TLS settings of --zenoh-config")]
+    NoAnswer { whereabouts: String, waited_s: f64 },
     #[error("zenoh: {0}")]
     Zenoh(String),
 }
@@ -506,8 +508,12 @@ impl std::fmt::Debug for ZenohLink {
 }
 
 /// Opens a zenoh session as worker `name` (default: host, process id and zenoh id) and
-/// announces it.
-pub fn join(cfg: &NetConfig, name: Option<&str>) -> Result<ZenohLink, NetError> {
+/// announces it. The worker is a zenoh client, whatever mode its configuration file names: a
+/// router routes between clients, but expects the peers that reach it to reach each other too
+/// (zenoh 1.10's regions), which workers behind NAT or in other subnets cannot. A client's
+/// session opens only once it reaches its coordinator or router, so `join` tries again every
+/// second, for up to `wait_s` seconds (0: forever), while nothing answers.
+pub fn join(cfg: &NetConfig, name: Option<&str>, wait_s: f64) -> Result<ZenohLink, NetError> {
     if let Some(n) = name {
         if !valid_chunk(n) || n.starts_with(LOCAL) {
             return Err(NetError::Option {
@@ -519,12 +525,11 @@ pub fn join(cfg: &NetConfig, name: Option<&str>) -> Result<ZenohLink, NetError> 
             });
         }
     }
-    let config = zenoh_config(cfg)?;
+    let mut config = zenoh_config(cfg)?;
+    config.insert_json5("mode", "\"client\"").map_err(zerr)?;
     let rt = runtime()?;
     let joined = rt.block_on(async {
-        let session = zenoh::open(config)
-            .await
-            .map_err(|e| NetError::Open(e.to_string()))?;
+        let session = open_client(config, cfg, wait_s).await?;
         let worker = name.map(str::to_string).unwrap_or_else(|| {
             let zid = session.zid().to_string();
             let host: String = crate::store::host_name()
@@ -558,6 +563,43 @@ pub fn join(cfg: &NetConfig, name: Option<&str>) -> Result<ZenohLink, NetError> 
     })
 }
 
+/// Opens a client session, trying again every second while its endpoints do not answer (for up
+/// to `wait_s` seconds; 0: forever).
+async fn open_client(
+    config: zenoh::Config,
+    cfg: &NetConfig,
+    wait_s: f64,
+) -> Result<Session, NetError> {
+    let t0 = std::time::Instant::now();
+    loop {
+        match zenoh::open(config.clone()).await {
+            Ok(session) => return Ok(session),
+            // (What zenoh says when none of a client's endpoints could be reached.)
+            Err(e) if e.to_string().contains("Unable to connect") => {
+                let waited_s = t0.elapsed().as_secs_f64();
+                if wait_s > 0.0 && waited_s > wait_s {
+                    return Err(NetError::NoAnswer {
+                        whereabouts: whereabouts(&cfg.connect.join(", "), &cfg.campaign),
+                        waited_s,
+                    });
+                }
+                tokio::time::sleep(Duration::from_secs(1)).await;
+            }
+            Err(e) => return Err(NetError::Open(e.to_string())),
+        }
+    }
+}
+
+/// Where a worker looks for its coordinator, for messages.
+fn whereabouts(endpoints: &str, campaign: &str) -> String {
+    let endpoints = if endpoints.is_empty() {
+        "the configured endpoints"
+    } else {
+        endpoints
+    };
+    format!("{endpoints} (campaign '{campaign}')")
+}
+
 impl ZenohLink {
     /// Withdraws the worker's token and closes the session.
     pub fn leave(self) {
@@ -588,12 +630,7 @@ impl Coordinator for ZenohLink {
     }
 
     fn whereabouts(&self) -> String {
-        let endpoints = if self.endpoints.is_empty() {
-            "the configured endpoints"
-        } else {
-            &self.endpoints
-        };
-        format!("{endpoints} (campaign '{}')", self.campaign)
+        whereabouts(&self.endpoints, &self.campaign)
     }
 
     fn next(&self, hello: &Hello) -> Result<Option<NextReply>, String> {
@@ -775,7 +812,7 @@ mod tests {
     }
 
     fn worker(ep: &str, name: Option<&str>, wait_s: f64) -> Result<WorkerReport, WorkerError> {
-        let link = join(&net(vec![], vec![ep.to_string()]), name).unwrap();
+        let link = join(&net(vec![], vec![ep.to_string()]), name, wait_s).unwrap();
         let report = run_worker(
             &link,
             "host",
@@ -919,7 +956,7 @@ mod tests {
             }
             r
         };
-        let link = join(&net(vec![], vec![ep.clone()]), Some("forger")).unwrap();
+        let link = join(&net(vec![], vec![ep.clone()]), Some("forger"), 20.0).unwrap();
         let e = run_worker(
             &link,
             "host",
@@ -960,13 +997,30 @@ mod tests {
     fn a_worker_without_coordinator_gives_up_with_a_clear_message() {
         let dir = tempfile::tempdir().unwrap();
         let ep = endpoint(dir.path());
-        let e = worker(&ep, None, 0.5).unwrap_err();
-        assert!(matches!(e, WorkerError::NoCoordinator { .. }), "{e}");
+        let e = join(&net(vec![], vec![ep.clone()]), None, 1.5).unwrap_err();
+        assert!(matches!(e, NetError::NoAnswer { .. }), "{e}");
         assert!(e.to_string().contains("floorcast run GRID --listen"));
         assert!(
             e.to_string().contains(&format!("{ep} (campaign 'test')")),
             "{e}"
         );
+    }
+
+    /// A worker started before its coordinator waits for it (its client session opens once
+    /// the coordinator's endpoint answers).
+    #[test]
+    fn a_worker_started_first_waits_for_its_coordinator() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = plan(dir.path(), "[1]");
+        let ep = endpoint(dir.path());
+        let early = std::thread::spawn({
+            let ep = ep.clone();
+            move || worker(&ep, Some("early"), 30.0)
+        });
+        std::thread::sleep(Duration::from_secs(2));
+        let (_, counts) = coordinator(p, ep, 0.0).join().unwrap();
+        assert_eq!(counts.done, 1);
+        assert_eq!(early.join().unwrap().unwrap().stored, 1);
     }
 
     /// The thread that checks remote workers' results refused by the system: `run` is an error
