@@ -5,6 +5,7 @@ mod output;
 mod cmd_building;
 mod cmd_explore;
 mod cmd_layout;
+mod cmd_router;
 mod cmd_run;
 mod cmd_strategy;
 mod cmd_suite;
@@ -88,6 +89,9 @@ enum Command {
     /// floorcast processes killed on this machine left in the temporary directory (TMPDIR),
     /// never a live process's (docs/failures.md).
     Worker(cmd_worker::WorkerArgs),
+    /// Run a zenoh router that a coordinator and its workers all connect to (`--connect`) when
+    /// they cannot reach each other directly; no zenohd needed. Runs until stopped.
+    Router(cmd_router::RouterArgs),
     /// Print the table of a results directory and export it as CSV; list its failed jobs.
     Report(cmd_run::ReportArgs),
     /// Tools for your own strategies (the strategy protocol): check a program's compliance.
@@ -124,6 +128,7 @@ fn main() -> ExitCode {
         Command::Layout(a) => cmd_layout::run(a),
         Command::Run(a) => cmd_run::run(a),
         Command::Worker(a) => cmd_worker::run(a),
+        Command::Router(a) => cmd_router::run(a),
         Command::Report(a) => cmd_run::report(a),
         Command::Strategy(c) => cmd_strategy::run(c),
         Command::Suite(c) => cmd_suite::run(c),

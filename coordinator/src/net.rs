@@ -18,6 +18,9 @@
 //! with an error, never trusted. Queries use `ConsolidationMode::None` (the default keeps one
 //! reply per key). zenoh needs tokio's multi-thread runtime; simulations run on blocking
 //! threads, never on the runtime's workers.
+//!
+//! [`open_router`] runs a zenoh router (`floorcast router`) for deployments where the
+//! coordinator and the workers cannot reach each other directly and no `zenohd` is installed.
 
 use std::path::{Path, PathBuf};
 use std::sync::{mpsc, Arc};
@@ -42,7 +45,8 @@ use floorcast_worker::wire::{
 pub struct NetConfig {
     /// Endpoints to listen on, e.g. `tcp/0.0.0.0:7447`.
     pub listen: Vec<String>,
-    /// Endpoints to connect to (a coordinator or a `zenohd` router), e.g. `tcp/host:7447`.
+    /// Endpoints to connect to (a coordinator, or a router: `floorcast router` or `zenohd`), e.g.
+    /// `tcp/host:7447`.
     pub connect: Vec<String>,
     /// A zenoh configuration file (JSON5/YAML): TLS, mutual TLS, user/password, router mode...
     /// Endpoints given on the command line are added to it.
@@ -666,6 +670,93 @@ impl Coordinator for ZenohLink {
     }
 }
 
+// ------------------------------------------------------------------------------------------
+// Router: `floorcast router`, for deployments without `zenohd`.
+
+/// A zenoh session in router mode (what `zenohd` runs, without its plugins): a coordinator and
+/// workers that cannot reach each other directly all connect to it, and it routes their queries
+/// and liveliness tokens. It serves every campaign. Closed with [`Router::close`].
+pub struct Router {
+    rt: tokio::runtime::Runtime,
+    session: Session,
+    listening: Vec<String>,
+}
+
+impl std::fmt::Debug for Router {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Router")
+            .field("listening", &self.listening)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Opens a router listening on `cfg.listen` and on the endpoints of `cfg.zenoh_config` (whose
+/// TLS, authentication and access control apply; its `mode` is overridden: this is a router).
+/// Its `connect` endpoints (other routers) are joined too. `cfg.campaign` plays no part.
+pub fn open_router(cfg: &NetConfig) -> Result<Router, NetError> {
+    let mut config = zenoh_config(cfg)?;
+    config.insert_json5("mode", "\"router\"").map_err(zerr)?;
+    let listening = router_endpoints(&config)?;
+    if listening.is_empty() {
+        return Err(NetError::Option {
+            what: "--listen".into(),
+            message: "a router needs an endpoint to listen on: give e.g. --listen tcp/0.0.0.0:7447, or a --zenoh-config that lists one".into(),
+        });
+    }
+    let rt = runtime()?;
+    match rt.block_on(async { zenoh::open(config).await }) {
+        Ok(session) => Ok(Router {
+            rt,
+            session,
+            listening,
+        }),
+        Err(e) => {
+            rt.shutdown_timeout(Duration::from_secs(1));
+            Err(NetError::Open(e.to_string()))
+        }
+    }
+}
+
+/// The endpoints a router listens on: `listen/endpoints` of its configuration, a list or, mode
+/// by mode, the router's.
+fn router_endpoints(config: &zenoh::Config) -> Result<Vec<String>, NetError> {
+    let json = config.get_json("listen/endpoints").map_err(zerr)?;
+    let value: serde_json::Value = serde_json::from_str(&json).map_err(zerr)?;
+    let list = match value {
+        serde_json::Value::Object(mut by_mode) => by_mode.remove("router").unwrap_or_default(),
+        v => v,
+    };
+    Ok(list
+        .as_array()
+        .map(|l| {
+            l.iter()
+                .filter_map(|e| e.as_str().map(str::to_string))
+                .collect()
+        })
+        .unwrap_or_default())
+}
+
+impl Router {
+    /// The endpoints it listens on.
+    pub fn listening(&self) -> &[String] {
+        &self.listening
+    }
+
+    /// Its zenoh id (as other nodes' logs name it).
+    pub fn id(&self) -> String {
+        self.session.zid().to_string()
+    }
+
+    /// Closes the session: connected nodes see it leave.
+    pub fn close(self) {
+        let Router { rt, session, .. } = self;
+        rt.block_on(async {
+            let _ = tokio::time::timeout(Duration::from_secs(3), session.close()).await;
+        });
+        rt.shutdown_timeout(Duration::from_secs(1));
+    }
+}
+
 /// One `get` with a typed reply. `Ok(None)`: nobody answered (no coordinator now).
 async fn ask<T: Message>(
     s: &Session,
@@ -1050,6 +1141,49 @@ mod tests {
                 && e.to_string().contains("--verify-fraction 0"),
             "{e}"
         );
+    }
+
+    /// A coordinator and a worker that both connect to a router (neither listens) complete a
+    /// grid through it.
+    #[test]
+    fn a_grid_runs_through_a_router() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = plan(dir.path(), "[1, 2]");
+        let ep = endpoint(dir.path());
+        let router = open_router(&net(vec![ep.clone()], vec![])).unwrap();
+        assert_eq!(router.listening(), std::slice::from_ref(&ep));
+        let coord = std::thread::spawn({
+            let p = p.clone();
+            let ep = ep.clone();
+            move || {
+                let store = Store::open(&p.results_dir).unwrap();
+                let opts = RunOptions {
+                    workers: 0,
+                    remote: Some(Arc::new(net(vec![], vec![ep]))),
+                    lease_s: 30.0,
+                    linger_s: 1.0,
+                    executor: None,
+                    verify_fraction: 0.0,
+                    share: true,
+                    retry_failed: false,
+                    live: None,
+                };
+                crate::run::tests::run_quietly(&p, &store, &opts).unwrap()
+            }
+        });
+        let report = worker(&ep, Some("w1"), 20.0).unwrap();
+        assert_eq!(report.stored, 2);
+        coord.join().unwrap();
+        router.close();
+        let rows = Store::open(&p.results_dir).unwrap().all().unwrap();
+        assert_eq!(rows.len(), 2);
+        assert!(rows.iter().all(|r| r.worker == "w1" && r.status.is_ok()));
+    }
+
+    #[test]
+    fn a_router_needs_an_endpoint() {
+        let e = open_router(&net(vec![], vec![])).unwrap_err();
+        assert!(e.to_string().contains("--listen tcp/0.0.0.0:7447"), "{e}");
     }
 
     #[test]
