@@ -1,8 +1,10 @@
 //! Helpers for the end-to-end tests of the `floorcast` binary.
 #![allow(dead_code)]
 
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
 
 pub fn floorcast() -> Command {
     Command::new(env!("CARGO_BIN_EXE_floorcast"))
@@ -267,4 +269,27 @@ pub fn code_lines(text: &str) -> Vec<(usize, &str)> {
         }
     }
     out
+}
+
+/// Spawns `cmd` with its stdout and stderr piped: their lines arrive on the channel as they
+/// are printed (stderr's and stdout's interleaved as they come).
+pub fn spawn_lines(cmd: &mut Command) -> (Child, mpsc::Receiver<String>) {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (tx, rx) = mpsc::channel();
+    for stream in [
+        Box::new(child.stderr.take().unwrap()) as Box<dyn Read + Send>,
+        Box::new(child.stdout.take().unwrap()),
+    ] {
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stream).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+    }
+    (child, rx)
 }

@@ -7,10 +7,10 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Stdio};
+use std::process::Child;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
@@ -80,29 +80,15 @@ const GATED_ENTRY: &str =
 /// `floorcast run GRID --http 127.0.0.1:0 ...` in `dir`; returns the child, its output lines
 /// and the address it serves on (read from its `live view:` line).
 fn start(dir: &Path, grid: &Path) -> (Child, mpsc::Receiver<String>, String) {
-    let mut child = floorcast()
-        .args(["run", grid.to_str().unwrap(), "--results"])
-        .arg(dir.join("results"))
-        .args(["--workers", "2", "--no-share", "--no-tours", "-q"])
-        .args(["--http", "127.0.0.1:0"])
-        .current_dir(dir)
-        .env("TMPDIR", dir)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let (tx, rx) = mpsc::channel();
-    for stream in [
-        Box::new(child.stdout.take().unwrap()) as Box<dyn Read + Send>,
-        Box::new(child.stderr.take().unwrap()),
-    ] {
-        let tx = tx.clone();
-        std::thread::spawn(move || {
-            for l in BufReader::new(stream).lines().map_while(Result::ok) {
-                let _ = tx.send(l);
-            }
-        });
-    }
+    let (mut child, rx) = spawn_lines(
+        floorcast()
+            .args(["run", grid.to_str().unwrap(), "--results"])
+            .arg(dir.join("results"))
+            .args(["--workers", "2", "--no-share", "--no-tours", "-q"])
+            .args(["--http", "127.0.0.1:0"])
+            .current_dir(dir)
+            .env("TMPDIR", dir),
+    );
     let t0 = Instant::now();
     let mut seen = Vec::new();
     while t0.elapsed() < Duration::from_secs(60) {

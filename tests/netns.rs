@@ -18,7 +18,7 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -241,30 +241,16 @@ struct Node {
 
 impl Node {
     fn start(lab: &Lab, host: &str, name: &str, args: &[&str]) -> Node {
-        let mut child = Command::new("ip")
-            .args([
-                "netns",
-                "exec",
-                &lab.ns(host),
-                env!("CARGO_BIN_EXE_floorcast"),
-            ])
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let (tx, rx) = mpsc::channel();
-        for stream in [
-            Box::new(child.stderr.take().unwrap()) as Box<dyn Read + Send>,
-            Box::new(child.stdout.take().unwrap()),
-        ] {
-            let tx = tx.clone();
-            std::thread::spawn(move || {
-                for line in BufReader::new(stream).lines().map_while(Result::ok) {
-                    let _ = tx.send(line);
-                }
-            });
-        }
+        let (child, rx) = common::spawn_lines(
+            Command::new("ip")
+                .args([
+                    "netns",
+                    "exec",
+                    &lab.ns(host),
+                    env!("CARGO_BIN_EXE_floorcast"),
+                ])
+                .args(args),
+        );
         Node {
             name: name.to_string(),
             child,

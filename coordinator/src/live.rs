@@ -9,7 +9,6 @@ use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
-use crate::run::Counts;
 use crate::sprt::LabelTest;
 
 /// `status.json`'s format name and version (docs/live-view.md).
@@ -130,7 +129,7 @@ struct Worker {
 #[derive(Debug)]
 struct Inner {
     state: String,
-    counts: Option<Counts>,
+    counts: Option<JobCounts>,
     done_at_start: Option<usize>,
     leases: Vec<(String, RunningJob)>,
     workers: BTreeMap<String, Worker>,
@@ -183,7 +182,7 @@ impl Live {
     }
 
     /// The loop's counts and the jobs leased now, as (worker, job).
-    pub fn counts(&self, counts: Counts, leases: Vec<(String, RunningJob)>) {
+    pub fn counts(&self, counts: JobCounts, leases: Vec<(String, RunningJob)>) {
         self.with(|i| {
             i.done_at_start.get_or_insert(counts.done);
             i.counts = Some(counts);
@@ -257,20 +256,10 @@ impl Live {
         let now = Instant::now();
         let elapsed_s = now.duration_since(self.started).as_secs_f64();
         self.with(|i| {
-            let c = i.counts.unwrap_or(Counts {
-                total: 0,
-                done: 0,
-                running: 0,
-                failed: 0,
-                resumed: 0,
-                remote_workers: 0,
-                verified: 0,
-                quarantined: 0,
-            });
+            let c = i.counts.unwrap_or_default();
             let done_now = c.done.saturating_sub(i.done_at_start.unwrap_or(c.done));
-            let left = c.total.saturating_sub(c.done + c.running);
             let eta_s = (done_now > 0 && elapsed_s > 0.0)
-                .then(|| (left + c.running) as f64 * elapsed_s / done_now as f64);
+                .then(|| (c.left + c.running) as f64 * elapsed_s / done_now as f64);
             let workers = i
                 .workers
                 .iter()
@@ -300,14 +289,7 @@ impl Live {
                 state: i.state.clone(),
                 started_unix_s: self.started_unix_s,
                 elapsed_s,
-                jobs: JobCounts {
-                    total: c.total,
-                    done: c.done,
-                    running: c.running,
-                    failed: c.failed,
-                    left,
-                    stored_before: c.resumed,
-                },
+                jobs: c,
                 eta_s,
                 workers,
                 failures: i.failures.iter().cloned().collect(),
@@ -381,16 +363,14 @@ mod tests {
         }
     }
 
-    fn counts(total: usize, done: usize, running: usize, failed: usize) -> Counts {
-        Counts {
+    fn counts(total: usize, done: usize, running: usize, failed: usize) -> JobCounts {
+        JobCounts {
             total,
             done,
             running,
             failed,
-            resumed: 2,
-            remote_workers: 1,
-            verified: 0,
-            quarantined: 0,
+            left: total - done - running,
+            stored_before: 2,
         }
     }
 

@@ -437,7 +437,16 @@ impl<'a> LoopState<'a> {
                 finished_at = Some(Instant::now());
             }
             if let Some(live) = &self.opts.live {
-                live.counts(self.counts(), self.running_jobs());
+                let c = self.counts();
+                let jobs = crate::live::JobCounts {
+                    total: c.total,
+                    done: c.done,
+                    running: c.running,
+                    failed: c.failed,
+                    left: c.total.saturating_sub(c.done + c.running),
+                    stored_before: c.resumed,
+                };
+                live.counts(jobs, self.running_jobs());
                 live.tests(&self.progress.path);
             }
             on_progress(self.counts());
