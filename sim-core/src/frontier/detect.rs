@@ -14,7 +14,7 @@
 //! both share one component search.
 
 use crate::grid::{Cell, Occupancy, OccupancyGrid};
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 
 /// A hash map that is looked up only, never iterated, so its order cannot reach a result (the
 /// kernel's clippy configuration forbids hash maps elsewhere).
@@ -208,34 +208,57 @@ pub fn frontiers_where(
     out
 }
 
-/// Frontier cells kept up to date as the map changes, so that detecting the frontiers of a
-/// decision touches only the frontier cells instead of the whole map. Gives exactly the result
+/// Frontiers kept up to date as the map changes, so that detecting the frontiers of a decision
+/// touches only what changed near the robot instead of the whole map. Gives exactly the result
 /// of [`detect_frontiers`] on the same grid.
+///
+/// Every frontier cell belongs to a tracked *component* (an 8-connected chain, kept whatever
+/// its size) with its cells and, once asked for, its middle cell. A map update marks the
+/// components that lost a cell, and lists the cells that became frontier cells; a detection
+/// dissolves the marked components and those next to a new cell, labels the chains of their
+/// cells and the new ones again, and lists every component in row-major order of its first
+/// cell. The components far from the changes, most of a large building's, are not looked at
+/// beyond copying them into the list.
 #[derive(Debug, Clone, Default)]
 pub struct FrontierTracker {
     /// Per cell: [`FRONTIER`] when it is a frontier cell, plus [`LABELLED`] while the component
-    /// search has reached it (never between calls). One byte for both: the search reads both
-    /// for every neighbour of every frontier cell, scattered over the whole map.
+    /// search has reached it (never between calls).
     state: Vec<u8>,
-    /// Every frontier cell, possibly with cells that stopped being one and repeats (pruned at
-    /// each detection).
-    cells: Vec<u32>,
-    /// The frontiers of the last detection (cells in row-major order, middle cell's index) by
-    /// their first cell's index: most frontiers are unchanged between two decisions, and their
-    /// cells and middle cells (two searches through the frontier) are taken from here. Looked
-    /// up only, never iterated.
-    middles: LookupMap<usize, (Vec<Cell>, usize)>,
-    /// The width of the grid of the last detection (its cells' indices are for it).
-    middles_width: u32,
+    /// Per cell: the slot in `comps` of the component holding it, or [`NO_COMPONENT`] (not a
+    /// frontier cell at the last detection, or one that became a frontier cell since).
+    owner: Vec<u32>,
+    /// The components of the last detection, by slot (`None`: a free slot, listed in `free`).
+    comps: Vec<Option<Component>>,
+    free: Vec<u32>,
+    /// Slot of each component by the row-major index of its first cell: the order of the
+    /// frontiers.
+    order: BTreeMap<u32, u32>,
+    /// Slots of components that lost a cell since the last detection (repeats allowed).
+    dirty: Vec<u32>,
+    /// Cells that became frontier cells since the last detection (repeats allowed, and cells
+    /// that stopped being one again).
+    fresh: Vec<u32>,
+    /// The width of the grid the cells' indices are for.
+    width: u32,
+}
+
+/// A frontier chain kept by [`FrontierTracker`].
+#[derive(Debug, Clone)]
+struct Component {
+    /// Its cells in row-major order.
+    cells: Vec<Cell>,
+    /// Its middle cell, once computed.
+    middle: Option<Cell>,
+    /// Listed in [`FrontierTracker::dirty`] since the last detection.
+    dirty: bool,
 }
 
 /// [`FrontierTracker::state`]: a frontier cell.
 const FRONTIER: u8 = 1;
 /// [`FrontierTracker::state`]: reached by the component search.
 const LABELLED: u8 = 2;
-/// [`FrontierTracker::state`]: a cell of the last detection's list for the component at hand
-/// (set and cleared while comparing the two).
-const MARKED: u8 = 4;
+/// [`FrontierTracker::owner`]: no component.
+const NO_COMPONENT: u32 = u32::MAX;
 
 impl FrontierTracker {
     /// A tracker of `grid`'s frontier cells, from a full scan of the grid.
@@ -243,9 +266,9 @@ impl FrontierTracker {
         let n = grid.data.len();
         let mut t = Self {
             state: vec![0; n],
-            cells: Vec::new(),
-            middles: Default::default(),
-            middles_width: grid.width(),
+            owner: vec![NO_COMPONENT; n],
+            width: grid.width(),
+            ..Default::default()
         };
         // (Row by row, as `update` of every cell would find them, without its five tests per
         // cell: the first update of a run scans a map that is nearly all unknown.)
@@ -256,7 +279,7 @@ impl FrontierTracker {
             for (x, &f) in row.iter().enumerate() {
                 if f {
                     t.state[y * w + x] = FRONTIER;
-                    t.cells.push((y * w + x) as u32);
+                    t.fresh.push((y * w + x) as u32);
                 }
             }
         }
@@ -266,7 +289,7 @@ impl FrontierTracker {
     /// Brings the frontier cells up to date after the cells at `changed` (row-major indices of
     /// `grid`, in any order, repeats allowed) changed state. A grid of another size starts over.
     pub fn update(&mut self, grid: &OccupancyGrid, changed: impl IntoIterator<Item = u32>) {
-        if grid.data.len() != self.state.len() {
+        if grid.data.len() != self.state.len() || grid.width() != self.width {
             *self = Self::new(grid);
             return;
         }
@@ -293,10 +316,27 @@ impl FrontierTracker {
                 } else {
                     is_frontier_cell(grid, Cell::new(nx as i32, ny as i32))
                 };
-                if now && self.state[j] & FRONTIER == 0 {
-                    self.cells.push(j as u32);
+                let was = self.state[j] & FRONTIER != 0;
+                if now == was {
+                    continue;
                 }
-                self.state[j] = (self.state[j] & !FRONTIER) | if now { FRONTIER } else { 0 };
+                if now {
+                    self.state[j] |= FRONTIER;
+                    self.fresh.push(j as u32);
+                } else {
+                    self.state[j] &= !FRONTIER;
+                    self.mark_dirty(self.owner[j]);
+                }
+            }
+        }
+    }
+
+    /// Lists the component in `slot` (if any) as changed.
+    fn mark_dirty(&mut self, slot: u32) {
+        if let Some(Some(c)) = self.comps.get_mut(slot as usize) {
+            if !c.dirty {
+                c.dirty = true;
+                self.dirty.push(slot);
             }
         }
     }
@@ -304,27 +344,58 @@ impl FrontierTracker {
     /// The frontiers of `grid` (which must be the grid of the last update), as
     /// [`detect_frontiers`] finds them.
     pub fn detect(&mut self, grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
-        if self.middles_width != grid.width() {
-            self.middles.clear();
-            self.middles_width = grid.width();
+        if grid.data.len() != self.state.len() || grid.width() != self.width {
+            *self = Self::new(grid);
         }
-        let state = &self.state;
-        self.cells.retain(|&i| state[i as usize] & FRONTIER != 0);
-        // (The stable sort, whose result is the same for integers: the list is the last
-        // detection's, sorted, with the cells that became frontier cells since appended, and
-        // it merges such runs rather than sorting the whole list again.)
-        self.cells.sort();
-        self.cells.dedup();
         let w = grid.width() as i64;
         let h = grid.height() as i64;
-        let mut frontiers = Vec::new();
+        let index_of = |c: Cell| c.y as usize * w as usize + c.x as usize;
+        // 1. A new frontier cell next to a component's cell joins it: the component changed.
+        let fresh = std::mem::take(&mut self.fresh);
+        for &i in &fresh {
+            let i = i as usize;
+            if self.state[i] & FRONTIER == 0 || self.owner[i] != NO_COMPONENT {
+                continue;
+            }
+            let (x, y) = (i as i64 % w, i as i64 / w);
+            for (dx, dy) in NEIGHBOURS8 {
+                let (nx, ny) = (x + dx as i64, y + dy as i64);
+                if nx >= 0 && ny >= 0 && nx < w && ny < h {
+                    self.mark_dirty(self.owner[(ny * w + nx) as usize]);
+                }
+            }
+        }
+        // 2. The changed components dissolved: their cells still frontier cells, and the new
+        // ones, are labelled again. (The dissolved ones kept by first cell: a chain found again
+        // with the same cells keeps its middle cell.)
+        let mut seeds: Vec<usize> = Vec::new();
+        let mut dissolved: LookupMap<u32, Component> = LookupMap::new();
+        for slot in std::mem::take(&mut self.dirty) {
+            let Some(comp) = self.comps[slot as usize].take() else {
+                continue;
+            };
+            self.free.push(slot);
+            let first = index_of(comp.cells[0]) as u32;
+            self.order.remove(&first);
+            for c in &comp.cells {
+                let i = index_of(*c);
+                self.owner[i] = NO_COMPONENT;
+                if self.state[i] & FRONTIER != 0 {
+                    seeds.push(i);
+                }
+            }
+            dissolved.insert(first, comp);
+        }
+        seeds.extend(
+            fresh
+                .iter()
+                .map(|&i| i as usize)
+                .filter(|&i| self.state[i] & FRONTIER != 0 && self.owner[i] == NO_COMPONENT),
+        );
+        // 3. Their chains.
         let mut queue = VecDeque::new();
-        let mut middles = LookupMap::with_capacity(self.middles.len());
-        // (One list for the components in turn, copied at its length for those kept: a list
-        // made and grown for each component was most of a run's allocations.)
         let mut comp: Vec<usize> = Vec::new();
-        for k in 0..self.cells.len() {
-            let start = self.cells[k] as usize;
+        for &start in &seeds {
             if self.state[start] & LABELLED != 0 {
                 continue;
             }
@@ -345,65 +416,66 @@ impl FrontierTracker {
                     }
                     let j = (ny * w + nx) as usize;
                     if self.state[j] == FRONTIER {
+                        // (A component next to a new cell or a labelled one was dissolved.)
+                        debug_assert_eq!(self.owner[j], NO_COMPONENT);
                         self.state[j] |= LABELLED;
                         comp.push(j);
                         queue.push_back((nx, ny));
                     }
                 }
             }
-            if comp.len() < cfg.min_cells.max(1) {
+            comp.sort_unstable();
+            let first = comp[0] as u32;
+            let cells: Vec<Cell> = comp.iter().map(|&i| grid.frame.cell_of_index(i)).collect();
+            let middle = dissolved
+                .remove(&first)
+                .filter(|old| old.cells == cells)
+                .and_then(|old| old.middle);
+            let slot = match self.free.pop() {
+                Some(s) => s,
+                None => {
+                    self.comps.push(None);
+                    (self.comps.len() - 1) as u32
+                }
+            };
+            for &i in &comp {
+                self.owner[i] = slot;
+            }
+            self.comps[slot as usize] = Some(Component {
+                cells,
+                middle,
+                dirty: false,
+            });
+            self.order.insert(first, slot);
+        }
+        for &i in &seeds {
+            self.state[i] &= !LABELLED;
+        }
+        // 4. Every component of enough cells, in order, with its middle cell.
+        let mut frontiers = Vec::new();
+        let mut indices: Vec<usize> = Vec::new();
+        for &slot in self.order.values() {
+            let Some(comp) = self.comps[slot as usize].as_mut() else {
+                continue;
+            };
+            if comp.cells.len() < cfg.min_cells.max(1) {
                 continue;
             }
-            // The last detection's entry moves to this one's: its cells are kept as they are
-            // when the component is the same, and refilled otherwise, not allocated again.
-            // (The component's first cell is its least, the cells being searched from in
-            // order. The same cells, found by marking the entry's and looking for the marks:
-            // most components are the same from one detection to the next, and need no sort
-            // and no division per cell for their coordinates.)
-            let old = self.middles.remove(&start);
-            let index = |c: &Cell| (c.y as i64 * w + c.x as i64) as usize;
-            let same = old.as_ref().is_some_and(|(cells, _)| {
-                cells.len() == comp.len() && {
-                    let state = &mut self.state;
-                    for c in cells {
-                        if let Some(s) = state.get_mut(index(c)) {
-                            *s |= MARKED;
-                        }
-                    }
-                    let all = comp.iter().all(|&i| state[i] & MARKED != 0);
-                    for c in cells {
-                        if let Some(s) = state.get_mut(index(c)) {
-                            *s &= !MARKED;
-                        }
-                    }
-                    all
-                }
-            });
-            let to_cell = |i: usize| grid.frame.cell_of_index(i);
-            let (kept, middle) = match old {
-                Some((cells, middle)) if same => (cells, middle),
+            let middle = *comp.middle.get_or_insert_with(|| {
                 // (A cell's place in the component from a table over the component's box, not
                 // over the whole map; by binary search when the box is much larger than the
                 // component, a long diagonal chain.)
-                old => {
-                    comp.sort_unstable();
-                    let mut cells = old.map(|(cells, _)| cells).unwrap_or_default();
-                    cells.clear();
-                    cells.extend(comp.iter().map(|&i| to_cell(i)));
-                    (cells, middle_cell_boxed(&comp, w as usize))
-                }
-            };
-            frontiers.push(Frontier {
-                size: kept.len(),
-                candidate: to_cell(middle),
-                cells: kept.clone(),
+                indices.clear();
+                indices.extend(comp.cells.iter().map(|c| index_of(*c)));
+                grid.frame
+                    .cell_of_index(middle_cell_boxed(&indices, w as usize))
             });
-            middles.insert(start, (kept, middle));
+            frontiers.push(Frontier {
+                size: comp.cells.len(),
+                candidate: middle,
+                cells: comp.cells.clone(),
+            });
         }
-        for &i in &self.cells {
-            self.state[i as usize] &= !LABELLED;
-        }
-        self.middles = middles;
         frontiers
     }
 }
@@ -768,14 +840,19 @@ mod tests {
                 *s = state(init[i]);
             }
             let n = w * h;
-            let mut old = FrontierTracker { state: vec![0; n], cells: Vec::new(), middles: Default::default(), middles_width: 0 };
+            let mut old = FrontierTracker {
+                state: vec![0; n],
+                owner: vec![NO_COMPONENT; n],
+                width: w as u32,
+                ..Default::default()
+            };
             old.update(&g, 0..n as u32);
             let new = FrontierTracker::new(&g);
             prop_assert_eq!(&new.state, &old.state);
-            let mut cells = old.cells.clone();
+            let mut cells = old.fresh.clone();
             cells.sort_unstable();
             cells.dedup();
-            prop_assert_eq!(&new.cells, &cells);
+            prop_assert_eq!(&new.fresh, &cells);
         }
 
         #[test]
@@ -803,6 +880,38 @@ mod tests {
                 }
                 t.update(&g, changed);
                 prop_assert_eq!(t.detect(&g, &cfg), detect_frontiers(&g, &cfg));
+            }
+        }
+
+        /// Chains that grow, merge, split and vanish over many updates of a larger map, with
+        /// the minimal size changing between detections and some detections repeated without
+        /// an update: the components kept from one detection to the next are the full
+        /// detection's.
+        #[test]
+        fn tracker_equals_full_detection_over_many_updates(
+            init in proptest::collection::vec(0u8..3, 30 * 24),
+            edits in proptest::collection::vec((0usize..30 * 24, 0u8..3, 1usize..6), 0..200),
+            chunk in 1usize..12,
+        ) {
+            let state = |k: u8| match k { 0 => Occupancy::Unknown, 1 => Occupancy::Free, _ => Occupancy::Occupied };
+            let mut g = OccupancyGrid::filled(crate::grid::GridFrame::new(crate::geom::Vec2::zeros(), 0.1, 30, 24), Occupancy::Unknown);
+            for (i, s) in g.data.iter_mut().enumerate() {
+                *s = state(init[i]);
+            }
+            let mut t = FrontierTracker::new(&g);
+            for edits in edits.chunks(chunk) {
+                let mut changed = Vec::new();
+                for &(i, k, _) in edits {
+                    g.data[i] = state(k);
+                    changed.push(i as u32);
+                }
+                t.update(&g, changed);
+                let cfg = FrontierConfig { min_cells: edits[0].2 };
+                prop_assert_eq!(t.detect(&g, &cfg), detect_frontiers(&g, &cfg));
+                if edits[0].2 == 1 {
+                    let cfg = FrontierConfig { min_cells: 3 };
+                    prop_assert_eq!(t.detect(&g, &cfg), detect_frontiers(&g, &cfg));
+                }
             }
         }
     }
