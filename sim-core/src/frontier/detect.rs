@@ -347,10 +347,48 @@ impl FrontierTracker {
         if grid.data.len() != self.state.len() || grid.width() != self.width {
             *self = Self::new(grid);
         }
+        let w = grid.width() as usize;
+        let index_of = |c: Cell| c.y as usize * w + c.x as usize;
+        let (seeds, mut dissolved) = self.dissolve_changed(grid);
+        self.label(grid, &seeds, &mut dissolved);
+        // Every component of enough cells, in order, with its middle cell.
+        let mut frontiers = Vec::new();
+        let mut indices: Vec<usize> = Vec::new();
+        for &slot in self.order.values() {
+            let Some(comp) = self.comps[slot as usize].as_mut() else {
+                continue;
+            };
+            if comp.cells.len() < cfg.min_cells.max(1) {
+                continue;
+            }
+            let middle = *comp.middle.get_or_insert_with(|| {
+                // (A cell's place in the component from a table over the component's box, not
+                // over the whole map; by binary search when the box is much larger than the
+                // component, a long diagonal chain.)
+                indices.clear();
+                indices.extend(comp.cells.iter().map(|c| index_of(*c)));
+                grid.frame.cell_of_index(middle_cell_boxed(&indices, w))
+            });
+            frontiers.push(Frontier {
+                size: comp.cells.len(),
+                candidate: middle,
+                cells: comp.cells.clone(),
+            });
+        }
+        frontiers
+    }
+
+    /// Dissolves the components that changed since the last detection (lost a cell, or have a
+    /// new frontier cell next to them): returns the cells to label again (their cells still
+    /// frontier cells, and the new ones) and the dissolved components by first cell.
+    fn dissolve_changed(
+        &mut self,
+        grid: &OccupancyGrid,
+    ) -> (Vec<usize>, LookupMap<u32, Component>) {
         let w = grid.width() as i64;
         let h = grid.height() as i64;
         let index_of = |c: Cell| c.y as usize * w as usize + c.x as usize;
-        // 1. A new frontier cell next to a component's cell joins it: the component changed.
+        // A new frontier cell next to a component's cell joins it: the component changed.
         let fresh = std::mem::take(&mut self.fresh);
         for &i in &fresh {
             let i = i as usize;
@@ -365,7 +403,7 @@ impl FrontierTracker {
                 }
             }
         }
-        // 2. The changed components dissolved: their cells still frontier cells, and the new
+        // The changed components dissolved: their cells still frontier cells, and the new
         // ones, are labelled again. (The dissolved ones kept by first cell: a chain found again
         // with the same cells keeps its middle cell.)
         let mut seeds: Vec<usize> = Vec::new();
@@ -392,10 +430,22 @@ impl FrontierTracker {
                 .map(|&i| i as usize)
                 .filter(|&i| self.state[i] & FRONTIER != 0 && self.owner[i] == NO_COMPONENT),
         );
-        // 3. Their chains.
+        (seeds, dissolved)
+    }
+
+    /// Labels the chains of `seeds` (frontier cells of no component) as components, each
+    /// keeping the middle cell of a dissolved one with the same cells.
+    fn label(
+        &mut self,
+        grid: &OccupancyGrid,
+        seeds: &[usize],
+        dissolved: &mut LookupMap<u32, Component>,
+    ) {
+        let w = grid.width() as i64;
+        let h = grid.height() as i64;
         let mut queue = VecDeque::new();
         let mut comp: Vec<usize> = Vec::new();
-        for &start in &seeds {
+        for &start in seeds {
             if self.state[start] & LABELLED != 0 {
                 continue;
             }
@@ -448,35 +498,9 @@ impl FrontierTracker {
             });
             self.order.insert(first, slot);
         }
-        for &i in &seeds {
+        for &i in seeds {
             self.state[i] &= !LABELLED;
         }
-        // 4. Every component of enough cells, in order, with its middle cell.
-        let mut frontiers = Vec::new();
-        let mut indices: Vec<usize> = Vec::new();
-        for &slot in self.order.values() {
-            let Some(comp) = self.comps[slot as usize].as_mut() else {
-                continue;
-            };
-            if comp.cells.len() < cfg.min_cells.max(1) {
-                continue;
-            }
-            let middle = *comp.middle.get_or_insert_with(|| {
-                // (A cell's place in the component from a table over the component's box, not
-                // over the whole map; by binary search when the box is much larger than the
-                // component, a long diagonal chain.)
-                indices.clear();
-                indices.extend(comp.cells.iter().map(|c| index_of(*c)));
-                grid.frame
-                    .cell_of_index(middle_cell_boxed(&indices, w as usize))
-            });
-            frontiers.push(Frontier {
-                size: comp.cells.len(),
-                candidate: middle,
-                cells: comp.cells.clone(),
-            });
-        }
-        frontiers
     }
 }
 
