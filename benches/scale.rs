@@ -6,7 +6,13 @@
 //! 1 GB; a layout strategy at least 0.8 of `baseline`'s speed on the same building).
 //!
 //! `cargo bench --bench scale -- [--sim-s 3000] [--seed 77] [--run-seed 1] [--areas
-//! 1000,4000,12000,50000] [--kinds office,school] [--strategies baseline,layout-es]`
+//! 1000,4000,12000,50000] [--kinds office,school] [--strategies baseline,layout-es]
+//! [--max-cells 40000000]`
+//!
+//! Per run it also prints the decisions per 1000 simulated seconds, the mean number of
+//! candidates per decision, the wall time per decision and the layouts computed: a large
+//! building's runs decide more often (more frontiers vanish as corridors are seen), which the
+//! speed ratio counts but the work per decision does not.
 //!
 //! Each run is a process of its own (this program again, with `--case`), so that its peak
 //! resident memory (`VmHWM`, Linux) is its own; the building is generated in it, before the
@@ -19,6 +25,10 @@ use std::time::Instant;
 
 use floorcast_worker::{run_job, Job, Settings};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
+
+/// The cell budget of the runs (`--max-cells`): a generated 50000 m² office spans about
+/// 820 m x 70 m, 28 million cells at 0.05 m, a school 25.6 million (docs/limits.md).
+const DEFAULT_BENCH_MAX_CELLS: &str = "40000000";
 
 fn arg<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
     args.iter()
@@ -71,6 +81,13 @@ fn case(args: &[String]) {
         .parse()
         .expect("sim s");
     let strategy = arg(args, "--strategy").expect("--strategy").to_string();
+    // (A 50000 m² building's 0.05 m grid is above the default budget of 25 million cells: the
+    // documented raised budget, as `--max-cells` raises it for the binary.)
+    let max_cells: u64 = arg(args, "--max-cells")
+        .unwrap_or(DEFAULT_BENCH_MAX_CELLS)
+        .parse()
+        .expect("--max-cells: a number of cells");
+    floorcast_formats::limits::set_max_cells(max_cells);
     let building = generate(&GenerateConfig {
         seed,
         area_m2: area,
@@ -94,14 +111,20 @@ fn case(args: &[String]) {
     let t = Instant::now();
     let out = run_job(&job, &mut |_| {}).expect("the run");
     let wall = t.elapsed().as_secs_f64();
+    let decisions = &out.result.decisions;
+    let candidates = decisions.iter().map(|d| d.candidates).sum::<usize>() as f64
+        / decisions.len().max(1) as f64;
     println!(
-        "case {} {} {} {} {} {:?}",
+        "case {} {} {} {} {} {:?} {} {} {}",
         out.summary.total_time_s,
         wall,
         out.result.free_area_m2,
         out.summary.explored_fraction,
         peak_rss_mb().unwrap_or(f64::NAN),
-        out.summary.end_reason
+        out.summary.end_reason,
+        decisions.len(),
+        candidates,
+        out.result.layouts_computed,
     );
 }
 
@@ -116,6 +139,11 @@ struct Row {
     peak_mb: f64,
     explored: f64,
     end: String,
+    /// Decisions made, their mean number of candidates, layouts computed, wall seconds.
+    decisions: f64,
+    candidates: f64,
+    layouts: f64,
+    wall_s: f64,
 }
 
 fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
@@ -130,7 +158,7 @@ fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
         "--strategy",
         strategy,
     ]);
-    for k in ["--sim-s", "--seed", "--run-seed"] {
+    for k in ["--sim-s", "--seed", "--run-seed", "--max-cells"] {
         if let Some(v) = arg(args, k) {
             cmd.args([k, v]);
         }
@@ -158,6 +186,10 @@ fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
         explored: num(3),
         peak_mb: num(4),
         end: f.get(5).unwrap_or(&"?").to_string(),
+        decisions: num(6),
+        candidates: num(7),
+        layouts: num(8),
+        wall_s: num(1),
     }
 }
 
@@ -176,7 +208,7 @@ fn main() {
         arg(&args, "--sim-s").unwrap_or("3000"),
     );
     println!(
-        "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10}",
+        "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10} {:>7} {:>6} {:>7} {:>8}",
         "kind",
         "area",
         "free m2",
@@ -187,7 +219,11 @@ fn main() {
         "explored",
         "vs 1000",
         "vs base",
-        "end"
+        "end",
+        "dec/ks",
+        "cand",
+        "ms/dec",
+        "layouts"
     );
     let mut rows: Vec<Row> = Vec::new();
     for kind in &kinds {
@@ -203,7 +239,7 @@ fn main() {
                     .find(|s| s.kind == r.kind && s.area == r.area && s.strategy == strategies[0])
                     .map_or(r.speed, |s| s.speed);
                 println!(
-                    "{:<7} {:>7} {:>8.0} {:<10} {:>7.0} {:>8.0}x {:>8.0} {:>9.4} {:>8.2} {:>9.2} {:>10}",
+                    "{:<7} {:>7} {:>8.0} {:<10} {:>7.0} {:>8.0}x {:>8.0} {:>9.4} {:>8.2} {:>9.2} {:>10} {:>7.0} {:>6.0} {:>7.1} {:>8.0}",
                     r.kind,
                     r.area,
                     r.free_m2,
@@ -214,11 +250,16 @@ fn main() {
                     r.explored,
                     r.speed / small,
                     r.speed / base,
-                    r.end
+                    r.end,
+                    r.decisions * 1000.0 / r.sim_s,
+                    r.candidates,
+                    r.wall_s * 1000.0 / r.decisions.max(1.0),
+                    r.layouts
                 );
                 rows.push(r);
             }
         }
     }
     println!("vs 1000: speed / the same kind's and strategy's first area's; vs base: speed / the first strategy's on the same building");
+    println!("dec/ks: decisions per 1000 simulated s; cand: candidates per decision (mean); ms/dec: wall ms per decision (the whole run's wall time / decisions); layouts: layouts computed");
 }

@@ -564,10 +564,11 @@ fn generated_building(
     field: &str,
     invalid: &dyn Fn(&str, String) -> GridError,
 ) -> Result<PlannedBuilding, GridError> {
-    if !(g.area_m2.is_finite() && (100.0..=20_000.0).contains(&g.area_m2)) {
+    let max = floorcast_formats::limits::MAX_GENERATED_AREA_M2;
+    if !(g.area_m2.is_finite() && (100.0..=max).contains(&g.area_m2)) {
         return Err(invalid(
             &format!("{field}.area_m2"),
-            format!("{} is not a free area in [100, 20000] m2", g.area_m2),
+            format!("{} is not a free area in [100, {max}] m2", g.area_m2),
         ));
     }
     let kind = match g.kind.as_str() {

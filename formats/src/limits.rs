@@ -16,6 +16,11 @@ use crate::error::{num, Error};
 /// map and paper building needs at most a fifth of it).
 pub const DEFAULT_MAX_CELLS: u64 = 25_000_000;
 
+/// The largest free area of a generated building (m²): a hospital or a terminal. A generated
+/// office of 50000 m² spans about 820 m x 70 m, 28 million cells at 0.05 m, a school 25.6
+/// million: above the default budget, explore them with `--max-cells 40000000` (docs/limits.md).
+pub const MAX_GENERATED_AREA_M2: f64 = 50_000.0;
+
 /// The command-line flag that raises the budget (named in messages).
 pub const MAX_CELLS_FLAG: &str = "--max-cells";
 
