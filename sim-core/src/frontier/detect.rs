@@ -6,10 +6,10 @@
 //! inside the chain finds the farthest cell `a`; a second BFS from `a` finds the farthest `b` at
 //! depth `L`; the candidate is the cell at depth `L / 2` on the BFS path from `b` back to `a`.
 //!
-//! [`FrontierTracker`] keeps the frontier cells up to date from each map update's list of changed
-//! cells, so a decision touches only frontier cells, and reuses the middle cell of every frontier
-//! unchanged since the last decision; it is property-tested equal to a full detection
-//! ([`detect_frontiers`]). [`frontiers_where`] (for `frontier_clearance_m`) drops the cells that
+//! [`FrontierTracker`] keeps the frontier cells and their chains up to date from each map
+//! update's list of changed cells, so a decision labels again only the chains that changed, and
+//! reuses the middle cell of every chain unchanged since the last decision; it is property-tested
+//! equal to a full detection ([`detect_frontiers`]). [`frontiers_where`] (for `frontier_clearance_m`) drops the cells that
 //! fail a predicate and splits each frontier into the chains left, each with its own middle cell;
 //! both share one component search.
 
