@@ -7,7 +7,8 @@
 //!
 //! `cargo bench --bench scale -- [--sim-s 3000] [--seed 77] [--run-seed 1] [--areas
 //! 1000,4000,12000,50000] [--kinds office,school] [--strategies baseline,layout-es]
-//! [--max-cells 40000000]`
+//! [--max-cells 40000000] [--layout-update-fraction 0]` (the last: the setting of every run,
+//! e.g. 0.025, docs/scale.md)
 //!
 //! Per run it also prints the decisions per 1000 simulated seconds, the mean number of
 //! candidates per decision, the wall time per decision and the layouts computed: a large
@@ -94,8 +95,13 @@ fn case(args: &[String]) {
         kind,
         ..Default::default()
     });
+    let layout_update_fraction: f64 = arg(args, "--layout-update-fraction")
+        .unwrap_or("0")
+        .parse()
+        .expect("--layout-update-fraction: a number");
     let settings = Settings {
         time_limit_s: sim_s,
+        layout_update_fraction,
         ..Settings::default()
     };
     let job = Job {
@@ -158,7 +164,13 @@ fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
         "--strategy",
         strategy,
     ]);
-    for k in ["--sim-s", "--seed", "--run-seed", "--max-cells"] {
+    for k in [
+        "--sim-s",
+        "--seed",
+        "--run-seed",
+        "--max-cells",
+        "--layout-update-fraction",
+    ] {
         if let Some(v) = arg(args, k) {
             cmd.args([k, v]);
         }
@@ -202,10 +214,11 @@ fn main() {
     let kinds = list(&args, "--kinds", "office,school");
     let strategies = list(&args, "--strategies", "baseline,layout-es");
     println!(
-        "generated buildings (seed {}), run seed {}, first {} simulated s of each run",
+        "generated buildings (seed {}), run seed {}, first {} simulated s of each run, layout_update_fraction {}",
         arg(&args, "--seed").unwrap_or("77"),
         arg(&args, "--run-seed").unwrap_or("1"),
         arg(&args, "--sim-s").unwrap_or("3000"),
+        arg(&args, "--layout-update-fraction").unwrap_or("0"),
     );
     println!(
         "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10} {:>7} {:>6} {:>7} {:>8}",

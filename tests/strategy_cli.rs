@@ -529,7 +529,8 @@ fn the_strategy_list_in_json_cites_each_strategy_and_its_parameters() {
                 "{s}"
             ),
             None => assert!(
-                params.iter().all(|p| p["setting"] == "layout_update_m2"),
+                params.iter().all(|p| p["setting"] == "layout_update_m2"
+                    || p["setting"] == "layout_update_fraction"),
                 "{s}"
             ),
         }

@@ -425,6 +425,14 @@ declare_settings! {
         number(0.1, 1000000.0), "m2",
         "Layout strategies: rebuild the layout when the known area grew by this much.",
         apply cfg.layout_use.update_m2 = layout_update_m2;
+    /// Layout strategies: ...and by this fraction of the known area (0 = off). Written only
+    /// when not the default, so that the records and job identities of runs with the default
+    /// are those of earlier versions.
+    #[serde(skip_serializing_if = "is_zero")]
+    layout_update_fraction: f64 = c.layout_use.update_fraction,
+        number(0.0, 1.0), "",
+        "Layout strategies: ...and by this fraction of the known area (0 = off; 0.025 keeps the layout's cost from growing with the building).",
+        apply cfg.layout_use.update_fraction = layout_update_fraction;
     /// Layout strategies: the layout's wall lines close gaps in observed walls up to this long (m).
     max_wall_gap_m: f64 = c.layout_use.max_wall_gap_m,
         number(0.0, 20.0), "m",
@@ -1024,6 +1032,7 @@ mod tests {
             paper_layout_gain: true,
             utility_exp_lambda_per_m: 0.5,
             cost_utility_beta_m2_per_m: 2.0,
+            layout_update_fraction: 0.025,
             ..Settings::default()
         };
         let v = serde_json::to_value(&all_written).unwrap();

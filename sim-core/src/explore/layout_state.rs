@@ -16,7 +16,8 @@ impl Explorer<'_> {
         let grown_m2 = self.layout.as_ref().map_or(f64::INFINITY, |l| {
             (self.known_cells.saturating_sub(l.known_cells_at)) as f64 * cell_area
         });
-        if grown_m2 >= layout_use.update_m2 {
+        let known_m2 = self.known_cells as f64 * cell_area;
+        if grown_m2 >= layout_use.update_m2 && grown_m2 >= layout_use.update_fraction * known_m2 {
             let grid = &self.map.occupancy;
             // Judge the previous layout by what was revealed since (for the switch strategy).
             if let (
@@ -112,6 +113,11 @@ pub struct LayoutUse {
     /// The layout is recomputed at a decision when the known area changed by at least this much
     /// since the last layout (m2), so it follows the map without being rebuilt at every step.
     pub update_m2: f64,
+    /// And by at least this fraction of the known area (0: off, the default): on a large
+    /// building the layout, whose every rebuild reads the whole known map, is then rebuilt a
+    /// number of times that does not grow with the building (0.025: every 100 m² at 4000 m²
+    /// known, 300 m² at 12000 m²; docs/scale.md).
+    pub update_fraction: f64,
     /// Layout walls close gaps of unknown cells up to this long in an observed wall (m).
     pub max_wall_gap_m: f64,
     /// The paper's `I(p)` sees through openings of the layout's wall lines (see
@@ -125,6 +131,7 @@ impl Default for LayoutUse {
     fn default() -> Self {
         Self {
             update_m2: 20.0,
+            update_fraction: 0.0,
             max_wall_gap_m: 1.0,
             through_openings: true,
         }

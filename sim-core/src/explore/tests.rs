@@ -157,6 +157,37 @@ fn layout_es_stops_early_with_the_building_nearly_explored() {
     }
 }
 
+#[test]
+fn the_layout_rebuilt_in_proportion_to_the_known_map() {
+    // `layout_use.update_fraction`: the layout is rebuilt once the known area grew by that
+    // fraction of itself as well as by `update_m2`. A fraction whose share of this small
+    // building never reaches 20 m² changes nothing; a larger one rebuilds less often and the
+    // run still explores the building.
+    let b = corridor_building(8);
+    let with = |fraction: f64| {
+        let mut cfg = ExploreConfig {
+            strategy: Strategy::by_name("layout-es", &StrategyParams::default()).unwrap(),
+            ..ExploreConfig::default()
+        };
+        cfg.layout_use.update_fraction = fraction;
+        explore(&b, b.start.unwrap(), &cfg, 1, &mut |_| {})
+    };
+    let (every, tiny, tenth) = (with(0.0), with(0.01), with(0.1));
+    assert_eq!(every, tiny, "1 % of at most 400 m² is below 20 m²");
+    assert!(every.layouts_computed >= 3, "{}", every.layouts_computed);
+    assert!(
+        tenth.layouts_computed < every.layouts_computed,
+        "{} layouts against {}",
+        tenth.layouts_computed,
+        every.layouts_computed
+    );
+    assert!(
+        tenth.explored_fraction >= 0.97,
+        "{}",
+        tenth.explored_fraction
+    );
+}
+
 /// [`corridor_building`] with its ground-truth rooms: the corridor and the rooms on each side.
 fn corridor_building_with_rooms(n: usize) -> Building {
     let mut b = corridor_building(n);
