@@ -341,8 +341,8 @@ fn plain(choice: Choice) -> Strategy {
 impl Strategy {
     /// The settings this strategy reads, by their names, with its values of them: those of
     /// its choice, its early stop and, when it uses the layout, how the layout is used
-    /// (`layout_update_m2`, `layout_update_fraction`, `max_wall_gap_m` for closed gaps; their values are the run's, not
-    /// the strategy's, so only their names are listed there).
+    /// (`layout_update_m2`, `layout_update_fraction`, `max_wall_gap_m` for closed gaps; their
+    /// values are the run's, not the strategy's, so only their names are listed there).
     pub fn parameters(&self) -> Vec<(&'static str, Option<f64>)> {
         let mut out = Vec::new();
         match self.choice {
