@@ -126,6 +126,16 @@ fn generate_cmd(a: GenerateArgs) -> Result<()> {
         b.free_area_m2(),
         b.content_hash()
     );
+    // A building above the cell budget is written (a run with a raised `--max-cells` explores
+    // it), with what exploring it will need.
+    if let Err(e) = floorcast_formats::limits::check_building(
+        &b,
+        &a.out,
+        "outline",
+        floorcast_formats::limits::EXPLORE_RESOLUTION_M,
+    ) {
+        eprintln!("note: {e}");
+    }
     Ok(())
 }
 

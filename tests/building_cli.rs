@@ -114,6 +114,51 @@ fn generated_buildings_hit_their_area_and_are_deterministic() {
 }
 
 #[test]
+fn a_generated_building_above_the_cell_budget_is_written_with_a_note() {
+    // (area m², whether its 0.05 m grid exceeds the default budget of 25 million cells)
+    let cases = [(2000.0, false), (50000.0, true)];
+    let dir = tempfile::tempdir().unwrap();
+    for (area, above) in cases {
+        let out = dir.path().join(format!("g{area}.toml"));
+        let o = run(&[
+            "building",
+            "generate",
+            "--seed",
+            "77",
+            "--area-m2",
+            &area.to_string(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(out.is_file());
+        let err = stderr(&o);
+        assert_eq!(
+            err.contains("note: ") && err.contains("--max-cells"),
+            above,
+            "{err}"
+        );
+        // The note says what a run will need: checked with the default budget, accepted with
+        // a raised one.
+        let check = run(&["building", "check", out.to_str().unwrap()]);
+        assert_eq!(
+            check.status.code(),
+            Some(if above { 2 } else { 0 }),
+            "{}",
+            stderr(&check)
+        );
+        let raised = run(&[
+            "--max-cells",
+            "40000000",
+            "building",
+            "check",
+            out.to_str().unwrap(),
+        ]);
+        assert!(raised.status.success(), "{}", stderr(&raised));
+    }
+}
+
+#[test]
 fn render_writes_png_and_svg() {
     let dir = tempfile::tempdir().unwrap();
     let b = repo().join("buildings/small.toml");
