@@ -78,6 +78,20 @@ fn stage_world_loads_with_its_robot_pose() {
     assert_eq!(j["start_source"], "file");
 }
 
+/// `floorcast building generate --seed SEED --area-m2 AREA --out OUT`.
+fn generate(seed: u64, area: f64, out: &std::path::Path) -> std::process::Output {
+    run(&[
+        "building",
+        "generate",
+        "--seed",
+        &seed.to_string(),
+        "--area-m2",
+        &area.to_string(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 #[test]
 fn generated_buildings_hit_their_area_and_are_deterministic() {
     let dir = tempfile::tempdir().unwrap();
@@ -85,16 +99,7 @@ fn generated_buildings_hit_their_area_and_are_deterministic() {
         let a = dir.path().join(format!("a{seed}.toml"));
         let b = dir.path().join(format!("b{seed}.toml"));
         for out in [&a, &b] {
-            let o = run(&[
-                "building",
-                "generate",
-                "--seed",
-                &seed.to_string(),
-                "--area-m2",
-                &area.to_string(),
-                "--out",
-                out.to_str().unwrap(),
-            ]);
+            let o = generate(seed, area, out);
             assert!(o.status.success(), "{}", stderr(&o));
         }
         let ta = std::fs::read_to_string(&a).unwrap();
@@ -120,16 +125,7 @@ fn a_generated_building_above_the_cell_budget_is_written_with_a_note() {
     let dir = tempfile::tempdir().unwrap();
     for (area, above) in cases {
         let out = dir.path().join(format!("g{area}.toml"));
-        let o = run(&[
-            "building",
-            "generate",
-            "--seed",
-            "77",
-            "--area-m2",
-            &area.to_string(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = generate(77, area, &out);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(out.is_file());
         let err = stderr(&o);

@@ -289,7 +289,7 @@ impl FrontierTracker {
     /// Brings the frontier cells up to date after the cells at `changed` (row-major indices of
     /// `grid`, in any order, repeats allowed) changed state. A grid of another size starts over.
     pub fn update(&mut self, grid: &OccupancyGrid, changed: impl IntoIterator<Item = u32>) {
-        if grid.data.len() != self.state.len() || grid.width() != self.width {
+        if !self.is_for(grid) {
             *self = Self::new(grid);
             return;
         }
@@ -331,6 +331,11 @@ impl FrontierTracker {
         }
     }
 
+    /// Whether the tracker's cells are those of `grid` (a grid of another size starts over).
+    fn is_for(&self, grid: &OccupancyGrid) -> bool {
+        grid.data.len() == self.state.len() && grid.width() == self.width
+    }
+
     /// Lists the component in `slot` (if any) as changed.
     fn mark_dirty(&mut self, slot: u32) {
         if let Some(Some(c)) = self.comps.get_mut(slot as usize) {
@@ -344,7 +349,7 @@ impl FrontierTracker {
     /// The frontiers of `grid` (which must be the grid of the last update), as
     /// [`detect_frontiers`] finds them.
     pub fn detect(&mut self, grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
-        if grid.data.len() != self.state.len() || grid.width() != self.width {
+        if !self.is_for(grid) {
             *self = Self::new(grid);
         }
         let w = grid.width() as usize;
