@@ -194,10 +194,12 @@ impl<T: Copy + Default + TryFrom<usize> + Into<u32>> RoomCells<T> {
             x1.min(frame.width as i64 - 1),
             y1.min(frame.height as i64 - 1),
         );
-        let (width, height) = if x0 <= x1 && y0 <= y1 {
-            ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize)
+        // (An empty box at the origin: with no room, `x0` would be `i64::MAX`, and `get`'s
+        // subtraction would overflow.)
+        let (x0, y0, width, height) = if x0 <= x1 && y0 <= y1 {
+            (x0, y0, (x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize)
         } else {
-            (0, 0)
+            (0, 0, 0, 0)
         };
         let mut data = vec![T::default(); width * height];
         let fw = frame.width as usize;
