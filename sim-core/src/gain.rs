@@ -86,6 +86,9 @@ struct RayCells {
     half: i32,
     start: Vec<u32>,
     entries: Vec<u32>,
+    /// Per cell of the square (indexed as `start`), whether its centre is within range (the
+    /// fan's [`IN_RANGE`]: a visible cell there counts).
+    in_range: Vec<bool>,
 }
 
 impl RayStops {
@@ -105,6 +108,23 @@ impl RayStops {
                 .any(|&e| self.stops[(e >> 8) as usize] as u32 >= (e & 0xff)),
         )
     }
+
+    /// Whether the cell `c`, if it did not block, was visible from `p` and within range, so
+    /// that it counted exactly when it satisfied the predicate `counts`: a ray from `p` read
+    /// it, and its centre is within range. `None` when the stops are not kept. (A cell a ray
+    /// read and that does not block is not where the ray stopped: the rays read it on their
+    /// way.)
+    #[inline]
+    pub fn counted_if_open(&self, p: Cell, c: Cell) -> Option<bool> {
+        let cells = self.cells.as_ref()?;
+        let (dx, dy) = (c.x as i64 - p.x as i64, c.y as i64 - p.y as i64);
+        let (h, side) = (cells.half as i64, 2 * cells.half as i64 + 1);
+        if dx.abs() > h || dy.abs() > h {
+            return Some(false);
+        }
+        let j = ((dy + h) * side + dx + h) as usize;
+        Some(cells.in_range[j] && self.read(p, c) == Some(true))
+    }
 }
 
 /// [`visible_area`], with predicates that are also given the cell's row-major index in `frame`
@@ -117,7 +137,19 @@ pub fn visible_area_read(
     blocks: impl Fn(Cell, usize) -> bool,
     counts: impl Fn(Cell, usize) -> bool,
 ) -> (f64, CellsRead) {
-    let nothing = (0.0, CellsRead::of(p));
+    let (count, read) = visible_count_read(frame, p, range_m, blocks, counts);
+    (count as f64 * frame.cell_area_m2(), read)
+}
+
+/// [`visible_area_read`] as a number of cells.
+pub fn visible_count_read(
+    frame: &GridFrame,
+    p: Cell,
+    range_m: f64,
+    blocks: impl Fn(Cell, usize) -> bool,
+    counts: impl Fn(Cell, usize) -> bool,
+) -> (usize, CellsRead) {
+    let nothing = (0, CellsRead::of(p));
     // (The fan's frame test takes a negative coordinate, cast unsigned, for one beyond the
     // frame: a frame wider or taller than `i32::MAX` cells, some of whose cells no `Cell` can
     // name, shows nothing.)
@@ -144,7 +176,7 @@ pub fn visible_area_read(
         // Only reachable if a predicate itself computes a visible area.
         Err(_) => RayFan::new(r_cells).count(frame, p, &blocks, &counts),
     });
-    (count as f64 * frame.cell_area_m2(), read)
+    (count, read)
 }
 
 /// Ranges beyond this many cells are refused (the fan's offsets are `i16`).
@@ -240,7 +272,12 @@ impl RayFan {
             .iter()
             .map(|&id| leaves_before[preorder_of[id as usize] as usize])
             .collect();
-        let ray_cells = RayCells::of(trie.on, half);
+        let mut ray_cells = RayCells::of(trie.on, half);
+        for n in &nodes {
+            if n.seen & IN_RANGE != 0 {
+                ray_cells.in_range[(n.seen & !IN_RANGE) as usize] = true;
+            }
+        }
         let side = side as usize;
         Self {
             r_cells,
@@ -482,6 +519,7 @@ impl RayCells {
             half,
             start: starts,
             entries: on.into_iter().map(|(_, e)| e).collect(),
+            in_range: vec![false; (side * side) as usize],
         }
     }
 }
@@ -578,9 +616,18 @@ pub fn information_gain(grid: &OccupancyGrid, p: Cell, range_m: f64) -> f64 {
 
 /// [`information_gain`] and where the cells it read lie ([`CellsRead`]).
 pub fn information_gain_read(grid: &OccupancyGrid, p: Cell, range_m: f64) -> (f64, CellsRead) {
+    let (count, read) = information_count_read(grid, p, range_m);
+    (count as f64 * grid.frame.cell_area_m2(), read)
+}
+
+/// [`information_gain_read`] as a number of cells: the unknown cells visible from `p`. (Only
+/// an occupied cell blocks and only an unknown one counts, so while no cell read changes
+/// whether it is occupied, the count falls by one for each cell read within range that stops
+/// being unknown: [`RayStops::counted_if_open`].)
+pub fn information_count_read(grid: &OccupancyGrid, p: Cell, range_m: f64) -> (usize, CellsRead) {
     // (The cells as a slice: the predicates then read them without going through `grid`.)
     let data = &grid.data[..];
-    visible_area_read(
+    visible_count_read(
         &grid.frame,
         p,
         range_m,

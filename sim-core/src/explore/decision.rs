@@ -91,9 +91,9 @@ impl Explorer<'_> {
                             gap_closed_information_gain_read(grid, &l.raster, c, range_m)
                         })
                     }
-                    _ => self.gains.gain(GainKind::Plain, c, range_m, now, || {
-                        information_gain_read(grid, c, range_m)
-                    }),
+                    _ => self
+                        .gains
+                        .plain_gain(c, range_m, now, || information_count_read(grid, c, range_m)),
                 }
             } else {
                 0.0
@@ -833,9 +833,7 @@ pub(super) fn layout_gain_cached(
     now: u64,
 ) -> f64 {
     if raster.uses_baseline(p) {
-        gains.gain(GainKind::Plain, p, range_m, now, || {
-            information_gain_read(grid, p, range_m)
-        })
+        gains.plain_gain(p, range_m, now, || information_count_read(grid, p, range_m))
     } else {
         gains.gain(GainKind::Rooms, p, range_m, now, || {
             layout_information_gain_read(grid, raster, p, range_m)

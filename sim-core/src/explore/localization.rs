@@ -242,8 +242,13 @@ impl Explorer<'_> {
             .map_updated(&self.map, &mut self.obstacles, &flips, &free_changes);
         // (The layout gains too: the layout they are computed with changes less often than the
         // map, and clears them when it does.)
-        for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
-            self.gains.touch(i, self.localizer.scans());
+        // (Changes of whether a cell is occupied recorded last: see `GainCache::touch`.)
+        let now = self.localizer.scans();
+        for &(i, _) in &free_changes {
+            self.gains.touch(i, now, false);
+        }
+        for &i in &flips {
+            self.gains.touch(i, now, true);
         }
         self.frontiers.update(
             &self.map.occupancy,

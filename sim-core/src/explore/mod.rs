@@ -80,7 +80,7 @@ use crate::frontier::blacklist::Blacklist;
 use crate::frontier::detect::{
     frontiers_where, is_frontier_cell, Frontier, FrontierConfig, FrontierTracker,
 };
-use crate::gain::{information_gain, information_gain_read};
+use crate::gain::{information_count_read, information_gain};
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
 use crate::layout::reconstruct_layout;
