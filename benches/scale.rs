@@ -10,10 +10,14 @@
 //! [--max-cells 40000000] [--layout-update-fraction 0]` (the last: the setting of every run,
 //! e.g. 0.025, docs/scale.md)
 //!
-//! Per run it also prints the decisions per 1000 simulated seconds, the mean number of
-//! candidates per decision, the wall time per decision and the layouts computed: a large
-//! building's runs decide more often (more frontiers vanish as corridors are seen), which the
-//! speed ratio counts but the work per decision does not.
+//! Per run it also prints the area explored per simulated second and the wall time per m²
+//! explored, both up to 90 % explored (the last per cent's chase finds little area), with its
+//! ratio to the 1000 m² building's (a robot in a large building's long corridors sees
+//! more per second, and a run's work follows what it sees: docs/scale.md), the decisions per
+//! 1000 simulated seconds, the mean number of candidates per decision, the wall time per
+//! decision and the layouts computed: a large building's runs decide more often (more frontiers
+//! vanish as corridors are seen), which the speed ratio counts but the work per decision does
+//! not.
 //!
 //! Each run is a process of its own (this program again, with `--case`), so that its peak
 //! resident memory (`VmHWM`, Linux) is its own; the building is generated in it, before the
@@ -115,13 +119,27 @@ fn case(args: &[String]) {
         snapshot_fractions: Vec::new(),
     };
     let t = Instant::now();
-    let out = run_job(&job, &mut |_| {}).expect("the run");
+    // The wall time, simulated time and area explored when the run first reached
+    // `EXPLORING_UNTIL` explored: what follows is the last per cent's chase, which costs wall
+    // time and finds little area.
+    let mut exploring: Option<(f64, f64, f64)> = None;
+    let out = run_job(&job, &mut |s| {
+        if exploring.is_none() && s.explored_fraction >= EXPLORING_UNTIL {
+            exploring = Some((t.elapsed().as_secs_f64(), s.time_s, s.explored_area_m2));
+        }
+    })
+    .expect("the run");
     let wall = t.elapsed().as_secs_f64();
+    let (wall_x, sim_x, area_x) = exploring.unwrap_or((
+        wall,
+        out.summary.total_time_s,
+        out.result.free_area_m2 * out.summary.explored_fraction,
+    ));
     let decisions = &out.result.decisions;
     let candidates = decisions.iter().map(|d| d.candidates).sum::<usize>() as f64
         / decisions.len().max(1) as f64;
     println!(
-        "case {} {} {} {} {} {:?} {} {} {}",
+        "case {} {} {} {} {} {:?} {} {} {} {} {} {}",
         out.summary.total_time_s,
         wall,
         out.result.free_area_m2,
@@ -131,8 +149,15 @@ fn case(args: &[String]) {
         decisions.len(),
         candidates,
         out.result.layouts_computed,
+        wall_x,
+        sim_x,
+        area_x,
     );
 }
+
+/// The explored fraction up to which the area explored per simulated second and the wall time
+/// per m² explored are measured (the whole run if it stops before).
+const EXPLORING_UNTIL: f64 = 0.9;
 
 #[derive(Debug, Clone)]
 struct Row {
@@ -150,6 +175,20 @@ struct Row {
     candidates: f64,
     layouts: f64,
     wall_s: f64,
+    /// Up to `EXPLORING_UNTIL` explored (or the end): wall s, simulated s, m² explored.
+    exploring: (f64, f64, f64),
+}
+
+impl Row {
+    /// Area explored per simulated second, up to `EXPLORING_UNTIL` explored.
+    fn m2_per_s(&self) -> f64 {
+        self.exploring.2 / self.exploring.1
+    }
+
+    /// Wall milliseconds per m² explored, up to `EXPLORING_UNTIL` explored.
+    fn ms_per_m2(&self) -> f64 {
+        self.exploring.0 * 1000.0 / self.exploring.2
+    }
 }
 
 fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
@@ -202,6 +241,7 @@ fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
         candidates: num(7),
         layouts: num(8),
         wall_s: num(1),
+        exploring: (num(9), num(10), num(11)),
     }
 }
 
@@ -221,7 +261,7 @@ fn main() {
         arg(&args, "--layout-update-fraction").unwrap_or("0"),
     );
     println!(
-        "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10} {:>7} {:>6} {:>7} {:>8}",
+        "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10} {:>7} {:>6} {:>7} {:>8} {:>6} {:>6} {:>8}",
         "kind",
         "area",
         "free m2",
@@ -236,23 +276,27 @@ fn main() {
         "dec/ks",
         "cand",
         "ms/dec",
-        "layouts"
+        "layouts",
+        "m2/s",
+        "ms/m2",
+        "m2 vs 1000"
     );
     let mut rows: Vec<Row> = Vec::new();
     for kind in &kinds {
         for area in &areas {
             for strategy in &strategies {
                 let r = measure(&args, kind, area, strategy);
-                let small = rows
+                let first = rows
                     .iter()
-                    .find(|s| s.kind == r.kind && s.strategy == r.strategy)
-                    .map_or(r.speed, |s| s.speed);
+                    .find(|s| s.kind == r.kind && s.strategy == r.strategy);
+                let small = first.map_or(r.speed, |s| s.speed);
+                let small_ms_m2 = first.map_or(r.ms_per_m2(), Row::ms_per_m2);
                 let base = rows
                     .iter()
                     .find(|s| s.kind == r.kind && s.area == r.area && s.strategy == strategies[0])
                     .map_or(r.speed, |s| s.speed);
                 println!(
-                    "{:<7} {:>7} {:>8.0} {:<10} {:>7.0} {:>8.0}x {:>8.0} {:>9.4} {:>8.2} {:>9.2} {:>10} {:>7.0} {:>6.0} {:>7.1} {:>8.0}",
+                    "{:<7} {:>7} {:>8.0} {:<10} {:>7.0} {:>8.0}x {:>8.0} {:>9.4} {:>8.2} {:>9.2} {:>10} {:>7.0} {:>6.0} {:>7.1} {:>8.0} {:>6.2} {:>6.2} {:>10.2}",
                     r.kind,
                     r.area,
                     r.free_m2,
@@ -267,12 +311,16 @@ fn main() {
                     r.decisions * 1000.0 / r.sim_s,
                     r.candidates,
                     r.wall_s * 1000.0 / r.decisions.max(1.0),
-                    r.layouts
+                    r.layouts,
+                    r.m2_per_s(),
+                    r.ms_per_m2(),
+                    small_ms_m2 / r.ms_per_m2()
                 );
                 rows.push(r);
             }
         }
     }
     println!("vs 1000: speed / the same kind's and strategy's first area's; vs base: speed / the first strategy's on the same building");
+    println!("m2/s: area explored per simulated s, ms/m2: wall ms per m2 explored, both up to 90 % explored (or the run's end); m2 vs 1000: the first area's ms/m2 / this one's (the speed per area explored, not per simulated s: docs/scale.md)");
     println!("dec/ks: decisions per 1000 simulated s; cand: candidates per decision (mean); ms/dec: wall ms per decision (the whole run's wall time / decisions); layouts: layouts computed");
 }
