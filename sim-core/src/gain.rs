@@ -96,17 +96,19 @@ impl RayStops {
     #[inline]
     pub fn read(&self, p: Cell, c: Cell) -> Option<bool> {
         let cells = self.cells.as_ref()?;
-        let (dx, dy) = (c.x as i64 - p.x as i64, c.y as i64 - p.y as i64);
-        let (h, side) = (cells.half as i64, 2 * cells.half as i64 + 1);
-        if dx.abs() > h || dy.abs() > h {
-            return Some(false);
-        }
-        let j = ((dy + h) * side + dx + h) as usize;
-        let on = &cells.entries[cells.start[j] as usize..cells.start[j + 1] as usize];
         Some(
-            on.iter()
-                .any(|&e| self.stops[(e >> 8) as usize] as u32 >= (e & 0xff)),
+            cells
+                .square_index(p, c)
+                .is_some_and(|j| self.read_at(cells, j)),
         )
+    }
+
+    /// Whether a ray read the cell of index `j` in `cells`' square.
+    #[inline]
+    fn read_at(&self, cells: &RayCells, j: usize) -> bool {
+        let on = &cells.entries[cells.start[j] as usize..cells.start[j + 1] as usize];
+        on.iter()
+            .any(|&e| self.stops[(e >> 8) as usize] as u32 >= (e & 0xff))
     }
 
     /// Whether the cell `c`, if it did not block, was visible from `p` and within range, so
@@ -117,13 +119,21 @@ impl RayStops {
     #[inline]
     pub fn counted_if_open(&self, p: Cell, c: Cell) -> Option<bool> {
         let cells = self.cells.as_ref()?;
+        Some(
+            cells
+                .square_index(p, c)
+                .is_some_and(|j| cells.in_range[j] && self.read_at(cells, j)),
+        )
+    }
+}
+
+impl RayCells {
+    /// The index in the square around `p` of the cell `c`, if it lies in the square.
+    #[inline]
+    fn square_index(&self, p: Cell, c: Cell) -> Option<usize> {
         let (dx, dy) = (c.x as i64 - p.x as i64, c.y as i64 - p.y as i64);
-        let (h, side) = (cells.half as i64, 2 * cells.half as i64 + 1);
-        if dx.abs() > h || dy.abs() > h {
-            return Some(false);
-        }
-        let j = ((dy + h) * side + dx + h) as usize;
-        Some(cells.in_range[j] && self.read(p, c) == Some(true))
+        let (h, side) = (self.half as i64, 2 * self.half as i64 + 1);
+        (dx.abs() <= h && dy.abs() <= h).then(|| ((dy + h) * side + dx + h) as usize)
     }
 }
 

@@ -431,7 +431,7 @@ declare_settings! {
     #[serde(skip_serializing_if = "is_zero")]
     layout_update_fraction: f64 = c.layout_use.update_fraction,
         number(0.0, 1.0), "",
-        "Layout strategies: ...and by this fraction of the known area (0 = off; 0.025 keeps the layout's cost from growing with the building).",
+        "Layout strategies: ...and by this fraction of the known area (0 = off, the paper's; 0.1 keeps the layout's cost from growing with the building, tested no slower: docs/scale.md).",
         apply cfg.layout_use.update_fraction = layout_update_fraction;
     /// Layout strategies: the layout's wall lines close gaps in observed walls up to this long (m).
     max_wall_gap_m: f64 = c.layout_use.max_wall_gap_m,
