@@ -7,8 +7,10 @@
 //!
 //! `cargo bench --bench scale -- [--sim-s 3000] [--seed 77] [--run-seed 1] [--areas
 //! 1000,4000,12000,50000] [--kinds office,school] [--strategies baseline,layout-es]
-//! [--max-cells 40000000] [--layout-update-fraction 0]` (the last: the setting of every run,
-//! e.g. 0.025, docs/scale.md)
+//! [--max-cells 40000000] [--layout-update-fraction 0] [--repeat 1]` (`--layout-update-fraction`:
+//! the setting of every run, e.g. 0.1, docs/scale.md; `--repeat N`: N runs of each, the
+//! strategies alternating per round, the run of median speed printed: a 1000 m² run lasts a
+//! couple of wall seconds, and its speed varies by up to a quarter between invocations)
 //!
 //! Per run it also prints the area explored per simulated second and the wall time per m²
 //! explored, both up to 90 % explored (the last per cent's chase finds little area), with its
@@ -245,6 +247,17 @@ fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
     }
 }
 
+/// The run of median speed among `runs` (the lower middle one of an even number), with the
+/// greatest peak memory of them.
+fn median_run(runs: &mut [Row]) -> Row {
+    runs.sort_by(|a, b| a.speed.total_cmp(&b.speed));
+    let peak = runs.iter().map(|r| r.peak_mb).fold(f64::NAN, f64::max);
+    Row {
+        peak_mb: peak,
+        ..runs[(runs.len() - 1) / 2].clone()
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.iter().any(|a| a == "--case") {
@@ -254,11 +267,12 @@ fn main() {
     let kinds = list(&args, "--kinds", "office,school");
     let strategies = list(&args, "--strategies", "baseline,layout-es");
     println!(
-        "generated buildings (seed {}), run seed {}, first {} simulated s of each run, layout_update_fraction {}",
+        "generated buildings (seed {}), run seed {}, first {} simulated s of each run, layout_update_fraction {}, the median of {} runs",
         arg(&args, "--seed").unwrap_or("77"),
         arg(&args, "--run-seed").unwrap_or("1"),
         arg(&args, "--sim-s").unwrap_or("3000"),
         arg(&args, "--layout-update-fraction").unwrap_or("0"),
+        arg(&args, "--repeat").unwrap_or("1"),
     );
     println!(
         "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10} {:>7} {:>6} {:>7} {:>8} {:>6} {:>6} {:>8}",
@@ -281,11 +295,22 @@ fn main() {
         "ms/m2",
         "m2 vs 1000"
     );
+    let repeat: usize = arg(&args, "--repeat")
+        .unwrap_or("1")
+        .parse()
+        .expect("--repeat: a number of runs");
     let mut rows: Vec<Row> = Vec::new();
     for kind in &kinds {
         for area in &areas {
-            for strategy in &strategies {
-                let r = measure(&args, kind, area, strategy);
+            // Each strategy's runs on this building, the strategies alternating per round.
+            let mut runs: Vec<Vec<Row>> = vec![Vec::new(); strategies.len()];
+            for _ in 0..repeat.max(1) {
+                for (k, strategy) in strategies.iter().enumerate() {
+                    runs[k].push(measure(&args, kind, area, strategy));
+                }
+            }
+            for mut of_strategy in runs {
+                let r = median_run(&mut of_strategy);
                 let first = rows
                     .iter()
                     .find(|s| s.kind == r.kind && s.strategy == r.strategy);
