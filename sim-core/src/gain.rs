@@ -111,19 +111,16 @@ impl RayStops {
             .any(|&e| self.stops[(e >> 8) as usize] as u32 >= (e & 0xff))
     }
 
-    /// Whether the cell `c`, if it did not block, was visible from `p` and within range, so
-    /// that it counted exactly when it satisfied the predicate `counts`: a ray from `p` read
-    /// it, and its centre is within range. `None` when the stops are not kept. (A cell a ray
-    /// read and that does not block is not where the ray stopped: the rays read it on their
-    /// way.)
+    /// Whether a ray from `p` read the cell `c`, and whether its centre is within range: a
+    /// cell read that does not block is not where a ray stopped (the rays read it on their
+    /// way), so it counted exactly when within range and satisfying the predicate `counts`.
+    /// `None` when the stops are not kept.
     #[inline]
-    pub fn counted_if_open(&self, p: Cell, c: Cell) -> Option<bool> {
+    pub fn read_in_range(&self, p: Cell, c: Cell) -> Option<(bool, bool)> {
         let cells = self.cells.as_ref()?;
-        Some(
-            cells
-                .square_index(p, c)
-                .is_some_and(|j| cells.in_range[j] && self.read_at(cells, j)),
-        )
+        Some(cells.square_index(p, c).map_or((false, false), |j| {
+            (self.read_at(cells, j), cells.in_range[j])
+        }))
     }
 }
 
@@ -633,7 +630,7 @@ pub fn information_gain_read(grid: &OccupancyGrid, p: Cell, range_m: f64) -> (f6
 /// [`information_gain_read`] as a number of cells: the unknown cells visible from `p`. (Only
 /// an occupied cell blocks and only an unknown one counts, so while no cell read changes
 /// whether it is occupied, the count falls by one for each cell read within range that stops
-/// being unknown: [`RayStops::counted_if_open`].)
+/// being unknown: [`RayStops::read_in_range`].)
 pub fn information_count_read(grid: &OccupancyGrid, p: Cell, range_m: f64) -> (usize, CellsRead) {
     // (The cells as a slice: the predicates then read them without going through `grid`.)
     let data = &grid.data[..];

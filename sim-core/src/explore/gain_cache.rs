@@ -355,19 +355,15 @@ impl GainCache {
                 let k = changed.trailing_zeros();
                 changed &= changed - 1;
                 let c = Cell::new(x0 + k as i32, y);
-                if !read.may_have_read(p, c) {
-                    continue;
-                }
-                // Read: with the rays' stops kept and no change of whether it blocks (its last
-                // change was not one), it stopped being unknown after `at` and did not block
-                // then or since.
-                let stamp = row[k as usize];
-                match (count && stamp & BLOCKING == 0)
-                    .then(|| read.rays.counted_if_open(p, c))
-                    .flatten()
-                {
-                    Some(visible) => opened += visible as usize,
-                    None => return Since::Changed,
+                // With the rays' stops kept, a cell whose last change was not of whether it
+                // blocks stopped being unknown after `at` and did not block then or since: if
+                // read, it counted then when within range, and counts no more.
+                let opened_cell = count && row[k as usize] & BLOCKING == 0;
+                match opened_cell.then(|| read.rays.read_in_range(p, c)).flatten() {
+                    Some((false, _)) => {}
+                    Some((true, in_range)) => opened += in_range as usize,
+                    None if read.may_have_read(p, c) => return Since::Changed,
+                    None => {}
                 }
             }
         }
