@@ -275,7 +275,7 @@ fn main() {
         arg(&args, "--repeat").unwrap_or("1"),
     );
     println!(
-        "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10} {:>7} {:>6} {:>7} {:>8} {:>6} {:>6} {:>8}",
+        "{:<7} {:>7} {:>8} {:<10} {:>7} {:>9} {:>8} {:>9} {:>8} {:>9} {:>10} {:>7} {:>6} {:>7} {:>8} {:>6} {:>6} {:>10}",
         "kind",
         "area",
         "free m2",
@@ -298,13 +298,15 @@ fn main() {
     let repeat: usize = arg(&args, "--repeat")
         .unwrap_or("1")
         .parse()
-        .expect("--repeat: a number of runs");
+        .ok()
+        .filter(|&n| n > 0)
+        .expect("--repeat: a number of runs, at least 1");
     let mut rows: Vec<Row> = Vec::new();
     for kind in &kinds {
         for area in &areas {
             // Each strategy's runs on this building, the strategies alternating per round.
             let mut runs: Vec<Vec<Row>> = vec![Vec::new(); strategies.len()];
-            for _ in 0..repeat.max(1) {
+            for _ in 0..repeat {
                 for (k, strategy) in strategies.iter().enumerate() {
                     runs[k].push(measure(&args, kind, area, strategy));
                 }
@@ -346,6 +348,6 @@ fn main() {
         }
     }
     println!("vs 1000: speed / the same kind's and strategy's first area's; vs base: speed / the first strategy's on the same building");
-    println!("m2/s: area explored per simulated s, ms/m2: wall ms per m2 explored, both up to 90 % explored (or the run's end); m2 vs 1000: the first area's ms/m2 / this one's (the speed per area explored, not per simulated s: docs/scale.md)");
+    println!("m2/s: area explored per simulated s, ms/m2: wall ms per m2 explored, both up to {} % explored (or the run's end); m2 vs 1000: the first area's ms/m2 / this one's (the speed per area explored, not per simulated s: docs/scale.md)", EXPLORING_UNTIL * 100.0);
     println!("dec/ks: decisions per 1000 simulated s; cand: candidates per decision (mean); ms/dec: wall ms per decision (the whole run's wall time / decisions); layouts: layouts computed");
 }
