@@ -5,7 +5,8 @@
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, ChildStdin, Command, Stdio};
-use std::sync::mpsc::{self, Receiver};
+use std::collections::VecDeque;
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -86,12 +87,46 @@ impl Stderr {
     }
 }
 
+/// The program's stdout as its reader passes it on: in batches of the lines that arrived
+/// together (read from the pipe at once), so that a second line written with the first is
+/// already here when the first is taken, never still on its way (a race that blamed an
+/// unasked answer on the next message).
+pub(super) struct Lines {
+    rx: Receiver<Vec<Line>>,
+    pending: VecDeque<Line>,
+}
+
+impl Lines {
+    /// The next line if one has arrived and is text (an end of the pipe is left to be read).
+    pub(super) fn try_recv_text(&mut self) -> Option<String> {
+        if self.pending.is_empty() {
+            self.pending.extend(self.rx.try_recv().ok()?);
+        }
+        match self.pending.pop_front()? {
+            Line::Text(t) => Some(t),
+            other => {
+                self.pending.push_front(other);
+                None
+            }
+        }
+    }
+
+    /// The next line, waiting at most `timeout` for it.
+    pub(super) fn recv_timeout(&mut self, timeout: Duration) -> Result<Line, RecvTimeoutError> {
+        if self.pending.is_empty() {
+            self.pending.extend(self.rx.recv_timeout(timeout)?);
+        }
+        // A batch is never empty (`read_lines`); an empty one reads as the pipe closed.
+        self.pending.pop_front().ok_or(RecvTimeoutError::Disconnected)
+    }
+}
+
 /// A started program's pipes, each served by a thread of its own.
 pub(super) struct Pipes {
     /// Lines to write to the program's stdin (`None` once closed).
     pub(super) stdin: Option<mpsc::Sender<String>>,
     /// The program's stdout, line by line.
-    pub(super) lines: Receiver<Line>,
+    pub(super) lines: Lines,
     pub(super) stderr: Arc<Mutex<Stderr>>,
     stderr_reader: Option<std::thread::JoinHandle<()>>,
 }
@@ -148,8 +183,12 @@ fn start_pipes(child: &mut Child) -> std::io::Result<Pipes> {
     };
     let stdout = child.stdout.take().expect("stdout is piped");
     let stderr_pipe = child.stderr.take().expect("stderr is piped");
-    let (tx, lines) = mpsc::channel();
+    let (tx, rx) = mpsc::channel();
     crate::spawn_thread(move || read_lines(stdout, tx))?;
+    let lines = Lines {
+        rx,
+        pending: VecDeque::new(),
+    };
     let stderr = Arc::new(Mutex::new(Stderr::default()));
     let sink = Arc::clone(&stderr);
     let stderr_reader = Some(crate::spawn_thread(move || read_stderr(stderr_pipe, sink))?);
@@ -218,26 +257,37 @@ fn write_lines(mut pipe: ChildStdin, lines: mpsc::Receiver<String>) {
     }
 }
 
-fn read_lines(stdout: impl Read, tx: mpsc::Sender<Line>) {
+/// Reads `stdout` line by line and passes the lines on in batches: a line and those that arrived
+/// with it (already in the reader's buffer, complete) go together.
+fn read_lines(stdout: impl Read, tx: mpsc::Sender<Vec<Line>>) {
     let mut r = BufReader::new(stdout);
     loop {
-        let mut buf = Vec::new();
-        let line = match (&mut r)
-            .take(MAX_LINE as u64 + 1)
-            .read_until(b'\n', &mut buf)
-        {
-            Ok(0) => Line::Eof,
-            Ok(_) if buf.last() != Some(&b'\n') && buf.len() > MAX_LINE => Line::TooLong,
-            Ok(_) => {
-                let text = String::from_utf8_lossy(&buf);
-                Line::Text(text.trim_end_matches(['\n', '\r']).to_string())
+        let mut batch = Vec::new();
+        let done = loop {
+            let line = read_line(&mut r);
+            let done = !matches!(line, Line::Text(_));
+            batch.push(line);
+            if done || !r.buffer().contains(&b'\n') {
+                break done;
             }
-            Err(e) => Line::Failed(e.to_string()),
         };
-        let done = !matches!(line, Line::Text(_));
-        if tx.send(line).is_err() || done {
+        if tx.send(batch).is_err() || done {
             return;
         }
+    }
+}
+
+/// One line of at most [`MAX_LINE`] bytes.
+fn read_line(r: &mut BufReader<impl Read>) -> Line {
+    let mut buf = Vec::new();
+    match r.take(MAX_LINE as u64 + 1).read_until(b'\n', &mut buf) {
+        Ok(0) => Line::Eof,
+        Ok(_) if buf.last() != Some(&b'\n') && buf.len() > MAX_LINE => Line::TooLong,
+        Ok(_) => {
+            let text = String::from_utf8_lossy(&buf);
+            Line::Text(text.trim_end_matches(['\n', '\r']).to_string())
+        }
+        Err(e) => Line::Failed(e.to_string()),
     }
 }
 
@@ -313,5 +363,76 @@ mod tests {
         let kept = s.kept();
         assert!(kept.ends_with(&format!("001999 {line}")), "the last line");
         assert!(kept.starts_with("[floorcast: the first "));
+    }
+
+    /// A reader that hands out its chunks one `read` at a time, as a pipe does.
+    struct Chunks(VecDeque<Vec<u8>>);
+
+    impl Read for Chunks {
+        fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+            let Some(mut chunk) = self.0.pop_front() else {
+                return Ok(0);
+            };
+            let n = chunk.len().min(out.len());
+            out[..n].copy_from_slice(&chunk[..n]);
+            if n < chunk.len() {
+                self.0.push_front(chunk.split_off(n));
+            }
+            Ok(n)
+        }
+    }
+
+    fn texts(batch: &[Line]) -> Vec<String> {
+        batch
+            .iter()
+            .map(|l| match l {
+                Line::Text(t) => t.clone(),
+                Line::Eof => "<eof>".into(),
+                Line::TooLong => "<too long>".into(),
+                Line::Failed(e) => format!("<failed {e}>"),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn lines_that_arrive_together_are_passed_on_together() {
+        // (chunks as the pipe delivers them, batches expected)
+        let cases: &[(&[&str], &[&[&str]])] = &[
+            (&["a\nb\n"], &[&["a", "b"], &["<eof>"]]),
+            (&["a\n", "b\n"], &[&["a"], &["b"], &["<eof>"]]),
+            (&["a\nb", "c\n"], &[&["a"], &["bc"], &["<eof>"]]),
+            (&["a\r\nb\nc\n", "d"], &[&["a", "b", "c"], &["d"], &["<eof>"]]),
+            (&[""], &[&["<eof>"]]),
+        ];
+        for (chunks, expected) in cases {
+            let reader = Chunks(chunks.iter().map(|c| c.as_bytes().to_vec()).collect());
+            let (tx, rx) = mpsc::channel();
+            read_lines(reader, tx);
+            let got: Vec<Vec<String>> = rx.iter().map(|b| texts(&b)).collect();
+            assert_eq!(got, *expected, "{chunks:?}");
+        }
+    }
+
+    #[test]
+    fn an_early_line_is_taken_but_an_end_is_left_to_be_read() {
+        let (tx, rx) = mpsc::channel();
+        let mut lines = Lines {
+            rx,
+            pending: VecDeque::new(),
+        };
+        assert!(lines.try_recv_text().is_none(), "nothing has arrived");
+        tx.send(vec![Line::Text("one".into()), Line::Text("two".into())])
+            .unwrap();
+        tx.send(vec![Line::Eof]).unwrap();
+        drop(tx);
+        let wait = Duration::from_millis(10);
+        assert!(matches!(lines.recv_timeout(wait), Ok(Line::Text(t)) if t == "one"));
+        assert_eq!(lines.try_recv_text().as_deref(), Some("two"), "sent with one");
+        assert!(lines.try_recv_text().is_none(), "the end is not text");
+        assert!(matches!(lines.recv_timeout(wait), Ok(Line::Eof)), "and is kept");
+        assert!(matches!(
+            lines.recv_timeout(wait),
+            Err(RecvTimeoutError::Disconnected)
+        ));
     }
 }

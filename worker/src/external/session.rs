@@ -199,7 +199,7 @@ impl ExternalStrategy {
         // A line waiting before `msg` is sent was not asked for (a second answer to the last
         // message, or one written ahead): taken as the answer to `msg`, it would be blamed on
         // the wrong message. (A program that ended is told by the `recv` below.)
-        if let Ok(Line::Text(early)) = self.pipes.lines.try_recv() {
+        if let Some(early) = self.pipes.lines.try_recv_text() {
             return Err(format!(
                 "sent a line before it was asked for (after {}, before {what}): '{}'; a strategy answers each message once, after reading it (logs go to stderr)",
                 self.last_asked,
