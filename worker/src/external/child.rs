@@ -3,9 +3,9 @@
 //! their own ([`Pipes`]), so that a program that stops reading or writing blocks a thread,
 //! never the run.
 
+use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, ChildStdin, Command, Stdio};
-use std::collections::VecDeque;
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -117,7 +117,9 @@ impl Lines {
             self.pending.extend(self.rx.recv_timeout(timeout)?);
         }
         // A batch is never empty (`read_lines`); an empty one reads as the pipe closed.
-        self.pending.pop_front().ok_or(RecvTimeoutError::Disconnected)
+        self.pending
+            .pop_front()
+            .ok_or(RecvTimeoutError::Disconnected)
     }
 }
 
@@ -401,7 +403,10 @@ mod tests {
             (&["a\nb\n"], &[&["a", "b"], &["<eof>"]]),
             (&["a\n", "b\n"], &[&["a"], &["b"], &["<eof>"]]),
             (&["a\nb", "c\n"], &[&["a"], &["bc"], &["<eof>"]]),
-            (&["a\r\nb\nc\n", "d"], &[&["a", "b", "c"], &["d"], &["<eof>"]]),
+            (
+                &["a\r\nb\nc\n", "d"],
+                &[&["a", "b", "c"], &["d"], &["<eof>"]],
+            ),
             (&[""], &[&["<eof>"]]),
         ];
         for (chunks, expected) in cases {
@@ -427,9 +432,16 @@ mod tests {
         drop(tx);
         let wait = Duration::from_millis(10);
         assert!(matches!(lines.recv_timeout(wait), Ok(Line::Text(t)) if t == "one"));
-        assert_eq!(lines.try_recv_text().as_deref(), Some("two"), "sent with one");
+        assert_eq!(
+            lines.try_recv_text().as_deref(),
+            Some("two"),
+            "sent with one"
+        );
         assert!(lines.try_recv_text().is_none(), "the end is not text");
-        assert!(matches!(lines.recv_timeout(wait), Ok(Line::Eof)), "and is kept");
+        assert!(
+            matches!(lines.recv_timeout(wait), Ok(Line::Eof)),
+            "and is kept"
+        );
         assert!(matches!(
             lines.recv_timeout(wait),
             Err(RecvTimeoutError::Disconnected)
