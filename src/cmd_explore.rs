@@ -81,6 +81,11 @@ pub struct ExploreArgs {
     /// settings file's).
     #[arg(long, value_name = "SECONDS", value_parser = crate::values::number)]
     time_limit_s: Option<f64>,
+    /// Layout strategies: rebuild the layout only once the known map grew by this fraction of
+    /// itself (as well as by 20 m²), in [0, 1] (default: 0.1, or the settings file's; 0: every
+    /// 20 m², the paper's trigger and the default before 0.7).
+    #[arg(long, value_name = "F", value_parser = crate::values::number)]
+    layout_update_fraction: Option<f64>,
     /// Settings file: a JSON object of run settings such as {"alpha": 0.8} (the settings are
     /// listed below); a flag given on the command line overrides the file's value.
     #[arg(long, value_name = "FILE")]
@@ -265,6 +270,9 @@ fn explore_settings(a: &ExploreArgs) -> Result<Settings> {
     }
     if let Some(d) = a.utility_distance {
         settings.utility_distance = d;
+    }
+    if let Some(f) = a.layout_update_fraction {
+        settings.layout_update_fraction = f;
     }
     settings.return_home |= a.return_home;
     settings.candidate_from_reachable_part |= a.candidate_from_reachable_part;

@@ -506,12 +506,20 @@ fn every_strategy_explores_a_real_map() {
 /// A generated building with a ring of corridors (paper-10, 3569 m2): before 0.3.0 the heading
 /// random-walked by up to 7 degrees around the ring, and this run ended with 98.5 % explored and
 /// a map whose walls overlapped the building's only after a 0.31 aligned precision (walls
-/// doubled, rooms drawn turned).
+/// doubled, rooms drawn turned). The run is that one, with the paper's layout trigger (the
+/// default before 0.7): its path, hence its map, depends on it. (The aligned precision of
+/// `layout` on paper-10 over seeds 1-8 is 0.74-0.93 with that trigger and 0.72-0.90 with the
+/// default, 2026-11-30: this seed's 0.92 is the best of both, and doubled walls gave 0.31.)
 #[test]
 fn a_ring_of_corridors_is_mapped_without_doubled_walls() {
     let dir = tempfile::tempdir().unwrap();
     let b = repo().join("buildings/paper/paper-10.toml");
-    let s = explore_with(&b, 6, dir.path(), &["--strategy", "layout"]);
+    let s = explore_with(
+        &b,
+        6,
+        dir.path(),
+        &["--strategy", "layout", "--layout-update-fraction", "0"],
+    );
     let f = s["explored_fraction"].as_f64().unwrap();
     assert!(f >= 0.97, "explored {f}");
     assert_eq!(s["end_reason"], "complete");

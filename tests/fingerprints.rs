@@ -13,40 +13,64 @@ fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// (case name, building path relative to the repository, strategy, seed).
-const CASES: &[(&str, &str, &str, u64)] = &[
-    ("small-baseline-1", "buildings/small.toml", "baseline", 1),
-    ("small-layout-1", "buildings/small.toml", "layout", 1),
-    ("small-layout-es-2", "buildings/small.toml", "layout-es", 2),
+/// (case name, building path relative to the repository, strategy, seed, settings changed from
+/// the defaults).
+const CASES: &[(&str, &str, &str, u64, Changed)] = &[
+    (
+        "small-baseline-1",
+        "buildings/small.toml",
+        "baseline",
+        1,
+        DEFAULT,
+    ),
+    (
+        "small-layout-1",
+        "buildings/small.toml",
+        "layout",
+        1,
+        DEFAULT,
+    ),
+    (
+        "small-layout-es-2",
+        "buildings/small.toml",
+        "layout-es",
+        2,
+        DEFAULT,
+    ),
     (
         "small-layout-aes-1",
         "buildings/small.toml",
         "layout-aes",
         1,
+        DEFAULT,
     ),
     (
         "small-layout-gaps-es-1",
         "buildings/small.toml",
         "layout-gaps-es",
         1,
+        DEFAULT,
     ),
     (
         "paper-01-baseline-1",
         "buildings/paper/paper-01.toml",
         "baseline",
         1,
+        DEFAULT,
     ),
     (
         "paper-01-layout-es-1",
         "buildings/paper/paper-01.toml",
         "layout-es",
         1,
+        DEFAULT,
     ),
     (
         "franch1-baseline-1",
         "maps/schools/Franch1.yaml",
         "baseline",
         1,
+        DEFAULT,
     ),
     // A real map with doorways the planning grid finds too narrow: decisions whose best
     // candidates have no path (the memo of what a failed search reached, `waypoints_to`).
@@ -55,6 +79,7 @@ const CASES: &[(&str, &str, &str, u64)] = &[
         "maps/radish/intel_map.yaml",
         "baseline",
         1,
+        DEFAULT,
     ),
     // An annotated plan (its doorways, start and rooms drawn by formats::floorplan) and the
     // true-layout oracle with its early stop (its layout open at the doors).
@@ -63,10 +88,33 @@ const CASES: &[(&str, &str, &str, u64)] = &[
         "maps/plans/Lamuniere1_updated.xml",
         "layout-truth-es",
         1,
+        DEFAULT,
+    ),
+    // The paper's layout trigger (`layout_update_fraction = 0`, the default before 0.7): the
+    // runs of the layout strategies as they were made before the default changed, which the
+    // grids that pin it reproduce (their fingerprints then were these).
+    (
+        "small-layout-es-2-paper-trigger",
+        "buildings/small.toml",
+        "layout-es",
+        2,
+        PAPER_TRIGGER,
+    ),
+    (
+        "paper-01-layout-es-1-paper-trigger",
+        "buildings/paper/paper-01.toml",
+        "layout-es",
+        1,
+        PAPER_TRIGGER,
     ),
 ];
 
-fn fingerprint(building: &Path, strategy: &str, seed: u64) -> String {
+/// The settings a case changes from the defaults: `layout_update_fraction`, if it sets one.
+type Changed = Option<f64>;
+const DEFAULT: Changed = None;
+const PAPER_TRIGGER: Changed = Some(0.0);
+
+fn fingerprint(building: &Path, strategy: &str, seed: u64, changed: Changed) -> String {
     let b = floorcast_formats::read_building(building).unwrap();
     let job = Job {
         building: &b,
@@ -74,7 +122,10 @@ fn fingerprint(building: &Path, strategy: &str, seed: u64) -> String {
         strategy: strategy.to_string(),
         program: None,
         seed,
-        settings: Settings::default(),
+        settings: Settings {
+            layout_update_fraction: changed.unwrap_or(Settings::default().layout_update_fraction),
+            ..Settings::default()
+        },
         start: None,
         snapshot_fractions: Vec::new(),
     };
@@ -86,10 +137,10 @@ fn reference_runs_keep_their_fingerprints() {
     let file = repo().join("tests/fingerprints.txt");
     let now: Vec<(String, String)> = CASES
         .iter()
-        .map(|&(name, path, strategy, seed)| {
+        .map(|&(name, path, strategy, seed, changed)| {
             (
                 name.to_string(),
-                fingerprint(&repo().join(path), strategy, seed),
+                fingerprint(&repo().join(path), strategy, seed, changed),
             )
         })
         .collect();

@@ -425,13 +425,15 @@ declare_settings! {
         number(0.1, 1000000.0), "m2",
         "Layout strategies: rebuild the layout when the known area grew by this much.",
         apply cfg.layout_use.update_m2 = layout_update_m2;
-    /// Layout strategies: ...and by this fraction of the known area (0 = off). Written only
-    /// when not the default, so that the records and job identities of runs with the default
-    /// are those of earlier versions.
-    #[serde(skip_serializing_if = "is_zero")]
+    /// Layout strategies: ...and by this fraction of the known area (0 = off, the paper's;
+    /// 0.1 by default since 0.7). Written only when not 0, and read as 0 where a record does
+    /// not have it (records written before it had another default, and runs of the paper's 0,
+    /// keep their meaning and job identities); a settings table without it (a grid, a
+    /// `--settings` file) gets the default ([`settings_from_map`]).
+    #[serde(skip_serializing_if = "is_zero", default)]
     layout_update_fraction: f64 = c.layout_use.update_fraction,
         number(0.0, 1.0), "",
-        "Layout strategies: ...and by this fraction of the known area (0 = off, the paper's; 0.1 keeps the layout's cost from growing with the building, tested no slower: docs/scale.md).",
+        "Layout strategies: ...and by this fraction of the known area (0 = off, the paper's; the default keeps the layout's cost from growing with the building, tested no slower: docs/scale.md).",
         apply cfg.layout_use.update_fraction = layout_update_fraction;
     /// Layout strategies: the layout's wall lines close gaps in observed walls up to this long (m).
     max_wall_gap_m: f64 = c.layout_use.max_wall_gap_m,
@@ -680,8 +682,13 @@ pub fn settings_from_map(
             info.check(&SettingValue::Word(w.to_string()))?;
         }
     }
-    let settings: Settings = serde_json::from_value(serde_json::Value::Object(map.clone()))
+    let mut settings: Settings = serde_json::from_value(serde_json::Value::Object(map.clone()))
         .map_err(|e| SettingsError::Shape(one_line(&e.to_string())))?;
+    // Serde reads a record without `layout_update_fraction` as 0 (see the field); a table
+    // without it asks for the default.
+    if !map.contains_key("layout_update_fraction") {
+        settings.layout_update_fraction = Settings::default().layout_update_fraction;
+    }
     settings.validate()?;
     Ok(settings)
 }
@@ -1258,6 +1265,52 @@ mod tests {
                 info.name
             );
         }
+    }
+
+    /// `layout_update_fraction` changed its default (0, the paper's, to 0.1): a record without
+    /// it was made with 0 and reads so (keeping its meaning and, written back, its job
+    /// identity), where a settings table without it asks for the default; every value is
+    /// written and read back as it was.
+    #[test]
+    fn a_record_without_the_layout_fraction_was_made_with_0_a_table_without_it_gets_the_default() {
+        let default = Settings::default().layout_update_fraction;
+        assert_eq!(default, 0.1);
+        let record: Settings = serde_json::from_str(r#"{"alpha": 0.5}"#).unwrap();
+        assert_eq!(record.layout_update_fraction, 0.0);
+        assert_eq!(record.alpha, 0.5);
+        let table = settings_from_json_text(r#"{"alpha": 0.5}"#).unwrap();
+        assert_eq!(table.layout_update_fraction, default);
+        assert_eq!(
+            table,
+            Settings {
+                alpha: 0.5,
+                ..Settings::default()
+            }
+        );
+        for (value, written) in [(0.0, false), (0.1, true), (0.025, true), (1.0, true)] {
+            let s = Settings {
+                layout_update_fraction: value,
+                ..Settings::default()
+            };
+            let json = serde_json::to_value(&s).unwrap();
+            assert_eq!(
+                json.get("layout_update_fraction").is_some(),
+                written,
+                "{value}"
+            );
+            assert_eq!(serde_json::from_value::<Settings>(json.clone()).unwrap(), s);
+            let map = json.as_object().unwrap();
+            assert_eq!(settings_from_map(map).unwrap().layout_update_fraction, {
+                if written {
+                    value
+                } else {
+                    default
+                }
+            });
+        }
+        // Written as 0 in a table, it is 0.
+        let paper = settings_from_json_text(r#"{"layout_update_fraction": 0}"#).unwrap();
+        assert_eq!(paper.layout_update_fraction, 0.0);
     }
 
     #[test]

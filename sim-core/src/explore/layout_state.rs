@@ -113,10 +113,10 @@ pub struct LayoutUse {
     /// The layout is recomputed at a decision when the known area changed by at least this much
     /// since the last layout (m2), so it follows the map without being rebuilt at every step.
     pub update_m2: f64,
-    /// And by at least this fraction of the known area (0: off, the default): on a large
-    /// building the layout, whose every rebuild reads the whole known map, is then rebuilt a
-    /// number of times that does not grow with the building (0.025: every 100 m² at 4000 m²
-    /// known, 300 m² at 12000 m²; docs/scale.md).
+    /// And by at least this fraction of the known area (0.1 by default since 0.7; 0: off, the
+    /// paper's): on a large building the layout, whose every rebuild reads the whole known map,
+    /// is then rebuilt a number of times that does not grow with the building (every 400 m² at
+    /// 4000 m² known; below 200 m² known `update_m2` decides alone; docs/scale.md).
     pub update_fraction: f64,
     /// Layout walls close gaps of unknown cells up to this long in an observed wall (m).
     pub max_wall_gap_m: f64,
@@ -131,7 +131,7 @@ impl Default for LayoutUse {
     fn default() -> Self {
         Self {
             update_m2: 20.0,
-            update_fraction: 0.0,
+            update_fraction: 0.1,
             max_wall_gap_m: 1.0,
             through_openings: true,
         }
