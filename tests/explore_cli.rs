@@ -509,7 +509,7 @@ fn every_strategy_explores_a_real_map() {
 /// doubled, rooms drawn turned). The run is that one, with the paper's layout trigger (the
 /// default before 0.7): its path, hence its map, depends on it. (The aligned precision of
 /// `layout` on paper-10 over seeds 1-8 is 0.74-0.93 with that trigger and 0.72-0.90 with the
-/// default, 2026-11-30: this seed's 0.92 is the best of both, and doubled walls gave 0.31.)
+/// default, 2026-11-30: this seed's 0.92 is among the best of both; doubled walls gave 0.31.)
 #[test]
 fn a_ring_of_corridors_is_mapped_without_doubled_walls() {
     let dir = tempfile::tempdir().unwrap();
