@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use floorcast_coordinator::grid::normal_heading_deg;
 use floorcast_worker::external::ExternalStrategy;
 use floorcast_worker::settings::{LocalizationSetting, UtilityDistanceSetting};
 use floorcast_worker::{
@@ -414,12 +415,22 @@ fn parse_start(s: &str) -> Result<StartArg, String> {
     }
     let pose = parse_pose(s)?;
     let deg = s.rsplit(',').next().unwrap_or("").trim();
-    if !(-360.0..=360.0).contains(&pose.theta_rad.to_degrees()) {
+    // (`parse_pose` has read it as a finite number.)
+    let heading: f64 = deg
+        .parse()
+        .map_err(|_| format!("'{deg}' in '{s}' is not a number"))?;
+    if !(-360.0..=360.0).contains(&heading) {
         return Err(format!(
             "heading {deg} in '{s}' is outside [-360, 360] degrees (expected x,y,theta with theta in degrees, or random)"
         ));
     }
-    Ok(StartArg::Pose(pose))
+    // One heading, one start pose, as a grid's `[starts]` reads it: 360 starts the run 0 does,
+    // -180 the run 180 does, and `explore` reproduces a grid's job bit for bit.
+    Ok(StartArg::Pose(sim_core::Pose::new(
+        pose.x_m,
+        pose.y_m,
+        normal_heading_deg(heading).to_radians(),
+    )))
 }
 
 /// `progress.csv`: as the results store keeps a run's curve.

@@ -8,6 +8,44 @@ fn explore(building: &std::path::Path, seed: u64, out: &std::path::Path) -> serd
     explore_with(building, seed, out, &["--strategy", "baseline"])
 }
 
+/// `--start X,Y,THETA` reads a heading as a grid's `[starts]` does: one angle of (-180, 180], so
+/// that 360 starts the run 0 does (to the bit: its trajectory and decisions), and an `explore`
+/// reproduces a grid's job.
+#[test]
+fn a_start_heading_is_one_angle_whichever_way_it_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = repo().join("buildings/small.toml");
+    let own = explore_with(&b, 1, &dir.path().join("own"), &["--time-limit-s", "60"]);
+    let (x, y) = (
+        own["start"][0].as_f64().unwrap(),
+        own["start"][1].as_f64().unwrap(),
+    );
+    // (heading as written, the same heading in (-180, 180], its radians as recorded)
+    let cases: &[(&str, &str, f64)] = &[
+        ("360", "0", 0.0),
+        ("-180", "180", std::f64::consts::PI),
+        ("-270", "90", std::f64::consts::FRAC_PI_2),
+        ("270", "-90", -std::f64::consts::FRAC_PI_2),
+        ("-45", "-45", -std::f64::consts::FRAC_PI_4),
+    ];
+    for (i, (written, normal, radians)) in cases.iter().enumerate() {
+        let run = |heading: &str, name: &str| {
+            let out = dir.path().join(format!("{i}-{name}"));
+            let start = format!("{x},{y},{heading}");
+            let s = explore_with(&b, 1, &out, &["--start", &start, "--time-limit-s", "60"]);
+            let read = |f: &str| std::fs::read_to_string(out.join(f)).unwrap();
+            (s, read("trajectory.csv"), read("decisions.csv"))
+        };
+        let (a, b_) = (run(written, "written"), run(normal, "normal"));
+        assert_eq!(a.0["start"], b_.0["start"], "{written}");
+        assert_eq!(a.0["start"][2].as_f64(), Some(*radians), "{written}");
+        assert!(
+            a.1 == b_.1 && a.2 == b_.2,
+            "{written}: another run than {normal}"
+        );
+    }
+}
+
 #[test]
 fn explores_the_small_building_completely_and_reproducibly() {
     let dir = tempfile::tempdir().unwrap();
