@@ -7,13 +7,13 @@ use anyhow::{Context, Result};
 use clap::Args;
 use floorcast_coordinator::grid::normal_heading_deg;
 use floorcast_worker::external::ExternalStrategy;
-use floorcast_worker::settings::{LocalizationSetting, UtilityDistanceSetting};
+use floorcast_worker::settings::{fmt_num, LocalizationSetting, UtilityDistanceSetting};
 use floorcast_worker::{
     check_job, check_start, run_job, strategy_names, GivenStart, Job, Settings, StrategyProgram,
 };
 use sim_core::explore::{EndReason, RunResult};
 
-use crate::output::{parse_pose, progress_bar, write_text, Picture};
+use crate::output::{parse_pose_deg, progress_bar, write_text, Picture};
 
 #[derive(Debug, Args)]
 #[command(
@@ -413,22 +413,18 @@ fn parse_start(s: &str) -> Result<StartArg, String> {
     if s.trim() == "random" {
         return Ok(StartArg::Random);
     }
-    let pose = parse_pose(s)?;
-    let deg = s.rsplit(',').next().unwrap_or("").trim();
-    // (`parse_pose` has read it as a finite number.)
-    let heading: f64 = deg
-        .parse()
-        .map_err(|_| format!("'{deg}' in '{s}' is not a number"))?;
+    let [x, y, heading] = parse_pose_deg(s)?;
     if !(-360.0..=360.0).contains(&heading) {
         return Err(format!(
-            "heading {deg} in '{s}' is outside [-360, 360] degrees (expected x,y,theta with theta in degrees, or random)"
+            "heading {} in '{s}' is outside [-360, 360] degrees (expected x,y,theta with theta in degrees, or random)",
+            fmt_num(heading)
         ));
     }
     // One heading, one start pose, as a grid's `[starts]` reads it: 360 starts the run 0 does,
     // -180 the run 180 does, and `explore` reproduces a grid's job bit for bit.
     Ok(StartArg::Pose(sim_core::Pose::new(
-        pose.x_m,
-        pose.y_m,
+        x,
+        y,
         normal_heading_deg(heading).to_radians(),
     )))
 }

@@ -46,8 +46,8 @@ pub fn progress_bar(len: u64, quiet: bool, template: &str) -> ProgressBar {
     pb
 }
 
-/// Parses "x,y,theta" (metres, metres, degrees).
-pub fn parse_pose(s: &str) -> Result<sim_core::Pose, String> {
+/// Parses "x,y,theta" into its three finite numbers as written (metres, metres, degrees).
+pub fn parse_pose_deg(s: &str) -> Result<[f64; 3], String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 3 {
         return Err(format!(
@@ -62,7 +62,7 @@ pub fn parse_pose(s: &str) -> Result<sim_core::Pose, String> {
             .filter(|x| x.is_finite())
             .ok_or_else(|| format!("'{p}' in '{s}' is not a finite number (expected x,y,theta)"))?;
     }
-    Ok(sim_core::Pose::new(v[0], v[1], v[2].to_radians()))
+    Ok(v)
 }
 
 /// Ctrl-C ends floorcast at once (exit code 130) and every strategy program with everything it

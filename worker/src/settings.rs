@@ -429,7 +429,7 @@ declare_settings! {
     /// 0.1 by default since 0.7). Written only when not 0, and read as 0 where a record does
     /// not have it (records written before it had another default, and runs of the paper's 0,
     /// keep their meaning and job identities); a settings table without it (a grid, a
-    /// `--settings` file) gets the default ([`settings_from_map`]).
+    /// `--settings` file) gets the default, as every setting ([`settings_from_map`]).
     #[serde(skip_serializing_if = "is_zero", default)]
     layout_update_fraction: f64 = c.layout_use.update_fraction,
         number(0.0, 1.0), "",
@@ -682,13 +682,15 @@ pub fn settings_from_map(
             info.check(&SettingValue::Word(w.to_string()))?;
         }
     }
-    let mut settings: Settings = serde_json::from_value(serde_json::Value::Object(map.clone()))
+    // The table's settings over the defaults: what a table leaves out is at its default, where
+    // serde reads a record that lacks a setting as it was made (`layout_update_fraction`: 0).
+    let mut table = match serde_json::to_value(Settings::default()) {
+        Ok(serde_json::Value::Object(defaults)) => defaults,
+        _ => serde_json::Map::new(),
+    };
+    table.extend(map.iter().map(|(k, v)| (k.clone(), v.clone())));
+    let settings: Settings = serde_json::from_value(serde_json::Value::Object(table))
         .map_err(|e| SettingsError::Shape(one_line(&e.to_string())))?;
-    // Serde reads a record without `layout_update_fraction` as 0 (see the field); a table
-    // without it asks for the default.
-    if !map.contains_key("layout_update_fraction") {
-        settings.layout_update_fraction = Settings::default().layout_update_fraction;
-    }
     settings.validate()?;
     Ok(settings)
 }
