@@ -105,9 +105,13 @@ fn case(args: &[String]) {
     let layout_update_fraction: f64 = arg(args, "--layout-update-fraction")
         .map_or(Ok(Settings::default().layout_update_fraction), str::parse)
         .expect("--layout-update-fraction: a number");
+    let distance_bound_m: f64 = arg(args, "--distance-bound-m")
+        .map_or(Ok(Settings::default().distance_bound_m), str::parse)
+        .expect("--distance-bound-m: a number");
     let settings = Settings {
         time_limit_s: sim_s,
         layout_update_fraction,
+        distance_bound_m,
         ..Settings::default()
     };
     let job = Job {
@@ -211,6 +215,7 @@ fn measure(args: &[String], kind: &str, area: &str, strategy: &str) -> Row {
         "--run-seed",
         "--max-cells",
         "--layout-update-fraction",
+        "--distance-bound-m",
     ] {
         if let Some(v) = arg(args, k) {
             cmd.args([k, v]);

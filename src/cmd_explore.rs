@@ -87,6 +87,12 @@ pub struct ExploreArgs {
     /// 20 m², the paper's trigger and the default before 0.7).
     #[arg(long, value_name = "F", value_parser = crate::values::number)]
     layout_update_fraction: Option<f64>,
+    /// Bound each decision's distance search to paths this long, in metres, 0 to 10000
+    /// (default: 0 = off, the paper's exact distances, or the settings file's); farther
+    /// candidates take the lengths of the last whole search, and a choice beyond the bound is
+    /// made again exactly (built-in strategies; docs/scale.md).
+    #[arg(long, value_name = "METRES", value_parser = crate::values::number)]
+    distance_bound_m: Option<f64>,
     /// Settings file: a JSON object of run settings such as {"alpha": 0.8} (the settings are
     /// listed below); a flag given on the command line overrides the file's value.
     #[arg(long, value_name = "FILE")]
@@ -274,6 +280,9 @@ fn explore_settings(a: &ExploreArgs) -> Result<Settings> {
     }
     if let Some(f) = a.layout_update_fraction {
         settings.layout_update_fraction = f;
+    }
+    if let Some(b) = a.distance_bound_m {
+        settings.distance_bound_m = b;
     }
     settings.return_home |= a.return_home;
     settings.candidate_from_reachable_part |= a.candidate_from_reachable_part;

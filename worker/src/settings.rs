@@ -329,6 +329,17 @@ declare_settings! {
         SettingKind::Choice(&["path", "euclidean"]), "",
         "The utility's distance: the planned path's length, or the straight line (the paper's).",
         apply cfg.utility_distance = utility_distance.into();
+    /// Bound each decision's distance search to paths of this length (m; 0 = off, the paper's
+    /// exact distances at every decision); candidates beyond take their path lengths from the
+    /// last search of everything reachable, made within a quarter of the bound of where the
+    /// robot stands, and a decision that heads beyond the bound, passes or stops is made again
+    /// with every distance searched. Built-in strategies only. Written only when not 0, so that
+    /// the records and job identities of runs without it are those of earlier versions.
+    #[serde(skip_serializing_if = "is_zero", default)]
+    distance_bound_m: f64 = c.distance_bound_m,
+        number(0.0, 10000.0), "m",
+        "Bound each decision's distance search to paths this long; farther candidates take the lengths of the last whole search, made within a quarter of it, and a choice beyond it is made again exactly (0 = off, the paper's exact distances; built-in strategies: docs/scale.md).",
+        apply cfg.distance_bound_m = distance_bound_m;
     /// Frontiers shorter than this are ignored (m).
     min_frontier_m: f64 = c.min_frontier_m,
         number(0.0, 100.0), "m",
@@ -1042,6 +1053,7 @@ mod tests {
             utility_exp_lambda_per_m: 0.5,
             cost_utility_beta_m2_per_m: 2.0,
             layout_update_fraction: 0.025,
+            distance_bound_m: 20.0,
             ..Settings::default()
         };
         let v = serde_json::to_value(&all_written).unwrap();

@@ -24,7 +24,7 @@ impl Explorer<'_> {
         }
         // The new goals need distances that are final: search everything if the search stopped
         // at its targets.
-        let plan = if plan.field.is_complete() {
+        let plan = if plan.is_complete() {
             plan
         } else {
             self.plan(&[])
@@ -159,7 +159,7 @@ impl Explorer<'_> {
         let use_layout = self.refresh_layout();
         let targets: Vec<Cell> = goals.iter().flatten().copied().collect();
         self.plans += 1;
-        let mut plan = self.plan(&targets);
+        let mut plan = self.plan_bounded(&targets);
         // The frontiers' own middle cells first (the paper's rule), unless the settings ask
         // for the reachable part of every frontier from the start; as a last resort, before
         // ending the run with frontiers left, their reachable parts: exploration does not end
@@ -171,7 +171,14 @@ impl Explorer<'_> {
         let (scores, best, wps) = loop {
             let scores = self.score(&frontiers, &goals, &plan, use_layout);
             // `None` when the strategy says stop.
+            let counted = self.policy_decisions;
             let chosen = match self.choose(&frontiers, &mut goals, &plan, scores, use_layout) {
+                Choice::Inexact => {
+                    // (The same decision asked again: counted once.)
+                    self.policy_decisions = counted;
+                    plan = self.plan_all();
+                    continue;
+                }
                 Choice::Decided(result) => return Planned::Done(result),
                 Choice::Stop => None,
                 Choice::Nothing => Some(None),
@@ -231,6 +238,8 @@ impl Explorer<'_> {
         };
         let goal_cell = goals[best].expect("best candidate is reachable");
         let score = scores[best];
+        self.nav
+            .chose(plan.distance_m(goal_cell), cfg.distance_bound_m);
         Planned::Done(self.set_goal(&frontiers, best, goal_cell, wps, Some(score)))
     }
 
@@ -323,7 +332,22 @@ impl Explorer<'_> {
                 use_layout,
                 unreachable_goal: unreachable_goal.take(),
             };
-            match self.ask_policy(frontiers, goals, plan, &scores, asked) {
+            let answer = self.ask_policy(frontiers, goals, plan, &scores, asked);
+            // An answer from a bounded search stands when it heads for a goal within the bound;
+            // a stop, a pass or a goal beyond is asked again with every distance searched.
+            let inexact = match &answer {
+                Answer::Stop | Answer::Nothing => !plan.is_exact(),
+                Answer::One(best) => goals[*best].is_some_and(|c| !plan.is_exact_at(c)),
+                Answer::Ranked(ids) => ids
+                    .first()
+                    .and_then(|&id| goals[id])
+                    .is_some_and(|c| !plan.is_exact_at(c)),
+                Answer::Drop(_) | Answer::Point(_) => false,
+            };
+            if inexact {
+                return Choice::Inexact;
+            }
+            match answer {
                 Answer::Stop => return Choice::Stop,
                 Answer::Nothing => return Choice::Nothing,
                 Answer::Drop(ids) => {
@@ -721,6 +745,9 @@ pub(super) enum Planned {
 
 /// What the policy chose within one round of a decision (see `Explorer::choose`).
 enum Choice {
+    /// The answer rests on distances beyond a bounded search ([`Plan::is_exact_at`]): to be
+    /// asked again with every distance searched.
+    Inexact,
     /// The strategy says stop.
     Stop,
     /// No candidate with a path (or the policy passed).

@@ -93,7 +93,8 @@ use crate::mapping::ray::{grid_from_world, walk_segment};
 use crate::mapping::scan_match::{match_scan, ScanMatchConfig};
 use crate::plan::coarse::CoarseCosts;
 use crate::plan::dijkstra::{
-    dijkstra_padded, dijkstra_padded_within, padded_index, AStar, CostField,
+    dijkstra_padded, dijkstra_padded_bounded, dijkstra_padded_within, padded_index, AStar,
+    CostField,
 };
 use crate::plan::inflate::{nearest_by, Traversability};
 use crate::plan::waypoints::waypoints_by;
@@ -200,6 +201,15 @@ pub struct ExploreConfig {
     /// What the utility's `D(p)` measures: the planned path's length (default) or, as in the
     /// paper, the straight line from the robot to the candidate.
     pub utility_distance: UtilityDistance,
+    /// Bound the distance search of a decision to paths of this length (m; 0 = off, the
+    /// paper's: every candidate's path searched at every decision, which on a large building is
+    /// most of the known map each time). With a bound, candidates beyond it take their path
+    /// lengths from the last search of everything reachable, made within `bound / 4` of where
+    /// the robot stands (an approximation of `Dmax` and of far candidates' `D(p)`), and a
+    /// choice of a candidate beyond the bound, a pass or a stop is made again with every
+    /// distance searched: the robot heads only for goals whose distance is exact. Built-in
+    /// strategies only (a strategy of the caller's is asked once per decision). docs/scale.md.
+    pub distance_bound_m: f64,
     /// Frontiers shorter than this are ignored.
     pub min_frontier_m: f64,
     /// Frontier cells closer than this to an observed obstacle are ignored (m; 0 = none, the
@@ -275,6 +285,7 @@ impl Default for ExploreConfig {
             layout: crate::layout::LayoutConfig::default(),
             layout_use: LayoutUse::default(),
             utility_distance: UtilityDistance::Path,
+            distance_bound_m: 0.0,
             min_frontier_m: 0.5,
             frontier_clearance_m: 0.0,
             candidate_from_reachable_part: false,

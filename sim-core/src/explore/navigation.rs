@@ -60,6 +60,22 @@ pub(super) struct Navigator {
     /// no path either (a decision whose best candidates lie beyond a gap too narrow for the
     /// planning grid asks for many).
     unreachable_memo: Option<UnreachableMemo>,
+    /// The last search of everything reachable made by a plan bounded by distance
+    /// ([`Navigator::plan`] with a radius), whose distances the candidates beyond the radius take.
+    stale: Option<StaleField>,
+    /// Whether the last decision headed for a goal beyond the bound of a bounded plan: the next
+    /// then searches everything at once (late in a run every candidate is far, and a bounded
+    /// search would only be made again).
+    chose_beyond: bool,
+}
+
+/// See [`Navigator::stale`].
+#[derive(Debug, Clone)]
+struct StaleField {
+    field: Arc<CostField>,
+    /// Where the robot stood (world) and the planning level then.
+    from: Vec2,
+    planning: Planning,
 }
 
 /// See [`Navigator::unreachable_memo`].
@@ -92,6 +108,8 @@ impl Navigator {
             corridor: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
             planning_generation: 0,
             unreachable_memo: None,
+            stale: None,
+            chose_beyond: false,
         }
     }
 
@@ -114,6 +132,8 @@ impl Navigator {
             corridor: self.corridor.clone(),
             planning_generation: self.planning_generation,
             unreachable_memo: self.unreachable_memo.clone(),
+            stale: self.stale.clone(),
+            chose_beyond: self.chose_beyond,
         }
     }
 
@@ -273,12 +293,25 @@ impl Navigator {
     /// planning grid ([`Plan::waypoints_to`]). A robot closer to a wall than the inflation
     /// radius starts from the nearest passable cell (it then first drives out). The robot
     /// stands at `robot` (world) on the map `seen`.
-    pub(super) fn plan(&mut self, seen: Seen, robot: Vec2, targets: &[Cell]) -> Plan {
+    ///
+    /// With `bound_m > 0` (an approximation, not the paper's: `ExploreConfig::distance_bound_m`)
+    /// the search is bounded to paths of `bound_m`, and the targets beyond take their distances
+    /// from the last search of everything reachable, made from where the robot stood at most
+    /// `bound_m / 4` away; a target neither search reaches reads as unreachable. A robot farther
+    /// away, another planning level, no target reached, or a last decision that headed beyond
+    /// the bound ([`Self::chose`]) makes a new search of everything.
+    pub(super) fn plan(
+        &mut self,
+        seen: Seen,
+        robot_m: Vec2,
+        targets: &[Cell],
+        bound_m: f64,
+    ) -> Plan {
         self.refresh(seen);
         #[cfg(test)]
         self.check_planning_grids(seen);
         let radius_m = self.inflation_m();
-        let robot = seen.map.frame.cell_from_world(robot);
+        let robot = seen.map.frame.cell_from_world(robot_m);
         let start_on = |grid: &CoarseCosts| start_cell(grid, robot, radius_m);
         let far = Arc::clone(&self.far);
         let start = start_on(&far);
@@ -287,6 +320,40 @@ impl Navigator {
             .filter_map(|c| far.passable_near(*c, far_search_cells()))
             .collect();
         let window = self.far_window(seen.map);
+        let near_start = start_on(&self.coarse);
+        if bound_m > 0.0 && !targets.is_empty() {
+            if self.chose_beyond {
+                return self.plan_all(seen, robot_m);
+            }
+            let planning = self.planning;
+            let stale = self
+                .stale
+                .as_ref()
+                .filter(|s| s.planning == planning && (s.from - robot_m).norm() <= bound_m / 4.0)
+                .map(|s| Arc::clone(&s.field));
+            if let Some(stale) = stale {
+                let field = dijkstra_padded_bounded(
+                    far.frame,
+                    start,
+                    far.padded(),
+                    MAX_EXTRA,
+                    window,
+                    bound_m,
+                );
+                let covered = far_targets
+                    .iter()
+                    .any(|c| field.distance_m(*c).is_some() || stale.distance_m(*c).is_some());
+                if covered {
+                    return Plan {
+                        far,
+                        field: Arc::new(field),
+                        stale: Some(stale),
+                        near_start,
+                    };
+                }
+            }
+            return self.plan_all(seen, robot_m);
+        }
         let field = dijkstra_padded_within(
             far.frame,
             start,
@@ -297,9 +364,47 @@ impl Navigator {
         );
         Plan {
             far,
+            field: Arc::new(field),
+            stale: None,
+            near_start,
+        }
+    }
+
+    /// Path costs from the robot (at `robot_m`, world) to every reachable cell, kept for the
+    /// bounded plans that follow (see [`Self::plan`]).
+    pub(super) fn plan_all(&mut self, seen: Seen, robot_m: Vec2) -> Plan {
+        self.refresh(seen);
+        let radius_m = self.inflation_m();
+        let robot = seen.map.frame.cell_from_world(robot_m);
+        let start_on = |grid: &CoarseCosts| start_cell(grid, robot, radius_m);
+        let far = Arc::clone(&self.far);
+        let start = start_on(&far);
+        let window = self.far_window(seen.map);
+        let field = Arc::new(dijkstra_padded_within(
+            far.frame,
+            start,
+            far.padded(),
+            MAX_EXTRA,
+            &[],
+            window,
+        ));
+        self.stale = Some(StaleField {
+            field: Arc::clone(&field),
+            from: robot_m,
+            planning: self.planning,
+        });
+        Plan {
+            far,
             field,
+            stale: None,
             near_start: start_on(&self.coarse),
         }
+    }
+
+    /// Notes the path length (m) of the goal a decision chose, for the next bounded plan
+    /// (`bound_m`, 0 = none: see [`Self::plan`]).
+    pub(super) fn chose(&mut self, distance_m: Option<f64>, bound_m: f64) {
+        self.chose_beyond = bound_m > 0.0 && distance_m.is_some_and(|d| d > bound_m);
     }
 
     /// The planned path lengths (m) on the distance grid between the goals of `views`,
@@ -562,7 +667,7 @@ impl Navigator {
     /// A search of the whole planning grid, guided by the straight-line distance only, took 6 %
     /// of a run (its wall penalty leaves the heuristic far below the true cost).
     pub(super) fn path_to(&mut self, seen: Seen, robot: Vec2, c: Cell) -> Option<Vec<Vec2>> {
-        let plan = self.plan(seen, robot, &[c]);
+        let plan = self.plan(seen, robot, &[c], 0.0);
         self.waypoints_to(&plan, c)
     }
 }
@@ -674,7 +779,25 @@ impl Explorer<'_> {
     pub(super) fn plan(&mut self, targets: &[Cell]) -> Plan {
         let robot = self.localizer.estimate().position();
         self.nav
-            .plan(seen(&self.map, &self.obstacles), robot, targets)
+            .plan(seen(&self.map, &self.obstacles), robot, targets, 0.0)
+    }
+
+    /// [`Self::plan`] bounded as the settings ask (`ExploreConfig::distance_bound_m`; a
+    /// built-in strategy only: a strategy of the caller's is asked once per decision).
+    pub(super) fn plan_bounded(&mut self, targets: &[Cell]) -> Plan {
+        let robot = self.localizer.estimate().position();
+        let bound_m = match self.policy {
+            PolicySlot::BuiltIn(_) => self.cfg.distance_bound_m,
+            PolicySlot::External(_) => 0.0,
+        };
+        self.nav
+            .plan(seen(&self.map, &self.obstacles), robot, targets, bound_m)
+    }
+
+    /// Path costs from the robot to every reachable cell ([`Navigator::plan_all`]).
+    pub(super) fn plan_all(&mut self) -> Plan {
+        let robot = self.localizer.estimate().position();
+        self.nav.plan_all(seen(&self.map, &self.obstacles), robot)
     }
 
     /// Waypoints of the path to map cell `c` found with `plan` ([`Navigator::waypoints_to`]).
@@ -906,7 +1029,10 @@ impl Planning {
 pub(super) struct Plan {
     /// The distance grid and the search over it.
     pub(super) far: Arc<CoarseCosts>,
-    pub(super) field: CostField,
+    pub(super) field: Arc<CostField>,
+    /// With a bounded search (see [`Navigator::plan`]), the earlier search the cells beyond
+    /// its bound take their distances from.
+    stale: Option<Arc<CostField>>,
     /// The robot's cell on the planning grid.
     pub(super) near_start: Cell,
 }
@@ -914,8 +1040,31 @@ pub(super) struct Plan {
 impl Plan {
     /// Path length (with the wall penalty) to the map cell `c`, `None` if unreachable.
     pub(super) fn distance_m(&self, c: Cell) -> Option<f64> {
+        let c = self.far.passable_near(c, far_search_cells())?;
         self.field
-            .distance_m(self.far.passable_near(c, far_search_cells())?)
+            .distance_m(c)
+            .or_else(|| self.stale.as_ref()?.distance_m(c))
+    }
+
+    /// Whether every distance is final for every cell (a search of everything reachable).
+    pub(super) fn is_complete(&self) -> bool {
+        self.field.is_complete()
+    }
+
+    /// Whether every distance is searched from where the robot stands (no bound, or nothing
+    /// reachable beyond it).
+    pub(super) fn is_exact(&self) -> bool {
+        self.stale.is_none() || self.field.is_complete()
+    }
+
+    /// Whether the distance to map cell `c` is searched from where the robot stands: within
+    /// the bound of a bounded search (the path to it is then found there too).
+    pub(super) fn is_exact_at(&self, c: Cell) -> bool {
+        self.is_exact()
+            || self
+                .far
+                .passable_near(c, far_search_cells())
+                .is_some_and(|c| self.field.distance_m(c).is_some())
     }
 
     /// The path to the map cell `c` on the distance grid.
@@ -1016,7 +1165,7 @@ mod tests {
         let (robot, to) = (Vec2::new(1.0, 1.525), Vec2::new(4.0, 1.525));
         let goal = frame.cell_from_world(to);
         let reaches = |nav: &mut Navigator, map: &LogOddsMap, obstacles: &ObstacleDistance| {
-            let plan = nav.plan(Seen { map, obstacles }, robot, &[goal]);
+            let plan = nav.plan(Seen { map, obstacles }, robot, &[goal], 0.0);
             let wps = nav.waypoints_to(&plan, goal);
             // (The coarser distance grid may connect what the planning grid does not.)
             assert!(wps.is_none() || plan.distance_m(goal).is_some());
@@ -1055,6 +1204,44 @@ mod tests {
         }
         let checks = PLANNING_CHECKS.with(|c| c.replace(None)).expect("on");
         assert_eq!(checks, [4, 3, 3]);
+    }
+
+    /// A plan bounded by distance: the first searches everything; the next, within a quarter
+    /// of the bound of where that one was made, gives the targets within the bound their
+    /// distances from where the robot stands and the farther ones theirs from the earlier
+    /// search; farther away, everything is searched again.
+    #[test]
+    fn a_bounded_plan_takes_far_distances_from_the_last_whole_search() {
+        let map = two_rooms(20);
+        let frame = map.frame;
+        let mut nav = Navigator::new(frame, 0.1, 0.1);
+        let mut obstacles = ObstacleDistance::new(frame, 8);
+        update(&mut nav, &mut obstacles, &LogOddsMap::new(frame), &map);
+        let seen = Seen {
+            map: &map,
+            obstacles: &obstacles,
+        };
+        let (near, far) = (
+            frame.cell_from_world(Vec2::new(1.6, 1.0)),
+            frame.cell_from_world(Vec2::new(4.5, 1.0)),
+        );
+        let targets = [near, far];
+        let bound_m = 2.0;
+        let at = |x: f64| Vec2::new(x, 1.0);
+        let exact = |nav: &mut Navigator, x: f64| nav.plan(seen, at(x), &targets, 0.0);
+        // (Each case: where the robot stands, and from where the far target's distance is.)
+        for (x, far_from, stale) in [(0.5, 0.5, false), (0.9, 0.5, true), (1.1, 1.1, false)] {
+            let plan = nav.plan(seen, at(x), &targets, bound_m);
+            let (here, then) = (exact(&mut nav, x), exact(&mut nav, far_from));
+            assert_eq!(plan.distance_m(near), here.distance_m(near), "{x}");
+            assert!(plan.is_exact_at(near), "{x}");
+            assert_eq!(plan.distance_m(far), then.distance_m(far), "{x}");
+            assert_eq!(plan.is_exact_at(far), !stale, "{x}");
+            // (From where the robot stands the far target is nearer.)
+            assert_eq!(plan.distance_m(far) == here.distance_m(far), !stale, "{x}");
+            assert_eq!(plan.is_exact(), !stale, "{x}");
+            assert!(plan.distance_m(far).unwrap() > bound_m, "{x}");
+        }
     }
 
     #[test]

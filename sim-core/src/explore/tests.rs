@@ -968,3 +968,39 @@ fn a_policys_charged_compute_delays_the_robot() {
     assert_eq!(b.strategy_compute_s, 2.0 * charged.asked as f64);
     assert!(b.exploration_time_s > a.exploration_time_s);
 }
+
+/// A decision's distance search bounded (`distance_bound_m`) beyond everything reachable is the
+/// exact search: the same run, bit for bit. With a bound of a few metres (candidates beyond it
+/// taking their distances from earlier searches) the robot still explores the building
+/// completely, a layout strategy's early stop included, and the runs are reproducible.
+#[test]
+fn a_distance_search_bounded_beyond_the_building_is_exact_and_a_short_bound_explores() {
+    let b = corridor_building(6);
+    for name in ["baseline", "layout-es"] {
+        let cfg = ExploreConfig {
+            strategy: Strategy::by_name(name, &StrategyParams::default()).unwrap(),
+            ..ExploreConfig::default()
+        };
+        let with = |bound_m: f64| {
+            let cfg = ExploreConfig {
+                distance_bound_m: bound_m,
+                ..cfg.clone()
+            };
+            explore(&b, b.start.unwrap(), &cfg, 2, &mut |_| {})
+        };
+        let exact = with(0.0);
+        assert_eq!(with(1000.0), exact, "{name}");
+        let short = with(4.0);
+        assert_eq!(with(4.0), short, "{name}");
+        assert!(
+            matches!(short.end_reason, EndReason::Complete | EndReason::EarlyStop),
+            "{name}: {:?}",
+            short.end_reason
+        );
+        assert!(
+            short.explored_fraction >= 0.97,
+            "{name}: {}",
+            short.explored_fraction
+        );
+    }
+}

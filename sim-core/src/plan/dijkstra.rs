@@ -66,6 +66,9 @@ pub struct CostField {
     nodes: Vec<Node>,
     /// Whether the search settled every reachable cell (it did not stop at its targets).
     complete: bool,
+    /// Costs above this are not final (a search bounded by cost, [`dijkstra_padded_bounded`]):
+    /// such a cell reads as not reached. `u32::MAX` = no bound.
+    limit: u32,
 }
 
 /// The search state of one cell.
@@ -102,7 +105,7 @@ impl CostField {
     fn cost_to(&self, c: Cell) -> Option<u32> {
         let i = self.padded_index(c)?;
         let cost = self.nodes[i].cost;
-        (cost != UNREACHED && (cost != 0 || c == self.start)).then_some(cost)
+        (cost != UNREACHED && cost <= self.limit && (cost != 0 || c == self.start)).then_some(cost)
     }
 
     /// Cost of reaching `c` in metres (extra costs included), `None` if unreachable.
@@ -279,6 +282,7 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
             window: (Cell::new(0, 0), 0, 0),
             nodes: Vec::new(),
             complete: true,
+            limit: u32::MAX,
         };
     }
     let (mut lo, mut hi) = (
@@ -297,6 +301,7 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
         window: (lo, ww, wh),
         nodes,
         complete: true,
+        limit: u32::MAX,
     };
     // From here on, the window padded is the grid searched.
     let pw = ww + 2;
@@ -311,7 +316,8 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
             targets_left += 1;
         }
     }
-    let Some(targets_left) = settle(&mut field.nodes, si, pw, max_extra, targets_left) else {
+    let Some(targets_left) = settle(&mut field.nodes, si, pw, max_extra, targets_left, u32::MAX)
+    else {
         field.complete = false;
         return field;
     };
@@ -320,6 +326,73 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
         for c in targets.iter().filter(|c| frame.contains(**c)) {
             field.nodes[pad(*c)].target = false;
         }
+    }
+    field
+}
+
+/// [`dijkstra_padded_within`] without targets, bounded by cost: settles the cells of `window`
+/// whose path from `start` costs at most `max_m` metres (extra costs included), and no more. A
+/// cell beyond reads as not reached ([`CostField::distance_m`]), whether it is reachable or
+/// not; the field is not complete. Only the cells within `max_m` of the start (straight
+/// line) can be settled, so the search's window is cut to them.
+pub fn dijkstra_padded_bounded<T: Copy + Into<u32>>(
+    frame: GridFrame,
+    start: Cell,
+    enter: &[T],
+    max_extra: u32,
+    window: (Cell, Cell),
+    max_m: f64,
+) -> CostField {
+    let max_cost = (max_m / frame.resolution_m * STRAIGHT as f64).floor();
+    let max_cost = if max_cost.is_finite() && max_cost >= 0.0 {
+        max_cost.min((u32::MAX - 1) as f64) as u32
+    } else {
+        0
+    };
+    // A step costs at least `STRAIGHT` per cell of straight-line distance.
+    let r = (max_cost / STRAIGHT) as i32 + 1;
+    let cut = (
+        Cell::new(window.0.x.max(start.x - r), window.0.y.max(start.y - r)),
+        Cell::new(window.1.x.min(start.x + r), window.1.y.min(start.y + r)),
+    );
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let pw = w + 2;
+    assert_eq!(
+        enter.len(),
+        pw * (h + 2),
+        "the cost grid must cover the padded frame"
+    );
+    let max_extra = max_extra.min(u16::MAX as u32 - 2);
+    let (lo, hi) = (
+        Cell::new(cut.0.x.max(0), cut.0.y.max(0)),
+        Cell::new(cut.1.x.min(w as i32 - 1), cut.1.y.min(h as i32 - 1)),
+    );
+    let inside = start.x >= lo.x && start.y >= lo.y && start.x <= hi.x && start.y <= hi.y;
+    if !frame.contains(start) || !inside {
+        return CostField {
+            frame,
+            start,
+            window: (Cell::new(0, 0), 0, 0),
+            nodes: Vec::new(),
+            complete: false,
+            limit: max_cost,
+        };
+    }
+    let (ww, wh) = ((hi.x - lo.x + 1) as usize, (hi.y - lo.y + 1) as usize);
+    let nodes = window_nodes(enter, pw, lo, (ww, wh), max_extra);
+    let mut field = CostField {
+        frame,
+        start,
+        window: (lo, ww, wh),
+        nodes,
+        complete: false,
+        limit: max_cost,
+    };
+    let qw = ww + 2;
+    let si = ((start.y - lo.y) as usize + 1) * qw + (start.x - lo.x) as usize + 1;
+    if settle(&mut field.nodes, si, qw, max_extra, 0, max_cost).is_some() {
+        // Everything reachable was within the bound.
+        field.complete = true;
     }
     field
 }
@@ -375,6 +448,7 @@ fn settle(
     pw: usize,
     max_extra: u32,
     mut targets_left: usize,
+    max_cost: u32,
 ) -> Option<usize> {
     // A ring of buckets, one per cost modulo its length (a power of two at least the spread
     // of costs pending at once, `DIAGONAL + max_extra + 1`: the bucket of a cost by a mask).
@@ -387,6 +461,10 @@ fn settle(
     let mut pending = 1usize;
     let mut current = 0u32;
     while pending > 0 {
+        if current > max_cost {
+            // Every cell of cost up to `max_cost` is settled; the rest is not searched.
+            return None;
+        }
         let b = current as usize & ring;
         // The bucket being emptied is taken out of the ring (the steps it pushes go to other
         // buckets: each costs from `current + 10` to `current + nb - 1`).
@@ -937,6 +1015,44 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    proptest::proptest! {
+        /// A search bounded by cost gives every cell whose cost is within the bound the cost
+        /// and the path of the whole search, and no other cell a cost; it is complete exactly
+        /// when everything reachable is within the bound.
+        #[test]
+        fn a_bounded_search_is_the_whole_search_within_its_bound(
+            (cells, start, _goal) in search_case(0.7),
+            bound_m in 0.0f64..4.0,
+        ) {
+            let (w, h) = (23usize, 17usize);
+            let (frame, padded) = padded_grid(&cells, w, h);
+            let all = dijkstra_padded(frame, start, &padded, 5, &[]);
+            let last = Cell::new(w as i32 - 1, h as i32 - 1);
+            let bounded =
+                dijkstra_padded_bounded(frame, start, &padded, 5, (Cell::new(0, 0), last), bound_m);
+            // (A cost at the bound itself counts as within: the bound's cost units rounded down.)
+            let within = |d: f64| d <= (bound_m / 0.1 * STRAIGHT as f64).floor() * 0.1 / STRAIGHT as f64;
+            let mut beyond = false;
+            for y in -1..=h as i32 {
+                for x in -1..=w as i32 {
+                    let c = Cell::new(x, y);
+                    match all.distance_m(c) {
+                        Some(d) if within(d) => {
+                            proptest::prop_assert_eq!(bounded.distance_m(c), Some(d));
+                            proptest::prop_assert_eq!(bounded.path_to(c), all.path_to(c));
+                        }
+                        Some(_) => {
+                            beyond = true;
+                            proptest::prop_assert_eq!(bounded.distance_m(c), None);
+                        }
+                        None => proptest::prop_assert_eq!(bounded.distance_m(c), None),
+                    }
+                }
+            }
+            proptest::prop_assert_eq!(bounded.is_complete(), !beyond);
         }
     }
 
