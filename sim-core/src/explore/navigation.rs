@@ -60,8 +60,8 @@ pub(super) struct Navigator {
     /// no path either (a decision whose best candidates lie beyond a gap too narrow for the
     /// planning grid asks for many).
     unreachable_memo: Option<UnreachableMemo>,
-    /// The last search of everything reachable made by a plan bounded by distance
-    /// ([`Navigator::plan`] with a radius), whose distances the candidates beyond the radius take.
+    /// The last search of everything reachable made for plans bounded by distance
+    /// ([`Navigator::plan`] with a bound), whose distances the candidates beyond the bound take.
     stale: Option<StaleField>,
     /// Whether the last decision headed for a goal beyond the bound of a bounded plan: the next
     /// then searches everything at once (late in a run every candidate is far, and a bounded

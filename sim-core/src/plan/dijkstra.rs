@@ -270,71 +270,19 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
     targets: &[Cell],
     window: (Cell, Cell),
 ) -> CostField {
-    let (w, h) = (frame.width as usize, frame.height as usize);
-    let pw = w + 2;
-    let np = pw * (h + 2);
-    assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
-    let max_extra = max_extra.min(u16::MAX as u32 - 2);
-    if !frame.contains(start) {
-        return CostField {
-            frame,
-            start,
-            window: (Cell::new(0, 0), 0, 0),
-            nodes: Vec::new(),
-            complete: true,
-            limit: u32::MAX,
-        };
-    }
-    let (mut lo, mut hi) = (
-        Cell::new(window.0.x.max(0), window.0.y.max(0)),
-        Cell::new(window.1.x.min(w as i32 - 1), window.1.y.min(h as i32 - 1)),
-    );
+    let (mut lo, mut hi) = in_frame(frame, window);
     let inside = |c: &Cell| c.x >= lo.x && c.y >= lo.y && c.x <= hi.x && c.y <= hi.y;
     if !inside(&start) || !targets.iter().filter(|c| frame.contains(**c)).all(inside) {
-        (lo, hi) = (Cell::new(0, 0), Cell::new(w as i32 - 1, h as i32 - 1));
+        (lo, hi) = whole_frame(frame);
     }
-    let (ww, wh) = ((hi.x - lo.x + 1) as usize, (hi.y - lo.y + 1) as usize);
-    let nodes = window_nodes(enter, pw, lo, (ww, wh), max_extra);
-    let mut field = CostField {
-        frame,
-        start,
-        window: (lo, ww, wh),
-        nodes,
-        complete: true,
-        limit: u32::MAX,
-    };
-    // From here on, the window padded is the grid searched.
-    let pw = ww + 2;
-    let pad = |c: Cell| ((c.y - lo.y) as usize + 1) * pw + (c.x - lo.x) as usize + 1;
-    let si = pad(start);
-    // Targets still to settle, marked in their cells (unmarked as they settle).
-    let mut targets_left = 0usize;
-    for c in targets.iter().filter(|c| frame.contains(**c)) {
-        let n = &mut field.nodes[pad(*c)];
-        if !n.target {
-            n.target = true;
-            targets_left += 1;
-        }
-    }
-    let Some(targets_left) = settle(&mut field.nodes, si, pw, max_extra, targets_left, u32::MAX)
-    else {
-        field.complete = false;
-        return field;
-    };
-    // (Targets never reached are left unmarked too: the field says nothing of its targets.)
-    if targets_left > 0 {
-        for c in targets.iter().filter(|c| frame.contains(**c)) {
-            field.nodes[pad(*c)].target = false;
-        }
-    }
-    field
+    search_window(frame, start, enter, max_extra, targets, (lo, hi), u32::MAX)
 }
 
 /// [`dijkstra_padded_within`] without targets, bounded by cost: settles the cells of `window`
 /// whose path from `start` costs at most `max_m` metres (extra costs included), and no more. A
 /// cell beyond reads as not reached ([`CostField::distance_m`]), whether it is reachable or
-/// not; the field is not complete. Only the cells within `max_m` of the start (straight
-/// line) can be settled, so the search's window is cut to them.
+/// not; the field is complete only when nothing reachable lies beyond. Only the cells within
+/// `max_m` of the start (straight line) can be settled, so the search's window is cut to them.
 pub fn dijkstra_padded_bounded<T: Copy + Into<u32>>(
     frame: GridFrame,
     start: Cell,
@@ -349,32 +297,57 @@ pub fn dijkstra_padded_bounded<T: Copy + Into<u32>>(
     } else {
         0
     };
+    let (lo, hi) = in_frame(frame, window);
+    let inside = start.x >= lo.x && start.y >= lo.y && start.x <= hi.x && start.y <= hi.y;
+    let (lo, hi) = if inside { (lo, hi) } else { whole_frame(frame) };
     // A step costs at least `STRAIGHT` per cell of straight-line distance.
     let r = (max_cost / STRAIGHT) as i32 + 1;
     let cut = (
-        Cell::new(window.0.x.max(start.x - r), window.0.y.max(start.y - r)),
-        Cell::new(window.1.x.min(start.x + r), window.1.y.min(start.y + r)),
+        Cell::new(lo.x.max(start.x - r), lo.y.max(start.y - r)),
+        Cell::new(hi.x.min(start.x + r), hi.y.min(start.y + r)),
     );
+    search_window(frame, start, enter, max_extra, &[], cut, max_cost)
+}
+
+/// `window` cut to the cells of `frame`.
+fn in_frame(frame: GridFrame, window: (Cell, Cell)) -> (Cell, Cell) {
+    let (w, h) = (frame.width as i32, frame.height as i32);
+    (
+        Cell::new(window.0.x.max(0), window.0.y.max(0)),
+        Cell::new(window.1.x.min(w - 1), window.1.y.min(h - 1)),
+    )
+}
+
+fn whole_frame(frame: GridFrame) -> (Cell, Cell) {
+    let (w, h) = (frame.width as i32, frame.height as i32);
+    (Cell::new(0, 0), Cell::new(w - 1, h - 1))
+}
+
+/// The search of [`dijkstra_padded_within`] and [`dijkstra_padded_bounded`] on the cells from
+/// `lo` to `hi` (in the frame, holding `start` when the frame does): settles cells in order of
+/// cost until every target is settled, the next cost is above `max_cost`, or everything
+/// reachable is (the field is then complete).
+fn search_window<T: Copy + Into<u32>>(
+    frame: GridFrame,
+    start: Cell,
+    enter: &[T],
+    max_extra: u32,
+    targets: &[Cell],
+    (lo, hi): (Cell, Cell),
+    max_cost: u32,
+) -> CostField {
     let (w, h) = (frame.width as usize, frame.height as usize);
     let pw = w + 2;
-    assert_eq!(
-        enter.len(),
-        pw * (h + 2),
-        "the cost grid must cover the padded frame"
-    );
+    let np = pw * (h + 2);
+    assert_eq!(enter.len(), np, "the cost grid must cover the padded frame");
     let max_extra = max_extra.min(u16::MAX as u32 - 2);
-    let (lo, hi) = (
-        Cell::new(cut.0.x.max(0), cut.0.y.max(0)),
-        Cell::new(cut.1.x.min(w as i32 - 1), cut.1.y.min(h as i32 - 1)),
-    );
-    let inside = start.x >= lo.x && start.y >= lo.y && start.x <= hi.x && start.y <= hi.y;
-    if !frame.contains(start) || !inside {
+    if !frame.contains(start) {
         return CostField {
             frame,
             start,
             window: (Cell::new(0, 0), 0, 0),
             nodes: Vec::new(),
-            complete: false,
+            complete: true,
             limit: max_cost,
         };
     }
@@ -385,14 +358,32 @@ pub fn dijkstra_padded_bounded<T: Copy + Into<u32>>(
         start,
         window: (lo, ww, wh),
         nodes,
-        complete: false,
+        complete: true,
         limit: max_cost,
     };
-    let qw = ww + 2;
-    let si = ((start.y - lo.y) as usize + 1) * qw + (start.x - lo.x) as usize + 1;
-    if settle(&mut field.nodes, si, qw, max_extra, 0, max_cost).is_some() {
-        // Everything reachable was within the bound.
-        field.complete = true;
+    // From here on, the window padded is the grid searched.
+    let pw = ww + 2;
+    let pad = |c: Cell| ((c.y - lo.y) as usize + 1) * pw + (c.x - lo.x) as usize + 1;
+    let si = pad(start);
+    // Targets still to settle, marked in their cells (unmarked as they settle).
+    let mut targets_left = 0usize;
+    for c in targets.iter().filter(|c| frame.contains(**c)) {
+        let n = &mut field.nodes[pad(*c)];
+        if !n.target {
+            n.target = true;
+            targets_left += 1;
+        }
+    }
+    let Some(targets_left) = settle(&mut field.nodes, si, pw, max_extra, targets_left, max_cost)
+    else {
+        field.complete = false;
+        return field;
+    };
+    // (Targets never reached are left unmarked too: the field says nothing of its targets.)
+    if targets_left > 0 {
+        for c in targets.iter().filter(|c| frame.contains(**c)) {
+            field.nodes[pad(*c)].target = false;
+        }
     }
     field
 }
