@@ -7,9 +7,10 @@
 //!
 //! `cargo bench --bench scale -- [--sim-s 3000] [--seed 77] [--run-seed 1] [--areas
 //! 1000,4000,12000,50000] [--kinds office,school] [--strategies baseline,layout-es]
-//! [--max-cells 40000000] [--layout-update-fraction 0.1] [--repeat 1]` (`--layout-update-fraction`:
-//! the setting of every run, by default the setting's default, 0 the paper's trigger,
-//! docs/scale.md; `--repeat N`: N runs of each, the
+//! [--max-cells 40000000] [--layout-update-fraction 0.1] [--distance-bound-m 0] [--repeat 1]`
+//! (`--layout-update-fraction`, `--distance-bound-m`: the settings of every run, by default the
+//! settings' defaults; 0 the paper's layout trigger and exact distances, docs/scale.md;
+//! `--repeat N`: N runs of each, the
 //! strategies alternating per round, the run of median speed printed: a 1000 m² run lasts a
 //! couple of wall seconds, and its speed varies by up to a quarter between invocations)
 //!
@@ -272,12 +273,14 @@ fn main() {
     let kinds = list(&args, "--kinds", "office,school");
     let strategies = list(&args, "--strategies", "baseline,layout-es");
     println!(
-        "generated buildings (seed {}), run seed {}, first {} simulated s of each run, layout_update_fraction {}, the median of {} runs",
+        "generated buildings (seed {}), run seed {}, first {} simulated s of each run, layout_update_fraction {}, distance_bound_m {}, the median of {} runs",
         arg(&args, "--seed").unwrap_or("77"),
         arg(&args, "--run-seed").unwrap_or("1"),
         arg(&args, "--sim-s").unwrap_or("3000"),
         arg(&args, "--layout-update-fraction")
             .map_or(Settings::default().layout_update_fraction.to_string(), str::to_string),
+        arg(&args, "--distance-bound-m")
+            .map_or(Settings::default().distance_bound_m.to_string(), str::to_string),
         arg(&args, "--repeat").unwrap_or("1"),
     );
     println!(
