@@ -287,7 +287,15 @@ pub fn run(a: RunArgs) -> Result<()> {
             (Outcome::Complete, None) => "complete",
         });
     }
-    finish(&plan, &store, outcome, counts, networked, tour_threads)?;
+    finish(
+        &plan,
+        &store,
+        outcome,
+        counts,
+        networked,
+        tour_threads,
+        &interrupt,
+    )?;
     if let Some(live) = &opts.live {
         live.set_state("complete");
     }
@@ -321,7 +329,8 @@ fn nothing_to_do(
     print_sequential(plan, progress);
     if !a.no_tours {
         let threads = a.workers.unwrap_or_else(crate::values::cores).max(1);
-        crate::cmd_tour::make_grid_tours(plan, jobs, store, threads)?;
+        let interrupt = interrupt_on_ctrl_c();
+        crate::cmd_tour::make_grid_tours(plan, jobs, store, threads, &interrupt)?;
     }
     failed_jobs(plan, jobs, store)
 }
@@ -634,6 +643,7 @@ fn finish(
     counts: floorcast_coordinator::run::Counts,
     networked: bool,
     tour_threads: Option<usize>,
+    interrupt: &AtomicBool,
 ) -> Result<()> {
     match outcome {
         Outcome::Complete => {
@@ -664,7 +674,7 @@ fn finish(
             let (progress, jobs) = floorcast_coordinator::sequential::replay(plan, &store.all()?);
             print_sequential(plan, &progress);
             if let Some(threads) = tour_threads {
-                crate::cmd_tour::make_grid_tours(plan, &jobs, store, threads)?;
+                crate::cmd_tour::make_grid_tours(plan, &jobs, store, threads, interrupt)?;
             }
             failed_jobs(plan, &jobs, store)
         }

@@ -87,12 +87,15 @@ fn tour_figure(building: &sim_core::Building, tour: &TourRecord) -> Figure {
 }
 
 /// Makes and stores the known-map tours `jobs` need that `store` lacks
-/// (`floorcast_coordinator::yardstick`), on `workers` threads, saying what it does.
+/// (`floorcast_coordinator::yardstick`), on `workers` threads, saying what it does. When
+/// `interrupt` is set (Ctrl-C, SIGTERM) it ends the process with exit code 130, the tours made
+/// so far stored.
 pub fn make_grid_tours(
     plan: &floorcast_coordinator::grid::Plan,
     jobs: &[floorcast_coordinator::grid::PlannedJob],
     store: &floorcast_coordinator::store::Store,
     workers: usize,
+    interrupt: &std::sync::atomic::AtomicBool,
 ) -> Result<()> {
     use floorcast_coordinator::yardstick::{missing, planned_tours};
     // Only the runs that succeeded are measured (a failed job's start may be no start at all).
@@ -145,18 +148,37 @@ pub fn make_grid_tours(
             });
         }
         drop(tx);
-        for (k, (made, wall_s)) in rx.iter().enumerate() {
+        let mut k = 0;
+        loop {
+            // A tour takes up to a minute on a large building: an interrupt (Ctrl-C, SIGTERM)
+            // is answered within a fifth of a second, the tours made so far kept in the store.
+            let (made, wall_s) = match rx.recv_timeout(std::time::Duration::from_millis(200)) {
+                Ok(got) => got,
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    if interrupt.load(std::sync::atomic::Ordering::SeqCst) {
+                        eprintln!(
+                            "interrupted while making tours: {k} of {} made and stored in {}; run the same command again to make the rest",
+                            todo.len(),
+                            store.path().display()
+                        );
+                        floorcast_worker::external::kill_all_programs();
+                        std::process::exit(130);
+                    }
+                    continue;
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break,
+            };
+            k += 1;
             let tour = match made {
                 Ok(tour) => tour,
                 Err(e) => {
-                    eprintln!("tour {}/{}: {e}", k + 1, todo.len());
+                    eprintln!("tour {k}/{}: {e}", todo.len());
                     continue;
                 }
             };
             store.record_tour(&tour)?;
             say!(
-                "tour {}/{}: {}: {:.0} s, {:.1} % of {:.0} m2 seen ({:.1} s to make)",
-                k + 1,
+                "tour {k}/{}: {}: {:.0} s, {:.1} % of {:.0} m2 seen ({:.1} s to make)",
                 todo.len(),
                 tour.building,
                 tour.time_s,

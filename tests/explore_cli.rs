@@ -615,6 +615,65 @@ fn alternating_goals_do_not_hold_the_robot_forever() {
     assert_eq!(s["settings"]["utility_distance"], "euclidean", "{s}");
 }
 
+/// A run's `summary.json` names every setting, so that its `settings` given back as a settings
+/// file run the same run: with the paper's layout trigger (`layout_update_fraction` 0, which
+/// a table without the setting would read as the default 0.1) and the default, `layout-es` on
+/// a building whose known map passes the 200 m2 where the two triggers part.
+#[test]
+fn a_records_settings_given_back_as_a_settings_file_run_the_same_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let b = repo().join("buildings/paper/paper-01.toml");
+    let mut layouts = Vec::new();
+    for fraction in ["0", "0.1"] {
+        let first_out = dir.path().join(format!("first-{fraction}"));
+        let first = explore_with(
+            &b,
+            1,
+            &first_out,
+            &[
+                "--strategy",
+                "layout-es",
+                "--layout-update-fraction",
+                fraction,
+                "--time-limit-s",
+                "900",
+            ],
+        );
+        let written = first["settings"].as_object().unwrap();
+        assert_eq!(
+            written["layout_update_fraction"].as_f64(),
+            Some(fraction.parse().unwrap()),
+            "{first}"
+        );
+        let file = dir.path().join(format!("settings-{fraction}.json"));
+        std::fs::write(&file, serde_json::to_string(&first["settings"]).unwrap()).unwrap();
+        let again_out = dir.path().join(format!("again-{fraction}"));
+        let again = explore_with(
+            &b,
+            1,
+            &again_out,
+            &[
+                "--strategy",
+                "layout-es",
+                "--settings",
+                file.to_str().unwrap(),
+            ],
+        );
+        assert_eq!(again["settings"], first["settings"], "{fraction}");
+        for f in ["decisions.csv", "trajectory.csv"] {
+            let read = |d: &std::path::Path| std::fs::read_to_string(d.join(f)).unwrap();
+            assert!(
+                read(&first_out) == read(&again_out),
+                "{fraction}: {f} differs"
+            );
+        }
+        assert_eq!(again["layouts_computed"], first["layouts_computed"]);
+        layouts.push(first["layouts_computed"].as_u64().unwrap());
+    }
+    // The two triggers part on this building: the test tells them apart.
+    assert!(layouts[0] > layouts[1], "layouts {layouts:?}");
+}
+
 /// A settings file in another format is refused with the file's name and what is expected.
 #[test]
 fn a_settings_file_that_is_not_json_is_refused_with_what_is_expected() {

@@ -590,3 +590,71 @@ fn a_grid_run_stores_its_tour_and_report_shows_efficiency() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["efficiency"]["labels"].as_array().unwrap().len(), 0);
 }
+
+/// Ctrl-C or SIGTERM while `run` makes its known-map tours (up to a minute each on a large
+/// building) ends it within seconds with exit code 130, saying how many tours it kept; run
+/// again, it makes the tour it lacks.
+#[test]
+fn an_interrupt_while_tours_are_made_ends_the_run_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("grid.toml");
+    // One short run on a large building: its tour takes far longer than the run.
+    std::fs::write(
+        &g,
+        r#"format = "floorcast-grid"
+version = 1
+name = "tours"
+seeds = [1]
+[[generated]]
+seed = 7
+area_m2 = 6000
+kind = "office"
+[[strategies]]
+name = "baseline"
+[settings]
+time_limit_s = 20
+"#,
+    )
+    .unwrap();
+    let res = dir.path().join("res");
+    for signal in ["TERM", "INT"] {
+        let (mut child, lines) = spawn_lines(floorcast().args([
+            "run",
+            g.to_str().unwrap(),
+            "--results",
+            res.to_str().unwrap(),
+            "--workers",
+            "1",
+        ]));
+        let t0 = std::time::Instant::now();
+        let mut seen = Vec::new();
+        while !seen
+            .iter()
+            .any(|l: &String| l.contains("making 1 known-map tour"))
+        {
+            let line = lines.recv_timeout(std::time::Duration::from_secs(120));
+            seen.push(line.unwrap_or_else(|_| panic!("no tour began: {seen:?}")));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        let sent = std::time::Instant::now();
+        let killed = std::process::Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let status = child.wait().unwrap();
+        let waited = sent.elapsed();
+        seen.extend(lines.try_iter());
+        assert_eq!(status.code(), Some(130), "{signal}: {seen:?}");
+        assert!(
+            waited.as_secs_f64() < 5.0,
+            "{signal}: {waited:?} after the signal"
+        );
+        assert!(
+            seen.iter()
+                .any(|l| l.contains("interrupted while making tours: 0 of 1 made")),
+            "{signal}: {seen:?} ({:?} in all)",
+            t0.elapsed()
+        );
+    }
+}

@@ -52,6 +52,9 @@ pub struct RunSummary {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub strategy_replies: Option<u64>,
     pub seed: u64,
+    /// Every setting, written whole ([`Settings::to_table`]): given back as a settings file
+    /// they run the same run (records before 0.7.1 leave out those at 0 or off).
+    #[serde(serialize_with = "settings_whole")]
     pub settings: Settings,
     /// Start pose `[x_m, y_m, theta_rad]` and where it came from.
     pub start: [f64; 3],
@@ -292,6 +295,11 @@ pub(crate) mod end_reason_name {
             }),
         }
     }
+}
+
+/// Writes a record's settings whole (see [`RunSummary::settings`]).
+fn settings_whole<S: serde::Serializer>(settings: &Settings, out: S) -> Result<S::Ok, S::Error> {
+    settings.to_table().serialize(out)
 }
 
 #[cfg(test)]

@@ -706,6 +706,36 @@ pub fn settings_from_map(
     Ok(settings)
 }
 
+impl Settings {
+    /// Every setting by name, as a settings table that reads back as these settings
+    /// ([`settings_from_map`], a `--settings` file, a grid's `[settings]`). The records' own
+    /// form leaves some settings out at the value that keeps earlier job identities (0 or off),
+    /// and a table without one gets its default, which for `layout_update_fraction` is not that
+    /// value; here every setting is written.
+    pub fn to_table(&self) -> serde_json::Map<String, serde_json::Value> {
+        let mut table = match serde_json::to_value(self) {
+            Ok(serde_json::Value::Object(written)) => written,
+            _ => serde_json::Map::new(),
+        };
+        for info in SETTINGS {
+            if table.contains_key(info.name) {
+                continue;
+            }
+            let value = match self.value(info.name) {
+                Some(SettingValue::Number(x)) => match info.kind {
+                    SettingKind::Integer { .. } => serde_json::Value::from(x as u64),
+                    _ => serde_json::Value::from(x),
+                },
+                Some(SettingValue::Bool(b)) => serde_json::Value::Bool(b),
+                Some(SettingValue::Word(w)) => serde_json::Value::String(w),
+                None => continue,
+            };
+            table.insert(info.name.to_string(), value);
+        }
+        table
+    }
+}
+
 /// Settings from a settings file's text: a JSON object (`{"alpha": 0.8}`).
 pub fn settings_from_json_text(text: &str) -> Result<Settings, SettingsError> {
     let v: serde_json::Value = serde_json::from_str(text).map_err(|e| {
@@ -1325,6 +1355,39 @@ mod tests {
         // Written as 0 in a table, it is 0.
         let paper = settings_from_json_text(r#"{"layout_update_fraction": 0}"#).unwrap();
         assert_eq!(paper.layout_update_fraction, 0.0);
+    }
+
+    /// A record's settings written whole ([`Settings::to_table`]) name every setting and read
+    /// back, as a settings table, as the same settings: a summary's `settings` given to
+    /// `explore --settings` runs the same run, whatever the settings the record form leaves out.
+    #[test]
+    fn settings_written_whole_name_every_setting_and_read_back_as_a_table() {
+        let cases = [
+            Settings::default(),
+            Settings {
+                layout_update_fraction: 0.0,
+                ..Settings::default()
+            },
+            Settings {
+                layout_update_fraction: 0.0,
+                distance_bound_m: 20.0,
+                frontier_clearance_m: 0.3,
+                utility_distance: UtilityDistanceSetting::Euclidean,
+                laser_beams: 361,
+                return_home: true,
+                ..Settings::default()
+            },
+        ];
+        for s in cases {
+            let table = s.to_table();
+            assert_eq!(table.len(), SETTINGS.len(), "{table:?}");
+            assert!(SETTINGS.iter().all(|i| table.contains_key(i.name)));
+            assert_eq!(settings_from_map(&table).unwrap(), s);
+            assert_eq!(
+                serde_json::from_value::<Settings>(serde_json::Value::Object(table)).unwrap(),
+                s
+            );
+        }
     }
 
     #[test]
