@@ -293,3 +293,13 @@ pub fn spawn_lines(cmd: &mut Command) -> (Child, mpsc::Receiver<String>) {
     }
     (child, rx)
 }
+
+/// Sends the signal `name` (`TERM`, `INT`, `9`, ...) to the process `pid`, as `kill -NAME PID`;
+/// fails the test when it cannot be sent.
+pub fn send_signal(pid: u32, name: &str) {
+    let sent = Command::new("kill")
+        .args([format!("-{name}"), pid.to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success(), "kill -{name} {pid}");
+}

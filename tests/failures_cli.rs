@@ -302,11 +302,7 @@ fn a_run_killed_mid_job_leaves_no_folder_after_a_restart() {
         left.iter().any(|n| n.starts_with("floorcast-python-")),
         "the job's folder: {left:?}"
     );
-    let killed = std::process::Command::new("kill")
-        .args(["-9", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
+    send_signal(child.id(), "9");
     child.wait().unwrap();
     // The program outlives floorcast (in its own process group): ended here.
     let program = std::fs::read_to_string(&started).unwrap();

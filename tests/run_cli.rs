@@ -637,11 +637,7 @@ time_limit_s = 20
         }
         std::thread::sleep(std::time::Duration::from_millis(300));
         let sent = std::time::Instant::now();
-        let killed = std::process::Command::new("kill")
-            .args([&format!("-{signal}"), &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(killed.success());
+        send_signal(child.id(), signal);
         let status = child.wait().unwrap();
         let waited = sent.elapsed();
         seen.extend(lines.try_iter());

@@ -368,11 +368,7 @@ fn a_terminated_floorcast_ends_its_programs() {
         }
         // The program is waiting for its first decision by now, or soon.
         std::thread::sleep(std::time::Duration::from_millis(500));
-        let killed = std::process::Command::new("kill")
-            .args([&format!("-{signal}"), &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(killed.success());
+        send_signal(child.id(), signal);
         let status = child.wait().unwrap();
         assert!(!status.success(), "{name}: {status:?}");
         let (pid, gone) = ended_soon(&pid_file);
@@ -663,11 +659,7 @@ fn a_stopped_or_failed_explore_leaves_no_output() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     std::thread::sleep(std::time::Duration::from_millis(300));
-    let killed = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
+    send_signal(child.id(), "INT");
     let status = child.wait().unwrap();
     assert_eq!(status.code(), Some(130));
     assert!(names_in(tmp).is_empty(), "{:?}", names_in(tmp));

@@ -78,6 +78,18 @@ struct StaleField {
     planning: Planning,
 }
 
+/// Where a search from the robot starts, on grids brought up to date ([`Navigator::origin`]).
+#[derive(Clone)]
+struct Origin {
+    /// The distance grid.
+    far: Arc<CoarseCosts>,
+    /// The robot's cell on it, and the window of its cells that can be passable.
+    start: Cell,
+    window: (Cell, Cell),
+    /// The robot's cell on the planning grid.
+    near_start: Cell,
+}
+
 /// See [`Navigator::unreachable_memo`].
 #[derive(Debug, Clone)]
 struct UnreachableMemo {
@@ -307,23 +319,22 @@ impl Navigator {
         targets: &[Cell],
         bound_m: f64,
     ) -> Plan {
-        self.refresh(seen);
+        let origin = self.origin(seen, robot_m);
         #[cfg(test)]
         self.check_planning_grids(seen);
-        let radius_m = self.inflation_m();
-        let robot = seen.map.frame.cell_from_world(robot_m);
-        let start_on = |grid: &CoarseCosts| start_cell(grid, robot, radius_m);
-        let far = Arc::clone(&self.far);
-        let start = start_on(&far);
+        let Origin {
+            far,
+            start,
+            window,
+            near_start,
+        } = origin.clone();
         let far_targets: Vec<Cell> = targets
             .iter()
             .filter_map(|c| far.passable_near(*c, far_search_cells()))
             .collect();
-        let window = self.far_window(seen.map);
-        let near_start = start_on(&self.coarse);
         if bound_m > 0.0 && !targets.is_empty() {
             if self.chose_beyond {
-                return self.plan_all(seen, robot_m);
+                return self.plan_all_from(origin, robot_m);
             }
             let planning = self.planning;
             let stale = self
@@ -352,7 +363,7 @@ impl Navigator {
                     };
                 }
             }
-            return self.plan_all(seen, robot_m);
+            return self.plan_all_from(origin, robot_m);
         }
         let field = dijkstra_padded_within(
             far.frame,
@@ -373,13 +384,33 @@ impl Navigator {
     /// Path costs from the robot (at `robot_m`, world) to every reachable cell, kept for the
     /// bounded plans that follow (see [`Self::plan`]).
     pub(super) fn plan_all(&mut self, seen: Seen, robot_m: Vec2) -> Plan {
+        let origin = self.origin(seen, robot_m);
+        self.plan_all_from(origin, robot_m)
+    }
+
+    /// The grids brought up to date with the map `seen`, and where a search from the robot (at
+    /// `robot_m`, world) starts on them.
+    fn origin(&mut self, seen: Seen, robot_m: Vec2) -> Origin {
         self.refresh(seen);
         let radius_m = self.inflation_m();
         let robot = seen.map.frame.cell_from_world(robot_m);
-        let start_on = |grid: &CoarseCosts| start_cell(grid, robot, radius_m);
         let far = Arc::clone(&self.far);
-        let start = start_on(&far);
-        let window = self.far_window(seen.map);
+        Origin {
+            start: start_cell(&far, robot, radius_m),
+            far,
+            window: self.far_window(seen.map),
+            near_start: start_cell(&self.coarse, robot, radius_m),
+        }
+    }
+
+    /// [`Self::plan_all`] from the robot's `origin` on the grids.
+    fn plan_all_from(&mut self, origin: Origin, robot_m: Vec2) -> Plan {
+        let Origin {
+            far,
+            start,
+            window,
+            near_start,
+        } = origin;
         let field = Arc::new(dijkstra_padded_within(
             far.frame,
             start,
@@ -397,7 +428,7 @@ impl Navigator {
             far,
             field,
             stale: None,
-            near_start: start_on(&self.coarse),
+            near_start,
         }
     }
 
