@@ -53,7 +53,8 @@ pub struct RunSummary {
     pub strategy_replies: Option<u64>,
     pub seed: u64,
     /// Every setting, written whole ([`Settings::to_table`]): given back as a settings file
-    /// they run the same run (records before 0.7.1 leave out those at 0 or off).
+    /// they run the same run (earlier records leave out those at 0 or off, and are read with
+    /// them at 0 or off).
     #[serde(serialize_with = "settings_whole")]
     pub settings: Settings,
     /// Start pose `[x_m, y_m, theta_rad]` and where it came from.
