@@ -225,9 +225,11 @@ fn toml_error(text: &str, path: &Path, e: &toml::de::Error) -> Error {
 }
 
 fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
-    let outline = ring(&f.outline, "outline", path)?;
-    let (solids, solid_names) = solids_of(&f, path)?;
-    let (rooms, ids) = rooms_of(&f, path)?;
+    // The work of checking the polygons for crossings (a budget for the whole file).
+    let budget = &mut { crate::polygon::FILE_BUDGET };
+    let outline = ring(&f.outline, "outline", path, budget)?;
+    let (solids, solid_names) = solids_of(&f, path, budget)?;
+    let (rooms, ids) = rooms_of(&f, path, budget)?;
     let doors = doors_of(&f, &ids, path)?;
     let start = match &f.start {
         None => None,
@@ -255,7 +257,11 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
 
 /// The walls (as thick segments) and solids, with the file entry each came from (for messages
 /// about the start pose).
-fn solids_of(f: &FileV1, path: &Path) -> Result<(Vec<Polygon>, Vec<String>), Error> {
+fn solids_of(
+    f: &FileV1,
+    path: &Path,
+    budget: &mut u64,
+) -> Result<(Vec<Polygon>, Vec<String>), Error> {
     let mut solids = Vec::with_capacity(f.walls.len() + f.solids.len());
     // Which file entry each solid came from, for messages about the start pose.
     let mut solid_names = Vec::with_capacity(solids.capacity());
@@ -278,14 +284,23 @@ fn solids_of(f: &FileV1, path: &Path) -> Result<(Vec<Polygon>, Vec<String>), Err
         solid_names.push(format!("a wall ({field})"));
     }
     for (i, s) in f.solids.iter().enumerate() {
-        solids.push(ring(&s.polygon, &format!("solids[{i}].polygon"), path)?);
+        solids.push(ring(
+            &s.polygon,
+            &format!("solids[{i}].polygon"),
+            path,
+            budget,
+        )?);
         solid_names.push(format!("a solid (solids[{i}])"));
     }
     Ok((solids, solid_names))
 }
 
 /// The rooms, their ids checked (from 1, unique); the ids with their entries' indices.
-fn rooms_of(f: &FileV1, path: &Path) -> Result<(Vec<Room>, BTreeMap<u32, usize>), Error> {
+fn rooms_of(
+    f: &FileV1,
+    path: &Path,
+    budget: &mut u64,
+) -> Result<(Vec<Room>, BTreeMap<u32, usize>), Error> {
     let mut rooms = Vec::with_capacity(f.rooms.len());
     let mut seen: BTreeMap<u32, usize> = BTreeMap::new();
     for (i, r) in f.rooms.iter().enumerate() {
@@ -310,7 +325,7 @@ fn rooms_of(f: &FileV1, path: &Path) -> Result<(Vec<Room>, BTreeMap<u32, usize>)
         rooms.push(Room {
             id: r.id,
             kind: r.kind.clone(),
-            polygon: ring(&r.polygon, &format!("{field}.polygon"), path)?,
+            polygon: ring(&r.polygon, &format!("{field}.polygon"), path, budget)?,
         });
     }
     Ok((rooms, seen))
@@ -436,7 +451,9 @@ fn vec2(p: [f64; 2], field: &str, path: &Path) -> Result<Vec2, Error> {
 }
 
 /// A closed ring of the file as an (implicitly closed) polygon.
-fn ring(pts: &[[f64; 2]], field: &str, path: &Path) -> Result<Polygon, Error> {
+/// A closed ring of at least 3 distinct vertices, with an area, whose edges do not cross
+/// ([`crate::polygon`], within the file's `budget` of work).
+fn ring(pts: &[[f64; 2]], field: &str, path: &Path, budget: &mut u64) -> Result<Polygon, Error> {
     for (i, p) in pts.iter().enumerate() {
         vec2(*p, &format!("{field}[{i}]"), path)?;
     }
@@ -459,12 +476,14 @@ fn ring(pts: &[[f64; 2]], field: &str, path: &Path) -> Result<Polygon, Error> {
         ));
     }
     let open = &pts[..pts.len() - 1];
-    let mut distinct: Vec<[f64; 2]> = Vec::new();
-    for p in open {
-        if !distinct.contains(p) {
-            distinct.push(*p);
-        }
-    }
+    // The distinct vertices in order (by value: 0.0 and -0.0 are one), in linear time: a ring
+    // may have hundreds of thousands of vertices.
+    let mut seen = std::collections::HashSet::with_capacity(open.len());
+    let distinct: Vec<[f64; 2]> = open
+        .iter()
+        .filter(|p| seen.insert([(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()]))
+        .copied()
+        .collect();
     if distinct.len() < 3 {
         return Err(Error::invalid(
             path,
@@ -493,6 +512,9 @@ fn ring(pts: &[[f64; 2]], field: &str, path: &Path) -> Result<Polygon, Error> {
                 "polygon has zero area: its edges cross each other (a figure-eight); list the vertices in order around the polygon"
             },
         ));
+    }
+    if let Some(c) = crate::polygon::first_crossing(&poly.vertices, budget) {
+        return Err(Error::invalid(path, field, c.describe(&poly.vertices)));
     }
     Ok(poly)
 }
@@ -659,6 +681,12 @@ theta_deg = 90.0
             e.contains("x.toml: outline: polygon has 2 distinct vertices; expected at least 3"),
             "{e}"
         );
+        // -0 is 0: one vertex.
+        let e = bad(
+            "outline = [[0.0, 0.0], [10.0, 0.0], [10.0, 6.0], [0.0, 6.0], [0.0, 0.0]]",
+            "outline = [[0.0, 0.0], [-0.0, 0.0], [10.0, 0.0], [0.0, -0.0], [0.0, 0.0]]",
+        );
+        assert!(e.contains("polygon has 2 distinct vertices"), "{e}");
     }
 
     #[test]

@@ -22,7 +22,9 @@
 //! else in the largest corridor, else in the largest space, heading 0. Pixel `y` grows
 //! downwards in the plans: it is turned so that the plan is not mirrored. Spaces without a
 //! polygon (some offices' untyped spaces), or whose polygon is one point repeated (spaces left
-//! empty), are left out, and so are portals to them.
+//! empty), are left out, and so are portals to them. A space's polygon must have an area and
+//! no edges that cross ([`crate::polygon`]); the data set's repeated points and walls traced
+//! twice are not crossings.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -105,6 +107,7 @@ pub fn read_floorplan(path: &Path) -> Result<Building, Error> {
         segments: HashMap::new(),
         n_segments: 0,
         n_portals: 0,
+        crossing_budget: crate::polygon::FILE_BUDGET,
     };
     let mut spaces: Vec<Space> = Vec::new();
     let mut ids: HashMap<String, usize> = HashMap::new();
@@ -204,6 +207,8 @@ struct SpaceReader<'a> {
     segments: HashMap<String, (Vec2, Vec2)>,
     n_segments: usize,
     n_portals: usize,
+    /// What is left of the plan's work of checking outlines for crossings.
+    crossing_budget: u64,
 }
 
 impl SpaceReader<'_> {
@@ -239,7 +244,7 @@ impl SpaceReader<'_> {
         if polygon.len() <= 1 {
             return Ok(None);
         }
-        check_outline(path, &field, &polygon)?;
+        check_outline(path, &field, &polygon, &mut self.crossing_budget)?;
         let labels = child(s, "labels");
         let kind_code = labels
             .and_then(|l| child(l, "type"))
@@ -382,8 +387,14 @@ impl SpaceReader<'_> {
     }
 }
 
-/// A space's outline has at least three distinct points and an area.
-fn check_outline(path: &Path, field: &str, polygon: &[Vec2]) -> Result<(), Error> {
+/// A space's outline has at least three distinct points and an area, and its edges do not cross
+/// ([`crate::polygon`], within the plan's `budget` of work).
+fn check_outline(
+    path: &Path,
+    field: &str,
+    polygon: &[Vec2],
+    budget: &mut u64,
+) -> Result<(), Error> {
     if polygon.len() < 3 {
         return Err(Error::invalid(
             path,
@@ -400,6 +411,13 @@ fn check_outline(path: &Path, field: &str, polygon: &[Vec2]) -> Result<(), Error
             path,
             format!("{field}/bounding_polygon"),
             "a polygon of zero area; expected a room's outline",
+        ));
+    }
+    if let Some(c) = crate::polygon::first_crossing(polygon, budget) {
+        return Err(Error::invalid(
+            path,
+            format!("{field}/bounding_polygon"),
+            c.describe(polygon),
         ));
     }
     Ok(())

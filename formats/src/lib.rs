@@ -11,6 +11,7 @@ pub mod error;
 pub mod floorplan;
 pub mod limits;
 pub mod map_server;
+pub mod polygon;
 pub mod stage;
 pub mod suite;
 
