@@ -450,9 +450,8 @@ fn vec2(p: [f64; 2], field: &str, path: &Path) -> Result<Vec2, Error> {
     }
 }
 
-/// A closed ring of the file as an (implicitly closed) polygon.
-/// A closed ring of at least 3 distinct vertices, with an area, whose edges do not cross
-/// ([`crate::polygon`], within the file's `budget` of work).
+/// A closed ring of the file as an (implicitly closed) polygon: at least 3 distinct vertices,
+/// an area, and no edges that cross ([`crate::polygon`], within the file's `budget` of work).
 fn ring(pts: &[[f64; 2]], field: &str, path: &Path, budget: &mut u64) -> Result<Polygon, Error> {
     for (i, p) in pts.iter().enumerate() {
         vec2(*p, &format!("{field}[{i}]"), path)?;

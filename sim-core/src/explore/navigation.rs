@@ -79,7 +79,6 @@ struct StaleField {
 }
 
 /// Where a search from the robot starts, on grids brought up to date ([`Navigator::origin`]).
-#[derive(Clone)]
 struct Origin {
     /// The distance grid.
     far: Arc<CoarseCosts>,
@@ -322,15 +321,9 @@ impl Navigator {
         let origin = self.origin(seen, robot_m);
         #[cfg(test)]
         self.check_planning_grids(seen);
-        let Origin {
-            far,
-            start,
-            window,
-            near_start,
-        } = origin.clone();
         let far_targets: Vec<Cell> = targets
             .iter()
-            .filter_map(|c| far.passable_near(*c, far_search_cells()))
+            .filter_map(|c| origin.far.passable_near(*c, far_search_cells()))
             .collect();
         if bound_m > 0.0 && !targets.is_empty() {
             if self.chose_beyond {
@@ -344,11 +337,11 @@ impl Navigator {
                 .map(|s| Arc::clone(&s.field));
             if let Some(stale) = stale {
                 let field = dijkstra_padded_bounded(
-                    far.frame,
-                    start,
-                    far.padded(),
+                    origin.far.frame,
+                    origin.start,
+                    origin.far.padded(),
                     MAX_EXTRA,
-                    window,
+                    origin.window,
                     bound_m,
                 );
                 let covered = far_targets
@@ -356,15 +349,21 @@ impl Navigator {
                     .any(|c| field.distance_m(*c).is_some() || stale.distance_m(*c).is_some());
                 if covered {
                     return Plan {
-                        far,
+                        far: origin.far,
                         field: Arc::new(field),
                         stale: Some(stale),
-                        near_start,
+                        near_start: origin.near_start,
                     };
                 }
             }
             return self.plan_all_from(origin, robot_m);
         }
+        let Origin {
+            far,
+            start,
+            window,
+            near_start,
+        } = origin;
         let field = dijkstra_padded_within(
             far.frame,
             start,
