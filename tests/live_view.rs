@@ -2,7 +2,8 @@
 //! HTTP while jobs run, fail and wait, the page looked at in headless Chromium (a screenshot
 //! whose progress bar shows stored, failed and running jobs), and a sequential grid's tests.
 //!
-//! Chromium comes from Debian's package `chromium` (`.ci/run` installs it); without it the
+//! A system test, built only with the `system-tests` feature: `.ci/system-tests` (which CI runs)
+//! installs Chromium from Debian's package `chromium` and runs it; without Chromium the
 //! screenshot test fails and says what to install.
 
 mod common;
@@ -255,7 +256,7 @@ fn screenshot(addr: &str, dir: &Path) -> image::RgbImage {
         .into_iter()
         .find(|p| Path::new(p).exists())
         .unwrap_or_else(|| {
-            panic!("headless Chromium is needed to look at the live view: install Debian's package `chromium` (apt-get install chromium; .ci/run does)")
+            panic!("headless Chromium is needed to look at the live view: install Debian's package `chromium` (apt-get install chromium; .ci/system-tests does)")
         });
     let png = dir.join("live.png");
     let profile = dir.join("chromium-profile");

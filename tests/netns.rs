@@ -11,8 +11,9 @@
 //! forwards each direction of the TCP stream 150 ms ± 50 ms late (order kept).
 //!
 //! Rights: these tests need root (CAP_NET_ADMIN) for `ip netns add`, iproute2 (`ip`), nftables
-//! (`nft`) and openssl. CI runs as root and runs them; without the rights each test fails with a
-//! message saying so, unless FLOORCAST_SKIP_NETNS=1 skips them knowingly. The namespaces are
+//! (`nft`) and openssl. They are system tests, built only with the `system-tests` feature:
+//! `.ci/system-tests` (which CI runs, as root) installs what they need and runs them; without the
+//! rights each test fails with a message saying so. The namespaces are
 //! named after the test process's id and removed, with the processes started in them, when a
 //! test ends (pass or fail); tests take turns (one lock), so that each has the machine's cores.
 
@@ -28,8 +29,6 @@ use std::time::{Duration, Instant};
 
 use common::repo;
 
-/// Set to 1 to skip these tests knowingly (on a machine where they cannot run).
-const SKIP_VAR: &str = "FLOORCAST_SKIP_NETNS";
 /// The port everything listens on (each namespace has its own ports).
 const PORT: u16 = 7447;
 /// Summary fields that are measured, not computed: they differ between runs of one job.
@@ -71,18 +70,9 @@ fn must(r: Result<(), String>) {
 }
 
 impl Lab {
-    /// Makes the hub and `hosts` (each gets 10.213.`subnet`.(i+1)); `None` when the tests are
-    /// skipped (FLOORCAST_SKIP_NETNS=1). Without the rights to make a namespace it panics with
-    /// what to do.
-    fn new(test: char, subnet: u8, hosts: &[&str]) -> Option<Lab> {
-        if std::env::var(SKIP_VAR).is_ok_and(|v| v == "1") {
-            // (Past the test harness's capture: a skip is said even when the test passes.)
-            let _ = writeln!(
-                std::io::stderr(),
-                "skipped: {SKIP_VAR}=1, this multi-host test did not run"
-            );
-            return None;
-        }
+    /// Makes the hub and `hosts` (each gets 10.213.`subnet`.(i+1)). Without the rights to make a
+    /// namespace it panics with what to do.
+    fn new(test: char, subnet: u8, hosts: &[&str]) -> Lab {
         let turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
         remove_stale_namespaces();
         let tag = format!("fc{}{test}", std::process::id());
@@ -91,9 +81,8 @@ impl Lab {
             panic!(
                 "these multi-host tests make Linux network namespaces and could not ({e}). They \
                  need root (or CAP_NET_ADMIN) and iproute2 (`ip`; Debian/Ubuntu: apt-get install \
-                 iproute2), plus nftables (`nft`) and openssl: run them as root, e.g. `sudo -E \
-                 cargo test --release --test netns`. CI runs as root and must run them; to skip \
-                 them knowingly on a machine where they cannot run, set {SKIP_VAR}=1."
+                 iproute2), plus nftables (`nft`) and openssl: run them as root with \
+                 `sudo -E bash .ci/system-tests`, which installs what they need."
             );
         }
         let mut lab = Lab {
@@ -107,7 +96,7 @@ impl Lab {
         for h in hosts {
             lab.add_host(h);
         }
-        Some(lab)
+        lab
     }
 
     fn ns(&self, host: &str) -> String {
@@ -570,9 +559,7 @@ const PARTITION: Duration = Duration::from_secs(30);
 /// identical to the row of the same grid run locally.
 #[test]
 fn a_partition_and_a_coordinator_restart_on_a_lossy_network_change_no_result() {
-    let Some(lab) = Lab::new('p', 1, &["c", "w1", "w2"]) else {
-        return;
-    };
+    let lab = Lab::new('p', 1, &["c", "w1", "w2"]);
     let t0 = Instant::now();
     let dir = tempfile::tempdir().unwrap();
     let g = grid(
@@ -718,9 +705,7 @@ const ROUTER_JOBS: usize = 6;
 /// cleanly on SIGTERM.
 #[test]
 fn a_grid_runs_through_a_router() {
-    let Some(lab) = Lab::new('r', 2, &["r", "c", "w1", "w2"]) else {
-        return;
-    };
+    let lab = Lab::new('r', 2, &["r", "c", "w1", "w2"]);
     let t0 = Instant::now();
     let dir = tempfile::tempdir().unwrap();
     let g = grid(dir.path(), "netns-router", "small.toml", ROUTER_JOBS, 150);
@@ -913,9 +898,7 @@ fn tls_config(dir: &Path, file: &str, ca: &str, cert: &str, listens: bool) -> Pa
 /// CA then completes it.
 #[test]
 fn workers_without_the_right_certificate_get_no_jobs() {
-    let Some(lab) = Lab::new('t', 3, &["c", "x", "w"]) else {
-        return;
-    };
+    let lab = Lab::new('t', 3, &["c", "x", "w"]);
     let t0 = Instant::now();
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use floorcast_worker::{
     check_start, strategy_names, GivenSource, GivenStart, Settings, StrategyProgram,
-    FLOORCAST_VERSION, JOB_ID_RESULT_FORMAT,
+    JOB_ID_RESULT_FORMAT,
 };
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
@@ -1229,8 +1229,10 @@ pub fn job_id_from(
     settings: &Settings,
     start: Option<&GivenStart>,
 ) -> String {
+    // The version of this strategy's behaviour, not of the build (the key keeps its name, so
+    // that identities made before runs versions existed are unchanged).
     let mut canonical = serde_json::json!({
-        "floorcast_version": FLOORCAST_VERSION,
+        "floorcast_version": floorcast_worker::runs_version(strategy),
         "result_format": JOB_ID_RESULT_FORMAT,
         "building_hash": building_hash,
         "strategy": strategy,

@@ -39,8 +39,27 @@ pub use record::{
 };
 pub use settings::{Settings, SettingsError};
 
-/// The floorcast version recorded in every result.
+/// The floorcast version recorded in every result (the build that made it).
 pub const FLOORCAST_VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The floorcast versions that changed runs, oldest first, each with the built-in strategies
+/// whose runs it changed (`None`: every run, external programs' included). A version means one
+/// behaviour: a job's identity names the version in which its strategy's runs last changed
+/// ([`runs_version`]), so stored results stay valid across the versions that leave them bit for
+/// bit as they were, and never mix two behaviours under one name. `tests/fingerprints.rs`
+/// records every reference run's fingerprint under its runs version and fails when a run changes
+/// without a new entry here (with a new crate version, CHANGELOG.md saying what changed).
+pub const RUNS_CHANGED: &[(&str, Option<&[&str]>)] = &[("0.7.0", None)];
+
+/// The version in which the runs of `strategy` (a built-in's name, or anything else for an
+/// external program) last changed: the newest [`RUNS_CHANGED`] entry that names it or every run.
+pub fn runs_version(strategy: &str) -> &'static str {
+    RUNS_CHANGED
+        .iter()
+        .rev()
+        .find(|(_, names)| names.is_none_or(|n| n.contains(&strategy)))
+        .map_or(RUNS_CHANGED[0].0, |(v, _)| v)
+}
 
 /// One exploration to run.
 #[derive(Debug, Clone)]
