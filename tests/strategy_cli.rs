@@ -465,8 +465,20 @@ fn the_compliance_check_names_the_rule_a_program_breaks() {
             "FAIL  decide with one candidate (id 7): exited with status 1",
             2,
         ),
+        // Its exit is told at once, not as a timeout, though a child it left holds its stdout.
+        (
+            "tests/strategies/forks_and_exits.py",
+            "FAIL  hello: exited with status 5 before answering the hello message, but its stdout is still held open by a process it started and left running",
+            2,
+        ),
+        (
+            "tests/strategies/v1_ready_needs.py",
+            "FAIL  run: answered the run message with \"needs\" in its ready reply, which protocol version 2 added, but its hello said it speaks version 1",
+            2,
+        ),
     ];
     for (script, last, code) in cases {
+        let t0 = std::time::Instant::now();
         let o = run(&[
             "strategy",
             "check",
@@ -481,6 +493,14 @@ fn the_compliance_check_names_the_rule_a_program_breaks() {
             "{script}: {out}"
         );
         assert!(!stderr(&o).contains("panicked"), "{script}");
+        if script.contains("forks_and_exits") {
+            // Well before the 2 s timeout (0.3 s for its last lines, 1 s for its stderr).
+            let took = t0.elapsed();
+            assert!(
+                took < std::time::Duration::from_millis(1900),
+                "{script}: {took:?}"
+            );
+        }
     }
 }
 

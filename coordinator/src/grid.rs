@@ -356,7 +356,7 @@ impl Plan {
             problem,
         };
         let file = read_grid_file(text, path, &invalid)?;
-        let base_dir = path.parent().unwrap_or(Path::new("."));
+        let base_dir = dir_of(path);
         let (buildings, suites) = plan_buildings(&file, base_dir, path, &invalid)?;
 
         // Seeds (counted before they are listed). A sequential grid adds them in batches.
@@ -466,6 +466,15 @@ fn read_grid_file(
     // The name is a folder of `results/` by default.
     crate::names::file_name_part(&file.name).map_err(|p| invalid("name", p))?;
     Ok(file)
+}
+
+/// The folder holding `path`, which the grid's relative paths start from: its parent, and "."
+/// for a bare file name (`run g.toml`, whose parent is "", which no folder lookup takes).
+pub fn dir_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
 }
 
 /// The grid's buildings: its files (`buildings`), its suites' and its generated ones, each
@@ -694,7 +703,7 @@ fn plan_strategies(
         resolved: Vec::new(),
         program_files: BTreeMap::new(),
     };
-    let grid_dir = path.parent().unwrap_or(Path::new("."));
+    let grid_dir = dir_of(path);
     for (i, s) in file.strategies.iter().enumerate() {
         let field = format!("strategies[{i}]");
         let (name, program) = match (&s.name, &s.command) {

@@ -32,6 +32,12 @@ pub struct PlannedSuite {
 /// The first `suites/` folder in `base` or a folder above it (as a path relative to the
 /// current directory when it is under it).
 pub fn suites_dir(base: &Path) -> Option<PathBuf> {
+    // "" (the parent of a bare file name) is the current folder.
+    let base = if base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        base
+    };
     let abs = std::path::absolute(base).ok()?;
     let cwd = std::env::current_dir().ok();
     for dir in abs.ancestors() {

@@ -17,8 +17,8 @@ for line in sys.stdin:
     if kind == "hello":
         send({"type": "hello", "protocol": 1, "name": "nearest-plain-v1", "needs": ["layout"]})
     elif kind == "run":
-        # Needs in a ready reply are not protocol 1's: ignored.
-        send({"type": "ready", "needs": ["map"]})
+        # Needs in a ready reply are protocol 2's (v1_ready_needs.py is refused for them).
+        send({"type": "ready", "x": 1})
     elif kind == "decide":
         assert "map_changes" not in msg, "protocol 1: no map without the need"
         assert "robot_room" not in msg, "protocol 1: no robot_room"

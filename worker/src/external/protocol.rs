@@ -551,12 +551,19 @@ fn needs_of(needs: &Field<Vec<Field<Need>>>) -> Result<Vec<Need>, String> {
 }
 
 /// The program's answer to the run message, checked: ready. In protocol 2, needs it lists
-/// replace those of its hello (they may depend on the run's `params`); in protocol 1 a ready
-/// reply's other fields are ignored.
+/// replace those of its hello (they may depend on the run's `params`); in protocol 1 `needs`
+/// is refused (version 2 added it: ignoring it would run without what the program asked
+/// for), other fields are ignored.
 pub fn ready_of(r: &Received, hello: &mut Hello) -> Result<(), String> {
     match &r.message {
         Some(FromStrategy::Ready { needs }) => {
-            if hello.protocol >= 2 && !needs.is_missing() {
+            if hello.protocol < 2 && !needs.is_missing() {
+                return Err(format!(
+                    "answered the run message with \"needs\" in its ready reply, which protocol version 2 added, but its hello said it speaks version {}: say \"protocol\": 2 in the hello reply, or leave \"needs\" out of the ready reply (the hello's needs then hold; docs/strategy-protocol.md)",
+                    hello.protocol
+                ));
+            }
+            if !needs.is_missing() {
                 let needs =
                     needs_of(needs).map_err(|e| format!("answered the run message: {e}"))?;
                 hello.set_needs(&needs);
@@ -979,14 +986,23 @@ mod tests {
             e,
             r#"answered the run message with {"id":1,"type":"choose"} (expected {"type":"ready"})"#
         );
-        // Needs in the ready reply: ignored in protocol 1, the run's needs in protocol 2
-        // (replacing the hello's; none listed keeps them).
+        // Needs in the ready reply: refused in protocol 1 (whatever their value; null is no
+        // needs), the run's
+        // needs in protocol 2 (replacing the hello's; none listed keeps them).
         let v1 = h.clone();
-        assert_eq!(
-            ready(r#"{"type":"ready","needs":["layout"]}"#, &mut h),
-            Ok(())
-        );
-        assert_eq!(h, v1);
+        for line in [
+            r#"{"type":"ready","needs":["layout"]}"#,
+            r#"{"type":"ready","needs":[]}"#,
+            r#"{"type":"ready","needs":"map"}"#,
+        ] {
+            let e = ready(line, &mut h).unwrap_err();
+            assert!(
+                e.contains(r#"answered the run message with "needs" in its ready reply, which protocol version 2 added, but its hello said it speaks version 1: say "protocol": 2"#),
+                "{line}: {e}"
+            );
+            assert_eq!(h, v1, "{line}");
+        }
+        assert_eq!(ready(r#"{"type":"ready","needs":null}"#, &mut h), Ok(()));
         let mut h = hello(r#"{"type":"hello","protocol":2,"name":"n","needs":["map"]}"#).unwrap();
         assert_eq!(ready(r#"{"type":"ready"}"#, &mut h), Ok(()));
         assert!(h.needs_map && !h.needs_layout);

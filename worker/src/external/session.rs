@@ -209,7 +209,7 @@ impl ExternalStrategy {
         self.last_asked = format!("its answer to {what}");
         self.send(msg)
             .map_err(|_| self.ended(&format!("before answering {what}")))?;
-        let line = match self.pipes.lines.recv_timeout(self.timeout) {
+        let line = match self.await_line() {
             Ok(Line::Text(t)) => t,
             Ok(Line::TooLong) => {
                 return Err(format!(
@@ -217,14 +217,20 @@ impl ExternalStrategy {
                     MAX_LINE >> 20
                 ))
             }
-            Ok(Line::Eof) | Err(RecvTimeoutError::Disconnected) => {
+            Ok(Line::Eof) => {
                 return Err(self.ended(&format!("before answering {what}")))
             }
             Ok(Line::Failed(e)) => return Err(format!("cannot read its answer to {what}: {e}")),
-            Err(RecvTimeoutError::Timeout) => {
+            Err(Awaited::Late) => {
                 return Err(format!(
                     "did not answer {what} within {} s (the timeout: raise it with --strategy-timeout-s, or timeout_s in a grid)",
                     self.program.timeout_s
+                ))
+            }
+            Err(Awaited::ExitedHeld(how)) => {
+                return Err(format!(
+                    "{how} before answering {what}, but its stdout is still held open by a process it started and left running (a forked child or a daemon); end what it starts before exiting, or start it with stdout redirected{}",
+                    self.last_stderr_line()
                 ))
             }
         };
@@ -234,6 +240,56 @@ impl ExternalStrategy {
                 clip(&line, 80)
             )
         })
+    }
+
+    /// The next line of the program, waited for at most its timeout; a program that exits
+    /// while something it left behind holds its stdout open is told at once (after
+    /// [`EXIT_GRACE`] for the lines it wrote before exiting), not as a timeout.
+    fn await_line(&mut self) -> Result<Line, Awaited> {
+        let deadline = Instant::now() + self.timeout;
+        let mut exited_at: Option<(Instant, std::process::ExitStatus)> = None;
+        loop {
+            let now = Instant::now();
+            if now >= deadline {
+                return Err(Awaited::Late);
+            }
+            let slice = (deadline - now).min(EXIT_POLL);
+            match self.pipes.lines.recv_timeout(slice) {
+                Ok(line) => return Ok(line),
+                Err(RecvTimeoutError::Disconnected) => return Ok(Line::Eof),
+                Err(RecvTimeoutError::Timeout) => {}
+            }
+            match exited_at {
+                Some((at, status)) if at.elapsed() >= EXIT_GRACE => {
+                    return Err(Awaited::ExitedHeld(exit_words(status)))
+                }
+                Some(_) => {}
+                None => {
+                    if let Ok(Some(status)) = self.child.try_wait() {
+                        exited_at = Some((Instant::now(), status));
+                    }
+                }
+            }
+        }
+    }
+
+    /// "; its last stderr line: '...'" as read so far, or "" (not waited for: what the program
+    /// left may hold its stderr open too).
+    fn last_stderr_line(&self) -> String {
+        let last = self
+            .pipes
+            .stderr
+            .lock()
+            .map(|s| s.last_line.clone())
+            .unwrap_or_default();
+        if last.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; its last stderr line: '{}'",
+                clip(&last, crate::text::MAX_ECHO_BYTES)
+            )
+        }
     }
 
     fn send(&mut self, msg: &ToStrategy) -> Result<(), ()> {
@@ -264,10 +320,7 @@ impl ExternalStrategy {
             .map(|s| s.last_line.clone())
             .unwrap_or_default();
         let how = match status {
-            Some(s) => match s.code() {
-                Some(c) => format!("exited with status {c}"),
-                None => format!("was ended by a signal ({s})"),
-            },
+            Some(s) => exit_words(s),
             None => "closed its stdout".to_string(),
         };
         if last.is_empty() {
@@ -278,6 +331,27 @@ impl ExternalStrategy {
                 clip(&last, crate::text::MAX_ECHO_BYTES)
             )
         }
+    }
+}
+
+/// How often a wait for a reply looks whether the program has exited.
+const EXIT_POLL: Duration = Duration::from_millis(50);
+/// After the program exited, how long its last lines may take to come through its stdout.
+const EXIT_GRACE: Duration = Duration::from_millis(300);
+
+/// Why no line came.
+enum Awaited {
+    /// Not within the program's timeout.
+    Late,
+    /// The program exited (how, in words) but its stdout stays open: held by a process it left.
+    ExitedHeld(String),
+}
+
+/// "exited with status 3" or "was ended by a signal (...)".
+fn exit_words(s: std::process::ExitStatus) -> String {
+    match s.code() {
+        Some(c) => format!("exited with status {c}"),
+        None => format!("was ended by a signal ({s})"),
     }
 }
 
