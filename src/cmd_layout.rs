@@ -140,7 +140,13 @@ pub fn run(a: LayoutArgs) -> Result<()> {
         .read("--truth", a.truth.as_deref())
         .write("layout.json", Some(&out.join("layout.json")))
         .write("the layout picture", Some(&picture))
-        .write("accuracy.json", a.truth.as_ref().map(|_| out.join("accuracy.json")).as_deref())
+        .write(
+            "accuracy.json",
+            a.truth
+                .as_ref()
+                .map(|_| out.join("accuracy.json"))
+                .as_deref(),
+        )
         .check()?;
     create_dir(&out)?;
     let t = Instant::now();

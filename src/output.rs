@@ -43,7 +43,9 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 /// written.
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     use std::io::Write;
-    let failed = |e: std::io::Error| anyhow::Error::new(e).context(format!("cannot write {}", path.display()));
+    let failed = |e: std::io::Error| {
+        anyhow::Error::new(e).context(format!("cannot write {}", path.display()))
+    };
     if let Ok(m) = std::fs::metadata(path) {
         if !m.is_file() && !m.is_dir() {
             // Written directly: no file beside it, and the link (/dev/stdout) left alone.
@@ -70,7 +72,10 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut tmp = tempfile::Builder::new()
         .prefix(&format!(
             ".{}.part-",
-            target.file_name().map(|n| n.to_string_lossy()).unwrap_or_default()
+            target
+                .file_name()
+                .map(|n| n.to_string_lossy())
+                .unwrap_or_default()
         ))
         .permissions(std::os::unix::fs::PermissionsExt::from_mode(mode & 0o777))
         .tempfile_in(dir)
@@ -137,8 +142,7 @@ impl Paths {
         use floorcast_coordinator::store::{refuse_owned, same_file};
         for (i, (flag, out)) in self.writes.iter().enumerate() {
             for (what, dir) in &self.stores {
-                refuse_owned(flag, Some(out), dir)
-                    .map_err(|e| anyhow::anyhow!("{e} ({what})"))?;
+                refuse_owned(flag, Some(out), dir).map_err(|e| anyhow::anyhow!("{e} ({what})"))?;
             }
             let device = std::fs::metadata(out).is_ok_and(|m| !m.is_file() && !m.is_dir());
             if !device {
@@ -285,14 +289,14 @@ macro_rules! tell {
 /// The files `explore` writes in its `--out` directory (besides its layout snapshots,
 /// `layout-NN.png`/`.svg`).
 pub const EXPLORE_FILES: [&str; 9] = [
-        "summary.json",
-        "progress.csv",
-        "decisions.csv",
-        "trajectory.csv",
-        "strategy-stderr.txt",
-        "map.yaml",
-        "map.pgm",
-        "final.png",
+    "summary.json",
+    "progress.csv",
+    "decisions.csv",
+    "trajectory.csv",
+    "strategy-stderr.txt",
+    "map.yaml",
+    "map.pgm",
+    "final.png",
     "final.svg",
 ];
 
@@ -342,11 +346,14 @@ impl StagedOut {
                 return Err(e).with_context(|| format!("cannot lock {}", out.display()));
             }
         }
-        let parent = match out.parent() {
+        // A link to a directory is written through: the files move into its target (the
+        // staging folder is made beside the target), the link stays.
+        let real = out.canonicalize().unwrap_or_else(|_| out.to_path_buf());
+        let parent = match real.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
-        let name = out
+        let name = real
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| "explore".into());
@@ -361,7 +368,7 @@ impl StagedOut {
         let made = created.then(|| out.to_path_buf());
         staged(|s| s.push((staging.path().to_path_buf(), made)));
         Ok(StagedOut {
-            out: out.to_path_buf(),
+            out: real,
             staging: Some(staging),
             created,
             _lock: lock,

@@ -24,7 +24,14 @@ fn non_test_sources() -> Vec<(PathBuf, String)> {
         }
     }
     let mut files = Vec::new();
-    for c in ["src", "coordinator/src", "worker/src", "formats/src", "render/src", "sim-core/src"] {
+    for c in [
+        "src",
+        "coordinator/src",
+        "worker/src",
+        "formats/src",
+        "render/src",
+        "sim-core/src",
+    ] {
         walk(&repo().join(c), &mut files);
     }
     assert!(files.len() > 50, "too few sources found: {}", files.len());
@@ -37,9 +44,10 @@ fn non_test_sources() -> Vec<(PathBuf, String)> {
             let end = (0..lines.len())
                 .find(|&i| {
                     lines[i].trim() == "#[cfg(test)]"
-                        && lines
-                            .get(i + 1)
-                            .is_some_and(|l| l.trim_start().starts_with("mod ") || l.trim_start().starts_with("pub(crate) mod "))
+                        && lines.get(i + 1).is_some_and(|l| {
+                            l.trim_start().starts_with("mod ")
+                                || l.trim_start().starts_with("pub(crate) mod ")
+                        })
                 })
                 .unwrap_or(lines.len());
             (p, lines[..end].join("\n"))
@@ -235,18 +243,120 @@ fn no_output_is_an_input_or_another_output() {
     let (a_s, b_s) = (p("res-a"), p("res-b"));
     // (arguments, words of the refusal)
     let cases: Vec<(Vec<String>, Vec<&str>)> = [
-        (vec!["report", &a_s, "--against", &b_s, "--csv", &p("res-b/results.sqlite")], vec!["--csv", "results.sqlite", "a file floorcast owns", "--against"]),
-        (vec!["report", &a_s, "--against", &b_s, "--json", &p("b-link")], vec!["--json", "b-link", "a file floorcast owns"]),
-        (vec!["report", &a_s, "--against", &b_s, "--html", &p("res-b/floorcast.lock")], vec!["--html", "floorcast.lock"]),
-        (vec!["report", &a_s, "--against", &b_s, "--export-runs", &p("res-b/results.sqlite-wal")], vec!["--export-runs", "results.sqlite-wal"]),
-        (vec!["report", &a_s, "--against", &format!("{b_s}/../res-b"), "--csv", &p("res-b/./results.sqlite")], vec!["--csv", "a file floorcast owns"]),
-        (vec!["report", &a_s, "--csv", &p("x.out"), "--json", &p("x.out")], vec!["--csv and --json are the same file"]),
-        (vec!["report", &a_s, "--json", &p("y.out"), "--export-runs", &format!("{}/../{}/y.out", d.display(), d.file_name().unwrap().to_string_lossy())], vec!["--json and --export-runs are the same file"]),
-        (vec!["tour", "--building", &p("b.toml"), "--json", &p("b.toml")], vec!["--json", "b.toml", "which this command reads", "--building"]),
-        (vec!["tour", "--building", &p("b.toml"), "--json", &p("building-link.json")], vec!["--json", "which this command reads"]),
-        (vec!["tour", "--building", &p("b.toml"), "--settings", &p("s.json"), "--picture", &p("s.json")], vec!["--picture", "--settings"]),
-        (vec!["tour", "--building", &p("b.toml"), "--json", &p("t.svg"), "--picture", &p("t.svg")], vec!["--json and --picture are the same file"]),
-        (vec!["building", "render", &p("b.toml"), "--out", &p("b.toml")], vec!["--out", "which this command reads"]),
+        (
+            vec![
+                "report",
+                &a_s,
+                "--against",
+                &b_s,
+                "--csv",
+                &p("res-b/results.sqlite"),
+            ],
+            vec![
+                "--csv",
+                "results.sqlite",
+                "a file floorcast owns",
+                "--against",
+            ],
+        ),
+        (
+            vec!["report", &a_s, "--against", &b_s, "--json", &p("b-link")],
+            vec!["--json", "b-link", "a file floorcast owns"],
+        ),
+        (
+            vec![
+                "report",
+                &a_s,
+                "--against",
+                &b_s,
+                "--html",
+                &p("res-b/floorcast.lock"),
+            ],
+            vec!["--html", "floorcast.lock"],
+        ),
+        (
+            vec![
+                "report",
+                &a_s,
+                "--against",
+                &b_s,
+                "--export-runs",
+                &p("res-b/results.sqlite-wal"),
+            ],
+            vec!["--export-runs", "results.sqlite-wal"],
+        ),
+        (
+            vec![
+                "report",
+                &a_s,
+                "--against",
+                &format!("{b_s}/../res-b"),
+                "--csv",
+                &p("res-b/./results.sqlite"),
+            ],
+            vec!["--csv", "a file floorcast owns"],
+        ),
+        (
+            vec!["report", &a_s, "--csv", &p("x.out"), "--json", &p("x.out")],
+            vec!["--csv and --json are the same file"],
+        ),
+        (
+            vec![
+                "report",
+                &a_s,
+                "--json",
+                &p("y.out"),
+                "--export-runs",
+                &format!(
+                    "{}/../{}/y.out",
+                    d.display(),
+                    d.file_name().unwrap().to_string_lossy()
+                ),
+            ],
+            vec!["--json and --export-runs are the same file"],
+        ),
+        (
+            vec!["tour", "--building", &p("b.toml"), "--json", &p("b.toml")],
+            vec!["--json", "b.toml", "which this command reads", "--building"],
+        ),
+        (
+            vec![
+                "tour",
+                "--building",
+                &p("b.toml"),
+                "--json",
+                &p("building-link.json"),
+            ],
+            vec!["--json", "which this command reads"],
+        ),
+        (
+            vec![
+                "tour",
+                "--building",
+                &p("b.toml"),
+                "--settings",
+                &p("s.json"),
+                "--picture",
+                &p("s.json"),
+            ],
+            vec!["--picture", "--settings"],
+        ),
+        (
+            vec![
+                "tour",
+                "--building",
+                &p("b.toml"),
+                "--json",
+                &p("t.svg"),
+                "--picture",
+                &p("t.svg"),
+            ],
+            vec!["--json and --picture are the same file"],
+        ),
+        (
+            vec!["building", "render", &p("b.toml"), "--out", &p("b.toml")],
+            vec!["--out", "which this command reads"],
+        ),
     ]
     .into_iter()
     .map(|(args, needles)| (args.into_iter().map(str::to_string).collect(), needles))
@@ -256,24 +366,60 @@ fn no_output_is_an_input_or_another_output() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let o = run(&args);
         assert_clean_failure(&o, needles);
-        assert_eq!(before, (snapshot(&a), snapshot(&b), snapshot(d)), "{args:?} changed a file");
+        assert_eq!(
+            before,
+            (snapshot(&a), snapshot(&b), snapshot(d)),
+            "{args:?} changed a file"
+        );
     }
     // An explore whose --out holds its building under an output's name is refused.
     let out = d.join("ex");
     std::fs::create_dir(&out).unwrap();
-    std::fs::copy(repo().join("maps/radish/intel_map.yaml"), out.join("map.yaml")).unwrap();
-    std::fs::copy(repo().join("maps/radish/intel_map.pgm"), out.join("intel_map.pgm")).unwrap();
+    std::fs::copy(
+        repo().join("maps/radish/intel_map.yaml"),
+        out.join("map.yaml"),
+    )
+    .unwrap();
+    std::fs::copy(
+        repo().join("maps/radish/intel_map.pgm"),
+        out.join("intel_map.pgm"),
+    )
+    .unwrap();
     let yaml = std::fs::read(out.join("map.yaml")).unwrap();
-    let o = run(&["explore", "--building", out.join("map.yaml").to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = run(&[
+        "explore",
+        "--building",
+        out.join("map.yaml").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert_clean_failure(&o, &["--out's map.yaml", "which this command reads"]);
     assert_eq!(std::fs::read(out.join("map.yaml")).unwrap(), yaml);
     // An import that is the results directory's lock (which `run` writes).
     let res = d.join("res-lockimport");
     std::fs::create_dir(&res).unwrap();
     std::fs::write(res.join("floorcast.lock"), "not yet\n").unwrap();
-    let o = run(&["run", grid.to_str().unwrap(), "--import", res.join("floorcast.lock").to_str().unwrap(), "--results", res.to_str().unwrap()]);
-    assert_clean_failure(&o, &["--results", "floorcast.lock", "--import", "which this command reads"]);
-    assert_eq!(std::fs::read_to_string(res.join("floorcast.lock")).unwrap(), "not yet\n");
+    let o = run(&[
+        "run",
+        grid.to_str().unwrap(),
+        "--import",
+        res.join("floorcast.lock").to_str().unwrap(),
+        "--results",
+        res.to_str().unwrap(),
+    ]);
+    assert_clean_failure(
+        &o,
+        &[
+            "--results",
+            "floorcast.lock",
+            "--import",
+            "which this command reads",
+        ],
+    );
+    assert_eq!(
+        std::fs::read_to_string(res.join("floorcast.lock")).unwrap(),
+        "not yet\n"
+    );
 }
 
 /// Outputs that are symbolic links are written through to their targets (the links stay);
@@ -286,30 +432,67 @@ fn symlinked_outputs_are_written_through() {
     let a = d.join("res-a");
     run_ok(&grid, Some(&a), &[]);
     std::fs::create_dir(d.join("real")).unwrap();
-    for (flag, name) in [("--csv", "x.csv"), ("--json", "x.json"), ("--export-runs", "x.gz"), ("--html", "x.html")] {
+    for (flag, name) in [
+        ("--csv", "x.csv"),
+        ("--json", "x.json"),
+        ("--export-runs", "x.gz"),
+        ("--html", "x.html"),
+    ] {
         let link = d.join(format!("link-{name}"));
         std::os::unix::fs::symlink(format!("real/{name}"), &link).unwrap();
         let o = run(&["report", a.to_str().unwrap(), flag, link.to_str().unwrap()]);
         assert!(o.status.success(), "{flag}: {}", stderr(&o));
-        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "{flag}: the link was replaced");
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink(),
+            "{flag}: the link was replaced"
+        );
         let written = std::fs::read(d.join("real").join(name)).unwrap();
-        assert!(!written.is_empty(), "{flag}: nothing written through the link");
+        assert!(
+            !written.is_empty(),
+            "{flag}: nothing written through the link"
+        );
         // Nothing left beside the link or the target.
-        let left: Vec<_> = std::fs::read_dir(d).unwrap().chain(std::fs::read_dir(d.join("real")).unwrap())
+        let left: Vec<_> = std::fs::read_dir(d)
+            .unwrap()
+            .chain(std::fs::read_dir(d.join("real")).unwrap())
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .filter(|n| n.contains(".part-"))
             .collect();
         assert!(left.is_empty(), "{flag}: {left:?}");
     }
     // The export to /dev/stdout: its bytes on stdout, /dev/stdout still a link.
-    let o = run(&["report", a.to_str().unwrap(), "--export-runs", "/dev/stdout"]);
+    let o = run(&[
+        "report",
+        a.to_str().unwrap(),
+        "--export-runs",
+        "/dev/stdout",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(o.stdout.windows(2).any(|w| w == [0x1f, 0x8b]), "no gzip data on stdout");
-    assert!(std::fs::symlink_metadata("/dev/stdout").unwrap().file_type().is_symlink());
-    let o = run(&["report", a.to_str().unwrap(), "--csv", "/dev/null", "--json", d.join("r.json").to_str().unwrap()]);
+    assert!(
+        o.stdout.windows(2).any(|w| w == [0x1f, 0x8b]),
+        "no gzip data on stdout"
+    );
+    assert!(std::fs::symlink_metadata("/dev/stdout")
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    let o = run(&[
+        "report",
+        a.to_str().unwrap(),
+        "--csv",
+        "/dev/null",
+        "--json",
+        d.join("r.json").to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     use std::os::unix::fs::FileTypeExt;
-    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    assert!(std::fs::metadata("/dev/null")
+        .unwrap()
+        .file_type()
+        .is_char_device());
 }
 
 /// A results directory's lock that is a symbolic link (or not a regular file) is refused, its
@@ -323,18 +506,41 @@ fn a_symlinked_lock_is_refused() {
     std::fs::write(&victim, "precious\n").unwrap();
     type Make = fn(&Path, &Path);
     let cases: [(&str, Make, &str); 3] = [
-        ("link", |res, v| std::os::unix::fs::symlink(v, res.join("floorcast.lock")).unwrap(), "a symbolic link"),
-        ("dangling", |res, _| std::os::unix::fs::symlink("nowhere/lock", res.join("floorcast.lock")).unwrap(), "a symbolic link"),
-        ("dir", |res, _| std::fs::create_dir(res.join("floorcast.lock")).unwrap(), "not a regular file"),
+        (
+            "link",
+            |res, v| std::os::unix::fs::symlink(v, res.join("floorcast.lock")).unwrap(),
+            "a symbolic link",
+        ),
+        (
+            "dangling",
+            |res, _| {
+                std::os::unix::fs::symlink("nowhere/lock", res.join("floorcast.lock")).unwrap()
+            },
+            "a symbolic link",
+        ),
+        (
+            "dir",
+            |res, _| std::fs::create_dir(res.join("floorcast.lock")).unwrap(),
+            "not a regular file",
+        ),
     ];
     for (what, make, said) in cases {
         let res = d.join(format!("res-{what}"));
         std::fs::create_dir(&res).unwrap();
         make(&res, &victim);
-        let o = run(&["run", grid.to_str().unwrap(), "--quiet", "--results", res.to_str().unwrap()]);
+        let o = run(&[
+            "run",
+            grid.to_str().unwrap(),
+            "--quiet",
+            "--results",
+            res.to_str().unwrap(),
+        ]);
         assert_clean_failure(&o, &["floorcast.lock", said, "remove it"]);
         assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
-        assert!(!res.join("results.sqlite").exists(), "{what}: a store was made");
+        assert!(
+            !res.join("results.sqlite").exists(),
+            "{what}: a store was made"
+        );
     }
     assert!(!d.join("nowhere").exists());
 }
@@ -369,7 +575,12 @@ fn forged_import_lines_are_refused() {
     let a = d.join("res-a");
     run_ok(&grid, Some(&a), &[]);
     let file = d.join("runs.gz");
-    let o = run(&["report", a.to_str().unwrap(), "--export-runs", file.to_str().unwrap()]);
+    let o = run(&[
+        "report",
+        a.to_str().unwrap(),
+        "--export-runs",
+        file.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let lines = export_lines(&file);
     assert_eq!(lines.len(), 3, "header, the run, its tour: {lines:?}");
@@ -382,34 +593,97 @@ fn forged_import_lines_are_refused() {
     type Forge = fn(&mut serde_json::Value);
     // (what is forged, how, words of the refusal)
     let cases: Vec<(&str, Forge, &[&str])> = vec![
-        ("building_hash", |r| r["building_hash"] = "0123456789abcdef0123456789abcdef".into(), &["building_hash"]),
-        ("strategy", |r| { r["strategy"] = "nearest".into(); r["summary"]["strategy"] = "nearest".into(); }, &["strategy", "nearest"]),
-        ("seed", |r| { r["seed"] = 2.into(); r["summary"]["seed"] = 2.into(); }, &["seed"]),
-        ("seed 2^64-1", |r| { r["seed"] = u64::MAX.into(); r["summary"]["seed"] = u64::MAX.into(); }, &["seed", "18446744073709551615"]),
-        ("settings", |r| { r["settings"]["alpha"] = 0.3.into(); r["summary"]["settings"]["alpha"] = 0.3.into(); }, &["settings"]),
-        ("summary settings", |r| r["summary"]["settings"]["max_speed_mps"] = 0.9.into(), &["settings"]),
-        ("start", |r| r["summary"]["start"][0] = 1.25.into(), &["start"]),
-        ("version", |r| { r["floorcast_version"] = "0.6.0".into(); r["summary"]["floorcast_version"] = "0.6.0".into(); }, &["floorcast_version", "0.6.0"]),
-        ("a 1 s exploration at 100 %", |r| {
-            let s = &mut r["summary"];
-            s["exploration_time_s"] = 1.0.into();
-            s["total_time_s"] = 1.0.into();
-            s["explored_fraction"] = 1.0.into();
-            s["explored_area_m2"] = s["free_area_m2"].clone();
-            s["unexplored_free_m2"] = 0.0.into();
-            s["end_reason"] = "complete".into();
-        }, &["summary", "explored_fraction"]),
-        ("a shorter time", |r| {
-            r["summary"]["exploration_time_s"] = 3.0.into();
-            r["summary"]["total_time_s"] = 3.0.into();
-        }, &["summary.exploration_time_s", "progress curve ends"]),
-        ("a curve going back in time", |r| {
-            let p = r["progress"].as_str().unwrap().to_string();
-            let mut rows: Vec<&str> = p.lines().collect();
-            rows.swap(2, 3);
-            r["progress"] = (rows.join("\n") + "\n").into();
-        }, &["progress", "before the one before it"]),
-        ("wall time", |r| r["wall_time_s"] = (-1.0).into(), &["wall_time_s"]),
+        (
+            "building_hash",
+            |r| r["building_hash"] = "0123456789abcdef0123456789abcdef".into(),
+            &["building_hash"],
+        ),
+        (
+            "strategy",
+            |r| {
+                r["strategy"] = "nearest".into();
+                r["summary"]["strategy"] = "nearest".into();
+            },
+            &["strategy", "nearest"],
+        ),
+        (
+            "seed",
+            |r| {
+                r["seed"] = 2.into();
+                r["summary"]["seed"] = 2.into();
+            },
+            &["seed"],
+        ),
+        (
+            "seed 2^64-1",
+            |r| {
+                r["seed"] = u64::MAX.into();
+                r["summary"]["seed"] = u64::MAX.into();
+            },
+            &["seed", "18446744073709551615"],
+        ),
+        (
+            "settings",
+            |r| {
+                r["settings"]["alpha"] = 0.3.into();
+                r["summary"]["settings"]["alpha"] = 0.3.into();
+            },
+            &["settings"],
+        ),
+        (
+            "summary settings",
+            |r| r["summary"]["settings"]["max_speed_mps"] = 0.9.into(),
+            &["settings"],
+        ),
+        (
+            "start",
+            |r| r["summary"]["start"][0] = 1.25.into(),
+            &["start"],
+        ),
+        (
+            "version",
+            |r| {
+                r["floorcast_version"] = "0.6.0".into();
+                r["summary"]["floorcast_version"] = "0.6.0".into();
+            },
+            &["floorcast_version", "0.6.0"],
+        ),
+        (
+            "a 1 s exploration at 100 %",
+            |r| {
+                let s = &mut r["summary"];
+                s["exploration_time_s"] = 1.0.into();
+                s["total_time_s"] = 1.0.into();
+                s["explored_fraction"] = 1.0.into();
+                s["explored_area_m2"] = s["free_area_m2"].clone();
+                s["unexplored_free_m2"] = 0.0.into();
+                s["end_reason"] = "complete".into();
+            },
+            &["summary", "explored_fraction"],
+        ),
+        (
+            "a shorter time",
+            |r| {
+                r["summary"]["exploration_time_s"] = 3.0.into();
+                r["summary"]["total_time_s"] = 3.0.into();
+            },
+            &["summary.exploration_time_s", "progress curve ends"],
+        ),
+        (
+            "a curve going back in time",
+            |r| {
+                let p = r["progress"].as_str().unwrap().to_string();
+                let mut rows: Vec<&str> = p.lines().collect();
+                rows.swap(2, 3);
+                r["progress"] = (rows.join("\n") + "\n").into();
+            },
+            &["progress", "before the one before it"],
+        ),
+        (
+            "wall time",
+            |r| r["wall_time_s"] = (-1.0).into(),
+            &["wall_time_s"],
+        ),
     ];
     let forged = d.join("forged.gz");
     for (what, forge, needles) in &cases {
@@ -418,14 +692,26 @@ fn forged_import_lines_are_refused() {
         let text = format!("{}\n{}\n{}\n", lines[0], v, lines[2]);
         std::fs::write(&forged, gzip(&text)).unwrap();
         let res = d.join(format!("res-{}", what.replace([' ', '^', '%'], "-")));
-        let o = run(&["run", grid.to_str().unwrap(), "--quiet", "--import", forged.to_str().unwrap(), "--results", res.to_str().unwrap()]);
+        let o = run(&[
+            "run",
+            grid.to_str().unwrap(),
+            "--quiet",
+            "--import",
+            forged.to_str().unwrap(),
+            "--results",
+            res.to_str().unwrap(),
+        ]);
         let mut all = needles.to_vec();
         all.extend(["forged.gz", "line 2"]);
         assert_clean_failure(&o, &all);
         // Nothing of it was stored (a store without rows, or none at all).
         if res.join("results.sqlite").exists() {
             let o = run(&["report", res.to_str().unwrap()]);
-            assert!(stdout(&o).starts_with("0 results"), "{what}: {}", stdout(&o));
+            assert!(
+                stdout(&o).starts_with("0 results"),
+                "{what}: {}",
+                stdout(&o)
+            );
         }
     }
     // The same run then accepts its own grid.
@@ -434,26 +720,70 @@ fn forged_import_lines_are_refused() {
     assert!(!out.contains("import"), "{out}");
     assert_eq!(report_rows(&res).len(), 1);
     // A job given twice.
-    let text = format!("{}\n{}\n{}\n{}\n", lines[0].replace("\"runs\":1", "\"runs\":2"), lines[1], lines[1], lines[2]);
+    let text = format!(
+        "{}\n{}\n{}\n{}\n",
+        lines[0].replace("\"runs\":1", "\"runs\":2"),
+        lines[1],
+        lines[1],
+        lines[2]
+    );
     std::fs::write(&forged, gzip(&text)).unwrap();
-    let o = run(&["run", grid.to_str().unwrap(), "--quiet", "--import", forged.to_str().unwrap(), "--results", d.join("res-twice").to_str().unwrap()]);
+    let o = run(&[
+        "run",
+        grid.to_str().unwrap(),
+        "--quiet",
+        "--import",
+        forged.to_str().unwrap(),
+        "--results",
+        d.join("res-twice").to_str().unwrap(),
+    ]);
     assert_clean_failure(&o, &["forged.gz", "line 3", "again", "line 2"]);
     // Data after the gzip stream: another member, or bytes appended.
     let good = std::fs::read(&file).unwrap();
-    for (what, tail) in [("a second member", gzip(&lines[1])), ("bytes", b"junk\n".to_vec()), ("one zero byte", vec![0])] {
+    for (what, tail) in [
+        ("a second member", gzip(&lines[1])),
+        ("bytes", b"junk\n".to_vec()),
+        ("one zero byte", vec![0]),
+    ] {
         let mut bytes = good.clone();
         bytes.extend(&tail);
         std::fs::write(&forged, bytes).unwrap();
-        let o = run(&["run", grid.to_str().unwrap(), "--quiet", "--import", forged.to_str().unwrap(), "--results", d.join("res-tail").to_str().unwrap()]);
-        assert_clean_failure(&o, &["--import", "forged.gz", "bytes follow the end of its gzip stream"]);
+        let o = run(&[
+            "run",
+            grid.to_str().unwrap(),
+            "--quiet",
+            "--import",
+            forged.to_str().unwrap(),
+            "--results",
+            d.join("res-tail").to_str().unwrap(),
+        ]);
+        assert_clean_failure(
+            &o,
+            &[
+                "--import",
+                "forged.gz",
+                "bytes follow the end of its gzip stream",
+            ],
+        );
         assert!(!d.join("res-tail").exists(), "{what}: nothing is made");
     }
     // A FIFO is refused at once (opening it would wait for a writer).
     let fifo = d.join("fifo.gz");
-    let made = std::process::Command::new("mkfifo").arg(&fifo).status().expect("mkfifo (coreutils) runs");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo (coreutils) runs");
     assert!(made.success());
     let mut child = floorcast()
-        .args(["run", grid.to_str().unwrap(), "--quiet", "--import", fifo.to_str().unwrap(), "--results", d.join("res-fifo").to_str().unwrap()])
+        .args([
+            "run",
+            grid.to_str().unwrap(),
+            "--quiet",
+            "--import",
+            fifo.to_str().unwrap(),
+            "--results",
+            d.join("res-fifo").to_str().unwrap(),
+        ])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -482,7 +812,9 @@ fn a_half_made_store_is_completed() {
     let cases: [(&str, Make); 2] = [
         ("header only", |p| {
             let c = rusqlite::Connection::open(p).unwrap();
-            let mode: String = c.query_row("PRAGMA journal_mode = WAL", [], |r| r.get(0)).unwrap();
+            let mode: String = c
+                .query_row("PRAGMA journal_mode = WAL", [], |r| r.get(0))
+                .unwrap();
             assert_eq!(mode, "wal");
             drop(c);
             let len = std::fs::metadata(p).unwrap().len();
@@ -496,7 +828,10 @@ fn a_half_made_store_is_completed() {
         std::fs::write(res.join("floorcast.lock"), "pid 1 on host x\n").unwrap();
         make(&res.join("results.sqlite"));
         let o = run(&["report", res.to_str().unwrap()]);
-        assert_clean_failure(&o, &["created by floorcast but never finished", "completes it"]);
+        assert_clean_failure(
+            &o,
+            &["created by floorcast but never finished", "completes it"],
+        );
         let out = run_ok(&grid, Some(&res), &[]);
         assert!(out.contains("is now complete"), "{what}: {out}");
         assert_eq!(report_rows(&res).len(), 1, "{what}");
@@ -508,6 +843,51 @@ fn a_half_made_store_is_completed() {
         .unwrap()
         .execute_batch("PRAGMA user_version = 7;")
         .unwrap();
-    let o = run(&["run", grid.to_str().unwrap(), "--quiet", "--results", res.to_str().unwrap()]);
+    let o = run(&[
+        "run",
+        grid.to_str().unwrap(),
+        "--quiet",
+        "--results",
+        res.to_str().unwrap(),
+    ]);
     assert_clean_failure(&o, &["not a floorcast results store"]);
+}
+
+/// `explore --out LINK`, a link to a directory, writes into the directory; the link stays.
+#[test]
+fn explore_writes_through_a_linked_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (what, existing) in [("new", false), ("holding files", true)] {
+        let real = d.join(format!("real-{}", what.replace(' ', "-")));
+        std::fs::create_dir(&real).unwrap();
+        if existing {
+            std::fs::write(real.join("notes.txt"), "mine\n").unwrap();
+        }
+        let link = d.join(format!("link-{}", what.replace(' ', "-")));
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        let o = run(&[
+            "explore",
+            "--building",
+            repo().join("buildings/small.toml").to_str().unwrap(),
+            "--time-limit-s",
+            "5",
+            "--quiet",
+            "--out",
+            link.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{what}: {}", stderr(&o));
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink(),
+            "{what}: the link was replaced"
+        );
+        assert!(
+            real.join("summary.json").is_file(),
+            "{what}: no summary in the link's target"
+        );
+        assert_eq!(existing, real.join("notes.txt").exists(), "{what}");
+    }
 }

@@ -111,7 +111,10 @@ pub fn thin(curve: &[Sample]) -> Vec<Sample> {
 /// The successful runs among `rows` and the `tours` of the current method as the export file's
 /// bytes (gzip JSON lines), with how many runs and tours it holds. The binary writes them the
 /// way it writes every output (`src/output.rs`: through a link, directly to a device).
-pub fn export(rows: &[StoredResult], tours: &[TourRecord]) -> Result<(Vec<u8>, usize, usize), String> {
+pub fn export(
+    rows: &[StoredResult],
+    tours: &[TourRecord],
+) -> Result<(Vec<u8>, usize, usize), String> {
     let runs: Vec<&StoredResult> = rows.iter().filter(|r| r.status == JobStatus::Ok).collect();
     // A tour of an older method is never used again.
     let tours: Vec<&TourRecord> = tours
@@ -318,7 +321,11 @@ pub fn check_import(
         ));
     }
     if r.floorcast_version != FLOORCAST_VERSION {
-        return differs("floorcast_version", &r.floorcast_version, &FLOORCAST_VERSION);
+        return differs(
+            "floorcast_version",
+            &r.floorcast_version,
+            &FLOORCAST_VERSION,
+        );
     }
     let (Some(summary), Some(curve)) = (&r.summary, &r.progress) else {
         return Err("a successful run without its summary or progress curve".into());
@@ -340,8 +347,11 @@ pub fn check_import(
         },
         stderr_tail: None,
     };
-    floorcast_worker::wire::check_report(&report, &want).map_err(|e| format!("{e} (job {})", job.id))?;
-    if summary.start.map(f64::to_bits) != start.0.map(f64::to_bits) || summary.start_source != start.1 {
+    floorcast_worker::wire::check_report(&report, &want)
+        .map_err(|e| format!("{e} (job {})", job.id))?;
+    if summary.start.map(f64::to_bits) != start.0.map(f64::to_bits)
+        || summary.start_source != start.1
+    {
         return Err(format!(
             "field summary.start is {:?} ({}), the grid's job {} starts at {:?} ({})",
             summary.start, summary.start_source, job.id, start.0, start.1

@@ -553,9 +553,11 @@ fn is_half_made(conn: &Connection, tables: &[String], path: &Path) -> bool {
     wal_mode(path)
         && tables.iter().all(|t| STORE_TABLES.contains(&t.as_str()))
         && tables.iter().all(|t| {
-            conn.query_row(&format!("SELECT NOT EXISTS (SELECT 1 FROM \"{t}\")"), [], |r| {
-                r.get::<_, bool>(0)
-            })
+            conn.query_row(
+                &format!("SELECT NOT EXISTS (SELECT 1 FROM \"{t}\")"),
+                [],
+                |r| r.get::<_, bool>(0),
+            )
             .unwrap_or(false)
         })
 }
@@ -1635,7 +1637,14 @@ mod tests {
     fn seeds_are_stored_losslessly() {
         let dir = tempfile::tempdir().unwrap();
         let s = Store::open(dir.path()).unwrap();
-        let seeds = [0, 1, i64::MAX as u64, i64::MAX as u64 + 1, u64::MAX - 1, u64::MAX];
+        let seeds = [
+            0,
+            1,
+            i64::MAX as u64,
+            i64::MAX as u64 + 1,
+            u64::MAX - 1,
+            u64::MAX,
+        ];
         let rows: Vec<StoredResult> = seeds
             .iter()
             .map(|&seed| StoredResult {
