@@ -214,15 +214,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         },
     )?;
     check_options(&a)?;
-    // The store, SQLite's files and the lock `run` writes are none of the files it reads.
-    let mut paths = crate::output::Paths::new();
-    paths
-        .read("the grid", Some(&a.grid))
-        .read("--import", a.import.as_deref());
-    for f in floorcast_coordinator::store::OWNED_FILES {
-        paths.write("--results", Some(&plan.results_dir.join(f)));
-    }
-    paths.check()?;
+    refuse_overwrites_of_run(&a, &plan)?;
     if a.summary && nothing_stored(&a, &plan) {
         return Ok(());
     }
@@ -310,6 +302,19 @@ pub fn run(a: RunArgs) -> Result<()> {
     }
     drop(live);
     Ok(())
+}
+
+/// The store, SQLite's files and the lock `run` writes are none of the files it reads (the
+/// grid, `--import`): [`crate::output::Paths`].
+fn refuse_overwrites_of_run(a: &RunArgs, plan: &Plan) -> Result<()> {
+    let mut paths = crate::output::Paths::new();
+    paths
+        .read("the grid", Some(&a.grid))
+        .read("--import", a.import.as_deref());
+    for f in floorcast_coordinator::store::OWNED_FILES {
+        paths.write("--results", Some(&plan.results_dir.join(f)));
+    }
+    paths.check()
 }
 
 /// Every job of the grid is stored already: says so, prints the table and the tests, makes the

@@ -226,6 +226,7 @@ fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
 /// a settings file, a grid) nor one of its own outputs twice; each refusal is one line naming
 /// the flag and what the path is, exit code 2, and every input is left as it was.
 #[test]
+#[allow(clippy::too_many_lines)] // a table of cases
 fn no_output_is_an_input_or_another_output() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -568,6 +569,7 @@ fn gzip(text: &str) -> Vec<u8> {
 /// the same `run` then runs its own grid. Data after the gzip stream is refused, and a FIFO at
 /// once (it would block).
 #[test]
+#[allow(clippy::too_many_lines)] // a table of cases
 fn forged_import_lines_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
