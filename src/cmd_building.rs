@@ -118,7 +118,9 @@ fn generate_cmd(a: GenerateArgs) -> Result<()> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         crate::output::create_dir(dir)?;
     }
-    floorcast_formats::building_toml::write_building_toml(&b, &a.out)?;
+    let text = floorcast_formats::building_toml::to_toml_string(&b)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.out.display()))?;
+    crate::output::write_text(&a.out, &text)?;
     say!(
         "{}: {} rooms, {:.0} m2 free, hash {}",
         a.out.display(),
@@ -134,7 +136,7 @@ fn generate_cmd(a: GenerateArgs) -> Result<()> {
         "outline",
         floorcast_formats::limits::EXPLORE_RESOLUTION_M,
     ) {
-        eprintln!("note: {e}");
+        tell!("note: {e}");
     }
     Ok(())
 }
@@ -324,9 +326,12 @@ fn text_list(items: &[String], max: usize) -> String {
 }
 
 fn render_cmd(a: RenderArgs) -> Result<()> {
+    crate::output::Paths::new()
+        .read("the building", Some(&a.file))
+        .write("--out", Some(&a.out))
+        .check()?;
     let b = floorcast_formats::read_building(&a.file)?;
-    building_figure(&b)
-        .save(&a.out)
+    crate::output::save_figure(&building_figure(&b), &a.out)
         .with_context(|| format!("cannot write {}", a.out.display()))?;
     say!("{}", a.out.display());
     Ok(())

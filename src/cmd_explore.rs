@@ -152,6 +152,21 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{e} (given on the command line)"))?;
     check_job(&job).with_context(|| format!("{}: cannot explore", a.building.display()))?;
     let out = out_dir(&a, &name, &label);
+    // No file `explore` writes in --out is one it reads.
+    let mut paths = crate::output::Paths::new();
+    paths
+        .read("--building", Some(&a.building))
+        .read("--settings", a.settings.as_deref());
+    for f in crate::output::EXPLORE_FILES {
+        paths.write(&format!("--out's {f}"), Some(&out.join(f)));
+    }
+    for pct in [20, 40, 60, 80, 90] {
+        for ext in ["png", "svg"] {
+            let f = format!("layout-{pct}.{ext}");
+            paths.write(&format!("--out's {f}"), Some(&out.join(&f)));
+        }
+    }
+    paths.check()?;
     // Written whole or not at all, one explore at a time (`StagedOut`).
     let staged = crate::output::StagedOut::begin(&out)?;
     let dir = staged.dir();
@@ -185,7 +200,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         summary.speedup
     );
     if let Some(w) = short_run_warning(summary) {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
     say!("results in {}", out.display());
     Ok(())

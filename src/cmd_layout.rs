@@ -134,6 +134,20 @@ pub fn run(a: LayoutArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/layout/{stem}")));
+    let picture = out.join(format!("layout.{}", a.picture));
+    crate::output::Paths::new()
+        .read("the map", Some(&a.map))
+        .read("--truth", a.truth.as_deref())
+        .write("layout.json", Some(&out.join("layout.json")))
+        .write("the layout picture", Some(&picture))
+        .write(
+            "accuracy.json",
+            a.truth
+                .as_ref()
+                .map(|_| out.join("accuracy.json"))
+                .as_deref(),
+        )
+        .check()?;
     create_dir(&out)?;
     let t = Instant::now();
     let layout = reconstruct_layout(&grid, &LayoutConfig::default());
@@ -143,9 +157,7 @@ pub fn run(a: LayoutArgs) -> Result<()> {
         &out.join("layout.json"),
         &(serde_json::to_string_pretty(&file)? + "\n"),
     )?;
-    let picture = out.join(format!("layout.{}", a.picture));
-    layout_figure(&grid, &layout)
-        .save(&picture)
+    crate::output::save_figure(&layout_figure(&grid, &layout), &picture)
         .with_context(|| format!("cannot write {}", picture.display()))?;
     let full = layout.rooms_labelled(RoomLabel::Full);
     let open = layout.rooms_labelled(RoomLabel::Open);

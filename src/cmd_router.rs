@@ -65,6 +65,6 @@ pub fn run(a: RouterArgs) -> Result<()> {
     say!("{line}; connect the coordinator (`floorcast run GRID --connect ENDPOINT --workers 0`) and the workers (`floorcast worker --connect ENDPOINT`) to it");
     let _ = stopped.recv();
     router.close();
-    eprintln!("router stopped");
+    tell!("router stopped");
     Ok(())
 }

@@ -214,6 +214,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         },
     )?;
     check_options(&a)?;
+    refuse_overwrites_of_run(&a, &plan)?;
     if a.summary && nothing_stored(&a, &plan) {
         return Ok(());
     }
@@ -301,6 +302,19 @@ pub fn run(a: RunArgs) -> Result<()> {
     }
     drop(live);
     Ok(())
+}
+
+/// The store, SQLite's files and the lock `run` writes are none of the files it reads (the
+/// grid, `--import`): [`crate::output::Paths`].
+fn refuse_overwrites_of_run(a: &RunArgs, plan: &Plan) -> Result<()> {
+    let mut paths = crate::output::Paths::new();
+    paths
+        .read("the grid", Some(&a.grid))
+        .read("--import", a.import.as_deref());
+    for f in floorcast_coordinator::store::OWNED_FILES {
+        paths.write("--results", Some(&plan.results_dir.join(f)));
+    }
+    paths.check()
 }
 
 /// Every job of the grid is stored already: says so, prints the table and the tests, makes the
@@ -405,32 +419,44 @@ fn import_runs(
         Some(q) => plan.jobs_for(&(1..=q.max_seeds).collect::<Vec<_>>(), None),
         None => plan.jobs.clone(),
     };
-    // Each job's label and building as this grid names them.
-    let names: std::collections::BTreeMap<&str, (&str, &str)> = jobs
-        .iter()
-        .map(|j| {
-            let building = plan.buildings[j.building].name.as_str();
-            (j.id.as_str(), (j.label.as_str(), building))
-        })
-        .collect();
+    let by_id: std::collections::BTreeMap<&str, &floorcast_coordinator::grid::PlannedJob> =
+        jobs.iter().map(|j| (j.id.as_str(), j)).collect();
     let stored = store.stored_ids()?;
     let worker = format!(
         "import:{}",
         path.file_name().unwrap_or_default().to_string_lossy()
     );
-    let rows: Vec<_> = file
-        .runs
-        .into_iter()
-        .filter(|r| !stored.contains(&r.job_id))
-        .filter_map(|mut r| {
-            let (label, building) = names.get(r.job_id.as_str())?;
-            r.label = (*label).to_string();
-            r.building = (*building).to_string();
-            r.grid.clone_from(&plan.name);
-            r.worker.clone_from(&worker);
-            Some(r)
-        })
-        .collect();
+    // Every line that claims a job of this grid is checked against that job before any is
+    // stored: one refused line stores nothing of the file.
+    let mut starts = floorcast_coordinator::board::Starts::new();
+    let mut seen = std::collections::BTreeMap::new();
+    let mut rows = Vec::new();
+    for (mut r, line) in file.runs.into_iter().zip(file.run_lines) {
+        let Some(job) = by_id.get(r.job_id.as_str()) else {
+            continue;
+        };
+        if let Some(first) = seen.insert(r.job_id.clone(), line) {
+            anyhow::bail!(
+                "--import {}: line {line}: job {} again (line {first} holds it already); expected each job once",
+                path.display(),
+                r.job_id
+            );
+        }
+        floorcast_coordinator::board::check_import(plan, job, &r, &mut starts).map_err(|e| {
+            anyhow::anyhow!(
+                "--import {}: line {line}: {e}; nothing of the file was stored (export the runs again with `floorcast report DIR --export-runs FILE`)",
+                path.display()
+            )
+        })?;
+        if stored.contains(&r.job_id) {
+            continue;
+        }
+        r.label.clone_from(&job.label);
+        r.building.clone_from(&plan.buildings[job.building].name);
+        r.grid.clone_from(&plan.name);
+        r.worker.clone_from(&worker);
+        rows.push(r);
+    }
     let n = store.insert_many(&rows)?;
     let hashes: std::collections::BTreeSet<&str> =
         plan.buildings.iter().map(|b| b.hash.as_str()).collect();
@@ -496,6 +522,12 @@ fn open_store(
     } else {
         Store::open(&plan.results_dir)?
     };
+    if store.completed_half_made() {
+        say!(
+            "{}: a store floorcast had created but not finished (it held nothing: its disk was full, or floorcast was killed as it made it) is now complete",
+            store.path().display()
+        );
+    }
     Ok((lock, store))
 }
 
@@ -624,7 +656,7 @@ fn run_with_progress(
         },
         &mut |line| {
             if log_pb.is_hidden() {
-                eprintln!("{line}");
+                tell!("{line}");
             } else {
                 log_pb.println(line);
             }
@@ -679,7 +711,7 @@ fn finish(
             failed_jobs(plan, &jobs, store)
         }
         Outcome::Interrupted => {
-            eprintln!(
+            tell!(
                 "interrupted: {} of {} jobs stored in {}; run the same command again to resume",
                 counts.done,
                 counts.total,
@@ -893,8 +925,9 @@ fn export_runs(
     results: &[floorcast_coordinator::store::StoredResult],
     tours: &[floorcast_worker::tour::TourRecord],
 ) -> Result<()> {
-    let (runs, tours) = floorcast_coordinator::board::export(results, tours, path)
+    let (bytes, runs, tours) = floorcast_coordinator::board::export(results, tours)
         .map_err(|e| anyhow::anyhow!("--export-runs: {e}"))?;
+    crate::output::write_bytes(path, &bytes).context("--export-runs")?;
     say!("wrote {} ({runs} runs, {tours} tours)", path.display());
     Ok(())
 }
@@ -917,20 +950,22 @@ fn report_style(a: &ReportArgs) -> Result<floorcast_render::chart::ChartStyle> {
     })
 }
 
-/// No export may overwrite the store or a file of it (checked before anything is written).
+/// No export may overwrite a store the report reads (the reported one and `--against`'s) or a
+/// file of one, nor another export (checked before anything is written: [`crate::output::Paths`]).
 fn refuse_overwrites(a: &ReportArgs) -> Result<()> {
-    use floorcast_coordinator::store::{refuse_owned, refuse_owned_in};
-    refuse_owned("--csv", a.csv.as_deref(), &a.results)?;
-    refuse_owned("--json", a.json.as_deref(), &a.results)?;
-    refuse_owned("--html", a.html.as_deref(), &a.results)?;
-    refuse_owned("--export-runs", a.export_runs.as_deref(), &a.results)?;
+    use floorcast_coordinator::store::refuse_owned_in;
+    crate::output::Paths::new()
+        .store("the reported store", Some(&a.results))
+        .store("--against's store", a.against.as_deref())
+        .write("--csv", a.csv.as_deref())
+        .write("--json", a.json.as_deref())
+        .write("--html", a.html.as_deref())
+        .write("--export-runs", a.export_runs.as_deref())
+        .check()?;
     for picture in &a.picture {
-        refuse_owned_in(
-            "--plots",
-            a.plots.as_deref(),
-            picture.extension(),
-            &a.results,
-        )?;
+        for dir in std::iter::once(&a.results).chain(&a.against) {
+            refuse_owned_in("--plots", a.plots.as_deref(), picture.extension(), dir)?;
+        }
     }
     Ok(())
 }
@@ -1081,7 +1116,7 @@ fn write_pictures(
         formats.dedup();
         for (name, fig) in charts {
             for f in &formats {
-                fig.save(dir.join(format!("{name}.{}", f.extension())))?;
+                crate::output::save_figure(fig, &dir.join(format!("{name}.{}", f.extension())))?;
             }
         }
         let names: Vec<&str> = formats.iter().map(|f| f.extension()).collect();

@@ -483,14 +483,9 @@ fn write_manifest(m: &Manifest, dir: &Path, path: &Path) -> Result<()> {
     let back = parse_manifest(&text, path)?;
     debug_assert_eq!(&back, m);
     crate::output::create_dir(dir)?;
-    // Written beside it and moved into place: a manifest is never half written.
-    let tmp = dir.join(format!(".{}.tmp-{}", m.name, std::process::id()));
-    crate::output::write_text(&tmp, &text)?;
-    std::fs::rename(&tmp, path).with_context(|| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("cannot write {}", path.display())
-    })?;
-    Ok(())
+    // Written beside it (beside a link's target) and moved into place: a manifest is never half
+    // written, and a link to it stays a link.
+    crate::output::write_text(path, &text)
 }
 
 #[cfg(test)]

@@ -38,6 +38,12 @@ pub fn run(a: TourArgs) -> Result<()> {
             a.coverage
         );
     }
+    crate::output::Paths::new()
+        .read("--building", Some(&a.building))
+        .read("--settings", a.settings.as_deref())
+        .write("--json", a.json.as_deref())
+        .write("--picture", a.picture.as_deref())
+        .check()?;
     let building = floorcast_formats::read_building(&a.building)?;
     let settings = crate::cmd_explore::settings_file(a.settings.as_deref())?;
     let name = a.building.display().to_string();
@@ -65,8 +71,7 @@ pub fn run(a: TourArgs) -> Result<()> {
         write_text(path, &text)?;
     }
     if let Some(path) = &a.picture {
-        tour_figure(&building, &tour)
-            .save(path)
+        crate::output::save_figure(&tour_figure(&building, &tour), path)
             .with_context(|| format!("--picture: cannot draw the tour to {}", path.display()))?;
         say!("drew {}", path.display());
     }
@@ -156,7 +161,7 @@ pub fn make_grid_tours(
                 Ok(got) => got,
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
                     if interrupt.load(std::sync::atomic::Ordering::SeqCst) {
-                        eprintln!(
+                        tell!(
                             "interrupted while making tours: {k} of {} made and stored in {}; run the same command again to make the rest",
                             todo.len(),
                             store.path().display()
@@ -172,7 +177,7 @@ pub fn make_grid_tours(
             let tour = match made {
                 Ok(tour) => tour,
                 Err(e) => {
-                    eprintln!("tour {k}/{}: {e}", todo.len());
+                    tell!("tour {k}/{}: {e}", todo.len());
                     continue;
                 }
             };

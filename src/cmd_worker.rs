@@ -68,20 +68,20 @@ pub fn run(a: WorkerArgs) -> Result<()> {
         }
         match e {
             WorkerEvent::Joined { worker } => {
-                eprintln!("worker {worker}: connected, taking jobs ({jobs} at once)")
+                tell!("worker {worker}: connected, taking jobs ({jobs} at once)")
             }
-            WorkerEvent::Started { job, what } => eprintln!("job {job}: {what}"),
+            WorkerEvent::Started { job, what } => tell!("job {job}: {what}"),
             WorkerEvent::Finished {
                 job,
                 status,
                 wall_time_s,
                 reply,
-            } => eprintln!(
+            } => tell!(
                 "job {job}: {} in {wall_time_s:.1} s, {}",
                 status.as_str(),
                 shown(&reply, 4000)
             ),
-            WorkerEvent::Note(n) => eprintln!("note: {}", shown(&n, 4000)),
+            WorkerEvent::Note(n) => tell!("note: {}", shown(&n, 4000)),
         }
     };
     let t0 = std::time::Instant::now();

@@ -155,7 +155,7 @@ fn main() -> ExitCode {
                 return ExitCode::from(130);
             }
             // Errors quote outside text (a program's output): escaped, bounded.
-            eprintln!(
+            tell!(
                 "error: {}",
                 floorcast_worker::text::shown(&one_line_error(&e), 4000)
             );
@@ -181,7 +181,7 @@ fn usage_error(e: clap::Error) -> ExitCode {
         }
         return ExitCode::from(e.exit_code() as u8);
     }
-    eprintln!("{}", usage_line(&e.render().to_string()));
+    tell!("{}", usage_line(&e.render().to_string()));
     ExitCode::from(2)
 }
 

@@ -29,9 +29,140 @@ pub fn create_dir(dir: &Path) -> Result<()> {
         .with_context(|| format!("cannot create directory {}", dir.display()))
 }
 
-/// Writes a text file, naming it on failure.
+/// Writes a text file, naming it on failure ([`write_bytes`]).
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+    write_bytes(path, text.as_bytes())
+}
+
+/// Writes a file the one way floorcast writes every output file it names (docs/limits.md,
+/// "Output paths"): a symbolic link is written through to its target (the link stays); a
+/// device, FIFO or socket (`/dev/stdout`, `/dev/null`, a named pipe) is written directly; a
+/// regular file (or none yet) is written whole or not at all, into a new file beside it (beside
+/// the link's target) renamed over it at the end, so that a failed write leaves the old file as
+/// it was. Which paths a command may write is [`Paths::check`]'s part, before anything is
+/// written.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    use std::io::Write;
+    let failed = |e: std::io::Error| {
+        anyhow::Error::new(e).context(format!("cannot write {}", path.display()))
+    };
+    if let Ok(m) = std::fs::metadata(path) {
+        if !m.is_file() && !m.is_dir() {
+            // Written directly: no file beside it, and the link (/dev/stdout) left alone.
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(failed)?;
+            return f.write_all(bytes).and_then(|_| f.flush()).map_err(failed);
+        }
+    }
+    let target = floorcast_coordinator::store::resolved(path).ok_or_else(|| {
+        anyhow::anyhow!(
+            "cannot write {}: its folder does not exist (or the link leads nowhere); create the folder or give another path",
+            path.display()
+        )
+    })?;
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mode = std::fs::metadata(&target)
+        .map(|m| std::os::unix::fs::PermissionsExt::mode(&m.permissions()))
+        .unwrap_or(0o644);
+    let mut tmp = tempfile::Builder::new()
+        .prefix(&format!(
+            ".{}.part-",
+            target
+                .file_name()
+                .map(|n| n.to_string_lossy())
+                .unwrap_or_default()
+        ))
+        .permissions(std::os::unix::fs::PermissionsExt::from_mode(mode & 0o777))
+        .tempfile_in(dir)
+        .map_err(failed)?;
+    tmp.write_all(bytes)
+        .and_then(|_| tmp.as_file().sync_all())
+        .map_err(failed)?;
+    tmp.persist(&target).map_err(|e| failed(e.error))?;
+    Ok(())
+}
+
+/// Draws `fig` to `path` (SVG, PNG or PDF by its extension) as [`write_bytes`] writes.
+pub fn save_figure(fig: &floorcast_render::Figure, path: &Path) -> Result<()> {
+    let bytes = fig.encode_for(path)?;
+    write_bytes(path, &bytes)
+}
+
+/// What one command reads and writes, checked against the one rule for output paths before
+/// anything is written (docs/limits.md, "Output paths"): no output is a file the command reads
+/// (a building, grid, settings file, import, a results store or a file of it: SQLite's files and
+/// the lock), whatever its spelling (relative, `..`, symbolic or hard links); no two outputs
+/// are the same file. An output that is a device (`/dev/stdout`) is compared with the other
+/// outputs only: writing one destroys no input.
+#[derive(Debug, Default)]
+pub struct Paths {
+    reads: Vec<(String, PathBuf)>,
+    stores: Vec<(String, PathBuf)>,
+    writes: Vec<(String, PathBuf)>,
+}
+
+impl Paths {
+    pub fn new() -> Paths {
+        Paths::default()
+    }
+
+    /// A file the command reads; `what` names it in a refusal (`--building`, `the grid`).
+    pub fn read(&mut self, what: &str, path: Option<&Path>) -> &mut Paths {
+        if let Some(p) = path {
+            self.reads.push((what.to_string(), p.to_path_buf()));
+        }
+        self
+    }
+
+    /// A results directory the command reads or writes: its store, SQLite's files beside it and
+    /// its lock ([`floorcast_coordinator::store::OWNED_FILES`]).
+    pub fn store(&mut self, what: &str, dir: Option<&Path>) -> &mut Paths {
+        if let Some(d) = dir {
+            self.stores.push((what.to_string(), d.to_path_buf()));
+        }
+        self
+    }
+
+    /// A file the command writes, given by `flag` (`--json`).
+    pub fn write(&mut self, flag: &str, path: Option<&Path>) -> &mut Paths {
+        if let Some(p) = path {
+            self.writes.push((flag.to_string(), p.to_path_buf()));
+        }
+        self
+    }
+
+    /// Refuses, naming the flag, the path and the file it would overwrite, any output the rule
+    /// forbids. Nothing is written.
+    pub fn check(&self) -> Result<()> {
+        use floorcast_coordinator::store::{refuse_owned, same_file};
+        for (i, (flag, out)) in self.writes.iter().enumerate() {
+            for (what, dir) in &self.stores {
+                refuse_owned(flag, Some(out), dir).map_err(|e| anyhow::anyhow!("{e} ({what})"))?;
+            }
+            let device = std::fs::metadata(out).is_ok_and(|m| !m.is_file() && !m.is_dir());
+            if !device {
+                if let Some((what, input)) = self.reads.iter().find(|(_, r)| same_file(out, r)) {
+                    anyhow::bail!(
+                        "{flag}: {} is {} ({what}), which this command reads; writing there would destroy it: give another path",
+                        out.display(),
+                        input.display()
+                    );
+                }
+            }
+            if let Some((other, _)) = self.writes[..i].iter().find(|(_, o)| same_file(out, o)) {
+                anyhow::bail!(
+                    "{other} and {flag} are the same file ({}): one would overwrite the other; give each its own path",
+                    out.display()
+                );
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A progress bar on stderr, hidden when `quiet` or when stderr is not a terminal.
@@ -88,10 +219,10 @@ pub fn stop_programs_on_ctrl_c() {
 pub fn remove_stale_temp_dirs(quiet: bool) {
     let n = floorcast_worker::external::remove_stale_temp_dirs();
     if n > 0 && !quiet {
-        eprintln!(
+        tell_fmt(format_args!(
             "removed {n} temporary folder(s) left in {} by floorcast processes that were killed",
             std::env::temp_dir().display()
-        );
+        ));
     }
 }
 
@@ -126,7 +257,7 @@ pub fn stdout_failed(e: &std::io::Error) -> ! {
     if e.kind() == std::io::ErrorKind::BrokenPipe {
         std::process::exit(0);
     }
-    eprintln!("error: cannot write to stdout ({e}); free space on its device or send the output elsewhere");
+    tell_fmt(format_args!("error: cannot write to stdout ({e}); free space on its device or send the output elsewhere"));
     std::process::exit(2);
 }
 
@@ -140,20 +271,38 @@ macro_rules! say_raw {
     ($($t:tt)*) => { crate::output::say_fmt(format_args!($($t)*), false) };
 }
 
+/// Writes one line to stderr (messages, warnings, errors). A failed write (stderr closed, or on a
+/// full device: `2>/dev/full`) is let go: there is nowhere left to say it, the outputs already
+/// written stay, and the exit code still tells an error (never a panic, as `eprintln!` would).
+pub fn tell_fmt(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let mut err = std::io::stderr().lock();
+    let _ = writeln!(err, "{args}").and_then(|_| err.flush());
+}
+
+/// `eprintln!` that never panics ([`tell_fmt`]). Every write to stdout or stderr outside tests
+/// goes through [`say!`], [`say_raw!`] or this (`tests/checked_writes.rs` greps the sources).
+macro_rules! tell {
+    ($($t:tt)*) => { crate::output::tell_fmt(format_args!($($t)*)) };
+}
+
+/// The files `explore` writes in its `--out` directory (besides its layout snapshots,
+/// `layout-NN.png`/`.svg`).
+pub const EXPLORE_FILES: [&str; 9] = [
+    "summary.json",
+    "progress.csv",
+    "decisions.csv",
+    "trajectory.csv",
+    "strategy-stderr.txt",
+    "map.yaml",
+    "map.pgm",
+    "final.png",
+    "final.svg",
+];
+
 /// Whether `name` is a file `explore` writes in its `--out` directory.
 fn is_explore_output(name: &str) -> bool {
-    const FILES: [&str; 9] = [
-        "summary.json",
-        "progress.csv",
-        "decisions.csv",
-        "trajectory.csv",
-        "strategy-stderr.txt",
-        "map.yaml",
-        "map.pgm",
-        "final.png",
-        "final.svg",
-    ];
-    FILES.contains(&name)
+    EXPLORE_FILES.contains(&name)
         || (name.starts_with("layout-") && (name.ends_with(".png") || name.ends_with(".svg")))
 }
 
@@ -197,11 +346,14 @@ impl StagedOut {
                 return Err(e).with_context(|| format!("cannot lock {}", out.display()));
             }
         }
-        let parent = match out.parent() {
+        // A link to a directory is written through: the files move into its target (the
+        // staging folder is made beside the target), the link stays.
+        let real = out.canonicalize().unwrap_or_else(|_| out.to_path_buf());
+        let parent = match real.parent() {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
-        let name = out
+        let name = real
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_else(|| "explore".into());
@@ -216,7 +368,7 @@ impl StagedOut {
         let made = created.then(|| out.to_path_buf());
         staged(|s| s.push((staging.path().to_path_buf(), made)));
         Ok(StagedOut {
-            out: out.to_path_buf(),
+            out: real,
             staging: Some(staging),
             created,
             _lock: lock,

@@ -78,6 +78,8 @@ pub struct Exported {
     pub header: Header,
     /// Successful runs, each with its thinned curve.
     pub runs: Vec<StoredResult>,
+    /// The line of the file each of `runs` was read from (1 is the header).
+    pub run_lines: Vec<usize>,
     pub tours: Vec<TourRecord>,
 }
 
@@ -106,14 +108,13 @@ pub fn thin(curve: &[Sample]) -> Vec<Sample> {
     out
 }
 
-/// Writes the successful runs among `rows` and the `tours` of the current method to `path`
-/// (gzip JSON lines), through a file beside it renamed into place. Returns how many runs and
-/// tours were written.
+/// The successful runs among `rows` and the `tours` of the current method as the export file's
+/// bytes (gzip JSON lines), with how many runs and tours it holds. The binary writes them the
+/// way it writes every output (`src/output.rs`: through a link, directly to a device).
 pub fn export(
     rows: &[StoredResult],
     tours: &[TourRecord],
-    path: &Path,
-) -> Result<(usize, usize), String> {
+) -> Result<(Vec<u8>, usize, usize), String> {
     let runs: Vec<&StoredResult> = rows.iter().filter(|r| r.status == JobStatus::Ok).collect();
     // A tour of an older method is never used again.
     let tours: Vec<&TourRecord> = tours
@@ -152,33 +153,37 @@ pub fn export(
                 .map_err(|e| e.to_string())?,
         );
     }
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(format!(".part-{}", std::process::id()));
-    let tmp = std::path::PathBuf::from(tmp);
-    let write = || -> std::io::Result<()> {
-        let file = std::fs::File::create(&tmp)?;
-        let mut gz = flate2::write::GzEncoder::new(file, flate2::Compression::best());
+    let encode = || -> std::io::Result<Vec<u8>> {
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
         for l in &lines {
             gz.write_all(l.as_bytes())?;
             gz.write_all(b"\n")?;
         }
-        gz.finish()?.sync_all()?;
-        std::fs::rename(&tmp, path)
+        gz.finish()
     };
-    write().map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("cannot write {}: {e}", path.display())
-    })?;
-    Ok((runs.len(), tours.len()))
+    let bytes = encode().map_err(|e| format!("cannot compress the export: {e}"))?;
+    Ok((bytes, runs.len(), tours.len()))
 }
 
 /// Reads and checks a file [`export`] wrote. The error names the line and what was expected.
+/// Only a regular file is read (a FIFO, which would block until written, or a device is
+/// refused before it is opened), and only one gzip stream: bytes after it (another gzip member,
+/// anything appended) are refused.
 pub fn read(path: &Path) -> Result<Exported, String> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() => {
+            return Err(
+                "not a regular file (a directory, FIFO or device); expected a file that `floorcast report DIR --export-runs FILE` wrote"
+                    .into(),
+            )
+        }
+        _ => {}
+    }
     let file = std::fs::File::open(path).map_err(|e| format!("cannot open it ({e})"))?;
-    let gz = flate2::read::GzDecoder::new(file);
+    let gz = flate2::bufread::GzDecoder::new(BufReader::new(file));
     let mut input = BufReader::new(gz.take(MAX_TOTAL_BYTES + 1));
     let mut header: Option<Header> = None;
-    let (mut runs, mut tours) = (Vec::new(), Vec::new());
+    let (mut runs, mut tours, mut run_lines) = (Vec::new(), Vec::new(), Vec::new());
     let mut buf = Vec::new();
     let mut total = 0u64;
     for n in 1.. {
@@ -224,12 +229,27 @@ pub fn read(path: &Path) -> Result<Exported, String> {
         let line: Line = serde_json::from_str(text)
             .map_err(|e| format!("line {n}: expected a run or a tour ({e})"))?;
         match line {
-            Line::Run(r) => runs.push(run_of(*r).map_err(|e| format!("line {n}: {e}"))?),
+            Line::Run(r) => {
+                runs.push(run_of(*r).map_err(|e| format!("line {n}: {e}"))?);
+                run_lines.push(n);
+            }
             Line::Tour(t) => {
                 t.validate().map_err(|e| format!("line {n}: tour: {e}"))?;
                 tours.push(*t);
             }
         }
+    }
+    // The gzip stream ended: nothing may follow it.
+    let mut rest = input.into_inner().into_inner().into_inner();
+    let after = rest
+        .fill_buf()
+        .map_err(|e| format!("cannot read it ({e})"))?
+        .len();
+    if after > 0 {
+        return Err(
+            "bytes follow the end of its gzip stream (another gzip member, or data appended); expected the one stream that `floorcast report DIR --export-runs FILE` writes"
+                .into(),
+        );
     }
     let header = header.ok_or("it is empty, expected the header line")?;
     if (header.runs, header.tours) != (runs.len() as u64, tours.len() as u64) {
@@ -244,9 +264,154 @@ pub fn read(path: &Path) -> Result<Exported, String> {
     Ok(Exported {
         header,
         runs,
+        run_lines,
         tours,
     })
 }
+
+/// Checks an imported run against the grid's job it claims (its `job_id`): everything that
+/// determines the run (building hash, strategy and program, seed, settings, start, floorcast
+/// version) is the job's, its summary is whole and in range
+/// ([`floorcast_worker::wire::check_report`], as for a remote worker's result), and its progress
+/// curve agrees with its summary (times from 0 never going back, fractions in [0, 1], the last
+/// sample the summary's explored fraction at its exploration time). The error names the field.
+/// `starts` keeps the buildings' own starts found so far (by building and robot radius).
+pub fn check_import(
+    plan: &crate::grid::Plan,
+    job: &crate::grid::PlannedJob,
+    r: &StoredResult,
+    starts: &mut Starts,
+) -> Result<(), String> {
+    let want = crate::execute::identity(plan, job);
+    // Where the job starts: the grid's given start, else the building's own.
+    let start = match &job.start {
+        Some(g) => (
+            [g.pose.x_m, g.pose.y_m, g.pose.theta_rad],
+            g.source.as_str().to_string(),
+        ),
+        None => starts
+            .entry((job.building, job.settings.robot_radius_m.to_bits()))
+            .or_insert_with(|| {
+                floorcast_worker::check_job(&crate::execute::spec(plan, job))
+                    .map(|(_, p, source)| ([p.x_m, p.y_m, p.theta_rad], source))
+                    .map_err(|e| e.to_string())
+            })
+            .clone()
+            .map_err(|e| format!("the grid's job {} cannot run here ({e})", job.id))?,
+    };
+    let differs = |field: &str, got: &dyn std::fmt::Debug, want: &dyn std::fmt::Debug| {
+        Err(format!(
+            "field {field} is {got:?}, the grid's job {} has {want:?}",
+            job.id
+        ))
+    };
+    if r.building_hash != want.building_hash {
+        return differs("building_hash", &r.building_hash, &want.building_hash);
+    }
+    if r.strategy != want.strategy {
+        return differs("strategy", &r.strategy, &want.strategy);
+    }
+    if r.seed != want.seed {
+        return differs("seed", &r.seed, &want.seed);
+    }
+    if r.settings != want.settings {
+        return Err(format!(
+            "field settings differs from the settings of the grid's job {}",
+            job.id
+        ));
+    }
+    if r.floorcast_version != FLOORCAST_VERSION {
+        return differs(
+            "floorcast_version",
+            &r.floorcast_version,
+            &FLOORCAST_VERSION,
+        );
+    }
+    let (Some(summary), Some(curve)) = (&r.summary, &r.progress) else {
+        return Err("a successful run without its summary or progress curve".into());
+    };
+    if summary.strategy_program != job.program {
+        return Err(format!(
+            "field summary.strategy_program differs from the grid's job {}'s program",
+            job.id
+        ));
+    }
+    let report = floorcast_worker::wire::JobReport {
+        wall_time_s: r.wall_time_s,
+        outcome: floorcast_worker::wire::JobOutcome::Ok {
+            summary: Box::new(summary.clone()),
+            progress: curve
+                .iter()
+                .map(|s| [s.time_s, s.explored_area_m2, s.explored_fraction])
+                .collect(),
+        },
+        stderr_tail: None,
+    };
+    floorcast_worker::wire::check_report(&report, &want)
+        .map_err(|e| format!("{e} (job {})", job.id))?;
+    if summary.start.map(f64::to_bits) != start.0.map(f64::to_bits)
+        || summary.start_source != start.1
+    {
+        return Err(format!(
+            "field summary.start is {:?} ({}), the grid's job {} starts at {:?} ({})",
+            summary.start, summary.start_source, job.id, start.0, start.1
+        ));
+    }
+    check_curve(summary, curve)
+}
+
+/// A progress curve agrees with its run's summary (the curve as the store rounds it: time to
+/// 0.1 s, fraction to five decimals).
+fn check_curve(summary: &floorcast_worker::RunSummary, curve: &[Sample]) -> Result<(), String> {
+    let Some(last) = curve.last() else {
+        return Err("field progress is empty".into());
+    };
+    let mut before = 0.0;
+    for (i, s) in curve.iter().enumerate() {
+        if s.time_s.is_nan() || s.time_s < before {
+            return Err(format!(
+                "field progress: sample {} is at {} s, before the one before it ({before} s)",
+                i + 1,
+                s.time_s
+            ));
+        }
+        before = s.time_s;
+        if !(0.0..=1.0).contains(&s.explored_fraction)
+            || s.explored_area_m2.is_nan()
+            || s.explored_area_m2 < 0.0
+        {
+            return Err(format!(
+                "field progress: sample {} has explored fraction {} and area {} m2, expected a fraction in [0, 1] and an area of 0 or more",
+                i + 1,
+                s.explored_fraction,
+                s.explored_area_m2
+            ));
+        }
+    }
+    if (last.explored_fraction - summary.explored_fraction).abs() > CURVE_FRACTION_TOLERANCE {
+        return Err(format!(
+            "field summary.explored_fraction is {}, its progress curve ends at {}",
+            summary.explored_fraction, last.explored_fraction
+        ));
+    }
+    if (last.time_s - summary.exploration_time_s).abs() > CURVE_TIME_TOLERANCE_S {
+        return Err(format!(
+            "field summary.exploration_time_s is {} s, its progress curve ends at {} s",
+            summary.exploration_time_s, last.time_s
+        ));
+    }
+    Ok(())
+}
+
+/// The buildings' own starts [`check_import`] found: by building index and robot radius (bits).
+pub type Starts = std::collections::BTreeMap<(usize, u64), Result<([f64; 3], String), String>>;
+
+/// How far a stored curve's last explored fraction may be from its summary's (the store keeps
+/// five decimals).
+const CURVE_FRACTION_TOLERANCE: f64 = 1e-5;
+/// How far a stored curve's last time may be from its summary's exploration time (the store
+/// keeps tenths of a second).
+const CURVE_TIME_TOLERANCE_S: f64 = 0.1;
 
 /// A run line as a store's row, checked as a store's row is read.
 fn run_of(r: RunLine) -> Result<StoredResult, String> {

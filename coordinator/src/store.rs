@@ -54,6 +54,8 @@ pub enum StoreError {
     ReadOnly { path: PathBuf, why: String },
     #[error("results store {path} cannot be read ({why}); give yourself read access to it, or give another --results directory")]
     Unreadable { path: PathBuf, why: String },
+    #[error("results store {path} was created by floorcast but never finished (it holds no results, no store version: its disk was full, or floorcast was killed as it made it); `floorcast run GRID --results {dir}` completes it")]
+    HalfMade { path: PathBuf, dir: PathBuf },
     #[error("results store {path}: {problem}")]
     Row { path: PathBuf, problem: String },
     #[error("results directory {dir} is in use by another floorcast run ({holder}); wait for it to end or stop it, then run again (report needs no lock)")]
@@ -63,6 +65,8 @@ pub enum StoreError {
         path: PathBuf,
         source: std::io::Error,
     },
+    #[error("the lock {path} is {what}; floorcast writes its lock only to a file of its own: remove it (nothing runs while it is there) and run again")]
+    LockNotOwn { path: PathBuf, what: String },
     #[error("{flag}: {path} is {owned}, a file floorcast owns; writing there would destroy the results: give another path")]
     Owned {
         flag: String,
@@ -159,6 +163,9 @@ pub struct Provenance {
 pub struct Store {
     path: PathBuf,
     conn: Connection,
+    /// Opened by [`Store::open`] as a store floorcast had created but not finished
+    /// ([`StoreError::HalfMade`]), now completed.
+    completed: bool,
     /// The tables and columns added since the first layout are there ([`Store::upgrade`]).
     upgraded: std::sync::atomic::AtomicBool,
 }
@@ -172,8 +179,14 @@ impl Store {
             source,
         })?;
         let path = dir.join(DB_FILE);
+        let mut completed = false;
         if std::fs::symlink_metadata(&path).is_ok() {
-            check_is_store(&path)?;
+            match check_is_store(&path) {
+                Ok(_) => {}
+                // It holds nothing: made whole below, as a new store is.
+                Err(StoreError::HalfMade { .. }) => completed = true,
+                Err(e) => return Err(e),
+            }
             // Refused before SQLite opens it (and makes its files beside it) read-only.
             if let Err(e) = std::fs::OpenOptions::new().write(true).open(&path) {
                 return Err(StoreError::ReadOnly {
@@ -186,6 +199,7 @@ impl Store {
         let s = Store {
             path,
             conn,
+            completed,
             upgraded: false.into(),
         };
         s.init()?;
@@ -203,12 +217,19 @@ impl Store {
         Ok(Store {
             path,
             conn,
+            completed: false,
             upgraded: false.into(),
         })
     }
 
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// Whether [`Store::open`] found a store floorcast had created but not finished (it held
+    /// nothing) and completed it.
+    pub fn completed_half_made(&self) -> bool {
+        self.completed
     }
 }
 
@@ -241,6 +262,20 @@ pub fn lock_results(dir: &Path) -> Result<RunLock, StoreError> {
             source,
         },
     };
+    // The lock is a file of floorcast's own: a symbolic link there is refused, never followed
+    // (its target would be written), and so is anything but a regular file.
+    let not_own = |what: &str| StoreError::LockNotOwn {
+        path: path.clone(),
+        what: what.to_string(),
+    };
+    if let Ok(m) = std::fs::symlink_metadata(&path) {
+        if m.file_type().is_symlink() {
+            return Err(not_own("a symbolic link"));
+        }
+        if !m.is_file() {
+            return Err(not_own("not a regular file"));
+        }
+    }
     let mut file = std::fs::OpenOptions::new()
         .read(true)
         .write(true)
@@ -248,6 +283,15 @@ pub fn lock_results(dir: &Path) -> Result<RunLock, StoreError> {
         .truncate(false)
         .open(&path)
         .map_err(failed)?;
+    {
+        // What was opened is what is there now (not a link put in its place meanwhile).
+        use std::os::unix::fs::MetadataExt;
+        let opened = file.metadata().map_err(failed)?;
+        match std::fs::symlink_metadata(&path) {
+            Ok(m) if m.is_file() && m.dev() == opened.dev() && m.ino() == opened.ino() => {}
+            _ => return Err(not_own("replaced while it was opened")),
+        }
+    }
     match file.try_lock() {
         Ok(()) => {}
         Err(std::fs::TryLockError::WouldBlock) => {
@@ -317,22 +361,30 @@ pub fn refuse_owned_in(
 
 /// The file of [`OWNED_FILES`] in `results_dir` that writing `out` would write, if any.
 fn owned_file_at(out: &Path, results_dir: &Path) -> Option<PathBuf> {
-    use std::os::unix::fs::MetadataExt;
-    let out_meta = std::fs::metadata(out).ok();
-    let out_resolved = resolved(out);
     OWNED_FILES
         .iter()
         .map(|f| results_dir.join(f))
-        .find(|owned| match (&out_meta, std::fs::metadata(owned).ok()) {
-            (Some(a), Some(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
-            _ => out_resolved.is_some() && out_resolved == resolved(owned),
-        })
+        .find(|owned| same_file(out, owned))
+}
+
+/// Whether writing `a` would write `b`, whatever their spellings: relative, with `.` or `..`,
+/// through symbolic links (a link to a file not yet there included), or a hard link (both
+/// there: the same device and inode).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+        _ => {
+            let ra = resolved(a);
+            ra.is_some() && ra == resolved(b)
+        }
+    }
 }
 
 /// Where writing `path` would write: its absolute path with every symbolic link followed, a
 /// link to a file not yet there included (`None` when its directory does not exist, or it has
 /// no file name).
-fn resolved(path: &Path) -> Option<PathBuf> {
+pub fn resolved(path: &Path) -> Option<PathBuf> {
     let mut p = std::path::absolute(path).ok()?;
     // As many links as the kernel follows.
     for _ in 0..40 {
@@ -425,6 +477,9 @@ fn check_sqlite_file(path: &Path) -> Result<(), StoreError> {
         return Err(foreign(path, "not a regular file"));
     }
     if meta.len() == 0 {
+        if ran_in(path) {
+            return Err(half_made(path));
+        }
         return Err(damaged(path, "an empty file"));
     }
     let mut header = [0u8; 16];
@@ -456,12 +511,66 @@ fn check_sqlite_file(path: &Path) -> Result<(), StoreError> {
     Ok(())
 }
 
+/// Whether a `floorcast run` has used the folder of the store at `path` (its lock is there).
+fn ran_in(path: &Path) -> bool {
+    path.parent()
+        .is_some_and(|d| std::fs::symlink_metadata(d.join(LOCK_FILE)).is_ok())
+}
+
+fn half_made(path: &Path) -> StoreError {
+    StoreError::HalfMade {
+        path: path.to_path_buf(),
+        dir: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+    }
+}
+
+/// Whether the SQLite file at `path` is in write-ahead-log mode (its header's bytes 18 and 19).
+fn wal_mode(path: &Path) -> bool {
+    use std::io::Read;
+    let mut header = [0u8; 20];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut header))
+        .is_ok_and(|()| header[18] == 2 && header[19] == 2)
+}
+
+/// The tables a floorcast store may hold (SQLite's own `sqlite_sequence` included).
+const STORE_TABLES: [&str; 8] = [
+    "meta",
+    "results",
+    "runs",
+    "sequential",
+    "failures",
+    "grids",
+    "tours",
+    "sqlite_sequence",
+];
+
+/// Whether the database is a store floorcast began and could not finish: in write-ahead-log
+/// mode (what floorcast sets first, [`Store::init`]), it holds none but floorcast's tables (none
+/// at all, as a store whose creation failed on a full disk), every one empty, and so no store
+/// version either.
+fn is_half_made(conn: &Connection, tables: &[String], path: &Path) -> bool {
+    wal_mode(path)
+        && tables.iter().all(|t| STORE_TABLES.contains(&t.as_str()))
+        && tables.iter().all(|t| {
+            conn.query_row(
+                &format!("SELECT NOT EXISTS (SELECT 1 FROM \"{t}\")"),
+                [],
+                |r| r.get::<_, bool>(0),
+            )
+            .unwrap_or(false)
+        })
+}
+
 /// An SQLite database with `tables` is floorcast's store of this version, whole.
 fn check_floorcast_tables(
     conn: &Connection,
     tables: &[String],
     path: &Path,
 ) -> Result<(), StoreError> {
+    if is_half_made(conn, tables, path) {
+        return Err(half_made(path));
+    }
     if !tables.iter().any(|t| t == "meta") {
         return Err(foreign(
             path,
@@ -916,6 +1025,9 @@ impl Store {
                     ))
                 }
             };
+            // Seeds are u64, stored as SQLite's i64 by their bits (`seed as i64`): read back
+            // the same way, 2^64-1 (stored as -1) included.
+            let seed = seed as u64;
             let what = format!(
                 " ({}, {}, seed {seed})",
                 floorcast_worker::text::excerpt(&raw.row.building),
@@ -923,8 +1035,6 @@ impl Store {
             );
             let job = raw.row.job_id.clone();
             let tampered = |problem: String| tampered(&job, &what, problem);
-            let seed = u64::try_from(seed)
-                .map_err(|_| tampered(format!("field seed is {seed}, expected 0 or more")))?;
             out.push(decode_row(raw, seed).map_err(tampered)?);
         }
         Ok(out)
@@ -1165,8 +1275,8 @@ impl Store {
                 .ok()
                 .filter(|a| *a >= 1)
                 .ok_or_else(|| bad(format!("field attempt is {attempt}, expected 1 or more")))?;
-            f.seed = u64::try_from(seed)
-                .map_err(|_| bad(format!("field seed is {seed}, expected 0 or more")))?;
+            // By its bits, as it was stored (`seed as i64`).
+            f.seed = seed as u64;
             if !(f.wall_time_s.is_finite() && f.wall_time_s >= 0.0) {
                 return Err(bad(format!(
                     "field wall_time_s is {}, expected a finite number of seconds, 0 or more",
@@ -1521,6 +1631,36 @@ mod tests {
         s.insert_many(&[ok, row("failed-job")]).unwrap();
     }
 
+    /// Every seed, 2^64-1 included (SQLite's integers are i64: it is stored as -1), reads back
+    /// as itself, in results and failures alike.
+    #[test]
+    fn seeds_are_stored_losslessly() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = Store::open(dir.path()).unwrap();
+        let seeds = [
+            0,
+            1,
+            i64::MAX as u64,
+            i64::MAX as u64 + 1,
+            u64::MAX - 1,
+            u64::MAX,
+        ];
+        let rows: Vec<StoredResult> = seeds
+            .iter()
+            .map(|&seed| StoredResult {
+                seed,
+                ..row(&format!("failed-{seed}"))
+            })
+            .collect();
+        s.insert_many(&rows).unwrap();
+        let mut got: Vec<u64> = s.all().unwrap().iter().map(|r| r.seed).collect();
+        got.sort_unstable();
+        assert_eq!(got, seeds);
+        let mut failed: Vec<u64> = s.failures().unwrap().iter().map(|f| f.seed).collect();
+        failed.sort_unstable();
+        assert_eq!(failed, seeds);
+    }
+
     /// Overwrites `len` bytes of `path` at `at` with pseudo-random bytes.
     fn scribble(path: &Path, at: u64, len: usize) {
         use std::io::{Seek, Write};
@@ -1736,10 +1876,6 @@ mod tests {
             (
                 "UPDATE results SET error = NULL WHERE status = 'failed'",
                 &["failed-job", "field error is empty"],
-            ),
-            (
-                "UPDATE results SET seed = -3 WHERE status = 'failed'",
-                &["field seed is -3"],
             ),
             (
                 "UPDATE results SET wall_time_s = 1e999 WHERE status = 'failed'",

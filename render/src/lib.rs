@@ -398,6 +398,17 @@ impl Figure {
     /// Writes the figure as SVG, PNG or PDF, chosen by the extension of `path`.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), RenderError> {
         let path = path.as_ref();
+        let bytes = self.encode_for(path)?;
+        std::fs::write(path, bytes).map_err(|source| RenderError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// The figure's bytes as SVG, PNG or PDF, chosen by the extension of `path` (what
+    /// [`Figure::save`] writes there).
+    pub fn encode_for(&self, path: impl AsRef<Path>) -> Result<Vec<u8>, RenderError> {
+        let path = path.as_ref();
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -412,10 +423,7 @@ impl Figure {
                 })
             }
         };
-        std::fs::write(path, bytes).map_err(|source| RenderError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        Ok(bytes)
     }
 
     pub(crate) fn background_color(&self) -> Color {
