@@ -320,11 +320,16 @@ pub fn check_import(
             job.id
         ));
     }
-    if r.floorcast_version != FLOORCAST_VERSION {
+    // A run of an earlier floorcast is this one's while its strategy's runs have not changed
+    // since (the version its job identity names, `floorcast_worker::runs_version`).
+    if !floorcast_worker::runs_as_this_build(&r.strategy, &r.floorcast_version) {
         return differs(
             "floorcast_version",
             &r.floorcast_version,
-            &FLOORCAST_VERSION,
+            &format!(
+                "{} to {FLOORCAST_VERSION}",
+                floorcast_worker::runs_version(&r.strategy)
+            ),
         );
     }
     let (Some(summary), Some(curve)) = (&r.summary, &r.progress) else {

@@ -61,6 +61,44 @@ pub fn runs_version(strategy: &str) -> &'static str {
         .map_or(RUNS_CHANGED[0].0, |(v, _)| v)
 }
 
+/// Whether a run of `strategy` made by floorcast `version` is a run of this build: made at or
+/// after the version in which the strategy's runs last changed ([`runs_version`]) and not by a
+/// later floorcast than this one. A version that is not `major.minor.patch` numbers is not.
+pub fn runs_as_this_build(strategy: &str, version: &str) -> bool {
+    match (
+        version_numbers(version),
+        version_numbers(runs_version(strategy)),
+        version_numbers(FLOORCAST_VERSION),
+    ) {
+        (Some(v), Some(first), Some(this)) => first <= v && v <= this,
+        _ => false,
+    }
+}
+
+/// A version's three numbers, for ordering ("0.10.0" after "0.9.1").
+fn version_numbers(v: &str) -> Option<[u64; 3]> {
+    let mut parts = v.split('.').map(|p| p.parse::<u64>().ok());
+    let numbers = [parts.next()??, parts.next()??, parts.next()??];
+    parts.next().is_none().then_some(numbers)
+}
+
+#[cfg(test)]
+mod version_tests {
+    use super::*;
+
+    #[test]
+    fn a_run_is_this_builds_from_its_strategys_runs_version_to_this_version() {
+        let first = runs_version("baseline");
+        assert!(runs_as_this_build("baseline", first));
+        assert!(runs_as_this_build("baseline", FLOORCAST_VERSION));
+        for v in ["0.1.0", "0.6.9", "99.0.0", "0.7", "0.7.0.1", "x", "", "0.7.0-rc1"] {
+            assert!(!runs_as_this_build("baseline", v), "{v}");
+        }
+        assert_eq!(version_numbers("0.10.2"), Some([0, 10, 2]));
+        assert!(version_numbers("0.10.0") > version_numbers("0.9.1"));
+    }
+}
+
 /// One exploration to run.
 #[derive(Debug, Clone)]
 pub struct Job<'a> {

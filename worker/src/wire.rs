@@ -401,11 +401,15 @@ pub fn check_report(report: &JobReport, job: &WireJob) -> Result<(), String> {
             &(crate::SUMMARY_FORMAT, SUMMARY_VERSION),
         );
     }
-    if summary.floorcast_version != FLOORCAST_VERSION {
+    // Made by this floorcast, or by an earlier one whose runs of this strategy are this one's.
+    if !crate::runs_as_this_build(&summary.strategy, &summary.floorcast_version) {
         return differs(
             "floorcast_version",
             &summary.floorcast_version,
-            &FLOORCAST_VERSION,
+            &format!(
+                "{} to {FLOORCAST_VERSION}",
+                crate::runs_version(&summary.strategy)
+            ),
         );
     }
     if summary.building_hash != job.building_hash {
