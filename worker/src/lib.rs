@@ -91,7 +91,16 @@ mod version_tests {
         let first = runs_version("baseline");
         assert!(runs_as_this_build("baseline", first));
         assert!(runs_as_this_build("baseline", FLOORCAST_VERSION));
-        for v in ["0.1.0", "0.6.9", "99.0.0", "0.7", "0.7.0.1", "x", "", "0.7.0-rc1"] {
+        for v in [
+            "0.1.0",
+            "0.6.9",
+            "99.0.0",
+            "0.7",
+            "0.7.0.1",
+            "x",
+            "",
+            "0.7.0-rc1",
+        ] {
             assert!(!runs_as_this_build("baseline", v), "{v}");
         }
         assert_eq!(version_numbers("0.10.2"), Some([0, 10, 2]));
