@@ -108,6 +108,11 @@ pub struct ExploreArgs {
     /// it); the run then depends on the machine.
     #[arg(long)]
     charge_compute: bool,
+    /// Refuse a building whose polygons' edges cross, however small the slip (by default a
+    /// slip of up to 1.5 m and 2 m², 5 % of the polygon, is repaired with a warning;
+    /// docs/limits.md).
+    #[arg(long)]
+    strict: bool,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -122,7 +127,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
             a.strategy
         );
     }
-    let building = floorcast_formats::read_building(&a.building)?;
+    let (building, _) = crate::cmd_building::read_building_warned(&a.building, a.strict)?;
     let name = a
         .building
         .file_stem()

@@ -297,3 +297,61 @@ fn run_refuses_a_grid_with_a_job_that_cannot_start() {
     }
     assert!(!tmp.join("r/results.sqlite").exists());
 }
+
+/// A polygon whose edges cross by a slip (one corner 0.4 m past its neighbour edge) is repaired:
+/// the building loads (exit 0) with one `warning:` line on stderr naming the file, the polygon
+/// and the size of the change, also in `--json`; `--strict` refuses it (the corpus's
+/// `*-slip-strict*` cases). (args, words of the warning)
+#[test]
+fn slips_load_with_a_warning() {
+    let files = corpus_dir().join("files");
+    let cases: &[(&[&str], &[&str])] = &[
+        (
+            &["building", "check", "plan-slip.xml"],
+            &[
+                "warning: plan-slip.xml: space[1] (a)/bounding_polygon: the 'office' (type R): the edge from (-0.2, -3.0) to (10.0, -3.0) crosses the edge from (0.0, -13.0) to (0.0, -2.6) at (0.0, -3.0); repaired as the largest simple polygon: 1 crossing; the loop beyond it dropped: the area changed by 0.04 m² (0.04 % of the 100.0 m² kept) and a corner moved by up to 0.4 m",
+            ],
+        ),
+        (
+            &["building", "check", "slip.toml"],
+            &[
+                "warning: slip.toml: rooms[1].polygon: the room 2 ('office'): ",
+                "at (1.0, 5.0)",
+                "the area changed by 0.04 m²",
+                "a corner moved by up to 0.4 m",
+            ],
+        ),
+        (
+            &["building", "check", "--json", "slip.toml"],
+            &["warning: slip.toml: rooms[1].polygon: the room 2 ('office'): "],
+        ),
+    ];
+    for (args, words) in cases {
+        let o = common::floorcast()
+            .args(*args)
+            .current_dir(&files)
+            .output()
+            .unwrap();
+        let err = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        for w in *words {
+            assert!(err.contains(w), "{args:?}: {w:?} not in {err}");
+        }
+        let out = common::stdout(&o);
+        if args.contains(&"--json") {
+            let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+            let ws = v["warnings"].as_array().unwrap();
+            assert_eq!(ws.len(), 1, "{out}");
+            assert!(
+                ws[0]
+                    .as_str()
+                    .unwrap()
+                    .contains("a corner moved by up to 0.4 m"),
+                "{out}"
+            );
+        } else {
+            assert!(out.contains("\nrooms:   "), "{out}");
+        }
+    }
+}

@@ -14,6 +14,8 @@ use serde::{Deserialize, Serialize};
 use sim_core::{Building, Door, Geometry, Polygon, Pose, Room, Vec2};
 
 use crate::error::{num, point, Error};
+use crate::polygon::{LoadOptions, Rings};
+use crate::Loaded;
 
 /// The value of the `format` key.
 pub const FORMAT_NAME: &str = "floorcast-building";
@@ -84,18 +86,35 @@ struct StartV1 {
     theta_rad: Option<f64>,
 }
 
-/// Reads and validates a building TOML file; the name defaults to the file's stem.
+/// Reads and validates a building TOML file; the name defaults to the file's stem. A polygon
+/// whose edges cross by a slip is repaired ([`crate::polygon`]) and the warning dropped (see
+/// [`read_building_toml_with`]).
 pub fn read_building_toml(path: &Path) -> Result<Building, Error> {
+    read_building_toml_with(path, LoadOptions::default()).map(|l| l.building)
+}
+
+/// Reads and validates a building TOML file, with the warnings of the polygons repaired
+/// ([`crate::polygon`]; refused instead under `options.strict`).
+pub fn read_building_toml_with(path: &Path, options: LoadOptions) -> Result<Loaded, Error> {
     let text = crate::limits::read_text(path)?;
-    parse_building_toml(&text, path)
+    parse_building_toml_with(&text, path, options)
 }
 
 /// Parses and validates building TOML text; `path` names the file in messages and gives the
-/// default name (its stem).
+/// default name (its stem). Repairs as [`read_building_toml`] does.
 pub fn parse_building_toml(text: &str, path: &Path) -> Result<Building, Error> {
+    parse_building_toml_with(text, path, LoadOptions::default()).map(|l| l.building)
+}
+
+/// Parses and validates building TOML text, with the warnings of the polygons repaired.
+pub fn parse_building_toml_with(
+    text: &str,
+    path: &Path,
+    options: LoadOptions,
+) -> Result<Loaded, Error> {
     check_header(text, path)?;
     let file: FileV1 = toml::from_str(text).map_err(|e| toml_error(text, path, &e))?;
-    from_file(file, path)
+    from_file(file, path, options)
 }
 
 /// Writes a vector building as TOML.
@@ -224,12 +243,13 @@ fn toml_error(text: &str, path: &Path, e: &toml::de::Error) -> Error {
     Error::syntax(path, format!("{}{}", loc.unwrap_or_default(), e.message()))
 }
 
-fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
-    // The work of checking the polygons for crossings (a budget for the whole file).
-    let budget = &mut { crate::polygon::FILE_BUDGET };
-    let outline = ring(&f.outline, "outline", path, budget)?;
-    let (solids, solid_names) = solids_of(&f, path, budget)?;
-    let (rooms, ids) = rooms_of(&f, path, budget)?;
+fn from_file(f: FileV1, path: &Path, options: LoadOptions) -> Result<Loaded, Error> {
+    // The checks of the polygons for crossings (a work budget for the whole file), and the
+    // warnings of those repaired.
+    let rings = &mut Rings::new(options);
+    let outline = ring(&f.outline, "outline", "the outline", path, rings)?;
+    let (solids, solid_names) = solids_of(&f, path, rings)?;
+    let (rooms, ids) = rooms_of(&f, path, rings)?;
     let doors = doors_of(&f, &ids, path)?;
     let start = match &f.start {
         None => None,
@@ -252,7 +272,10 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
         "outline",
         crate::limits::EXPLORE_RESOLUTION_M,
     )?;
-    Ok(building)
+    Ok(Loaded {
+        building,
+        warnings: std::mem::take(&mut rings.warnings),
+    })
 }
 
 /// The walls (as thick segments) and solids, with the file entry each came from (for messages
@@ -260,7 +283,7 @@ fn from_file(f: FileV1, path: &Path) -> Result<Building, Error> {
 fn solids_of(
     f: &FileV1,
     path: &Path,
-    budget: &mut u64,
+    rings: &mut Rings,
 ) -> Result<(Vec<Polygon>, Vec<String>), Error> {
     let mut solids = Vec::with_capacity(f.walls.len() + f.solids.len());
     // Which file entry each solid came from, for messages about the start pose.
@@ -287,8 +310,9 @@ fn solids_of(
         solids.push(ring(
             &s.polygon,
             &format!("solids[{i}].polygon"),
+            &format!("the solid solids[{i}]"),
             path,
-            budget,
+            rings,
         )?);
         solid_names.push(format!("a solid (solids[{i}])"));
     }
@@ -299,7 +323,7 @@ fn solids_of(
 fn rooms_of(
     f: &FileV1,
     path: &Path,
-    budget: &mut u64,
+    rings: &mut Rings,
 ) -> Result<(Vec<Room>, BTreeMap<u32, usize>), Error> {
     let mut rooms = Vec::with_capacity(f.rooms.len());
     let mut seen: BTreeMap<u32, usize> = BTreeMap::new();
@@ -325,7 +349,13 @@ fn rooms_of(
         rooms.push(Room {
             id: r.id,
             kind: r.kind.clone(),
-            polygon: ring(&r.polygon, &format!("{field}.polygon"), path, budget)?,
+            polygon: ring(
+                &r.polygon,
+                &format!("{field}.polygon"),
+                &format!("the room {} ('{}')", r.id, r.kind),
+                path,
+                rings,
+            )?,
         });
     }
     Ok((rooms, seen))
@@ -451,8 +481,15 @@ fn vec2(p: [f64; 2], field: &str, path: &Path) -> Result<Vec2, Error> {
 }
 
 /// A closed ring of the file as an (implicitly closed) polygon: at least 3 distinct vertices,
-/// an area, and no edges that cross ([`crate::polygon`], within the file's `budget` of work).
-fn ring(pts: &[[f64; 2]], field: &str, path: &Path, budget: &mut u64) -> Result<Polygon, Error> {
+/// an area, and no edges that cross, or repaired when they cross by a slip ([`crate::polygon`],
+/// within the file's work budget; `name` names it in the repair's warning).
+fn ring(
+    pts: &[[f64; 2]],
+    field: &str,
+    name: &str,
+    path: &Path,
+    rings: &mut Rings,
+) -> Result<Polygon, Error> {
     for (i, p) in pts.iter().enumerate() {
         vec2(*p, &format!("{field}[{i}]"), path)?;
     }
@@ -512,10 +549,12 @@ fn ring(pts: &[[f64; 2]], field: &str, path: &Path, budget: &mut u64) -> Result<
             },
         ));
     }
-    if let Some(c) = crate::polygon::first_crossing(&poly.vertices, budget) {
-        return Err(Error::invalid(path, field, c.describe(&poly.vertices)));
-    }
-    Ok(poly)
+    Ok(Polygon::new(rings.check(
+        path,
+        field,
+        name,
+        poly.vertices,
+    )?))
 }
 
 #[cfg(test)]

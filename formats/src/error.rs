@@ -88,6 +88,28 @@ impl Error {
     }
 }
 
+/// Something a reader changed or doubted in a file that it still read (a polygon repaired):
+/// one line, like an [`Error`]'s, `path: field: message`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Warning {
+    pub path: PathBuf,
+    /// Where in the file (`space[12] (R_3)/bounding_polygon`, `rooms[2].polygon`).
+    pub field: String,
+    pub message: String,
+}
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}: {}: {}",
+            self.path.display(),
+            self.field,
+            one_line(&self.message)
+        )
+    }
+}
+
 /// Joins the lines of a (library) message so that every error stays on one line.
 pub(crate) fn one_line(s: &str) -> String {
     s.lines()
@@ -108,7 +130,49 @@ pub(crate) fn num(v: f64) -> String {
     }
 }
 
-/// Formats a point for messages: `(3.0, 4.0)`.
+/// Formats a length or coordinate in metres (or an area in m²) for messages, rounded to the
+/// millimetre: `54.0` (not `54.00000000000001`), `0.412`; as [`num`] when too large to round.
+pub(crate) fn metres(v: f64) -> String {
+    if !v.is_finite() || v.abs() >= 1e12 {
+        return num(v);
+    }
+    // n / 1000 is the double nearest the decimal: it prints with at most 3 decimals.
+    let r = (v * 1000.0).round() / 1000.0;
+    num(if r == 0.0 { 0.0 } else { r })
+}
+
+/// Formats a point for messages, in metres to the millimetre: `(3.0, 4.25)`.
 pub(crate) fn point(x: f64, y: f64) -> String {
-    format!("({}, {})", num(x), num(y))
+    format!("({}, {})", metres(x), metres(y))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// (value, as printed)
+    #[test]
+    fn coordinates_print_to_the_millimetre() {
+        let cases: &[(f64, &str)] = &[
+            (54.00000000000001, "54.0"),
+            (53.99999999999999, "54.0"),
+            (0.1 + 0.2, "0.3"),
+            (3.0, "3.0"),
+            (-2.5, "-2.5"),
+            (0.41251, "0.413"),
+            (0.0004, "0.0"),
+            (-0.0004, "0.0"),
+            (-0.0, "0.0"),
+            (123456.78949, "123456.789"),
+            (2e15, "2e15"),
+            (f64::INFINITY, "inf"),
+        ];
+        for (v, want) in cases {
+            assert_eq!(metres(*v), *want, "{v}");
+        }
+        assert_eq!(
+            point(54.00000000000001, -0.30000000000000004),
+            "(54.0, -0.3)"
+        );
+    }
 }

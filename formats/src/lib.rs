@@ -26,11 +26,13 @@ use std::path::Path;
 use sim_core::{Building, GridFrame, Occupancy, OccupancyGrid};
 
 pub use building_toml::{
-    parse_building_toml, read_building_toml, to_toml_string, write_building_toml,
+    parse_building_toml, parse_building_toml_with, read_building_toml, read_building_toml_with,
+    to_toml_string, write_building_toml,
 };
-pub use error::Error;
-pub use floorplan::read_floorplan;
+pub use error::{Error, Warning};
+pub use floorplan::{read_floorplan, read_floorplan_with};
 pub use map_server::{building_from_map, read_map, write_map};
+pub use polygon::LoadOptions;
 pub use stage::read_world;
 
 /// Resolution at which [`read_occupancy`] rasterises a building file.
@@ -72,15 +74,34 @@ fn stem(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// A building read, with the warnings of what the reader repaired in its file.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    pub building: Building,
+    /// One line each (`path: field: message`), in the file's order.
+    pub warnings: Vec<Warning>,
+}
+
 /// Reads a building from any supported file, chosen by extension. A map becomes a raster world
 /// (every cell that is not free is solid). The name is the file's stem unless a TOML file names
-/// the building.
+/// the building. A polygon whose edges cross by a slip is repaired ([`polygon`]) and its warning
+/// dropped: use [`read_building_with`] to show it.
 pub fn read_building(path: &Path) -> Result<Building, Error> {
+    read_building_with(path, LoadOptions::default()).map(|l| l.building)
+}
+
+/// Reads a building as [`read_building`] does, with the warnings of the polygons repaired
+/// (refused instead under `options.strict`).
+pub fn read_building_with(path: &Path, options: LoadOptions) -> Result<Loaded, Error> {
+    let plain = |building| Loaded {
+        building,
+        warnings: Vec::new(),
+    };
     match kind_of(path)? {
-        Kind::MapServer => Ok(building_from_map(&read_map(path)?, &stem(path))),
-        Kind::Stage => read_world(path),
-        Kind::Toml => read_building_toml(path),
-        Kind::FloorPlan => read_floorplan(path),
+        Kind::MapServer => Ok(plain(building_from_map(&read_map(path)?, &stem(path)))),
+        Kind::Stage => read_world(path).map(plain),
+        Kind::Toml => read_building_toml_with(path, options),
+        Kind::FloorPlan => read_floorplan_with(path, options),
     }
 }
 
