@@ -279,7 +279,7 @@ pub(crate) fn read_building_warned(
     let l = floorcast_formats::read_building_with(file, floorcast_formats::LoadOptions { strict })?;
     let warnings: Vec<String> = l.warnings.iter().map(|w| w.to_string()).collect();
     for w in &warnings {
-        eprintln!("warning: {w}");
+        tell!("warning: {w}");
     }
     Ok((l.building, warnings))
 }
