@@ -34,7 +34,13 @@
 //! A pair's outcome is [`crate::outcome`]'s: a run that did not achieve the outcome at the
 //! grid's coverage level (an early stop short of it, the time limit, stuck, failed) is charged
 //! the pair's horizon (the time limit), so it counts as a loss against a partner that achieved
-//! it and as a tie against one that did not; it is never left out.
+//! it; a pair where neither did is scored by how much each explored, then by time
+//! ([`crate::outcome::Pair::both_short_s`]); no pair is left out.
+//!
+//! What a decision means: accepting H0 rejects H1 (the gain is below `h1_gain_pct`), accepting H1
+//! rejects H0 (above `h0_gain_pct`); neither shows the other hypothesis. The report says it that
+//! way ([`crate::sequential::decision_text`]) and, when the anytime interval excludes the
+//! hypothesis accepted, that the gain lies between the two.
 //!
 //! Several labels tested against one reference form a family: by default each label's test
 //! runs at `alpha / k` for `k` labels (Bonferroni), so that the chance of any false H1 in the
@@ -273,6 +279,8 @@ pub struct SequentialPlan {
     pub multiplicity: Multiplicity,
     /// Labels tested against the reference (the family's size).
     pub labels_tested: usize,
+    /// The time the pairs' outcomes measure (the grid's `measure`; default the time to end).
+    pub measure: crate::outcome::Measure,
 }
 
 /// One comparison's test after the runs of seeds `1..=through_seed`.
