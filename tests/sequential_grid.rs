@@ -60,7 +60,11 @@ fn decisions(out: &str) -> Vec<(String, String, String)> {
                 "?"
             };
             let after = w.iter().position(|x| *x == "after").expect("after N pairs");
-            (w[0].to_string(), decision.to_string(), w[after + 1].to_string())
+            (
+                w[0].to_string(),
+                decision.to_string(),
+                w[after + 1].to_string(),
+            )
         })
         .collect()
 }
@@ -194,7 +198,8 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     assert!(r.status.success(), "{}", stderr(&r));
     let text = stdout(&r);
     assert!(
-        text.contains("Measure: time to 99 % explored") && text.contains("measure: time to 99 % explored"),
+        text.contains("Measure: time to 99 % explored")
+            && text.contains("measure: time to 99 % explored"),
         "{text}"
     );
     let c: serde_json::Value =
@@ -203,13 +208,26 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     assert_eq!(c["aggregates"]["measure"], "coverage");
     for l in c["labels"].as_array().unwrap() {
         assert!(
-            l["time_mean_s"].as_f64().unwrap() <= v["labels"].as_array().unwrap().iter().find(|x| x["label"] == l["label"]).unwrap()["time_mean_s"].as_f64().unwrap() + 1e-9,
+            l["time_mean_s"].as_f64().unwrap()
+                <= v["labels"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .find(|x| x["label"] == l["label"])
+                    .unwrap()["time_mean_s"]
+                    .as_f64()
+                    .unwrap()
+                    + 1e-9,
             "{l}"
         );
     }
     let bad = run(&["report", res.to_str().unwrap(), "--measure", "fastest"]);
     assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
-    assert!(stderr(&bad).contains("unknown measure 'fastest'"), "{}", stderr(&bad));
+    assert!(
+        stderr(&bad).contains("unknown measure 'fastest'"),
+        "{}",
+        stderr(&bad)
+    );
     // Identical runs: no non-zero difference, no Wilcoxon p, decided H0.
     let same = overall("same");
     assert_eq!(same["decision"], "H0");

@@ -1250,7 +1250,7 @@ pub fn render_text(t: &Table) -> String {
         }
         let _ = writeln!(
             out,
-            "{} runs did not explore {coverage} ({}): not in `time (s)`, and each a loss in the paired gain against a run that did (a tie against one that did not); `>={:.0}%` counts the runs that did",
+            "{} runs did not explore {coverage} ({}): not in `time (s)`, and each a loss in the paired gain against a run that did (against one that did not either: scored by explored fraction, then time); `>={:.0}%` counts the runs that did",
             below + failed,
             listed.join(", "),
             t.coverage * 100.0
