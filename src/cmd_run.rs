@@ -187,7 +187,7 @@ pub struct ReportArgs {
     failures: bool,
     /// The coverage level, a fraction in (0, 1]: a run achieves the outcome when it ended with
     /// at least this fraction of the explorable area explored; a run below it counts as a loss
-    /// against a run that reached it (a tie against one that did not). Default: the grids'
+    /// against a run that reached it (two runs below it are scored by explored fraction, then time). Default: the grids'
     /// `coverage` as recorded in the store (0.99 unless a grid set another).
     #[arg(long, value_name = "F", value_parser = crate::values::number)]
     coverage: Option<f64>,
