@@ -154,7 +154,7 @@ pub fn hodges_lehmann_ci95(xs: &[f64]) -> Option<(f64, f64)> {
         let sd = (nf * (nf + 1.0) * (2.0 * nf + 1.0) / 24.0).sqrt();
         (mean - 1.959_963_984_540_054 * sd).floor().max(0.0) as usize
     };
-    (k >= 1 && k <= m).then(|| (w[k - 1], w[m - k]))
+    (1..=m).contains(&k).then(|| (w[k - 1], w[m - k]))
 }
 
 /// The seed of every bootstrap: a report is reproducible.
