@@ -187,10 +187,17 @@ pub struct ReportArgs {
     failures: bool,
     /// The coverage level, a fraction in (0, 1]: a run achieves the outcome when it ended with
     /// at least this fraction of the explorable area explored; a run below it counts as a loss
-    /// against a run that reached it (a tie against one that did not). Default: the grids'
+    /// against a run that reached it (two runs below it are scored by explored fraction, then time). Default: the grids'
     /// `coverage` as recorded in the store (0.99 unless a grid set another).
     #[arg(long, value_name = "F", value_parser = crate::values::number)]
     coverage: Option<f64>,
+    /// The time that decides every comparison, aggregate and ranking: end (the time until the
+    /// run ended, having explored the coverage level: the paper's measure, the default) or
+    /// coverage (the time at which it first had the coverage level explored, from its progress
+    /// curve: Explore-Bench's T_90 with --coverage 0.9). The tables show the times to 90 %, 99 %
+    /// and the end side by side whichever decides.
+    #[arg(long, value_name = "end|coverage", default_value = "end", value_parser = parse_measure)]
+    measure: floorcast_coordinator::outcome::Measure,
     /// Also write the store's successful runs and its tours to FILE (gzip-compressed JSON
     /// lines: a header, then a line per run and per tour), each progress curve thinned to its
     /// times to every whole percent (every tenth from 95 %): small enough to commit, e.g. a
@@ -847,12 +854,20 @@ pub fn report(a: ReportArgs) -> Result<()> {
         .filter(|v| v.test.reference == reference)
         .map(|v| v.test.label.clone())
         .collect();
-    let t =
-        floorcast_coordinator::table::table_against(&results, &order, Some(&reference), coverage);
-    let comparisons =
-        floorcast_coordinator::table::comparisons(&results, &order, &reference, coverage);
-    let aggregates =
-        floorcast_coordinator::aggregate::aggregates(&results, &order, &reference, coverage);
+    let measure = a.measure;
+    let t = floorcast_coordinator::table::table_by(
+        &results,
+        &order,
+        Some(&reference),
+        coverage,
+        measure,
+    );
+    let comparisons = floorcast_coordinator::table::comparisons_by(
+        &results, &order, &reference, coverage, measure,
+    );
+    let aggregates = floorcast_coordinator::aggregate::aggregates_by(
+        &results, &order, &reference, coverage, measure,
+    );
     let tours = store.tours()?;
     let (run_efficiency, efficiency) =
         floorcast_coordinator::yardstick::efficiencies(&results, &tours, &order, coverage);
@@ -872,7 +887,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         let line = format!(
             "sequential grid '{}': {}",
             v.grid,
-            floorcast_coordinator::sequential::render_test(&v.test)
+            floorcast_coordinator::sequential::render_test(&v.test, None)
         );
         say!("{line}");
         text.push_str(&line);
@@ -889,7 +904,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
     }
     if let Some(path) = &a.json {
         let mut v = floorcast_coordinator::table::report_json(
-            &results, &order, &reference, coverage, &verdicts,
+            &results, &order, &reference, coverage, measure, &verdicts,
         );
         if let Some((dir, gains)) = &cross {
             v["against"] = floorcast_coordinator::table::against_json(gains, dir);
@@ -917,6 +932,13 @@ pub fn report(a: ReportArgs) -> Result<()> {
         export_runs(path, &results, &tours)?;
     }
     Ok(())
+}
+
+/// `report --measure`: "end" or "coverage".
+fn parse_measure(
+    word: &str,
+) -> std::result::Result<floorcast_coordinator::outcome::Measure, String> {
+    word.parse()
 }
 
 /// `report --export-runs`: the store's successful runs and tours, written to `path`.

@@ -40,13 +40,31 @@ time_limit_s = 1200
 const SEQUENTIAL: &str =
     "[sequential]\nreference = \"baseline\"\nh1_gain_pct = 5\nbatch_seeds = 4\nmax_seeds = 16\n";
 
-/// The decisions printed, as (label, decision, pairs).
+/// The decisions printed, as (label, decision, pairs): "rejected H1 (gain below 5 %)" is the
+/// GSPRT's H0, "rejected H0 (gain above 0 %)" its H1 (the grid's hypotheses, known to `run`);
+/// a test read back by `report` names only what it rejected.
 fn decisions(out: &str) -> Vec<(String, String, String)> {
     out.lines()
         .filter(|l| l.contains(" vs baseline "))
         .map(|l| {
             let w: Vec<&str> = l.split_whitespace().collect();
-            (w[0].to_string(), w[3].to_string(), w[5].to_string())
+            let decision = if l.contains("rejected H1 (gain below 5 %)")
+                || l.contains("rejected H1 (H0 accepted)")
+            {
+                "H0"
+            } else if l.contains("rejected H0 (gain above 0 %)")
+                || l.contains("rejected H0 (H1 accepted)")
+            {
+                "H1"
+            } else {
+                "?"
+            };
+            let after = w.iter().position(|x| *x == "after").expect("after N pairs");
+            (
+                w[0].to_string(),
+                decision.to_string(),
+                w[after + 1].to_string(),
+            )
         })
         .collect()
 }
@@ -103,7 +121,8 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["format"], "floorcast-report");
-    assert_eq!(v["version"], 2);
+    assert_eq!(v["version"], 3);
+    assert_eq!(v["measure"], "end");
     assert_eq!(v["coverage"], 0.99);
     assert_eq!(v["reference"], "baseline");
     let overall = |label: &str| {
@@ -134,6 +153,13 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
         "{nearest}"
     );
     assert_eq!(nearest["family"], "headline");
+    // The headline: the Hodges-Lehmann estimate with its Wilcoxon interval; the decision in
+    // words (the store does not hold the grid's hypotheses).
+    let hl = nearest["hl_gain_pct"].as_f64().unwrap();
+    let [hlo, hhi] = [0, 1].map(|i| nearest["hl_ci95_pct"][i].as_f64().unwrap());
+    assert!(hlo <= hl && hl <= hhi && hlo > 10.0, "{nearest}");
+    assert_eq!(nearest["decision_text"], "rejected H0 (H1 accepted)");
+    assert_eq!(nearest["measure"], "end");
     // The aggregates across buildings: the faster label's IQM of normalized times below 1.
     let agg = v["aggregates"]["labels"].as_array().unwrap();
     let iqm = |label: &str| {
@@ -158,6 +184,50 @@ fn a_sequential_grid_stops_when_every_comparison_is_decided() {
         );
         assert!(m["unexplored_area_s_mean"].as_f64().unwrap() > 0.0, "{l}");
     }
+    // The time to 99 % explored decides instead: named in the table, the comparisons and the
+    // JSON; no run's time to 99 % is after its end.
+    let cov = dir.path().join("coverage.json");
+    let r = run(&[
+        "report",
+        res.to_str().unwrap(),
+        "--measure",
+        "coverage",
+        "--json",
+        cov.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let text = stdout(&r);
+    assert!(
+        text.contains("Measure: time to 99 % explored")
+            && text.contains("measure: time to 99 % explored"),
+        "{text}"
+    );
+    let c: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cov).unwrap()).unwrap();
+    assert_eq!(c["measure"], "coverage");
+    assert_eq!(c["aggregates"]["measure"], "coverage");
+    for l in c["labels"].as_array().unwrap() {
+        assert!(
+            l["time_mean_s"].as_f64().unwrap()
+                <= v["labels"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .find(|x| x["label"] == l["label"])
+                    .unwrap()["time_mean_s"]
+                    .as_f64()
+                    .unwrap()
+                    + 1e-9,
+            "{l}"
+        );
+    }
+    let bad = run(&["report", res.to_str().unwrap(), "--measure", "fastest"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(
+        stderr(&bad).contains("unknown measure 'fastest'"),
+        "{}",
+        stderr(&bad)
+    );
     // Identical runs: no non-zero difference, no Wilcoxon p, decided H0.
     let same = overall("same");
     assert_eq!(same["decision"], "H0");

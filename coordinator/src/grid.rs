@@ -80,6 +80,10 @@ struct SequentialSpec {
     /// "bonferroni" (default: each label's test at alpha / labels, so the chance of any false
     /// H1 stays within alpha) or "none" (each at alpha).
     multiplicity: Option<String>,
+    /// The time the test measures: "end" (default: until the run ended, having explored the
+    /// coverage level) or "coverage" (until it first had the coverage level explored).
+    #[serde(default)]
+    measure: crate::outcome::Measure,
 }
 
 fn default_h1_gain_pct() -> f64 {
@@ -1322,6 +1326,7 @@ fn sequential_plan(
         coverage: crate::outcome::DEFAULT_COVERAGE,
         multiplicity,
         labels_tested: 1,
+        measure: q.measure,
     })
 }
 

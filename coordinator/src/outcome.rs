@@ -48,6 +48,57 @@ pub fn check_coverage(coverage: f64) -> Result<(), String> {
     }
 }
 
+/// The time a comparison measures ([`outcome_by`]): the time until the run ended (its
+/// exploration time, the paper's measure, the default) or the time at which it first had the
+/// coverage level explored (from its stored progress curve; Explore-Bench's T_90 at 0.9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Measure {
+    /// Time to the end: the exploration time of a run that ended with the coverage level
+    /// explored.
+    #[default]
+    End,
+    /// Time to the coverage level: the first time the run's progress curve reached it.
+    Coverage,
+}
+
+impl Measure {
+    /// The word of `--measure` and of a grid's `measure`: "end" or "coverage".
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Measure::End => "end",
+            Measure::Coverage => "coverage",
+        }
+    }
+
+    /// What the measure is, in words: "time to end" or "time to 99 % explored".
+    pub fn text(self, coverage: f64) -> String {
+        match self {
+            Measure::End => "time to end".to_string(),
+            Measure::Coverage => format!("time to {} explored", coverage_text(coverage)),
+        }
+    }
+}
+
+impl std::str::FromStr for Measure {
+    type Err = String;
+
+    fn from_str(word: &str) -> Result<Measure, String> {
+        match word {
+            "end" => Ok(Measure::End),
+            "coverage" => Ok(Measure::Coverage),
+            _ => Err(format!(
+                "unknown measure '{}', expected end (the time until the run ended, having explored the coverage level) or coverage (the time at which it first had the coverage level explored)",
+                floorcast_worker::text::excerpt(word)
+            )),
+        }
+    }
+}
+
+/// Explored fractions closer than this (0.5 percentage points) count as the same when both runs
+/// of a pair fell short of the coverage level ([`Pair::charged_s`]).
+pub const SAME_FRACTION: f64 = 0.005;
+
 /// The end classes in the order tables list them (`sim_core`'s [`EndReason`] names).
 pub fn end_classes() -> [&'static str; 5] {
     EndReason::ALL.map(EndReason::as_str)
@@ -96,6 +147,28 @@ pub struct RunOutcome {
     pub explored_fraction: Option<f64>,
     /// The run's time limit, or its end time if later: the least time it may be charged.
     pub horizon_s: f64,
+    /// Its end time (its exploration time), if it has one.
+    pub end_s: Option<f64>,
+    /// A run that did not achieve the outcome: its progress curve `(time_s, explored_fraction)`,
+    /// to find when it reached a lower fraction (a pair where both fell short); `None` without
+    /// one.
+    pub curve: Option<std::sync::Arc<[(f64, f64)]>>,
+}
+
+impl RunOutcome {
+    /// The first time the run had `fraction` explored: from its curve, else its end time if it
+    /// ended with at least that much; `None` if it never had.
+    pub fn time_to(&self, fraction: f64) -> Option<f64> {
+        let f = self.explored_fraction?;
+        if f + 1e-12 < fraction {
+            return None;
+        }
+        self.curve
+            .as_deref()
+            .and_then(|c| c.iter().find(|(_, x)| *x + 1e-12 >= fraction).map(|p| p.0))
+            .filter(|t| *t > 0.0)
+            .or(self.end_s)
+    }
 }
 
 /// Whether a run with summary `s` achieved the outcome: at least `coverage` explored, with an
@@ -105,8 +178,15 @@ pub fn achieves(s: &RunSummary, coverage: f64) -> bool {
     s.explored_fraction >= coverage && t.is_finite() && t > 0.0
 }
 
-/// The outcome of `r` at `coverage`, its building named by `building`.
+/// The outcome of `r` at `coverage`, its building named by `building` (time to the end).
 pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome {
+    outcome_by(r, coverage, building, Measure::End)
+}
+
+/// The outcome of `r` at `coverage` by `measure`. With [`Measure::Coverage`] a run that
+/// achieved the outcome is timed by the first sample of its progress curve at the coverage
+/// level (its end time when it stored no curve).
+pub fn outcome_by(r: &StoredResult, coverage: f64, building: &str, measure: Measure) -> RunOutcome {
     let summary = r.summary.as_ref().filter(|_| r.status.is_ok());
     let usable = |t: &f64| t.is_finite() && *t > 0.0;
     let limit = summary
@@ -122,6 +202,8 @@ pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome
         not_achieved: Some("failed".into()),
         explored_fraction: None,
         horizon_s: limit,
+        end_s: None,
+        curve: None,
     };
     if let Some(s) = summary {
         let t = s.exploration_time_s;
@@ -129,12 +211,27 @@ pub fn outcome_of(r: &StoredResult, coverage: f64, building: &str) -> RunOutcome
         out.explored_fraction = Some(s.explored_fraction).filter(|f| f.is_finite());
         if t.is_finite() && t > 0.0 {
             out.horizon_s = limit.max(t);
+            out.end_s = Some(t);
         }
         if achieves(s, coverage) {
-            out.achieved_s = Some(t);
+            let at = match measure {
+                Measure::End => None,
+                Measure::Coverage => r
+                    .progress
+                    .as_deref()
+                    .and_then(|p| crate::metric::time_to_fraction(p, coverage))
+                    .filter(|x| x.is_finite() && *x > 0.0),
+            };
+            out.achieved_s = Some(at.unwrap_or(t).min(t));
             out.not_achieved = None;
         } else {
             out.not_achieved = Some(end_class(s).to_string());
+            out.curve = r.progress.as_deref().map(|p| {
+                p.iter()
+                    .map(|x| (x.time_s, x.explored_fraction))
+                    .collect::<Vec<_>>()
+                    .into()
+            });
         }
     }
     out
@@ -153,18 +250,44 @@ impl Pair {
         self.label.horizon_s.max(self.reference.horizon_s)
     }
 
-    /// The times the comparison charges: a run's exploration time if it achieved the outcome,
-    /// else the pair's horizon. `(reference, label)`.
+    /// The times the comparison charges, `(reference, label)`: a run's time if it achieved the
+    /// outcome, else the pair's horizon; when neither did, [`Pair::both_short_s`].
     pub fn charged_s(&self) -> (f64, f64) {
         let h = self.horizon_s();
-        (
-            self.reference.achieved_s.unwrap_or(h),
-            self.label.achieved_s.unwrap_or(h),
-        )
+        match (self.reference.achieved_s, self.label.achieved_s) {
+            (None, None) => self.both_short_s(),
+            (r, l) => (r.unwrap_or(h), l.unwrap_or(h)),
+        }
     }
 
-    /// `ln t_ref - ln t` of the charged times: positive when the label is faster; 0 when
-    /// neither achieved the outcome; negative whenever only the reference did.
+    /// The times charged when neither run achieved the outcome, `(reference, label)`, scored
+    /// by how much each explored, then by time: with explored fractions within
+    /// [`SAME_FRACTION`] of each other, each run's time to the lesser of the two fractions
+    /// (both reached it); else the run that explored more wins, charged its time to the other's
+    /// fraction, and the other the pair's horizon. A failed job (nothing explored) loses to a
+    /// run that explored; two failed jobs, or a run without a time, tie (the horizon each).
+    pub fn both_short_s(&self) -> (f64, f64) {
+        let h = self.horizon_s();
+        let (r, l) = (&self.reference, &self.label);
+        let (fr, fl) = (
+            r.explored_fraction.unwrap_or(0.0),
+            l.explored_fraction.unwrap_or(0.0),
+        );
+        if (fr - fl).abs() <= SAME_FRACTION {
+            let least = fr.min(fl);
+            match (r.time_to(least), l.time_to(least)) {
+                (Some(a), Some(b)) => (a, b),
+                _ => (h, h),
+            }
+        } else if fr > fl {
+            (r.time_to(fl).unwrap_or(h), h)
+        } else {
+            (h, l.time_to(fr).unwrap_or(h))
+        }
+    }
+
+    /// `ln t_ref - ln t` of the charged times: positive when the label is faster; negative
+    /// whenever only the reference achieved the outcome.
     pub fn log_ratio(&self) -> f64 {
         let (r, l) = self.charged_s();
         r.ln() - l.ln()
@@ -243,10 +366,21 @@ pub fn outcomes<'a>(
     coverage: f64,
     building: impl Fn(&StoredResult) -> String,
 ) -> Vec<RunOutcome> {
+    outcomes_by(subset, label, coverage, building, Measure::End)
+}
+
+/// [`outcomes`] by `measure`.
+pub fn outcomes_by<'a>(
+    subset: impl IntoIterator<Item = &'a StoredResult>,
+    label: &str,
+    coverage: f64,
+    building: impl Fn(&StoredResult) -> String,
+    measure: Measure,
+) -> Vec<RunOutcome> {
     subset
         .into_iter()
         .filter(|r| r.label == label)
-        .map(|r| outcome_of(r, coverage, &building(r)))
+        .map(|r| outcome_by(r, coverage, &building(r), measure))
         .collect()
 }
 
@@ -257,10 +391,21 @@ pub fn paired<'a>(
     reference: &str,
     coverage: f64,
 ) -> Pairing {
+    paired_by(subset, label, reference, coverage, Measure::End)
+}
+
+/// [`paired`] by `measure`.
+pub fn paired_by<'a>(
+    subset: impl IntoIterator<Item = &'a StoredResult> + Clone,
+    label: &str,
+    reference: &str,
+    coverage: f64,
+    measure: Measure,
+) -> Pairing {
     let name = |r: &StoredResult| r.building.clone();
     pair(
-        outcomes(subset.clone(), label, coverage, name),
-        outcomes(subset, reference, coverage, name),
+        outcomes_by(subset.clone(), label, coverage, name, measure),
+        outcomes_by(subset, reference, coverage, name, measure),
     )
 }
 
@@ -274,7 +419,7 @@ pub struct PairCounts {
     pub label_only_not_achieved: usize,
     /// Pairs where only the label did.
     pub reference_only_not_achieved: usize,
-    /// Pairs where neither did (ties).
+    /// Pairs where neither did (scored by explored fraction, then time: [`Pair::both_short_s`]).
     pub neither_achieved: usize,
     /// The label's paired runs that did not achieve the outcome, by end class ("failed" for
     /// failed jobs).
@@ -334,6 +479,8 @@ mod tests {
             not_achieved: achieved.is_none().then(|| "early stop".to_string()),
             explored_fraction: Some(if achieved.is_some() { 1.0 } else { 0.3 }),
             horizon_s: 1000.0,
+            end_s: Some(achieved.unwrap_or(500.0)),
+            curve: None,
         }
     }
 

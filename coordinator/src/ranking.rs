@@ -122,6 +122,7 @@ mod tests {
         let a = Aggregates {
             reference: "b".into(),
             coverage: 0.99,
+            measure: "end",
             reference_median_s: Default::default(),
             labels: vec![
                 label("b", Some(1.0)),

@@ -125,25 +125,67 @@ pub fn replay(plan: &Plan, results: &[StoredResult]) -> (Progress, Vec<PlannedJo
     (progress, jobs)
 }
 
-/// A test's line: its decision, pairs, mean gain with its anytime-valid interval, and the LLR
-/// with its bounds (a dash before the test has [`MIN_PAIRS`](crate::sprt::MIN_PAIRS) pairs).
-pub fn render_test(t: &LabelTest) -> String {
+/// What a decision says, in words: the GSPRT accepting H0 rejected H1 ("rejected H1 (gain
+/// below 15 %)"), accepting H1 rejected H0 ("rejected H0 (gain above 5 %)"). When the anytime
+/// interval `anytime` (as gains in per cent) excludes the value of the hypothesis accepted (H0
+/// accepted with the whole interval above `h0`, or H1 with it below `h1`), the gain lies between
+/// the two: that, the interval first. `hypotheses` are `(h0_gain_pct, h1_gain_pct)`, unknown for
+/// a test read from a store alone.
+pub fn decision_text(
+    decision: Decision,
+    hypotheses: Option<(f64, f64)>,
+    anytime: Option<(f64, f64)>,
+) -> String {
+    let num = |v: f64| format!("{}", (v * 1e6).round() / 1e6);
+    match (decision, hypotheses) {
+        (Decision::Undecided, _) => "undecided".to_string(),
+        (Decision::H0, None) => "rejected H1 (H0 accepted)".to_string(),
+        (Decision::H1, None) => "rejected H0 (H1 accepted)".to_string(),
+        (d, Some((h0, h1))) => {
+            let rejected = if d == Decision::H0 {
+                format!("rejected H1 (gain below {} %)", num(h1))
+            } else {
+                format!("rejected H0 (gain above {} %)", num(h0))
+            };
+            match anytime {
+                Some((lo, hi))
+                    if (d == Decision::H0 && lo > h0) || (d == Decision::H1 && hi < h1) =>
+                {
+                    format!(
+                        "gain between {} % and {} % (anytime 95 % [{lo:+.1}, {hi:+.1}] excludes {} %): {rejected}",
+                        num(h0),
+                        num(h1),
+                        num(if d == Decision::H0 { h0 } else { h1 })
+                    )
+                }
+                _ => rejected,
+            }
+        }
+    }
+}
+
+/// A test's line: its decision in words ([`decision_text`]; `config` gives the hypotheses,
+/// unknown for a test read from a store alone), pairs, mean gain with its anytime-valid
+/// interval, and the LLR with its bounds (a dash before the test has
+/// [`MIN_PAIRS`](crate::sprt::MIN_PAIRS) pairs).
+pub fn render_test(t: &LabelTest, config: Option<&crate::sprt::SprtConfig>) -> String {
     let s = &t.state;
-    let anytime = s.anytime_ci95().map_or("-".to_string(), |(a, b)| {
-        format!(
-            "[{:+.1}, {:+.1}]",
-            gain_pct_of_effect(a),
-            gain_pct_of_effect(b)
-        )
-    });
+    let anytime_pct = s
+        .anytime_ci95()
+        .map(|(a, b)| (gain_pct_of_effect(a), gain_pct_of_effect(b)));
+    let anytime = anytime_pct.map_or("-".to_string(), |(a, b)| format!("[{a:+.1}, {b:+.1}]"));
     let llr = s
         .llr_if_any()
         .map_or("-".to_string(), |l| format!("{l:.2}"));
     format!(
-        "{:<16} vs {:<12} {:<9} after {:>3} pairs (seeds 1-{}), mean gain {:+.1} % (anytime 95 % {anytime}), LLR {llr} in [{:.2}, {:.2}]",
+        "{:<16} vs {:<12} {} after {:>3} pairs (seeds 1-{}), mean gain {:+.1} % (anytime 95 % {anytime}), LLR {llr} in [{:.2}, {:.2}]",
         t.label,
         t.reference,
-        s.decision.as_str(),
+        decision_text(
+            s.decision,
+            config.map(|c| (c.h0_gain_pct, c.h1_gain_pct)),
+            anytime_pct
+        ),
         s.pairs,
         t.through_seed,
         gain_pct_of_effect(s.mean),
@@ -157,7 +199,8 @@ pub fn render(progress: &Progress, seq: &SequentialPlan) -> String {
     use std::fmt::Write as _;
     let label_alpha = seq.label_config().alpha;
     let mut out = format!(
-        "Sequential test (GSPRT on ln(t_ref / t) at {} coverage, a run below it a loss; H0: gain <= {} %, H1: gain >= {} %, alpha {} ({} over {} labels: {} each), beta {}):\n",
+        "Sequential test (GSPRT on ln(t_ref / t), {} at {} coverage, a run below it a loss, a pair of runs both below it scored by explored fraction then time; H0: gain <= {} %, H1: gain >= {} %, alpha {} ({} over {} labels: {} each), beta {}; accepting H0 rejects H1, accepting H1 rejects H0):\n",
+        seq.measure.text(seq.coverage),
         crate::outcome::coverage_text(seq.coverage),
         seq.config.h0_gain_pct,
         seq.config.h1_gain_pct,
@@ -168,7 +211,7 @@ pub fn render(progress: &Progress, seq: &SequentialPlan) -> String {
         seq.config.beta
     );
     for t in progress.latest() {
-        let _ = writeln!(out, "  {}", render_test(t));
+        let _ = writeln!(out, "  {}", render_test(t, Some(&seq.config)));
     }
     if !progress.finished {
         let _ = writeln!(out, "  (not finished: run the same command again to go on)");
@@ -180,7 +223,8 @@ impl SequentialPlan {
     /// The test of each label (in `labels` order, the reference left out) on the stored runs of
     /// seeds up to `through_seed`: pairs of a label's run and the reference's run on the same
     /// building, seed and start pose ([`crate::outcome::paired`] at the grid's coverage level:
-    /// a run that did not achieve it is a loss, or a tie against one that did not either).
+    /// a run that did not achieve it is a loss; two that did not are scored by explored fraction,
+    /// then time, [`crate::outcome::Pair::both_short_s`]), timed by the grid's `measure`.
     pub fn tests(
         &self,
         labels: &[String],
@@ -194,11 +238,12 @@ impl SequentialPlan {
             .iter()
             .filter(|l| **l != self.reference)
             .map(|label| {
-                let outcomes: Vec<f64> = crate::outcome::paired(
+                let outcomes: Vec<f64> = crate::outcome::paired_by(
                     within.iter().copied(),
                     label,
                     &self.reference,
                     self.coverage,
+                    self.measure,
                 )
                 .pairs
                 .iter()

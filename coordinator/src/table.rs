@@ -54,9 +54,14 @@ impl Stat {
 #[derive(Debug, Clone, PartialEq)]
 pub struct LabelRow {
     pub label: String,
-    /// Exploration time of the runs that achieved the outcome (descriptive: runs that did not
-    /// are not in it, see `not_achieved`).
+    /// The measured time ([`Table::measure`]) of the runs that achieved the outcome
+    /// (descriptive: runs that did not are not in it, see `not_achieved`).
     pub time: Stat,
+    /// Of the same runs: the time to 90 % and to 99 % explored (those whose stored progress
+    /// curve has it) and to the end (their exploration time).
+    pub time_to_90: Stat,
+    pub time_to_99: Stat,
+    pub time_to_end: Stat,
     /// Explored fraction of every successful run.
     pub explored_fraction: Stat,
     pub stopped_early: usize,
@@ -82,6 +87,11 @@ pub struct PairedGain {
     pub sd_log: f64,
     /// Half-width of Student's t 95 % interval of the mean log ratio; NaN for one pair.
     pub t_half_log: f64,
+    /// The Hodges-Lehmann estimate of the log ratios ([`crate::stats::hodges_lehmann`]): the
+    /// headline, which the size of a shortfall's charge cannot swing; and its 95 % interval
+    /// (`None` below 6 pairs).
+    pub hl_log: f64,
+    pub hl_ci95_log: Option<(f64, f64)>,
     /// What the pairs achieved.
     pub counts: PairCounts,
 }
@@ -107,6 +117,8 @@ impl PairedGain {
             } else {
                 f64::NAN
             },
+            hl_log: crate::stats::hodges_lehmann(xs).unwrap_or(f64::NAN),
+            hl_ci95_log: crate::stats::hodges_lehmann_ci95(xs),
             counts: PairCounts::default(),
         })
     }
@@ -126,8 +138,14 @@ impl PairedGain {
         })
     }
 
-    /// `+1.9 % [-3.1, +6.6] (n=3)`, or without the interval for one pair; `, 2 lost` when the
-    /// label did not achieve the outcome in pairs where the reference did.
+    /// The Hodges-Lehmann estimate as a gain in per cent, `1 - exp(-hl)`.
+    pub fn hl_gain_pct(&self) -> f64 {
+        gain_pct(self.hl_log)
+    }
+
+    /// `+1.9 % [-3.1, +6.6] (n=3)`: the mean gain with its t interval, or without the interval
+    /// for one pair; `, 2 lost` when the label did not achieve the outcome in pairs where the
+    /// reference did. A gain below -100 % is shown as a time ratio ("2.2x slower").
     pub fn cell(&self) -> String {
         let lost = match self.counts.label_only_not_achieved {
             0 => String::new(),
@@ -135,12 +153,43 @@ impl PairedGain {
         };
         match self.ci_pct() {
             Some((lo, hi)) => format!(
-                "{:+.1} % [{lo:+.1}, {hi:+.1}] (n={}{lost})",
-                self.gain_pct(),
+                "{} [{}, {}] (n={}{lost})",
+                gain_text(self.gain_pct(), true),
+                gain_text(lo, false),
+                gain_text(hi, false),
                 self.pairs
             ),
-            None => format!("{:+.1} % (n={}{lost})", self.gain_pct(), self.pairs),
+            None => format!(
+                "{} (n={}{lost})",
+                gain_text(self.gain_pct(), true),
+                self.pairs
+            ),
         }
+    }
+}
+
+/// A gain in per cent as text: `+9.4` (with ` %` when `unit`), or the time ratio when the gain is
+/// below -100 % (the label more than twice as slow), `2.2x slower`, where a percentage reads
+/// oddly.
+pub fn gain_text(g: f64, unit: bool) -> String {
+    if !g.is_finite() {
+        "-".to_string()
+    } else if g < -100.0 {
+        format!("{:.1}x slower", 1.0 - g / 100.0)
+    } else if unit {
+        format!("{g:+.1} %")
+    } else {
+        format!("{g:+.1}")
+    }
+}
+
+/// A p-value as text: four decimals, or scientific notation below 0.001 (`3e-5`, not
+/// `0.0000`).
+pub fn p_text(p: Option<f64>) -> String {
+    match p {
+        None => "-".to_string(),
+        Some(p) if p < 1e-3 => format!("{p:.0e}"),
+        Some(p) => format!("{p:.4}"),
     }
 }
 
@@ -418,6 +467,8 @@ pub struct Table {
     pub reference: Option<String>,
     /// The coverage level of its outcomes.
     pub coverage: f64,
+    /// The time its outcomes measure.
+    pub measure: outcome::Measure,
     pub overall: Vec<LabelRow>,
     /// Per building: label rows.
     pub per_building: BTreeMap<String, Vec<LabelRow>>,
@@ -436,6 +487,17 @@ pub fn table_against(
     labels: &[String],
     reference: Option<&str>,
     coverage: f64,
+) -> Table {
+    table_by(results, labels, reference, coverage, outcome::Measure::End)
+}
+
+/// [`table_against`] with the time measured by `measure`.
+pub fn table_by(
+    results: &[StoredResult],
+    labels: &[String],
+    reference: Option<&str>,
+    coverage: f64,
+    measure: outcome::Measure,
 ) -> Table {
     let order = label_order(results, labels);
     let reference = match reference {
@@ -461,20 +523,41 @@ pub fn table_against(
                     .filter_map(|r| r.summary.as_ref())
                     .collect();
                 let achieves = |s: &RunSummary| outcome::achieves(s, coverage);
-                let times: Vec<f64> = summaries
+                let achieved: Vec<&&&StoredResult> = mine
                     .iter()
-                    .filter(|s| achieves(s))
-                    .map(|s| s.exploration_time_s)
+                    .filter(|r| r.status.is_ok() && r.summary.as_ref().is_some_and(|s| achieves(s)))
+                    .collect();
+                let times: Vec<f64> = achieved
+                    .iter()
+                    .filter_map(|r| {
+                        outcome::outcome_by(r, coverage, &r.building, measure).achieved_s
+                    })
+                    .collect();
+                let to = |f: f64| -> Stat {
+                    Stat::of(
+                        &achieved
+                            .iter()
+                            .filter_map(|r| time_to_fraction(r.progress.as_deref()?, f))
+                            .collect::<Vec<f64>>(),
+                    )
+                };
+                let ends: Vec<f64> = achieved
+                    .iter()
+                    .filter_map(|r| r.summary.as_ref().map(|s| s.exploration_time_s))
                     .collect();
                 let fracs: Vec<f64> = summaries.iter().map(|s| s.explored_fraction).collect();
                 let paired = reference.as_ref().and_then(|r| {
                     PairedGain::of(
-                        &outcome::paired(subset.iter().copied(), label, r, coverage).pairs,
+                        &outcome::paired_by(subset.iter().copied(), label, r, coverage, measure)
+                            .pairs,
                     )
                 });
                 Some(LabelRow {
                     label: label.clone(),
                     time: Stat::of(&times),
+                    time_to_90: to(0.90),
+                    time_to_99: to(0.99),
+                    time_to_end: Stat::of(&ends),
                     explored_fraction: Stat::of(&fracs),
                     stopped_early: summaries.iter().filter(|s| s.stopped_early).count(),
                     failed: mine.len() - summaries.len(),
@@ -504,6 +587,7 @@ pub fn table_against(
     Table {
         reference: reference.clone(),
         coverage,
+        measure,
         overall,
         per_building,
     }
@@ -512,10 +596,13 @@ pub fn table_against(
 fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>, coverage: f64) {
     let _ = writeln!(
         out,
-        "  {:<16} {:>5} {:>8} {:>10} {:>9} {:>32} {:>9} {:>5}",
+        "  {:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>10} {:>9} {:>32} {:>9} {:>5}",
         "strategy",
         "runs",
         format!(">={:.0}%", coverage * 100.0),
+        "t90 (s)",
+        "t99 (s)",
+        "end (s)",
         "time (s)",
         "sd (s)",
         "paired gain [95% CI]",
@@ -560,10 +647,13 @@ fn fmt_rows(out: &mut String, rows: &[LabelRow], reference: Option<&String>, cov
         };
         let _ = writeln!(
             out,
-            "  {:<16} {:>5} {:>8} {:>10} {:>9} {:>32} {:>9} {:>5}{}",
+            "  {:<16} {:>5} {:>8} {:>8} {:>8} {:>8} {:>10} {:>9} {:>32} {:>9} {:>5}{}",
             r.label,
             r.failed + r.ends.iter().map(|(_, n)| n).sum::<usize>(),
             r.time.n,
+            number(r.time_to_90.mean, 0),
+            number(r.time_to_99.mean, 0),
+            number(r.time_to_end.mean, 0),
             number(r.time.mean, 0),
             number(r.time.sd, 0),
             paired,
@@ -589,6 +679,8 @@ pub struct Comparison {
     pub building: Option<String>,
     /// The coverage level: a run achieves the outcome with at least this fraction explored.
     pub coverage: f64,
+    /// The time measured: "end" or "coverage" ([`crate::outcome::Measure`]).
+    pub measure: &'static str,
     pub pairs: usize,
     /// The label's runs without a partner among the reference's.
     pub unpaired: usize,
@@ -600,6 +692,17 @@ pub struct Comparison {
     pub sd_log_ratio: Option<f64>,
     /// The mean as a gain, `100 (1 - exp(-mean_log_ratio))` (positive: the label is faster).
     pub mean_gain_pct: Option<f64>,
+    /// The headline: the Hodges-Lehmann estimate of the log ratios (the median of their Walsh
+    /// averages; a shortfall's charge moves it by rank only), with its Wilcoxon-based 95 %
+    /// interval (at least 6 pairs), and both as gains in per cent.
+    pub hl_log_ratio: Option<f64>,
+    pub hl_gain_pct: Option<f64>,
+    pub hl_ci95_log: Option<[f64; 2]>,
+    pub hl_ci95_pct: Option<[f64; 2]>,
+    /// When pairs with a run below the coverage level decide the comparison (any such pair, at
+    /// a coverage level above 0.98): the Hodges-Lehmann gain and the mean gain at 0.98, in per
+    /// cent, and the pairs with a shortfall there. `None` otherwise.
+    pub sensitivity_98: Option<Sensitivity>,
     /// Student's t 95 % interval of the mean log ratio, and as gains in per cent.
     pub t_ci95_log: Option<[f64; 2]>,
     pub t_ci95_pct: Option<[f64; 2]>,
@@ -622,6 +725,17 @@ pub struct Comparison {
     pub effect_size_dz: Option<f64>,
     /// The other metrics, paired the same way over the successful runs (see [`Metric`]).
     pub metrics: BTreeMap<Metric, MetricGain>,
+}
+
+/// A comparison again at a lower coverage level (0.98), to show how much the runs that fell
+/// just short decide it.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Sensitivity {
+    pub coverage: f64,
+    pub hl_gain_pct: Option<f64>,
+    pub mean_gain_pct: Option<f64>,
+    /// Pairs where at least one run stayed below that level.
+    pub pairs_short: usize,
 }
 
 /// A paired comparison of one metric: per pair, the log ratio `ln ref - ln x` for the metrics
@@ -703,6 +817,9 @@ fn span_pct(v: Option<[f64; 2]>) -> Option<[f64; 2]> {
     v.map(|[a, b]| [gain_pct(a), gain_pct(b)])
 }
 
+/// The coverage level of the sensitivity line ([`Comparison::sensitivity_98`]).
+pub const SENSITIVITY_COVERAGE: f64 = 0.98;
+
 /// The comparison of `label` with `reference` over `subset`.
 fn compare(
     subset: &[&StoredResult],
@@ -710,11 +827,12 @@ fn compare(
     reference: &str,
     building: Option<String>,
     coverage: f64,
+    measure: outcome::Measure,
 ) -> Option<Comparison> {
     if !subset.iter().any(|r| r.label == label) {
         return None;
     }
-    let pairing = outcome::paired(subset.iter().copied(), label, reference, coverage);
+    let pairing = outcome::paired_by(subset.iter().copied(), label, reference, coverage, measure);
     let xs: Vec<f64> = pairing.pairs.iter().map(Pair::log_ratio).collect();
     let paired = PairedGain::of(&pairing.pairs);
     let t_log = paired
@@ -723,25 +841,54 @@ fn compare(
         .map(|p| [p.mean_log - p.t_half_log, p.mean_log + p.t_half_log]);
     let boot = span(crate::stats::bootstrap_mean_ci95(&xs));
     let anytime = span(crate::stats::confidence_sequence(&xs));
+    let hl = paired.as_ref().and_then(|p| finite(p.hl_log));
+    let hl_ci = paired.as_ref().and_then(|p| span(p.hl_ci95_log));
     let family = if building.is_none() {
         "headline"
     } else {
         "per-building"
     };
+    let counts = PairCounts::of(&pairing.pairs);
+    let short = counts.label_only_not_achieved
+        + counts.reference_only_not_achieved
+        + counts.neither_achieved;
+    let sensitivity_98 =
+        (building.is_none() && short > 0 && coverage > SENSITIVITY_COVERAGE).then(|| {
+            let p = outcome::paired_by(
+                subset.iter().copied(),
+                label,
+                reference,
+                SENSITIVITY_COVERAGE,
+                measure,
+            );
+            let g = PairedGain::of(&p.pairs);
+            Sensitivity {
+                coverage: SENSITIVITY_COVERAGE,
+                hl_gain_pct: g.as_ref().and_then(|g| finite(g.hl_gain_pct())),
+                mean_gain_pct: g.as_ref().and_then(|g| finite(g.gain_pct())),
+                pairs_short: g.as_ref().map_or(0, |g| g.pairs - g.counts.both_achieved),
+            }
+        });
     Some(Comparison {
         label: label.to_string(),
         reference: reference.to_string(),
         building,
         coverage,
+        measure: measure.as_str(),
         pairs: xs.len(),
         unpaired: pairing.unpaired,
-        counts: PairCounts::of(&pairing.pairs),
+        counts,
         mean_log_ratio: paired.as_ref().and_then(|p| finite(p.mean_log)),
         sd_log_ratio: paired
             .as_ref()
             .filter(|p| p.pairs > 1)
             .and_then(|p| finite(p.sd_log)),
         mean_gain_pct: paired.as_ref().and_then(|p| finite(p.gain_pct())),
+        hl_log_ratio: hl,
+        hl_gain_pct: hl.map(gain_pct),
+        hl_ci95_log: hl_ci,
+        hl_ci95_pct: span_pct(hl_ci),
+        sensitivity_98,
         t_ci95_log: t_log,
         t_ci95_pct: span_pct(t_log),
         bootstrap_ci95_log: boot,
@@ -766,6 +913,17 @@ pub fn comparisons(
     reference: &str,
     coverage: f64,
 ) -> Vec<Comparison> {
+    comparisons_by(results, order, reference, coverage, outcome::Measure::End)
+}
+
+/// [`comparisons`] with the time measured by `measure`.
+pub fn comparisons_by(
+    results: &[StoredResult],
+    order: &[String],
+    reference: &str,
+    coverage: f64,
+    measure: outcome::Measure,
+) -> Vec<Comparison> {
     let mut out = Vec::new();
     let labels: Vec<String> = label_order(results, order)
         .into_iter()
@@ -788,6 +946,7 @@ pub fn comparisons(
                 reference,
                 building.clone(),
                 coverage,
+                measure,
             ));
         }
     }
@@ -803,6 +962,9 @@ pub fn comparisons(
     out
 }
 
+/// Fewest pairs for a bootstrap interval shown without a warning.
+pub const BOOTSTRAP_MIN_PAIRS: usize = 10;
+
 /// The comparisons over all buildings as text: one line each. `sequential` names the labels
 /// whose comparison a sequential test decided: their fixed-sample intervals are marked as
 /// such and the anytime-valid interval is the one shown first.
@@ -813,29 +975,49 @@ pub fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
         return out;
     }
     let coverage = coverage_text(overall[0].coverage);
+    let measure = overall[0]
+        .measure
+        .parse::<outcome::Measure>()
+        .unwrap_or_default()
+        .text(overall[0].coverage);
     let _ = writeln!(
         out,
-        "Paired gains over {} (all buildings; gain 1 - exp(-mean ln(t_ref/t)); a run below {coverage} explored charged the time limit): 95 % intervals t (fixed-sample), bootstrap, anytime (valid after a sequential stop); Wilcoxon p on the log ratios, Holm-adjusted over the {} headline comparisons; d_z:",
+        "Paired gains over {} (all buildings; measure: {measure}; per pair ln(t_ref/t), a run below {coverage} explored charged the time limit, a pair of runs both below it scored by explored fraction then time): the headline is the Hodges-Lehmann estimate (median of the Walsh averages: a charge moves it by rank only) with its Wilcoxon 95 % interval; beside it the mean gain 1 - exp(-mean) with 95 % intervals t (fixed-sample), bootstrap, anytime (valid after a sequential stop); Wilcoxon p on the log ratios, Holm-adjusted over the {} headline comparisons; d_z:",
         overall[0].reference,
         overall.len()
     );
-    let range =
-        |r: Option<[f64; 2]>| r.map_or("-".to_string(), |[a, b]| format!("[{a:+.1}, {b:+.1}]"));
+    let range = |r: Option<[f64; 2]>| {
+        r.map_or("-".to_string(), |[a, b]| {
+            format!("[{}, {}]", gain_text(a, false), gain_text(b, false))
+        })
+    };
     let num =
         |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |v| format!("{v:.digits$}"));
+    let pct = |v: Option<f64>| v.map_or("-".to_string(), |m| gain_text(m, true));
     for c in &overall {
         let seq = sequential.contains(&c.label);
         let n = &c.counts;
+        let boot = if c.pairs < BOOTSTRAP_MIN_PAIRS && c.bootstrap_ci95_pct.is_some() {
+            format!(
+                "{} (only {} pairs: unreliable)",
+                range(c.bootstrap_ci95_pct),
+                c.pairs
+            )
+        } else {
+            range(c.bootstrap_ci95_pct)
+        };
         let _ = writeln!(
             out,
-            "  {:<16} {:>7} % t {:<16} boot {:<16} anytime {:<16} p {:<7} Holm {:<7} d_z {:<6} {} pairs ({} both >= {coverage}, {} lost, {} won, {} neither), {} unpaired{}",
+            "  {:<16} HL {:>9} {:<16} mean {:>9} t {:<16} boot {:<16} anytime {:<16} p {:<7} Holm {:<7} d_z {:<6} {} pairs ({} both >= {coverage}, {} lost, {} won, {} neither), {} unpaired{}",
             c.label,
-            c.mean_gain_pct.map_or("-".to_string(), |m| format!("{m:+.1}")),
+            pct(c.hl_gain_pct),
+            range(c.hl_ci95_pct),
+            pct(c.mean_gain_pct),
             range(c.t_ci95_pct),
-            range(c.bootstrap_ci95_pct),
+            boot,
             range(c.anytime_ci95_pct),
-            num(c.wilcoxon_p, 4),
-            num(c.holm_p, 4),
+            p_text(c.wilcoxon_p),
+            p_text(c.holm_p),
             num(c.effect_size_dz, 2),
             c.pairs,
             n.both_achieved,
@@ -849,6 +1031,34 @@ pub fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
                 ""
             }
         );
+        let metric = |m: Metric| {
+            c.metrics
+                .get(&m)
+                .and_then(|g| g.mean)
+                .map_or("-".to_string(), |g| {
+                    format!("{} ({} pairs)", gain_text(g, true), c.metrics[&m].pairs)
+                })
+        };
+        let _ = writeln!(
+            out,
+            "  {:<16} mean gain by time to 90 % {}, to 99 % {} (pairs of runs that reached it); by {}: {}",
+            "",
+            metric(Metric::TimeTo90),
+            metric(Metric::TimeTo99),
+            measure,
+            pct(c.mean_gain_pct)
+        );
+        if let Some(s) = &c.sensitivity_98 {
+            let _ = writeln!(
+                out,
+                "  {:<16} at {} instead (runs that fell short decide this comparison): HL {}, mean {}, {} pairs with a run below it",
+                "",
+                coverage_text(s.coverage),
+                pct(s.hl_gain_pct),
+                pct(s.mean_gain_pct),
+                s.pairs_short
+            );
+        }
     }
     if overall
         .iter()
@@ -856,16 +1066,18 @@ pub fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
     {
         let _ = writeln!(
             out,
-            "  (lost: pairs where only the label's run stayed below {coverage}, a loss whatever its time; won: only the reference's; neither: a tie)"
+            "  (lost: pairs where only the label's run stayed below {coverage}, a loss whatever its time; won: only the reference's; neither: both below, scored by explored fraction then time)"
         );
     }
     out
 }
 
 /// The format and version of `report --json` (2: comparisons at a coverage level, symmetric
-/// log-ratio gains, anytime intervals, Holm families, aggregates across buildings).
+/// log-ratio gains, anytime intervals, Holm families, aggregates across buildings; 3: the
+/// measure, the Hodges-Lehmann headline and its interval, the sensitivity at 98 %, the
+/// sequential decision in words).
 pub const REPORT_FORMAT: &str = "floorcast-report";
-pub const REPORT_VERSION: u32 = 2;
+pub const REPORT_VERSION: u32 = 3;
 
 /// A sequential grid's last test of a label, as `report` shows it.
 #[derive(Debug, Clone, PartialEq)]
@@ -881,10 +1093,11 @@ pub fn report_json(
     order: &[String],
     reference: &str,
     coverage: f64,
+    measure: outcome::Measure,
     verdicts: &[SequentialVerdict],
 ) -> serde_json::Value {
     use serde_json::json;
-    let t = table_against(results, order, Some(reference), coverage);
+    let t = table_by(results, order, Some(reference), coverage, measure);
     let label_row = |r: &LabelRow, building: Option<&str>| {
         let mut v = json!({
             "label": r.label,
@@ -906,43 +1119,56 @@ pub fn report_json(
         );
         v
     };
-    let comparisons: Vec<serde_json::Value> = comparisons(results, order, reference, coverage)
-        .into_iter()
-        .map(|c| {
-            let mut v = serde_json::to_value(&c).unwrap_or_default();
-            let seq = c
-                .building
-                .is_none()
-                .then(|| {
-                    verdicts
-                        .iter()
-                        .rev()
-                        .find(|s| s.test.label == c.label && s.test.reference == c.reference)
-                })
-                .flatten();
-            v["decision"] = seq.map_or(serde_json::Value::Null, |s| {
-                json!(s.test.state.decision.as_str())
-            });
-            v["sequential_pairs"] =
-                seq.map_or(serde_json::Value::Null, |s| json!(s.test.state.pairs));
-            v["sequential_llr"] = seq
-                .and_then(|s| s.test.state.llr_if_any())
-                .map_or(serde_json::Value::Null, |l| json!(finite(l)));
-            v["fixed_sample_intervals_biased"] = json!(seq.is_some());
-            v
-        })
-        .collect();
+    let comparisons: Vec<serde_json::Value> =
+        comparisons_by(results, order, reference, coverage, measure)
+            .into_iter()
+            .map(|c| {
+                let mut v = serde_json::to_value(&c).unwrap_or_default();
+                let seq =
+                    c.building
+                        .is_none()
+                        .then(|| {
+                            verdicts.iter().rev().find(|s| {
+                                s.test.label == c.label && s.test.reference == c.reference
+                            })
+                        })
+                        .flatten();
+                v["decision"] = seq.map_or(serde_json::Value::Null, |s| {
+                    json!(s.test.state.decision.as_str())
+                });
+                v["decision_text"] = seq.map_or(serde_json::Value::Null, |s| {
+                    let a = s
+                        .test
+                        .state
+                        .anytime_ci95()
+                        .map(|(a, b)| (gain_pct(a), gain_pct(b)));
+                    json!(crate::sequential::decision_text(
+                        s.test.state.decision,
+                        None,
+                        a
+                    ))
+                });
+                v["sequential_pairs"] =
+                    seq.map_or(serde_json::Value::Null, |s| json!(s.test.state.pairs));
+                v["sequential_llr"] = seq
+                    .and_then(|s| s.test.state.llr_if_any())
+                    .map_or(serde_json::Value::Null, |l| json!(finite(l)));
+                v["fixed_sample_intervals_biased"] = json!(seq.is_some());
+                v
+            })
+            .collect();
     json!({
         "format": REPORT_FORMAT,
         "version": REPORT_VERSION,
         "floorcast_version": floorcast_worker::FLOORCAST_VERSION,
         "reference": reference,
         "coverage": coverage,
+        "measure": measure.as_str(),
         "runs": results.len(),
         "labels": t.overall.iter().map(|r| label_row(r, None)).collect::<Vec<_>>(),
         "per_building": t.per_building.iter().map(|(b, rows)| (b.clone(), rows.iter().map(|r| label_row(r, Some(b))).collect::<Vec<_>>())).collect::<BTreeMap<String, Vec<serde_json::Value>>>(),
         "comparisons": comparisons,
-        "aggregates": crate::aggregate::aggregates_json(&crate::aggregate::aggregates(results, order, reference, coverage)),
+        "aggregates": crate::aggregate::aggregates_json(&crate::aggregate::aggregates_by(results, order, reference, coverage, measure)),
     })
 }
 
@@ -994,7 +1220,8 @@ pub fn render_text(t: &Table) -> String {
     let coverage = coverage_text(t.coverage);
     let _ = writeln!(
         out,
-        "Exploration time of the runs that explored at least {coverage} (mean, sd), and the paired gain over {} (1 - exp(-mean ln(t_ref/t)); a run below {coverage} charged the time limit, a loss):",
+        "Measure: {} (`time (s)`, mean and sd, and the paired gain). Times of the runs that explored at least {coverage}: to 90 %, to 99 % explored (from their progress curves) and to the end, means; the paired gain over {} (1 - exp(-mean ln(t_ref/t)); a run below {coverage} charged the time limit, a loss; a pair of runs both below it scored by explored fraction then time):",
+        t.measure.text(t.coverage),
         t.reference.as_deref().unwrap_or("-")
     );
     fmt_rows(&mut out, &t.overall, t.reference.as_ref(), t.coverage);
@@ -1023,7 +1250,7 @@ pub fn render_text(t: &Table) -> String {
         }
         let _ = writeln!(
             out,
-            "{} runs did not explore {coverage} ({}): not in `time (s)`, and each a loss in the paired gain against a run that did (a tie against one that did not); `>={:.0}%` counts the runs that did",
+            "{} runs did not explore {coverage} ({}): not in `time (s)`, and each a loss in the paired gain against a run that did (against one that did not either: scored by explored fraction, then time); `>={:.0}%` counts the runs that did",
             below + failed,
             listed.join(", "),
             t.coverage * 100.0
@@ -1701,13 +1928,74 @@ mod tests {
         );
         assert!(text.contains("+10.0 %"), "{text}");
         assert_eq!(t.overall[0].time.n, 3);
-        // At a coverage level above what they explored, every run is below it: ties.
+        // At a coverage level above what they explored, every run is below it: both explored
+        // the same fraction, so each pair compares their times to it (their end times, without
+        // curves): layout 10 % faster, not a tie.
         let t = table(&results, &[], 1.0);
         let p = t.overall[1].paired.as_ref().unwrap();
-        assert_eq!(
-            (p.pairs, p.counts.neither_achieved, p.mean_log),
-            (3, 3, 0.0)
-        );
+        assert_eq!((p.pairs, p.counts.neither_achieved), (3, 3));
+        assert!((p.mean_log - (100f64 / 90.0).ln()).abs() < 1e-12, "{p:?}");
+    }
+
+    /// Pairs where both runs fell short of the coverage level, by explored fraction then time:
+    /// within half a point, their times to the lesser fraction (from the progress curves); else
+    /// the one that explored more wins, timed to the other's fraction, the other charged the
+    /// horizon; a failed job loses to a run that explored; swapping negates exactly.
+    #[test]
+    fn pairs_both_short_are_scored_by_fraction_then_time() {
+        use crate::outcome::{outcome_of, Pair};
+        let curve = "time_s,explored_area_m2,explored_fraction\n0,0,0\n500,50,0.5\n900,90,0.9\n1500,98,0.98\n1800,98.8,0.988\n";
+        let with = |label: &str, t: f64, f: f64, curve: Option<&str>| {
+            let mut r = stored_end(label, 1, t, "stuck", f, [1.0, 2.0, 0.0]);
+            r.progress = curve.map(progress);
+            outcome_of(&r, 0.99, "b")
+        };
+        let failed = || {
+            let mut r = stored("b", "x", 1, 100.0);
+            r.status = crate::store::JobStatus::Failed;
+            r.summary = None;
+            outcome_of(&r, 0.99, "b")
+        };
+        // (label's run, reference's run, (reference's charge, label's charge))
+        let cases = [
+            // Vipiteno1's case: 98.75 % against 98.94 %, within half a point: times to 98.75 %.
+            (
+                with("l", 1668.0, 0.9875, None),
+                with("r", 1900.0, 0.9894, Some(curve)),
+                (1800.0, 1668.0),
+            ),
+            (
+                with("l", 1668.0, 0.9875, Some(curve)),
+                with("r", 1900.0, 0.9894, None),
+                (1900.0, 1800.0),
+            ),
+            // 90 % against 98.8 %: the reference wins, timed to 90 %; the label charged 14 400 s.
+            (
+                with("l", 300.0, 0.90, None),
+                with("r", 1900.0, 0.988, Some(curve)),
+                (900.0, 14_400.0),
+            ),
+            // A quitter at 26 % against a run stuck at 98.8 %.
+            (
+                with("l", 60.0, 0.26, None),
+                with("r", 1900.0, 0.988, None),
+                (1900.0, 14_400.0),
+            ),
+            (failed(), with("r", 1900.0, 0.988, None), (1900.0, 14_400.0)),
+            (failed(), failed(), (14_400.0, 14_400.0)),
+        ];
+        for (i, (l, r, want)) in cases.into_iter().enumerate() {
+            let p = Pair {
+                label: l,
+                reference: r,
+            };
+            assert_eq!(p.charged_s(), want, "case {i}");
+            let swapped = Pair {
+                label: p.reference.clone(),
+                reference: p.label.clone(),
+            };
+            assert_eq!(swapped.log_ratio(), -p.log_ratio(), "case {i}");
+        }
     }
 
     #[test]
