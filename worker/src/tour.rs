@@ -109,17 +109,6 @@ impl TourRecord {
                 self.version, self.key.method
             ));
         }
-        match (self.version, self.lower_bound_s, self.bound_regions) {
-            (TOUR_VERSION, Some(b), Some(_)) if b.is_finite() && b >= 0.0 && b <= self.time_s * (1.0 + 1e-9) => {}
-            (TOUR_VERSION, b, _) => {
-                return Err(format!(
-                    "lower_bound_s: expected a number from 0 to time_s ({}) with bound_regions, got {b:?}",
-                    self.time_s
-                ))
-            }
-            (_, None, None) => {}
-            _ => return Err(format!("lower_bound_s: not in records of version {}", self.version)),
-        }
         let positive = [
             ("time_s", self.time_s),
             ("explorable_m2", self.explorable_m2),
@@ -142,6 +131,17 @@ impl TourRecord {
             if !(0.0..=1.0).contains(&v) {
                 return Err(format!("{field}: expected a fraction in [0, 1], got {v}"));
             }
+        }
+        match (self.version, self.lower_bound_s, self.bound_regions) {
+            (TOUR_VERSION, Some(b), Some(_)) if b.is_finite() && b >= 0.0 && b <= self.time_s * (1.0 + 1e-9) => {}
+            (TOUR_VERSION, b, _) => {
+                return Err(format!(
+                    "lower_bound_s: expected a number from 0 to time_s ({}) with bound_regions, got {b:?}",
+                    self.time_s
+                ))
+            }
+            (_, None, None) => {}
+            _ => return Err(format!("lower_bound_s: not in records of version {}", self.version)),
         }
         if self.start.iter().any(|v| !v.is_finite()) {
             return Err("start: expected three finite numbers".into());
