@@ -98,6 +98,11 @@ pub struct RunArgs {
     /// shows each run's efficiency.
     #[arg(long)]
     no_tours: bool,
+    /// The most a known-map tour may be estimated to take to make (s of one core, at least 1;
+    /// default 60): a tour estimated longer (a very short laser range or narrow field of
+    /// view) is skipped with a warning, and `report` shows its runs without efficiency.
+    #[arg(long, value_name = "SECONDS", default_value_t = crate::cmd_tour::DEFAULT_TOUR_BUDGET_S, value_parser = crate::values::number)]
+    tour_budget: f64,
     /// Before running, store the runs and tours of FILE (written by `report DIR --export-runs
     /// FILE`, e.g. results/reference/leaderboard/runs.jsonl.gz) that are jobs of this grid and
     /// not stored yet: only the grid's other jobs are run. A run matches a job only when
@@ -208,6 +213,13 @@ pub struct ReportArgs {
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
+    if !(a.tour_budget >= 1.0) {
+        anyhow::bail!(
+            "--tour-budget: {} is out of range, expected seconds at least 1 (default {})",
+            a.tour_budget,
+            crate::cmd_tour::DEFAULT_TOUR_BUDGET_S
+        );
+    }
     if let Some(r) = &a.results {
         if r.as_os_str().is_empty() {
             anyhow::bail!("--results: empty; expected a directory such as results/my-grid");
@@ -287,7 +299,10 @@ pub fn run(a: RunArgs) -> Result<()> {
     }
     let interrupt = interrupt_on_ctrl_c();
     let (outcome, counts) = run_with_progress(&plan, &store, &opts, &interrupt, a.quiet)?;
-    let tour_threads = (!a.no_tours).then_some(workers.max(1));
+    let tour_threads = (!a.no_tours).then_some(crate::cmd_tour::GridTours {
+        threads: workers.max(1),
+        budget_s: a.tour_budget,
+    });
     if let Some(live) = &opts.live {
         live.set_state(match (outcome, tour_threads) {
             (Outcome::Interrupted, _) => "interrupted",
@@ -349,9 +364,12 @@ fn nothing_to_do(
     );
     print_sequential(plan, progress);
     if !a.no_tours {
-        let threads = a.workers.unwrap_or_else(crate::values::cores).max(1);
+        let how = crate::cmd_tour::GridTours {
+            threads: a.workers.unwrap_or_else(crate::values::cores).max(1),
+            budget_s: a.tour_budget,
+        };
         let interrupt = interrupt_on_ctrl_c();
-        crate::cmd_tour::make_grid_tours(plan, jobs, store, threads, &interrupt)?;
+        crate::cmd_tour::make_grid_tours(plan, jobs, store, how, &interrupt)?;
     }
     failed_jobs(plan, jobs, store)
 }
@@ -681,7 +699,7 @@ fn finish(
     outcome: Outcome,
     counts: floorcast_coordinator::run::Counts,
     networked: bool,
-    tour_threads: Option<usize>,
+    tour_threads: Option<crate::cmd_tour::GridTours>,
     interrupt: &AtomicBool,
 ) -> Result<()> {
     match outcome {
@@ -879,7 +897,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         render_ends(&t),
         floorcast_coordinator::table::render_comparisons(&comparisons, &sequential_labels),
         floorcast_coordinator::aggregate::render(&aggregates),
-        floorcast_coordinator::yardstick::render(&efficiency, coverage),
+        floorcast_coordinator::yardstick::render(&efficiency, &results, coverage),
         floorcast_coordinator::ranking::render(&ranking, &reference)
     );
     say_raw!("{}", text);

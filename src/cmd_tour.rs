@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use floorcast_render::{building_figure, Color, Figure, Style};
-use floorcast_worker::tour::{make_tour, TourRecord};
+use floorcast_worker::tour::{estimate_tour, make_tour_with, TourRecord};
+use sim_core::tour::{TourEstimate, TourProgress};
 use sim_core::{Pose, Vec2};
 
 use crate::output::write_text;
@@ -56,7 +57,19 @@ pub fn run(a: TourArgs) -> Result<()> {
     let (start, _) = building
         .default_start(settings.robot_radius_m)
         .map_err(|e| anyhow::anyhow!("{name}: no start for the tour: {e}"))?;
-    let tour = make_tour(&building, &name, start, &settings, a.coverage)?;
+    let estimate = estimate_tour(&building, &name, start, &settings, a.coverage)?;
+    say!("{name}: {}", estimate_text(&estimate));
+    let began = std::time::Instant::now();
+    let mut shown = Shown::new(began);
+    let tour = make_tour_with(&building, &name, start, &settings, a.coverage, &mut |p| {
+        shown.progress(&name, p)
+    })?;
+    if began.elapsed().as_secs_f64() > 2.0 {
+        say!(
+            "{name}: the tour took {:.1} s to make",
+            began.elapsed().as_secs_f64()
+        );
+    }
     say!(
         "{name}: a tour that knows the building sees {:.1} % of its {:.0} m2 explorable in {:.0} s ({:.1} m, {} viewpoints; replayed with the laser: {:.1} %)",
         100.0 * tour.covered_fraction,
@@ -66,6 +79,12 @@ pub fn run(a: TourArgs) -> Result<()> {
         tour.viewpoints.len(),
         100.0 * tour.replayed_fraction
     );
+    if let (Some(b), Some(k)) = (tour.lower_bound_s, tour.bound_regions) {
+        say!(
+            "{name}: no tour is faster than {b:.0} s (a lower bound: {k} regions every tour must enter, at top speed; the tour is {:.1} times it)",
+            tour.time_s / b.max(1e-9)
+        );
+    }
     if let Some(path) = &a.json {
         let text = serde_json::to_string_pretty(&tour).context("cannot encode the tour")?;
         write_text(path, &text)?;
@@ -76,6 +95,67 @@ pub fn run(a: TourArgs) -> Result<()> {
         say!("drew {}", path.display());
     }
     Ok(())
+}
+
+/// The default of `run --tour-budget` (s): a tour estimated to take longer to make is skipped.
+pub const DEFAULT_TOUR_BUDGET_S: f64 = 60.0;
+
+/// What `run` does about tours: on how many threads, and the estimate above which a tour is
+/// skipped (s).
+#[derive(Debug, Clone, Copy)]
+pub struct GridTours {
+    pub threads: usize,
+    pub budget_s: f64,
+}
+
+/// An estimate as said before a tour is made.
+fn estimate_text(e: &TourEstimate) -> String {
+    format!(
+        "making the tour: {} places, about {} viewpoints, estimated {:.0} s on one core (within a factor of about 2)",
+        e.places, e.viewpoints, e.seconds
+    )
+}
+
+/// Shows a tour's progress on stderr, at most every 2 s (nothing for a tour made faster).
+struct Shown {
+    began: std::time::Instant,
+    last: std::time::Instant,
+}
+
+impl Shown {
+    fn new(began: std::time::Instant) -> Self {
+        Self { began, last: began }
+    }
+
+    fn progress(&mut self, name: &str, p: TourProgress) {
+        let now = std::time::Instant::now();
+        if now.duration_since(self.last).as_secs_f64() < 2.0 {
+            return;
+        }
+        self.last = now;
+        let what = match p {
+            TourProgress::Sweeping { done, total } => {
+                format!("what the places see: {done} of {total}")
+            }
+            TourProgress::Choosing { viewpoints, seen } => format!(
+                "choosing viewpoints: {viewpoints}, seeing {:.1} %",
+                100.0 * seen
+            ),
+            TourProgress::Ordering { done, total } => {
+                format!("ordering the viewpoints: paths from {done} of {total}")
+            }
+            TourProgress::Driving { legs, total } => {
+                format!("driving the tour: leg {legs} of {total}")
+            }
+            TourProgress::Replaying { attempt } => {
+                format!("replaying the tour with the laser (try {attempt} of at most 3)")
+            }
+        };
+        eprintln!(
+            "{name}: {:.0} s: {what}",
+            now.duration_since(self.began).as_secs_f64()
+        );
+    }
 }
 
 /// The building ([`building_figure`]) with the tour's path and viewpoints.
@@ -92,16 +172,18 @@ fn tour_figure(building: &sim_core::Building, tour: &TourRecord) -> Figure {
 }
 
 /// Makes and stores the known-map tours `jobs` need that `store` lacks
-/// (`floorcast_coordinator::yardstick`), on `workers` threads, saying what it does. When
-/// `interrupt` is set (Ctrl-C, SIGTERM) it ends the process with exit code 130, the tours made
-/// so far stored.
+/// (`floorcast_coordinator::yardstick`), on `how.threads` threads, saying what it does; a tour
+/// whose estimate exceeds `how.budget_s` is skipped with a warning (its runs get no
+/// efficiency). When `interrupt` is set (Ctrl-C, SIGTERM) it ends the process with exit code
+/// 130, the tours made so far stored.
 pub fn make_grid_tours(
     plan: &floorcast_coordinator::grid::Plan,
     jobs: &[floorcast_coordinator::grid::PlannedJob],
     store: &floorcast_coordinator::store::Store,
-    workers: usize,
+    how: GridTours,
     interrupt: &std::sync::atomic::AtomicBool,
 ) -> Result<()> {
+    let workers = how.threads;
     use floorcast_coordinator::yardstick::{missing, planned_tours};
     // Only the runs that succeeded are measured (a failed job's start may be no start at all).
     let ok: std::collections::BTreeSet<String> = store
@@ -140,9 +222,17 @@ pub fn make_grid_tours(
                 let b = &plan.buildings[t.building];
                 let began = std::time::Instant::now();
                 // A tour is a yardstick, not a result: one that cannot be made (a setting
-                // refused, a building the method cannot handle) is reported and skipped.
+                // refused, a robot that fits nowhere, a building the method cannot handle) or
+                // that would take longer than the budget is reported and skipped.
                 let made = std::panic::catch_unwind(|| {
-                    make_tour(&b.building, &b.name, t.start, &t.settings, t.key.coverage)
+                    let e = estimate_tour(&b.building, &b.name, t.start, &t.settings, t.key.coverage)?;
+                    if e.seconds > how.budget_s {
+                        return Err(anyhow::anyhow!(
+                            "skipped: its estimate is {:.0} s ({} places, about {} viewpoints), over the budget of {:.0} s (`run --tour-budget`)",
+                            e.seconds, e.places, e.viewpoints, how.budget_s
+                        ));
+                    }
+                    Ok(make_tour_with(&b.building, &b.name, t.start, &t.settings, t.key.coverage, &mut |_| {})?)
                 })
                 .map_err(|_| "the tour's computation failed".to_string())
                 .and_then(|r| r.map_err(|e| e.to_string()))

@@ -208,17 +208,76 @@ impl Sight {
     }
 }
 
+/// Why a tour cannot be made.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TourError {
+    /// No place the robot can drive to from the start has room for its body (its radius and
+    /// safety margin, `body_m`): a tour would see only what the start's first scan sees.
+    NoRoom { body_m: f64 },
+}
+
+impl std::fmt::Display for TourError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TourError::NoRoom { body_m } => write!(
+                f,
+                "the robot fits nowhere it could drive from the start: no place within reach has {body_m} m clear around it (its radius and safety margin); give a smaller robot_radius_m or another start"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for TourError {}
+
+/// What a tour's computation is doing, for a caller that shows its progress (see
+/// [`known_map_tour_with`]). Counts only: sim-core reads no clock.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TourProgress {
+    /// What `done` of `total` candidate places see (the set cover's input).
+    Sweeping { done: usize, total: usize },
+    /// `viewpoints` chosen so far, seeing `seen` of the explorable area.
+    Choosing { viewpoints: usize, seen: f64 },
+    /// Path lengths from `done` of `total` viewpoints to the others (the order's input).
+    Ordering { done: usize, total: usize },
+    /// `legs` of the tour driven (and pruned), of about `total`.
+    Driving { legs: usize, total: usize },
+    /// The tour replayed with the run's laser (`attempt` of at most 3).
+    Replaying { attempt: usize },
+}
+
+/// A progress callback shared by the tour's steps.
+struct Report<'a>(RefCell<&'a mut dyn FnMut(TourProgress)>);
+
+impl Report<'_> {
+    fn say(&self, p: TourProgress) {
+        (self.0.borrow_mut())(p);
+    }
+}
+
 /// The tour of `building` from `start` for the robot and laser of `cfg` (see the module doc).
 ///
 /// The tour is then replayed with the run's laser ([`replay`]); when that sees less than the
 /// wanted share (the tour's sweeps of rays and the laser's beams differ a little), the tour is
-/// made again asking for that much more, up to three times.
+/// made again asking for that much more, up to three times. An error when the robot fits
+/// nowhere it could drive from the start ([`TourError::NoRoom`]).
 pub fn known_map_tour(
     building: &Building,
     start: Pose,
     cfg: &ExploreConfig,
     ts: &TourSettings,
-) -> KnownMapTour {
+) -> Result<KnownMapTour, TourError> {
+    known_map_tour_with(building, start, cfg, ts, &mut |_| {})
+}
+
+/// [`known_map_tour`], telling `progress` what it does as it goes.
+pub fn known_map_tour_with(
+    building: &Building,
+    start: Pose,
+    cfg: &ExploreConfig,
+    ts: &TourSettings,
+    progress: &mut dyn FnMut(TourProgress),
+) -> Result<KnownMapTour, TourError> {
+    let report = Report(RefCell::new(progress));
     let mut asked = ts.coverage;
     let mut tries = 0;
     loop {
@@ -226,13 +285,92 @@ pub fn known_map_tour(
             coverage: asked,
             ..ts.clone()
         };
-        let mut tour = tour_seeing(building, start, cfg, &at);
-        tour.replayed_fraction = replay(building, start, &tour, cfg);
+        let mut tour = tour_seeing(building, start, cfg, &at, &report)?;
         tries += 1;
+        report.say(TourProgress::Replaying { attempt: tries });
+        tour.replayed_fraction = replay(building, start, &tour, cfg);
         if tour.replayed_fraction >= ts.coverage || tries == 3 || asked >= 1.0 {
-            return tour;
+            return Ok(tour);
         }
         asked = (asked + (ts.coverage - tour.replayed_fraction) + 0.001).min(1.0);
+    }
+}
+
+/// What a tour is made from: the explorable cells, where the body fits, the search from the
+/// start, what places see and the places of each round.
+struct Setup {
+    frame: GridFrame,
+    roomy: Bitmap,
+    from_start: CostField,
+    sight: Sight,
+    rounds: Vec<Vec<Cell>>,
+}
+
+impl Setup {
+    fn new(
+        building: &Building,
+        start: Pose,
+        cfg: &ExploreConfig,
+        ts: &TourSettings,
+    ) -> Result<Setup, TourError> {
+        let frame = crate::explore::map_frame(&building.bounds(), cfg.map_resolution_m);
+        let res = frame.resolution_m;
+        let reachable = building.reachable_free(frame, start.position());
+        let body_m = cfg.sim.robot.radius_m + cfg.safety_margin_m;
+        let range_m = cfg.sim.laser.max_range_m;
+        let truth = explorable_free(&reachable, start.position(), body_m, range_m);
+        let roomy = roomy_cells(&reachable, body_m);
+        let start_cell = frame.cell_from_world(start.position());
+        let from_start = dijkstra(&roomy, start_cell, None);
+        let sight = Sight {
+            frame,
+            truth,
+            free: reachable,
+            fov_rad: cfg.sim.laser.fov_rad,
+            headings: ts.headings.clamp(1, 16),
+            rays: Ray::sweep(ts.rays.max(8), range_m / res),
+            marks: RefCell::new(Marks::new(frame.len())),
+        };
+        // Places every `spacing_m`; then, if they cannot see the wanted share, the places of
+        // lattices twice and four times as fine (cells some corner hides from the first).
+        let step = ((ts.spacing_m / res).round() as i32).max(1);
+        let lattices: Vec<i32> = [step, step / 2, step / 4]
+            .into_iter()
+            .filter(|s| *s >= 1)
+            .fold(Vec::new(), |mut v, s| {
+                if v.last() != Some(&s) {
+                    v.push(s);
+                }
+                v
+            });
+        let rounds: Vec<Vec<Cell>> = lattices
+            .iter()
+            .enumerate()
+            .map(|(r, &s)| {
+                let on = |c: &Cell, s: i32| c.x % s == 0 && c.y % s == 0;
+                (0..frame.len())
+                    .map(|i| frame.cell_of_index(i))
+                    .filter(|c| on(c, s) && !lattices[..r].iter().any(|&p| on(c, p)))
+                    .filter(|c| roomy.get(*c) == Some(&true) && from_start.distance_m(*c).is_some())
+                    .collect()
+            })
+            .collect();
+        // Not one place to drive to (the body fits nowhere near the start): the tour would be
+        // the start's first scan, in 0 s, a yardstick that makes every efficiency 0.
+        let drivable = (0..frame.len())
+            .filter(|&i| roomy.data[i] && from_start.distance_m(frame.cell_of_index(i)).is_some())
+            .take(2)
+            .count();
+        if drivable < 2 || rounds.iter().all(Vec::is_empty) {
+            return Err(TourError::NoRoom { body_m });
+        }
+        Ok(Setup {
+            frame,
+            roomy,
+            from_start,
+            sight,
+            rounds,
+        })
     }
 }
 
@@ -242,54 +380,20 @@ fn tour_seeing(
     start: Pose,
     cfg: &ExploreConfig,
     ts: &TourSettings,
-) -> KnownMapTour {
-    let frame = crate::explore::map_frame(&building.bounds(), cfg.map_resolution_m);
-    let res = frame.resolution_m;
-    let reachable = building.reachable_free(frame, start.position());
-    let body_m = cfg.sim.robot.radius_m + cfg.safety_margin_m;
-    let range_m = cfg.sim.laser.max_range_m;
-    let truth = explorable_free(&reachable, start.position(), body_m, range_m);
-    let roomy = roomy_cells(&reachable, body_m);
-    let start_cell = frame.cell_from_world(start.position());
-    let from_start = dijkstra(&roomy, start_cell, None);
-    let sight = Sight {
+    report: &Report<'_>,
+) -> Result<KnownMapTour, TourError> {
+    let Setup {
         frame,
-        truth,
-        free: reachable,
-        fov_rad: cfg.sim.laser.fov_rad,
-        headings: ts.headings.clamp(1, 16),
-        rays: Ray::sweep(ts.rays.max(8), range_m / res),
-        marks: RefCell::new(Marks::new(frame.len())),
-    };
-    // Places every `spacing_m`; then, if they cannot see the wanted share, the places of lattices
-    // twice and four times as fine (cells some corner hides from the first).
-    let step = ((ts.spacing_m / res).round() as i32).max(1);
-    let lattices: Vec<i32> = [step, step / 2, step / 4]
-        .into_iter()
-        .filter(|s| *s >= 1)
-        .fold(Vec::new(), |mut v, s| {
-            if v.last() != Some(&s) {
-                v.push(s);
-            }
-            v
-        });
-    let rounds: Vec<Vec<Cell>> = lattices
-        .iter()
-        .enumerate()
-        .map(|(r, &s)| {
-            let on = |c: &Cell, s: i32| c.x % s == 0 && c.y % s == 0;
-            (0..frame.len())
-                .map(|i| frame.cell_of_index(i))
-                .filter(|c| on(c, s) && !lattices[..r].iter().any(|&p| on(c, p)))
-                .filter(|c| roomy.get(*c) == Some(&true) && from_start.distance_m(*c).is_some())
-                .collect()
-        })
-        .collect();
+        roomy,
+        from_start,
+        sight,
+        rounds,
+    } = Setup::new(building, start, cfg, ts)?;
     let cover = Cover::new(&sight, ts.cover_cell_m);
     let explorable = sight.truth.count_true();
     let wanted = (ts.coverage * explorable as f64).ceil() as usize;
-    let chosen = cover.choose(&sight, &rounds, start, wanted);
-    let ordered = order(&roomy, &chosen, &from_start);
+    let chosen = cover.choose(&sight, &rounds, start, wanted, report);
+    let ordered = order(&roomy, &chosen, &from_start, report);
     let robot = &cfg.sim.robot;
     let driver = Driver {
         roomy: &roomy,
@@ -298,6 +402,7 @@ fn tour_seeing(
         start,
         speed_mps: robot.max_speed_mps,
         turn_radps: robot.max_turn_rate_radps,
+        report,
     };
     let mut tour = driver.tour(&ordered);
     tour.prune(&driver, wanted);
@@ -305,7 +410,7 @@ fn tour_seeing(
     // while that makes the tour faster.
     for _ in 0..3 {
         let kept: Vec<Pose> = tour.legs.iter().map(|l| l.to).collect();
-        let mut again = driver.tour(&order(&roomy, &kept, &from_start));
+        let mut again = driver.tour(&order(&roomy, &kept, &from_start, report));
         again.prune(&driver, wanted);
         if again.total < wanted || again.time_s(&driver) >= tour.time_s(&driver) - 1e-9 {
             break;
@@ -319,7 +424,7 @@ fn tour_seeing(
         length_m += leg.length_m;
         time_s += driver.time_of(leg);
     }
-    KnownMapTour {
+    Ok(KnownMapTour {
         viewpoints: std::iter::once(start)
             .chain(tour.legs.iter().map(|l| l.to))
             .collect(),
@@ -333,7 +438,86 @@ fn tour_seeing(
         },
         replayed_fraction: f64::NAN,
         explorable_m2: explorable as f64 * frame.cell_area_m2(),
+    })
+}
+
+/// What making a tour will cost, estimated before making it ([`estimate`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TourEstimate {
+    /// Candidate places of the first lattice.
+    pub places: usize,
+    /// Viewpoints the set cover is expected to choose (explorable cells over what a sample of
+    /// places sees at its best heading, times [`ESTIMATE_OVERLAP`]).
+    pub viewpoints: usize,
+    /// Cells where the body fits (each path search between viewpoints may visit them all).
+    pub roomy_cells: usize,
+    /// Cells the sweeps of rays from every place pass through.
+    pub sweep_cells: f64,
+    /// Seconds on one core of the reference machine: the constants `ESTIMATE_S_PER_*` fitted
+    /// to tours of 0.5 to 180 s (docs/known-map-tour.md), within a factor of about 2 on them.
+    pub seconds: f64,
+}
+
+/// How many more viewpoints the greedy cover chooses than explorable area over what one sees.
+pub const ESTIMATE_OVERLAP: f64 = 2.0;
+/// Seconds per cell a place's sweep of rays passes through (measured, see docs/known-map-tour.md).
+pub const ESTIMATE_S_PER_SWEEP_CELL: f64 = 1.5e-8;
+/// Seconds per cell a path search between viewpoints settles (measured likewise).
+pub const ESTIMATE_S_PER_SEARCH_CELL: f64 = 1.43e-8;
+/// Seconds per pair of viewpoints (the order's improving moves and the legs' pruning).
+pub const ESTIMATE_S_PER_PAIR: f64 = 5.5e-5;
+/// Seconds per cell where the body fits, for what every tour does once (the explorable area,
+/// the replay with the laser).
+pub const ESTIMATE_S_PER_CELL: f64 = 1.0e-5;
+/// Path searches per viewpoint: the order's (from each to the later ones, four orders at most)
+/// and the legs' (driving and pruning).
+const SEARCHES_PER_VIEWPOINT: f64 = 4.0;
+
+/// What making the tour of `building` from `start` for `cfg` would cost (see [`TourEstimate`]),
+/// from the grids the tour is made on and the sweeps of a sample of at most 24 places: a
+/// fraction of the tour's own cost. The same error as [`known_map_tour`] when the robot fits
+/// nowhere.
+pub fn estimate(
+    building: &Building,
+    start: Pose,
+    cfg: &ExploreConfig,
+    ts: &TourSettings,
+) -> Result<TourEstimate, TourError> {
+    let setup = Setup::new(building, start, cfg, ts)?;
+    let sight = &setup.sight;
+    let places = &setup.rounds[0];
+    let sample: Vec<Cell> = if places.is_empty() {
+        setup.rounds.iter().flatten().take(24).copied().collect()
+    } else {
+        let every = places.len().div_ceil(24).max(1);
+        places.iter().step_by(every).copied().collect()
+    };
+    let (mut swept, mut seen) = (0usize, 0usize);
+    for &p in &sample {
+        sight.cast(p, |_| 1, |_, _| swept += 1);
+        seen += (0..sight.headings)
+            .map(|k| sight.fine_cells(p, sight.heading(k)).len())
+            .max()
+            .unwrap_or(0);
     }
+    let n = sample.len().max(1) as f64;
+    let per_place = swept as f64 / n;
+    let per_view = (seen as f64 / n).max(1.0);
+    let explorable = sight.truth.count_true() as f64;
+    let viewpoints = (ESTIMATE_OVERLAP * explorable / per_view).ceil().max(1.0);
+    let roomy_cells = setup.roomy.count_true();
+    let sweep_cells = per_place * places.len().max(sample.len()) as f64;
+    let search_cells = SEARCHES_PER_VIEWPOINT * viewpoints * roomy_cells as f64;
+    Ok(TourEstimate {
+        places: places.len(),
+        viewpoints: viewpoints as usize,
+        roomy_cells,
+        sweep_cells,
+        seconds: sweep_cells * ESTIMATE_S_PER_SWEEP_CELL
+            + search_cells * ESTIMATE_S_PER_SEARCH_CELL
+            + viewpoints * viewpoints * ESTIMATE_S_PER_PAIR
+            + roomy_cells as f64 * ESTIMATE_S_PER_CELL,
+    })
 }
 
 /// An independent check of a tour: the share of the explorable area the run's laser (its
@@ -483,7 +667,14 @@ impl Cover {
     /// cells' weight not yet seen, after what the start sees, until the fine cells seen reach
     /// `wanted` or nothing more is seen; from the places of each round in turn while short of
     /// `wanted` (in the later rounds a cover cell counts as seen only once all its cells are).
-    fn choose(&self, sight: &Sight, rounds: &[Vec<Cell>], start: Pose, wanted: usize) -> Vec<Pose> {
+    fn choose(
+        &self,
+        sight: &Sight,
+        rounds: &[Vec<Cell>],
+        start: Pose,
+        wanted: usize,
+        report: &Report<'_>,
+    ) -> Vec<Pose> {
         let f = sight.frame;
         let mut seen = Seen {
             fine: vec![false; f.len()],
@@ -507,7 +698,7 @@ impl Cover {
                     *covered = seen.seen_in[c] == self.weight[c];
                 }
             }
-            self.choose_among(sight, places, &mut seen, wanted, &mut chosen);
+            self.choose_among(sight, places, &mut seen, wanted, &mut chosen, report);
         }
         chosen
     }
@@ -520,10 +711,21 @@ impl Cover {
         seen: &mut Seen,
         wanted: usize,
         chosen: &mut Vec<Pose>,
+        report: &Report<'_>,
     ) {
         let f = sight.frame;
-        let lists: Vec<Vec<(u32, u16)>> =
-            places.iter().map(|p| self.seen_from(sight, *p)).collect();
+        let total = places.len();
+        let lists: Vec<Vec<(u32, u16)>> = places
+            .iter()
+            .enumerate()
+            .map(|(done, p)| {
+                if done % 256 == 0 {
+                    report.say(TourProgress::Sweeping { done, total });
+                }
+                self.seen_from(sight, *p)
+            })
+            .collect();
+        let explorable = sight.truth.count_true().max(1) as f64;
         let gain = |item: usize, covered: &[bool]| -> u64 {
             let (p, k) = (item / sight.headings, item % sight.headings);
             lists[p]
@@ -554,6 +756,10 @@ impl Cover {
             seen.see(self, sight, places[p], heading);
             let at = f.world_from_cell(places[p]);
             chosen.push(Pose::new(at.x, at.y, wrap_angle(heading)));
+            report.say(TourProgress::Choosing {
+                viewpoints: chosen.len(),
+                seen: seen.fine_seen as f64 / explorable,
+            });
         }
     }
 }
@@ -583,7 +789,12 @@ impl Seen {
 
 /// `chosen` in the order of a short open path from the start (over the planned path lengths
 /// between them on the `roomy` cells; `from_start` is the search from the start's cell).
-fn order(roomy: &Bitmap, chosen: &[Pose], from_start: &CostField) -> Vec<Pose> {
+fn order(
+    roomy: &Bitmap,
+    chosen: &[Pose],
+    from_start: &CostField,
+    report: &Report<'_>,
+) -> Vec<Pose> {
     let frame = roomy.frame;
     let cells: Vec<Cell> = chosen
         .iter()
@@ -594,7 +805,11 @@ fn order(roomy: &Bitmap, chosen: &[Pose], from_start: &CostField) -> Vec<Pose> {
         .map(|c| from_start.distance_m(*c).unwrap_or(f64::INFINITY))
         .collect();
     let some: Vec<Option<Cell>> = cells.iter().copied().map(Some).collect();
+    let total = some.len();
+    let mut done = 0;
     let between = lengths_between(&some, |from, to| {
+        report.say(TourProgress::Ordering { done, total });
+        done += 1;
         dijkstra_by(frame, from, |k| roomy.data[k], |_| 0, 0, to)
     });
     crate::tsp::open_path(&first, &between, 50)
@@ -618,16 +833,17 @@ struct Leg {
 
 /// Drives legs: along the shortest paths of the `roomy` cells, pulled straight, at full speed,
 /// turning in place at the full turn rate.
-struct Driver<'a> {
+struct Driver<'a, 'r> {
     roomy: &'a Bitmap,
     sight: &'a Sight,
     from_start: &'a CostField,
     start: Pose,
     speed_mps: f64,
     turn_radps: f64,
+    report: &'a Report<'r>,
 }
 
-impl Driver<'_> {
+impl Driver<'_, '_> {
     fn time_of(&self, leg: &Leg) -> f64 {
         leg.length_m / self.speed_mps + leg.turn_rad / self.turn_radps
     }
@@ -686,7 +902,13 @@ impl Driver<'_> {
         };
         let start_cell = f.cell_from_world(self.start.position());
         tour.add(&self.sight.fine_cells(start_cell, self.start.theta_rad), 1);
-        for &v in ordered {
+        for (k, &v) in ordered.iter().enumerate() {
+            if k % 16 == 0 {
+                self.report.say(TourProgress::Driving {
+                    legs: k,
+                    total: ordered.len(),
+                });
+            }
             if let Some(leg) = self.leg(tour.legs.last().map(|l| l.to), v) {
                 tour.add(&leg.seen, 1);
                 tour.legs.push(leg);
@@ -705,7 +927,7 @@ struct Tour {
 }
 
 impl Tour {
-    fn time_s(&self, driver: &Driver<'_>) -> f64 {
+    fn time_s(&self, driver: &Driver<'_, '_>) -> f64 {
         self.legs.iter().map(|l| driver.time_of(l)).sum()
     }
 
@@ -725,9 +947,15 @@ impl Tour {
     /// Drops viewpoints the rest of the tour makes needless (what the robot sees on its way
     /// covers them), one at a time in the order visited, each drop joining its neighbours by a
     /// new leg, while the tour still sees `wanted` cells and takes less time.
-    fn prune(&mut self, driver: &Driver<'_>, wanted: usize) {
+    fn prune(&mut self, driver: &Driver<'_, '_>, wanted: usize) {
         let mut k = 0;
         while k < self.legs.len() {
+            if k % 16 == 0 {
+                driver.report.say(TourProgress::Driving {
+                    legs: k,
+                    total: self.legs.len(),
+                });
+            }
             let end = (k + 2).min(self.legs.len());
             let from = k.checked_sub(1).map(|p| self.legs[p].to);
             let joined = match self.legs.get(k + 1) {
@@ -804,6 +1032,179 @@ fn clear(roomy: &Bitmap, a: Cell, b: Cell) -> bool {
     })
 }
 
+/// A lower bound on the time of any tour ([`lower_bound`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LowerBound {
+    /// No path from the start that sees the wanted share is shorter (m).
+    pub length_m: f64,
+    /// `length_m` at the robot's top speed (s).
+    pub time_s: f64,
+    /// Regions every such path must enter (beside the start).
+    pub regions: usize,
+}
+
+/// A lower bound on the time of any tour of `building` from `start` that sees `coverage` of the
+/// explorable area with the robot and laser of `cfg`: the known-map tour's, an explorer's, the
+/// best possible.
+///
+/// **Why it is sound.** Let `N` be the explorable cells and `m = N - ceil(coverage * N)` the
+/// cells a tour may leave unseen. A cell is seen when a beam, a straight segment from the
+/// robot's centre of length at most the laser's range `R`, passes through it, so the centre
+/// was within `R + δ` of the cell's centre (`δ` half the cell's diagonal). Take an explorable
+/// cell `c` and the explorable cells whose centres lie within `r` of it: more than `m` of them
+/// (`r` is the smallest radius, in steps of a cell, that holds more than `m` explorable cells
+/// around the least crowded of the candidates). Any of them is seen only from within
+/// `ρ = R + δ + r` of `c`, so a tour that never comes within `ρ` of `c` leaves more than `m`
+/// cells unseen: every tour enters the disc `D(c, ρ)`, whatever it does elsewhere. For a set
+/// of such discs, the path's pieces from the start to its first entry into the first disc it
+/// enters, and from there to its first entry into each next one, are disjoint and each at
+/// least as long as the straight distance between what they join: from the start to a disc
+/// `max(0, |s - c| - ρ)`, between two discs `max(0, |c_i - c_j| - 2ρ)`. These pieces form a
+/// spanning path of {start, discs}, so the tour is at least as long as the minimum spanning
+/// tree of {start, discs} under those distances. Nothing drives faster than the top speed.
+/// Turning, and what walls make longer than a straight line, are left out: the bound is
+/// sound, not tight (docs/known-map-tour.md).
+///
+/// The discs' centres are chosen farthest first (from the start and the centres chosen, among
+/// explorable cells every `spacing` on a lattice whose disc of radius `r` holds more than `m`),
+/// at most 48; the bound is the largest spanning tree's of the first `k` centres, `k` from 0.
+pub fn lower_bound(
+    building: &Building,
+    start: Pose,
+    cfg: &ExploreConfig,
+    coverage: f64,
+) -> LowerBound {
+    let frame = crate::explore::map_frame(&building.bounds(), cfg.map_resolution_m);
+    let res = frame.resolution_m;
+    let reachable = building.reachable_free(frame, start.position());
+    let body_m = cfg.sim.robot.radius_m + cfg.safety_margin_m;
+    let range_m = cfg.sim.laser.max_range_m;
+    let truth = explorable_free(&reachable, start.position(), body_m, range_m);
+    let n = truth.count_true();
+    let zero = LowerBound {
+        length_m: 0.0,
+        time_s: 0.0,
+        regions: 0,
+    };
+    let m = n - ((coverage.clamp(0.0, 1.0) * n as f64).ceil() as usize).min(n);
+    if n == 0 || m + 1 > n {
+        return zero;
+    }
+    let cells: Vec<Cell> = (0..frame.len())
+        .filter(|&i| truth.data[i])
+        .map(|i| frame.cell_of_index(i))
+        .collect();
+    // Candidates on a lattice of about 0.5 m (at most about 4000 of them).
+    let area_m2 = n as f64 * frame.cell_area_m2();
+    let spacing_m = (area_m2 / 4000.0).sqrt().max(0.5);
+    let step = ((spacing_m / res).round() as i32).max(1);
+    let candidates: Vec<Cell> = cells
+        .iter()
+        .copied()
+        .filter(|c| c.x % step == 0 && c.y % step == 0)
+        .collect();
+    // Explorable cells within `r_cells` of `c` (centre to centre).
+    let count = |c: Cell, r_cells: i32| -> usize {
+        let mut k = 0;
+        for dy in -r_cells..=r_cells {
+            for dx in -r_cells..=r_cells {
+                if dx * dx + dy * dy <= r_cells * r_cells
+                    && truth.get(Cell::new(c.x + dx, c.y + dy)) == Some(&true)
+                {
+                    k += 1;
+                }
+            }
+        }
+        k
+    };
+    // The smallest radius whose full disc would hold more than `m` cells, then grown until
+    // at least a tenth of the candidates' discs do (those whose discs do are the centres).
+    let mut r_cells = ((m as f64 + 1.0) / std::f64::consts::PI).sqrt().ceil() as i32;
+    let max_r = (range_m / res).ceil() as i32 * 4 + 8;
+    let mut valid: Vec<Cell> = Vec::new();
+    while r_cells <= max_r {
+        valid = candidates
+            .iter()
+            .copied()
+            .filter(|c| count(*c, r_cells) > m)
+            .collect();
+        if valid.len() * 10 >= candidates.len() && !valid.is_empty() {
+            break;
+        }
+        r_cells = r_cells + (r_cells / 4).max(1);
+    }
+    if valid.is_empty() {
+        return zero;
+    }
+    let rho = range_m + res * std::f64::consts::SQRT_2 / 2.0 + r_cells as f64 * res;
+    let at = |c: Cell| frame.world_from_cell(c);
+    let s = start.position();
+    // Farthest first from the start and the centres chosen.
+    let mut nearest: Vec<f64> = valid.iter().map(|c| (at(*c) - s).norm()).collect();
+    let mut centres: Vec<Vec2> = Vec::new();
+    let mut best = 0.0f64;
+    let mut best_k = 0;
+    while centres.len() < 48 {
+        let Some((i, &d)) = nearest
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
+        else {
+            break;
+        };
+        if d <= 0.0 {
+            break;
+        }
+        let c = at(valid[i]);
+        centres.push(c);
+        for (j, v) in valid.iter().enumerate() {
+            nearest[j] = nearest[j].min((at(*v) - c).norm());
+        }
+        let mst = spanning_tree(s, &centres, rho);
+        if mst > best {
+            (best, best_k) = (mst, centres.len());
+        }
+    }
+    LowerBound {
+        length_m: best,
+        time_s: best / cfg.sim.robot.max_speed_mps,
+        regions: best_k,
+    }
+}
+
+/// The minimum spanning tree's length over the start (node 0) and discs of radius `rho`
+/// around `centres`, the distances those of [`lower_bound`] (Prim's, quadratic).
+fn spanning_tree(start: Vec2, centres: &[Vec2], rho: f64) -> f64 {
+    let k = centres.len();
+    let dist = |a: usize, b: usize| -> f64 {
+        match (a, b) {
+            (0, 0) => 0.0,
+            (0, j) | (j, 0) => ((centres[j - 1] - start).norm() - rho).max(0.0),
+            (i, j) => ((centres[i - 1] - centres[j - 1]).norm() - 2.0 * rho).max(0.0),
+        }
+    };
+    let mut in_tree = vec![false; k + 1];
+    let mut best: Vec<f64> = (0..=k).map(|j| dist(0, j)).collect();
+    in_tree[0] = true;
+    let mut total = 0.0;
+    for _ in 0..k {
+        let Some(j) = (0..=k)
+            .filter(|j| !in_tree[*j])
+            .min_by(|a, b| best[*a].total_cmp(&best[*b]))
+        else {
+            break;
+        };
+        in_tree[j] = true;
+        total += best[j];
+        for l in 0..=k {
+            if !in_tree[l] {
+                best[l] = best[l].min(dist(j, l));
+            }
+        }
+    }
+    total
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -827,7 +1228,7 @@ mod tests {
             let b = building(seed, kind, 300.0);
             let start = b.start.unwrap();
             let cfg = ExploreConfig::default();
-            let tour = known_map_tour(&b, start, &cfg, &TourSettings::default());
+            let tour = known_map_tour(&b, start, &cfg, &TourSettings::default()).unwrap();
             assert!(
                 tour.covered_fraction >= 0.99,
                 "{kind:?}: {}",
@@ -877,9 +1278,79 @@ mod tests {
                 coverage,
                 ..ts.clone()
             };
-            known_map_tour(&b, start, cfg, &ts).viewpoints.len()
+            known_map_tour(&b, start, cfg, &ts)
+                .unwrap()
+                .viewpoints
+                .len()
         };
         assert!(n(&wide, 0.99) <= n(&narrow, 0.99));
         assert!(n(&narrow, 0.8) <= n(&narrow, 0.99));
+    }
+
+    /// The lower bound is at most the tour's time on generated buildings of both kinds, sizes
+    /// and laser ranges (every tour that reached the coverage), and positive where the building
+    /// is wider than the laser sees.
+    #[test]
+    fn the_lower_bound_is_at_most_the_tour() {
+        let cases = [
+            (1, BuildingKind::Office, 200.0, 6.0),
+            (2, BuildingKind::School, 250.0, 6.0),
+            (4, BuildingKind::Office, 300.0, 2.0),
+            (6, BuildingKind::School, 200.0, 3.0),
+            (8, BuildingKind::Office, 150.0, 1.0),
+        ];
+        let mut positive = 0;
+        for (seed, kind, area, range) in cases {
+            let b = building(seed, kind, area);
+            let start = b.start.unwrap();
+            let mut cfg = ExploreConfig::default();
+            cfg.sim.laser.max_range_m = range;
+            let tour = known_map_tour(&b, start, &cfg, &TourSettings::default()).unwrap();
+            let bound = lower_bound(&b, start, &cfg, 0.99);
+            let case = format!("{kind:?} seed {seed} {area} m2 range {range}");
+            assert!(tour.covered_fraction >= 0.99, "{case}");
+            assert!(
+                bound.time_s <= tour.time_s,
+                "{case}: bound {} s > tour {} s",
+                bound.time_s,
+                tour.time_s
+            );
+            assert!(bound.length_m <= tour.length_m, "{case}");
+            positive += usize::from(bound.time_s > 0.0);
+        }
+        assert!(positive >= 3, "{positive} positive bounds");
+    }
+
+    /// A robot that fits nowhere it could drive to is an error, for the tour and its estimate;
+    /// the estimate grows as the laser's range shrinks (more viewpoints, more pairs of them).
+    #[test]
+    fn no_room_is_an_error_and_estimates_grow_as_the_range_shrinks() {
+        let b = building(3, BuildingKind::Office, 200.0);
+        let start = b.start.unwrap();
+        let mut huge = ExploreConfig::default();
+        huge.sim.robot.radius_m = 3.0;
+        let ts = TourSettings::default();
+        assert!(matches!(
+            known_map_tour(&b, start, &huge, &ts),
+            Err(TourError::NoRoom { .. })
+        ));
+        assert!(matches!(
+            estimate(&b, start, &huge, &ts),
+            Err(TourError::NoRoom { .. })
+        ));
+        let mut last: Option<TourEstimate> = None;
+        for range in [6.0, 2.0, 0.5] {
+            let mut cfg = ExploreConfig::default();
+            cfg.sim.laser.max_range_m = range;
+            let e = estimate(&b, start, &cfg, &ts).unwrap();
+            assert!(e.places > 0 && e.seconds > 0.0, "{range}: {e:?}");
+            if let Some(l) = &last {
+                assert!(
+                    e.viewpoints > l.viewpoints && e.seconds > l.seconds,
+                    "{range}: {e:?} after {l:?}"
+                );
+            }
+            last = Some(e);
+        }
     }
 }

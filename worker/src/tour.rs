@@ -8,16 +8,17 @@
 //! efficiency).
 
 use serde::{Deserialize, Serialize};
-use sim_core::tour::{known_map_tour, TourSettings};
+use sim_core::tour::{known_map_tour_with, TourError, TourEstimate, TourProgress, TourSettings};
 use sim_core::{Building, Pose};
 
 use crate::{Settings, SettingsError};
 
 pub const TOUR_FORMAT: &str = "floorcast-tour";
-/// 3: the tour's method in the key; 2: the key and the start in the record (1: `floorcast tour
-/// --json` of 0.7.0). Records of version 2 are read, as of method 0 (made before methods were
+/// 4: the lower bound (`lower_bound_s`, `bound_regions`); 3: the tour's method in the key; 2:
+/// the key and the start in the record (1: `floorcast tour --json` of 0.7.0). Records of
+/// version 3 are read without a bound; of version 2 as of method 0 (made before methods were
 /// numbered: a store recomputes them).
-pub const TOUR_VERSION: u32 = 3;
+pub const TOUR_VERSION: u32 = 4;
 
 /// What a tour depends on besides its building: the settings it reads and the coverage wanted.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -78,6 +79,14 @@ pub struct TourRecord {
     /// the check of `covered_fraction`, at least `key.coverage` unless three tries fell short.
     pub replayed_fraction: f64,
     pub explorable_m2: f64,
+    /// No tour of the building from the start for the robot (this one, an explorer's, the best
+    /// possible) is faster ([`sim_core::tour::lower_bound`], s); absent in records of version
+    /// 2 and 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lower_bound_s: Option<f64>,
+    /// The regions the bound's tours must enter (absent with the bound).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bound_regions: Option<usize>,
     /// `[x_m, y_m, heading_rad]`, the start first, in the order visited.
     pub viewpoints: Vec<[f64; 3]>,
     /// `[x_m, y_m]` points of the path driven.
@@ -93,9 +102,10 @@ impl TourRecord {
                 crate::text::excerpt(&self.format)
             ));
         }
-        if !(self.version == TOUR_VERSION || self.version == 2 && self.key.method == 0) {
+        let old = self.version == 3 || self.version == 2 && self.key.method == 0;
+        if !(self.version == TOUR_VERSION || old) {
             return Err(format!(
-                "version: expected {TOUR_VERSION} (or 2, of method 0), got {} (of method {})",
+                "version: expected {TOUR_VERSION} (or 3, or 2 of method 0), got {} (of method {})",
                 self.version, self.key.method
             ));
         }
@@ -122,6 +132,17 @@ impl TourRecord {
                 return Err(format!("{field}: expected a fraction in [0, 1], got {v}"));
             }
         }
+        match (self.version, self.lower_bound_s, self.bound_regions) {
+            (TOUR_VERSION, Some(b), Some(_)) if b.is_finite() && b >= 0.0 && b <= self.time_s * (1.0 + 1e-9) => {}
+            (TOUR_VERSION, b, _) => {
+                return Err(format!(
+                    "lower_bound_s: expected a number from 0 to time_s ({}) with bound_regions, got {b:?}",
+                    self.time_s
+                ))
+            }
+            (_, None, None) => {}
+            _ => return Err(format!("lower_bound_s: not in records of version {}", self.version)),
+        }
         if self.start.iter().any(|v| !v.is_finite()) {
             return Err("start: expected three finite numbers".into());
         }
@@ -137,6 +158,54 @@ impl TourRecord {
     }
 }
 
+/// Why a tour of a building cannot be made: a setting refused, or the robot fits nowhere.
+#[derive(Debug)]
+pub enum MakeTourError {
+    Settings(SettingsError),
+    /// The building's name, the robot's radius and what [`sim_core::tour`] said.
+    Tour(String, f64, TourError),
+}
+
+impl std::fmt::Display for MakeTourError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MakeTourError::Settings(e) => write!(f, "{e}"),
+            MakeTourError::Tour(name, radius, e) => {
+                write!(f, "{name}: robot_radius_m = {radius}: no tour: {e}")
+            }
+        }
+    }
+}
+
+impl std::error::Error for MakeTourError {}
+
+impl From<SettingsError> for MakeTourError {
+    fn from(e: SettingsError) -> Self {
+        MakeTourError::Settings(e)
+    }
+}
+
+/// The tour settings of `coverage`.
+fn tour_settings(coverage: f64) -> TourSettings {
+    TourSettings {
+        coverage,
+        ..TourSettings::default()
+    }
+}
+
+/// What making the tour [`make_tour`] makes would cost ([`sim_core::tour::estimate`]).
+pub fn estimate_tour(
+    building: &Building,
+    name: &str,
+    start: Pose,
+    settings: &Settings,
+    coverage: f64,
+) -> Result<TourEstimate, MakeTourError> {
+    let config = settings.to_explore_config()?;
+    sim_core::tour::estimate(building, start, &config, &tour_settings(coverage))
+        .map_err(|e| MakeTourError::Tour(name.to_string(), settings.robot_radius_m, e))
+}
+
 /// The tour of `building` (named `name`) from `start` for the robot and laser of `settings`,
 /// seeing `coverage` of its explorable area (docs/known-map-tour.md).
 pub fn make_tour(
@@ -145,13 +214,23 @@ pub fn make_tour(
     start: Pose,
     settings: &Settings,
     coverage: f64,
-) -> Result<TourRecord, SettingsError> {
+) -> Result<TourRecord, MakeTourError> {
+    make_tour_with(building, name, start, settings, coverage, &mut |_| {})
+}
+
+/// [`make_tour`], telling `progress` what it does.
+pub fn make_tour_with(
+    building: &Building,
+    name: &str,
+    start: Pose,
+    settings: &Settings,
+    coverage: f64,
+    progress: &mut dyn FnMut(TourProgress),
+) -> Result<TourRecord, MakeTourError> {
     let config = settings.to_explore_config()?;
-    let ts = TourSettings {
-        coverage,
-        ..TourSettings::default()
-    };
-    let tour = known_map_tour(building, start, &config, &ts);
+    let tour = known_map_tour_with(building, start, &config, &tour_settings(coverage), progress)
+        .map_err(|e| MakeTourError::Tour(name.to_string(), settings.robot_radius_m, e))?;
+    let bound = sim_core::tour::lower_bound(building, start, &config, coverage);
     Ok(TourRecord {
         format: TOUR_FORMAT.to_string(),
         version: TOUR_VERSION,
@@ -165,6 +244,8 @@ pub fn make_tour(
         covered_fraction: tour.covered_fraction,
         replayed_fraction: tour.replayed_fraction,
         explorable_m2: tour.explorable_m2,
+        lower_bound_s: Some(bound.time_s),
+        bound_regions: Some(bound.regions),
         viewpoints: tour
             .viewpoints
             .iter()
@@ -202,10 +283,15 @@ mod tests {
         assert_eq!(back, t);
         assert_eq!(t.key, TourKey::of(&settings, 0.99));
         type Spoil = fn(&mut TourRecord);
-        let cases: [(&str, Spoil); 6] = [
+        let cases: [(&str, Spoil); 9] = [
             ("format", |r| r.format = "x".into()),
             ("version", |r| r.version = 99),
             ("version", |r| r.version = 2),
+            ("lower_bound_s", |r| r.lower_bound_s = None),
+            ("lower_bound_s", |r| r.lower_bound_s = Some(r.time_s * 1.5)),
+            ("lower_bound_s", |r| {
+                r.version = 3;
+            }),
             ("time_s", |r| r.time_s = f64::NAN),
             ("covered_fraction", |r| r.covered_fraction = 1.5),
             ("start", |r| r.start[1] = f64::INFINITY),
@@ -228,6 +314,8 @@ mod tests {
         let mut v = serde_json::to_value(&t).unwrap();
         v["version"] = 2.into();
         v["key"].as_object_mut().unwrap().remove("method");
+        v.as_object_mut().unwrap().remove("lower_bound_s");
+        v.as_object_mut().unwrap().remove("bound_regions");
         let old: TourRecord = serde_json::from_value(v).unwrap();
         old.validate().unwrap();
         assert_eq!(old.key.method, 0);
