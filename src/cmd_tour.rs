@@ -151,7 +151,7 @@ impl Shown {
                 format!("replaying the tour with the laser (try {attempt} of at most 3)")
             }
         };
-        eprintln!(
+        tell!(
             "{name}: {:.0} s: {what}",
             now.duration_since(self.began).as_secs_f64()
         );

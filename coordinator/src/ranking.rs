@@ -68,7 +68,7 @@ pub fn render(places: &[Place], reference: &str) -> String {
         .unwrap_or(5)
         .max(5);
     let mut out = format!(
-        "\nRanking by IQM of normalized time (lower is faster; P(faster) against {reference}; efficiency: median tour time / exploration time):\n"
+        "\nRanking by IQM of normalized time (lower is faster; P(faster) against {reference}; efficiency: median yardstick time / exploration time, the yardstick the faster of the known-map tour and the fastest run):\n"
     );
     let _ = writeln!(
         out,
