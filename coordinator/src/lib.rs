@@ -46,6 +46,7 @@ pub mod http;
 pub mod inbox;
 pub mod live;
 pub mod live_page;
+pub mod measure;
 pub mod metric;
 pub mod names;
 pub mod net;

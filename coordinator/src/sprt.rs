@@ -280,7 +280,7 @@ pub struct SequentialPlan {
     /// Labels tested against the reference (the family's size).
     pub labels_tested: usize,
     /// The time the pairs' outcomes measure (the grid's `measure`; default the time to end).
-    pub measure: crate::outcome::Measure,
+    pub measure: crate::measure::Measure,
 }
 
 /// One comparison's test after the runs of seeds `1..=through_seed`.
