@@ -212,8 +212,9 @@ pub struct ReportArgs {
     export_runs: Option<PathBuf>,
 }
 
-pub fn run(a: RunArgs) -> Result<()> {
-    if !(a.tour_budget >= 1.0) {
+/// The arguments of `run` that clap cannot check alone.
+fn check_run_args(a: &RunArgs) -> Result<()> {
+    if a.tour_budget.is_nan() || a.tour_budget < 1.0 {
         anyhow::bail!(
             "--tour-budget: {} is out of range, expected seconds at least 1 (default {})",
             a.tour_budget,
@@ -225,6 +226,11 @@ pub fn run(a: RunArgs) -> Result<()> {
             anyhow::bail!("--results: empty; expected a directory such as results/my-grid");
         }
     }
+    Ok(())
+}
+
+pub fn run(a: RunArgs) -> Result<()> {
+    check_run_args(&a)?;
     let plan = Plan::load_with(
         &a.grid,
         a.results.as_deref(),
@@ -838,6 +844,20 @@ impl ChartPicture {
     }
 }
 
+/// Which suites the runs come from, so that two results directories say whether they ran the
+/// same one.
+fn say_report_suites(
+    results: &[floorcast_coordinator::store::StoredResult],
+    against: Option<&(&PathBuf, Vec<floorcast_coordinator::store::StoredResult>)>,
+) {
+    for line in &floorcast_coordinator::suite::describe_suites(results) {
+        say!("{line}");
+    }
+    if let Some((dir, other)) = against {
+        say_same_suites(dir, results, other);
+    }
+}
+
 pub fn report(a: ReportArgs) -> Result<()> {
     let style = report_style(&a)?;
     let store = Store::open_existing(&a.results)?;
@@ -854,15 +874,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         results.len(),
         a.results.join(DB_FILE).display()
     );
-    // Which suites the runs come from, so that two results directories say whether they ran
-    // the same one.
-    let suites = floorcast_coordinator::suite::describe_suites(&results);
-    for line in &suites {
-        say!("{line}");
-    }
-    if let Some((dir, other)) = &against {
-        say_same_suites(dir, &results, other);
-    }
+    say_report_suites(&results, against.as_ref());
     let order = report_order(&grids, &results);
     let reference = report_reference(&a, &order)?;
     let coverage = report_coverage(&a, &grids)?;
@@ -901,16 +913,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         floorcast_coordinator::ranking::render(&ranking, &reference)
     );
     say_raw!("{}", text);
-    for v in &verdicts {
-        let line = format!(
-            "sequential grid '{}': {}",
-            v.grid,
-            floorcast_coordinator::sequential::render_test(&v.test, None)
-        );
-        say!("{line}");
-        text.push_str(&line);
-        text.push('\n');
-    }
+    text.push_str(&say_verdicts(&verdicts));
     let cross = against.as_ref().map(|(dir, other)| {
         let gains = gains_against(&results, other, a.against_label.as_deref(), coverage);
         (dir.display().to_string(), gains)
@@ -1123,6 +1126,22 @@ fn report_coverage(a: &ReportArgs, grids: &[(String, Vec<String>, f64)]) -> Resu
 }
 
 /// Sequential grids' decisions: each label's last test, by grid and label order.
+/// Prints each sequential grid's last verdict; returns what was printed.
+fn say_verdicts(verdicts: &[SequentialVerdict]) -> String {
+    let mut text = String::new();
+    for v in verdicts {
+        let line = format!(
+            "sequential grid '{}': {}",
+            v.grid,
+            floorcast_coordinator::sequential::render_test(&v.test, None)
+        );
+        say!("{line}");
+        text.push_str(&line);
+        text.push('\n');
+    }
+    text
+}
+
 fn last_verdicts(store: &Store, order: &[String]) -> Result<Vec<SequentialVerdict>> {
     let mut last: std::collections::BTreeMap<(String, String), SequentialVerdict> =
         Default::default();

@@ -525,7 +525,7 @@ pub fn table_by(
                 let achieves = |s: &RunSummary| outcome::achieves(s, coverage);
                 let achieved: Vec<&&&StoredResult> = mine
                     .iter()
-                    .filter(|r| r.status.is_ok() && r.summary.as_ref().is_some_and(|s| achieves(s)))
+                    .filter(|r| r.status.is_ok() && r.summary.as_ref().is_some_and(&achieves))
                     .collect();
                 let times: Vec<f64> = achieved
                     .iter()
@@ -968,6 +968,23 @@ pub const BOOTSTRAP_MIN_PAIRS: usize = 10;
 /// The comparisons over all buildings as text: one line each. `sequential` names the labels
 /// whose comparison a sequential test decided: their fixed-sample intervals are marked as
 /// such and the anytime-valid interval is the one shown first.
+/// A gain's interval as text (`[+6.3, +12.4]`), `-` without one.
+fn gain_range_text(r: Option<[f64; 2]>) -> String {
+    r.map_or("-".to_string(), |[a, b]| {
+        format!("[{}, {}]", gain_text(a, false), gain_text(b, false))
+    })
+}
+
+/// A comparison's bootstrap interval as text, said unreliable under [`BOOTSTRAP_MIN_PAIRS`].
+fn bootstrap_text(c: &Comparison) -> String {
+    let r = gain_range_text(c.bootstrap_ci95_pct);
+    if c.pairs < BOOTSTRAP_MIN_PAIRS && c.bootstrap_ci95_pct.is_some() {
+        format!("{r} (only {} pairs: unreliable)", c.pairs)
+    } else {
+        r
+    }
+}
+
 pub fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
     let mut out = String::new();
     let overall: Vec<&Comparison> = cs.iter().filter(|c| c.building.is_none()).collect();
@@ -986,26 +1003,14 @@ pub fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
         overall[0].reference,
         overall.len()
     );
-    let range = |r: Option<[f64; 2]>| {
-        r.map_or("-".to_string(), |[a, b]| {
-            format!("[{}, {}]", gain_text(a, false), gain_text(b, false))
-        })
-    };
+    let range = gain_range_text;
     let num =
         |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |v| format!("{v:.digits$}"));
     let pct = |v: Option<f64>| v.map_or("-".to_string(), |m| gain_text(m, true));
     for c in &overall {
         let seq = sequential.contains(&c.label);
         let n = &c.counts;
-        let boot = if c.pairs < BOOTSTRAP_MIN_PAIRS && c.bootstrap_ci95_pct.is_some() {
-            format!(
-                "{} (only {} pairs: unreliable)",
-                range(c.bootstrap_ci95_pct),
-                c.pairs
-            )
-        } else {
-            range(c.bootstrap_ci95_pct)
-        };
+        let boot = bootstrap_text(c);
         let _ = writeln!(
             out,
             "  {:<16} HL {:>9} {:<16} mean {:>9} t {:<16} boot {:<16} anytime {:<16} p {:<7} Holm {:<7} d_z {:<6} {} pairs ({} both >= {coverage}, {} lost, {} won, {} neither), {} unpaired{}",
