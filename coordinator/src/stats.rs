@@ -285,43 +285,8 @@ pub fn probability_lower(xs: &[f64], ys: &[f64]) -> Option<f64> {
     Some(score / (xs.len() * ys.len()) as f64)
 }
 
-/// Resamples for the stratified bootstrap of the aggregates across buildings.
+/// Resamples for the two-level bootstrap of the aggregates across buildings.
 pub const STRATIFIED_RESAMPLES: usize = 2_000;
-
-/// The 95 % percentile interval of `statistic` under the stratified bootstrap: each stratum
-/// (a building's runs, of one or more labels) resampled with replacement within itself,
-/// [`STRATIFIED_RESAMPLES`] times from [`BOOTSTRAP_SEED`] (as `rliable` resamples runs within
-/// each task). `statistic` gets the resampled strata in order; resamples where it gives `None`
-/// or a NaN are skipped. `None` when no stratum has two values or no resample gives a value.
-pub fn stratified_bootstrap_ci95<const K: usize>(
-    strata: &[[Vec<f64>; K]],
-    statistic: impl Fn(&[[Vec<f64>; K]]) -> Option<f64>,
-) -> Option<(f64, f64)> {
-    if !strata.iter().any(|s| s.iter().any(|v| v.len() > 1)) {
-        return None;
-    }
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(BOOTSTRAP_SEED);
-    let mut values = Vec::with_capacity(STRATIFIED_RESAMPLES);
-    let mut resampled: Vec<[Vec<f64>; K]> = strata.to_vec();
-    for _ in 0..STRATIFIED_RESAMPLES {
-        for (to, from) in resampled.iter_mut().zip(strata) {
-            for (t, f) in to.iter_mut().zip(from) {
-                for slot in t.iter_mut() {
-                    *slot = f[rng.random_range(0..f.len())];
-                }
-            }
-        }
-        if let Some(v) = statistic(&resampled).filter(|v| !v.is_nan()) {
-            values.push(v);
-        }
-    }
-    if values.is_empty() {
-        return None;
-    }
-    values.sort_by(f64::total_cmp);
-    let at = |q: f64| values[((q * (values.len() - 1) as f64).round()) as usize];
-    Some((at(0.025), at(0.975)))
-}
 
 /// The 95 % percentile interval of `statistic` under the two-level (hierarchical) bootstrap:
 /// each resample draws the strata (buildings) with replacement, then resamples each drawn
@@ -359,6 +324,11 @@ pub fn hierarchical_bootstrap_ci95<const K: usize>(
             values.push(v);
         }
     }
+    percentile_ci95(values)
+}
+
+/// The 2.5 % and 97.5 % percentiles of bootstrap `values` (`None` for none).
+fn percentile_ci95(mut values: Vec<f64>) -> Option<(f64, f64)> {
     if values.is_empty() {
         return None;
     }
