@@ -306,6 +306,33 @@ struct Setup {
     rounds: Vec<Vec<Cell>>,
 }
 
+/// What a tour and its bound both start from: the map frame, the free space reachable from the
+/// start, the robot's body and laser range, and the explorable part (the referee's truth).
+struct Ground {
+    frame: GridFrame,
+    reachable: Bitmap,
+    body_m: f64,
+    range_m: f64,
+    truth: Bitmap,
+}
+
+impl Ground {
+    fn of(building: &Building, start: Pose, cfg: &ExploreConfig) -> Ground {
+        let frame = crate::explore::map_frame(&building.bounds(), cfg.map_resolution_m);
+        let reachable = building.reachable_free(frame, start.position());
+        let body_m = cfg.sim.robot.radius_m + cfg.safety_margin_m;
+        let range_m = cfg.sim.laser.max_range_m;
+        let truth = explorable_free(&reachable, start.position(), body_m, range_m);
+        Ground {
+            frame,
+            reachable,
+            body_m,
+            range_m,
+            truth,
+        }
+    }
+}
+
 impl Setup {
     fn new(
         building: &Building,
@@ -313,12 +340,14 @@ impl Setup {
         cfg: &ExploreConfig,
         ts: &TourSettings,
     ) -> Result<Setup, TourError> {
-        let frame = crate::explore::map_frame(&building.bounds(), cfg.map_resolution_m);
+        let Ground {
+            frame,
+            reachable,
+            body_m,
+            range_m,
+            truth,
+        } = Ground::of(building, start, cfg);
         let res = frame.resolution_m;
-        let reachable = building.reachable_free(frame, start.position());
-        let body_m = cfg.sim.robot.radius_m + cfg.safety_margin_m;
-        let range_m = cfg.sim.laser.max_range_m;
-        let truth = explorable_free(&reachable, start.position(), body_m, range_m);
         let roomy = roomy_cells(&reachable, body_m);
         let start_cell = frame.cell_from_world(start.position());
         let from_start = dijkstra(&roomy, start_cell, None);
@@ -1074,12 +1103,13 @@ pub fn lower_bound(
     cfg: &ExploreConfig,
     coverage: f64,
 ) -> LowerBound {
-    let frame = crate::explore::map_frame(&building.bounds(), cfg.map_resolution_m);
+    let Ground {
+        frame,
+        range_m,
+        truth,
+        ..
+    } = Ground::of(building, start, cfg);
     let res = frame.resolution_m;
-    let reachable = building.reachable_free(frame, start.position());
-    let body_m = cfg.sim.robot.radius_m + cfg.safety_margin_m;
-    let range_m = cfg.sim.laser.max_range_m;
-    let truth = explorable_free(&reachable, start.position(), body_m, range_m);
     let n = truth.count_true();
     let zero = LowerBound {
         length_m: 0.0,
