@@ -357,13 +357,13 @@ pub fn run_job(
         None => None,
     };
     // With charge_compute, each layout costs the wall time it took (the robot waits for it).
-    let mut timed = |work: &mut dyn FnMut()| {
+    let timed = |work: &mut dyn FnMut()| {
         let t = Instant::now();
         work();
         t.elapsed().as_secs_f64()
     };
-    let cost: Option<sim_core::explore::LayoutCost<'_>> = if job.settings.charge_compute {
-        Some(&mut timed)
+    let cost: Option<sim_core::explore::LayoutCost> = if job.settings.charge_compute {
+        Some(Box::new(timed))
     } else {
         None
     };

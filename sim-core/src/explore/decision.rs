@@ -1,11 +1,14 @@
 //! The decision: the frontiers and their candidates, their scores (the gains a strategy needs),
-//! the policy asked to choose (`ask_policy`: the built-in strategy's rule or the caller's), the
-//! last resorts before a run ends with frontiers left (their reachable parts, plans with less
-//! clearance, a closer look: `approach`), and the goal set for the choice.
+//! the policy asked to choose (the built-in strategy's rule or the caller's, answering from
+//! outside the run: see `episode`), the last resorts before a run ends with frontiers left (their
+//! reachable parts, plans with less clearance, a closer look: `approach`), and the goal set for
+//! the choice. A decision is a state machine: `begin_decision` puts a question ([`Step::Ask`],
+//! its state a [`Deciding`]) or decides at once; `reply` takes the answer and puts the next
+//! question or decides.
 
 use super::*;
 
-impl Explorer<'_> {
+impl Explorer {
     /// Moves the candidate of every frontier whose goal is unreachable in `plan` to the
     /// reachable traversable cell of the frontier nearest to it (the first in row-major order
     /// among equals), if there is one. Returns the plan to score with: a full search when
@@ -67,7 +70,7 @@ impl Explorer<'_> {
         plan: &Plan,
         use_layout: bool,
     ) -> Vec<CandidateScore> {
-        let cfg = self.cfg;
+        let cfg = Arc::clone(&self.cfg);
         let mut scores = Vec::with_capacity(frontiers.len());
         let (frame, robot) = (self.map.frame, self.localizer.estimate().position());
         for (f, goal_cell) in frontiers.iter().zip(goals) {
@@ -125,35 +128,27 @@ impl Explorer<'_> {
         true
     }
 
-    /// Chooses the next goal. Returns false when no reachable candidate is left.
-    pub(super) fn decide(&mut self) -> bool {
-        // A relaxed plan (see below) holds for one decision.
+    /// Begins a decision (the goals given up already given another chance before it when
+    /// `forgiven`): the question to the policy, or at once the decision's result when nothing
+    /// is to be asked. A relaxed plan (see `chosen`) holds for one decision.
+    pub(super) fn begin_decision(&mut self, forgiven: bool) -> Step {
         self.set_planning(Planning::WithMargin);
-        // The decision at each planning level in turn while no frontier is reachable (the last
-        // resorts 2 and 3 of `decide_planned`).
-        loop {
-            match self.decide_planned() {
-                Planned::Done(result) => return result,
-                Planned::Looser(level) => self.set_planning(level),
-            }
-        }
+        self.begin_level(forgiven)
     }
 
-    /// The decision at the planning level in use: its result, or the looser level to decide at
-    /// instead.
-    pub(super) fn decide_planned(&mut self) -> Planned {
-        let cfg = self.cfg;
-        let frame = self.map.frame;
+    /// The decision at the planning level in use: the frontiers, their goals and the plan to
+    /// them, then the first round of asking (`begin_round`).
+    fn begin_level(&mut self, forgiven: bool) -> Step {
         if self.map.known_bounds.is_none() {
             // Nothing seen yet: wait for the first scan.
-            return Planned::Done(true);
+            return Step::Done(true);
         }
         self.blacklist_reached_again();
         let mut frontiers = self.candidate_frontiers();
         self.goal = None;
         self.follower = PathFollower::default();
         if frontiers.is_empty() {
-            return Planned::Done(false);
+            return Step::Done(false);
         }
         let mut goals = self.goal_cells(&frontiers);
         let use_layout = self.refresh_layout();
@@ -164,83 +159,253 @@ impl Explorer<'_> {
         // for the reachable part of every frontier from the start; as a last resort, before
         // ending the run with frontiers left, their reachable parts: exploration does not end
         // while a frontier can be reached.
-        let mut moved_to_reachable = cfg.candidate_from_reachable_part;
+        let moved_to_reachable = self.cfg.candidate_from_reachable_part;
         if moved_to_reachable {
             plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
         }
-        let (scores, best, wps) = loop {
-            let scores = self.score(&frontiers, &goals, &plan, use_layout);
-            // `None` when the strategy says stop.
-            let counted = self.policy_decisions;
-            let chosen = match self.choose(&frontiers, &mut goals, &plan, scores, use_layout) {
-                Choice::Inexact => {
-                    // (The same decision asked again: counted once.)
-                    self.policy_decisions = counted;
-                    plan = self.plan_all();
-                    continue;
-                }
-                Choice::Decided(result) => return Planned::Done(result),
-                Choice::Stop => None,
-                Choice::Nothing => Some(None),
-                Choice::Found(scores, best, wps) => Some(Some((scores, best, wps))),
-            };
-            // A policy that failed ends the run at once.
-            if self.policy_failed {
-                return Planned::Done(false);
-            }
-            let early_stop = match chosen {
-                Some(Some(found)) => break found,
-                Some(None) => false,
-                None => true,
-            };
-            // Frontiers exist but none can be reached as they stand, or the early stop would end
-            // the run. The last resorts first, in order. The early stop weighs the reachable
-            // candidates only, so it gets them too (not under the paper's frontier rule): a
-            // doorway seen at a slant leaves a wedge of free cells beyond it too thin to drive,
-            // whose frontier is reachable only at the doorway, and the room behind must weigh in
-            // the rule (modern-office, layout-es from a random start, stopped at 96.7 % with a
-            // room never entered).
-            let last_resorts = !early_stop || cfg.robust_frontiers;
-            // 1. Each frontier's reachable part.
-            if last_resorts && !moved_to_reachable {
-                moved_to_reachable = true;
-                plan = self.reachable_candidates(&mut frontiers, &mut goals, plan);
-                continue;
-            }
-            // 2. The plan without the safety margin. Where the map shows a passage (often the
-            // one the robot came in by) a little narrower than the robot's diameter plus twice
-            // the margin, the robot would otherwise end the run with frontiers it can reach
-            // (Lamuniere1, seed 2, with updates every 0.5 m / 0.25 rad: 86 % explored).
-            // 3. The plan through the cells the robot has travelled as well: where the map,
-            // sharpened by later scans, shows the passage it came in by narrower than its body
-            // (a crowded room, a narrow corridor), the robot is in a pocket of the planning grid
-            // and reaches nothing (freiburg_building101 and intel_map from random starts,
-            // stuck at 95 % explored). Its body fitted there: it leaves the way it came.
-            if let Some(looser) = self.nav.planning().looser().filter(|_| last_resorts) {
-                return Planned::Looser(looser);
-            }
-            // 4. A closer look (see `approach`).
-            if !early_stop {
-                if let Some((i, goal_cell, wps)) = self.approach(&frontiers, &goals, &plan) {
-                    return Planned::Done(self.set_goal(&frontiers, i, goal_cell, wps, None));
-                }
-            }
-            if early_stop {
-                self.stopped_early = true;
-            } else {
-                // Frontiers exist but none is reachable: blacklist them all so the run can end.
-                for f in &frontiers {
-                    self.blacklist
-                        .add(frame.world_from_cell(f.candidate), cfg.blacklist_radius_m);
-                }
-            }
-            return Planned::Done(false);
+        self.begin_round(Box::new(Deciding {
+            forgiven,
+            frontiers,
+            goals,
+            use_layout,
+            plan: Some(plan),
+            moved_to_reachable,
+            scores: Vec::new(),
+            counted: 0,
+            attempt: 0,
+            unreachable_goals: 0,
+            asked: Asked::default(),
+            views: Vec::new(),
+            between: None,
+        }))
+    }
+
+    /// A round of asking: the candidates scored, then the policy asked until it chooses a
+    /// candidate with a path on the planning grid, passes, or says stop. The distance grid is
+    /// coarser and may connect what the planning grid does not (yet: a door seen at a slant
+    /// opens as the robot comes closer), so a candidate without a path is passed over for
+    /// this decision (the policy is asked again without it), not blacklisted.
+    fn begin_round(&mut self, mut d: Box<Deciding>) -> Step {
+        d.scores = self.score(&d.frontiers, &d.goals, d.plan(), d.use_layout);
+        // (A round asked again with every distance searched counts once: see `chosen`.)
+        d.counted = self.policy_decisions;
+        d.attempt = 0;
+        d.unreachable_goals = 0;
+        self.ask(d, None)
+    }
+
+    /// Puts the question of attempt `d.attempt` (`unreachable_goal`: the previous attempt's
+    /// goal point without a path): the candidates the policy is shown and the paths between
+    /// them when it needs them. With no candidate to show, the answer is `Answer::Nothing`.
+    fn ask(&mut self, mut d: Box<Deciding>, unreachable_goal: Option<Vec2>) -> Step {
+        d.asked = Asked {
+            attempt: d.attempt,
+            use_layout: d.use_layout,
+            unreachable_goal,
         };
-        let goal_cell = goals[best].expect("best candidate is reachable");
-        let score = scores[best];
-        self.nav
-            .chose(plan.distance_m(goal_cell), cfg.distance_bound_m);
-        Planned::Done(self.set_goal(&frontiers, best, goal_cell, wps, Some(score)))
+        // A built-in strategy's rule weighs the layout's gain only while it uses the layout.
+        let needs = self.policy_needs;
+        let use_layout = d.use_layout || self.caller_decides;
+        d.views = self.candidate_views(
+            &d.frontiers,
+            &d.goals,
+            d.plan(),
+            &d.scores,
+            needs,
+            use_layout,
+        );
+        if d.views.is_empty() {
+            return self.answered(d, Answer::Nothing);
+        }
+        if d.attempt == 0 {
+            self.policy_decisions += 1;
+        }
+        d.between = needs.paths_between.then(|| self.paths_between(&d.views));
+        Step::Ask(d)
+    }
+
+    /// The policy's `reply` to the question in `d`, and its compute time to charge (s). A reply
+    /// naming no candidate shown (or a candidate twice, or an empty list, or a point that is not
+    /// finite) is a failure of the policy (`policy_failed`), as [`Reply::Fail`] is.
+    pub(super) fn reply(&mut self, d: Box<Deciding>, reply: Reply, charged_s: f64) -> Step {
+        if charged_s.is_finite() && charged_s > 0.0 {
+            self.compute_debt_s += charged_s;
+            self.strategy_compute_s += charged_s;
+        }
+        let views = &d.views;
+        let shown = |id: &usize| views.iter().any(|v| v.id == *id);
+        // Candidates shown, each once.
+        let listed = |ids: &[usize]| {
+            !ids.is_empty()
+                && ids.iter().all(shown)
+                && ids.iter().collect::<std::collections::BTreeSet<_>>().len() == ids.len()
+        };
+        let answer = match reply {
+            Reply::Choose(id) if shown(&id) => Answer::One(id),
+            Reply::Rank(ids) if listed(&ids) => Answer::Ranked(ids),
+            Reply::Goal(p) if p.x.is_finite() && p.y.is_finite() => Answer::Point(p),
+            Reply::Drop(ids) if listed(&ids) => Answer::Drop(ids),
+            Reply::Pass => Answer::Nothing,
+            Reply::Stop => Answer::Stop,
+            _ => {
+                self.policy_failed = true;
+                Answer::Nothing
+            }
+        };
+        self.answered(d, answer)
+    }
+
+    /// What an answer leads to: the round's choice (`chosen`), or the next attempt's question.
+    fn answered(&mut self, mut d: Box<Deciding>, answer: Answer) -> Step {
+        // An answer from a bounded search stands when it heads for a goal within the bound;
+        // a stop, a pass or a goal beyond is asked again with every distance searched.
+        let plan = d.plan();
+        let inexact = match &answer {
+            Answer::Stop | Answer::Nothing => !plan.is_exact(),
+            Answer::One(best) => d.goals[*best].is_some_and(|c| !plan.is_exact_at(c)),
+            Answer::Ranked(ids) => ids
+                .first()
+                .and_then(|&id| d.goals[id])
+                .is_some_and(|c| !plan.is_exact_at(c)),
+            Answer::Drop(_) | Answer::Point(_) => false,
+        };
+        if inexact {
+            return self.chosen(d, Choice::Inexact);
+        }
+        match answer {
+            Answer::Stop => self.chosen(d, Choice::Stop),
+            Answer::Nothing => self.chosen(d, Choice::Nothing),
+            Answer::Drop(ids) => {
+                let frame = self.map.frame;
+                for id in ids {
+                    let at = frame.world_from_cell(d.frontiers[id].candidate);
+                    self.blacklist.add(at, self.cfg.blacklist_radius_m);
+                    // Not offered again in this decision, nor by its last resorts where the
+                    // blacklist holds.
+                    d.scores[id].distance_m = None;
+                    d.goals[id] = None;
+                }
+                d.attempt += 1;
+                self.ask(d, None)
+            }
+            Answer::Point(p) => {
+                if let Some((goal_cell, wps)) = self.point_goal(p) {
+                    let n = d.frontiers.len();
+                    let done = self.set_point_goal(n, p, goal_cell, wps);
+                    return self.chosen(d, Choice::Decided(done));
+                }
+                d.unreachable_goals += 1;
+                if d.unreachable_goals >= MAX_UNREACHABLE_GOALS {
+                    return self.chosen(d, Choice::Nothing);
+                }
+                d.attempt += 1;
+                self.ask(d, Some(p))
+            }
+            Answer::One(best) => {
+                let goal_cell = d.goals[best].expect("best candidate is reachable");
+                match self.waypoints_to(d.plan(), goal_cell) {
+                    Some(wps) => return self.chosen(d, Choice::Found(best, wps)),
+                    None => d.scores[best].distance_m = None,
+                }
+                d.attempt += 1;
+                self.ask(d, None)
+            }
+            Answer::Ranked(ids) => {
+                let mut found = None;
+                for id in ids {
+                    let goal_cell = d.goals[id].expect("ranked candidate is reachable");
+                    if let Some(wps) = self.waypoints_to(d.plan(), goal_cell) {
+                        found = Some((id, wps));
+                        break;
+                    }
+                }
+                match found {
+                    Some((id, wps)) => self.chosen(d, Choice::Found(id, wps)),
+                    None => self.chosen(d, Choice::Nothing),
+                }
+            }
+        }
+    }
+
+    /// What the round's choice leads to: the goal set, the decision's end, or its last resorts
+    /// in order (another round, another planning level).
+    fn chosen(&mut self, mut d: Box<Deciding>, choice: Choice) -> Step {
+        let cfg = Arc::clone(&self.cfg);
+        // `None` when the strategy says stop.
+        let chosen = match choice {
+            Choice::Inexact => {
+                // (The same decision asked again: counted once.)
+                self.policy_decisions = d.counted;
+                d.plan = Some(self.plan_all());
+                return self.begin_round(d);
+            }
+            Choice::Decided(result) => return Step::Done(result),
+            Choice::Stop => None,
+            Choice::Nothing => Some(None),
+            Choice::Found(best, wps) => Some(Some((best, wps))),
+        };
+        // A policy that failed ends the run at once.
+        if self.policy_failed {
+            return Step::Done(false);
+        }
+        let early_stop = match chosen {
+            Some(Some((best, wps))) => {
+                let goal_cell = d.goals[best].expect("best candidate is reachable");
+                let score = d.scores[best];
+                self.nav
+                    .chose(d.plan().distance_m(goal_cell), cfg.distance_bound_m);
+                return Step::Done(self.set_goal(&d.frontiers, best, goal_cell, wps, Some(score)));
+            }
+            Some(None) => false,
+            None => true,
+        };
+        // Frontiers exist but none can be reached as they stand, or the early stop would end
+        // the run. The last resorts first, in order. The early stop weighs the reachable
+        // candidates only, so it gets them too (not under the paper's frontier rule): a
+        // doorway seen at a slant leaves a wedge of free cells beyond it too thin to drive,
+        // whose frontier is reachable only at the doorway, and the room behind must weigh in
+        // the rule (modern-office, layout-es from a random start, stopped at 96.7 % with a
+        // room never entered).
+        let last_resorts = !early_stop || cfg.robust_frontiers;
+        // 1. Each frontier's reachable part.
+        if last_resorts && !d.moved_to_reachable {
+            d.moved_to_reachable = true;
+            let plan = d.plan.take().expect("a decision has a plan");
+            let plan = self.reachable_candidates(&mut d.frontiers, &mut d.goals, plan);
+            d.plan = Some(plan);
+            return self.begin_round(d);
+        }
+        // 2. The plan without the safety margin. Where the map shows a passage (often the
+        // one the robot came in by) a little narrower than the robot's diameter plus twice
+        // the margin, the robot would otherwise end the run with frontiers it can reach
+        // (Lamuniere1, seed 2, with updates every 0.5 m / 0.25 rad: 86 % explored).
+        // 3. The plan through the cells the robot has travelled as well: where the map,
+        // sharpened by later scans, shows the passage it came in by narrower than its body
+        // (a crowded room, a narrow corridor), the robot is in a pocket of the planning grid
+        // and reaches nothing (freiburg_building101 and intel_map from random starts,
+        // stuck at 95 % explored). Its body fitted there: it leaves the way it came.
+        if let Some(looser) = self.nav.planning().looser().filter(|_| last_resorts) {
+            self.set_planning(looser);
+            return self.begin_level(d.forgiven);
+        }
+        // 4. A closer look (see `approach`).
+        if !early_stop {
+            if let Some((i, goal_cell, wps)) = self.approach(&d.frontiers, &d.goals, d.plan()) {
+                return Step::Done(self.set_goal(&d.frontiers, i, goal_cell, wps, None));
+            }
+        }
+        if early_stop {
+            self.stopped_early = true;
+        } else {
+            // Frontiers exist but none is reachable: blacklist them all so the run can end.
+            for f in &d.frontiers {
+                self.blacklist.add(
+                    self.map.frame.world_from_cell(f.candidate),
+                    cfg.blacklist_radius_m,
+                );
+            }
+        }
+        Step::Done(false)
     }
 
     /// Blacklists the goal just reached (and looked at) if most of its frontier is still there.
@@ -265,7 +430,7 @@ impl Explorer<'_> {
     /// The frontiers of the map with enough clearance, those whose candidate is blacklisted
     /// dropped (or, with robust frontiers, their candidate moved outside the blacklist).
     fn candidate_frontiers(&mut self) -> Vec<Frontier> {
-        let cfg = self.cfg;
+        let cfg = Arc::clone(&self.cfg);
         let frame = self.map.frame;
         let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
         let mut frontiers = self.frontiers.detect(&self.map.occupancy, &fcfg);
@@ -306,102 +471,6 @@ impl Explorer<'_> {
                 }
             })
             .collect()
-    }
-
-    /// Asks the policy until it chooses a candidate with a path on the planning grid, passes,
-    /// or says stop; a goal point of its own with a path decides at once (`Choice::Decided`).
-    fn choose(
-        &mut self,
-        frontiers: &[Frontier],
-        goals: &mut [Option<Cell>],
-        plan: &Plan,
-        mut scores: Vec<CandidateScore>,
-        use_layout: bool,
-    ) -> Choice {
-        let cfg = self.cfg;
-        // The best candidate with a path on the planning grid: the distance grid is coarser
-        // and may connect what the planning grid does not (yet: a door seen at a slant opens
-        // as the robot comes closer), so a candidate without a path is passed over for this
-        // decision (the strategy is asked again without it), not blacklisted.
-        let mut attempt = 0;
-        // A goal point of the policy's own without a path (`Reply::Goal`), and how many.
-        let (mut unreachable_goal, mut unreachable_goals) = (None, 0);
-        loop {
-            let asked = Asked {
-                attempt,
-                use_layout,
-                unreachable_goal: unreachable_goal.take(),
-            };
-            let answer = self.ask_policy(frontiers, goals, plan, &scores, asked);
-            // An answer from a bounded search stands when it heads for a goal within the bound;
-            // a stop, a pass or a goal beyond is asked again with every distance searched.
-            let inexact = match &answer {
-                Answer::Stop | Answer::Nothing => !plan.is_exact(),
-                Answer::One(best) => goals[*best].is_some_and(|c| !plan.is_exact_at(c)),
-                Answer::Ranked(ids) => ids
-                    .first()
-                    .and_then(|&id| goals[id])
-                    .is_some_and(|c| !plan.is_exact_at(c)),
-                Answer::Drop(_) | Answer::Point(_) => false,
-            };
-            if inexact {
-                return Choice::Inexact;
-            }
-            match answer {
-                Answer::Stop => return Choice::Stop,
-                Answer::Nothing => return Choice::Nothing,
-                Answer::Drop(ids) => {
-                    let frame = self.map.frame;
-                    for id in ids {
-                        let at = frame.world_from_cell(frontiers[id].candidate);
-                        self.blacklist.add(at, cfg.blacklist_radius_m);
-                        // Not offered again in this decision, nor by its last resorts
-                        // where the blacklist holds.
-                        scores[id].distance_m = None;
-                        goals[id] = None;
-                    }
-                    attempt += 1;
-                }
-                Answer::Point(p) => {
-                    if let Some((goal_cell, wps)) = self.point_goal(p) {
-                        return Choice::Decided(self.set_point_goal(
-                            frontiers.len(),
-                            p,
-                            goal_cell,
-                            wps,
-                        ));
-                    }
-                    unreachable_goals += 1;
-                    if unreachable_goals >= MAX_UNREACHABLE_GOALS {
-                        return Choice::Nothing;
-                    }
-                    unreachable_goal = Some(p);
-                    attempt += 1;
-                }
-                Answer::One(best) => {
-                    let goal_cell = goals[best].expect("best candidate is reachable");
-                    match self.waypoints_to(plan, goal_cell) {
-                        Some(wps) => return Choice::Found(scores, best, wps),
-                        None => scores[best].distance_m = None,
-                    }
-                    attempt += 1;
-                }
-                Answer::Ranked(ids) => {
-                    let mut found = None;
-                    for id in ids {
-                        let goal_cell = goals[id].expect("ranked candidate is reachable");
-                        if let Some(wps) = self.waypoints_to(plan, goal_cell) {
-                            found = Some((id, wps));
-                            break;
-                        }
-                    }
-                    return match found {
-                        Some((id, wps)) => Choice::Found(scores, id, wps),
-                        None => Choice::Nothing,
-                    };
-                }
-            }
-        }
     }
 
     /// Heads for frontier `i` of `frontiers` through `goal_cell` (a map cell) along `wps`,
@@ -517,61 +586,6 @@ impl Explorer<'_> {
             best_distance_at_s: now,
         });
         true
-    }
-
-    /// Asks the strategy's policy to choose among the reachable candidates (`scores` with a
-    /// distance). [`Answer::Nothing`] when there is none, when the policy passes, or when it
-    /// failed (`policy_failed`, also for a reply naming no candidate shown).
-    pub(super) fn ask_policy(
-        &mut self,
-        frontiers: &[Frontier],
-        goals: &[Option<Cell>],
-        plan: &Plan,
-        scores: &[CandidateScore],
-        asked: Asked,
-    ) -> Answer {
-        // A built-in strategy's rule weighs the layout's gain only while it uses the layout.
-        let needs = self.policy_needs;
-        let use_layout = asked.use_layout || matches!(self.policy, PolicySlot::External(_));
-        let views = self.candidate_views(frontiers, goals, plan, scores, needs, use_layout);
-        if views.is_empty() {
-            return Answer::Nothing;
-        }
-        if asked.attempt == 0 {
-            self.policy_decisions += 1;
-        }
-        // (The policy is taken out while it looks at the view, which borrows the explorer.)
-        let placeholder = strategy::BuiltInPolicy::new(&Strategy::baseline(), 0);
-        let mut policy = std::mem::replace(&mut self.policy, PolicySlot::BuiltIn(placeholder));
-        let between = needs.paths_between.then(|| self.paths_between(&views));
-        let view = self.decision_view(&views, &asked, needs, between.as_deref());
-        let (reply, charged_s) = policy.get().decide(&view);
-        self.policy = policy;
-        if charged_s.is_finite() && charged_s > 0.0 {
-            self.compute_debt_s += charged_s;
-            self.strategy_compute_s += charged_s;
-        }
-        // The runs sharing this one's beginning are asked the same (see `shared`).
-        self.ask_members(frontiers, goals, plan, scores, &asked, &reply);
-        let shown = |id: &usize| views.iter().any(|v| v.id == *id);
-        // Candidates shown, each once.
-        let listed = |ids: &[usize]| {
-            !ids.is_empty()
-                && ids.iter().all(shown)
-                && ids.iter().collect::<std::collections::BTreeSet<_>>().len() == ids.len()
-        };
-        match reply {
-            Reply::Choose(id) if shown(&id) => Answer::One(id),
-            Reply::Rank(ids) if listed(&ids) => Answer::Ranked(ids),
-            Reply::Goal(p) if p.x.is_finite() && p.y.is_finite() => Answer::Point(p),
-            Reply::Drop(ids) if listed(&ids) => Answer::Drop(ids),
-            Reply::Pass => Answer::Nothing,
-            Reply::Stop => Answer::Stop,
-            _ => {
-                self.policy_failed = true;
-                Answer::Nothing
-            }
-        }
     }
 
     /// The candidates a policy with `needs` is shown: those with a distance and a goal, with the
@@ -735,15 +749,69 @@ pub(super) enum Answer {
     Stop,
 }
 
-/// What a decision at one planning level came to (see `Explorer::decide_planned`).
-pub(super) enum Planned {
-    /// Decided: whether a goal was set.
+/// Where a decision stands after a step: the policy is asked (the question in [`Deciding`]),
+/// or the decision is made.
+pub(super) enum Step {
+    /// The policy is asked: see `Explorer::reply`.
+    Ask(Box<Deciding>),
+    /// Decided: whether a goal was set (false: no reachable candidate is left, or the strategy
+    /// stopped, or the policy failed).
     Done(bool),
-    /// No frontier reachable at this level: decide again at this looser one.
-    Looser(Planning),
 }
 
-/// What the policy chose within one round of a decision (see `Explorer::choose`).
+/// A decision in progress, its retries and last resorts as explicit state: the frontiers, their
+/// goal cells and the plan at the planning level in use (`Explorer::begin_level`), the round of
+/// asking (`begin_round`: the scores, the attempt) and the question put (`ask`).
+#[derive(Clone)]
+pub(super) struct Deciding {
+    /// The goals given up had another chance before this decision (`Explorer::forgive`).
+    pub(super) forgiven: bool,
+    frontiers: Vec<Frontier>,
+    goals: Vec<Option<Cell>>,
+    /// Whether a built-in strategy's gains use the layout now.
+    use_layout: bool,
+    /// (Only taken out while the last resorts move the candidates.)
+    plan: Option<Plan>,
+    /// The candidates already moved to their frontiers' reachable parts (the first last resort).
+    moved_to_reachable: bool,
+    scores: Vec<CandidateScore>,
+    /// `policy_decisions` when the round began.
+    counted: usize,
+    attempt: usize,
+    /// Goal points of the policy's own without a path in this round.
+    unreachable_goals: usize,
+    /// The question put: how, the candidates shown, the paths between them.
+    pub(super) asked: Asked,
+    pub(super) views: Vec<CandidateView>,
+    pub(super) between: Option<Vec<f64>>,
+}
+
+impl Deciding {
+    fn plan(&self) -> &Plan {
+        self.plan.as_ref().expect("a decision has a plan")
+    }
+
+    /// The question as a policy with `needs` would be shown it (`views`, `between`), for a run
+    /// that shares this one's state (see `shared`).
+    pub(super) fn show(
+        &self,
+        ex: &mut Explorer,
+        needs: Needs,
+    ) -> (Vec<CandidateView>, Option<Vec<f64>>) {
+        let views = ex.candidate_views(
+            &self.frontiers,
+            &self.goals,
+            self.plan(),
+            &self.scores,
+            needs,
+            self.asked.use_layout,
+        );
+        let between = needs.paths_between.then(|| ex.paths_between(&views));
+        (views, between)
+    }
+}
+
+/// What the policy chose within one round of a decision (see `Explorer::answered`).
 enum Choice {
     /// The answer rests on distances beyond a bounded search ([`Plan::is_exact_at`]): to be
     /// asked again with every distance searched.
@@ -752,8 +820,8 @@ enum Choice {
     Stop,
     /// No candidate with a path (or the policy passed).
     Nothing,
-    /// The scores, the chosen candidate and the waypoints to its goal cell.
-    Found(Vec<CandidateScore>, usize, Vec<Vec2>),
+    /// The chosen candidate and the waypoints to its goal cell.
+    Found(usize, Vec<Vec2>),
     /// The decision is made (a goal point of the policy's own): its result.
     Decided(bool),
 }
@@ -777,25 +845,11 @@ struct Recorded {
 
 /// How a policy is asked within one decision: the attempt, whether a built-in strategy uses the
 /// layout now, and the goal point of the previous attempt that had no path.
+#[derive(Debug, Clone, Default)]
 pub(super) struct Asked {
     pub(super) attempt: usize,
     pub(super) use_layout: bool,
     pub(super) unreachable_goal: Option<Vec2>,
-}
-
-/// The run's policy: the built-in strategy's rule, or the caller's.
-pub(super) enum PolicySlot<'a> {
-    BuiltIn(strategy::BuiltInPolicy),
-    External(&'a mut dyn Policy),
-}
-
-impl PolicySlot<'_> {
-    pub(super) fn get(&mut self) -> &mut dyn Policy {
-        match self {
-            PolicySlot::BuiltIn(b) => b,
-            PolicySlot::External(p) => &mut **p,
-        }
-    }
 }
 
 /// A frontier whose middle cell is blacklisted, with its candidate moved to the cell nearest to

@@ -3,7 +3,7 @@
 
 use super::*;
 
-impl Explorer<'_> {
+impl Explorer {
     /// Recomputes the layout when the strategy uses it and the map has grown enough since the
     /// last one. Returns whether gains should use the layout now.
     pub(super) fn refresh_layout(&mut self) -> bool {

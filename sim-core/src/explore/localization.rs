@@ -70,8 +70,9 @@ impl Localizer {
         &self.estimated_trajectory
     }
 
-    pub(super) fn into_estimated_trajectory(self) -> Vec<Pose> {
-        self.estimated_trajectory
+    /// The estimated trajectory, taken out (for the run's result).
+    pub(super) fn take_estimated_trajectory(&mut self) -> Vec<Pose> {
+        std::mem::take(&mut self.estimated_trajectory)
     }
 
     /// Dead reckoning to the odometry reading `odometry` at `time_s` (calibrated with SLAM when
@@ -218,13 +219,13 @@ const PRIOR_SIGMA_THETA_BASE_RAD: f64 = 0.0002;
 /// 0.3.0).
 const PRIOR_SIGMA_THETA_PER_RAD_CALIBRATED: f64 = 0.003;
 
-impl Explorer<'_> {
+impl Explorer {
     /// A map update when the robot has moved or turned enough, or the period has passed.
     pub(super) fn sense(&mut self) {
-        let cfg = self.cfg;
+        let cfg = Arc::clone(&self.cfg);
         let Some(due) = self
             .localizer
-            .advance(self.sim.odometry(), self.sim.time_s(), cfg)
+            .advance(self.sim.odometry(), self.sim.time_s(), &cfg)
         else {
             return;
         };
@@ -232,7 +233,7 @@ impl Explorer<'_> {
         let seen = (&self.map, &self.obstacles);
         let estimate = self
             .localizer
-            .localize(&due, &scan, seen, self.sim.true_pose(), cfg);
+            .localize(&due, &scan, seen, self.sim.true_pose(), &cfg);
         let stats = self.map.insert_scan(&estimate, &scan, &cfg.log_odds);
         self.known_cells += stats.cells_discovered;
         let flips = self.map.take_occupied_flips();

@@ -46,6 +46,7 @@
 
 mod calibration;
 mod decision;
+mod episode;
 mod follow;
 mod gain_cache;
 mod layout_state;
@@ -57,6 +58,7 @@ mod shared;
 pub mod strategy;
 
 pub use crate::utility::UtilityDistance;
+pub use episode::{Episode, EpisodeError, Event, RobotId};
 pub use follow::{Command, FollowConfig, PathFollower};
 pub use layout_state::LayoutUse;
 pub use policy::{
@@ -68,7 +70,6 @@ pub use strategy::{
 };
 
 use self::calibration::OdometryCalibration;
-use self::decision::*;
 use self::gain_cache::{GainCache, GainKind};
 use self::layout_state::*;
 use self::localization::*;
@@ -448,9 +449,9 @@ impl RunResult {
     }
 }
 
-/// The mutable state of one exploration.
-struct Explorer<'a> {
-    cfg: &'a ExploreConfig,
+/// The mutable state of one exploration (driven by an [`Episode`]).
+struct Explorer {
+    cfg: Arc<ExploreConfig>,
     seed: u64,
     sim: Simulator,
     map: LogOddsMap,
@@ -480,15 +481,16 @@ struct Explorer<'a> {
     known_cells: usize,
     layout: Option<LayoutState>,
     layouts_computed: u64,
-    layout_cost: Option<LayoutCost<'a>>,
+    layout_cost: Option<LayoutCost>,
     /// Charged layout compute time the robot still has to wait for (s).
     compute_debt_s: f64,
     /// Layout compute time charged so far (s).
     layout_compute_s: f64,
-    /// The decision rule in place of the strategy's own, if any, what it needs, how often it
-    /// was asked, whether it said stop or failed, and its compute time charged so far (s).
-    policy: PolicySlot<'a>,
+    /// What the policy needs computed, whether it is the caller's (not the strategy's rule: it is
+    /// then shown the layout's gains whenever it needs them), how often it was asked, whether it
+    /// failed, and its compute time charged so far (s).
     policy_needs: Needs,
+    caller_decides: bool,
     policy_decisions: usize,
     policy_failed: bool,
     strategy_compute_s: f64,
@@ -508,8 +510,6 @@ struct Explorer<'a> {
     forgiven_at: Option<usize>,
     /// Frontier cells left at the end that the robot had not looked into (see `classify_end`).
     frontier_cells_left: usize,
-    /// The runs sharing this one's beginning (see `shared`), when it leads them.
-    shared: Option<Box<shared::Shared<'a>>>,
 }
 
 #[derive(Clone)]
@@ -566,19 +566,19 @@ pub fn map_frame(bounds: &crate::geom::Aabb, resolution_m: f64) -> GridFrame {
 
 /// A caller's measure of the layout's compute cost: it is given the computation, must run it
 /// once, and returns the seconds to charge (e.g. the wall time it took).
-pub type LayoutCost<'a> = &'a mut dyn FnMut(&mut dyn FnMut()) -> f64;
+pub type LayoutCost = Box<dyn FnMut(&mut dyn FnMut()) -> f64 + Send>;
 
 /// [`explore`], with the cost of every layout computation charged to simulated time when
 /// `layout_cost` is given: the robot stands still (sensing) for the seconds it returns, right
 /// after the decision that needed the layout. The core has no clock, so the caller measures;
 /// a run charged with measured wall time depends on the machine and is no longer reproducible.
-pub fn explore_charged<'a>(
+pub fn explore_charged(
     building: &Building,
     start: Pose,
-    cfg: &'a ExploreConfig,
+    cfg: &ExploreConfig,
     seed: u64,
     on_progress: &mut dyn FnMut(&ProgressSample),
-    layout_cost: Option<LayoutCost<'a>>,
+    layout_cost: Option<LayoutCost>,
 ) -> RunResult {
     let hooks = Hooks {
         layout_cost,
@@ -591,7 +591,7 @@ pub fn explore_charged<'a>(
 #[derive(Default)]
 pub struct Hooks<'a> {
     /// Measures each layout computation, to charge its cost (see [`explore_charged`]).
-    pub layout_cost: Option<LayoutCost<'a>>,
+    pub layout_cost: Option<LayoutCost>,
     /// Chooses the candidates in place of the configured strategy (whose gain model and early
     /// stop still apply: give it [`Strategy::baseline`] for the plain gains and no early stop).
     pub policy: Option<&'a mut dyn Policy>,
@@ -606,42 +606,73 @@ impl std::fmt::Debug for Hooks<'_> {
     }
 }
 
-/// [`explore`] with the caller's [`Hooks`].
-pub fn explore_with<'a>(
+/// [`explore`] with the caller's [`Hooks`]: an [`Episode`] driven to its end, its decisions
+/// answered by the caller's policy or the strategy's built-in rule.
+pub fn explore_with(
     building: &Building,
     start: Pose,
-    cfg: &'a ExploreConfig,
+    cfg: &ExploreConfig,
     seed: u64,
     on_progress: &mut dyn FnMut(&ProgressSample),
-    hooks: Hooks<'a>,
+    hooks: Hooks<'_>,
 ) -> RunResult {
-    new_explorer(building, start, cfg, seed, hooks).run(on_progress)
-}
-
-/// The state of a run at its start.
-fn new_explorer<'a>(
-    building: &Building,
-    start: Pose,
-    cfg: &'a ExploreConfig,
-    seed: u64,
-    hooks: Hooks<'a>,
-) -> Explorer<'a> {
     let Hooks {
         layout_cost,
         policy,
     } = hooks;
-    let (policy, policy_needs) = policy_slot(policy, cfg, seed);
+    let mut built_in;
+    let (policy, caller): (&mut dyn Policy, _) = match policy {
+        Some(p) => {
+            let needs = p.needs();
+            (p, Some(needs))
+        }
+        None => {
+            built_in = strategy::BuiltInPolicy::new(&cfg.strategy, seed);
+            (&mut built_in, None)
+        }
+    };
+    let mut episode = Episode::build(building, start, cfg.clone(), seed, caller, layout_cost);
+    loop {
+        match episode.advance() {
+            Event::Decide(robot) => {
+                let (reply, charged_s) = match episode.view(robot) {
+                    Some(view) => policy.decide(&view),
+                    None => unreachable!("a decision is pending"),
+                };
+                let answered = episode.answer_charged(robot, reply, charged_s);
+                debug_assert!(answered.is_ok());
+            }
+            Event::Progress(sample) => on_progress(&sample),
+            Event::Ended(end) => policy.end(&end),
+            Event::Finished => return episode.into_result().expect("a finished run has a result"),
+        }
+    }
+}
+
+/// The state of a run at its start: `caller` holds the needs of the caller's policy (`None`:
+/// the strategy's rule decides).
+fn new_explorer(
+    building: &Building,
+    start: Pose,
+    cfg: Arc<ExploreConfig>,
+    seed: u64,
+    caller: Option<Needs>,
+    layout_cost: Option<LayoutCost>,
+) -> Explorer {
+    let policy_needs = match caller {
+        Some(needs) => needs,
+        None => built_in_needs(&strategy::BuiltInPolicy::new(&cfg.strategy, seed), &cfg),
+    };
     let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
-    let referee = new_referee(building, frame, start, cfg);
+    let referee = new_referee(building, frame, start, &cfg);
     let cap_cells =
         (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
             .max(8)
             .max((cfg.frontier_clearance_m / cfg.map_resolution_m).ceil() as u32 + 1);
     let sim = Simulator::new(building, start, &cfg.sim, seed);
     Explorer {
-        cfg,
         seed,
-        localizer: Localizer::new(start, sim.odometry(), cfg),
+        localizer: Localizer::new(start, sim.odometry(), &cfg),
         sim,
         map: LogOddsMap::new(frame),
         obstacles: ObstacleDistance::new(frame, cap_cells),
@@ -666,8 +697,8 @@ fn new_explorer<'a>(
         layout_cost,
         compute_debt_s: 0.0,
         layout_compute_s: 0.0,
-        policy,
         policy_needs,
+        caller_decides: caller.is_some(),
         policy_decisions: 0,
         policy_failed: false,
         strategy_compute_s: 0.0,
@@ -679,25 +710,8 @@ fn new_explorer<'a>(
         nav: Navigator::new(frame, cfg.sim.robot.radius_m, cfg.safety_margin_m),
         forgiven_at: None,
         frontier_cells_left: 0,
-        shared: None,
+        cfg,
     }
-}
-
-/// The run's policy (the caller's, or the built-in strategy's rule) and what it needs.
-fn policy_slot<'a>(
-    policy: Option<&'a mut dyn Policy>,
-    cfg: &ExploreConfig,
-    seed: u64,
-) -> (PolicySlot<'a>, Needs) {
-    let policy = match policy {
-        Some(p) => PolicySlot::External(p),
-        None => PolicySlot::BuiltIn(strategy::BuiltInPolicy::new(&cfg.strategy, seed)),
-    };
-    let policy_needs = match &policy {
-        PolicySlot::External(p) => p.needs(),
-        PolicySlot::BuiltIn(b) => built_in_needs(b, cfg),
-    };
-    (policy, policy_needs)
 }
 
 /// The referee of a run from `start` in `building` on the map's `frame`: the free space the
@@ -731,75 +745,6 @@ fn built_in_needs(policy: &strategy::BuiltInPolicy, cfg: &ExploreConfig) -> Need
         layout_gain: policy.needs().layout_gain && cfg.strategy.uses_layout(),
         layout: policy.needs().layout,
         paths_between: policy.needs().paths_between,
-    }
-}
-
-impl Explorer<'_> {
-    fn run(mut self, on_progress: &mut dyn FnMut(&ProgressSample)) -> RunResult {
-        let end_reason = self.explore_until_end(on_progress);
-        self.conclude(end_reason, on_progress)
-    }
-
-    /// The run loop: sensing, deciding and driving until exploration ends.
-    fn explore_until_end(&mut self, on_progress: &mut dyn FnMut(&ProgressSample)) -> EndReason {
-        let cfg = self.cfg;
-        let end_reason;
-        loop {
-            // (Runs sharing this one's beginning keep a copy of it now and then: see `shared`.)
-            self.checkpoint_if_due();
-            self.sense();
-            self.record_progress(on_progress);
-            if self.sim.time_s() >= cfg.time_limit_s {
-                end_reason = EndReason::TimeLimit;
-                break;
-            }
-            if self.needs_decision() && !self.decide() && !(self.forgive() && self.decide()) {
-                end_reason = if self.stopped_early {
-                    EndReason::EarlyStop
-                } else {
-                    self.classify_end()
-                };
-                break;
-            }
-            self.wait_for_compute(on_progress);
-            self.drive();
-        }
-        end_reason
-    }
-
-    /// What follows exploration: the policy told, the way home if asked for, the result.
-    fn conclude(
-        mut self,
-        end_reason: EndReason,
-        on_progress: &mut dyn FnMut(&ProgressSample),
-    ) -> RunResult {
-        let cfg = self.cfg;
-        let exploration_time_s = self.sim.time_s();
-        let end = RunEnd {
-            reason: end_reason,
-            exploration_time_s,
-            explored_fraction: self.explored_fraction(),
-            decisions: self.decisions.len(),
-        };
-        if !self.policy_failed {
-            self.policy.get().end(&end);
-        }
-        if cfg.return_home && end_reason != EndReason::TimeLimit && !self.policy_failed {
-            self.return_home();
-        }
-        self.finish(end_reason, exploration_time_s, on_progress)
-    }
-
-    /// Stands still, sensing, while charged layout compute time is due.
-    fn wait_for_compute(&mut self, on_progress: &mut dyn FnMut(&ProgressSample)) {
-        while self.compute_debt_s > 0.0 && self.sim.time_s() < self.cfg.time_limit_s {
-            let t0 = self.sim.time_s();
-            self.sim.idle();
-            self.compute_debt_s -= self.sim.time_s() - t0;
-            self.sense();
-            self.record_progress(on_progress);
-        }
-        self.compute_debt_s = 0.0;
     }
 }
 

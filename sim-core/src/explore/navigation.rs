@@ -707,9 +707,9 @@ fn seen<'m>(map: &'m LogOddsMap, obstacles: &'m ObstacleDistance) -> Seen<'m> {
     Seen { map, obstacles }
 }
 
-impl Explorer<'_> {
+impl Explorer {
     pub(super) fn needs_decision(&mut self) -> bool {
-        let cfg = self.cfg;
+        let cfg = Arc::clone(&self.cfg);
         let now = self.sim.time_s();
         let Some(goal) = &mut self.goal else {
             return true;
@@ -816,9 +816,10 @@ impl Explorer<'_> {
     /// built-in strategy only: a strategy of the caller's is asked once per decision).
     pub(super) fn plan_bounded(&mut self, targets: &[Cell]) -> Plan {
         let robot = self.localizer.estimate().position();
-        let bound_m = match self.policy {
-            PolicySlot::BuiltIn(_) => self.cfg.distance_bound_m,
-            PolicySlot::External(_) => 0.0,
+        let bound_m = if self.caller_decides {
+            0.0
+        } else {
+            self.cfg.distance_bound_m
         };
         self.nav
             .plan(seen(&self.map, &self.obstacles), robot, targets, bound_m)
@@ -857,7 +858,7 @@ impl Explorer<'_> {
     }
 
     pub(super) fn drive(&mut self) {
-        let cfg = self.cfg;
+        let cfg = Arc::clone(&self.cfg);
         if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
             let to = look_vector(goal, &self.localizer.estimate(), cfg.robust_frontiers);
             let err =
@@ -888,7 +889,7 @@ impl Explorer<'_> {
     }
 
     pub(super) fn return_home(&mut self) {
-        let cfg = self.cfg;
+        let cfg = Arc::clone(&self.cfg);
         let frame = self.map.frame;
         let start = self
             .trajectory
@@ -1056,6 +1057,7 @@ impl Planning {
 }
 
 /// The distances to the candidates, and what is needed to find the path to one of them.
+#[derive(Clone)]
 pub(super) struct Plan {
     /// The distance grid and the search over it.
     pub(super) far: Arc<CoarseCosts>,

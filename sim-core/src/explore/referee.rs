@@ -38,7 +38,7 @@ pub(super) struct Referee {
     pub(super) doors: Vec<(Vec2, Vec2)>,
 }
 
-impl Explorer<'_> {
+impl Explorer {
     /// Credits the building cells observed through the map cells `fresh`, just made known by
     /// the current scan (every one of them already marked in `known`): the building cells near
     /// where the sensor saw each whose centres, brought into the map frame by the current pose
@@ -119,7 +119,7 @@ impl Explorer<'_> {
         }
     }
 
-    pub(super) fn record_progress(&mut self, on_progress: &mut dyn FnMut(&ProgressSample)) {
+    pub(super) fn record_progress(&mut self) {
         if self.sim.time_s() + 1e-9 < self.next_progress_s {
             return;
         }
@@ -129,7 +129,6 @@ impl Explorer<'_> {
             explored_fraction: self.explored_fraction(),
         };
         self.progress.push(s);
-        on_progress(&s);
         while let Some(&f) = self.cfg.snapshot_fractions.get(self.snapshots.len()) {
             if s.explored_fraction + 1e-12 < f {
                 break;
@@ -198,15 +197,15 @@ impl Explorer<'_> {
         }
     }
 
-    pub(super) fn finish(
-        mut self,
-        end_reason: EndReason,
-        exploration_time_s: f64,
-        on_progress: &mut dyn FnMut(&ProgressSample),
-    ) -> RunResult {
-        // Always close the curve with the final state.
+    /// Closes the progress curve with the final state.
+    pub(super) fn close_curve(&mut self) {
         self.next_progress_s = f64::NEG_INFINITY;
-        self.record_progress(on_progress);
+        self.record_progress();
+    }
+
+    /// The run's result (`close_curve` called before), its map, curve and trajectories taken out
+    /// of the state.
+    pub(super) fn finish(&mut self, end_reason: EndReason, exploration_time_s: f64) -> RunResult {
         let mut map_quality = map_quality(&self.map.occupancy, &self.referee.free);
         // The map as a whole may sit rotated about the start (a heading error made before any
         // wall was in view); the best fit of the estimated trajectory onto the true one undoes
@@ -270,16 +269,16 @@ impl Explorer<'_> {
             explored_fraction: self.explored_fraction(),
             path_length_m: self.sim.path_length_m(),
             blacklisted_goals: self.blacklist.added(),
-            decisions: self.decisions,
-            progress: self.progress,
-            trajectory: self.trajectory,
+            decisions: std::mem::take(&mut self.decisions),
+            progress: std::mem::take(&mut self.progress),
+            trajectory: std::mem::take(&mut self.trajectory),
             scans: self.localizer.scans(),
             scan_matches_accepted: self.localizer.matches_accepted(),
-            estimated_trajectory: self.localizer.into_estimated_trajectory(),
-            map: self.map.occupancy,
+            estimated_trajectory: self.localizer.take_estimated_trajectory(),
+            map: self.map.occupancy.clone(),
             map_quality,
             plans: self.plans,
-            snapshots: self.snapshots,
+            snapshots: std::mem::take(&mut self.snapshots),
         }
     }
 }

@@ -3,14 +3,16 @@
 //! two) see the same candidates and, until one of their rules stops or drops what another
 //! keeps, make the same choices: the runs are identical up to that decision. On the paper's
 //! grid a `layout-es` run follows its `layout` twin for 96-100 % of its progress curve (median
-//! 99.98 %). [`explore_shared`] runs them as one: the first configuration leads, every other's
-//! rule is asked alongside at each of its decisions, and a run whose reply first differs goes on
-//! alone from the last copy of the state taken before that decision (one every
+//! 99.98 %). [`explore_shared`] runs them as one [`Episode`]: the first configuration leads,
+//! every other's rule is asked alongside at each of its decisions, and a run whose reply first
+//! differs goes on alone from the last copy of the episode taken at a decision before (one every
 //! [`CHECKPOINT_DECISIONS`] decisions); a run that never differs is the leader's up to its end.
 //! Each result is bit-identical to the run made alone (tested).
 
 use std::rc::Rc;
 
+use super::decision::Deciding;
+use super::episode::Phase;
 use super::strategy::BuiltInPolicy;
 use super::*;
 
@@ -18,28 +20,17 @@ use super::*;
 /// it repeats. A copy costs about as much as a few decisions.
 pub(super) const CHECKPOINT_DECISIONS: usize = 20;
 
-/// The runs sharing the leading run's beginning, held by the leader.
-pub(super) struct Shared<'a> {
-    members: Vec<Member<'a>>,
-    /// Seconds since the shared run began, read by the caller (the core reads no clock).
-    clock: &'a mut dyn FnMut() -> f64,
-    /// The leader's state at the top of its run loop when last copied, and the clock then.
-    checkpoint: Option<(Rc<Explorer<'a>>, f64)>,
-    /// The leader's `policy_decisions` at that copy.
-    checkpoint_decisions: usize,
-}
-
 /// One run following the leader.
-struct Member<'a> {
+struct Member {
     index: usize,
-    cfg: &'a ExploreConfig,
+    cfg: ExploreConfig,
     policy: BuiltInPolicy,
     needs: Needs,
     /// Its policy at the last checkpoint.
     policy_at_checkpoint: BuiltInPolicy,
     /// Once its reply differed from the leader's: the checkpoint before that decision, its
     /// policy then, and the clock then.
-    parted: Option<(Rc<Explorer<'a>>, BuiltInPolicy, f64)>,
+    parted: Option<(Rc<Episode>, BuiltInPolicy, f64)>,
 }
 
 /// What runs that share their beginning have in common: the configuration without the
@@ -64,13 +55,13 @@ pub fn can_share(cfgs: &[ExploreConfig]) -> bool {
 /// longest (no early stop) first: it leads. `clock` returns the seconds since the call began
 /// (the caller reads the clock); each run comes with the seconds it took: its own part, and the
 /// shared part up to where it went alone. `on_progress` sees the leader's progress.
-pub fn explore_shared<'a>(
+pub fn explore_shared(
     building: &Building,
     start: Pose,
-    cfgs: &'a [ExploreConfig],
+    cfgs: &[ExploreConfig],
     seed: u64,
     on_progress: &mut dyn FnMut(&ProgressSample),
-    clock: &'a mut dyn FnMut() -> f64,
+    clock: &mut dyn FnMut() -> f64,
 ) -> Vec<(RunResult, f64)> {
     if !can_share(cfgs) {
         let mut out = Vec::new();
@@ -81,15 +72,16 @@ pub fn explore_shared<'a>(
         }
         return out;
     }
-    let mut leader = new_explorer(building, start, &cfgs[0], seed, Hooks::default());
-    let members = cfgs[1..]
+    let mut leader = Episode::new(building, start, cfgs[0].clone(), seed);
+    let mut policy = BuiltInPolicy::new(&cfgs[0].strategy, seed);
+    let mut members: Vec<Member> = cfgs[1..]
         .iter()
         .enumerate()
         .map(|(k, cfg)| {
             let policy = BuiltInPolicy::new(&cfg.strategy, seed);
             Member {
                 index: k + 1,
-                cfg,
+                cfg: cfg.clone(),
                 needs: built_in_needs(&policy, cfg),
                 policy_at_checkpoint: policy.clone(),
                 policy,
@@ -97,50 +89,136 @@ pub fn explore_shared<'a>(
             }
         })
         .collect();
-    leader.shared = Some(Box::new(Shared {
-        members,
-        clock,
-        checkpoint: None,
-        checkpoint_decisions: 0,
-    }));
-    let end_reason = leader.explore_until_end(on_progress);
-    let shared = *leader.shared.take().expect("the leader keeps its members");
-    let Shared { members, clock, .. } = shared;
     let mut out: Vec<Option<(RunResult, f64)>> = (0..cfgs.len()).map(|_| None).collect();
-    // The members that never parted: the leader's run up to its end, then their own ending.
-    let shared_s = clock();
-    let mut parted = Vec::new();
-    for m in members {
-        match m.parted {
-            None => {
-                let t0 = clock();
-                let r = leader
-                    .fork(m.cfg, m.policy)
-                    .conclude(end_reason, &mut |_| {});
-                out[m.index] = Some((r, shared_s + clock() - t0));
+    // The leader's state at a decision when last copied, and the clock and decisions then.
+    let mut checkpoint: Option<(Rc<Episode>, f64)> = None;
+    let mut checkpoint_decisions = 0;
+    // The clock when the leader's exploration ended, and when its own ending began.
+    let (mut shared_s, mut own_s) = (0.0, 0.0);
+    loop {
+        match leader.advance() {
+            Event::Decide(robot) => {
+                let asked = leader.ex.policy_decisions;
+                let following = members.iter().any(|m| m.parted.is_none());
+                let due =
+                    checkpoint.is_none() || asked >= checkpoint_decisions + CHECKPOINT_DECISIONS;
+                if following && due {
+                    // (The previous copy dropped first, unless a member that parted holds it:
+                    // two copies of a large map at once are a lot.)
+                    drop(checkpoint.take());
+                    checkpoint = Some((Rc::new(leader.fork(&cfgs[0])), clock()));
+                    checkpoint_decisions = asked;
+                    for m in members.iter_mut().filter(|m| m.parted.is_none()) {
+                        m.policy_at_checkpoint = m.policy.clone();
+                    }
+                }
+                let (reply, charged_s) = match leader.view(robot) {
+                    Some(view) => policy.decide(&view),
+                    None => unreachable!("a decision is pending"),
+                };
+                // Every member still following is asked the same with the candidates as it
+                // sees them; those whose reply differs part.
+                for m in members.iter_mut().filter(|m| m.parted.is_none()) {
+                    if leader.ask_alongside(&mut m.policy, m.needs) != reply {
+                        let (from, at_s) = checkpoint
+                            .clone()
+                            .expect("a checkpoint is taken at the first decision");
+                        m.parted = Some((from, m.policy_at_checkpoint.clone(), at_s));
+                    }
+                }
+                let answered = leader.answer_charged(robot, reply, charged_s);
+                debug_assert!(answered.is_ok());
             }
-            Some(p) => parted.push((m.index, m.cfg, p)),
+            Event::Progress(s) => on_progress(&s),
+            Event::Ended(_) => {
+                // The members that never parted: the leader's run up to its end, then their
+                // own ending.
+                shared_s = clock();
+                for m in members.iter_mut().filter(|m| m.parted.is_none()) {
+                    let t0 = clock();
+                    let r = finish_alone(leader.fork(&m.cfg), &mut m.policy);
+                    out[m.index] = Some((r, shared_s + clock() - t0));
+                }
+                own_s = clock();
+            }
+            Event::Finished => break,
         }
     }
-    let t0 = clock();
-    let r = leader.conclude(end_reason, on_progress);
-    out[0] = Some((r, shared_s + clock() - t0));
+    let r = leader.into_result().expect("a finished run has a result");
+    out[0] = Some((r, shared_s + clock() - own_s));
     // The others from the copy made before they parted.
-    for (index, cfg, (from, policy, at_s)) in parted {
-        let t0 = clock();
-        let r = from.fork(cfg, policy).run(&mut |_| {});
-        out[index] = Some((r, at_s + clock() - t0));
+    for m in members {
+        if let Some((from, mut policy, at_s)) = m.parted {
+            let t0 = clock();
+            let r = finish_alone(from.fork(&m.cfg), &mut policy);
+            out[m.index] = Some((r, at_s + clock() - t0));
+        }
     }
     out.into_iter()
         .map(|r| r.expect("every run made"))
         .collect()
 }
 
-impl<'a> Explorer<'a> {
-    /// This run's state, to go on with `cfg` (whose settings may differ from this run's in the
-    /// early stop only) and its built-in `policy`. Hooks are not copied (shared runs have none).
-    pub(super) fn fork(&self, cfg: &'a ExploreConfig, policy: BuiltInPolicy) -> Explorer<'a> {
-        let needs = built_in_needs(&policy, cfg);
+/// Drives `episode` to its end, its decisions answered by `policy`.
+fn finish_alone(mut episode: Episode, policy: &mut BuiltInPolicy) -> RunResult {
+    loop {
+        match episode.advance() {
+            Event::Decide(robot) => {
+                let (reply, charged_s) = match episode.view(robot) {
+                    Some(view) => policy.decide(&view),
+                    None => unreachable!("a decision is pending"),
+                };
+                let answered = episode.answer_charged(robot, reply, charged_s);
+                debug_assert!(answered.is_ok());
+            }
+            Event::Progress(_) | Event::Ended(_) => {}
+            Event::Finished => return episode.into_result().expect("a finished run has a result"),
+        }
+    }
+}
+
+impl Episode {
+    /// This episode's state, to go on with `cfg` (whose settings may differ from this run's in
+    /// the early stop only) answered by its built-in rule. A decision pending is shown anew as
+    /// that rule sees it. Hooks are not copied (shared runs have none).
+    pub(super) fn fork(&self, cfg: &ExploreConfig) -> Episode {
+        let needs = built_in_needs(&BuiltInPolicy::new(&cfg.strategy, self.ex.seed), cfg);
+        let mut ex = Box::new(self.ex.fork(Arc::new(cfg.clone()), needs));
+        let phase = match &self.phase {
+            Phase::Deciding(d) => {
+                let mut d: Box<Deciding> = d.clone();
+                let (views, between) = d.show(&mut ex, needs);
+                d.views = views;
+                d.between = between;
+                Phase::Deciding(d)
+            }
+            other => other.clone(),
+        };
+        Episode {
+            ex,
+            phase,
+            progress_sent: self.progress_sent,
+            result: None,
+        }
+    }
+
+    /// The reply `policy` (a rule needing `needs`) gives to the decision pending, shown as it
+    /// would see it.
+    fn ask_alongside(&mut self, policy: &mut BuiltInPolicy, needs: Needs) -> Reply {
+        let Phase::Deciding(d) = &self.phase else {
+            unreachable!("asked alongside a decision pending")
+        };
+        let (views, between) = d.show(&mut self.ex, needs);
+        let view = self
+            .ex
+            .decision_view(&views, &d.asked, needs, between.as_deref());
+        policy.decide(&view).0
+    }
+}
+
+impl Explorer {
+    /// This run's state, to go on with `cfg` and a built-in rule needing `needs`.
+    fn fork(&self, cfg: Arc<ExploreConfig>, needs: Needs) -> Explorer {
         Explorer {
             cfg,
             seed: self.seed,
@@ -167,8 +245,8 @@ impl<'a> Explorer<'a> {
             layout_cost: None,
             compute_debt_s: self.compute_debt_s,
             layout_compute_s: self.layout_compute_s,
-            policy: PolicySlot::BuiltIn(policy),
             policy_needs: needs,
+            caller_decides: false,
             policy_decisions: self.policy_decisions,
             policy_failed: self.policy_failed,
             strategy_compute_s: self.strategy_compute_s,
@@ -182,65 +260,7 @@ impl<'a> Explorer<'a> {
             nav: self.nav.fork(),
             forgiven_at: self.forgiven_at,
             frontier_cells_left: self.frontier_cells_left,
-            shared: None,
         }
-    }
-
-    /// At the top of the run loop: a copy of the state for the members still following, every
-    /// [`CHECKPOINT_DECISIONS`] decisions (and at the start).
-    pub(super) fn checkpoint_if_due(&mut self) {
-        let Some(mut shared) = self.shared.take() else {
-            return;
-        };
-        let following = shared.members.iter().any(|m| m.parted.is_none());
-        let due = shared.checkpoint.is_none()
-            || self.policy_decisions >= shared.checkpoint_decisions + CHECKPOINT_DECISIONS;
-        if following && due {
-            // (The previous copy dropped first, unless a member that parted holds it: two
-            // copies of a large map at once are a lot.)
-            shared.checkpoint = None;
-            // (Its policy is never asked: a member that parts goes on with its own.)
-            let policy = BuiltInPolicy::new(&self.cfg.strategy, 0);
-            let copy = Rc::new(self.fork(self.cfg, policy));
-            shared.checkpoint = Some((copy, (shared.clock)()));
-            shared.checkpoint_decisions = self.policy_decisions;
-            for m in shared.members.iter_mut().filter(|m| m.parted.is_none()) {
-                m.policy_at_checkpoint = m.policy.clone();
-            }
-        }
-        self.shared = Some(shared);
-    }
-
-    /// After the leader's policy replied `reply` to a decision (`asked`), every member still
-    /// following is asked the same with the candidates as it sees them; those whose reply
-    /// differs part.
-    pub(super) fn ask_members(
-        &mut self,
-        frontiers: &[Frontier],
-        goals: &[Option<Cell>],
-        plan: &Plan,
-        scores: &[CandidateScore],
-        asked: &Asked,
-        reply: &Reply,
-    ) {
-        let Some(mut shared) = self.shared.take() else {
-            return;
-        };
-        for m in shared.members.iter_mut().filter(|m| m.parted.is_none()) {
-            let views =
-                self.candidate_views(frontiers, goals, plan, scores, m.needs, asked.use_layout);
-            let between = m.needs.paths_between.then(|| self.paths_between(&views));
-            let view = self.decision_view(&views, asked, m.needs, between.as_deref());
-            let (theirs, _) = m.policy.decide(&view);
-            if theirs != *reply {
-                let (from, at_s) = shared
-                    .checkpoint
-                    .clone()
-                    .expect("a checkpoint is taken before the first decision");
-                m.parted = Some((from, m.policy_at_checkpoint.clone(), at_s));
-            }
-        }
-        self.shared = Some(shared);
     }
 }
 

@@ -1,3 +1,4 @@
+use super::decision::{outside_blacklist, unknown_centroid, unknown_side};
 use super::*;
 use crate::building::Geometry;
 use crate::geom::Polygon;
@@ -362,37 +363,27 @@ fn charged_layout_compute_delays_the_robot() {
     let free = explore(&b, b.start.unwrap(), &cfg, 2, &mut |_| {});
     assert_eq!(free.layout_compute_s, 0.0);
     // A hook that charges nothing changes nothing.
-    let mut calls = 0;
-    let mut nothing = |work: &mut dyn FnMut()| {
-        calls += 1;
+    let calls = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+    let counted = std::sync::Arc::clone(&calls);
+    let nothing: LayoutCost = Box::new(move |work: &mut dyn FnMut()| {
+        counted.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         work();
         0.0
-    };
-    let same = explore_charged(
-        &b,
-        b.start.unwrap(),
-        &cfg,
-        2,
-        &mut |_| {},
-        Some(&mut nothing),
-    );
+    });
+    let same = explore_charged(&b, b.start.unwrap(), &cfg, 2, &mut |_| {}, Some(nothing));
     assert_eq!(same, free);
-    assert_eq!(calls as u64, free.layouts_computed);
+    assert_eq!(
+        calls.load(std::sync::atomic::Ordering::Relaxed),
+        free.layouts_computed
+    );
     // 100 s per layout: the charged time is recorded and the robot waits for all of it (the
     // waits alone then outlast the whole uncharged run; a small charge may even shorten a run,
     // as any change of timing changes the decisions).
-    let mut hundred = |work: &mut dyn FnMut()| {
+    let hundred: LayoutCost = Box::new(|work: &mut dyn FnMut()| {
         work();
         100.0
-    };
-    let slow = explore_charged(
-        &b,
-        b.start.unwrap(),
-        &cfg,
-        2,
-        &mut |_| {},
-        Some(&mut hundred),
-    );
+    });
+    let slow = explore_charged(&b, b.start.unwrap(), &cfg, 2, &mut |_| {}, Some(hundred));
     assert!(slow.layouts_computed > 0);
     assert_eq!(slow.layout_compute_s, 100.0 * slow.layouts_computed as f64);
     assert!(
@@ -614,11 +605,7 @@ fn cells_travelled_while_the_travelled_grids_are_kept_are_planned_with() {
         localization: Localization::GroundTruth,
         ..ExploreConfig::default()
     };
-    let hooks = Hooks {
-        layout_cost: None,
-        policy: None,
-    };
-    let mut e = new_explorer(&b, start, &cfg, 1, hooks);
+    let mut e = new_explorer(&b, start, std::sync::Arc::new(cfg), 1, None, None);
     e.sense();
     PLANNING_CHECKS.with(|c| c.set(Some([0; 3])));
     e.set_planning(Planning::Travelled);
