@@ -153,10 +153,9 @@ impl PairedGain {
         };
         match self.ci_pct() {
             Some((lo, hi)) => format!(
-                "{} [{}, {}] (n={}{lost})",
+                "{} {} (n={}{lost})",
                 gain_text(self.gain_pct(), true),
-                gain_text(lo, false),
-                gain_text(hi, false),
+                gain_range_text(Some([lo, hi])),
                 self.pairs
             ),
             None => format!(
@@ -968,10 +967,18 @@ pub const BOOTSTRAP_MIN_PAIRS: usize = 10;
 /// The comparisons over all buildings as text: one line each. `sequential` names the labels
 /// whose comparison a sequential test decided: their fixed-sample intervals are marked as
 /// such and the anytime-valid interval is the one shown first.
-/// A gain's interval as text (`[+6.3, +12.4]`), `-` without one.
-fn gain_range_text(r: Option<[f64; 2]>) -> String {
+/// A gain's interval as text (`[+6.3, +12.4]`), `-` without one. When an end falls below
+/// -100 %, both ends are time ratios to the reference's (`[1.5x, 3.0x the time]`), never a
+/// ratio and a percentage side by side.
+pub fn gain_range_text(r: Option<[f64; 2]>) -> String {
     r.map_or("-".to_string(), |[a, b]| {
-        format!("[{}, {}]", gain_text(a, false), gain_text(b, false))
+        if a < -100.0 || b < -100.0 {
+            let ratio = |g: f64| 1.0 - g / 100.0;
+            let (x, y) = (ratio(a).min(ratio(b)), ratio(a).max(ratio(b)));
+            format!("[{x:.1}x, {y:.1}x the time]")
+        } else {
+            format!("[{}, {}]", gain_text(a, false), gain_text(b, false))
+        }
     })
 }
 
@@ -1479,6 +1486,30 @@ mod tests {
     use super::*;
     use crate::metric::unexplored_area_s;
     use crate::store::fixtures::{progress, set_summary, stored, summary_value};
+
+    /// Gains and their intervals as text: percentages, a time ratio below -100 %, and an
+    /// interval with an end below -100 % wholly in time ratios.
+    #[test]
+    fn gains_and_intervals_as_text() {
+        let cases: &[(f64, bool, &str)] = &[
+            (9.44, true, "+9.4 %"),
+            (-49.2, false, "-49.2"),
+            (-120.0, true, "2.2x slower"),
+            (f64::NAN, true, "-"),
+        ];
+        for &(g, unit, want) in cases {
+            assert_eq!(gain_text(g, unit), want, "{g}");
+        }
+        let ranges: &[(Option<[f64; 2]>, &str)] = &[
+            (Some([6.3, 12.4]), "[+6.3, +12.4]"),
+            (Some([-200.0, -49.2]), "[1.5x, 3.0x the time]"),
+            (Some([-200.0, 10.0]), "[0.9x, 3.0x the time]"),
+            (None, "-"),
+        ];
+        for &(r, want) in ranges {
+            assert_eq!(gain_range_text(r), want, "{r:?}");
+        }
+    }
 
     #[test]
     fn stat_mean_and_sd() {
