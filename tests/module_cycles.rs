@@ -5,7 +5,11 @@
 //! left out) names a path `crate::a::b` or `super::b`, or imports a group `crate::{a, b}`, and
 //! the longest prefix of that path that is a module of the crate is the one used. A module
 //! naming its own parent (`super::Config` in `layout/lines.rs`) is not counted: a folder's root
-//! holds what its files share, and declares them.
+//! holds what its files share, and declares them. Under [`STRICT`] (sim-core's `explore`, the
+//! run's state machine) that is counted too, and so is a folder's root naming its children
+//! (`self::a`, `a::` in its own code; its `pub use` re-exports and `mod` declarations aside): no
+//! two modules there use each other, the root included. No crate's module imports its parent
+//! with a glob (`use super::*`) outside its tests.
 
 mod common;
 
@@ -128,12 +132,67 @@ fn module_of(path: &[String], modules: &BTreeMap<Vec<String>, PathBuf>) -> Optio
         .find(|p| modules.contains_key(p))
 }
 
-/// Each module's uses of the crate's other modules (not of its ancestors).
+/// The folders, by crate source, whose modules follow the strict rule (see the module doc).
+const STRICT: &[(&str, &str)] = &[("sim-core/src", "explore")];
+
+/// Whether `module` lies under a strict folder of `src`.
+fn strict(src: &Path, module: &[String]) -> bool {
+    STRICT
+        .iter()
+        .any(|(s, folder)| src.ends_with(s) && module.first().is_some_and(|m| m == folder))
+}
+
+/// Whether `code` names `prefix` where a path begins (not as the tail of a longer name).
+fn names(code: &str, prefix: &str) -> bool {
+    let ident = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == ':';
+    code.match_indices(prefix)
+        .any(|(at, _)| code[..at].chars().next_back().is_none_or(|c| !ident(c)))
+}
+
+/// A folder root's own code: its `pub use` re-exports and `mod` declarations taken out.
+fn own_code(code: &str) -> String {
+    let mut out = String::new();
+    for statement in code.split_inclusive(';') {
+        let t = statement.trim_start();
+        let declaration = [
+            "pub use ",
+            "pub(crate) use ",
+            "mod ",
+            "pub mod ",
+            "pub(crate) mod ",
+        ]
+        .iter()
+        .any(|k| t.starts_with(k));
+        if !declaration {
+            out.push_str(statement);
+        }
+    }
+    out
+}
+
+/// Each module's uses of the crate's other modules (not of its ancestors; under [`STRICT`], of
+/// its parent and, for a folder's root, of its children too).
 fn graph(src: &Path) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
     let modules = modules(src);
     let mut edges: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
     for (module, file) in &modules {
         let code = code_of(&std::fs::read_to_string(file).unwrap());
+        let is_root = file.file_name().is_some_and(|n| n == "mod.rs");
+        if strict(src, module) && is_root {
+            let own = own_code(&code);
+            let children = modules
+                .keys()
+                .filter(|m| m.len() == module.len() + 1 && m[..module.len()] == module[..]);
+            let uses = edges.entry(module.clone()).or_default();
+            for child in children {
+                let name = child.last().unwrap();
+                let named =
+                    names(&own, &format!("self::{name}::")) || names(&own, &format!("{name}::"));
+                if named {
+                    uses.insert(child.clone());
+                }
+            }
+        }
         // `super::` of `a/b.rs` (module `a::b`) is `a`; of `a/mod.rs` (module `a`), `a`'s parent.
         let parent: Vec<String> = module[..module.len().saturating_sub(1)].to_vec();
         let mut named: Vec<Vec<String>> = paths_after(&code, "crate::");
@@ -144,7 +203,8 @@ fn graph(src: &Path) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
         for p in named {
             if let Some(m) = module_of(&p, &modules) {
                 let ancestor = m.len() < module.len() && module[..m.len()] == m[..];
-                if m != *module && !ancestor && !m.is_empty() {
+                let parent_counted = strict(src, module) && m.len() + 1 == module.len();
+                if m != *module && (!ancestor || parent_counted) && !m.is_empty() {
                     uses.insert(m);
                 }
             }
@@ -217,6 +277,59 @@ fn no_crate_has_a_module_cycle() {
             );
         }
     }
+}
+
+/// No module imports its parent with a glob outside its tests: what it uses is named.
+#[test]
+fn no_module_imports_its_parent_with_a_glob() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut globs = Vec::new();
+    for src in common::CRATE_SOURCES {
+        for (module, file) in modules(&root.join(src)) {
+            let code = code_of(&std::fs::read_to_string(&file).unwrap());
+            if code.contains("use super::*") {
+                globs.push(format!("{src}: {}", module.join("::")));
+            }
+        }
+    }
+    assert!(
+        globs.is_empty(),
+        "modules importing their parent with a glob: {globs:?}"
+    );
+}
+
+/// The strict rule finds a root and its child using each other, and ignores re-exports.
+#[test]
+fn the_strict_rule_sees_a_root_and_its_children() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("sim-core/src");
+    std::fs::create_dir_all(src.join("explore")).unwrap();
+    std::fs::write(src.join("lib.rs"), "pub mod explore;\n").unwrap();
+    let write = |root: &str, child: &str| {
+        std::fs::write(src.join("explore/mod.rs"), root).unwrap();
+        std::fs::write(src.join("explore/a.rs"), child).unwrap();
+    };
+    // Re-exports and declarations only: no circle.
+    write(
+        "mod a;\npub use a::{A, B};\n",
+        "use super::super::geom::X;\npub struct A;\n",
+    );
+    assert_eq!(circle(&graph(&src)), None);
+    // The root's code uses its child, which names the root: a circle.
+    write(
+        "mod a;\npub struct Shared;\nfn f() -> a::A { a::A }\n",
+        "use super::Shared;\npub struct A;\n",
+    );
+    assert!(circle(&graph(&src)).is_some());
+    // A glob of the child in the root's code counts.
+    write(
+        "mod a;\nuse self::a::*;\npub struct Shared;\n",
+        "use super::Shared;\npub struct A;\n",
+    );
+    assert!(circle(&graph(&src)).is_some());
+    assert!(own_code("pub use a::{\n B,\n};\nfn g() {}")
+        .find("a::")
+        .is_none());
 }
 
 /// The reading itself, on cases with a known answer.

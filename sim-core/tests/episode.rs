@@ -99,7 +99,12 @@ fn an_episode_answered_by_a_hand_written_nearest_rule_is_the_built_in_nearest_ru
             let event = e.advance();
             (e, event)
         });
-        assert!(run.decisions.len() >= 10, "{}: {}", b.name, run.decisions.len());
+        assert!(
+            run.decisions.len() >= 10,
+            "{}: {}",
+            b.name,
+            run.decisions.len()
+        );
         assert_eq!(run.decisions, built_in.decisions, "{}", b.name);
         assert_eq!(run, built_in, "{}", b.name);
         assert_eq!(run.fingerprint(), built_in.fingerprint());

@@ -16,8 +16,14 @@
 //! A run has one robot today, [`RobotId`] 0; the events and answers name their robot so that a
 //! team needs no other interface.
 
-use super::decision::{Deciding, Step};
-use super::*;
+use crate::building::Building;
+use crate::explore::config::ExploreConfig;
+use crate::explore::explorer::deciding::{Deciding, Step};
+use crate::explore::explorer::{new_explorer, Explorer, LayoutCost};
+use crate::explore::policy::{DecisionView, Needs, Reply, RunEnd};
+use crate::explore::run::{EndReason, ProgressSample, RunResult};
+use crate::geom::Pose;
+use std::sync::Arc;
 
 /// A robot of an episode. An episode of one robot has `RobotId(0)` only.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -308,19 +314,5 @@ impl Episode {
     /// The run's result, once [`Event::Finished`] was returned.
     pub fn into_result(self) -> Option<RunResult> {
         self.result
-    }
-}
-
-impl Explorer {
-    /// Stands still, sensing, while charged compute time is due.
-    fn wait_for_compute(&mut self) {
-        while self.compute_debt_s > 0.0 && self.sim.time_s() < self.cfg.time_limit_s {
-            let t0 = self.sim.time_s();
-            self.sim.idle();
-            self.compute_debt_s -= self.sim.time_s() - t0;
-            self.sense();
-            self.record_progress();
-        }
-        self.compute_debt_s = 0.0;
     }
 }

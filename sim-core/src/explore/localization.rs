@@ -3,7 +3,14 @@
 //! and the explorer's `sense`, which feeds a scan to it and the map, and the map's changes to
 //! the frontier tracker, the gain cache, the planning grids and the referee.
 
-use super::*;
+use crate::mapping::scan_match::ScanMatchConfig;
+
+use crate::explore::calibration::OdometryCalibration;
+use crate::explore::config::{ExploreConfig, Localization};
+use crate::geom::{Pose, Vec2};
+use crate::mapping::distance_field::ObstacleDistance;
+use crate::mapping::log_odds::LogOddsMap;
+use crate::mapping::scan_match::match_scan;
 
 /// The pose estimate and what keeps it: the odometry read last and at the last map update, its
 /// calibration, the estimate at the last map update and when it was made, the estimated
@@ -219,68 +226,10 @@ const PRIOR_SIGMA_THETA_BASE_RAD: f64 = 0.0002;
 /// 0.3.0).
 const PRIOR_SIGMA_THETA_PER_RAD_CALIBRATED: f64 = 0.003;
 
-impl Explorer {
-    /// A map update when the robot has moved or turned enough, or the period has passed.
-    pub(super) fn sense(&mut self) {
-        let cfg = Arc::clone(&self.cfg);
-        let Some(due) = self
-            .localizer
-            .advance(self.sim.odometry(), self.sim.time_s(), &cfg)
-        else {
-            return;
-        };
-        let scan = self.sim.scan();
-        let seen = (&self.map, &self.obstacles);
-        let estimate = self
-            .localizer
-            .localize(&due, &scan, seen, self.sim.true_pose(), &cfg);
-        let stats = self.map.insert_scan(&estimate, &scan, &cfg.log_odds);
-        self.known_cells += stats.cells_discovered;
-        let flips = self.map.take_occupied_flips();
-        let free_changes = self.map.take_free_changes();
-        // (The obstacle distances too, and the planning cells of every change.)
-        self.nav
-            .map_updated(&self.map, &mut self.obstacles, &flips, &free_changes);
-        // (The layout gains too: the layout they are computed with changes less often than the
-        // map, and clears them when it does.)
-        // (Changes of whether a cell is occupied recorded last: see `GainCache::touch`.)
-        let now = self.localizer.scans();
-        for &(i, _) in &free_changes {
-            self.gains.touch(i, now, false);
-        }
-        for &i in &flips {
-            self.gains.touch(i, now, true);
-        }
-        self.frontiers.update(
-            &self.map.occupancy,
-            flips
-                .iter()
-                .chain(free_changes.iter().map(|(i, _)| i))
-                .copied(),
-        );
-        // A cell never goes back to unknown, and every change from unknown is in one of the
-        // two lists.
-        let mut fresh = std::mem::take(&mut self.fresh_known);
-        fresh.clear();
-        for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
-            let i = i as usize;
-            if !self.known.data[i] && self.map.occupancy.data[i] != Occupancy::Unknown {
-                self.known.data[i] = true;
-                fresh.push(i);
-            }
-        }
-        let map_to_world = MapToWorld::new(&estimate, &self.sim.true_pose());
-        self.credit_explored(&fresh, &map_to_world);
-        self.fresh_known = fresh;
-        let (from, to) = self.localizer.close_update(due, self.sim.time_s());
-        self.mark_travelled(from, to);
-        self.trajectory.push(self.sim.true_pose());
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::GridFrame;
 
     fn cfg(localization: Localization) -> ExploreConfig {
         ExploreConfig {

@@ -9,12 +9,19 @@
 //! [`CHECKPOINT_DECISIONS`] decisions); a run that never differs is the leader's up to its end.
 //! Each result is bit-identical to the run made alone (tested).
 
-use std::rc::Rc;
+use crate::building::Building;
+use crate::explore::config::ExploreConfig;
+use crate::explore::drive::explore;
+use crate::explore::episode::{Episode, Event, Phase};
+use crate::explore::explorer::deciding::Deciding;
+use crate::explore::explorer::{built_in_needs, Explorer};
+use crate::explore::policy::{Needs, Policy, Reply};
+use crate::explore::run::{ProgressSample, RunResult};
+use crate::explore::strategy::BuiltInPolicy;
+use crate::geom::Pose;
+use std::sync::Arc;
 
-use super::decision::Deciding;
-use super::episode::Phase;
-use super::strategy::BuiltInPolicy;
-use super::*;
+use std::rc::Rc;
 
 /// Decisions between two copies of the leading run's state: the most a run that parts from
 /// it repeats. A copy costs about as much as a few decisions.
@@ -267,6 +274,7 @@ impl Explorer {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::explore::strategy::{Strategy, StrategyParams};
     use crate::generate::{generate, BuildingKind, GenerateConfig};
 
     fn cfg(name: &str) -> ExploreConfig {

@@ -1,6 +1,16 @@
-use super::decision::{outside_blacklist, unknown_centroid, unknown_side};
+use crate::building::Building;
+use crate::explore::explorer::{new_explorer, Goal};
+use crate::explore::referee::{open_true_doors, true_layout, MapToWorld};
+use crate::frontier::blacklist::Blacklist;
+use crate::frontier::detect::Frontier;
+use crate::geom::{Pose, Vec2};
+use crate::grid::{Bitmap, Cell, GridFrame, Occupancy};
+use crate::utility::CandidateScore;
+
 use super::*;
 use crate::building::Geometry;
+use crate::explore::explorer::deciding::{outside_blacklist, unknown_centroid, unknown_side};
+use crate::explore::explorer::driving::look_vector;
 use crate::geom::Polygon;
 use crate::utility::best_candidate;
 

@@ -6,14 +6,35 @@
 //! its state a [`Deciding`]) or decides at once; `reply` takes the answer and puts the next
 //! question or decides.
 
-use super::*;
+use crate::explore::explorer::Goal;
+use crate::explore::policy::LayoutView;
+use crate::explore::run::Decision;
+
+use crate::explore::explorer::Explorer;
+use crate::explore::follow::PathFollower;
+use crate::explore::gain_cache::{GainCache, GainKind};
+use crate::explore::navigation::{Plan, Planning, MAX_EXTRA};
+use crate::explore::policy::{CandidateView, DecisionView, Needs, Reply, MAX_UNREACHABLE_GOALS};
+use crate::frontier::blacklist::Blacklist;
+use crate::frontier::detect::{frontiers_where, is_frontier_cell, Frontier, FrontierConfig};
+use crate::gain::{information_count_read, information_gain};
+use crate::geom::Vec2;
+use crate::grid::{Cell, GridFrame, Occupancy, OccupancyGrid};
+use crate::layout_gain::{
+    gap_closed_information_gain_read, layout_information_gain_read, LayoutRaster,
+};
+use crate::plan::dijkstra::dijkstra_padded;
+use crate::plan::inflate::nearest_by;
+use crate::plan::waypoints::waypoints_by;
+use crate::utility::{CandidateScore, UtilityDistance};
+use std::sync::Arc;
 
 impl Explorer {
     /// Moves the candidate of every frontier whose goal is unreachable in `plan` to the
     /// reachable traversable cell of the frontier nearest to it (the first in row-major order
     /// among equals), if there is one. Returns the plan to score with: a full search when
     /// `plan`, which stops once its targets are settled, may not cover the new goals.
-    pub(super) fn reachable_candidates(
+    pub(crate) fn reachable_candidates(
         &mut self,
         frontiers: &mut [Frontier],
         goals: &mut [Option<Cell>],
@@ -63,7 +84,7 @@ impl Explorer {
     /// `plan`; the path's length, or the straight line to the candidate with
     /// [`UtilityDistance::Euclidean`]) and information gain (as the strategy's gain model
     /// defines it).
-    pub(super) fn score(
+    pub(crate) fn score(
         &mut self,
         frontiers: &[Frontier],
         goals: &[Option<Cell>],
@@ -114,7 +135,7 @@ impl Explorer {
     /// they last had one (or never had one). A goal given up for a moment of bad luck (a robot
     /// stuck on clutter, a pose estimate briefly off) would otherwise end the run with
     /// frontiers left. Returns whether any were forgiven.
-    pub(super) fn forgive(&mut self) -> bool {
+    pub(crate) fn forgive(&mut self) -> bool {
         if self.stopped_early || self.policy_failed {
             return false;
         }
@@ -131,7 +152,7 @@ impl Explorer {
     /// Begins a decision (the goals given up already given another chance before it when
     /// `forgiven`): the question to the policy, or at once the decision's result when nothing
     /// is to be asked. A relaxed plan (see `chosen`) holds for one decision.
-    pub(super) fn begin_decision(&mut self, forgiven: bool) -> Step {
+    pub(crate) fn begin_decision(&mut self, forgiven: bool) -> Step {
         self.set_planning(Planning::WithMargin);
         self.begin_level(forgiven)
     }
@@ -227,7 +248,7 @@ impl Explorer {
     /// The policy's `reply` to the question in `d`, and its compute time to charge (s). A reply
     /// naming no candidate shown (or a candidate twice, or an empty list, or a point that is not
     /// finite) is a failure of the policy (`policy_failed`), as [`Reply::Fail`] is.
-    pub(super) fn reply(&mut self, d: Box<Deciding>, reply: Reply, charged_s: f64) -> Step {
+    pub(crate) fn reply(&mut self, d: Box<Deciding>, reply: Reply, charged_s: f64) -> Step {
         if charged_s.is_finite() && charged_s > 0.0 {
             self.compute_debt_s += charged_s;
             self.strategy_compute_s += charged_s;
@@ -476,7 +497,7 @@ impl Explorer {
     /// Heads for frontier `i` of `frontiers` through `goal_cell` (a map cell) along `wps`,
     /// recording the decision (`score`: its gain and path length; `None` for a closer look).
     /// Returns true.
-    pub(super) fn set_goal(
+    pub(crate) fn set_goal(
         &mut self,
         frontiers: &[Frontier],
         i: usize,
@@ -512,7 +533,7 @@ impl Explorer {
     /// The goal cell and path for a policy's own goal point `p` (`Reply::Goal`): the nearest
     /// traversable map cell within 0.5 m of it, and a path there on the planning grid. `None`
     /// when `p` is off the map or no path leads there.
-    pub(super) fn point_goal(&mut self, p: Vec2) -> Option<(Cell, Vec<Vec2>)> {
+    pub(crate) fn point_goal(&mut self, p: Vec2) -> Option<(Cell, Vec<Vec2>)> {
         let frame = self.map.frame;
         let c = frame.cell_from_world(p);
         frame.index(c)?;
@@ -534,7 +555,7 @@ impl Explorer {
     /// Heads for a policy's own goal point `p` through `goal_cell` along `wps` (no frontier:
     /// the goal ends on arrival, and is given up, as any, when the robot makes no progress).
     /// `candidates`: how many were shown. Returns true.
-    pub(super) fn set_point_goal(
+    pub(crate) fn set_point_goal(
         &mut self,
         candidates: usize,
         p: Vec2,
@@ -590,7 +611,7 @@ impl Explorer {
 
     /// The candidates a policy with `needs` is shown: those with a distance and a goal, with the
     /// layout's gain when it needs it and `use_layout` holds.
-    pub(super) fn candidate_views(
+    pub(crate) fn candidate_views(
         &mut self,
         frontiers: &[Frontier],
         goals: &[Option<Cell>],
@@ -645,7 +666,7 @@ impl Explorer {
     }
 
     /// The decision as a policy with `needs` sees it, with `views` for its candidates.
-    pub(super) fn decision_view<'v>(
+    pub(crate) fn decision_view<'v>(
         &'v self,
         views: &'v [CandidateView],
         asked: &Asked,
@@ -681,7 +702,7 @@ impl Explorer {
     /// whose gap left is smallest wins (the first among equals). Scans from there often open the
     /// doorway; if not, the frontier is looked into from there and given up as any other.
     /// Returns the frontier's index, the goal (map cell) and the path's waypoints.
-    pub(super) fn approach(
+    pub(crate) fn approach(
         &mut self,
         frontiers: &[Frontier],
         goals: &[Option<Cell>],
@@ -736,11 +757,11 @@ impl Explorer {
 
 /// Least baseline gain (m2) of a frontier worth a closer look (see `Explorer::approach`): two
 /// square metres, about what a doorway's view adds at once; slivers and corners add less.
-pub(super) const CLOSER_LOOK_MIN_GAIN_M2: f64 = 2.0;
+pub(crate) const CLOSER_LOOK_MIN_GAIN_M2: f64 = 2.0;
 
 /// A policy's answer as a decision uses it: one candidate (the next best is asked for when it
 /// has no path), a ranking (the first with a path), a point of its own, none, or stop.
-pub(super) enum Answer {
+pub(crate) enum Answer {
     One(usize),
     Ranked(Vec<usize>),
     Point(Vec2),
@@ -751,7 +772,7 @@ pub(super) enum Answer {
 
 /// Where a decision stands after a step: the policy is asked (the question in [`Deciding`]),
 /// or the decision is made.
-pub(super) enum Step {
+pub(crate) enum Step {
     /// The policy is asked: see `Explorer::reply`.
     Ask(Box<Deciding>),
     /// Decided: whether a goal was set (false: no reachable candidate is left, or the strategy
@@ -763,9 +784,9 @@ pub(super) enum Step {
 /// goal cells and the plan at the planning level in use (`Explorer::begin_level`), the round of
 /// asking (`begin_round`: the scores, the attempt) and the question put (`ask`).
 #[derive(Clone)]
-pub(super) struct Deciding {
+pub(crate) struct Deciding {
     /// The goals given up had another chance before this decision (`Explorer::forgive`).
-    pub(super) forgiven: bool,
+    pub(crate) forgiven: bool,
     frontiers: Vec<Frontier>,
     goals: Vec<Option<Cell>>,
     /// Whether a built-in strategy's gains use the layout now.
@@ -781,9 +802,9 @@ pub(super) struct Deciding {
     /// Goal points of the policy's own without a path in this round.
     unreachable_goals: usize,
     /// The question put: how, the candidates shown, the paths between them.
-    pub(super) asked: Asked,
-    pub(super) views: Vec<CandidateView>,
-    pub(super) between: Option<Vec<f64>>,
+    pub(crate) asked: Asked,
+    pub(crate) views: Vec<CandidateView>,
+    pub(crate) between: Option<Vec<f64>>,
 }
 
 impl Deciding {
@@ -793,7 +814,7 @@ impl Deciding {
 
     /// The question as a policy with `needs` would be shown it (`views`, `between`), for a run
     /// that shares this one's state (see `shared`).
-    pub(super) fn show(
+    pub(crate) fn show(
         &self,
         ex: &mut Explorer,
         needs: Needs,
@@ -846,16 +867,16 @@ struct Recorded {
 /// How a policy is asked within one decision: the attempt, whether a built-in strategy uses the
 /// layout now, and the goal point of the previous attempt that had no path.
 #[derive(Debug, Clone, Default)]
-pub(super) struct Asked {
-    pub(super) attempt: usize,
-    pub(super) use_layout: bool,
-    pub(super) unreachable_goal: Option<Vec2>,
+pub(crate) struct Asked {
+    pub(crate) attempt: usize,
+    pub(crate) use_layout: bool,
+    pub(crate) unreachable_goal: Option<Vec2>,
 }
 
 /// A frontier whose middle cell is blacklisted, with its candidate moved to the cell nearest to
 /// the middle outside every blacklisted radius (the first in row-major order among equals), or
 /// `None` when every cell is blacklisted.
-pub(super) fn outside_blacklist(
+pub(crate) fn outside_blacklist(
     mut f: Frontier,
     blacklist: &Blacklist,
     frame: &GridFrame,
@@ -875,7 +896,7 @@ pub(super) fn outside_blacklist(
 
 /// The outward side of a frontier: the mean of the unit steps from its cells to their unknown
 /// 4-neighbours, normalised (`None` when they cancel out or there are none).
-pub(super) fn unknown_side(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
+pub(crate) fn unknown_side(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
     let mut sum = Vec2::zeros();
     for c in cells {
         for nb in c.neighbours4() {
@@ -888,7 +909,7 @@ pub(super) fn unknown_side(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2>
 }
 
 /// Centre of the unknown cells next to a frontier.
-pub(super) fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
+pub(crate) fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<Vec2> {
     let mut sum = Vec2::zeros();
     let mut n = 0usize;
     for c in cells {
@@ -905,7 +926,7 @@ pub(super) fn unknown_centroid(grid: &OccupancyGrid, cells: &[Cell]) -> Option<V
 /// The paper's `I(p)` ([`layout_information_gain`]) through the cache: a candidate the layout
 /// leaves with the plain gain (in a room with an open frontier, or outside every room) reads the
 /// plain gain, which a new layout does not make stale.
-pub(super) fn layout_gain_cached(
+pub(crate) fn layout_gain_cached(
     gains: &mut GainCache,
     grid: &OccupancyGrid,
     raster: &LayoutRaster,

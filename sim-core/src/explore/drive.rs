@@ -1,0 +1,106 @@
+//! The drivers of a run over an [`Episode`]: [`explore`], [`explore_charged`], [`explore_with`].
+
+use crate::explore::policy::Policy;
+
+use crate::explore::strategy::BuiltInPolicy;
+
+use crate::building::Building;
+use crate::explore::config::ExploreConfig;
+use crate::explore::episode::{Episode, Event};
+use crate::explore::explorer::LayoutCost;
+use crate::explore::run::{ProgressSample, RunResult};
+use crate::geom::Pose;
+
+/// Runs one exploration. `on_progress` sees every progress sample as it is made (for a
+/// progress bar); it must not affect the run. Layouts are computed "in the background" (no delay
+/// to the robot), as in the paper; see [`explore_charged`] to charge their cost.
+pub fn explore(
+    building: &Building,
+    start: Pose,
+    cfg: &ExploreConfig,
+    seed: u64,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+) -> RunResult {
+    explore_charged(building, start, cfg, seed, on_progress, None)
+}
+
+/// [`explore`], with the cost of every layout computation charged to simulated time when
+/// `layout_cost` is given: the robot stands still (sensing) for the seconds it returns, right
+/// after the decision that needed the layout. The core has no clock, so the caller measures;
+/// a run charged with measured wall time depends on the machine and is no longer reproducible.
+pub fn explore_charged(
+    building: &Building,
+    start: Pose,
+    cfg: &ExploreConfig,
+    seed: u64,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+    layout_cost: Option<LayoutCost>,
+) -> RunResult {
+    let hooks = Hooks {
+        layout_cost,
+        policy: None,
+    };
+    explore_with(building, start, cfg, seed, on_progress, hooks)
+}
+
+/// What a caller can plug into a run besides its settings.
+#[derive(Default)]
+pub struct Hooks<'a> {
+    /// Measures each layout computation, to charge its cost (see [`explore_charged`]).
+    pub layout_cost: Option<LayoutCost>,
+    /// Chooses the candidates in place of the configured strategy (whose gain model and early
+    /// stop still apply: give it [`Strategy::baseline`] for the plain gains and no early stop).
+    pub policy: Option<&'a mut dyn Policy>,
+}
+
+impl std::fmt::Debug for Hooks<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Hooks")
+            .field("layout_cost", &self.layout_cost.is_some())
+            .field("policy", &self.policy.as_ref().map(|p| p.needs()))
+            .finish()
+    }
+}
+
+/// [`explore`] with the caller's [`Hooks`]: an [`Episode`] driven to its end, its decisions
+/// answered by the caller's policy or the strategy's built-in rule.
+pub fn explore_with(
+    building: &Building,
+    start: Pose,
+    cfg: &ExploreConfig,
+    seed: u64,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+    hooks: Hooks<'_>,
+) -> RunResult {
+    let Hooks {
+        layout_cost,
+        policy,
+    } = hooks;
+    let mut built_in;
+    let (policy, caller): (&mut dyn Policy, _) = match policy {
+        Some(p) => {
+            let needs = p.needs();
+            (p, Some(needs))
+        }
+        None => {
+            built_in = BuiltInPolicy::new(&cfg.strategy, seed);
+            (&mut built_in, None)
+        }
+    };
+    let mut episode = Episode::build(building, start, cfg.clone(), seed, caller, layout_cost);
+    loop {
+        match episode.advance() {
+            Event::Decide(robot) => {
+                let (reply, charged_s) = match episode.view(robot) {
+                    Some(view) => policy.decide(&view),
+                    None => unreachable!("a decision is pending"),
+                };
+                let answered = episode.answer_charged(robot, reply, charged_s);
+                debug_assert!(answered.is_ok());
+            }
+            Event::Progress(sample) => on_progress(&sample),
+            Event::Ended(end) => policy.end(&end),
+            Event::Finished => return episode.into_result().expect("a finished run has a result"),
+        }
+    }
+}

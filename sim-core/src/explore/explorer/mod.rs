@@ -1,0 +1,221 @@
+//! The state of one exploration ([`Explorer`]), driven by an [`super::Episode`]; its behaviour in
+//! the child modules: `sensing`, `deciding`, `driving`, `layout`, `scoring`.
+
+use crate::explore::policy::Policy;
+use crate::explore::strategy::BuiltInPolicy;
+
+use crate::building::Building;
+use crate::explore::config::{map_frame, ExploreConfig};
+use crate::explore::follow::PathFollower;
+use crate::explore::gain_cache::GainCache;
+use crate::explore::layout_state::LayoutState;
+use crate::explore::localization::Localizer;
+use crate::explore::navigation::Navigator;
+use crate::explore::policy::Needs;
+use crate::explore::referee::Referee;
+use crate::explore::run::{Decision, MapSnapshot, ProgressSample};
+use crate::frontier::blacklist::Blacklist;
+use crate::frontier::detect::FrontierTracker;
+use crate::geom::{Pose, Vec2};
+use crate::grid::{Bitmap, Cell, GridFrame};
+use crate::mapping::distance_field::ObstacleDistance;
+use crate::mapping::log_odds::LogOddsMap;
+use crate::sim::Simulator;
+use std::sync::Arc;
+
+pub(crate) mod deciding;
+pub(crate) mod driving;
+mod layout;
+mod scoring;
+mod sensing;
+
+/// A caller's measure of the layout's compute cost: it is given the computation, must run it
+/// once, and returns the seconds to charge (e.g. the wall time it took).
+pub type LayoutCost = Box<dyn FnMut(&mut dyn FnMut()) -> f64 + Send>;
+
+/// The mutable state of one exploration (driven by an [`Episode`]).
+pub(crate) struct Explorer {
+    pub(crate) cfg: Arc<ExploreConfig>,
+    pub(crate) seed: u64,
+    pub(crate) sim: Simulator,
+    pub(crate) map: LogOddsMap,
+    pub(crate) obstacles: ObstacleDistance,
+    /// Ground truth and the run's score (see `referee`).
+    pub(crate) referee: Referee,
+    /// Map cells observed (free or occupied) so far.
+    pub(crate) known: Bitmap,
+    /// The map cells the last update made known (a buffer kept between updates).
+    pub(crate) fresh_known: Vec<usize>,
+    /// The pose estimate (see `localization`).
+    pub(crate) localizer: Localizer,
+    pub(crate) blacklist: Blacklist,
+    /// The goal reached (and looked at) just before the current decision.
+    pub(crate) last_reached: Option<Vec2>,
+    pub(crate) follower: PathFollower,
+    pub(crate) goal: Option<Goal>,
+    pub(crate) decisions: Vec<Decision>,
+    pub(crate) progress: Vec<ProgressSample>,
+    pub(crate) trajectory: Vec<Pose>,
+    pub(crate) plans: u64,
+    /// Candidates' gains of every kind (the paper's room-bounded `I(p)` for ranking and early
+    /// stopping among them).
+    pub(crate) gains: GainCache,
+    pub(crate) next_progress_s: f64,
+    /// Cells of the map that are known (free or occupied), counted from the map's own changes.
+    pub(crate) known_cells: usize,
+    pub(crate) layout: Option<LayoutState>,
+    pub(crate) layouts_computed: u64,
+    pub(crate) layout_cost: Option<LayoutCost>,
+    /// Charged layout compute time the robot still has to wait for (s).
+    pub(crate) compute_debt_s: f64,
+    /// Layout compute time charged so far (s).
+    pub(crate) layout_compute_s: f64,
+    /// What the policy needs computed, whether it is the caller's (not the strategy's rule: it is
+    /// then shown the layout's gains whenever it needs them), how often it was asked, whether it
+    /// failed, and its compute time charged so far (s).
+    pub(crate) policy_needs: Needs,
+    pub(crate) caller_decides: bool,
+    pub(crate) policy_decisions: usize,
+    pub(crate) policy_failed: bool,
+    pub(crate) strategy_compute_s: f64,
+    /// Where the robot has stayed (within `STILL_RADIUS_M`) since `still_since_s`.
+    pub(crate) still_at: Vec2,
+    pub(crate) still_since_s: f64,
+    /// For the switch strategy: the layout has been judged reliable.
+    pub(crate) layout_trusted: bool,
+    pub(crate) stopped_early: bool,
+    pub(crate) start: Pose,
+    pub(crate) snapshots: Vec<MapSnapshot>,
+    /// The map's frontier cells, updated with each map update.
+    pub(crate) frontiers: FrontierTracker,
+    /// The planning grids and path search (see `navigation`).
+    pub(crate) nav: Navigator,
+    /// `known_cells` when goals given up were last given another chance (see `forgive`).
+    pub(crate) forgiven_at: Option<usize>,
+    /// Frontier cells left at the end that the robot had not looked into (see `classify_end`).
+    pub(crate) frontier_cells_left: usize,
+}
+
+#[derive(Clone)]
+pub(crate) struct Goal {
+    /// Where the robot drives: the candidate, or the nearest traversable cell to it.
+    pub(crate) cell: Cell,
+    /// The frontier's candidate (its middle cell). Blacklisting applies to candidates, so it
+    /// is recorded here: the goal cell may lie farther from it than the blacklist radius, and
+    /// blacklisting the goal cell would then leave the candidate to be chosen again forever.
+    pub(crate) candidate: Cell,
+    /// Where the unknown space behind the frontier is: the robot faces it on arrival, so that its
+    /// forward-looking laser sees it.
+    pub(crate) look_at: Vec2,
+    /// The frontier's outward side (unit vector from its cells to their unknown neighbours, on
+    /// average): faced instead when `look_at` is where the robot stands (`robust_frontiers`).
+    pub(crate) look_dir: Option<Vec2>,
+    pub(crate) arrived: bool,
+    /// Cells of the frontier it was chosen for.
+    pub(crate) frontier: Vec<Cell>,
+    pub(crate) decided_at_s: f64,
+    /// `Explorer::known_cells` when decided.
+    pub(crate) known_cells_at: usize,
+    /// Shortest path length left seen so far, and when.
+    pub(crate) best_distance_m: f64,
+    pub(crate) best_distance_at_s: f64,
+}
+
+/// The state of a run at its start: `caller` holds the needs of the caller's policy (`None`:
+/// the strategy's rule decides).
+pub(crate) fn new_explorer(
+    building: &Building,
+    start: Pose,
+    cfg: Arc<ExploreConfig>,
+    seed: u64,
+    caller: Option<Needs>,
+    layout_cost: Option<LayoutCost>,
+) -> Explorer {
+    let policy_needs = match caller {
+        Some(needs) => needs,
+        None => built_in_needs(&BuiltInPolicy::new(&cfg.strategy, seed), &cfg),
+    };
+    let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
+    let referee = new_referee(building, frame, start, &cfg);
+    let cap_cells =
+        (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
+            .max(8)
+            .max((cfg.frontier_clearance_m / cfg.map_resolution_m).ceil() as u32 + 1);
+    let sim = Simulator::new(building, start, &cfg.sim, seed);
+    Explorer {
+        seed,
+        localizer: Localizer::new(start, sim.odometry(), &cfg),
+        sim,
+        map: LogOddsMap::new(frame),
+        obstacles: ObstacleDistance::new(frame, cap_cells),
+        referee,
+        known: Bitmap::filled(frame, false),
+        fresh_known: Vec::new(),
+        blacklist: Blacklist::new(),
+        last_reached: None,
+        follower: PathFollower::default(),
+        goal: None,
+        decisions: Vec::new(),
+        progress: Vec::new(),
+        trajectory: Vec::new(),
+        plans: 0,
+        gains: GainCache::new(frame),
+        next_progress_s: 0.0,
+        known_cells: 0,
+        layout: None,
+        layouts_computed: 0,
+        still_at: start.position(),
+        still_since_s: 0.0,
+        layout_cost,
+        compute_debt_s: 0.0,
+        layout_compute_s: 0.0,
+        policy_needs,
+        caller_decides: caller.is_some(),
+        policy_decisions: 0,
+        policy_failed: false,
+        strategy_compute_s: 0.0,
+        layout_trusted: false,
+        stopped_early: false,
+        start,
+        snapshots: Vec::new(),
+        frontiers: FrontierTracker::default(),
+        nav: Navigator::new(frame, cfg.sim.robot.radius_m, cfg.safety_margin_m),
+        forgiven_at: None,
+        frontier_cells_left: 0,
+        cfg,
+    }
+}
+
+/// The referee of a run from `start` in `building` on the map's `frame`: the free space the
+/// robot can reach and the part of it it can explore, nothing explored yet.
+fn new_referee(building: &Building, frame: GridFrame, start: Pose, cfg: &ExploreConfig) -> Referee {
+    let free = building.reachable_free(frame, start.position());
+    let truth = crate::building::explorable_free(
+        &free,
+        start.position(),
+        cfg.sim.robot.radius_m + cfg.safety_margin_m,
+        cfg.sim.laser.max_range_m,
+    );
+    let truth_cells = truth.count_true();
+    Referee {
+        truth,
+        free,
+        truth_cells,
+        explored_cells: 0,
+        explored: Bitmap::filled(frame, false),
+        untestable: Bitmap::filled(frame, false),
+        untestable_list: Vec::new(),
+        rooms: building.rooms.iter().map(|r| r.polygon.clone()).collect(),
+        doors: building.doors.iter().map(|d| (d.a, d.b)).collect(),
+    }
+}
+
+/// What a built-in strategy's rule needs: the paper's I(p) only when the strategy uses the
+/// layout; the layout's rooms when its choice asks for them (`room-first`).
+pub(crate) fn built_in_needs(policy: &BuiltInPolicy, cfg: &ExploreConfig) -> Needs {
+    Needs {
+        layout_gain: policy.needs().layout_gain && cfg.strategy.uses_layout(),
+        layout: policy.needs().layout,
+        paths_between: policy.needs().paths_between,
+    }
+}
