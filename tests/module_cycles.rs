@@ -298,6 +298,62 @@ fn no_module_imports_its_parent_with_a_glob() {
     );
 }
 
+/// The functions of `text` (its tests left out, comments counted) longer than `max` lines, from
+/// `fn` to its closing brace: each as its name and length.
+fn long_functions(text: &str, max: usize) -> Vec<(String, usize)> {
+    let lines: Vec<(usize, &str)> = text.lines().enumerate().collect();
+    let code: BTreeSet<usize> = common::code_lines(text)
+        .iter()
+        .map(|(n, _)| n - 1)
+        .collect();
+    let mut out = Vec::new();
+    for &(i, l) in &lines {
+        let t = l.trim_start();
+        let head = t
+            .trim_start_matches("pub(crate) ")
+            .trim_start_matches("pub(super) ")
+            .trim_start_matches("pub ")
+            .trim_start_matches("const ")
+            .trim_start_matches("async ");
+        let Some(rest) = head.strip_prefix("fn ") else {
+            continue;
+        };
+        if !code.contains(&i) || l.trim_end().ends_with(';') {
+            continue;
+        }
+        let indent = &l[..l.len() - t.len()];
+        let close = format!("{indent}}}");
+        if let Some(end) = lines[i + 1..].iter().position(|(_, m)| *m == close) {
+            let n = end + 2;
+            if n > max {
+                let name: String = rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                out.push((name, n));
+            }
+        }
+    }
+    out
+}
+
+/// No function of sim-core (the kernel every run goes through) is over 100 lines, its tests
+/// aside.
+#[test]
+fn no_function_of_sim_core_is_over_100_lines() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut long = Vec::new();
+    for (module, file) in modules(&root.join("sim-core/src")) {
+        for (name, n) in long_functions(&std::fs::read_to_string(&file).unwrap(), 100) {
+            long.push(format!("{}::{name} ({n} lines)", module.join("::")));
+        }
+    }
+    assert!(long.is_empty(), "functions over 100 lines: {long:?}");
+    let body = (0..101).map(|_| "    x();\n").collect::<String>();
+    let text = format!("pub fn long() {{\n{body}}}\n\nfn short() {{\n}}\n");
+    assert_eq!(long_functions(&text, 100), vec![("long".to_string(), 103)]);
+}
+
 /// The strict rule finds a root and its child using each other, and ignores re-exports.
 #[test]
 fn the_strict_rule_sees_a_root_and_its_children() {

@@ -1167,10 +1167,20 @@ pub fn lower_bound(
         return zero;
     }
     let rho = range_m + res * std::f64::consts::SQRT_2 / 2.0 + r_cells as f64 * res;
-    let at = |c: Cell| frame.world_from_cell(c);
-    let s = start.position();
-    // Farthest first from the start and the centres chosen.
-    let mut nearest: Vec<f64> = valid.iter().map(|c| (at(*c) - s).norm()).collect();
+    let valid: Vec<Vec2> = valid.iter().map(|c| frame.world_from_cell(*c)).collect();
+    let (best, best_k) = farthest_first_tree(start.position(), &valid, rho);
+    LowerBound {
+        length_m: best,
+        time_s: best / cfg.sim.robot.max_speed_mps,
+        regions: best_k,
+    }
+}
+
+/// The longest of the minimum spanning trees (see [`spanning_tree`]) of the start `s` and discs
+/// of radius `rho` round the first k centres, for k up to 48, the centres taken from `valid`
+/// farthest first from the start and the centres already taken; with that k.
+fn farthest_first_tree(s: Vec2, valid: &[Vec2], rho: f64) -> (f64, usize) {
+    let mut nearest: Vec<f64> = valid.iter().map(|c| (*c - s).norm()).collect();
     let mut centres: Vec<Vec2> = Vec::new();
     let mut best = 0.0f64;
     let mut best_k = 0;
@@ -1185,21 +1195,17 @@ pub fn lower_bound(
         if d <= 0.0 {
             break;
         }
-        let c = at(valid[i]);
+        let c = valid[i];
         centres.push(c);
         for (j, v) in valid.iter().enumerate() {
-            nearest[j] = nearest[j].min((at(*v) - c).norm());
+            nearest[j] = nearest[j].min((*v - c).norm());
         }
         let mst = spanning_tree(s, &centres, rho);
         if mst > best {
             (best, best_k) = (mst, centres.len());
         }
     }
-    LowerBound {
-        length_m: best,
-        time_s: best / cfg.sim.robot.max_speed_mps,
-        regions: best_k,
-    }
+    (best, best_k)
 }
 
 /// The minimum spanning tree's length over the start (node 0) and discs of radius `rho`

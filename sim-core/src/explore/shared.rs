@@ -81,58 +81,27 @@ pub fn explore_shared(
     }
     let mut leader = Episode::new(building, start, cfgs[0].clone(), seed);
     let mut policy = BuiltInPolicy::new(&cfgs[0].strategy, seed);
-    let mut members: Vec<Member> = cfgs[1..]
-        .iter()
-        .enumerate()
-        .map(|(k, cfg)| {
-            let policy = BuiltInPolicy::new(&cfg.strategy, seed);
-            Member {
-                index: k + 1,
-                cfg: cfg.clone(),
-                needs: built_in_needs(&policy, cfg),
-                policy_at_checkpoint: policy.clone(),
-                policy,
-                parted: None,
-            }
-        })
-        .collect();
+    let mut together = Together {
+        members: cfgs[1..]
+            .iter()
+            .enumerate()
+            .map(|(k, cfg)| Member::new(k + 1, cfg, seed))
+            .collect(),
+        checkpoint: None,
+        checkpoint_decisions: 0,
+    };
     let mut out: Vec<Option<(RunResult, f64)>> = (0..cfgs.len()).map(|_| None).collect();
-    // The leader's state at a decision when last copied, and the clock and decisions then.
-    let mut checkpoint: Option<(Rc<Episode>, f64)> = None;
-    let mut checkpoint_decisions = 0;
     // The clock when the leader's exploration ended, and when its own ending began.
     let (mut shared_s, mut own_s) = (0.0, 0.0);
     loop {
         match leader.advance() {
             Event::Decide(robot) => {
-                let asked = leader.ex.policy_decisions;
-                let following = members.iter().any(|m| m.parted.is_none());
-                let due =
-                    checkpoint.is_none() || asked >= checkpoint_decisions + CHECKPOINT_DECISIONS;
-                if following && due {
-                    // (The previous copy dropped first, unless a member that parted holds it:
-                    // two copies of a large map at once are a lot.)
-                    drop(checkpoint.take());
-                    checkpoint = Some((Rc::new(leader.fork(&cfgs[0])), clock()));
-                    checkpoint_decisions = asked;
-                    for m in members.iter_mut().filter(|m| m.parted.is_none()) {
-                        m.policy_at_checkpoint = m.policy.clone();
-                    }
-                }
+                together.checkpoint_if_due(&leader, &cfgs[0], clock);
                 let (reply, charged_s) = match leader.view(robot) {
                     Some(view) => policy.decide(&view),
                     None => unreachable!("a decision is pending"),
                 };
-                // Every member still following is asked the same with the candidates as it
-                // sees them; those whose reply differs part.
-                for m in members.iter_mut().filter(|m| m.parted.is_none()) {
-                    if leader.ask_alongside(&mut m.policy, m.needs) != reply {
-                        let (from, at_s) = checkpoint
-                            .clone()
-                            .expect("a checkpoint is taken at the first decision");
-                        m.parted = Some((from, m.policy_at_checkpoint.clone(), at_s));
-                    }
-                }
+                together.ask_members(&mut leader, &reply);
                 let answered = leader.answer_charged(robot, reply, charged_s);
                 debug_assert!(answered.is_ok());
             }
@@ -141,7 +110,7 @@ pub fn explore_shared(
                 // The members that never parted: the leader's run up to its end, then their
                 // own ending.
                 shared_s = clock();
-                for m in members.iter_mut().filter(|m| m.parted.is_none()) {
+                for m in together.following() {
                     let t0 = clock();
                     let r = finish_alone(leader.fork(&m.cfg), &mut m.policy);
                     out[m.index] = Some((r, shared_s + clock() - t0));
@@ -154,7 +123,7 @@ pub fn explore_shared(
     let r = leader.into_result().expect("a finished run has a result");
     out[0] = Some((r, shared_s + clock() - own_s));
     // The others from the copy made before they parted.
-    for m in members {
+    for m in together.members {
         if let Some((from, mut policy, at_s)) = m.parted {
             let t0 = clock();
             let r = finish_alone(from.fork(&m.cfg), &mut policy);
@@ -164,6 +133,75 @@ pub fn explore_shared(
     out.into_iter()
         .map(|r| r.expect("every run made"))
         .collect()
+}
+
+/// The members of a shared run, and the leader's last checkpoint.
+struct Together {
+    members: Vec<Member>,
+    /// The leader's state at a decision when last copied, and the clock then.
+    checkpoint: Option<(Rc<Episode>, f64)>,
+    /// The leader's decisions asked at that copy.
+    checkpoint_decisions: usize,
+}
+
+impl Together {
+    /// The members still following the leader.
+    fn following(&mut self) -> impl Iterator<Item = &mut Member> {
+        self.members.iter_mut().filter(|m| m.parted.is_none())
+    }
+
+    /// At a decision of the `leader` (settings `cfg`): a copy of its state for the members
+    /// still following, every [`CHECKPOINT_DECISIONS`] decisions (and at the first).
+    fn checkpoint_if_due(
+        &mut self,
+        leader: &Episode,
+        cfg: &ExploreConfig,
+        clock: &mut dyn FnMut() -> f64,
+    ) {
+        let asked = leader.ex.policy_decisions;
+        let due =
+            self.checkpoint.is_none() || asked >= self.checkpoint_decisions + CHECKPOINT_DECISIONS;
+        if !due || self.following().next().is_none() {
+            return;
+        }
+        // (The previous copy dropped first, unless a member that parted holds it: two copies
+        // of a large map at once are a lot.)
+        drop(self.checkpoint.take());
+        self.checkpoint = Some((Rc::new(leader.fork(cfg)), clock()));
+        self.checkpoint_decisions = asked;
+        for m in self.following() {
+            m.policy_at_checkpoint = m.policy.clone();
+        }
+    }
+
+    /// Every member still following is asked the decision pending with the candidates as it
+    /// sees them; those whose reply differs from the leader's `reply` part.
+    fn ask_members(&mut self, leader: &mut Episode, reply: &Reply) {
+        let checkpoint = self.checkpoint.clone();
+        for m in self.following() {
+            if leader.ask_alongside(&mut m.policy, m.needs) != *reply {
+                let (from, at_s) = checkpoint
+                    .clone()
+                    .expect("a checkpoint is taken at the first decision");
+                m.parted = Some((from, m.policy_at_checkpoint.clone(), at_s));
+            }
+        }
+    }
+}
+
+impl Member {
+    /// Member `index` of the shared run, with settings `cfg`.
+    fn new(index: usize, cfg: &ExploreConfig, seed: u64) -> Member {
+        let policy = BuiltInPolicy::new(&cfg.strategy, seed);
+        Member {
+            index,
+            cfg: cfg.clone(),
+            needs: built_in_needs(&policy, cfg),
+            policy_at_checkpoint: policy.clone(),
+            policy,
+            parted: None,
+        }
+    }
 }
 
 /// Drives `episode` to its end, its decisions answered by `policy`.

@@ -119,41 +119,10 @@ pub fn predict_rooms(
                 .chain(&plan.rooms[r].predicted)
                 .copied()
                 .collect();
-            let is_cand = |f: u32, plan: &RoomPlan| {
-                f != NO_FACE && plan.candidate[f as usize] && plan.face_room[f as usize] == NO_ROOM
-            };
-            // First ring.
-            let mut ring: Vec<u32> = Vec::new();
-            for &f in &base {
-                for &e in &arr.faces[f as usize].edges {
-                    let o = arr.other_face(e, f);
-                    if open(e) && is_cand(o, plan) {
-                        ring.push(o);
-                    }
-                }
-            }
-            ring.sort_unstable();
-            ring.dedup();
-            if ring.is_empty() {
+            let Some((ring, cands)) =
+                growth_candidates(arr, plan, &base, &open, config.max_exhaustive_candidates)
+            else {
                 break;
-            }
-            // Breadth-first beyond the ring, while few enough for all subsets.
-            let mut all = ring.clone();
-            let mut head = 0;
-            while head < all.len() && all.len() <= config.max_exhaustive_candidates {
-                let f = all[head];
-                head += 1;
-                for &e in &arr.faces[f as usize].edges {
-                    let o = arr.other_face(e, f);
-                    if open(e) && is_cand(o, plan) && !all.contains(&o) {
-                        all.push(o);
-                    }
-                }
-            }
-            let cands = if all.len() <= config.max_exhaustive_candidates {
-                all
-            } else {
-                ring.clone()
             };
             let base_area: f64 = base.iter().map(|f| arr.faces[*f as usize].area_m2).sum();
             let mut base_pts: Vec<Vec2> = base
@@ -200,6 +169,52 @@ pub fn predict_rooms(
             plan.rooms[r].predicted.extend(chosen);
         }
     }
+}
+
+/// The faces a partial room with faces `base` may grow into: the first ring of candidate faces
+/// (in no room yet) across open edges, and the candidates to choose from: the ring and the faces
+/// beyond it breadth-first while they are at most `max` (for all subsets), else the ring alone.
+/// `None` when the ring is empty.
+fn growth_candidates(
+    arr: &Arrangement,
+    plan: &RoomPlan,
+    base: &[u32],
+    open: &impl Fn(u32) -> bool,
+    max: usize,
+) -> Option<(Vec<u32>, Vec<u32>)> {
+    let is_cand = |f: u32, plan: &RoomPlan| {
+        f != NO_FACE && plan.candidate[f as usize] && plan.face_room[f as usize] == NO_ROOM
+    };
+    // First ring.
+    let mut ring: Vec<u32> = Vec::new();
+    for &f in base {
+        for &e in &arr.faces[f as usize].edges {
+            let o = arr.other_face(e, f);
+            if open(e) && is_cand(o, plan) {
+                ring.push(o);
+            }
+        }
+    }
+    ring.sort_unstable();
+    ring.dedup();
+    if ring.is_empty() {
+        return None;
+    }
+    // Breadth-first beyond the ring, while few enough for all subsets.
+    let mut all = ring.clone();
+    let mut head = 0;
+    while head < all.len() && all.len() <= max {
+        let f = all[head];
+        head += 1;
+        for &e in &arr.faces[f as usize].edges {
+            let o = arr.other_face(e, f);
+            if open(e) && is_cand(o, plan) && !all.contains(&o) {
+                all.push(o);
+            }
+        }
+    }
+    let cands = if all.len() <= max { all } else { ring.clone() };
+    Some((ring, cands))
 }
 
 /// The points of `pts` on their convex hull (enough to compute hulls of supersets).

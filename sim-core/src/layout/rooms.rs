@@ -148,38 +148,7 @@ pub fn group_rooms(
         })
         .collect();
     diag.inside_faces = inside.iter().filter(|b| **b).count();
-    let mut parent: Vec<u32> = (0..nf as u32).collect();
-    for e in &arr.edges {
-        let [a, b] = e.faces;
-        if e.wall_fraction >= config.wall_edge_threshold {
-            diag.wall_edges += (b != NO_FACE) as usize;
-            continue;
-        }
-        if b == NO_FACE || !inside[a as usize] || !inside[b as usize] {
-            continue;
-        }
-        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-        if ra != rb {
-            // Union by smaller index keeps the result independent of edge order.
-            let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-            parent[hi as usize] = lo;
-        }
-    }
-    let mut face_room = vec![NO_ROOM; nf];
-    let mut root_room: BTreeMap<u32, u32> = BTreeMap::new();
-    let mut rooms: Vec<PlanRoom> = Vec::new();
-    for fi in 0..nf as u32 {
-        if !inside[fi as usize] {
-            continue;
-        }
-        let r = find(&mut parent, fi);
-        let id = *root_room.entry(r).or_insert_with(|| {
-            rooms.push(PlanRoom::default());
-            (rooms.len() - 1) as u32
-        });
-        rooms[id as usize].faces.push(fi);
-        face_room[fi as usize] = id;
-    }
+    let (mut rooms, face_room) = join_inside_faces(arr, &inside, config, diag);
     // Partial rooms: holding at least a fraction of a frontier cluster.
     let mut counts: BTreeMap<u32, usize> = BTreeMap::new();
     for c in &clusters {
@@ -223,6 +192,51 @@ pub fn group_rooms(
         face_room,
         candidate,
     }
+}
+
+/// The rooms made of the faces `inside` that share an edge with less wall than
+/// `wall_edge_threshold` (union-find, the smaller index the root), each face's room
+/// (`NO_ROOM` outside), and the wall edges counted into `diag`.
+fn join_inside_faces(
+    arr: &Arrangement,
+    inside: &[bool],
+    config: &LayoutConfig,
+    diag: &mut LayoutDiagnostics,
+) -> (Vec<PlanRoom>, Vec<u32>) {
+    let nf = arr.faces.len();
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
+    for e in &arr.edges {
+        let [a, b] = e.faces;
+        if e.wall_fraction >= config.wall_edge_threshold {
+            diag.wall_edges += (b != NO_FACE) as usize;
+            continue;
+        }
+        if b == NO_FACE || !inside[a as usize] || !inside[b as usize] {
+            continue;
+        }
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        if ra != rb {
+            // Union by smaller index keeps the result independent of edge order.
+            let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
+            parent[hi as usize] = lo;
+        }
+    }
+    let mut face_room = vec![NO_ROOM; nf];
+    let mut root_room: BTreeMap<u32, u32> = BTreeMap::new();
+    let mut rooms: Vec<PlanRoom> = Vec::new();
+    for fi in 0..nf as u32 {
+        if !inside[fi as usize] {
+            continue;
+        }
+        let r = find(&mut parent, fi);
+        let id = *root_room.entry(r).or_insert_with(|| {
+            rooms.push(PlanRoom::default());
+            (rooms.len() - 1) as u32
+        });
+        rooms[id as usize].faces.push(fi);
+        face_room[fi as usize] = id;
+    }
+    (rooms, face_room)
 }
 
 /// The outline of a union of faces: edges between two faces of the set cancel, the rest are
