@@ -49,7 +49,10 @@ pub const FLOORCAST_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// bit as they were, and never mix two behaviours under one name. `tests/fingerprints.rs`
 /// records every reference run's fingerprint under its runs version and fails when a run changes
 /// without a new entry here (with a new crate version, CHANGELOG.md saying what changed).
-pub const RUNS_CHANGED: &[(&str, Option<&[&str]>)] = &[("0.7.0", None)];
+pub const RUNS_CHANGED: &[(&str, Option<&[&str]>)] = &[
+    ("0.7.0", None),
+    ("0.9.0", Some(&["layout-truth", "layout-truth-es"])),
+];
 
 /// The version in which the runs of `strategy` (a built-in's name, or anything else for an
 /// external program) last changed: the newest [`RUNS_CHANGED`] entry that names it or every run.

@@ -31,8 +31,9 @@
 //! [`explore_charged`] takes a caller's cost hook that times each layout computation
 //! (`--charge-compute`): the clock stays outside sim-core, and only such runs depend on the
 //! machine. The `layout-truth` oracle's layout is the building's true rooms moved into the map
-//! frame by the current pose error (`true_layout`), rasterised by `LayoutRaster::exact`; it is the
-//! only strategy whose decisions read ground truth.
+//! frame by the current pose error (`true_layout`), rasterised by `LayoutRaster::exact`, its walls
+//! opened at the true doors, where the building has no wall and where the robot has not seen
+//! them at a frontier (`referee`); it is the only strategy whose decisions read ground truth.
 //!
 //! These incremental structures (frontier tracker, gain cache, planning cells) change no result:
 //! runs are bit-identical to full recomputation.

@@ -1,6 +1,12 @@
+use crate::grid::OccupancyGrid;
+use crate::layout_gain::LayoutRaster;
+use crate::mapping::ray::{grid_from_world, walk_segment};
+
 use crate::building::Building;
 use crate::explore::explorer::{new_explorer, Goal};
-use crate::explore::referee::{open_true_doors, true_layout, MapToWorld};
+use crate::explore::referee::{
+    open_true_doors, open_unseen_walls, open_where_free, true_layout, MapToWorld,
+};
 use crate::frontier::blacklist::Blacklist;
 use crate::frontier::detect::Frontier;
 use crate::geom::{Pose, Vec2};
@@ -291,6 +297,144 @@ fn the_true_layout_opens_at_the_true_doors() {
     assert!(*walls
         .get(frame.cell_from_world(Vec2::new(2.0, 5.0)))
         .unwrap());
+}
+
+/// The oracle's layout walls open wherever the building's free space runs across a room's
+/// outline (rooms that meet with no wall and no door listed), in the map's frame, and stay
+/// closed along walls and the building's outside.
+#[test]
+fn the_true_layout_opens_where_the_building_has_no_wall() {
+    let frame = GridFrame::new(Vec2::new(0.0, 0.0), 0.05, 300, 300);
+    // Two rooms, one above the other, meeting along y = 5; a wall 0.15 m thick between them
+    // from x = 1 to x = 7, nothing from x = 7 to x = 11 (and no door listed).
+    let rooms = vec![
+        Polygon::rect(Vec2::new(1.0, 1.0), Vec2::new(11.0, 5.0)),
+        Polygon::rect(Vec2::new(1.0, 5.0), Vec2::new(11.0, 9.0)),
+    ];
+    let mut free = Bitmap::filled(frame, false);
+    for i in 0..free.data.len() {
+        let p = frame.world_from_cell(frame.cell_of_index(i));
+        let inside = (1.0..=11.0).contains(&p.x) && (1.0..=9.0).contains(&p.y);
+        let wall = p.x < 7.0 && (p.y - 5.0).abs() <= 0.075;
+        free.data[i] = inside && !wall;
+    }
+    // The estimate 0.5 m ahead of the truth along x: the map shows everything at x + 0.5.
+    let to_map = MapToWorld::new(&Pose::new(1.5, 1.0, 0.0), &Pose::new(1.0, 1.0, 0.0));
+    let layout = true_layout(&rooms, &to_map);
+    let mut walls = Bitmap::filled(frame, false);
+    for r in &layout.rooms {
+        for e in r.polygon.edges() {
+            let (a, b) = (grid_from_world(&frame, e.a), grid_from_world(&frame, e.b));
+            walk_segment(a, b, |c| {
+                walls.set(c, true);
+                true
+            });
+        }
+    }
+    let before = walls.clone();
+    open_where_free(&mut walls, &layout, &free, &to_map);
+    let at = |x: f64, y: f64| *walls.get(frame.cell_from_world(Vec2::new(x, y))).unwrap();
+    // Open where the rooms meet with no wall (map x 7.5 to 11.5).
+    for x in [8.0, 9.0, 10.0, 11.0] {
+        assert!(!at(x, 5.0), "open at x = {x}");
+    }
+    // Closed along the wall between them, and along the building's outside.
+    for x in [2.0, 4.0, 6.0, 7.3] {
+        assert!(at(x, 5.0), "wall at x = {x}");
+    }
+    for (x, y) in [(1.5, 3.0), (11.5, 3.0), (11.5, 7.0), (6.0, 1.0), (9.0, 9.0)] {
+        assert!(at(x, y), "outside wall at ({x}, {y})");
+    }
+    // Only cells of the shared outline's open stretch were opened: about 4 m of it.
+    let mut opened = 0;
+    for (i, (&was, &is)) in before.data.iter().zip(&walls.data).enumerate() {
+        if was && !is {
+            let p = frame.world_from_cell(frame.cell_of_index(i));
+            assert!(
+                (p.y - 5.0).abs() < 0.1 && (7.3..=11.6).contains(&p.x),
+                "at {p:?}"
+            );
+            opened += 1;
+        }
+        assert!(was || !is);
+    }
+    assert!((70..=85).contains(&opened), "{opened} cells opened");
+}
+
+/// The oracle's layout walls open where the robot's view ends at a wall it has not seen: a
+/// frontier running along a room's outline with no wall in the map. A candidate standing there
+/// beside a door, which through the true walls sees along their face and nothing of the room
+/// beyond, then sees into it. Where the map shows the wall, and along an unseen stretch no
+/// longer than a doorway, the walls stay.
+#[test]
+fn the_true_layout_opens_where_the_robot_has_not_seen_the_wall() {
+    let frame = GridFrame::new(Vec2::new(0.0, 0.0), 0.05, 240, 200);
+    // A hall above a room, their outlines along the two faces of a wall 0.15 m thick at
+    // y = 4.925, with a 0.9 m door from x = 1.5 to 2.4.
+    let rooms = vec![
+        Polygon::rect(Vec2::new(1.0, 5.0), Vec2::new(11.0, 9.0)),
+        Polygon::rect(Vec2::new(1.0, 1.0), Vec2::new(11.0, 4.85)),
+    ];
+    let door = (Vec2::new(1.5, 4.925), Vec2::new(2.4, 4.925));
+    let same = Pose::new(1.0, 1.0, 0.0);
+    let to_map = MapToWorld::new(&same, &same);
+    let layout = true_layout(&rooms, &to_map);
+    // The map: the hall seen free, its outer walls seen, and the wall below it only grazed by
+    // the laser (unknown beyond the free cells), except from x = 7 to 11 where it was seen, bar
+    // a 0.5 m gap at x = 9.
+    let mut grid = OccupancyGrid::filled(frame, Occupancy::Unknown);
+    for i in 0..grid.data.len() {
+        let p = frame.world_from_cell(frame.cell_of_index(i));
+        let hall = (1.0..11.0).contains(&p.x) && (5.05..9.0).contains(&p.y);
+        let around = (0.9..11.1).contains(&p.x) && (5.05..9.1).contains(&p.y);
+        let seen_wall =
+            (7.0..11.0).contains(&p.x) && !(9.0..9.5).contains(&p.x) && (4.85..5.05).contains(&p.y);
+        if hall {
+            grid.data[i] = Occupancy::Free;
+        } else if around || seen_wall {
+            grid.data[i] = Occupancy::Occupied;
+        }
+    }
+    let mut raster = LayoutRaster::exact(&layout, &grid);
+    raster.through_openings = true;
+    open_true_doors(&mut raster.walls, &[door], &to_map);
+    let before = raster.walls.clone();
+    // A candidate on the frontier 0.3 m beside the door.
+    let p = frame.cell_from_world(Vec2::new(2.7, 5.075));
+    let gain = |r: &LayoutRaster| crate::layout_gain::layout_information_gain(&grid, r, p, 6.0);
+    let seen_before = gain(&raster);
+    open_unseen_walls(&mut raster.walls, &layout, &grid);
+    let seen_after = gain(&raster);
+    assert!(seen_before < 1.0, "{seen_before} m2 before");
+    assert!(seen_after > 10.0, "{seen_after} m2 after");
+    let at = |x: f64, y: f64| {
+        *raster
+            .walls
+            .get(frame.cell_from_world(Vec2::new(x, y)))
+            .unwrap()
+    };
+    // Both outlines open along the unseen stretch; closed where the wall was seen, across its
+    // short gap, and where the map has not reached or shows the wall.
+    for x in [3.0, 4.0, 6.0] {
+        assert!(!at(x, 5.0) && !at(x, 4.85), "open at x = {x}");
+    }
+    for x in [8.0, 9.25, 10.0] {
+        assert!(at(x, 5.0) && at(x, 4.85), "closed at x = {x}");
+    }
+    for (x, y) in [(1.0, 3.0), (11.0, 3.0), (6.0, 1.0), (6.0, 9.0), (1.0, 7.0)] {
+        assert!(at(x, y), "closed at ({x}, {y})");
+    }
+    // Only cells of those two outlines were opened, nothing was closed.
+    for (i, (&was, &is)) in before.data.iter().zip(&raster.walls.data).enumerate() {
+        let q = frame.world_from_cell(frame.cell_of_index(i));
+        assert!(was || !is, "closed at {q:?}");
+        if was && !is {
+            assert!(
+                (4.8..5.05).contains(&q.y) && (1.0..7.1).contains(&q.x),
+                "opened at {q:?}"
+            );
+        }
+    }
 }
 
 #[test]

@@ -4,7 +4,9 @@ use crate::explore::layout_state::LayoutState;
 
 use crate::explore::explorer::Explorer;
 use crate::explore::layout_state::room_view;
-use crate::explore::referee::{open_true_doors, true_layout, MapToWorld};
+use crate::explore::referee::{
+    open_true_doors, open_unseen_walls, open_where_free, true_layout, MapToWorld,
+};
 use crate::explore::strategy::GainModel;
 use crate::grid::Occupancy;
 use crate::layout::reconstruct_layout;
@@ -59,9 +61,11 @@ impl Explorer {
             let mut raster = if st.layout_from_truth() {
                 // The oracle: nothing to compute (and nothing to charge).
                 let to_map = MapToWorld::new(&self.localizer.estimate(), &self.sim.true_pose());
-                let mut raster =
-                    LayoutRaster::exact(&true_layout(&self.referee.rooms, &to_map), grid);
+                let layout = true_layout(&self.referee.rooms, &to_map);
+                let mut raster = LayoutRaster::exact(&layout, grid);
                 open_true_doors(&mut raster.walls, &self.referee.doors, &to_map);
+                open_where_free(&mut raster.walls, &layout, &self.referee.free, &to_map);
+                open_unseen_walls(&mut raster.walls, &layout, grid);
                 raster
             } else {
                 let mut made = None;
