@@ -87,7 +87,17 @@ pub fn explore_with(
             (&mut built_in, None)
         }
     };
-    let mut episode = Episode::build(building, start, cfg.clone(), seed, caller, layout_cost);
+    let episode = Episode::build(building, start, cfg.clone(), seed, caller, layout_cost);
+    drive_to_end(episode, policy, on_progress)
+}
+
+/// Drives `episode` to its end, its decisions answered by `policy` (told how the run ended),
+/// its progress samples shown to `on_progress`.
+pub(crate) fn drive_to_end(
+    mut episode: Episode,
+    policy: &mut dyn Policy,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+) -> RunResult {
     loop {
         match episode.advance() {
             Event::Decide(robot) => {

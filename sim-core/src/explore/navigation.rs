@@ -45,7 +45,7 @@ pub(super) struct Navigator {
     distance_changes: Vec<u32>,
     /// Per cell of `far`: listed among the cells to recompute (all false between updates).
     far_dirty_mark: Vec<bool>,
-    /// How permissive path planning is (see `decide_planned`'s last resorts).
+    /// How permissive path planning is (see the decision's last resorts, `Explorer::chosen`).
     planning: Planning,
     /// Map cells the robot's estimated centre passed through (the segments between its poses at
     /// map updates): its body fitted there, whatever the map shows now.
@@ -837,7 +837,7 @@ pub(super) struct ParkedGrids {
     dirty_mark: Vec<bool>,
 }
 
-/// How permissive path planning is: the rungs of `decide_planned`'s last resorts, in order.
+/// How permissive path planning is: the rungs of the decision's last resorts (`Explorer::chosen`), in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Planning {
     /// Paths keep the robot's radius and the safety margin from the map's obstacles.

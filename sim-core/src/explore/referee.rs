@@ -190,9 +190,35 @@ pub(super) fn open_where_free(
     to_map: &MapToWorld,
 ) {
     let frame = walls.frame;
-    let steps = (DOOR_REACH_M / frame.resolution_m).ceil().max(1.0) as i32;
-    let step_m = DOOR_REACH_M / f64::from(steps);
+    let (steps, step_m) = reach_steps(&frame);
     let free_at = |p: Vec2| free.get(free.frame.cell_from_world(to_map.forward(p))) == Some(&true);
+    for_outline_edges(layout, &frame, |cells, n| {
+        for &c in cells {
+            if walls.get(c) == Some(&true) {
+                let p = frame.world_from_cell(c);
+                if (-steps..=steps).all(|k| free_at(p + n * (f64::from(k) * step_m))) {
+                    walls.set(c, false);
+                }
+            }
+        }
+    });
+}
+
+/// The steps across a room's outline within [`DOOR_REACH_M`] on `frame`: how many on each side,
+/// and their length (m).
+fn reach_steps(frame: &GridFrame) -> (i32, f64) {
+    let steps = (DOOR_REACH_M / frame.resolution_m).ceil().max(1.0) as i32;
+    (steps, DOOR_REACH_M / f64::from(steps))
+}
+
+/// Calls `f` with the cells on `frame` of each edge of each room's outline in `layout` (map
+/// frame), in order along the edge, and the edge's unit normal; edges of no length are skipped.
+fn for_outline_edges(
+    layout: &crate::layout::Layout,
+    frame: &GridFrame,
+    mut f: impl FnMut(&[Cell], Vec2),
+) {
+    let mut cells = Vec::new();
     for room in &layout.rooms {
         for e in room.polygon.edges() {
             let d = e.b - e.a;
@@ -200,20 +226,16 @@ pub(super) fn open_where_free(
             if len.is_nan() || len <= 1e-9 {
                 continue;
             }
-            let n = Vec2::new(-d.y, d.x) / len;
+            cells.clear();
             walk_segment(
-                grid_from_world(&frame, e.a),
-                grid_from_world(&frame, e.b),
+                grid_from_world(frame, e.a),
+                grid_from_world(frame, e.b),
                 |c| {
-                    if walls.get(c) == Some(&true) {
-                        let p = frame.world_from_cell(c);
-                        if (-steps..=steps).all(|k| free_at(p + n * (f64::from(k) * step_m))) {
-                            walls.set(c, false);
-                        }
-                    }
+                    cells.push(c);
                     true
                 },
             );
+            f(&cells, Vec2::new(-d.y, d.x) / len);
         }
     }
 }
@@ -239,59 +261,40 @@ pub(super) fn open_unseen_walls(
     grid: &OccupancyGrid,
 ) {
     let frame = walls.frame;
-    let steps = (DOOR_REACH_M / frame.resolution_m).ceil().max(1.0) as i32;
-    let step_m = DOOR_REACH_M / f64::from(steps);
+    let (steps, step_m) = reach_steps(&frame);
     let longer = (UNSEEN_WALL_M / frame.resolution_m).ceil() as usize;
-    let mut cells = Vec::new();
     let mut unseen = Vec::new();
-    for room in &layout.rooms {
-        for e in room.polygon.edges() {
-            let d = e.b - e.a;
-            let len = d.norm();
-            if len.is_nan() || len <= 1e-9 {
-                continue;
-            }
-            let n = Vec2::new(-d.y, d.x) / len;
-            cells.clear();
-            walk_segment(
-                grid_from_world(&frame, e.a),
-                grid_from_world(&frame, e.b),
-                |c| {
-                    cells.push(c);
-                    true
-                },
-            );
-            unseen.clear();
-            unseen.extend(cells.iter().map(|&c| {
-                let p = frame.world_from_cell(c);
-                let (mut free, mut unknown) = (false, false);
-                for k in -steps..=steps {
-                    match grid
-                        .get(frame.cell_from_world(p + n * (f64::from(k) * step_m)))
-                        .copied()
-                    {
-                        Some(Occupancy::Occupied) => return false,
-                        Some(Occupancy::Free) => free = true,
-                        Some(Occupancy::Unknown) => unknown = true,
-                        None => {}
-                    }
+    for_outline_edges(layout, &frame, |cells, n| {
+        unseen.clear();
+        unseen.extend(cells.iter().map(|&c| {
+            let p = frame.world_from_cell(c);
+            let (mut free, mut unknown) = (false, false);
+            for k in -steps..=steps {
+                match grid
+                    .get(frame.cell_from_world(p + n * (f64::from(k) * step_m)))
+                    .copied()
+                {
+                    Some(Occupancy::Occupied) => return false,
+                    Some(Occupancy::Free) => free = true,
+                    Some(Occupancy::Unknown) => unknown = true,
+                    None => {}
                 }
-                free && unknown
-            }));
-            let mut i = 0;
-            while i < cells.len() {
-                let j = (i..cells.len())
-                    .find(|&j| !unseen[j])
-                    .unwrap_or(cells.len());
-                if j - i > longer {
-                    for c in &cells[i..j] {
-                        walls.set(*c, false);
-                    }
-                }
-                i = j + 1;
             }
+            free && unknown
+        }));
+        let mut i = 0;
+        while i < cells.len() {
+            let j = (i..cells.len())
+                .find(|&j| !unseen[j])
+                .unwrap_or(cells.len());
+            if j - i > longer {
+                for c in &cells[i..j] {
+                    walls.set(*c, false);
+                }
+            }
+            i = j + 1;
         }
-    }
+    });
 }
 
 pub(super) fn map_quality(map: &OccupancyGrid, truth_free: &Bitmap) -> MapQuality {

@@ -11,7 +11,7 @@
 
 use crate::building::Building;
 use crate::explore::config::ExploreConfig;
-use crate::explore::drive::explore;
+use crate::explore::drive::{drive_to_end, explore};
 use crate::explore::episode::{Episode, Event, Phase};
 use crate::explore::explorer::deciding::Deciding;
 use crate::explore::explorer::{built_in_needs, Explorer};
@@ -205,21 +205,8 @@ impl Member {
 }
 
 /// Drives `episode` to its end, its decisions answered by `policy`.
-fn finish_alone(mut episode: Episode, policy: &mut BuiltInPolicy) -> RunResult {
-    loop {
-        match episode.advance() {
-            Event::Decide(robot) => {
-                let (reply, charged_s) = match episode.view(robot) {
-                    Some(view) => policy.decide(&view),
-                    None => unreachable!("a decision is pending"),
-                };
-                let answered = episode.answer_charged(robot, reply, charged_s);
-                debug_assert!(answered.is_ok());
-            }
-            Event::Progress(_) | Event::Ended(_) => {}
-            Event::Finished => return episode.into_result().expect("a finished run has a result"),
-        }
-    }
+fn finish_alone(episode: Episode, policy: &mut BuiltInPolicy) -> RunResult {
+    drive_to_end(episode, policy, &mut |_| {})
 }
 
 impl Episode {

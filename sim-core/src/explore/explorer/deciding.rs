@@ -693,7 +693,7 @@ impl Explorer {
         }
     }
 
-    /// The last rung of `decide_planned`'s ladder: a closer look at a frontier that the distance
+    /// The last rung of the decision's last resorts (`chosen`): a closer look at a frontier that the distance
     /// grid reaches but no path on the planning grid does (a doorway seen from afar at a grazing
     /// angle, drawn narrower than the robot by the noise of its edges: intel_map from a random
     /// start never entered the building's middle and ended at 79 % explored). The goal is the
