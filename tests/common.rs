@@ -303,3 +303,42 @@ pub fn send_signal(pid: u32, name: &str) {
         .unwrap();
     assert!(sent.success(), "kill -{name} {pid}");
 }
+
+/// `floorcast run GRID --http 127.0.0.1:0` with `workers` local workers, results in
+/// `dir/results`, run in `dir`: the child, its output lines and the address it serves on (read
+/// from its `live view:` line within 60 s; else the child is killed and the test fails).
+pub fn spawn_live_run(
+    dir: &Path,
+    grid: &Path,
+    workers: usize,
+) -> (Child, mpsc::Receiver<String>, String) {
+    let (mut child, rx) = spawn_lines(
+        floorcast()
+            .args(["run", grid.to_str().unwrap(), "--results"])
+            .arg(dir.join("results"))
+            .args([
+                "--workers",
+                &workers.to_string(),
+                "--no-share",
+                "--no-tours",
+                "-q",
+            ])
+            .args(["--http", "127.0.0.1:0"])
+            .current_dir(dir)
+            .env("TMPDIR", dir),
+    );
+    let t0 = std::time::Instant::now();
+    let mut seen = Vec::new();
+    while t0.elapsed() < std::time::Duration::from_secs(60) {
+        if let Ok(l) = rx.recv_timeout(std::time::Duration::from_millis(100)) {
+            if let Some(rest) = l.strip_prefix("live view: http://") {
+                let addr = rest.split('/').next().unwrap().to_string();
+                return (child, rx, addr);
+            }
+            seen.push(l);
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    panic!("no 'live view:' line within 60 s: {seen:?}");
+}

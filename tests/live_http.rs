@@ -61,37 +61,15 @@ struct Run {
 
 impl Run {
     fn start(dir: &Path) -> Run {
-        let grid = project(dir);
-        let (mut child, lines) = spawn_lines(
-            floorcast()
-                .args(["run", grid.to_str().unwrap(), "--results"])
-                .arg(dir.join("results"))
-                .args(["--workers", "1", "--no-share", "--no-tours", "-q"])
-                .args(["--http", "127.0.0.1:0"])
-                .current_dir(dir)
-                .env("TMPDIR", dir),
-        );
-        let t0 = Instant::now();
-        let mut seen = Vec::new();
-        while t0.elapsed() < Duration::from_secs(60) {
-            if let Ok(l) = lines.recv_timeout(Duration::from_millis(100)) {
-                if let Some(rest) = l.strip_prefix("live view: http://") {
-                    let addr = rest.split('/').next().unwrap().to_string();
-                    let run = Run {
-                        child,
-                        lines,
-                        addr,
-                        dir: dir.to_path_buf(),
-                    };
-                    run.wait_running();
-                    return run;
-                }
-                seen.push(l);
-            }
-        }
-        let _ = child.kill();
-        let _ = child.wait();
-        panic!("no 'live view:' line within 60 s: {seen:?}");
+        let (child, lines, addr) = spawn_live_run(dir, &project(dir), 1);
+        let run = Run {
+            child,
+            lines,
+            addr,
+            dir: dir.to_path_buf(),
+        };
+        run.wait_running();
+        run
     }
 
     /// Waits (at most 60 s) until the held job runs.

@@ -78,34 +78,6 @@ fn project(dir: &Path, gate_seed: u64, body: &str) -> PathBuf {
 const GATED_ENTRY: &str =
     "[[strategies]]\nlabel = \"gated.py\"\ncommand = [\"python3\", \"strategies/gated.py\"]\ntimeout_s = 300\n";
 
-/// `floorcast run GRID --http 127.0.0.1:0 ...` in `dir`; returns the child, its output lines
-/// and the address it serves on (read from its `live view:` line).
-fn start(dir: &Path, grid: &Path) -> (Child, mpsc::Receiver<String>, String) {
-    let (mut child, rx) = spawn_lines(
-        floorcast()
-            .args(["run", grid.to_str().unwrap(), "--results"])
-            .arg(dir.join("results"))
-            .args(["--workers", "2", "--no-share", "--no-tours", "-q"])
-            .args(["--http", "127.0.0.1:0"])
-            .current_dir(dir)
-            .env("TMPDIR", dir),
-    );
-    let t0 = Instant::now();
-    let mut seen = Vec::new();
-    while t0.elapsed() < Duration::from_secs(60) {
-        if let Ok(l) = rx.recv_timeout(Duration::from_millis(100)) {
-            if let Some(rest) = l.strip_prefix("live view: http://") {
-                let addr = rest.split('/').next().unwrap().to_string();
-                return (child, rx, addr);
-            }
-            seen.push(l);
-        }
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    panic!("no 'live view:' line within 60 s: {seen:?}");
-}
-
 /// A plain HTTP/1.0 request: status code and body.
 fn http(addr: &str, method: &str, path: &str) -> (u16, String) {
     let mut s = TcpStream::connect(addr).unwrap();
@@ -163,7 +135,7 @@ fn the_live_view_serves_progress_workers_and_failures_during_a_run() {
         "seeds = [1, 2, 3]\n[[strategies]]\nname = \"baseline\"\n[[strategies]]\nlabel = \"broken.py\"\ncommand = [\"python3\", \"strategies/broken.py\"]\n{GATED_ENTRY}"
     );
     let grid = project(d, 2, &body);
-    let (child, rx, addr) = start(d, &grid);
+    let (child, rx, addr) = spawn_live_run(d, &grid, 2);
     // Every job but gated.py's seed 2 ends (broken.py's three fail); that one is held.
     let s = wait_status(&addr, "8 of 9 jobs stored, 1 running", |s| {
         s.jobs.done == 8 && s.jobs.running == 1
@@ -300,7 +272,7 @@ fn the_live_view_follows_a_sequential_grids_tests() {
         "[[strategies]]\nname = \"baseline\"\n[[strategies]]\nname = \"nearest\"\n{GATED_ENTRY}[sequential]\nreference = \"baseline\"\nh1_gain_pct = 5\nbatch_seeds = 5\nmax_seeds = 20\n"
     );
     let grid = project(d, 6, &body);
-    let (child, rx, addr) = start(d, &grid);
+    let (child, rx, addr) = spawn_live_run(d, &grid, 2);
     let s = wait_status(&addr, "tests of the first batch", |s| {
         s.sequential.len() == 2 && s.jobs.running == 1 && s.jobs.done + 1 == s.jobs.total
     });

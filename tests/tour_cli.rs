@@ -12,6 +12,27 @@ fn settings(dir: &std::path::Path, name: &str, settings: &str) -> std::path::Pat
     p
 }
 
+/// `floorcast tour --building B --settings S --json J` with the settings `json` written to
+/// `dir/settings.json`: the command's output and J (`dir/tour.json`).
+fn tour_of(
+    dir: &std::path::Path,
+    building: &std::path::Path,
+    json: &str,
+) -> (std::process::Output, std::path::PathBuf) {
+    let s = settings(dir, "settings.json", json);
+    let out = dir.join("tour.json");
+    let o = run(&[
+        "tour",
+        "--building",
+        building.to_str().unwrap(),
+        "--settings",
+        s.to_str().unwrap(),
+        "--json",
+        out.to_str().unwrap(),
+    ]);
+    (o, out)
+}
+
 /// A robot that fits nowhere it could drive from the start (radius 2 m in buildings/small.toml,
 /// or 1.5 m) is an error naming the building and the setting, exit 2, and no JSON is written.
 #[test]
@@ -19,21 +40,11 @@ fn a_robot_that_fits_nowhere_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     let small = repo().join("buildings/small.toml");
     for radius in ["2", "1.5"] {
-        let s = settings(
+        let (o, json) = tour_of(
             dir.path(),
-            "big.json",
+            &small,
             &format!("{{\"robot_radius_m\": {radius}}}"),
         );
-        let json = dir.path().join("tour.json");
-        let o = run(&[
-            "tour",
-            "--building",
-            small.to_str().unwrap(),
-            "--settings",
-            s.to_str().unwrap(),
-            "--json",
-            json.to_str().unwrap(),
-        ]);
         assert_clean_failure(
             &o,
             &[
@@ -55,21 +66,11 @@ fn the_tour_says_its_estimate_and_its_lower_bound() {
     let small = repo().join("buildings/small.toml");
     let mut seen = Vec::new();
     for range in ["6", "2"] {
-        let s = settings(
+        let (o, json) = tour_of(
             dir.path(),
-            "s.json",
+            &small,
             &format!("{{\"laser_range_m\": {range}}}"),
         );
-        let json = dir.path().join("tour.json");
-        let o = run(&[
-            "tour",
-            "--building",
-            small.to_str().unwrap(),
-            "--settings",
-            s.to_str().unwrap(),
-            "--json",
-            json.to_str().unwrap(),
-        ]);
         assert!(o.status.success(), "{}", stderr(&o));
         let out = stdout(&o);
         let first = out.lines().next().unwrap();

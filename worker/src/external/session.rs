@@ -313,24 +313,11 @@ impl ExternalStrategy {
         if status.is_some() {
             self.pipes.join_stderr();
         }
-        let last = self
-            .pipes
-            .stderr
-            .lock()
-            .map(|s| s.last_line.clone())
-            .unwrap_or_default();
         let how = match status {
             Some(s) => exit_words(s),
             None => "closed its stdout".to_string(),
         };
-        if last.is_empty() {
-            format!("{how} {when}")
-        } else {
-            format!(
-                "{how} {when}; its last stderr line: '{}'",
-                clip(&last, crate::text::MAX_ECHO_BYTES)
-            )
-        }
+        format!("{how} {when}{}", self.last_stderr_line())
     }
 }
 

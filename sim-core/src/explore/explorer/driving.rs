@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 impl Explorer {
     pub(crate) fn needs_decision(&mut self) -> bool {
-        let cfg = Arc::clone(&self.cfg);
+        let cfg = &*self.cfg;
         let now = self.sim.time_s();
         let Some(goal) = &mut self.goal else {
             return true;
@@ -161,7 +161,7 @@ impl Explorer {
     }
 
     pub(crate) fn drive(&mut self) {
-        let cfg = Arc::clone(&self.cfg);
+        let cfg = &*self.cfg;
         if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
             let to = look_vector(goal, &self.localizer.estimate(), cfg.robust_frontiers);
             let err =

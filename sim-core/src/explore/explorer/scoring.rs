@@ -177,7 +177,7 @@ impl Explorer {
     }
 
     /// The run's result (`close_curve` called before), its map, curve and trajectories taken out
-    /// of the state.
+    /// of the state: the explorer is not used after it.
     pub(crate) fn finish(&mut self, end_reason: EndReason, exploration_time_s: f64) -> RunResult {
         let mut map_quality = map_quality(&self.map.occupancy, &self.referee.free);
         // The map as a whole may sit rotated about the start (a heading error made before any
@@ -248,7 +248,10 @@ impl Explorer {
             scans: self.localizer.scans(),
             scan_matches_accepted: self.localizer.matches_accepted(),
             estimated_trajectory: self.localizer.take_estimated_trajectory(),
-            map: self.map.occupancy.clone(),
+            map: crate::grid::Grid {
+                frame: self.map.occupancy.frame,
+                data: std::mem::take(&mut self.map.occupancy.data),
+            },
             map_quality,
             plans: self.plans,
             snapshots: std::mem::take(&mut self.snapshots),

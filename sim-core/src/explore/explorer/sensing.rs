@@ -3,15 +3,14 @@
 use crate::explore::explorer::Explorer;
 use crate::explore::referee::MapToWorld;
 use crate::grid::Occupancy;
-use std::sync::Arc;
 
 impl Explorer {
     /// A map update when the robot has moved or turned enough, or the period has passed.
     pub(crate) fn sense(&mut self) {
-        let cfg = Arc::clone(&self.cfg);
+        let cfg = &*self.cfg;
         let Some(due) = self
             .localizer
-            .advance(self.sim.odometry(), self.sim.time_s(), &cfg)
+            .advance(self.sim.odometry(), self.sim.time_s(), cfg)
         else {
             return;
         };
@@ -19,7 +18,7 @@ impl Explorer {
         let seen = (&self.map, &self.obstacles);
         let estimate = self
             .localizer
-            .localize(&due, &scan, seen, self.sim.true_pose(), &cfg);
+            .localize(&due, &scan, seen, self.sim.true_pose(), cfg);
         let stats = self.map.insert_scan(&estimate, &scan, &cfg.log_odds);
         self.known_cells += stats.cells_discovered;
         let flips = self.map.take_occupied_flips();
