@@ -23,11 +23,9 @@ use crate::explore::explorer::{new_explorer, Explorer, LayoutCost};
 use crate::explore::policy::{DecisionView, Needs, Reply, RunEnd};
 use crate::explore::run::{EndReason, ProgressSample, RunResult};
 use crate::geom::Pose;
+pub use crate::sim::RobotId;
+use crate::sim::World;
 use std::sync::Arc;
-
-/// A robot of an episode. An episode of one robot has `RobotId(0)` only.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct RobotId(pub usize);
 
 /// What [`Episode::advance`] stopped for.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,13 +77,16 @@ pub(super) enum Phase {
     Sense,
     /// A question to the policy is pending.
     Deciding(Box<Deciding>),
-    /// Wait for charged compute time, then drive one step.
+    /// Wait for charged compute time (standing still, sensing, one period at a time), then
+    /// drive one period.
     Drive,
     /// Exploration ended for this reason (the policy is told next).
     Ending(EndReason),
     /// The policy told: return home if asked, close the progress curve. The exploration time
     /// (s).
     Concluding(EndReason, f64),
+    /// On the way home (one period at a time).
+    Home(EndReason, f64),
     /// Score the run (the last progress sample handed out).
     Scoring(EndReason, f64),
     /// Scored.
@@ -96,6 +97,9 @@ pub(super) enum Phase {
 /// documentation. Bit-identical to [`explore`] when every decision is answered as the
 /// strategy's built-in rule ([`super::strategy::BuiltInPolicy`]) answers it.
 pub struct Episode {
+    /// The walls, the physics, the clock and the robots' bodies and sensors.
+    pub(super) world: World,
+    /// The robot's exploration: its estimate, map, goal and record.
     pub(super) ex: Box<Explorer>,
     pub(super) phase: Phase,
     /// Progress samples handed out so far.
@@ -108,11 +112,13 @@ impl std::fmt::Debug for Episode {
         let phase = match &self.phase {
             Phase::Sense | Phase::Drive => "running",
             Phase::Deciding(_) => "deciding",
-            Phase::Ending(_) | Phase::Concluding(..) | Phase::Scoring(..) => "ending",
+            Phase::Ending(_) | Phase::Concluding(..) | Phase::Home(..) | Phase::Scoring(..) => {
+                "ending"
+            }
             Phase::Finished => "finished",
         };
         f.debug_struct("Episode")
-            .field("time_s", &self.ex.sim.time_s())
+            .field("time_s", &self.world.time_s())
             .field("phase", &phase)
             .field("decisions", &self.ex.decisions.len())
             .finish()
@@ -148,8 +154,12 @@ impl Episode {
         caller: Option<Needs>,
         layout_cost: Option<LayoutCost>,
     ) -> Episode {
-        let ex = new_explorer(building, start, Arc::new(cfg), seed, caller, layout_cost);
+        let world = World::with_robot(building, start, &cfg.sim, seed);
+        let cfg = Arc::new(cfg);
+        let robot = RobotId(0);
+        let ex = new_explorer(building, &world, robot, start, cfg, seed, caller, layout_cost);
         Episode {
+            world,
             ex: Box::new(ex),
             phase: Phase::Sense,
             progress_sent: 0,
@@ -165,7 +175,13 @@ impl Episode {
 
     /// The robots of the episode.
     pub fn robots(&self) -> Vec<RobotId> {
-        vec![RobotId(0)]
+        self.world.robots().collect()
+    }
+
+    /// The simulated world (its walls, and each robot's true pose and odometry: for evaluation
+    /// and drawing, not for a policy, which sees what [`Episode::view`] shows).
+    pub fn world(&self) -> &World {
+        &self.world
     }
 
     /// The settings of the run.
@@ -175,7 +191,7 @@ impl Episode {
 
     /// Simulated time (s).
     pub fn time_s(&self) -> f64 {
-        self.ex.sim.time_s()
+        self.world.time_s()
     }
 
     /// Runs the simulation until something needs the outside: see [`Event`].
@@ -191,14 +207,10 @@ impl Episode {
                     self.phase = Phase::Deciding(d);
                     return Event::Decide(RobotId(0));
                 }
-                Phase::Drive => {
-                    self.ex.wait_for_compute();
-                    self.ex.drive();
-                    self.phase = Phase::Sense;
-                }
+                Phase::Drive => self.drive(),
                 Phase::Ending(reason) => {
                     let ex = &mut self.ex;
-                    let exploration_time_s = ex.sim.time_s();
+                    let exploration_time_s = self.world.time_s();
                     self.phase = Phase::Concluding(reason, exploration_time_s);
                     if !ex.policy_failed {
                         return Event::Ended(RunEnd {
@@ -211,14 +223,21 @@ impl Episode {
                 }
                 Phase::Concluding(reason, exploration_time_s) => {
                     let ex = &mut self.ex;
-                    if ex.cfg.return_home && reason != EndReason::TimeLimit && !ex.policy_failed {
-                        ex.return_home();
+                    let home = ex.cfg.return_home
+                        && reason != EndReason::TimeLimit
+                        && !ex.policy_failed
+                        && ex.head_home();
+                    self.phase = Phase::Home(reason, exploration_time_s);
+                    if !home {
+                        self.arrived_home(reason, exploration_time_s);
                     }
-                    ex.close_curve();
-                    self.phase = Phase::Scoring(reason, exploration_time_s);
+                }
+                Phase::Home(reason, exploration_time_s) => {
+                    self.home(reason, exploration_time_s);
                 }
                 Phase::Scoring(reason, exploration_time_s) => {
-                    self.result = Some(self.ex.finish(reason, exploration_time_s));
+                    let result = self.ex.finish(reason, exploration_time_s, &self.world);
+                    self.result = Some(result);
                     self.phase = Phase::Finished;
                 }
                 Phase::Finished => {
@@ -229,12 +248,55 @@ impl Episode {
         }
     }
 
+    /// One period of waiting for charged compute time (standing still, sensing) while any is
+    /// due; else the robot drives one period.
+    fn drive(&mut self) {
+        let (ex, world) = (&mut self.ex, &mut self.world);
+        if ex.compute_debt_s > 0.0 && world.time_s() < ex.cfg.time_limit_s {
+            let t0 = world.time_s();
+            world.idle();
+            ex.compute_debt_s -= world.time_s() - t0;
+            ex.sense(world);
+            ex.record_progress();
+            self.phase = Phase::Drive;
+        } else {
+            ex.compute_debt_s = 0.0;
+            let command = ex.drive();
+            world.step(&[command]);
+            self.phase = Phase::Sense;
+        }
+    }
+
+    /// One period on the way home (sensing), or arrived (or out of time).
+    fn home(&mut self, reason: EndReason, exploration_time_s: f64) {
+        let (ex, world) = (&mut self.ex, &mut self.world);
+        let command = if world.time_s() < ex.cfg.time_limit_s {
+            ex.drive_home()
+        } else {
+            None
+        };
+        match command {
+            Some(command) => {
+                world.step(&[command]);
+                ex.sense(world);
+                self.phase = Phase::Home(reason, exploration_time_s);
+            }
+            None => self.arrived_home(reason, exploration_time_s),
+        }
+    }
+
+    /// The progress curve closed; the run is scored next.
+    fn arrived_home(&mut self, reason: EndReason, exploration_time_s: f64) {
+        self.ex.close_curve();
+        self.phase = Phase::Scoring(reason, exploration_time_s);
+    }
+
     /// The top of the run loop: sense, record progress, end at the time limit, else decide when
     /// a decision is due, or drive.
     fn sense(&mut self) {
-        self.ex.sense();
+        self.ex.sense(&mut self.world);
         self.ex.record_progress();
-        self.phase = if self.ex.sim.time_s() >= self.ex.cfg.time_limit_s {
+        self.phase = if self.world.time_s() >= self.ex.cfg.time_limit_s {
             Phase::Ending(EndReason::TimeLimit)
         } else if self.ex.needs_decision() {
             let step = self.ex.begin_decision(false);
@@ -290,7 +352,7 @@ impl Episode {
         reply: Reply,
         compute_s: f64,
     ) -> Result<(), EpisodeError> {
-        if robot != RobotId(0) {
+        if !self.world.has(robot) {
             return Err(EpisodeError::NoSuchRobot(robot));
         }
         let d = match std::mem::replace(&mut self.phase, Phase::Finished) {

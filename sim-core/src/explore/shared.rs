@@ -227,6 +227,7 @@ impl Episode {
             other => other.clone(),
         };
         Episode {
+            world: self.world.clone(),
             ex,
             phase,
             progress_sent: self.progress_sent,
@@ -254,7 +255,9 @@ impl Explorer {
         Explorer {
             cfg,
             seed: self.seed,
-            sim: self.sim.clone(),
+            robot: self.robot,
+            now_s: self.now_s,
+            true_pose: self.true_pose,
             map: self.map.clone(),
             obstacles: self.obstacles.clone(),
             referee: self.referee.clone(),

@@ -36,6 +36,18 @@ impl Default for LaserConfig {
 impl LaserConfig {
     /// One scan from `pose`. Beams that hit nothing within range report exactly `max_range_m`.
     pub fn scan(&self, walls: &Walls, pose: &Pose, rng: &mut impl Rng) -> Scan {
+        self.scan_among(walls, &[], pose, rng)
+    }
+
+    /// One scan from `pose` among the walls and the discs `others` (centre, radius m: the other
+    /// robots' bodies), each beam ending at the nearest of them.
+    pub fn scan_among(
+        &self,
+        walls: &Walls,
+        others: &[(Vec2, f64)],
+        pose: &Pose,
+        rng: &mut impl Rng,
+    ) -> Scan {
         let n = self.beams.max(1);
         let inc = if n > 1 {
             self.fov_rad / (n - 1) as f64
@@ -54,8 +66,17 @@ impl LaserConfig {
                 Vec2::new(a.cos(), a.sin())
             })
             .collect();
-        let ranges_m = walls
-            .cast_fan(origin, first_rad, inc, &dirs, self.max_range_m)
+        let mut hits = walls.cast_fan(origin, first_rad, inc, &dirs, self.max_range_m);
+        for &(centre, radius_m) in others {
+            for (hit, dir) in hits.iter_mut().zip(&dirs) {
+                if let Some(r) = ray_disc(origin, *dir, centre, radius_m)
+                    .filter(|&r| r <= self.max_range_m && hit.is_none_or(|h| r < h))
+                {
+                    *hit = Some(r);
+                }
+            }
+        }
+        let ranges_m = hits
             .into_iter()
             .map(|hit| match hit {
                 Some(r) => {
@@ -73,6 +94,19 @@ impl LaserConfig {
             ranges_m,
         }
     }
+}
+
+/// Distance along the unit direction `dir` from `origin` to where it enters the disc of
+/// `centre` and `radius_m` (`None`: it misses it, or starts inside it or past it).
+fn ray_disc(origin: Vec2, dir: Vec2, centre: Vec2, radius_m: f64) -> Option<f64> {
+    let to = centre - origin;
+    let along = to.dot(&dir);
+    let off2 = to.norm_squared() - along * along;
+    let r2 = radius_m * radius_m;
+    if along <= 0.0 || off2 > r2 || to.norm_squared() <= r2 {
+        return None;
+    }
+    Some(along - (r2 - off2).sqrt())
 }
 
 /// The building's walls: their segments under a uniform grid, for the laser, and as one parry2d

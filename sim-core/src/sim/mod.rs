@@ -2,8 +2,11 @@
 //! cast against the wall segments (the nearest crossing in `f64`), and odometry with Stage's
 //! proportional error model.
 //!
-//! All randomness comes from the seed given to [`Simulator::new`]; separate streams feed the
-//! odometry error and the laser noise, so changing the beam count does not change the odometry.
+//! A [`World`] holds the walls, the physics and the clock; each robot in it is reached by its
+//! [`RobotId`] and has its own body, odometry and laser. All randomness comes from the seed
+//! given to [`World::new`]; separate streams feed each robot's odometry error and laser noise,
+//! so changing the beam count does not change the odometry, and adding a robot does not change
+//! the first robot's draws.
 
 mod laser;
 mod odometry;
@@ -41,44 +44,86 @@ impl Default for SimConfig {
     }
 }
 
-/// RNG stream numbers (ChaCha streams of the run's seed).
+/// RNG stream numbers (ChaCha streams of the run's seed) of the first robot; robot `k` uses
+/// these plus `2 * k`.
 const STREAM_ODOMETRY: u64 = 1;
 const STREAM_LASER: u64 = 2;
 
-/// The simulated world and robot. Advance it with [`Simulator::step`]; read the laser with
-/// [`Simulator::scan`] and the odometry with [`Simulator::odometry`].
+/// A robot of a [`World`] (and of an [`crate::explore::Episode`]): its index in the order the
+/// robots were added. A world of one robot has `RobotId(0)` only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct RobotId(pub usize);
+
+/// One robot's sensors and its record of motion (its body is in [`World`]'s physics).
 #[derive(Debug, Clone)]
-pub struct Simulator {
-    config: SimConfig,
-    walls: Walls,
-    robot: robot::RobotBody,
+struct Robot {
     odometry: Odometry,
     laser_rng: ChaCha8Rng,
-    time_s: f64,
     /// Ground-truth path length.
     path_length_m: f64,
 }
 
-impl Simulator {
-    /// A robot at `start` in `building`. The odometry error of the run is drawn here from `seed`.
-    pub fn new(building: &Building, start: Pose, config: &SimConfig, seed: u64) -> Self {
-        let segments = building.boundary_segments();
-        let walls = Walls::new(&segments);
-        let robot = robot::RobotBody::new(&walls, start, &config.robot);
-        let mut odo_rng = ChaCha8Rng::seed_from_u64(seed);
-        odo_rng.set_stream(STREAM_ODOMETRY);
-        let odometry = Odometry::new(start, &config.odometry, &mut odo_rng);
-        let mut laser_rng = ChaCha8Rng::seed_from_u64(seed);
-        laser_rng.set_stream(STREAM_LASER);
+/// The simulated world: the building's walls, the physics of the robots' bodies (which cannot
+/// pass through walls or each other) and the clock. Add robots with [`World::add_robot`],
+/// advance every robot one period with [`World::step`]; read a robot's laser with
+/// [`World::scan`] and its odometry with [`World::odometry`].
+#[derive(Debug, Clone)]
+pub struct World {
+    config: SimConfig,
+    seed: u64,
+    walls: Walls,
+    bodies: robot::Bodies,
+    robots: Vec<Robot>,
+    time_s: f64,
+}
+
+impl World {
+    /// The walls of `building`, no robot yet; randomness from `seed`.
+    pub fn new(building: &Building, config: &SimConfig, seed: u64) -> Self {
+        let walls = Walls::new(&building.boundary_segments());
+        let bodies = robot::Bodies::new(&walls);
         Self {
             config: config.clone(),
+            seed,
             walls,
-            robot,
+            bodies,
+            robots: Vec::new(),
+            time_s: 0.0,
+        }
+    }
+
+    /// A world of one robot at `start` (see [`World::new`]).
+    pub fn with_robot(building: &Building, start: Pose, config: &SimConfig, seed: u64) -> Self {
+        let mut world = World::new(building, config, seed);
+        world.add_robot(start);
+        world
+    }
+
+    /// Adds a robot at `start`: its body, and its odometry error drawn from the seed.
+    pub fn add_robot(&mut self, start: Pose) -> RobotId {
+        let k = self.robots.len() as u64;
+        let mut odo_rng = ChaCha8Rng::seed_from_u64(self.seed);
+        odo_rng.set_stream(STREAM_ODOMETRY + 2 * k);
+        let odometry = Odometry::new(start, &self.config.odometry, &mut odo_rng);
+        let mut laser_rng = ChaCha8Rng::seed_from_u64(self.seed);
+        laser_rng.set_stream(STREAM_LASER + 2 * k);
+        self.bodies.add(start, &self.config.robot);
+        self.robots.push(Robot {
             odometry,
             laser_rng,
-            time_s: 0.0,
             path_length_m: 0.0,
-        }
+        });
+        RobotId(self.robots.len() - 1)
+    }
+
+    /// The robots, in the order they were added.
+    pub fn robots(&self) -> impl Iterator<Item = RobotId> {
+        (0..self.robots.len()).map(RobotId)
+    }
+
+    /// Whether `robot` is in this world.
+    pub fn has(&self, robot: RobotId) -> bool {
+        robot.0 < self.robots.len()
     }
 
     pub fn config(&self) -> &SimConfig {
@@ -90,58 +135,71 @@ impl Simulator {
         self.time_s
     }
 
-    /// Ground-truth distance travelled.
-    pub fn path_length_m(&self) -> f64 {
-        self.path_length_m
+    /// Ground-truth distance `robot` travelled.
+    pub fn path_length_m(&self, robot: RobotId) -> f64 {
+        self.robots[robot.0].path_length_m
     }
 
     /// The robot's true pose (for evaluation and drawing only: strategies must use the estimate).
-    pub fn true_pose(&self) -> Pose {
-        self.robot.pose()
+    pub fn true_pose(&self, robot: RobotId) -> Pose {
+        self.bodies.pose(robot.0)
     }
 
-    /// The odometry pose (true motion with this run's proportional error).
-    pub fn odometry(&self) -> Pose {
-        self.odometry.pose()
+    /// The odometry pose (true motion with this robot's proportional error).
+    pub fn odometry(&self, robot: RobotId) -> Pose {
+        self.robots[robot.0].odometry.pose()
     }
 
-    pub fn odometry_model(&self) -> &Odometry {
-        &self.odometry
+    pub fn odometry_model(&self, robot: RobotId) -> &Odometry {
+        &self.robots[robot.0].odometry
     }
 
     pub fn walls(&self) -> &Walls {
         &self.walls
     }
 
-    /// Drives for one period with the commanded forward speed and turn rate (clamped to the
-    /// robot's limits). Walls stop the robot.
-    pub fn step(&mut self, v_mps: f64, w_radps: f64) {
-        let before = self.robot.pose();
-        let v = v_mps.clamp(
-            -self.config.robot.max_speed_mps,
-            self.config.robot.max_speed_mps,
-        );
-        let w = w_radps.clamp(
-            -self.config.robot.max_turn_rate_radps,
-            self.config.robot.max_turn_rate_radps,
-        );
-        self.robot.step(v, w, self.config.step_s);
-        let after = self.robot.pose();
-        self.path_length_m += (after.position() - before.position()).norm();
-        self.odometry.advance(&before, &after);
+    /// Drives every robot for one period, robot `k` with the commanded forward speed and turn
+    /// rate `commands[k]` (clamped to the robot's limits; a robot without a command stands
+    /// still). Walls and other robots stop a robot.
+    pub fn step(&mut self, commands: &[(f64, f64)]) {
+        let robot = &self.config.robot;
+        let clamped: Vec<(f64, f64)> = (0..self.robots.len())
+            .map(|k| {
+                let (v, w) = commands.get(k).copied().unwrap_or((0.0, 0.0));
+                (
+                    v.clamp(-robot.max_speed_mps, robot.max_speed_mps),
+                    w.clamp(-robot.max_turn_rate_radps, robot.max_turn_rate_radps),
+                )
+            })
+            .collect();
+        let before: Vec<Pose> = (0..self.robots.len()).map(|k| self.bodies.pose(k)).collect();
+        self.bodies.step(&clamped, self.config.step_s);
+        for (k, r) in self.robots.iter_mut().enumerate() {
+            let after = self.bodies.pose(k);
+            r.path_length_m += (after.position() - before[k].position()).norm();
+            r.odometry.advance(&before[k], &after);
+        }
         self.time_s += self.config.step_s;
     }
 
-    /// Waits one period without moving.
+    /// Every robot waits one period without moving.
     pub fn idle(&mut self) {
-        self.step(0.0, 0.0);
+        self.step(&[]);
     }
 
-    /// A laser scan from the true pose, with range noise.
-    pub fn scan(&mut self) -> Scan {
+    /// A laser scan of `robot` from its true pose, with range noise: the walls and the other
+    /// robots' bodies stop its beams.
+    pub fn scan(&mut self, robot: RobotId) -> Scan {
+        let pose = self.bodies.pose(robot.0);
+        let radius_m = self.config.robot.radius_m;
+        let others: Vec<(crate::geom::Vec2, f64)> = (0..self.robots.len())
+            .filter(|&k| k != robot.0)
+            .map(|k| (self.bodies.pose(k).position(), radius_m))
+            .collect();
+        let rng = &mut self.robots[robot.0].laser_rng;
         self.config
             .laser
-            .scan(&self.walls, &self.robot.pose(), &mut self.laser_rng)
+            .scan_among(&self.walls, &others, &pose, rng)
     }
 }
 

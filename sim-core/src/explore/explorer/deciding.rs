@@ -581,7 +581,7 @@ impl Explorer {
     /// Follows `wps` to `target`, recording the decision (its distance, when `None`, the
     /// path's length). Returns true.
     fn head_for(&mut self, target: Target, recorded: Recorded, wps: Vec<Vec2>) -> bool {
-        let now = self.sim.time_s();
+        let now = self.now_s;
         self.follower = PathFollower::from(self.localizer.estimate().position(), wps);
         let dist = self
             .follower
@@ -676,7 +676,7 @@ impl Explorer {
         DecisionView {
             decision: self.policy_decisions - 1,
             attempt: asked.attempt,
-            time_s: self.sim.time_s(),
+            time_s: self.now_s,
             pose: self.localizer.estimate(),
             candidates: views,
             unreachable_goal: asked.unreachable_goal,

@@ -8,12 +8,11 @@ use crate::frontier::detect::is_frontier_cell;
 use crate::geom::{Pose, Vec2};
 use crate::grid::Cell;
 use crate::plan::inflate::Traversability;
-use std::sync::Arc;
 
 impl Explorer {
     pub(crate) fn needs_decision(&mut self) -> bool {
         let cfg = &*self.cfg;
-        let now = self.sim.time_s();
+        let now = self.now_s;
         let Some(goal) = &mut self.goal else {
             return true;
         };
@@ -160,7 +159,9 @@ impl Explorer {
         self.nav.mark_travelled(self.map.frame, from, to);
     }
 
-    pub(crate) fn drive(&mut self) {
+    /// The command of the robot for the next period, `(v_mps, w_radps)`: along the path to the
+    /// goal, or turning toward the unknown at the goal reached.
+    pub(crate) fn drive(&mut self) -> (f64, f64) {
         let cfg = &*self.cfg;
         if let Some(goal) = self.goal.as_ref().filter(|g| g.arrived) {
             let to = look_vector(goal, &self.localizer.estimate(), cfg.robust_frontiers);
@@ -170,8 +171,7 @@ impl Explorer {
                 -cfg.sim.robot.max_turn_rate_radps,
                 cfg.sim.robot.max_turn_rate_radps,
             );
-            self.sim.step(0.0, w);
-            return;
+            return (0.0, w);
         }
         match self.follower.command(
             &self.localizer.estimate(),
@@ -179,20 +179,20 @@ impl Explorer {
             cfg.sim.robot.max_speed_mps,
             cfg.sim.robot.max_turn_rate_radps,
         ) {
-            Command::Drive { v_mps, w_radps } => self.sim.step(v_mps, w_radps),
+            Command::Drive { v_mps, w_radps } => (v_mps, w_radps),
             Command::Arrived => {
                 // Goal reached: turn toward the unknown space behind the frontier.
                 if let Some(goal) = &mut self.goal {
                     goal.arrived = true;
-                    goal.best_distance_at_s = self.sim.time_s();
+                    goal.best_distance_at_s = self.now_s;
                 }
-                self.sim.idle();
+                (0.0, 0.0)
             }
         }
     }
 
-    pub(crate) fn return_home(&mut self) {
-        let cfg = Arc::clone(&self.cfg);
+    /// Sets the path home (the first pose of the trajectory); false when there is none.
+    pub(crate) fn head_home(&mut self) -> bool {
         let frame = self.map.frame;
         let start = self
             .trajectory
@@ -202,35 +202,24 @@ impl Explorer {
         let home = frame.cell_from_world(start.position());
         let plan = self.plan(&[home]);
         let Some(wps) = self.waypoints_to(&plan, home) else {
-            return;
+            return false;
         };
         self.follower = PathFollower::new(wps);
-        while self.sim.time_s() < cfg.time_limit_s {
-            match self.follower.command(
-                &self.localizer.estimate(),
-                &cfg.follow,
-                cfg.sim.robot.max_speed_mps,
-                cfg.sim.robot.max_turn_rate_radps,
-            ) {
-                Command::Arrived => break,
-                Command::Drive { v_mps, w_radps } => self.sim.step(v_mps, w_radps),
-            }
-            self.sense();
-        }
+        true
     }
-}
 
-impl Explorer {
-    /// Stands still, sensing, while charged compute time is due.
-    pub(crate) fn wait_for_compute(&mut self) {
-        while self.compute_debt_s > 0.0 && self.sim.time_s() < self.cfg.time_limit_s {
-            let t0 = self.sim.time_s();
-            self.sim.idle();
-            self.compute_debt_s -= self.sim.time_s() - t0;
-            self.sense();
-            self.record_progress();
+    /// The command of the robot for the next period on its way home, `None` once there.
+    pub(crate) fn drive_home(&mut self) -> Option<(f64, f64)> {
+        let cfg = &*self.cfg;
+        match self.follower.command(
+            &self.localizer.estimate(),
+            &cfg.follow,
+            cfg.sim.robot.max_speed_mps,
+            cfg.sim.robot.max_turn_rate_radps,
+        ) {
+            Command::Arrived => None,
+            Command::Drive { v_mps, w_radps } => Some((v_mps, w_radps)),
         }
-        self.compute_debt_s = 0.0;
     }
 }
 

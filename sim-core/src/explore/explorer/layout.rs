@@ -60,7 +60,7 @@ impl Explorer {
             let mut rooms = Vec::new();
             let mut raster = if st.layout_from_truth() {
                 // The oracle: nothing to compute (and nothing to charge).
-                let to_map = MapToWorld::new(&self.localizer.estimate(), &self.sim.true_pose());
+                let to_map = MapToWorld::new(&self.localizer.estimate(), &self.true_pose);
                 let layout = true_layout(&self.referee.rooms, &to_map);
                 let mut raster = LayoutRaster::exact(&layout, grid);
                 open_true_doors(&mut raster.walls, &self.referee.doors, &to_map);

@@ -20,7 +20,7 @@ use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame};
 use crate::mapping::distance_field::ObstacleDistance;
 use crate::mapping::log_odds::LogOddsMap;
-use crate::sim::Simulator;
+use crate::sim::{RobotId, World};
 use std::sync::Arc;
 
 pub(crate) mod deciding;
@@ -37,7 +37,12 @@ pub type LayoutCost = Box<dyn FnMut(&mut dyn FnMut()) -> f64 + Send>;
 pub(crate) struct Explorer {
     pub(crate) cfg: Arc<ExploreConfig>,
     pub(crate) seed: u64,
-    pub(crate) sim: Simulator,
+    /// The robot this state explores with (its body, odometry and laser are in the [`World`]).
+    pub(crate) robot: RobotId,
+    /// The world's clock (s) and the robot's true pose when it last sensed
+    /// ([`Explorer::observe`]: the world moves only between two sensings).
+    pub(crate) now_s: f64,
+    pub(crate) true_pose: Pose,
     pub(crate) map: LogOddsMap,
     pub(crate) obstacles: ObstacleDistance,
     /// Ground truth and the run's score (see `referee`).
@@ -121,10 +126,13 @@ pub(crate) struct Goal {
     pub(crate) best_distance_at_s: f64,
 }
 
-/// The state of a run at its start: `caller` holds the needs of the caller's policy (`None`:
-/// the strategy's rule decides).
+/// The state of `robot`'s exploration of `world` (made of `building`), starting at `start`:
+/// `caller` holds the needs of the caller's policy (`None`: the strategy's rule decides).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn new_explorer(
     building: &Building,
+    world: &World,
+    robot: RobotId,
     start: Pose,
     cfg: Arc<ExploreConfig>,
     seed: u64,
@@ -141,11 +149,12 @@ pub(crate) fn new_explorer(
         (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
             .max(8)
             .max((cfg.frontier_clearance_m / cfg.map_resolution_m).ceil() as u32 + 1);
-    let sim = Simulator::new(building, start, &cfg.sim, seed);
     Explorer {
         seed,
-        localizer: Localizer::new(start, sim.odometry(), &cfg),
-        sim,
+        localizer: Localizer::new(start, world.odometry(robot), &cfg),
+        robot,
+        now_s: world.time_s(),
+        true_pose: world.true_pose(robot),
         map: LogOddsMap::new(frame),
         obstacles: ObstacleDistance::new(frame, cap_cells),
         referee,

@@ -1,5 +1,6 @@
 //! What reads ground truth: the explored area, the progress curve, how the run ended, its result.
 
+use crate::sim::World;
 use crate::explore::run::{MapSnapshot, ProgressSample};
 
 use crate::explore::explorer::Explorer;
@@ -93,11 +94,11 @@ impl Explorer {
     }
 
     pub(crate) fn record_progress(&mut self) {
-        if self.sim.time_s() + 1e-9 < self.next_progress_s {
+        if self.now_s + 1e-9 < self.next_progress_s {
             return;
         }
         let s = ProgressSample {
-            time_s: self.sim.time_s(),
+            time_s: self.now_s,
             explored_area_m2: self.explored_area_m2(),
             explored_fraction: self.explored_fraction(),
         };
@@ -178,7 +179,12 @@ impl Explorer {
 
     /// The run's result (`close_curve` called before), its map, curve and trajectories taken out
     /// of the state: the explorer is not used after it.
-    pub(crate) fn finish(&mut self, end_reason: EndReason, exploration_time_s: f64) -> RunResult {
+    pub(crate) fn finish(
+        &mut self,
+        end_reason: EndReason,
+        exploration_time_s: f64,
+        world: &World,
+    ) -> RunResult {
         let mut map_quality = map_quality(&self.map.occupancy, &self.referee.free);
         // The map as a whole may sit rotated about the start (a heading error made before any
         // wall was in view); the best fit of the estimated trajectory onto the true one undoes
@@ -233,14 +239,14 @@ impl Explorer {
             end_reason,
             frontier_cells_left: self.frontier_cells_left,
             exploration_time_s,
-            total_time_s: self.sim.time_s(),
+            total_time_s: self.now_s,
             explored_area_m2: self.explored_area_m2(),
             free_area_m2: self.referee.truth_cells as f64 * self.map.frame.cell_area_m2(),
             unexplorable_free_m2: (self.referee.free.count_true() - self.referee.truth_cells)
                 as f64
                 * self.map.frame.cell_area_m2(),
             explored_fraction: self.explored_fraction(),
-            path_length_m: self.sim.path_length_m(),
+            path_length_m: world.path_length_m(self.robot),
             blacklisted_goals: self.blacklist.added(),
             decisions: std::mem::take(&mut self.decisions),
             progress: std::mem::take(&mut self.progress),

@@ -3,22 +3,31 @@
 use crate::explore::explorer::Explorer;
 use crate::explore::referee::MapToWorld;
 use crate::grid::Occupancy;
+use crate::sim::World;
 
 impl Explorer {
-    /// A map update when the robot has moved or turned enough, or the period has passed.
-    pub(crate) fn sense(&mut self) {
+    /// Takes in the world's clock and the robot's true pose (after the world moved).
+    pub(crate) fn observe(&mut self, world: &World) {
+        self.now_s = world.time_s();
+        self.true_pose = world.true_pose(self.robot);
+    }
+
+    /// Observes the world ([`Explorer::observe`]), and updates the map when the robot has moved
+    /// or turned enough, or the period has passed.
+    pub(crate) fn sense(&mut self, world: &mut World) {
+        self.observe(world);
         let cfg = &*self.cfg;
         let Some(due) = self
             .localizer
-            .advance(self.sim.odometry(), self.sim.time_s(), cfg)
+            .advance(world.odometry(self.robot), self.now_s, cfg)
         else {
             return;
         };
-        let scan = self.sim.scan();
+        let scan = world.scan(self.robot);
         let seen = (&self.map, &self.obstacles);
         let estimate = self
             .localizer
-            .localize(&due, &scan, seen, self.sim.true_pose(), cfg);
+            .localize(&due, &scan, seen, self.true_pose, cfg);
         let stats = self.map.insert_scan(&estimate, &scan, &cfg.log_odds);
         self.known_cells += stats.cells_discovered;
         let flips = self.map.take_occupied_flips();
@@ -54,11 +63,11 @@ impl Explorer {
                 fresh.push(i);
             }
         }
-        let map_to_world = MapToWorld::new(&estimate, &self.sim.true_pose());
+        let map_to_world = MapToWorld::new(&estimate, &self.true_pose);
         self.credit_explored(&fresh, &map_to_world);
         self.fresh_known = fresh;
-        let (from, to) = self.localizer.close_update(due, self.sim.time_s());
+        let (from, to) = self.localizer.close_update(due, self.now_s);
         self.mark_travelled(from, to);
-        self.trajectory.push(self.sim.true_pose());
+        self.trajectory.push(self.true_pose);
     }
 }
