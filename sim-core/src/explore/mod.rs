@@ -44,9 +44,11 @@
 //! - `explorer`: the `Explorer`, the state of one run, and its behaviour in its children:
 //!   `sensing`, `deciding` (frontiers, scores, the question to the policy, the last resorts, as
 //!   explicit states), `driving`, `layout`, `scoring` (what reads ground truth).
-//! - The components it holds: `localization` (the `Localizer`, the pose estimate), `navigation`
-//!   (the `Navigator`, the planning grids), `referee` (ground truth, the explored area),
-//!   `layout_state`, `gain_cache`, `follow`, `calibration`.
+//! - The components it holds: `map_state` (the `MapState`: grid, obstacle distances, known
+//!   cells, frontiers, gain cache, layout; `integrate` returns what changed), `localization` (the
+//!   `Localizer`, the pose estimate), `navigation` (the `Navigator`, the planning grids),
+//!   `referee` (ground truth, the explored area), `layout_state`, `gain_cache`, `follow`,
+//!   `calibration`.
 //! - What crosses the boundary: `config` ([`ExploreConfig`]), `run` ([`RunResult`]), `policy`
 //!   (what a policy sees and replies), `strategy` (the built-in strategies).
 
@@ -59,6 +61,7 @@ mod follow;
 mod gain_cache;
 mod layout_state;
 mod localization;
+mod map_state;
 mod navigation;
 pub mod policy;
 mod referee;

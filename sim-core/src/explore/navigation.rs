@@ -6,6 +6,7 @@
 //! driving itself. The navigator reads the map it is given (`Seen`) and holds none of it.
 
 use crate::explore::follow::PathFollower;
+use crate::explore::map_state::{MapChanges, MapState};
 use crate::explore::policy::CandidateView;
 use crate::geom::Vec2;
 use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
@@ -40,9 +41,6 @@ pub(super) struct Navigator {
     coarse: CoarseCosts,
     coarse_dirty: Vec<u32>,
     coarse_dirty_mark: Vec<bool>,
-    /// The map cells whose obstacle distance the last map update changed (kept for its
-    /// allocation).
-    distance_changes: Vec<u32>,
     /// Per cell of `far`: listed among the cells to recompute (all false between updates).
     far_dirty_mark: Vec<bool>,
     /// How permissive path planning is (see the decision's last resorts, `Explorer::chosen`).
@@ -121,7 +119,6 @@ impl Navigator {
             coarse: CoarseCosts::blocked(frame, PLAN_FACTOR),
             coarse_dirty: Vec::new(),
             coarse_dirty_mark: vec![false; CoarseCosts::blocked(frame, PLAN_FACTOR).len()],
-            distance_changes: Vec::new(),
             far_dirty_mark: vec![false; CoarseCosts::blocked(frame, DISTANCE_FACTOR).len()],
             planning: Planning::WithMargin,
             travelled: Bitmap::filled(frame, false),
@@ -145,7 +142,6 @@ impl Navigator {
             coarse: self.coarse.clone(),
             coarse_dirty: self.coarse_dirty.clone(),
             coarse_dirty_mark: self.coarse_dirty_mark.clone(),
-            distance_changes: Vec::new(),
             far_dirty_mark: self.far_dirty_mark.clone(),
             planning: self.planning,
             travelled: self.travelled.clone(),
@@ -176,29 +172,31 @@ impl Navigator {
         std::mem::take(&mut self.walls_changed)
     }
 
-    /// A map update: the cells of `map` in `flips` became or stopped being occupied, those of
-    /// `free_changes` changed otherwise. Brings the `obstacles` distances up to date with the
-    /// flips and marks the planning cells the update may have changed, in the grids of every
-    /// planning level: those of the cells whose state or obstacle distance changed (which
-    /// decides traversability and the wall cost). A planning cell's cost depends on its map
+    /// A map update (`map` after `changes`): marks the planning cells the `changes` may have
+    /// changed, in the grids of every planning level: those of the cells whose state or
+    /// obstacle distance changed (which decides traversability and the wall cost). A planning cell's cost depends on its map
     /// cells' states, obstacle distances and travelled marks only.
-    pub(super) fn map_updated(
+    pub(super) fn map_updated(&mut self, map: &MapState, changes: &MapChanges) {
+        let (flips, free) = (&changes.flips, &changes.free_changes);
+        self.cells_changed(map.grid.frame, flips, map.distance_changes(), free);
+    }
+
+    /// [`Navigator::map_updated`] with the changes listed: the cells of `frame` in `flips`
+    /// became or stopped being occupied, those in `distance_changes` changed their obstacle
+    /// distance, those in `free_changes` changed otherwise.
+    fn cells_changed(
         &mut self,
-        map: &LogOddsMap,
-        obstacles: &mut ObstacleDistance,
+        frame: GridFrame,
         flips: &[u32],
+        distance_changes: &[u32],
         free_changes: &[(u32, bool)],
     ) {
         self.walls_changed |= !flips.is_empty();
-        let mut distance_changes = std::mem::take(&mut self.distance_changes);
-        distance_changes.clear();
-        obstacles.update_reporting(&map.occupancy, flips, &mut distance_changes);
         let cells = flips
             .iter()
-            .chain(&distance_changes)
+            .chain(distance_changes)
             .chain(free_changes.iter().map(|(i, _)| i));
-        self.mark_planning_cells_at(map.frame, cells.copied(), |_| true);
-        self.distance_changes = distance_changes;
+        self.mark_planning_cells_at(frame, cells.copied(), |_| true);
     }
 
     /// Marks the map cells (of `frame`) on the segment `from`-`to` (world) travelled. They
@@ -971,7 +969,9 @@ mod tests {
                 free_changes.push((i as u32, true));
             }
         }
-        nav.map_updated(map, obstacles, &flips, &free_changes);
+        let mut distance_changes = Vec::new();
+        obstacles.update_reporting(&map.occupancy, &flips, &mut distance_changes);
+        nav.cells_changed(map.frame, &flips, &distance_changes, &free_changes);
     }
 
     /// The navigator alone, on maps made by hand: a path through a wide gap at every level, a

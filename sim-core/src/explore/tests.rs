@@ -773,10 +773,10 @@ fn cells_travelled_while_the_travelled_grids_are_kept_are_planned_with() {
     // Along the wall, 0.1-0.15 m from its face: free in the map, closer than the robot's
     // radius (0.2 m).
     let (from, to) = (Vec2::new(2.5, 0.22), Vec2::new(4.5, 0.22));
-    let frame = e.map.frame;
+    let frame = e.map.grid.frame;
     let free_unfit = (0..=40)
         .map(|k| frame.cell_from_world(from + (to - from) * (k as f64 / 40.0)))
-        .filter(|&c| e.map.occupancy.is(c, Occupancy::Free) && !e.traversability().at(c))
+        .filter(|&c| e.map.grid.occupancy.is(c, Occupancy::Free) && !e.traversability().at(c))
         .count();
     assert!(free_unfit >= 20, "{free_unfit}");
     e.mark_travelled(from, to);

@@ -54,7 +54,7 @@ impl Explorer {
             self.plan(&[])
         };
         let trav = self.traversability();
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
         for k in moved {
             let f = &mut frontiers[k];
             let from = f.candidate;
@@ -93,7 +93,7 @@ impl Explorer {
     ) -> Vec<CandidateScore> {
         let cfg = Arc::clone(&self.cfg);
         let mut scores = Vec::with_capacity(frontiers.len());
-        let (frame, robot) = (self.map.frame, self.localizer.estimate().position());
+        let (frame, robot) = (self.map.grid.frame, self.localizer.estimate().position());
         for (f, goal_cell) in frontiers.iter().zip(goals) {
             let distance_m = goal_cell.and_then(|c| plan.distance_m(c)).map(|path_m| {
                 match cfg.utility_distance {
@@ -104,19 +104,19 @@ impl Explorer {
                 }
             });
             let gain_m2 = if distance_m.is_some() {
-                let (grid, range_m) = (&self.map.occupancy, cfg.sim.laser.max_range_m);
-                let (c, now) = (f.candidate, self.localizer.scans());
-                match (&self.layout, use_layout) {
+                let (grid, range_m) = (&self.map.grid.occupancy, cfg.sim.laser.max_range_m);
+                let (c, now) = (f.candidate, self.map.updates());
+                match (&self.map.layout, use_layout) {
                     (Some(l), true) if cfg.strategy.gain.ranks_by_predicted_rooms() => {
-                        layout_gain_cached(&mut self.gains, grid, &l.raster, c, range_m, now)
+                        layout_gain_cached(&mut self.map.gains, grid, &l.raster, c, range_m, now)
                     }
                     (Some(l), true) => {
-                        self.gains.gain(GainKind::GapClosed, c, range_m, now, || {
+                        self.map.gains.gain(GainKind::GapClosed, c, range_m, now, || {
                             gap_closed_information_gain_read(grid, &l.raster, c, range_m)
                         })
                     }
                     _ => self
-                        .gains
+                        .map.gains
                         .plain_gain(c, range_m, now, || information_count_read(grid, c, range_m)),
                 }
             } else {
@@ -140,12 +140,12 @@ impl Explorer {
             return false;
         }
         let grown = self.forgiven_at.is_none_or(|at| {
-            self.known_cells.saturating_sub(at) as f64 * self.map.frame.cell_area_m2() >= 1.0
+            self.map.known_cells.saturating_sub(at) as f64 * self.map.grid.frame.cell_area_m2() >= 1.0
         });
         if !grown || self.blacklist.forgive() == 0 {
             return false;
         }
-        self.forgiven_at = Some(self.known_cells);
+        self.forgiven_at = Some(self.map.known_cells);
         true
     }
 
@@ -160,7 +160,7 @@ impl Explorer {
     /// The decision at the planning level in use: the frontiers, their goals and the plan to
     /// them, then the first round of asking (`begin_round`).
     fn begin_level(&mut self, forgiven: bool) -> Step {
-        if self.map.known_bounds.is_none() {
+        if self.map.grid.known_bounds.is_none() {
             // Nothing seen yet: wait for the first scan.
             return Step::Done(true);
         }
@@ -297,7 +297,7 @@ impl Explorer {
             Answer::Stop => self.chosen(d, Choice::Stop),
             Answer::Nothing => self.chosen(d, Choice::Nothing),
             Answer::Drop(ids) => {
-                let frame = self.map.frame;
+                let frame = self.map.grid.frame;
                 for id in ids {
                     let at = frame.world_from_cell(d.frontiers[id].candidate);
                     self.blacklist.add(at, self.cfg.blacklist_radius_m);
@@ -421,7 +421,7 @@ impl Explorer {
             // Frontiers exist but none is reachable: blacklist them all so the run can end.
             for f in &d.frontiers {
                 self.blacklist.add(
-                    self.map.frame.world_from_cell(f.candidate),
+                    self.map.grid.frame.world_from_cell(f.candidate),
                     cfg.blacklist_radius_m,
                 );
             }
@@ -437,7 +437,7 @@ impl Explorer {
             let again = self.goal.as_ref().is_some_and(|g| {
                 g.frontier
                     .iter()
-                    .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
+                    .filter(|c| is_frontier_cell(&self.map.grid.occupancy, **c))
                     .count()
                     * 2
                     > g.frontier.len()
@@ -452,12 +452,12 @@ impl Explorer {
     /// dropped (or, with robust frontiers, their candidate moved outside the blacklist).
     fn candidate_frontiers(&mut self) -> Vec<Frontier> {
         let cfg = Arc::clone(&self.cfg);
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
         let fcfg = FrontierConfig::with_min_length_m(cfg.min_frontier_m, frame.resolution_m);
-        let mut frontiers = self.frontiers.detect(&self.map.occupancy, &fcfg);
+        let mut frontiers = self.map.frontiers.detect(&self.map.grid.occupancy, &fcfg);
         if cfg.frontier_clearance_m > 0.0 {
             let clearance_cells = cfg.frontier_clearance_m / frame.resolution_m;
-            let obstacles = &self.obstacles;
+            let obstacles = &self.map.obstacles;
             frontiers = frontiers_where(frontiers, &fcfg, |c| {
                 f64::from(obstacles.get(c)) >= clearance_cells
             });
@@ -480,7 +480,7 @@ impl Explorer {
     /// The goal cell of each frontier: its candidate if traversable, else the nearest
     /// traversable cell within half a metre (`None` if there is none).
     fn goal_cells(&self, frontiers: &[Frontier]) -> Vec<Option<Cell>> {
-        let search = (0.5 / self.map.frame.resolution_m).ceil() as i32;
+        let search = (0.5 / self.map.grid.frame.resolution_m).ceil() as i32;
         let trav = self.traversability();
         frontiers
             .iter()
@@ -505,14 +505,14 @@ impl Explorer {
         wps: Vec<Vec2>,
         score: Option<CandidateScore>,
     ) -> bool {
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
         let f = &frontiers[i];
-        let look_at = unknown_centroid(&self.map.occupancy, &f.cells)
+        let look_at = unknown_centroid(&self.map.grid.occupancy, &f.cells)
             .unwrap_or_else(|| frame.world_from_cell(f.candidate));
         let look_dir = self
             .cfg
             .robust_frontiers
-            .then(|| unknown_side(&self.map.occupancy, &f.cells))
+            .then(|| unknown_side(&self.map.grid.occupancy, &f.cells))
             .flatten();
         let target = Target {
             cell: goal_cell,
@@ -534,7 +534,7 @@ impl Explorer {
     /// traversable map cell within 0.5 m of it, and a path there on the planning grid. `None`
     /// when `p` is off the map or no path leads there.
     pub(crate) fn point_goal(&mut self, p: Vec2) -> Option<(Cell, Vec<Vec2>)> {
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
         let c = frame.cell_from_world(p);
         frame.index(c)?;
         let search = (0.5 / frame.resolution_m).ceil() as i32;
@@ -602,7 +602,7 @@ impl Explorer {
             arrived: false,
             frontier: target.frontier,
             decided_at_s: now,
-            known_cells_at: self.known_cells,
+            known_cells_at: self.map.known_cells,
             best_distance_m: dist,
             best_distance_at_s: now,
         });
@@ -621,7 +621,7 @@ impl Explorer {
         use_layout: bool,
     ) -> Vec<CandidateView> {
         let layout_gain = needs.layout_gain && use_layout;
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
         let robot = self.localizer.estimate().position();
         let range_m = self.cfg.sim.laser.max_range_m;
         let mut views = Vec::new();
@@ -631,16 +631,17 @@ impl Explorer {
             };
             let f = &frontiers[i];
             let point = frame.world_from_cell(f.candidate);
-            let layout_gain_m2 = match (&self.layout, layout_gain) {
+            let now = self.map.updates();
+            let layout_gain_m2 = match (&self.map.layout, layout_gain) {
                 (Some(l), true) => {
-                    let grid = &self.map.occupancy;
+                    let grid = &self.map.grid.occupancy;
                     Some(layout_gain_cached(
-                        &mut self.gains,
+                        &mut self.map.gains,
                         grid,
                         &l.raster,
                         f.candidate,
                         range_m,
-                        self.localizer.scans(),
+                        now,
                     ))
                 }
                 _ => None,
@@ -656,7 +657,7 @@ impl Explorer {
                 straight_m: (point - robot).norm(),
                 gain_m2: s.gain_m2,
                 layout_gain_m2,
-                room: match (&self.layout, needs.layout) {
+                room: match (&self.map.layout, needs.layout) {
                     (Some(l), true) => l.raster.room_index(f.candidate),
                     _ => None,
                 },
@@ -681,14 +682,14 @@ impl Explorer {
             candidates: views,
             unreachable_goal: asked.unreachable_goal,
             layout: self
-                .layout
+                .map.layout
                 .as_ref()
                 .filter(|_| needs.layout)
                 .map(|l| LayoutView {
                     number: l.number,
                     rooms: &l.rooms,
                 }),
-            map: &self.map.occupancy,
+            map: &self.map.grid.occupancy,
             between_m,
         }
     }
@@ -708,7 +709,7 @@ impl Explorer {
         goals: &[Option<Cell>],
         plan: &Plan,
     ) -> Option<(usize, Cell, Vec<Vec2>)> {
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
         let near = self.nav.coarse();
         let field = dijkstra_padded(near.frame, plan.near_start, near.padded(), MAX_EXTRA, &[]);
         let robot = self.localizer.estimate().position();
@@ -723,7 +724,7 @@ impl Explorer {
             // Slivers behind a wall and corners seen at a slant are not worth the drive; a
             // doorway opens onto a room. The baseline's gain (not the strategy's: a layout's
             // wall line may close the very doorway; not cached: the caches hold the strategy's).
-            let (grid, candidate) = (&self.map.occupancy, frontiers[i].candidate);
+            let (grid, candidate) = (&self.map.grid.occupancy, frontiers[i].candidate);
             if information_gain(grid, candidate, range_m) < CLOSER_LOOK_MIN_GAIN_M2 {
                 continue;
             }

@@ -25,7 +25,7 @@ impl Explorer {
             self.still_since_s = now;
         } else if now - self.still_since_s > STILL_FACTOR * cfg.progress_timeout_s {
             self.blacklist.give_up(
-                self.map.frame.world_from_cell(goal.candidate),
+                self.map.grid.frame.world_from_cell(goal.candidate),
                 cfg.blacklist_radius_m,
             );
             self.goal = None;
@@ -40,13 +40,13 @@ impl Explorer {
             if err.abs() > 0.15 && to.norm() > 0.05 && now - goal.best_distance_at_s < 10.0 {
                 return false;
             }
-            self.last_reached = Some(self.map.frame.world_from_cell(goal.candidate));
+            self.last_reached = Some(self.map.grid.frame.world_from_cell(goal.candidate));
             return true;
         }
         // Periodically, once the map shows something new: without new information the choice
         // would be the same (see `redecide_min_growth_m2`).
-        let grown_m2 = self.known_cells.saturating_sub(goal.known_cells_at) as f64
-            * self.map.frame.cell_area_m2();
+        let grown_m2 = self.map.known_cells.saturating_sub(goal.known_cells_at) as f64
+            * self.map.grid.frame.cell_area_m2();
         if now - goal.decided_at_s >= cfg.redecide_period_s
             && grown_m2 >= cfg.redecide_min_growth_m2
         {
@@ -56,7 +56,7 @@ impl Explorer {
         let still = goal
             .frontier
             .iter()
-            .filter(|c| is_frontier_cell(&self.map.occupancy, **c))
+            .filter(|c| is_frontier_cell(&self.map.grid.occupancy, **c))
             .count();
         if still * 5 < goal.frontier.len() {
             return true;
@@ -70,7 +70,7 @@ impl Explorer {
             goal.best_distance_m = d;
             goal.best_distance_at_s = now;
         } else if now - goal.best_distance_at_s > cfg.progress_timeout_s {
-            let p = self.map.frame.world_from_cell(goal.candidate);
+            let p = self.map.grid.frame.world_from_cell(goal.candidate);
             self.blacklist.give_up(p, cfg.blacklist_radius_m);
             self.goal = None;
             return true;
@@ -97,21 +97,21 @@ impl Explorer {
     /// ([`Navigator::path_blocked`]).
     fn path_blocked(&mut self) -> bool {
         let robot = self.localizer.estimate().position();
-        let seen = seen(&self.map, &self.obstacles);
+        let seen = seen(&self.map.grid, &self.map.obstacles);
         self.nav.path_blocked(seen, &self.follower, robot)
     }
 
     /// Waypoints of a path from the robot to map cell `c` ([`Navigator::path_to`]).
     pub(crate) fn path_to(&mut self, c: Cell) -> Option<Vec<Vec2>> {
         let robot = self.localizer.estimate().position();
-        self.nav.path_to(seen(&self.map, &self.obstacles), robot, c)
+        self.nav.path_to(seen(&self.map.grid, &self.map.obstacles), robot, c)
     }
 
     /// Path costs from the robot to `targets` ([`Navigator::plan`]).
     pub(crate) fn plan(&mut self, targets: &[Cell]) -> Plan {
         let robot = self.localizer.estimate().position();
         self.nav
-            .plan(seen(&self.map, &self.obstacles), robot, targets, 0.0)
+            .plan(seen(&self.map.grid, &self.map.obstacles), robot, targets, 0.0)
     }
 
     /// [`Self::plan`] bounded as the settings ask (`ExploreConfig::distance_bound_m`; a
@@ -124,13 +124,13 @@ impl Explorer {
             self.cfg.distance_bound_m
         };
         self.nav
-            .plan(seen(&self.map, &self.obstacles), robot, targets, bound_m)
+            .plan(seen(&self.map.grid, &self.map.obstacles), robot, targets, bound_m)
     }
 
     /// Path costs from the robot to every reachable cell ([`Navigator::plan_all`]).
     pub(crate) fn plan_all(&mut self) -> Plan {
         let robot = self.localizer.estimate().position();
-        self.nav.plan_all(seen(&self.map, &self.obstacles), robot)
+        self.nav.plan_all(seen(&self.map.grid, &self.map.obstacles), robot)
     }
 
     /// Waypoints of the path to map cell `c` found with `plan` ([`Navigator::waypoints_to`]).
@@ -140,7 +140,7 @@ impl Explorer {
 
     /// The planned path lengths between the goals of `views` ([`Navigator::paths_between`]).
     pub(crate) fn paths_between(&self, views: &[CandidateView]) -> Vec<f64> {
-        self.nav.paths_between(&self.map, views)
+        self.nav.paths_between(&self.map.grid, views)
     }
 
     /// Plans at `level` from now on ([`Navigator::set_planning`]).
@@ -150,13 +150,13 @@ impl Explorer {
 
     /// Where the robot's centre may be at the planning level in use.
     pub(crate) fn traversability(&self) -> Traversability<'_> {
-        self.nav.traversability(seen(&self.map, &self.obstacles))
+        self.nav.traversability(seen(&self.map.grid, &self.map.obstacles))
     }
 
     /// Marks the map cells on the segment `from`-`to` (world) travelled
     /// ([`Navigator::mark_travelled`]).
     pub(crate) fn mark_travelled(&mut self, from: Vec2, to: Vec2) {
-        self.nav.mark_travelled(self.map.frame, from, to);
+        self.nav.mark_travelled(self.map.grid.frame, from, to);
     }
 
     /// The command of the robot for the next period, `(v_mps, w_radps)`: along the path to the
@@ -193,7 +193,7 @@ impl Explorer {
 
     /// Sets the path home (the first pose of the trajectory); false when there is none.
     pub(crate) fn head_home(&mut self) -> bool {
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
         let start = self
             .trajectory
             .first()

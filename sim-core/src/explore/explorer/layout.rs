@@ -21,13 +21,13 @@ impl Explorer {
         if !st.uses_layout() && !needs.layout_gain && !needs.layout {
             return false;
         }
-        let cell_area = self.map.frame.cell_area_m2();
-        let grown_m2 = self.layout.as_ref().map_or(f64::INFINITY, |l| {
-            (self.known_cells.saturating_sub(l.known_cells_at)) as f64 * cell_area
+        let cell_area = self.map.grid.frame.cell_area_m2();
+        let grown_m2 = self.map.layout.as_ref().map_or(f64::INFINITY, |l| {
+            (self.map.known_cells.saturating_sub(l.known_cells_at)) as f64 * cell_area
         });
-        let known_m2 = self.known_cells as f64 * cell_area;
+        let known_m2 = self.map.known_cells as f64 * cell_area;
         if grown_m2 >= layout_use.update_m2 && grown_m2 >= layout_use.update_fraction * known_m2 {
-            let grid = &self.map.occupancy;
+            let grid = &self.map.grid.occupancy;
             // Judge the previous layout by what was revealed since (for the switch strategy).
             if let (
                 Some(prev),
@@ -35,7 +35,7 @@ impl Explorer {
                     agreement,
                     min_area_m2,
                 },
-            ) = (&self.layout, st.gain)
+            ) = (&self.map.layout, st.gain)
             {
                 let (mut known, mut free) = (0usize, 0usize);
                 for &i in &prev.predicted_unknown {
@@ -55,7 +55,7 @@ impl Explorer {
                 }
             }
             // (Dropped before the next is made: two rasters of a large map are tens of MB.)
-            self.layout = None;
+            self.map.layout = None;
             // The rooms a policy is shown: only a layout predicted from the map.
             let mut rooms = Vec::new();
             let mut raster = if st.layout_from_truth() {
@@ -91,7 +91,7 @@ impl Explorer {
                     .iter()
                     .enumerate()
                     .filter(|(i, s)| {
-                        **s == Occupancy::Unknown && raster.inside(self.map.frame.cell_of_index(*i))
+                        **s == Occupancy::Unknown && raster.inside(self.map.grid.frame.cell_of_index(*i))
                     })
                     .map(|(i, _)| i as u32)
                     .collect()
@@ -99,15 +99,15 @@ impl Explorer {
                 Vec::new()
             };
             self.layouts_computed += 1;
-            self.layout = Some(LayoutState {
+            self.map.layout = Some(LayoutState {
                 raster,
-                known_cells_at: self.known_cells,
+                known_cells_at: self.map.known_cells,
                 predicted_unknown,
                 rooms,
                 number: self.layouts_computed,
             });
             // Cached layout gains were computed with the previous layout.
-            self.gains.clear_layout_gains();
+            self.map.gains.clear_layout_gains();
         }
         match st.gain {
             GainModel::Baseline => false,

@@ -7,19 +7,15 @@ use crate::explore::strategy::BuiltInPolicy;
 use crate::building::Building;
 use crate::explore::config::{map_frame, ExploreConfig};
 use crate::explore::follow::PathFollower;
-use crate::explore::gain_cache::GainCache;
-use crate::explore::layout_state::LayoutState;
 use crate::explore::localization::Localizer;
+use crate::explore::map_state::MapState;
 use crate::explore::navigation::Navigator;
 use crate::explore::policy::Needs;
 use crate::explore::referee::Referee;
 use crate::explore::run::{Decision, MapSnapshot, ProgressSample};
 use crate::frontier::blacklist::Blacklist;
-use crate::frontier::detect::FrontierTracker;
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame};
-use crate::mapping::distance_field::ObstacleDistance;
-use crate::mapping::log_odds::LogOddsMap;
 use crate::sim::{RobotId, World};
 use std::sync::Arc;
 
@@ -43,14 +39,10 @@ pub(crate) struct Explorer {
     /// ([`Explorer::observe`]: the world moves only between two sensings).
     pub(crate) now_s: f64,
     pub(crate) true_pose: Pose,
-    pub(crate) map: LogOddsMap,
-    pub(crate) obstacles: ObstacleDistance,
+    /// The map built from the scans, its frontiers, gains and layout (see `map_state`).
+    pub(crate) map: MapState,
     /// Ground truth and the run's score (see `referee`).
     pub(crate) referee: Referee,
-    /// Map cells observed (free or occupied) so far.
-    pub(crate) known: Bitmap,
-    /// The map cells the last update made known (a buffer kept between updates).
-    pub(crate) fresh_known: Vec<usize>,
     /// The pose estimate (see `localization`).
     pub(crate) localizer: Localizer,
     pub(crate) blacklist: Blacklist,
@@ -62,13 +54,7 @@ pub(crate) struct Explorer {
     pub(crate) progress: Vec<ProgressSample>,
     pub(crate) trajectory: Vec<Pose>,
     pub(crate) plans: u64,
-    /// Candidates' gains of every kind (the paper's room-bounded `I(p)` for ranking and early
-    /// stopping among them).
-    pub(crate) gains: GainCache,
     pub(crate) next_progress_s: f64,
-    /// Cells of the map that are known (free or occupied), counted from the map's own changes.
-    pub(crate) known_cells: usize,
-    pub(crate) layout: Option<LayoutState>,
     pub(crate) layouts_computed: u64,
     pub(crate) layout_cost: Option<LayoutCost>,
     /// Charged layout compute time the robot still has to wait for (s).
@@ -91,8 +77,6 @@ pub(crate) struct Explorer {
     pub(crate) stopped_early: bool,
     pub(crate) start: Pose,
     pub(crate) snapshots: Vec<MapSnapshot>,
-    /// The map's frontier cells, updated with each map update.
-    pub(crate) frontiers: FrontierTracker,
     /// The planning grids and path search (see `navigation`).
     pub(crate) nav: Navigator,
     /// `known_cells` when goals given up were last given another chance (see `forgive`).
@@ -119,7 +103,7 @@ pub(crate) struct Goal {
     /// Cells of the frontier it was chosen for.
     pub(crate) frontier: Vec<Cell>,
     pub(crate) decided_at_s: f64,
-    /// `Explorer::known_cells` when decided.
+    /// `MapState::known_cells` when decided.
     pub(crate) known_cells_at: usize,
     /// Shortest path length left seen so far, and when.
     pub(crate) best_distance_m: f64,
@@ -155,11 +139,8 @@ pub(crate) fn new_explorer(
         robot,
         now_s: world.time_s(),
         true_pose: world.true_pose(robot),
-        map: LogOddsMap::new(frame),
-        obstacles: ObstacleDistance::new(frame, cap_cells),
+        map: MapState::new(frame, cap_cells),
         referee,
-        known: Bitmap::filled(frame, false),
-        fresh_known: Vec::new(),
         blacklist: Blacklist::new(),
         last_reached: None,
         follower: PathFollower::default(),
@@ -168,10 +149,7 @@ pub(crate) fn new_explorer(
         progress: Vec::new(),
         trajectory: Vec::new(),
         plans: 0,
-        gains: GainCache::new(frame),
         next_progress_s: 0.0,
-        known_cells: 0,
-        layout: None,
         layouts_computed: 0,
         still_at: start.position(),
         still_since_s: 0.0,
@@ -187,7 +165,6 @@ pub(crate) fn new_explorer(
         stopped_early: false,
         start,
         snapshots: Vec::new(),
-        frontiers: FrontierTracker::default(),
         nav: Navigator::new(frame, cfg.sim.robot.radius_m, cfg.safety_margin_m),
         forgiven_at: None,
         frontier_cells_left: 0,

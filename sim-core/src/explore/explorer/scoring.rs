@@ -13,8 +13,8 @@ use crate::grid::Cell;
 use crate::plan::inflate::nearest_by;
 
 impl Explorer {
-    /// Credits the building cells observed through the map cells `fresh`, just made known by
-    /// the current scan (every one of them already marked in `known`): the building cells near
+    /// Credits the building cells observed through the map cells `fresh`
+    /// ([`MapState::fresh_known`]), just made known by the current scan (every one of them already marked in `known`): the building cells near
     /// where the sensor saw each whose centres, brought into the map frame by the current pose
     /// error, fall in a known map cell. With ground-truth poses that is exactly the known cells.
     /// Under a rotation every building cell still corresponds to one map cell (mapping cell
@@ -28,9 +28,10 @@ impl Explorer {
     /// itself. Hence a building cell found not creditable once in an update stays so for the rest
     /// of it, and is tested once (about a sixth of the tests of testing it for every fresh cell
     /// near it, on the bench building).
-    pub(crate) fn credit_explored(&mut self, fresh: &[usize], map_to_world: &MapToWorld) {
+    pub(crate) fn credit_explored(&mut self, map_to_world: &MapToWorld) {
         const REACH: i32 = 2;
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
+        let fresh = self.map.fresh_known();
         let referee = &mut self.referee;
         let (w, h) = (frame.width as i32, frame.height as i32);
         // The previous fresh cell's square of building cells (clipped to the frame): every cell
@@ -64,7 +65,7 @@ impl Explorer {
                     }
                     if map_to_world
                         .map_index_of(&frame, Cell::new(x, y))
-                        .is_some_and(|k| self.known.data[k])
+                        .is_some_and(|k| self.map.known.data[k])
                     {
                         referee.explored.data[j] = true;
                         referee.explored_cells += referee.truth.data[j] as usize;
@@ -82,7 +83,7 @@ impl Explorer {
     }
 
     pub(crate) fn explored_area_m2(&self) -> f64 {
-        self.referee.explored_cells as f64 * self.map.frame.cell_area_m2()
+        self.referee.explored_cells as f64 * self.map.grid.frame.cell_area_m2()
     }
 
     pub(crate) fn explored_fraction(&self) -> f64 {
@@ -110,7 +111,7 @@ impl Explorer {
             self.snapshots.push(MapSnapshot {
                 fraction: f,
                 time_s: s.time_s,
-                map: self.map.occupancy.clone(),
+                map: self.map.grid.occupancy.clone(),
             });
         }
         self.next_progress_s += self.cfg.progress_period_s;
@@ -122,12 +123,12 @@ impl Explorer {
     /// the configured length, wherever they are); stuck when a path leads to one of the cells
     /// left (every goal toward them was given up); unreachable otherwise.
     pub(crate) fn classify_end(&mut self) -> EndReason {
-        let frame = self.map.frame;
+        let frame = self.map.grid.frame;
         let fcfg = FrontierConfig::with_min_length_m(self.cfg.min_frontier_m, frame.resolution_m);
-        let mut frontiers = self.frontiers.detect(&self.map.occupancy, &fcfg);
+        let mut frontiers = self.map.frontiers.detect(&self.map.grid.occupancy, &fcfg);
         if self.cfg.frontier_clearance_m > 0.0 {
             let clearance_cells = self.cfg.frontier_clearance_m / frame.resolution_m;
-            let obstacles = &self.obstacles;
+            let obstacles = &self.map.obstacles;
             frontiers = frontiers_where(frontiers, &fcfg, |c| {
                 f64::from(obstacles.get(c)) >= clearance_cells
             });
@@ -185,7 +186,7 @@ impl Explorer {
         exploration_time_s: f64,
         world: &World,
     ) -> RunResult {
-        let mut map_quality = map_quality(&self.map.occupancy, &self.referee.free);
+        let mut map_quality = map_quality(&self.map.grid.occupancy, &self.referee.free);
         // The map as a whole may sit rotated about the start (a heading error made before any
         // wall was in view); the best fit of the estimated trajectory onto the true one undoes
         // that, and the search around it takes out what remains of a rigid misplacement, so
@@ -197,7 +198,7 @@ impl Explorer {
         );
         map_quality.occupied_precision_aligned =
             crate::mapping::alignment::aligned_occupied_precision(
-                &self.map.occupancy,
+                &self.map.grid.occupancy,
                 &self.referee.free,
                 &prior,
                 prior
@@ -226,7 +227,7 @@ impl Explorer {
                     .iter()
                     .filter(|r| {
                         let (mut free, mut explored) = (0usize, 0usize);
-                        crate::building::for_cells_in_polygon(self.map.frame, r, |i| {
+                        crate::building::for_cells_in_polygon(self.map.grid.frame, r, |i| {
                             if self.referee.truth.data[i] {
                                 free += 1;
                                 explored += self.referee.explored.data[i] as usize;
@@ -241,10 +242,10 @@ impl Explorer {
             exploration_time_s,
             total_time_s: self.now_s,
             explored_area_m2: self.explored_area_m2(),
-            free_area_m2: self.referee.truth_cells as f64 * self.map.frame.cell_area_m2(),
+            free_area_m2: self.referee.truth_cells as f64 * self.map.grid.frame.cell_area_m2(),
             unexplorable_free_m2: (self.referee.free.count_true() - self.referee.truth_cells)
                 as f64
-                * self.map.frame.cell_area_m2(),
+                * self.map.grid.frame.cell_area_m2(),
             explored_fraction: self.explored_fraction(),
             path_length_m: world.path_length_m(self.robot),
             blacklisted_goals: self.blacklist.added(),
@@ -255,8 +256,8 @@ impl Explorer {
             scan_matches_accepted: self.localizer.matches_accepted(),
             estimated_trajectory: self.localizer.take_estimated_trajectory(),
             map: crate::grid::Grid {
-                frame: self.map.occupancy.frame,
-                data: std::mem::take(&mut self.map.occupancy.data),
+                frame: self.map.grid.occupancy.frame,
+                data: std::mem::take(&mut self.map.grid.occupancy.data),
             },
             map_quality,
             plans: self.plans,

@@ -2,7 +2,6 @@
 
 use crate::explore::explorer::Explorer;
 use crate::explore::referee::MapToWorld;
-use crate::grid::Occupancy;
 use crate::sim::World;
 
 impl Explorer {
@@ -24,48 +23,15 @@ impl Explorer {
             return;
         };
         let scan = world.scan(self.robot);
-        let seen = (&self.map, &self.obstacles);
+        let seen = (&self.map.grid, &self.map.obstacles);
         let estimate = self
             .localizer
             .localize(&due, &scan, seen, self.true_pose, cfg);
-        let stats = self.map.insert_scan(&estimate, &scan, &cfg.log_odds);
-        self.known_cells += stats.cells_discovered;
-        let flips = self.map.take_occupied_flips();
-        let free_changes = self.map.take_free_changes();
-        // (The obstacle distances too, and the planning cells of every change.)
-        self.nav
-            .map_updated(&self.map, &mut self.obstacles, &flips, &free_changes);
-        // (The layout gains too: the layout they are computed with changes less often than the
-        // map, and clears them when it does.)
-        // (Changes of whether a cell is occupied recorded last: see `GainCache::touch`.)
-        let now = self.localizer.scans();
-        for &(i, _) in &free_changes {
-            self.gains.touch(i, now, false);
-        }
-        for &i in &flips {
-            self.gains.touch(i, now, true);
-        }
-        self.frontiers.update(
-            &self.map.occupancy,
-            flips
-                .iter()
-                .chain(free_changes.iter().map(|(i, _)| i))
-                .copied(),
-        );
-        // A cell never goes back to unknown, and every change from unknown is in one of the
-        // two lists.
-        let mut fresh = std::mem::take(&mut self.fresh_known);
-        fresh.clear();
-        for &i in flips.iter().chain(free_changes.iter().map(|(i, _)| i)) {
-            let i = i as usize;
-            if !self.known.data[i] && self.map.occupancy.data[i] != Occupancy::Unknown {
-                self.known.data[i] = true;
-                fresh.push(i);
-            }
-        }
+        let changes = self.map.integrate(&estimate, &scan, &cfg.log_odds);
+        // (The planning cells of every change, and the explored area.)
+        self.nav.map_updated(&self.map, &changes);
         let map_to_world = MapToWorld::new(&estimate, &self.true_pose);
-        self.credit_explored(&fresh, &map_to_world);
-        self.fresh_known = fresh;
+        self.credit_explored(&map_to_world);
         let (from, to) = self.localizer.close_update(due, self.now_s);
         self.mark_travelled(from, to);
         self.trajectory.push(self.true_pose);
