@@ -245,24 +245,32 @@ pub fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// The numbered lines of a file's code: its test modules left out (by convention at its end:
-/// from the first `#[cfg(test)]` that opens a module) and comment lines skipped.
+/// The numbered lines of a file's code: its test modules left out (each `#[cfg(test)]` module,
+/// to its closing brace at the indent it opened at) and comment lines skipped.
 pub fn code_lines(text: &str) -> Vec<(usize, &str)> {
     let lines: Vec<&str> = text.lines().collect();
     let mut out = Vec::new();
+    let mut skip_to: Option<String> = None;
     for (i, l) in lines.iter().enumerate() {
-        if l.trim() == "#[cfg(test)]"
-            && lines[i + 1..]
-                .iter()
-                .find(|n| !n.trim().is_empty())
-                .is_some_and(|n| {
-                    let n = n.trim_start();
-                    n.starts_with("mod ")
-                        || n.starts_with("pub(crate) mod ")
-                        || n.starts_with("pub mod ")
-                })
-        {
-            break;
+        if let Some(close) = &skip_to {
+            if l == close {
+                skip_to = None;
+            }
+            continue;
+        }
+        let test_module = (l.trim() == "#[cfg(test)]")
+            .then(|| lines[i + 1..].iter().find(|n| !n.trim().is_empty()))
+            .flatten()
+            .filter(|n| {
+                let n = n.trim_start();
+                n.starts_with("mod ") || n.starts_with("pub(crate) mod ") || n.starts_with("pub mod ")
+            });
+        if let Some(m) = test_module {
+            // The module's lines up to its closing brace (none when it is `mod tests;`).
+            if m.trim_end().ends_with('{') {
+                skip_to = Some(format!("{}}}", &m[..m.len() - m.trim_start().len()]));
+            }
+            continue;
         }
         if !l.trim_start().starts_with("//") {
             out.push((i + 1, *l));

@@ -435,3 +435,28 @@ fn the_reader_finds_paths_groups_and_circles() {
             .is_none()
     );
 }
+
+/// The drivers of a run, floorcast's own loop (`explore_with`) and the grid's worker path
+/// (`run_job`), are short functions over an `Episode` (issue 79): each under 60 lines, and each
+/// makes an episode and hands it to the driver loop.
+#[test]
+fn the_drivers_of_a_run_are_short_and_over_an_episode() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (file, name) in [
+        ("sim-core/src/explore/drive.rs", "explore_with"),
+        ("worker/src/lib.rs", "run_job"),
+    ] {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        let all = long_functions(&text, 0);
+        let Some(&(_, n)) = all.iter().find(|(f, _)| f == name) else {
+            panic!("{file}: no function {name}");
+        };
+        assert!(n < 60, "{file}: {name} is {n} lines");
+        let start = text.find(&format!("fn {name}(")).unwrap();
+        let body: String = text[start..].lines().take(n).collect::<Vec<_>>().join("\n");
+        assert!(
+            body.contains("Episode::") && body.contains("drive_to_end("),
+            "{file}: {name} does not make an Episode and drive it"
+        );
+    }
+}

@@ -30,7 +30,8 @@ pub mod wire;
 use std::time::Instant;
 
 use sim_core::building::{PoseProblem, StartSource};
-use sim_core::explore::{explore_with, Hooks, ProgressSample, RunResult};
+use sim_core::explore::strategy::BuiltInPolicy;
+use sim_core::explore::{drive_to_end, Episode, ExploreConfig, Policy, ProgressSample, RunResult};
 use sim_core::{Building, Pose};
 
 pub use external::{StrategyError, StrategyProgram};
@@ -326,58 +327,30 @@ fn check_size(building: &Building, name: &str, resolution_m: f64) -> Result<(), 
 }
 
 /// Runs one job to completion. `on_progress` sees the exploration curve as it grows. A panic of
-/// the simulation is caught and returned as [`JobError::Panicked`].
+/// the simulation is caught and returned as [`JobError::Panicked`]. The run is an [`Episode`]
+/// driven to its end, its decisions answered by the job's external program or by the
+/// strategy's built-in rule.
 pub fn run_job(
     job: &Job<'_>,
     on_progress: &mut dyn FnMut(&ProgressSample),
 ) -> Result<JobOutput, JobError> {
     let (config, start, source) = check_job(job)?;
     let t0 = Instant::now();
-    let mut external = match &job.program {
-        Some(program) => {
-            program.check_files().map_err(|what| StrategyError {
-                command: program.display(),
-                what,
-                stderr: String::new(),
-            })?;
-            let mut s = external::ExternalStrategy::start(program)?;
-            let frame =
-                sim_core::explore::map_frame(&job.building.bounds(), config.map_resolution_m);
-            s.begin(
-                external::run_message(
-                    &job.building_name,
-                    &job.building.content_hash(),
-                    job.seed,
-                    start,
-                    &job.settings,
-                    &program.params,
-                    &frame,
-                ),
-                job.settings.charge_compute,
-            )?;
-            Some(s)
-        }
-        None => None,
-    };
-    // With charge_compute, each layout costs the wall time it took (the robot waits for it).
-    let timed = |work: &mut dyn FnMut()| {
-        let t = Instant::now();
-        work();
-        t.elapsed().as_secs_f64()
-    };
-    let cost: Option<sim_core::explore::LayoutCost> = if job.settings.charge_compute {
-        Some(Box::new(timed))
-    } else {
-        None
-    };
+    let mut external = start_external(job, &config, start)?;
+    let (building, seed) = (job.building, job.seed);
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let hooks = Hooks {
-            layout_cost: cost,
-            policy: external
-                .as_mut()
-                .map(|s| s as &mut dyn sim_core::explore::Policy),
-        };
-        explore_with(job.building, start, &config, job.seed, on_progress, hooks)
+        match external.as_mut() {
+            Some(program) => {
+                let needs = program.needs();
+                let episode = Episode::with_policy(building, start, config.clone(), seed, needs);
+                drive_to_end(charged(episode, job), program, on_progress)
+            }
+            None => {
+                let mut rule = BuiltInPolicy::new(&config.strategy, seed);
+                let episode = Episode::new(building, start, config.clone(), seed);
+                drive_to_end(charged(episode, job), &mut rule, on_progress)
+            }
+        }
     }))
     .map_err(|p| JobError::Panicked(panic_message(&*p)))?;
     let wall_time_s = t0.elapsed().as_secs_f64();
@@ -398,6 +371,51 @@ pub fn run_job(
         result,
         strategy_stderr,
     })
+}
+
+/// The job's external strategy program, started and told of the run (`None`: a built-in
+/// strategy).
+fn start_external(
+    job: &Job<'_>,
+    config: &ExploreConfig,
+    start: Pose,
+) -> Result<Option<external::ExternalStrategy>, JobError> {
+    let Some(program) = &job.program else {
+        return Ok(None);
+    };
+    program.check_files().map_err(|what| StrategyError {
+        command: program.display(),
+        what,
+        stderr: String::new(),
+    })?;
+    let mut s = external::ExternalStrategy::start(program)?;
+    let frame = sim_core::explore::map_frame(&job.building.bounds(), config.map_resolution_m);
+    s.begin(
+        external::run_message(
+            &job.building_name,
+            &job.building.content_hash(),
+            job.seed,
+            start,
+            &job.settings,
+            &program.params,
+            &frame,
+        ),
+        job.settings.charge_compute,
+    )?;
+    Ok(Some(s))
+}
+
+/// `episode`, each layout computation charged the wall time it took when the job's settings
+/// ask for it (`charge_compute`: the robot waits for it).
+fn charged(mut episode: Episode, job: &Job<'_>) -> Episode {
+    if job.settings.charge_compute {
+        episode.charge_layouts(Box::new(|work: &mut dyn FnMut()| {
+            let t = Instant::now();
+            work();
+            t.elapsed().as_secs_f64()
+        }));
+    }
+    episode
 }
 
 /// Whether a job's run may share its beginning with runs of other strategies (see

@@ -92,8 +92,9 @@ pub fn explore_with(
 }
 
 /// Drives `episode` to its end, its decisions answered by `policy` (told how the run ended),
-/// its progress samples shown to `on_progress`.
-pub(crate) fn drive_to_end(
+/// its progress samples shown to `on_progress`. `policy` must be the one the episode was made
+/// for (its needs: [`Episode::with_policy`]; the strategy's own rule for [`Episode::new`]).
+pub fn drive_to_end(
     mut episode: Episode,
     policy: &mut dyn Policy,
     on_progress: &mut dyn FnMut(&ProgressSample),

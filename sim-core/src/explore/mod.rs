@@ -71,7 +71,7 @@ pub mod strategy;
 
 pub use crate::utility::UtilityDistance;
 pub use config::{map_frame, map_margin_m, ExploreConfig, Localization};
-pub use drive::{explore, explore_charged, explore_with, Hooks};
+pub use drive::{drive_to_end, explore, explore_charged, explore_with, Hooks};
 pub use episode::{Episode, EpisodeError, Event, RobotId};
 pub use explorer::LayoutCost;
 pub use follow::{Command, FollowConfig, PathFollower};
