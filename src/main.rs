@@ -1,5 +1,9 @@
 //! `floorcast`: simulate robot exploration of buildings, fast, and compare strategies.
 
+// A binary has no outside: its modules' `pub` is the crate's (the workspace's
+// `unreachable_pub` is for the libraries).
+#![allow(unreachable_pub)]
+
 #[macro_use]
 mod output;
 mod cmd_building;

@@ -349,7 +349,7 @@ pub(crate) struct Rings {
 }
 
 impl Rings {
-    pub fn new(options: LoadOptions) -> Self {
+    pub(crate) fn new(options: LoadOptions) -> Self {
         Rings {
             budget: FILE_BUDGET,
             options,
@@ -360,7 +360,7 @@ impl Rings {
     /// The ring `pts` (the polygon at `field` of the file at `path`, called `name` in warnings)
     /// as it is when its edges do not cross; repaired, with a warning, when they cross within
     /// the tolerance; else an error naming the first crossing.
-    pub fn check(
+    pub(crate) fn check(
         &mut self,
         path: &Path,
         field: &str,

@@ -12,7 +12,7 @@ use crate::geom::{Aabb, Polygon, Pose, Segment, Vec2};
 use crate::grid::{Bitmap, Cell, Grid, GridFrame};
 
 /// Resolution at which vector buildings are rasterised to measure areas.
-pub const AREA_RESOLUTION_M: f64 = 0.05;
+pub(crate) const AREA_RESOLUTION_M: f64 = 0.05;
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum Geometry {
@@ -53,10 +53,10 @@ pub struct Building {
 }
 
 /// Headings of start poses are refused beyond this (360°).
-pub const MAX_HEADING_RAD: f64 = std::f64::consts::TAU * (1.0 + 1e-12);
+pub(crate) const MAX_HEADING_RAD: f64 = std::f64::consts::TAU * (1.0 + 1e-12);
 
 /// Room kept free around the robot's body at a random start (the explorer's safety margin).
-pub const RANDOM_START_MARGIN_M: f64 = 0.05;
+pub(crate) const RANDOM_START_MARGIN_M: f64 = 0.05;
 
 /// Why no start pose could be chosen.
 #[derive(Debug, Clone, PartialEq)]
@@ -117,7 +117,7 @@ impl std::fmt::Display for PoseProblem {
 
 /// The clearance of the cells of a grid covering a building ([`Building::clearance_field`]).
 #[derive(Debug, Clone)]
-pub struct ClearanceField {
+pub(crate) struct ClearanceField {
     /// The building's [`Building::area_frame`].
     pub base: GridFrame,
     /// `base` padded by one (solid) cell on every side.
@@ -131,13 +131,13 @@ pub struct ClearanceField {
 impl ClearanceField {
     /// The world position of the centre of cell `index` of `frame`, computed on `base` (so
     /// that a point is bit for bit the same as on the building's own grid).
-    pub fn position(&self, index: usize) -> Vec2 {
+    pub(crate) fn position(&self, index: usize) -> Vec2 {
         let c = self.frame.cell_of_index(index);
         self.base.world_from_cell(Cell::new(c.x - 1, c.y - 1))
     }
 
     /// The free cell of largest clearance (lowest row-major index on ties) and its clearance.
-    pub fn largest(&self) -> Option<(usize, f32)> {
+    pub(crate) fn largest(&self) -> Option<(usize, f32)> {
         let mut best: Option<(usize, f32)> = None;
         for (i, &c) in self.clearance_m.data.iter().enumerate() {
             if self.free.data[i] && best.is_none_or(|(_, bc)| c > bc) {
@@ -352,7 +352,7 @@ impl Building {
     /// free cell farthest from solid space (outside the outline or the raster is solid; lowest
     /// row-major index on ties). Refused when even there a disc of `robot_radius_m` would
     /// overlap solid space.
-    pub fn largest_clearance_start(&self, robot_radius_m: f64) -> Result<Pose, StartError> {
+    pub(crate) fn largest_clearance_start(&self, robot_radius_m: f64) -> Result<Pose, StartError> {
         let field = self.clearance_field();
         let (i, _) = field.largest().ok_or(StartError::NoFreeSpace)?;
         let p = field.position(i);
@@ -368,7 +368,7 @@ impl Building {
 
     /// The distance (m) from `p` to the nearest solid space, 0 where `p` is not free. Exact:
     /// measured to the boundary segments the simulated robot collides with.
-    pub fn clearance_at(&self, p: Vec2) -> f64 {
+    pub(crate) fn clearance_at(&self, p: Vec2) -> f64 {
         if !self.is_free(p) {
             return 0.0;
         }
@@ -431,7 +431,7 @@ impl Building {
     /// The clearance of every cell of [`Building::area_frame`] (the raster's own grid or a
     /// 0.05 m grid over the outline's box), padded by one solid cell all around: outside the
     /// outline or the raster is solid.
-    pub fn clearance_field(&self) -> ClearanceField {
+    pub(crate) fn clearance_field(&self) -> ClearanceField {
         let base = self.area_frame();
         let base_free = self.free_mask(base);
         let frame = GridFrame::new(
@@ -484,7 +484,7 @@ impl Building {
     }
 
     /// The full SHA-256 digest behind [`Building::content_hash`].
-    pub fn content_digest(&self) -> [u8; 32] {
+    pub(crate) fn content_digest(&self) -> [u8; 32] {
         let mut h = Sha256::new();
         h.update(b"floorcast-building-v1\0");
         let f = |h: &mut Sha256, v: f64| h.update(v.to_le_bytes());
@@ -1245,13 +1245,13 @@ pub fn fill_polygon(mask: &mut Bitmap, poly: &Polygon, value: bool) {
 
 /// Calls `visit` with the row-major index of every cell of `f` whose centre lies inside `poly`
 /// (even-odd rule), touching only the polygon's rows.
-pub fn for_cells_in_polygon(f: GridFrame, poly: &Polygon, mut visit: impl FnMut(usize)) {
+pub(crate) fn for_cells_in_polygon(f: GridFrame, poly: &Polygon, mut visit: impl FnMut(usize)) {
     for_runs_in_polygon(f, poly, |run| run.for_each(&mut visit));
 }
 
 /// [`for_cells_in_polygon`] by runs: `visit` gets the row-major indices of each run of cells
 /// along a row, in the same order.
-pub fn for_runs_in_polygon(
+pub(crate) fn for_runs_in_polygon(
     f: GridFrame,
     poly: &Polygon,
     mut visit: impl FnMut(std::ops::Range<usize>),

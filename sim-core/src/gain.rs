@@ -32,7 +32,7 @@ pub fn visible_area(
 
 /// A box of cells, corners included (it may reach outside the frame).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct CellBox {
+pub(crate) struct CellBox {
     pub min: Cell,
     pub max: Cell,
 }
@@ -41,14 +41,14 @@ pub struct CellBox {
 /// per quadrant around the centre cell `p` (each holds `p`), and on the rays up to where they
 /// stopped ([`RayStops`]). The area stays the same while no cell read changes.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct CellsRead {
+pub(crate) struct CellsRead {
     pub boxes: [CellBox; 4],
     pub rays: RayStops,
 }
 
 impl CellsRead {
     /// Only the cell `c`.
-    pub fn of(c: Cell) -> Self {
+    pub(crate) fn of(c: Cell) -> Self {
         Self {
             boxes: [CellBox { min: c, max: c }; 4],
             rays: RayStops::default(),
@@ -59,7 +59,7 @@ impl CellsRead {
     /// the rays' stops are kept, whether it lies on a ray at or before where it stopped (which
     /// lies in the boxes); otherwise whether it lies in a box.
     #[inline]
-    pub fn may_have_read(&self, p: Cell, c: Cell) -> bool {
+    pub(crate) fn may_have_read(&self, p: Cell, c: Cell) -> bool {
         self.rays.read(p, c).unwrap_or_else(|| {
             let holds =
                 |b: &CellBox| b.min.x <= c.x && c.x <= b.max.x && b.min.y <= c.y && c.y <= b.max.y;
@@ -73,7 +73,7 @@ impl CellsRead {
 /// when not kept (a walk longer than 255 cells, a range beyond about 180 cells): any cell may
 /// then have been read.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct RayStops {
+pub(crate) struct RayStops {
     stops: Vec<u8>,
     cells: Option<std::sync::Arc<RayCells>>,
 }
@@ -94,7 +94,7 @@ struct RayCells {
 impl RayStops {
     /// Whether a ray from `p` read the cell `c`; `None` when the stops are not kept.
     #[inline]
-    pub fn read(&self, p: Cell, c: Cell) -> Option<bool> {
+    pub(crate) fn read(&self, p: Cell, c: Cell) -> Option<bool> {
         let cells = self.cells.as_ref()?;
         Some(
             cells
@@ -116,7 +116,7 @@ impl RayStops {
     /// way), so it counted exactly when within range and satisfying the predicate `counts`.
     /// `None` when the stops are not kept.
     #[inline]
-    pub fn read_in_range(&self, p: Cell, c: Cell) -> Option<(bool, bool)> {
+    pub(crate) fn read_in_range(&self, p: Cell, c: Cell) -> Option<(bool, bool)> {
         let cells = self.cells.as_ref()?;
         Some(cells.square_index(p, c).map_or((false, false), |j| {
             (self.read_at(cells, j), cells.in_range[j])
@@ -137,7 +137,7 @@ impl RayCells {
 /// [`visible_area`], with predicates that are also given the cell's row-major index in `frame`
 /// (so that they can read a grid without a bounds test on the cell), and where the cells it
 /// read lie ([`CellsRead`]).
-pub fn visible_area_read(
+pub(crate) fn visible_area_read(
     frame: &GridFrame,
     p: Cell,
     range_m: f64,
@@ -149,7 +149,7 @@ pub fn visible_area_read(
 }
 
 /// [`visible_area_read`] as a number of cells.
-pub fn visible_count_read(
+pub(crate) fn visible_count_read(
     frame: &GridFrame,
     p: Cell,
     range_m: f64,
@@ -622,7 +622,11 @@ pub fn information_gain(grid: &OccupancyGrid, p: Cell, range_m: f64) -> f64 {
 }
 
 /// [`information_gain`] and where the cells it read lie ([`CellsRead`]).
-pub fn information_gain_read(grid: &OccupancyGrid, p: Cell, range_m: f64) -> (f64, CellsRead) {
+pub(crate) fn information_gain_read(
+    grid: &OccupancyGrid,
+    p: Cell,
+    range_m: f64,
+) -> (f64, CellsRead) {
     let (count, read) = information_count_read(grid, p, range_m);
     (count as f64 * grid.frame.cell_area_m2(), read)
 }
@@ -631,7 +635,11 @@ pub fn information_gain_read(grid: &OccupancyGrid, p: Cell, range_m: f64) -> (f6
 /// an occupied cell blocks and only an unknown one counts, so while no cell read changes
 /// whether it is occupied, the count falls by one for each cell read within range that stops
 /// being unknown: [`RayStops::read_in_range`].)
-pub fn information_count_read(grid: &OccupancyGrid, p: Cell, range_m: f64) -> (usize, CellsRead) {
+pub(crate) fn information_count_read(
+    grid: &OccupancyGrid,
+    p: Cell,
+    range_m: f64,
+) -> (usize, CellsRead) {
     // (The cells as a slice: the predicates then read them without going through `grid`.)
     let data = &grid.data[..];
     visible_count_read(

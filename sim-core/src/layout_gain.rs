@@ -124,13 +124,13 @@ impl LayoutRaster {
     }
 
     /// The index (into the layout's rooms) of the room whose polygon holds the centre of `c`.
-    pub fn room_index(&self, c: Cell) -> Option<usize> {
+    pub(crate) fn room_index(&self, c: Cell) -> Option<usize> {
         let k = self.room.get(c);
         (k != NO_ROOM).then(|| k as usize - 1)
     }
 
     /// Whether a candidate at `c` must fall back to the baseline gain.
-    pub fn uses_baseline(&self, c: Cell) -> bool {
+    pub(crate) fn uses_baseline(&self, c: Cell) -> bool {
         match self.room.get(c) {
             NO_ROOM => true,
             k => self.open[k as usize - 1],
@@ -415,7 +415,7 @@ pub fn layout_information_gain(
 }
 
 /// [`layout_information_gain`] and where the map cells it read lie ([`CellsRead`]).
-pub fn layout_information_gain_read(
+pub(crate) fn layout_information_gain_read(
     grid: &OccupancyGrid,
     raster: &LayoutRaster,
     p: Cell,
@@ -494,7 +494,7 @@ pub fn gap_closed_information_gain(
 }
 
 /// [`gap_closed_information_gain`] and where the map cells it read lie ([`CellsRead`]).
-pub fn gap_closed_information_gain_read(
+pub(crate) fn gap_closed_information_gain_read(
     grid: &OccupancyGrid,
     raster: &LayoutRaster,
     p: Cell,

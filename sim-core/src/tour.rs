@@ -488,16 +488,16 @@ pub struct TourEstimate {
 }
 
 /// How many more viewpoints the greedy cover chooses than explorable area over what one sees.
-pub const ESTIMATE_OVERLAP: f64 = 2.0;
+pub(crate) const ESTIMATE_OVERLAP: f64 = 2.0;
 /// Seconds per cell a place's sweep of rays passes through (measured, see docs/known-map-tour.md).
-pub const ESTIMATE_S_PER_SWEEP_CELL: f64 = 1.5e-8;
+pub(crate) const ESTIMATE_S_PER_SWEEP_CELL: f64 = 1.5e-8;
 /// Seconds per cell a path search between viewpoints settles (measured likewise).
-pub const ESTIMATE_S_PER_SEARCH_CELL: f64 = 1.43e-8;
+pub(crate) const ESTIMATE_S_PER_SEARCH_CELL: f64 = 1.43e-8;
 /// Seconds per pair of viewpoints (the order's improving moves and the legs' pruning).
-pub const ESTIMATE_S_PER_PAIR: f64 = 5.5e-5;
+pub(crate) const ESTIMATE_S_PER_PAIR: f64 = 5.5e-5;
 /// Seconds per cell where the body fits, for what every tour does once (the explorable area,
 /// the replay with the laser).
-pub const ESTIMATE_S_PER_CELL: f64 = 1.0e-5;
+pub(crate) const ESTIMATE_S_PER_CELL: f64 = 1.0e-5;
 /// Path searches per viewpoint: the order's (from each to the later ones, four orders at most)
 /// and the legs' (driving and pruning).
 const SEARCHES_PER_VIEWPOINT: f64 = 4.0;

@@ -10,7 +10,7 @@ const FAR: f64 = 1e9;
 /// start to node `i`, `between[i * n + j]` from node `i` to node `j` (`n = from_start.len()`).
 /// Lengths that are not finite count as very long. At most `max_passes` rounds of improving
 /// moves are made (each round tries every move once).
-pub fn open_path(from_start: &[f64], between: &[f64], max_passes: usize) -> Vec<usize> {
+pub(crate) fn open_path(from_start: &[f64], between: &[f64], max_passes: usize) -> Vec<usize> {
     let n = from_start.len();
     if n == 0 || between.len() != n * n {
         return (0..n).collect();

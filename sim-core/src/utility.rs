@@ -44,7 +44,7 @@ pub struct CandidateScore {
 }
 
 /// `u(p)` per candidate (`None` for unreachable ones). `alpha` is clamped to `[0, 1]`.
-pub fn utilities(candidates: &[CandidateScore], alpha: f64) -> Vec<Option<f64>> {
+pub(crate) fn utilities(candidates: &[CandidateScore], alpha: f64) -> Vec<Option<f64>> {
     let alpha = if alpha.is_finite() {
         alpha.clamp(0.0, 1.0)
     } else {
@@ -85,7 +85,7 @@ pub fn utilities(candidates: &[CandidateScore], alpha: f64) -> Vec<Option<f64>> 
 /// 2.5 m2, both within the error of the estimate, into a reason to cross the building, only to
 /// come back later for what was left behind. With a floor, gains below it count as equal and
 /// distance decides among them; large gains still dominate.
-pub fn with_gain_floor(candidates: &[CandidateScore], floor_m2: f64) -> Vec<CandidateScore> {
+pub(crate) fn with_gain_floor(candidates: &[CandidateScore], floor_m2: f64) -> Vec<CandidateScore> {
     candidates
         .iter()
         .map(|c| CandidateScore {

@@ -338,8 +338,8 @@ pub fn run_job(
     let t0 = Instant::now();
     let mut external = start_external(job, &config, start)?;
     let (building, seed) = (job.building, job.seed);
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        match external.as_mut() {
+    let result =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match external.as_mut() {
             Some(program) => {
                 let needs = program.needs();
                 let episode = Episode::with_policy(building, start, config.clone(), seed, needs);
@@ -350,9 +350,8 @@ pub fn run_job(
                 let episode = Episode::new(building, start, config.clone(), seed);
                 drive_to_end(charged(episode, job), &mut rule, on_progress)
             }
-        }
-    }))
-    .map_err(|p| JobError::Panicked(panic_message(&*p)))?;
+        }))
+        .map_err(|p| JobError::Panicked(panic_message(&*p)))?;
     let wall_time_s = t0.elapsed().as_secs_f64();
     let mut summary = RunSummary::new(job, &result, &source, wall_time_s);
     let strategy_stderr = match external {

@@ -280,11 +280,11 @@ pub(crate) mod end_reason_name {
     use serde::{Deserialize, Deserializer, Serializer};
     use sim_core::explore::EndReason;
 
-    pub fn serialize<S: Serializer>(r: &EndReason, s: S) -> Result<S::Ok, S::Error> {
+    pub(crate) fn serialize<S: Serializer>(r: &EndReason, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_str(r.as_str())
     }
 
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<EndReason, D::Error> {
+    pub(crate) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<EndReason, D::Error> {
         let name = String::deserialize(d)?;
         match name.as_str() {
             "no frontiers" => Ok(EndReason::Complete),

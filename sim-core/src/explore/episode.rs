@@ -157,7 +157,16 @@ impl Episode {
         let world = World::with_robot(building, start, &cfg.sim, seed);
         let cfg = Arc::new(cfg);
         let robot = RobotId(0);
-        let ex = new_explorer(building, &world, robot, start, cfg, seed, caller, layout_cost);
+        let ex = new_explorer(
+            building,
+            &world,
+            robot,
+            start,
+            cfg,
+            seed,
+            caller,
+            layout_cost,
+        );
         Episode {
             world,
             ex: Box::new(ex),

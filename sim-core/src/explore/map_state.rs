@@ -189,7 +189,9 @@ mod tests {
                 .filter(|&i| before[i] != map.grid.occupancy.data[i])
                 .map(|i| i as u32)
                 .collect();
-            let missed = changed.iter().filter(|i| reported.binary_search(i).is_err());
+            let missed = changed
+                .iter()
+                .filter(|i| reported.binary_search(i).is_err());
             assert_eq!(missed.count(), 0, "update {k}: changed cells not reported");
             assert!(!changed.is_empty());
             let mut fresh = map.fresh_known().to_vec();

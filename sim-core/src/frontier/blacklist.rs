@@ -34,7 +34,7 @@ impl Blacklist {
     }
 
     /// Blacklists a goal given up (no progress toward it); [`Blacklist::forgive`] lifts it.
-    pub fn give_up(&mut self, goal_m: Vec2, radius_m: f64) {
+    pub(crate) fn give_up(&mut self, goal_m: Vec2, radius_m: f64) {
         self.push(goal_m, radius_m, true, false);
     }
 
@@ -61,14 +61,14 @@ impl Blacklist {
     }
 
     /// Whether `p` lies within the radius of a goal given up.
-    pub fn given_up_at(&self, p: Vec2) -> bool {
+    pub(crate) fn given_up_at(&self, p: Vec2) -> bool {
         self.entries
             .iter()
             .any(|e| e.given_up && (p - e.goal_m).norm_squared() <= e.radius_m * e.radius_m)
     }
 
     /// Removes the goals given up; returns how many.
-    pub fn forgive(&mut self) -> usize {
+    pub(crate) fn forgive(&mut self) -> usize {
         let before = self.entries.len();
         self.entries.retain(|e| !e.given_up);
         before - self.entries.len()

@@ -177,7 +177,7 @@ fn chains(
 /// middle cell (e.g. frontier cells too close to a wall for the robot, as explorers that look
 /// for frontiers in an inflated costmap see them). A frontier whose cells are all kept is
 /// returned as it is.
-pub fn frontiers_where(
+pub(crate) fn frontiers_where(
     frontiers: Vec<Frontier>,
     cfg: &FrontierConfig,
     keep: impl Fn(Cell) -> bool,
@@ -220,7 +220,7 @@ pub fn frontiers_where(
 /// cell. The components far from the changes, most of a large building's, are not looked at
 /// beyond copying them into the list.
 #[derive(Debug, Clone, Default)]
-pub struct FrontierTracker {
+pub(crate) struct FrontierTracker {
     /// Per cell: [`FRONTIER`] when it is a frontier cell, plus [`LABELLED`] while the component
     /// search has reached it (never between calls).
     state: Vec<u8>,
@@ -262,7 +262,7 @@ const NO_COMPONENT: u32 = u32::MAX;
 
 impl FrontierTracker {
     /// A tracker of `grid`'s frontier cells, from a full scan of the grid.
-    pub fn new(grid: &OccupancyGrid) -> Self {
+    pub(crate) fn new(grid: &OccupancyGrid) -> Self {
         let n = grid.data.len();
         let mut t = Self {
             state: vec![0; n],
@@ -288,7 +288,7 @@ impl FrontierTracker {
 
     /// Brings the frontier cells up to date after the cells at `changed` (row-major indices of
     /// `grid`, in any order, repeats allowed) changed state. A grid of another size starts over.
-    pub fn update(&mut self, grid: &OccupancyGrid, changed: impl IntoIterator<Item = u32>) {
+    pub(crate) fn update(&mut self, grid: &OccupancyGrid, changed: impl IntoIterator<Item = u32>) {
         if !self.is_for(grid) {
             *self = Self::new(grid);
             return;
@@ -348,7 +348,7 @@ impl FrontierTracker {
 
     /// The frontiers of `grid` (which must be the grid of the last update), as
     /// [`detect_frontiers`] finds them.
-    pub fn detect(&mut self, grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
+    pub(crate) fn detect(&mut self, grid: &OccupancyGrid, cfg: &FrontierConfig) -> Vec<Frontier> {
         if !self.is_for(grid) {
             *self = Self::new(grid);
         }
@@ -511,7 +511,7 @@ impl FrontierTracker {
 
 /// Whether `c` is a frontier cell: free, with an unknown 4-neighbour (outside the grid is not
 /// unknown).
-pub fn is_frontier_cell(grid: &OccupancyGrid, c: Cell) -> bool {
+pub(crate) fn is_frontier_cell(grid: &OccupancyGrid, c: Cell) -> bool {
     grid.is(c, Occupancy::Free)
         && c.neighbours4()
             .iter()

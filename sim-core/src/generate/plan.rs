@@ -27,7 +27,7 @@ pub(super) struct Params {
 }
 
 impl Params {
-    pub fn sample(kind: BuildingKind, rng: &mut impl Rng) -> Self {
+    pub(crate) fn sample(kind: BuildingKind, rng: &mut impl Rng) -> Self {
         match kind {
             BuildingKind::School => {
                 let module_m = rng.random_range(7.0..10.0);
@@ -100,7 +100,7 @@ pub(super) enum Shape {
 
 impl Shape {
     /// How the free area grows with the skeleton length (used to size it).
-    pub fn area_exponent(&self) -> f64 {
+    pub(crate) fn area_exponent(&self) -> f64 {
         1.0
     }
 }

@@ -84,7 +84,7 @@ fn iou(inter: usize, a: usize, b: usize) -> f64 {
 }
 
 /// A doorway at least this wide (m) joins two true rooms into one region of the map.
-pub const OPENING_M: f64 = 1.5;
+pub(crate) const OPENING_M: f64 = 1.5;
 
 /// The pairs of `b`'s rooms (indices into `b.rooms`) that no wall parts, to be scored as one
 /// ([`evaluate_merged`]): joined by a doorway at least [`OPENING_M`] wide, or both connective

@@ -19,9 +19,9 @@ use super::{LayoutDiagnostics, WallLine};
 use crate::geom::Vec2;
 use crate::grid::{Cell, Occupancy, OccupancyGrid};
 
-pub const NO_FACE: u32 = u32::MAX;
+pub(crate) const NO_FACE: u32 = u32::MAX;
 /// The first four lines are the sides of the box: bottom, right, top, left.
-pub const BORDER_LINES: u32 = 4;
+pub(crate) const BORDER_LINES: u32 = 4;
 
 /// A line `n . p = c` of the arrangement.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,15 +104,15 @@ impl FaceRuns {
 
 impl Arrangement {
     /// The face of the grid cell of index `i` (row-major), `NO_FACE` outside the box.
-    pub fn face_of(&self, i: usize) -> u32 {
+    pub(crate) fn face_of(&self, i: usize) -> u32 {
         self.labels.face_of(i)
     }
 
-    pub fn is_border(&self, tag: u32) -> bool {
+    pub(crate) fn is_border(&self, tag: u32) -> bool {
         tag < BORDER_LINES
     }
     /// The face across edge `e` from face `f`.
-    pub fn other_face(&self, e: u32, f: u32) -> u32 {
+    pub(crate) fn other_face(&self, e: u32, f: u32) -> u32 {
         let faces = self.edges[e as usize].faces;
         if faces[0] == f {
             faces[1]

@@ -167,7 +167,7 @@ impl SharpnessBuffers {
 /// The dominant boundary-normal orientations in `[0, pi)`, strongest first: peaks of the
 /// sharpness of all boundary cells' offsets over angles (a Radon-like scan, robust to the
 /// staircases of rotated walls, unlike local gradients), each refined to 0.05 degree.
-pub fn dominant_directions(
+pub(crate) fn dominant_directions(
     cells: &[BoundaryCell],
     resolution_m: f64,
     config: &LayoutConfig,

@@ -35,7 +35,7 @@ pub fn wall_evidence(grid: &OccupancyGrid, config: &LayoutConfig) -> WallEvidenc
 
 /// [`wall_evidence`] with the known box and the number of known cells of `grid` given (from
 /// [`known_box`]).
-pub fn wall_evidence_in(
+pub(crate) fn wall_evidence_in(
     grid: &OccupancyGrid,
     config: &LayoutConfig,
     (known_box, known_cells): (Option<(Cell, Cell)>, usize),

@@ -27,7 +27,7 @@ pub fn wall_lines(
 /// [`LayoutConfig::min_door_jamb_m`]. Only evidence parallel to the line counts, so a line
 /// extended across a corridor (whose walls are perpendicular to it) gets no gap there, while a
 /// door in a wall does: the wall continues on both sides of it.
-pub fn wall_lines_and_doors(
+pub(crate) fn wall_lines_and_doors(
     cells: &[BoundaryCell],
     normals_rad: &[f64],
     resolution_m: f64,
@@ -259,7 +259,7 @@ impl Family<'_> {
 
 /// Door gaps along a line from the sorted coordinates `ts` of its evidence cells: runs of
 /// evidence (holes up to a quarter metre are noise) and the short holes between two long runs.
-pub fn door_gaps(ts: &[f64], resolution_m: f64, config: &LayoutConfig) -> Vec<(f64, f64)> {
+pub(crate) fn door_gaps(ts: &[f64], resolution_m: f64, config: &LayoutConfig) -> Vec<(f64, f64)> {
     let join_m = (2.5 * resolution_m).max(0.25);
     let mut runs: Vec<(f64, f64)> = Vec::new();
     for &t in ts {
@@ -282,7 +282,11 @@ pub fn door_gaps(ts: &[f64], resolution_m: f64, config: &LayoutConfig) -> Vec<(f
 /// corridor (or along a corridor past a side corridor, a T junction) meets walls at the ends of
 /// the gap that run away from the line, along its normal, on one side or both, far beyond the
 /// line's own wall; a door's jambs are only as deep as that wall, however thick it is drawn.
-pub fn drop_crossings(grid: &OccupancyGrid, lines: &[WallLine], doors: &mut [Vec<(f64, f64)>]) {
+pub(crate) fn drop_crossings(
+    grid: &OccupancyGrid,
+    lines: &[WallLine],
+    doors: &mut [Vec<(f64, f64)>],
+) {
     let res = grid.frame.resolution_m;
     let reach = (1.5 / res).round().max(1.0) as i32;
     let slack = (0.2 / res).round().max(1.0) as i32;

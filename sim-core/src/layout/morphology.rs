@@ -59,7 +59,7 @@ impl BitRows {
     }
 
     /// Sets row `y` from one bool per cell of the row.
-    pub fn set_row(&mut self, y: usize, cells: &[bool]) {
+    pub(crate) fn set_row(&mut self, y: usize, cells: &[bool]) {
         assert_eq!(cells.len(), self.width, "a row has width cells");
         for (word, block) in self.row_mut(y).iter_mut().zip(cells.chunks(64)) {
             *word = pack_bools(block);
@@ -67,7 +67,7 @@ impl BitRows {
     }
 
     /// Whether a cell of row `y` in columns `a..=b` (clamped to the mask) is true.
-    pub fn any_in(&self, y: usize, a: i64, b: i64) -> bool {
+    pub(crate) fn any_in(&self, y: usize, a: i64, b: i64) -> bool {
         let (a, b) = (a.max(0), b.min(self.width as i64 - 1));
         if y >= self.height || a > b {
             return false;
@@ -117,7 +117,7 @@ impl BitRows {
     }
 
     /// The bits of word `k` of a row that are cells (not past the width).
-    pub fn valid_bits(&self, k: usize) -> u64 {
+    pub(crate) fn valid_bits(&self, k: usize) -> u64 {
         let end = self.width - (k * 64).min(self.width);
         if end >= 64 {
             u64::MAX
@@ -132,7 +132,7 @@ impl BitRows {
     }
 
     /// Every cell flipped.
-    pub fn invert(&mut self) {
+    pub(crate) fn invert(&mut self) {
         self.words.iter_mut().for_each(|w| *w = !*w);
         self.clear_padding();
     }
@@ -152,7 +152,7 @@ impl BitRows {
     /// the mask shifted both ways (radii 1, 2, 4...: a dilation by `R` followed by one by
     /// `{-s, 0, s}`, `s <= R + 1`, is one by `R + s`, also where the mask's edge clips it), a
     /// word of 64 cells at a time.
-    pub fn dilate(&self, radius: usize) -> BitRows {
+    pub(crate) fn dilate(&self, radius: usize) -> BitRows {
         let mut a = self.clone();
         if radius == 0 || self.width == 0 || self.height == 0 {
             return a;
@@ -364,7 +364,7 @@ impl WindowMask {
 /// The reference dilation (per cell, the last true cell before and after in each row, then in
 /// each column, over the whole mask): what [`BitRows::dilate`] replaced; kept to check it.
 #[cfg(any(test, feature = "test-support"))]
-pub fn dilate_reference(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
+pub(crate) fn dilate_reference(src: &[bool], w: usize, h: usize, radius: usize) -> Vec<bool> {
     let mut rows = vec![false; w * h];
     let mut line = Vec::new();
     for y in 0..h {

@@ -11,7 +11,7 @@ use super::{LayoutConfig, LayoutDiagnostics};
 use crate::geom::Vec2;
 
 /// Area of the convex hull of `pts` (monotone chain). Sorts `pts`.
-pub fn convex_hull_area_m2(pts: &mut [Vec2]) -> f64 {
+pub(crate) fn convex_hull_area_m2(pts: &mut [Vec2]) -> f64 {
     if pts.len() < 3 {
         return 0.0;
     }
@@ -94,7 +94,7 @@ impl Scorer<'_> {
 }
 
 /// Grows every partial room of `plan` into the faces that best complete it.
-pub fn predict_rooms(
+pub(crate) fn predict_rooms(
     arr: &Arrangement,
     plan: &mut RoomPlan,
     config: &LayoutConfig,

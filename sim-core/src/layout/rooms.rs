@@ -9,11 +9,11 @@ use super::{LayoutConfig, LayoutDiagnostics, LayoutRoom, RoomLabel};
 use crate::geom::{Polygon, Vec2};
 use crate::grid::{Cell, OccupancyGrid};
 
-pub const NO_ROOM: u32 = u32::MAX;
+pub(crate) const NO_ROOM: u32 = u32::MAX;
 
 /// A room as a set of faces.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct PlanRoom {
+pub(crate) struct PlanRoom {
     /// Faces seen as inside.
     pub faces: Vec<u32>,
     /// Faces added by prediction.
@@ -24,7 +24,7 @@ pub struct PlanRoom {
 
 /// Rooms as sets of faces, with the owner of every face.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct RoomPlan {
+pub(crate) struct RoomPlan {
     pub rooms: Vec<PlanRoom>,
     pub face_room: Vec<u32>,
     /// Face can be predicted into: not in a room, mostly unknown.
@@ -48,7 +48,7 @@ pub fn frontier_clusters(grid: &OccupancyGrid, min_cells: usize) -> Vec<Vec<usiz
 
 /// [`frontier_clusters`] with the box of the known cells of `grid` given (from
 /// [`known_box`](super::evidence::known_box)).
-pub fn frontier_clusters_in(
+pub(crate) fn frontier_clusters_in(
     grid: &OccupancyGrid,
     known_box: Option<(Cell, Cell)>,
     min_cells: usize,
@@ -112,7 +112,7 @@ pub fn frontier_clusters_in(
 }
 
 /// Groups the inside faces into rooms and marks the partial ones.
-pub fn group_rooms(
+pub(crate) fn group_rooms(
     grid: &OccupancyGrid,
     known_box: Option<(Cell, Cell)>,
     arr: &Arrangement,
@@ -242,7 +242,7 @@ fn join_inside_faces(
 /// The outline of a union of faces: edges between two faces of the set cancel, the rest are
 /// chained into loops; the largest loop is returned with the lines carrying its edges and the
 /// number of loops found.
-pub fn union_outline(
+pub(crate) fn union_outline(
     arr: &Arrangement,
     faces: &[u32],
     in_set: &mut [bool],
@@ -331,7 +331,7 @@ pub fn union_outline(
 }
 
 /// Builds the output rooms: outlines, labels, areas.
-pub fn room_polygons(
+pub(crate) fn room_polygons(
     grid: &OccupancyGrid,
     arr: &Arrangement,
     plan: &RoomPlan,
@@ -389,7 +389,7 @@ pub fn room_polygons(
 /// Faces left out of every room after prediction that still hold observed free space (mostly
 /// unknown faces seen through a door, say) become rooms of their own, joined across open edges;
 /// they are partial.
-pub fn adopt_leftovers(
+pub(crate) fn adopt_leftovers(
     grid: &OccupancyGrid,
     arr: &Arrangement,
     plan: &mut RoomPlan,

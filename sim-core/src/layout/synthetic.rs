@@ -195,7 +195,7 @@ pub fn complete_map(b: &Building, resolution_m: f64) -> OccupancyGrid {
 
 /// Marks what a laser at `p` looking along `heading_rad` with field of view `fov_rad` and range
 /// `range_m` sees of the complete map `full` (rays stop at the first occupied cell).
-pub fn scan_into(
+pub(crate) fn scan_into(
     full: &OccupancyGrid,
     out: &mut OccupancyGrid,
     p: Vec2,

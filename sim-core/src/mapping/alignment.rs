@@ -10,7 +10,7 @@ use crate::grid::{Bitmap, Cell, GridFrame, Occupancy, OccupancyGrid};
 
 /// Search range of [`aligned_occupied_precision`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AlignmentConfig {
+pub(crate) struct AlignmentConfig {
     pub max_rotation_rad: f64,
     pub rotation_step_rad: f64,
     pub max_translation_m: f64,
@@ -35,7 +35,7 @@ impl Default for AlignmentConfig {
 /// Returns that fraction and the small motion (`x_m, y_m` translation, `theta_rad` rotation).
 /// The raw overlap (no motion at all) is one of the candidates, so the result is never below it.
 /// A map without occupied cells scores 1.
-pub fn aligned_occupied_precision(
+pub(crate) fn aligned_occupied_precision(
     map: &OccupancyGrid,
     truth_free: &Bitmap,
     prior: &Pose,
@@ -274,7 +274,7 @@ fn near_solid(frame: GridFrame, truth_free: &Bitmap) -> Vec<bool> {
 
 /// The rigid motion `m` minimising the summed squared distances `|m(from[k]) - to[k]|`
 /// (least squares in closed form, Kabsch/Umeyama in 2-D); the identity without points.
-pub fn fit_rigid(from: &[Vec2], to: &[Vec2]) -> Pose {
+pub(crate) fn fit_rigid(from: &[Vec2], to: &[Vec2]) -> Pose {
     let n = from.len().min(to.len());
     if n == 0 {
         return Pose::new(0.0, 0.0, 0.0);

@@ -220,7 +220,7 @@ impl ObstacleDistance {
     /// whose distance it changed (some possibly more than once): only cells within the cap of a
     /// flipped cell can change (the others are at least the cap from it), so their values
     /// are kept before the update and compared after. Every cell if the frame changed.
-    pub fn update_reporting(
+    pub(crate) fn update_reporting(
         &mut self,
         grid: &OccupancyGrid,
         flips: &[u32],

@@ -348,7 +348,7 @@ impl LogOddsMap {
     }
 
     /// The mean surface point of an occupied cell with hits, in world coordinates.
-    pub fn surface_point(&self, c: Cell) -> Option<Vec2> {
+    pub(crate) fn surface_point(&self, c: Cell) -> Option<Vec2> {
         let i = self.frame.index(c)?;
         if self.occupancy.data[i] != Occupancy::Occupied {
             return None;
@@ -367,7 +367,7 @@ impl LogOddsMap {
     /// and in one block of the surface store (most cells), else cell by cell.
     // (Always inlined, as profile-guided optimisation chose: BENCHMARKS.md.)
     #[inline(always)]
-    pub fn surface_points_around(&self, c0: Cell, out: &mut [Vec2; 9]) -> usize {
+    pub(crate) fn surface_points_around(&self, c0: Cell, out: &mut [Vec2; 9]) -> usize {
         const B: usize = SURFACE_BLOCK;
         let (w, h) = (self.frame.width as i32, self.frame.height as i32);
         let mut n = 0;
@@ -470,7 +470,7 @@ impl LogOddsMap {
     }
 
     /// Returns and clears the list of `Free` transitions.
-    pub fn take_free_changes(&mut self) -> Vec<(u32, bool)> {
+    pub(crate) fn take_free_changes(&mut self) -> Vec<(u32, bool)> {
         std::mem::take(&mut self.free_changes)
     }
 

@@ -28,7 +28,7 @@ pub fn walk_segment(a: [f64; 2], b: [f64; 2], mut visit: impl FnMut(Cell) -> boo
 /// (a closure per cell is a call per cell when the compiler declines to inline it, as in the
 /// map update's hot loop). A segment with a non-finite end has no cells.
 #[derive(Debug, Clone)]
-pub struct SegmentCells {
+pub(crate) struct SegmentCells {
     cx: i32,
     cy: i32,
     ex: i32,
@@ -48,7 +48,7 @@ pub struct SegmentCells {
 impl SegmentCells {
     // (Always inlined, as profile-guided optimisation chose: BENCHMARKS.md.)
     #[inline(always)]
-    pub fn new(a: [f64; 2], b: [f64; 2]) -> Self {
+    pub(crate) fn new(a: [f64; 2], b: [f64; 2]) -> Self {
         let finite = a[0].is_finite() && a[1].is_finite() && b[0].is_finite() && b[1].is_finite();
         let cx = floor_i32(a[0]);
         let cy = floor_i32(a[1]);
@@ -106,7 +106,7 @@ impl SegmentCells {
     /// both axes while both have some left (one comparison per step), then on the one left, the
     /// index kept by adding.
     #[inline(always)]
-    pub fn for_each_indexed(
+    pub(crate) fn for_each_indexed(
         self,
         w: i32,
         mut visit: impl FnMut(Cell, usize, u32, u32),
@@ -186,7 +186,7 @@ impl Iterator for SegmentCells {
 /// Whether every cell on the segment between the centres of `a` and `b` satisfies `clear`.
 // (Always inlined, as profile-guided optimisation chose: BENCHMARKS.md.)
 #[inline(always)]
-pub fn line_of_sight(a: Cell, b: Cell, mut clear: impl FnMut(Cell) -> bool) -> bool {
+pub(crate) fn line_of_sight(a: Cell, b: Cell, mut clear: impl FnMut(Cell) -> bool) -> bool {
     let mut ok = true;
     walk_segment(
         [a.x as f64 + 0.5, a.y as f64 + 0.5],

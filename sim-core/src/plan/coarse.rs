@@ -23,12 +23,12 @@ pub struct CoarseCosts {
 }
 
 impl CoarseCosts {
-    pub fn passable(&self, c: Cell) -> bool {
+    pub(crate) fn passable(&self, c: Cell) -> bool {
         self.frame.contains(c) && self.padded[self.padded_index(c)] > 0
     }
 
     /// The cost grid on the padded frame (see the type's doc).
-    pub fn padded(&self) -> &[u8] {
+    pub(crate) fn padded(&self) -> &[u8] {
         &self.padded
     }
 
@@ -56,14 +56,14 @@ impl CoarseCosts {
     }
 
     /// The planning cell covering map cell `c`.
-    pub fn coarse_of(&self, c: Cell) -> Cell {
+    pub(crate) fn coarse_of(&self, c: Cell) -> Cell {
         let f = self.factor as i32;
         Cell::new(c.x.div_euclid(f), c.y.div_euclid(f))
     }
 
     /// The planning cell of map cell `c` if passable, else the nearest passable one within
     /// `radius_cells` planning cells.
-    pub fn passable_near(&self, c: Cell, radius_cells: i32) -> Option<Cell> {
+    pub(crate) fn passable_near(&self, c: Cell, radius_cells: i32) -> Option<Cell> {
         let cc = self.coarse_of(c);
         if self.passable(cc) {
             Some(cc)
@@ -104,7 +104,7 @@ pub fn coarse_costs(
 
 impl CoarseCosts {
     /// The planning grid of a map grid `fine` with every planning cell blocked.
-    pub fn blocked(fine: GridFrame, factor: u32) -> Self {
+    pub(crate) fn blocked(fine: GridFrame, factor: u32) -> Self {
         let f = factor.max(1);
         let frame = GridFrame::new(
             fine.origin_m,
@@ -122,7 +122,7 @@ impl CoarseCosts {
     /// Recomputes the planning cells at `cells` (row-major indices of this grid; out-of-range
     /// ones are ignored) from the map, as [`coarse_costs`] computes them. Updating every
     /// planning cell whose map cells changed keeps the grid equal to a full rebuild.
-    pub fn recompute(
+    pub(crate) fn recompute(
         &mut self,
         fine: GridFrame,
         cells: &[u32],
@@ -140,7 +140,7 @@ impl CoarseCosts {
     /// of the `k x k` cells of `finer` under it (`k` the ratio of the factors), so it is blocked
     /// when they all are, else their largest cost (1 + the largest extra cost of a traversable
     /// map cell, clamped alike). Reads `k^2` cells instead of `factor^2` map cells.
-    pub fn recompute_from(&mut self, finer: &CoarseCosts, cells: &[u32]) {
+    pub(crate) fn recompute_from(&mut self, finer: &CoarseCosts, cells: &[u32]) {
         assert!(
             self.factor.is_multiple_of(finer.factor) && self.frame.origin_m == finer.frame.origin_m,
             "a finer grid of the same map"

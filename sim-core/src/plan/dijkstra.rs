@@ -88,7 +88,7 @@ struct Node {
 impl CostField {
     /// Whether every reachable cell is settled: `distance_m` is then final for every cell,
     /// not only for the search's targets.
-    pub fn is_complete(&self) -> bool {
+    pub(crate) fn is_complete(&self) -> bool {
         self.complete
     }
 
@@ -179,7 +179,7 @@ pub fn dijkstra(trav: &Bitmap, start: Cell, extra: Option<&Grid<u8>>) -> CostFie
 /// functions of the cell index (so nothing has to be precomputed over the whole grid), and the
 /// search stops as soon as every cell of `targets` is settled (an empty `targets` searches
 /// everything reachable). `max_extra` bounds `extra`.
-pub fn dijkstra_by(
+pub(crate) fn dijkstra_by(
     frame: GridFrame,
     start: Cell,
     traversable: impl Fn(usize) -> bool,
@@ -210,7 +210,7 @@ pub fn dijkstra_by(
 /// The path lengths (m) between `cells`, row-major (`n * n`; 0 on the diagonal, infinite where
 /// no path leads or a cell is `None`): one `search` from each cell to the cells after it (which
 /// may stop once it has settled them), its lengths used both ways.
-pub fn lengths_between(
+pub(crate) fn lengths_between(
     cells: &[Option<Cell>],
     mut search: impl FnMut(Cell, &[Cell]) -> CostField,
 ) -> Vec<f64> {
@@ -239,7 +239,7 @@ pub fn lengths_between(
 /// [`dijkstra_by`] on a grid given as it searches it: `enter` covers `frame` padded by one
 /// cell on every side (row-major, `frame.width + 2` wide; the padding must be 0), with 0 for a
 /// blocked cell and otherwise 1 + the extra cost of entering the cell, at most `max_extra`.
-pub fn dijkstra_padded<T: Copy + Into<u32>>(
+pub(crate) fn dijkstra_padded<T: Copy + Into<u32>>(
     frame: GridFrame,
     start: Cell,
     enter: &[T],
@@ -262,7 +262,7 @@ pub fn dijkstra_padded<T: Copy + Into<u32>>(
 /// costs nothing for the cells outside (a grid of a building's bounding box, of which a search
 /// early in a run reaches a small part). A window that does not hold the start and every
 /// target in the frame is taken to be the whole frame.
-pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
+pub(crate) fn dijkstra_padded_within<T: Copy + Into<u32>>(
     frame: GridFrame,
     start: Cell,
     enter: &[T],
@@ -283,7 +283,7 @@ pub fn dijkstra_padded_within<T: Copy + Into<u32>>(
 /// cell beyond reads as not reached ([`CostField::distance_m`]), whether it is reachable or
 /// not; the field is complete only when nothing reachable lies beyond. Only the cells within
 /// `max_m` of the start (straight line) can be settled, so the search's window is cut to them.
-pub fn dijkstra_padded_bounded<T: Copy + Into<u32>>(
+pub(crate) fn dijkstra_padded_bounded<T: Copy + Into<u32>>(
     frame: GridFrame,
     start: Cell,
     enter: &[T],
@@ -540,7 +540,7 @@ pub struct AStar {
 
 /// The index of `c` (in `frame`) in a grid of `frame` padded by one cell on every side, as
 /// [`dijkstra_padded`] and [`AStar`] take them.
-pub fn padded_index(frame: &GridFrame, c: Cell) -> usize {
+pub(crate) fn padded_index(frame: &GridFrame, c: Cell) -> usize {
     (c.y as usize + 1) * (frame.width as usize + 2) + c.x as usize + 1
 }
 
@@ -565,7 +565,7 @@ impl AStar {
     /// frame ([`padded_index`]), when the start's flood went everywhere it could (another goal
     /// not among them cannot be reached either); otherwise it is empty (the goal's part was
     /// the smaller, or a start or goal lies outside the frame).
-    pub fn path_or_reached<T: Copy + Into<u32>>(
+    pub(crate) fn path_or_reached<T: Copy + Into<u32>>(
         &mut self,
         frame: GridFrame,
         start: Cell,
@@ -672,7 +672,7 @@ impl AStar {
 
     /// [`AStar::path`] through the cells for which `allowed` holds only (the start excepted),
     /// e.g. a corridor around a path found on a coarser grid.
-    pub fn path_within<T: Copy + Into<u32>>(
+    pub(crate) fn path_within<T: Copy + Into<u32>>(
         &mut self,
         frame: GridFrame,
         start: Cell,

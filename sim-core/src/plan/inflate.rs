@@ -29,14 +29,18 @@ pub fn traversable(grid: &OccupancyGrid, obstacles: &ObstacleDistance, radius_m:
 /// Traversability read on demand from a map and its obstacle field (same rule as
 /// [`traversable`]), for planners that touch only part of a large grid.
 #[derive(Debug, Clone, Copy)]
-pub struct Traversability<'a> {
+pub(crate) struct Traversability<'a> {
     pub grid: &'a OccupancyGrid,
     pub obstacles: &'a ObstacleDistance,
     radius_cells: f32,
 }
 
 impl<'a> Traversability<'a> {
-    pub fn new(grid: &'a OccupancyGrid, obstacles: &'a ObstacleDistance, radius_m: f64) -> Self {
+    pub(crate) fn new(
+        grid: &'a OccupancyGrid,
+        obstacles: &'a ObstacleDistance,
+        radius_m: f64,
+    ) -> Self {
         debug_assert!(grid.frame == obstacles.frame);
         Self {
             grid,
@@ -47,13 +51,13 @@ impl<'a> Traversability<'a> {
 
     /// Whether the cell with row-major index `i` is traversable.
     #[inline]
-    pub fn at_index(&self, i: usize) -> bool {
+    pub(crate) fn at_index(&self, i: usize) -> bool {
         self.grid.data[i] == Occupancy::Free
             && (self.obstacles.data[i] > self.radius_cells
                 || self.obstacles.data[i] >= self.obstacles.cap_cells as f32)
     }
 
-    pub fn at(&self, c: Cell) -> bool {
+    pub(crate) fn at(&self, c: Cell) -> bool {
         self.grid.frame.index(c).is_some_and(|i| self.at_index(i))
     }
 }
@@ -103,7 +107,11 @@ pub fn nearest_traversable(trav: &Bitmap, c: Cell, radius_cells: i32) -> Option<
 
 /// [`nearest_traversable`] with any traversability test (which must be pure: the cells are
 /// tested nearest first, and the search stops at the first traversable one).
-pub fn nearest_by(c: Cell, radius_cells: i32, traversable: impl Fn(Cell) -> bool) -> Option<Cell> {
+pub(crate) fn nearest_by(
+    c: Cell,
+    radius_cells: i32,
+    traversable: impl Fn(Cell) -> bool,
+) -> Option<Cell> {
     if !(0..=MAX_ORDERED_RADIUS).contains(&radius_cells) {
         return nearest_by_scan(c, radius_cells, traversable);
     }

@@ -11,7 +11,11 @@ pub fn waypoints(path: &[Cell], trav: &Bitmap) -> Vec<Vec2> {
 }
 
 /// [`waypoints`] with any traversability test.
-pub fn waypoints_by(path: &[Cell], frame: &GridFrame, clear: impl Fn(Cell) -> bool) -> Vec<Vec2> {
+pub(crate) fn waypoints_by(
+    path: &[Cell],
+    frame: &GridFrame,
+    clear: impl Fn(Cell) -> bool,
+) -> Vec<Vec2> {
     let mut out = Vec::new();
     if path.len() < 2 {
         return path

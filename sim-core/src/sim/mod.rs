@@ -172,7 +172,9 @@ impl World {
                 )
             })
             .collect();
-        let before: Vec<Pose> = (0..self.robots.len()).map(|k| self.bodies.pose(k)).collect();
+        let before: Vec<Pose> = (0..self.robots.len())
+            .map(|k| self.bodies.pose(k))
+            .collect();
         self.bodies.step(&clamped, self.config.step_s);
         for (k, r) in self.robots.iter_mut().enumerate() {
             let after = self.bodies.pose(k);

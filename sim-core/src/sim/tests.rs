@@ -178,7 +178,10 @@ fn robots_stop_each_other() {
     for _ in 0..100 {
         world.step(&[(0.5, 0.0), (0.5, 0.0)]);
         let d = (world.true_pose(R0).position() - world.true_pose(RobotId(1)).position()).norm();
-        assert!(d >= 2.0 * r - 0.02, "the bodies overlap: centres {d} m apart");
+        assert!(
+            d >= 2.0 * r - 0.02,
+            "the bodies overlap: centres {d} m apart"
+        );
     }
     assert!(world.path_length_m(R0) > 0.5 && world.path_length_m(RobotId(1)) > 0.5);
 }
@@ -191,5 +194,8 @@ fn each_robot_draws_from_its_own_streams() {
     // The first robot's odometry error is the same with a second robot in the world; the
     // second's is its own.
     assert_eq!(one.odometry_model(R0).error, two.odometry_model(R0).error);
-    assert_ne!(two.odometry_model(R0).error, two.odometry_model(RobotId(1)).error);
+    assert_ne!(
+        two.odometry_model(R0).error,
+        two.odometry_model(RobotId(1)).error
+    );
 }

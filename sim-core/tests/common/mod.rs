@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 use sim_core::{Cell, GridFrame, Occupancy, OccupancyGrid, Vec2};
 
 /// The real maps vendored in the repository (`maps/`).
-pub fn maps_dir() -> PathBuf {
+pub(crate) fn maps_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps")
 }
 
 /// Every map YAML under the folder, sorted.
-pub fn all_maps() -> Vec<PathBuf> {
+pub(crate) fn all_maps() -> Vec<PathBuf> {
     let mut out = Vec::new();
     let Ok(dirs) = std::fs::read_dir(maps_dir()) else {
         return out;
@@ -39,7 +39,7 @@ fn yaml_value<'a>(text: &'a str, key: &str) -> Option<&'a str> {
 
 /// Loads a map as the ROS map_server does in trinary mode (occupied above `occupied_thresh`,
 /// free below `free_thresh`, unknown between).
-pub fn load_map(yaml: &Path) -> OccupancyGrid {
+pub(crate) fn load_map(yaml: &Path) -> OccupancyGrid {
     let text = std::fs::read_to_string(yaml).unwrap();
     let image = yaml_value(&text, "image").unwrap();
     let res: f64 = yaml_value(&text, "resolution").unwrap().parse().unwrap();

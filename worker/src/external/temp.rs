@@ -16,7 +16,7 @@ use std::path::Path;
 pub const TEMP_PREFIXES: [&str; 2] = ["floorcast-job-", "floorcast-python-"];
 
 /// The file in each private folder that names its owner.
-pub const OWNER_FILE: &str = ".floorcast-owner";
+pub(crate) const OWNER_FILE: &str = ".floorcast-owner";
 
 /// The first line of an owner file (its format and version).
 const OWNER_HEADER: &str = "floorcast-temp-owner 1";

@@ -111,12 +111,15 @@ impl Explorer {
                         layout_gain_cached(&mut self.map.gains, grid, &l.raster, c, range_m, now)
                     }
                     (Some(l), true) => {
-                        self.map.gains.gain(GainKind::GapClosed, c, range_m, now, || {
-                            gap_closed_information_gain_read(grid, &l.raster, c, range_m)
-                        })
+                        self.map
+                            .gains
+                            .gain(GainKind::GapClosed, c, range_m, now, || {
+                                gap_closed_information_gain_read(grid, &l.raster, c, range_m)
+                            })
                     }
                     _ => self
-                        .map.gains
+                        .map
+                        .gains
                         .plain_gain(c, range_m, now, || information_count_read(grid, c, range_m)),
                 }
             } else {
@@ -140,7 +143,8 @@ impl Explorer {
             return false;
         }
         let grown = self.forgiven_at.is_none_or(|at| {
-            self.map.known_cells.saturating_sub(at) as f64 * self.map.grid.frame.cell_area_m2() >= 1.0
+            self.map.known_cells.saturating_sub(at) as f64 * self.map.grid.frame.cell_area_m2()
+                >= 1.0
         });
         if !grown || self.blacklist.forgive() == 0 {
             return false;
@@ -682,7 +686,8 @@ impl Explorer {
             candidates: views,
             unreachable_goal: asked.unreachable_goal,
             layout: self
-                .map.layout
+                .map
+                .layout
                 .as_ref()
                 .filter(|_| needs.layout)
                 .map(|l| LayoutView {

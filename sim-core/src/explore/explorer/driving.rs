@@ -104,14 +104,19 @@ impl Explorer {
     /// Waypoints of a path from the robot to map cell `c` ([`Navigator::path_to`]).
     pub(crate) fn path_to(&mut self, c: Cell) -> Option<Vec<Vec2>> {
         let robot = self.localizer.estimate().position();
-        self.nav.path_to(seen(&self.map.grid, &self.map.obstacles), robot, c)
+        self.nav
+            .path_to(seen(&self.map.grid, &self.map.obstacles), robot, c)
     }
 
     /// Path costs from the robot to `targets` ([`Navigator::plan`]).
     pub(crate) fn plan(&mut self, targets: &[Cell]) -> Plan {
         let robot = self.localizer.estimate().position();
-        self.nav
-            .plan(seen(&self.map.grid, &self.map.obstacles), robot, targets, 0.0)
+        self.nav.plan(
+            seen(&self.map.grid, &self.map.obstacles),
+            robot,
+            targets,
+            0.0,
+        )
     }
 
     /// [`Self::plan`] bounded as the settings ask (`ExploreConfig::distance_bound_m`; a
@@ -123,14 +128,19 @@ impl Explorer {
         } else {
             self.cfg.distance_bound_m
         };
-        self.nav
-            .plan(seen(&self.map.grid, &self.map.obstacles), robot, targets, bound_m)
+        self.nav.plan(
+            seen(&self.map.grid, &self.map.obstacles),
+            robot,
+            targets,
+            bound_m,
+        )
     }
 
     /// Path costs from the robot to every reachable cell ([`Navigator::plan_all`]).
     pub(crate) fn plan_all(&mut self) -> Plan {
         let robot = self.localizer.estimate().position();
-        self.nav.plan_all(seen(&self.map.grid, &self.map.obstacles), robot)
+        self.nav
+            .plan_all(seen(&self.map.grid, &self.map.obstacles), robot)
     }
 
     /// Waypoints of the path to map cell `c` found with `plan` ([`Navigator::waypoints_to`]).
@@ -150,7 +160,8 @@ impl Explorer {
 
     /// Where the robot's centre may be at the planning level in use.
     pub(crate) fn traversability(&self) -> Traversability<'_> {
-        self.nav.traversability(seen(&self.map.grid, &self.map.obstacles))
+        self.nav
+            .traversability(seen(&self.map.grid, &self.map.obstacles))
     }
 
     /// Marks the map cells on the segment `from`-`to` (world) travelled

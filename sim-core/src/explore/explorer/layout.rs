@@ -91,7 +91,8 @@ impl Explorer {
                     .iter()
                     .enumerate()
                     .filter(|(i, s)| {
-                        **s == Occupancy::Unknown && raster.inside(self.map.grid.frame.cell_of_index(*i))
+                        **s == Occupancy::Unknown
+                            && raster.inside(self.map.grid.frame.cell_of_index(*i))
                     })
                     .map(|(i, _)| i as u32)
                     .collect()

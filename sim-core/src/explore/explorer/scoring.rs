@@ -1,7 +1,7 @@
 //! What reads ground truth: the explored area, the progress curve, how the run ended, its result.
 
-use crate::sim::World;
 use crate::explore::run::{MapSnapshot, ProgressSample};
+use crate::sim::World;
 
 use crate::explore::explorer::Explorer;
 use crate::explore::navigation::Planning;
