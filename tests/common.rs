@@ -6,33 +6,33 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::mpsc;
 
-pub fn floorcast() -> Command {
+pub(crate) fn floorcast() -> Command {
     Command::new(env!("CARGO_BIN_EXE_floorcast"))
 }
 
-pub fn run(args: &[&str]) -> Output {
+pub(crate) fn run(args: &[&str]) -> Output {
     floorcast().args(args).output().expect("floorcast runs")
 }
 
-pub fn stdout(o: &Output) -> String {
+pub(crate) fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
-pub fn stderr(o: &Output) -> String {
+pub(crate) fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// The real maps vendored in the repository (`maps/`).
-pub fn maps_dir() -> PathBuf {
+pub(crate) fn maps_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("maps")
 }
 
-pub fn repo() -> PathBuf {
+pub(crate) fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// Asserts a failed run: exit code 2, one line on stderr containing every `needles`, no panic.
-pub fn assert_clean_failure(o: &Output, needles: &[&str]) {
+pub(crate) fn assert_clean_failure(o: &Output, needles: &[&str]) {
     let err = stderr(o);
     assert_eq!(o.status.code(), Some(2), "exit code; stderr: {err}");
     assert!(!err.contains("panicked"), "panic: {err}");
@@ -43,7 +43,7 @@ pub fn assert_clean_failure(o: &Output, needles: &[&str]) {
 }
 
 /// The rows of `report DIR --csv`: column name -> value, one map per stored job.
-pub fn report_rows(res: &Path) -> Vec<std::collections::BTreeMap<String, String>> {
+pub(crate) fn report_rows(res: &Path) -> Vec<std::collections::BTreeMap<String, String>> {
     let csv = res.join("export.csv");
     let o = run(&[
         "report",
@@ -73,11 +73,11 @@ pub fn report_rows(res: &Path) -> Vec<std::collections::BTreeMap<String, String>
 
 /// A `floorcast` child whose stdout and stderr lines are collected.
 #[derive(Debug)]
-pub struct Proc(std::process::Child, std::sync::mpsc::Receiver<String>);
+pub(crate) struct Proc(std::process::Child, std::sync::mpsc::Receiver<String>);
 
 impl Proc {
     /// Starts `floorcast ARGS` in `cwd`.
-    pub fn spawn(args: &[&str], cwd: &Path) -> Proc {
+    pub(crate) fn spawn(args: &[&str], cwd: &Path) -> Proc {
         use std::io::BufRead;
         let mut child = floorcast()
             .args(args)
@@ -106,7 +106,7 @@ impl Proc {
 
     /// Waits for the exit (killed after `timeout`, failing the test); returns the exit code and
     /// every line printed.
-    pub fn finish(mut self, timeout: std::time::Duration) -> Exit {
+    pub(crate) fn finish(mut self, timeout: std::time::Duration) -> Exit {
         let t0 = std::time::Instant::now();
         let mut seen = Vec::new();
         loop {
@@ -130,12 +130,12 @@ impl Proc {
 }
 
 /// A process's exit code and everything it printed.
-pub type Exit = (Option<i32>, String);
+pub(crate) type Exit = (Option<i32>, String);
 
 /// `floorcast run GRID --results RES --workers 0 --listen` on a free loopback port with one
 /// `floorcast worker` per name (one job each) started in `workers_cwd`; waits for all. Returns
 /// the coordinator's exit code and output, then each worker's.
-pub fn run_with_remote_workers(
+pub(crate) fn run_with_remote_workers(
     grid: &Path,
     res: &Path,
     names: &[&str],
@@ -189,7 +189,7 @@ pub fn run_with_remote_workers(
 }
 
 /// `floorcast run GRID --results RES -q`.
-pub fn run_grid(grid: &Path, res: &Path) -> Output {
+pub(crate) fn run_grid(grid: &Path, res: &Path) -> Output {
     run(&[
         "run",
         grid.to_str().unwrap(),
@@ -200,7 +200,7 @@ pub fn run_grid(grid: &Path, res: &Path) -> Output {
 }
 
 /// Runs one exploration with extra arguments; returns its summary.
-pub fn explore_with(
+pub(crate) fn explore_with(
     building: &std::path::Path,
     seed: u64,
     out: &std::path::Path,
@@ -224,7 +224,7 @@ pub fn explore_with(
 }
 
 /// The crates' source folders, for the tests that read the code itself.
-pub const CRATE_SOURCES: &[&str] = &[
+pub(crate) const CRATE_SOURCES: &[&str] = &[
     "sim-core/src",
     "formats/src",
     "render/src",
@@ -234,7 +234,7 @@ pub const CRATE_SOURCES: &[&str] = &[
 ];
 
 /// Every `.rs` file under `dir`.
-pub fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+pub(crate) fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).unwrap() {
         let p = entry.unwrap().path();
         if p.is_dir() {
@@ -247,7 +247,7 @@ pub fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 
 /// The numbered lines of a file's code: its test modules left out (each `#[cfg(test)]` module,
 /// to its closing brace at the indent it opened at) and comment lines skipped.
-pub fn code_lines(text: &str) -> Vec<(usize, &str)> {
+pub(crate) fn code_lines(text: &str) -> Vec<(usize, &str)> {
     let lines: Vec<&str> = text.lines().collect();
     let mut out = Vec::new();
     let mut skip_to: Option<String> = None;
@@ -263,7 +263,9 @@ pub fn code_lines(text: &str) -> Vec<(usize, &str)> {
             .flatten()
             .filter(|n| {
                 let n = n.trim_start();
-                n.starts_with("mod ") || n.starts_with("pub(crate) mod ") || n.starts_with("pub mod ")
+                n.starts_with("mod ")
+                    || n.starts_with("pub(crate) mod ")
+                    || n.starts_with("pub mod ")
             });
         if let Some(m) = test_module {
             // The module's lines up to its closing brace (none when it is `mod tests;`).
@@ -281,7 +283,7 @@ pub fn code_lines(text: &str) -> Vec<(usize, &str)> {
 
 /// Spawns `cmd` with its stdout and stderr piped: their lines arrive on the channel as they
 /// are printed (stderr's and stdout's interleaved as they come).
-pub fn spawn_lines(cmd: &mut Command) -> (Child, mpsc::Receiver<String>) {
+pub(crate) fn spawn_lines(cmd: &mut Command) -> (Child, mpsc::Receiver<String>) {
     let mut child = cmd
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -304,7 +306,7 @@ pub fn spawn_lines(cmd: &mut Command) -> (Child, mpsc::Receiver<String>) {
 
 /// Sends the signal `name` (`TERM`, `INT`, `9`, ...) to the process `pid`, as `kill -NAME PID`;
 /// fails the test when it cannot be sent.
-pub fn send_signal(pid: u32, name: &str) {
+pub(crate) fn send_signal(pid: u32, name: &str) {
     let sent = Command::new("kill")
         .args([format!("-{name}"), pid.to_string()])
         .status()
@@ -315,7 +317,7 @@ pub fn send_signal(pid: u32, name: &str) {
 /// `floorcast run GRID --http 127.0.0.1:0` with `workers` local workers, results in
 /// `dir/results`, run in `dir`: the child, its output lines and the address it serves on (read
 /// from its `live view:` line within 60 s; else the child is killed and the test fails).
-pub fn spawn_live_run(
+pub(crate) fn spawn_live_run(
     dir: &Path,
     grid: &Path,
     workers: usize,

@@ -17,11 +17,17 @@ fn read(path: &str) -> String {
 /// the `Kind` it chooses.
 fn format_extensions() -> Vec<(String, String)> {
     let lib = read("formats/src/lib.rs");
-    let start = lib.find("fn kind_of(").expect("formats/src/lib.rs: fn kind_of");
+    let start = lib
+        .find("fn kind_of(")
+        .expect("formats/src/lib.rs: fn kind_of");
     let body = &lib[start..start + lib[start..].find("\n}\n").unwrap()];
     let mut out = Vec::new();
     for line in body.lines().filter(|l| l.contains("=> Ok(Kind::")) {
-        let kind = line.split("Kind::").nth(1).unwrap().trim_end_matches([')', ',']);
+        let kind = line
+            .split("Kind::")
+            .nth(1)
+            .unwrap()
+            .trim_end_matches([')', ',']);
         for ext in line.split('"').skip(1).step_by(2) {
             out.push((ext.to_string(), kind.to_string()));
         }
@@ -76,7 +82,10 @@ fn every_map_format_has_its_reader_malformed_cases_and_an_example() {
                 let text = std::fs::read_to_string(&p).unwrap_or_default();
                 text.contains(&format!("pub fn read_{reader}("))
             });
-        assert!(defined, "Kind::{kind}: read_{reader} not defined in a module of formats/src");
+        assert!(
+            defined,
+            "Kind::{kind}: read_{reader} not defined in a module of formats/src"
+        );
         let ext_of_kind: Vec<&str> = exts
             .iter()
             .filter(|(_, k)| k == kind)
@@ -93,8 +102,14 @@ fn every_map_format_has_its_reader_malformed_cases_and_an_example() {
             .iter()
             .filter(|p| cases.contains(p.file_name().unwrap().to_str().unwrap()))
             .collect();
-        assert!(!run.is_empty(), "Kind::{kind} ({ext_of_kind:?}): no malformed case");
-        assert!(!examples.is_empty(), "Kind::{kind} ({ext_of_kind:?}): no example");
+        assert!(
+            !run.is_empty(),
+            "Kind::{kind} ({ext_of_kind:?}): no malformed case"
+        );
+        assert!(
+            !examples.is_empty(),
+            "Kind::{kind} ({ext_of_kind:?}): no example"
+        );
     }
 }
 
@@ -102,7 +117,11 @@ fn every_map_format_has_its_reader_malformed_cases_and_an_example() {
 #[test]
 fn the_format_count_reads_the_dispatch() {
     let exts = format_extensions();
-    for (e, k) in [("yaml", "MapServer"), ("yml", "MapServer"), ("xml", "FloorPlan")] {
+    for (e, k) in [
+        ("yaml", "MapServer"),
+        ("yml", "MapServer"),
+        ("xml", "FloorPlan"),
+    ] {
         assert!(exts.contains(&(e.to_string(), k.to_string())), "{exts:?}");
     }
 }
