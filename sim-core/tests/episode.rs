@@ -1,7 +1,8 @@
 //! An [`Episode`] driven from outside, through its public interface only (issue 79): answered by
 //! a hand-written nearest-frontier rule it is the built-in `nearest` run, decision for decision
 //! and pose for pose; moved to another thread between steps it is the same run; calls it cannot
-//! take are errors, not panics.
+//! take are errors, not panics; a team of robots shares the world, each deciding and scored on
+//! its own.
 
 // Integration tests run at the edge: they spawn threads, which the kernel itself may not
 // (sim-core/clippy.toml).
@@ -79,8 +80,8 @@ fn drive(
                 episode.answer(robot, reply).unwrap();
                 seen.decisions_asked += 1;
             }
-            Event::Progress(s) => seen.progress.push(s),
-            Event::Ended(end) => {
+            Event::Progress(_, s) => seen.progress.push(s),
+            Event::Ended(_, end) => {
                 assert!(seen.ended.is_none(), "told twice that the run ended");
                 seen.ended = Some(end);
             }
@@ -164,7 +165,7 @@ fn calls_an_episode_cannot_take_are_errors() {
     assert_eq!(episode.time_s(), t);
     assert_eq!(
         episode.answer(RobotId(1), Reply::Pass),
-        Err(EpisodeError::NoSuchRobot(RobotId(1)))
+        Err(EpisodeError::NoSuchRobot(RobotId(1), 1))
     );
     assert!(episode.view(RobotId(1)).is_none());
     // A reply naming no candidate shown is the policy's failure: the run ends at once, and the
@@ -179,11 +180,79 @@ fn calls_an_episode_cannot_take_are_errors() {
         }
     }
     assert!(
-        events.iter().all(|e| matches!(e, Event::Progress(_))),
+        events.iter().all(|e| matches!(e, Event::Progress(..))),
         "{events:?}"
     );
     assert_eq!(episode.advance(), Event::Finished);
     let run = episode.result().unwrap();
     assert_eq!(run.decisions.len(), 0);
     assert_eq!(run.exploration_time_s, t);
+}
+
+/// A team of two: both robots decide (each `Decide` names its robot), they never overlap, each
+/// run is scored, and robot 0's run is not the run alone (the other robot is in its way and its
+/// laser's), while robot 1's streams are its own. The same team is the same run again.
+#[test]
+fn a_team_shares_the_world_and_each_robot_is_scored() {
+    let (b, seed) = cases().remove(1);
+    let start = b.start.unwrap();
+    let second = sim_core::geom::Pose::new(start.x_m, start.y_m, start.theta_rad + 3.0);
+    // The second robot 0.6 m from the first, on free ground.
+    let second = [(0.6, 0.0), (-0.6, 0.0), (0.0, 0.6), (0.0, -0.6)]
+        .into_iter()
+        .map(|(dx, dy)| sim_core::geom::Pose::new(start.x_m + dx, start.y_m + dy, second.theta_rad))
+        .find(|p| {
+            let around = [
+                (0.0, 0.0),
+                (0.35, 0.0),
+                (-0.35, 0.0),
+                (0.0, 0.35),
+                (0.0, -0.35),
+            ];
+            around
+                .iter()
+                .all(|&(dx, dy)| b.is_free(p.position() + sim_core::geom::Vec2::new(dx, dy)))
+        })
+        .expect("a free place beside the start");
+    let run_team = || {
+        let mut episode = Episode::team(&b, &[start, second], nearest_config(), seed, None);
+        assert_eq!(episode.robots(), vec![RobotId(0), RobotId(1)]);
+        let mut decided = [0usize; 2];
+        let mut ended = [false; 2];
+        let mut closest = f64::INFINITY;
+        loop {
+            let w = episode.world();
+            let gap =
+                (w.true_pose(RobotId(0)).position() - w.true_pose(RobotId(1)).position()).norm();
+            closest = closest.min(gap);
+            match episode.advance() {
+                Event::Decide(r) => {
+                    decided[r.0] += 1;
+                    let reply = nearest(&episode.view(r).unwrap());
+                    episode.answer(r, reply).unwrap();
+                }
+                Event::Ended(r, _) => ended[r.0] = true,
+                Event::Progress(..) => {}
+                Event::Finished => break,
+            }
+        }
+        assert!(
+            decided.iter().all(|&n| n > 3),
+            "decisions per robot: {decided:?}"
+        );
+        assert_eq!(ended, [true, true]);
+        assert!(closest >= 0.38, "the bodies came {closest} m apart");
+        let results = episode.into_results();
+        let results: Vec<RunResult> = results.into_iter().map(|r| r.unwrap()).collect();
+        assert!(
+            results.iter().all(|r| r.explored_fraction > 0.5),
+            "explored"
+        );
+        results
+    };
+    let team = run_team();
+    assert_eq!(team, run_team());
+    let alone = explore(&b, start, &nearest_config(), seed, &mut |_| {});
+    assert_ne!(team[0].trajectory, alone.trajectory);
+    assert_ne!(team[0].trajectory, team[1].trajectory);
 }

@@ -87,7 +87,7 @@ pub fn explore_with(
             (&mut built_in, None)
         }
     };
-    let episode = Episode::build(building, start, cfg.clone(), seed, caller, layout_cost);
+    let episode = Episode::build(building, &[start], cfg.clone(), seed, caller, layout_cost);
     drive_to_end(episode, policy, on_progress)
 }
 
@@ -109,8 +109,8 @@ pub fn drive_to_end(
                 let answered = episode.answer_charged(robot, reply, charged_s);
                 debug_assert!(answered.is_ok());
             }
-            Event::Progress(sample) => on_progress(&sample),
-            Event::Ended(end) => policy.end(&end),
+            Event::Progress(_, sample) => on_progress(&sample),
+            Event::Ended(_, end) => policy.end(&end),
             Event::Finished => return episode.into_result().expect("a finished run has a result"),
         }
     }

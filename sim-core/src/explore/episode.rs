@@ -13,8 +13,11 @@
 //! exploration ends, the policy is told, the robot returns home if asked to, and the run is
 //! scored.
 //!
-//! A run has one robot today, [`RobotId`] 0; the events and answers name their robot so that a
-//! team needs no other interface.
+//! An episode holds one robot or a team ([`Episode::team`]): the robots share the [`World`]
+//! (their bodies and lasers see each other) and its clock, which moves one period once every
+//! robot has its command for it (a robot deciding holds the world until it is answered); each
+//! robot has its own exploration (estimate, map, goal, record) and result. The events and
+//! answers name their robot. One robot's episode is today's run, bit for bit.
 
 use crate::building::Building;
 use crate::explore::config::ExploreConfig;
@@ -25,7 +28,7 @@ use crate::explore::run::{EndReason, ProgressSample, RunResult};
 use crate::geom::Pose;
 pub use crate::sim::RobotId;
 use crate::sim::World;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// What [`Episode::advance`] stopped for.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,13 +36,14 @@ pub enum Event {
     /// The robot needs a decision: [`Episode::view`] shows it, [`Episode::answer`] replies.
     /// Until it is answered, `advance` returns this again and the simulation does not move.
     Decide(RobotId),
-    /// A point of the progress curve (every `progress_period_s` of simulated time, and the
-    /// last at the end of the run).
-    Progress(ProgressSample),
-    /// Exploration ended: the policy's last message (not sent when the policy failed). The
-    /// robot then returns home if the settings ask for it, and the run is scored.
-    Ended(RunEnd),
-    /// The run is over: [`Episode::result`] holds it. `advance` returns this from now on.
+    /// A point of the robot's progress curve (every `progress_period_s` of simulated time, and
+    /// the last at the end of its run).
+    Progress(RobotId, ProgressSample),
+    /// The robot's exploration ended: its policy's last message (not sent when the policy
+    /// failed). The robot then returns home if the settings ask for it, and its run is scored.
+    Ended(RobotId, RunEnd),
+    /// Every robot's run is over: [`Episode::result_of`] holds each. `advance` returns this
+    /// from now on.
     Finished,
 }
 
@@ -47,7 +51,7 @@ pub enum Event {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum EpisodeError {
     /// The episode has no such robot.
-    NoSuchRobot(RobotId),
+    NoSuchRobot(RobotId, usize),
     /// No decision of this robot is pending (`advance` has not returned [`Event::Decide`] for
     /// it, or it was answered).
     NotDeciding(RobotId),
@@ -56,9 +60,12 @@ pub enum EpisodeError {
 impl std::fmt::Display for EpisodeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            EpisodeError::NoSuchRobot(r) => {
-                write!(f, "the episode has no robot {} (it has robot 0 only)", r.0)
-            }
+            EpisodeError::NoSuchRobot(r, n) => write!(
+                f,
+                "the episode has no robot {} (its robots are 0 to {})",
+                r.0,
+                n.saturating_sub(1)
+            ),
             EpisodeError::NotDeciding(r) => write!(
                 f,
                 "robot {} has no decision pending: answer only after advance() returned Decide",
@@ -70,7 +77,7 @@ impl std::fmt::Display for EpisodeError {
 
 impl std::error::Error for EpisodeError {}
 
-/// Where the run loop stands.
+/// Where a robot's run loop stands.
 #[derive(Clone)]
 pub(super) enum Phase {
     /// At the top of the loop: sense, record progress, then decide or drive.
@@ -80,6 +87,9 @@ pub(super) enum Phase {
     /// Wait for charged compute time (standing still, sensing, one period at a time), then
     /// drive one period.
     Drive,
+    /// The robot has its command for the period: the world moves once every robot has one,
+    /// then `After` is done.
+    Moving((f64, f64), After),
     /// Exploration ended for this reason (the policy is told next).
     Ending(EndReason),
     /// The policy told: return home if asked, close the progress curve. The exploration time
@@ -89,17 +99,24 @@ pub(super) enum Phase {
     Home(EndReason, f64),
     /// Score the run (the last progress sample handed out).
     Scoring(EndReason, f64),
-    /// Scored.
+    /// Scored: the robot stands still while the others run.
     Finished,
 }
 
-/// One run (a building, settings, a seed and its robot), stepped from outside: see the module
-/// documentation. Bit-identical to [`explore`] when every decision is answered as the
-/// strategy's built-in rule ([`super::strategy::BuiltInPolicy`]) answers it.
-pub struct Episode {
-    /// The walls, the physics, the clock and the robots' bodies and sensors.
-    pub(super) world: World,
-    /// The robot's exploration: its estimate, map, goal and record.
+/// What a robot does once the world has moved.
+#[derive(Clone, Copy)]
+pub(super) enum After {
+    /// It stood still for charged compute from this time (s): sense, record progress, and wait
+    /// on or drive.
+    Waited(f64),
+    /// It drove: sense at the top of the loop.
+    Drove,
+    /// It drove on its way home: sense, and go on home.
+    Home(EndReason, f64),
+}
+
+/// One robot of an episode: its exploration and where its loop stands.
+pub(super) struct Robot {
     pub(super) ex: Box<Explorer>,
     pub(super) phase: Phase,
     /// Progress samples handed out so far.
@@ -107,20 +124,42 @@ pub struct Episode {
     pub(super) result: Option<RunResult>,
 }
 
+/// What one step of a robot's loop came to.
+enum Poll {
+    /// Something for the outside.
+    Event(Event),
+    /// The robot waits for the world to move (it has its command, or has finished).
+    Wait,
+    /// Go on stepping it.
+    Again,
+}
+
+/// One run (a building, settings, a seed and its robots), stepped from outside: see the module
+/// documentation. Bit-identical to [`explore`] when every decision is answered as the
+/// strategy's built-in rule ([`super::strategy::BuiltInPolicy`]) answers it.
+pub struct Episode {
+    /// The walls, the physics, the clock and the robots' bodies and sensors.
+    pub(super) world: World,
+    /// Each robot's exploration, by [`RobotId`].
+    pub(super) robots: Vec<Robot>,
+}
+
 impl std::fmt::Debug for Episode {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let phase = match &self.phase {
-            Phase::Sense | Phase::Drive => "running",
-            Phase::Deciding(_) => "deciding",
-            Phase::Ending(_) | Phase::Concluding(..) | Phase::Home(..) | Phase::Scoring(..) => {
-                "ending"
-            }
-            Phase::Finished => "finished",
-        };
+        let phases: Vec<&str> = self
+            .robots
+            .iter()
+            .map(|r| match &r.phase {
+                Phase::Sense | Phase::Drive | Phase::Moving(..) => "running",
+                Phase::Deciding(_) => "deciding",
+                Phase::Ending(_) | Phase::Concluding(..) | Phase::Home(..) => "ending",
+                Phase::Scoring(..) => "ending",
+                Phase::Finished => "finished",
+            })
+            .collect();
         f.debug_struct("Episode")
             .field("time_s", &self.world.time_s())
-            .field("phase", &phase)
-            .field("decisions", &self.ex.decisions.len())
+            .field("robots", &phases)
             .finish()
     }
 }
@@ -130,7 +169,7 @@ impl Episode {
     /// strategy's own rule is to answer (the episode computes what that rule needs: the
     /// layout's gains, its rooms, the paths between candidates).
     pub fn new(building: &Building, start: Pose, cfg: ExploreConfig, seed: u64) -> Episode {
-        Episode::build(building, start, cfg, seed, None, None)
+        Episode::build(building, &[start], cfg, seed, None, None)
     }
 
     /// [`Episode::new`], its decisions answered by a policy of the caller's that needs
@@ -143,43 +182,67 @@ impl Episode {
         seed: u64,
         needs: Needs,
     ) -> Episode {
-        Episode::build(building, start, cfg, seed, Some(needs), None)
+        Episode::build(building, &[start], cfg, seed, Some(needs), None)
+    }
+
+    /// A team: one robot at each of `starts` (robot `k` at `starts[k]`), in one world, each
+    /// exploring on its own with the settings `cfg` (its own map and estimate; nothing is
+    /// shared but the world), its decisions answered by a policy needing `needs` (`None`: the
+    /// strategy's own rule). Robot 0's random streams are those of a run alone; robot `k`'s
+    /// are its own.
+    pub fn team(
+        building: &Building,
+        starts: &[Pose],
+        cfg: ExploreConfig,
+        seed: u64,
+        needs: Option<Needs>,
+    ) -> Episode {
+        Episode::build(building, starts, cfg, seed, needs, None)
     }
 
     pub(super) fn build(
         building: &Building,
-        start: Pose,
+        starts: &[Pose],
         cfg: ExploreConfig,
         seed: u64,
         caller: Option<Needs>,
         layout_cost: Option<LayoutCost>,
     ) -> Episode {
-        let world = World::with_robot(building, start, &cfg.sim, seed);
+        let mut world = World::new(building, &cfg.sim, seed);
         let cfg = Arc::new(cfg);
-        let robot = RobotId(0);
-        let ex = new_explorer(
-            building,
-            &world,
-            robot,
-            start,
-            cfg,
-            seed,
-            caller,
-            layout_cost,
-        );
-        Episode {
-            world,
-            ex: Box::new(ex),
-            phase: Phase::Sense,
-            progress_sent: 0,
-            result: None,
+        let mut robots = Vec::new();
+        for &start in starts {
+            let robot = world.add_robot(start);
+            let ex = new_explorer(
+                building,
+                &world,
+                robot,
+                start,
+                Arc::clone(&cfg),
+                seed,
+                caller,
+            );
+            robots.push(Robot {
+                ex: Box::new(ex),
+                phase: Phase::Sense,
+                progress_sent: 0,
+                result: None,
+            });
         }
+        let mut episode = Episode { world, robots };
+        if let Some(cost) = layout_cost {
+            episode.charge_layouts(cost);
+        }
+        episode
     }
 
     /// Charges each layout computation the seconds `cost` returns (see
-    /// [`super::explore_charged`]).
+    /// [`super::explore_charged`]); a team's robots share it.
     pub fn charge_layouts(&mut self, cost: LayoutCost) {
-        self.ex.layout_cost = Some(cost);
+        let cost = Arc::new(Mutex::new(cost));
+        for r in &mut self.robots {
+            r.ex.layout_cost = Some(Arc::clone(&cost));
+        }
     }
 
     /// The robots of the episode.
@@ -195,7 +258,7 @@ impl Episode {
 
     /// The settings of the run.
     pub fn config(&self) -> &ExploreConfig {
-        &self.ex.cfg
+        &self.robots[0].ex.cfg
     }
 
     /// Simulated time (s).
@@ -206,52 +269,119 @@ impl Episode {
     /// Runs the simulation until something needs the outside: see [`Event`].
     pub fn advance(&mut self) -> Event {
         loop {
-            if let Some(&s) = self.ex.progress.get(self.progress_sent) {
-                self.progress_sent += 1;
-                return Event::Progress(s);
-            }
-            match std::mem::replace(&mut self.phase, Phase::Finished) {
-                Phase::Sense => self.sense(),
-                Phase::Deciding(d) => {
-                    self.phase = Phase::Deciding(d);
-                    return Event::Decide(RobotId(0));
+            for k in 0..self.robots.len() {
+                let r = &mut self.robots[k];
+                if let Some(&s) = r.ex.progress.get(r.progress_sent) {
+                    r.progress_sent += 1;
+                    return Event::Progress(RobotId(k), s);
                 }
-                Phase::Drive => self.drive(),
-                Phase::Ending(reason) => {
-                    let ex = &mut self.ex;
-                    let exploration_time_s = self.world.time_s();
-                    self.phase = Phase::Concluding(reason, exploration_time_s);
-                    if !ex.policy_failed {
-                        return Event::Ended(RunEnd {
+            }
+            // One step of the first robot that has one to take (then its progress first, as
+            // each step may record some); the world moves once none has.
+            let mut stepped = false;
+            for k in 0..self.robots.len() {
+                match self.poll(k) {
+                    Poll::Event(e) => return e,
+                    Poll::Wait => {}
+                    Poll::Again => {
+                        stepped = true;
+                        break;
+                    }
+                }
+            }
+            if stepped {
+                continue;
+            }
+            if self
+                .robots
+                .iter()
+                .all(|r| matches!(r.phase, Phase::Finished))
+            {
+                return Event::Finished;
+            }
+            self.step_world();
+        }
+    }
+
+    /// One step of robot `k`'s loop.
+    fn poll(&mut self, k: usize) -> Poll {
+        let robot = RobotId(k);
+        let r = &mut self.robots[k];
+        match std::mem::replace(&mut r.phase, Phase::Finished) {
+            Phase::Sense => self.sense(k),
+            Phase::Deciding(d) => {
+                r.phase = Phase::Deciding(d);
+                return Poll::Event(Event::Decide(robot));
+            }
+            Phase::Drive => self.drive(k),
+            moving @ Phase::Moving(..) => {
+                r.phase = moving;
+                return Poll::Wait;
+            }
+            Phase::Ending(reason) => {
+                let exploration_time_s = self.world.time_s();
+                r.phase = Phase::Concluding(reason, exploration_time_s);
+                if !r.ex.policy_failed {
+                    return Poll::Event(Event::Ended(
+                        robot,
+                        RunEnd {
                             reason,
                             exploration_time_s,
-                            explored_fraction: ex.explored_fraction(),
-                            decisions: ex.decisions.len(),
-                        });
-                    }
+                            explored_fraction: r.ex.explored_fraction(),
+                            decisions: r.ex.decisions.len(),
+                        },
+                    ));
                 }
-                Phase::Concluding(reason, exploration_time_s) => {
-                    let ex = &mut self.ex;
-                    let home = ex.cfg.return_home
-                        && reason != EndReason::TimeLimit
-                        && !ex.policy_failed
-                        && ex.head_home();
-                    self.phase = Phase::Home(reason, exploration_time_s);
-                    if !home {
-                        self.arrived_home(reason, exploration_time_s);
-                    }
+            }
+            Phase::Concluding(reason, exploration_time_s) => {
+                let ex = &mut r.ex;
+                let home = ex.cfg.return_home
+                    && reason != EndReason::TimeLimit
+                    && !ex.policy_failed
+                    && ex.head_home();
+                r.phase = Phase::Home(reason, exploration_time_s);
+                if !home {
+                    self.arrived_home(k, reason, exploration_time_s);
                 }
-                Phase::Home(reason, exploration_time_s) => {
-                    self.home(reason, exploration_time_s);
+            }
+            Phase::Home(reason, exploration_time_s) => self.home(k, reason, exploration_time_s),
+            Phase::Scoring(reason, exploration_time_s) => {
+                r.result = Some(r.ex.finish(reason, exploration_time_s, &self.world));
+                r.phase = Phase::Finished;
+            }
+            Phase::Finished => return Poll::Wait,
+        }
+        Poll::Again
+    }
+
+    /// Moves the world one period, every robot by its command (a finished robot stands
+    /// still), then lets each robot take in the move.
+    fn step_world(&mut self) {
+        let commands: Vec<(f64, f64)> = self
+            .robots
+            .iter()
+            .map(|r| match r.phase {
+                Phase::Moving(command, _) => command,
+                _ => (0.0, 0.0),
+            })
+            .collect();
+        self.world.step(&commands);
+        for k in 0..self.robots.len() {
+            let r = &mut self.robots[k];
+            let Phase::Moving(_, after) = r.phase else {
+                continue;
+            };
+            match after {
+                After::Waited(t0) => {
+                    r.ex.compute_debt_s -= self.world.time_s() - t0;
+                    r.ex.sense(&mut self.world);
+                    r.ex.record_progress();
+                    r.phase = Phase::Drive;
                 }
-                Phase::Scoring(reason, exploration_time_s) => {
-                    let result = self.ex.finish(reason, exploration_time_s, &self.world);
-                    self.result = Some(result);
-                    self.phase = Phase::Finished;
-                }
-                Phase::Finished => {
-                    self.phase = Phase::Finished;
-                    return Event::Finished;
+                After::Drove => r.phase = Phase::Sense,
+                After::Home(reason, exploration_time_s) => {
+                    r.ex.sense(&mut self.world);
+                    r.phase = Phase::Home(reason, exploration_time_s);
                 }
             }
         }
@@ -259,88 +389,68 @@ impl Episode {
 
     /// One period of waiting for charged compute time (standing still, sensing) while any is
     /// due; else the robot drives one period.
-    fn drive(&mut self) {
-        let (ex, world) = (&mut self.ex, &mut self.world);
-        if ex.compute_debt_s > 0.0 && world.time_s() < ex.cfg.time_limit_s {
-            let t0 = world.time_s();
-            world.idle();
-            ex.compute_debt_s -= world.time_s() - t0;
-            ex.sense(world);
-            ex.record_progress();
-            self.phase = Phase::Drive;
+    fn drive(&mut self, k: usize) {
+        let (r, now) = (&mut self.robots[k], self.world.time_s());
+        r.phase = if r.ex.compute_debt_s > 0.0 && now < r.ex.cfg.time_limit_s {
+            Phase::Moving((0.0, 0.0), After::Waited(now))
         } else {
-            ex.compute_debt_s = 0.0;
-            let command = ex.drive();
-            world.step(&[command]);
-            self.phase = Phase::Sense;
-        }
+            r.ex.compute_debt_s = 0.0;
+            Phase::Moving(r.ex.drive(), After::Drove)
+        };
     }
 
-    /// One period on the way home (sensing), or arrived (or out of time).
-    fn home(&mut self, reason: EndReason, exploration_time_s: f64) {
-        let (ex, world) = (&mut self.ex, &mut self.world);
-        let command = if world.time_s() < ex.cfg.time_limit_s {
-            ex.drive_home()
+    /// One period on the way home, or arrived (or out of time).
+    fn home(&mut self, k: usize, reason: EndReason, exploration_time_s: f64) {
+        let (r, now) = (&mut self.robots[k], self.world.time_s());
+        let command = if now < r.ex.cfg.time_limit_s {
+            r.ex.drive_home()
         } else {
             None
         };
         match command {
-            Some(command) => {
-                world.step(&[command]);
-                ex.sense(world);
-                self.phase = Phase::Home(reason, exploration_time_s);
-            }
-            None => self.arrived_home(reason, exploration_time_s),
+            Some(c) => r.phase = Phase::Moving(c, After::Home(reason, exploration_time_s)),
+            None => self.arrived_home(k, reason, exploration_time_s),
         }
     }
 
     /// The progress curve closed; the run is scored next.
-    fn arrived_home(&mut self, reason: EndReason, exploration_time_s: f64) {
-        self.ex.close_curve();
-        self.phase = Phase::Scoring(reason, exploration_time_s);
+    fn arrived_home(&mut self, k: usize, reason: EndReason, exploration_time_s: f64) {
+        let r = &mut self.robots[k];
+        r.ex.close_curve();
+        r.phase = Phase::Scoring(reason, exploration_time_s);
     }
 
-    /// The top of the run loop: sense, record progress, end at the time limit, else decide when
-    /// a decision is due, or drive.
-    fn sense(&mut self) {
-        self.ex.sense(&mut self.world);
-        self.ex.record_progress();
-        self.phase = if self.world.time_s() >= self.ex.cfg.time_limit_s {
+    /// The top of robot `k`'s loop: sense, record progress, end at the time limit, else decide
+    /// when a decision is due, or drive.
+    fn sense(&mut self, k: usize) {
+        let r = &mut self.robots[k];
+        r.ex.sense(&mut self.world);
+        r.ex.record_progress();
+        r.phase = if self.world.time_s() >= r.ex.cfg.time_limit_s {
             Phase::Ending(EndReason::TimeLimit)
-        } else if self.ex.needs_decision() {
-            let step = self.ex.begin_decision(false);
-            self.after_decision(step, false)
+        } else if r.ex.needs_decision() {
+            let step = r.ex.begin_decision(false);
+            after_decision(&mut r.ex, step, false)
         } else {
             Phase::Drive
         };
     }
 
-    /// Where a decision's step leads: the question pending, driving to the goal set, one more
-    /// chance for the goals given up (unless the decision had it: `forgiven`), or the end of
-    /// exploration.
-    fn after_decision(&mut self, step: Step, forgiven: bool) -> Phase {
-        match step {
-            Step::Ask(d) => Phase::Deciding(d),
-            Step::Done(true) => Phase::Drive,
-            Step::Done(false) if !forgiven && self.ex.forgive() => {
-                let step = self.ex.begin_decision(true);
-                self.after_decision(step, true)
-            }
-            Step::Done(false) => Phase::Ending(if self.ex.stopped_early {
-                EndReason::EarlyStop
-            } else {
-                self.ex.classify_end()
-            }),
-        }
+    /// The robot `robot` of this episode.
+    fn robot(&self, robot: RobotId) -> Result<&Robot, EpisodeError> {
+        self.robots
+            .get(robot.0)
+            .ok_or(EpisodeError::NoSuchRobot(robot, self.robots.len()))
     }
 
     /// The decision pending for `robot` as its policy sees it (`None` when none is pending).
     pub fn view(&self, robot: RobotId) -> Option<DecisionView<'_>> {
-        match (&self.phase, robot) {
-            (Phase::Deciding(d), RobotId(0)) => Some(self.ex.decision_view(
+        let r = self.robot(robot).ok()?;
+        match &r.phase {
+            Phase::Deciding(d) => Some(r.ex.decision_view(
                 &d.views,
                 &d.asked,
-                self.ex.policy_needs,
+                r.ex.policy_needs,
                 d.between.as_deref(),
             )),
             _ => None,
@@ -348,7 +458,8 @@ impl Episode {
     }
 
     /// Answers the decision pending for `robot` (see [`Reply`]). A reply that names no
-    /// candidate shown is the policy's failure and ends the run, as [`Reply::Fail`] does.
+    /// candidate shown is the policy's failure and ends the robot's run, as [`Reply::Fail`]
+    /// does.
     pub fn answer(&mut self, robot: RobotId, reply: Reply) -> Result<(), EpisodeError> {
         self.answer_charged(robot, reply, 0.0)
     }
@@ -361,29 +472,59 @@ impl Episode {
         reply: Reply,
         compute_s: f64,
     ) -> Result<(), EpisodeError> {
-        if !self.world.has(robot) {
-            return Err(EpisodeError::NoSuchRobot(robot));
-        }
-        let d = match std::mem::replace(&mut self.phase, Phase::Finished) {
+        self.robot(robot)?;
+        let r = &mut self.robots[robot.0];
+        let d = match std::mem::replace(&mut r.phase, Phase::Finished) {
             Phase::Deciding(d) => d,
             other => {
-                self.phase = other;
+                r.phase = other;
                 return Err(EpisodeError::NotDeciding(robot));
             }
         };
         let forgiven = d.forgiven;
-        let step = self.ex.reply(d, reply, compute_s);
-        self.phase = self.after_decision(step, forgiven);
+        let step = r.ex.reply(d, reply, compute_s);
+        r.phase = after_decision(&mut r.ex, step, forgiven);
         Ok(())
     }
 
-    /// The run's result, once [`Event::Finished`] was returned.
+    /// Robot 0's result (the run's, for an episode of one robot), once [`Event::Finished`] was
+    /// returned.
     pub fn result(&self) -> Option<&RunResult> {
-        self.result.as_ref()
+        self.robots.first()?.result.as_ref()
     }
 
-    /// The run's result, once [`Event::Finished`] was returned.
+    /// `robot`'s result, once its run is over.
+    pub fn result_of(&self, robot: RobotId) -> Option<&RunResult> {
+        self.robot(robot).ok()?.result.as_ref()
+    }
+
+    /// Robot 0's result (the run's, for an episode of one robot), once [`Event::Finished`] was
+    /// returned.
     pub fn into_result(self) -> Option<RunResult> {
-        self.result
+        self.robots.into_iter().next()?.result
+    }
+
+    /// Every robot's result (by [`RobotId`]), once [`Event::Finished`] was returned.
+    pub fn into_results(self) -> Vec<Option<RunResult>> {
+        self.robots.into_iter().map(|r| r.result).collect()
+    }
+}
+
+/// Where a decision's step leads: the question pending, driving to the goal set, one more
+/// chance for the goals given up (unless the decision had it: `forgiven`), or the end of
+/// exploration.
+fn after_decision(ex: &mut Explorer, step: Step, forgiven: bool) -> Phase {
+    match step {
+        Step::Ask(d) => Phase::Deciding(d),
+        Step::Done(true) => Phase::Drive,
+        Step::Done(false) if !forgiven && ex.forgive() => {
+            let step = ex.begin_decision(true);
+            after_decision(ex, step, true)
+        }
+        Step::Done(false) => Phase::Ending(if ex.stopped_early {
+            EndReason::EarlyStop
+        } else {
+            ex.classify_end()
+        }),
     }
 }

@@ -12,7 +12,7 @@
 use crate::building::Building;
 use crate::explore::config::ExploreConfig;
 use crate::explore::drive::{drive_to_end, explore};
-use crate::explore::episode::{Episode, Event, Phase};
+use crate::explore::episode::{Episode, Event, Phase, Robot, RobotId};
 use crate::explore::explorer::deciding::Deciding;
 use crate::explore::explorer::{built_in_needs, Explorer};
 use crate::explore::policy::{Needs, Policy, Reply};
@@ -101,12 +101,12 @@ pub fn explore_shared(
                     Some(view) => policy.decide(&view),
                     None => unreachable!("a decision is pending"),
                 };
-                together.ask_members(&mut leader, &reply);
+                together.ask_members(&mut leader, robot, &reply);
                 let answered = leader.answer_charged(robot, reply, charged_s);
                 debug_assert!(answered.is_ok());
             }
-            Event::Progress(s) => on_progress(&s),
-            Event::Ended(_) => {
+            Event::Progress(_, s) => on_progress(&s),
+            Event::Ended(..) => {
                 // The members that never parted: the leader's run up to its end, then their
                 // own ending.
                 shared_s = clock();
@@ -158,7 +158,7 @@ impl Together {
         cfg: &ExploreConfig,
         clock: &mut dyn FnMut() -> f64,
     ) {
-        let asked = leader.ex.policy_decisions;
+        let asked = leader.robots[0].ex.policy_decisions;
         let due =
             self.checkpoint.is_none() || asked >= self.checkpoint_decisions + CHECKPOINT_DECISIONS;
         if !due || self.following().next().is_none() {
@@ -176,10 +176,10 @@ impl Together {
 
     /// Every member still following is asked the decision pending with the candidates as it
     /// sees them; those whose reply differs from the leader's `reply` part.
-    fn ask_members(&mut self, leader: &mut Episode, reply: &Reply) {
+    fn ask_members(&mut self, leader: &mut Episode, robot: RobotId, reply: &Reply) {
         let checkpoint = self.checkpoint.clone();
         for m in self.following() {
-            if leader.ask_alongside(&mut m.policy, m.needs) != *reply {
+            if leader.ask_alongside(robot, &mut m.policy, m.needs) != *reply {
                 let (from, at_s) = checkpoint
                     .clone()
                     .expect("a checkpoint is taken at the first decision");
@@ -214,37 +214,43 @@ impl Episode {
     /// the early stop only) answered by its built-in rule. A decision pending is shown anew as
     /// that rule sees it. Hooks are not copied (shared runs have none).
     pub(super) fn fork(&self, cfg: &ExploreConfig) -> Episode {
-        let needs = built_in_needs(&BuiltInPolicy::new(&cfg.strategy, self.ex.seed), cfg);
-        let mut ex = Box::new(self.ex.fork(Arc::new(cfg.clone()), needs));
-        let phase = match &self.phase {
-            Phase::Deciding(d) => {
-                let mut d: Box<Deciding> = d.clone();
-                let (views, between) = d.show(&mut ex, needs);
-                d.views = views;
-                d.between = between;
-                Phase::Deciding(d)
+        let cfg = Arc::new(cfg.clone());
+        let robots = self.robots.iter().map(|r| {
+            let needs = built_in_needs(&BuiltInPolicy::new(&cfg.strategy, r.ex.seed), &cfg);
+            let mut ex = Box::new(r.ex.fork(Arc::clone(&cfg), needs));
+            let phase = match &r.phase {
+                Phase::Deciding(d) => {
+                    let mut d: Box<Deciding> = d.clone();
+                    let (views, between) = d.show(&mut ex, needs);
+                    d.views = views;
+                    d.between = between;
+                    Phase::Deciding(d)
+                }
+                other => other.clone(),
+            };
+            Robot {
+                ex,
+                phase,
+                progress_sent: r.progress_sent,
+                result: None,
             }
-            other => other.clone(),
-        };
+        });
         Episode {
             world: self.world.clone(),
-            ex,
-            phase,
-            progress_sent: self.progress_sent,
-            result: None,
+            robots: robots.collect(),
         }
     }
 
-    /// The reply `policy` (a rule needing `needs`) gives to the decision pending, shown as it
-    /// would see it.
-    fn ask_alongside(&mut self, policy: &mut BuiltInPolicy, needs: Needs) -> Reply {
-        let Phase::Deciding(d) = &self.phase else {
+    /// The reply `policy` (a rule needing `needs`) gives to the decision pending for `robot`,
+    /// shown as it would see it.
+    fn ask_alongside(&mut self, robot: RobotId, policy: &mut BuiltInPolicy, needs: Needs) -> Reply {
+        let r = &mut self.robots[robot.0];
+        let Phase::Deciding(d) = &r.phase else {
             unreachable!("asked alongside a decision pending")
         };
-        let (views, between) = d.show(&mut self.ex, needs);
-        let view = self
-            .ex
-            .decision_view(&views, &d.asked, needs, between.as_deref());
+        let (views, between) = d.show(&mut r.ex, needs);
+        let view =
+            r.ex.decision_view(&views, &d.asked, needs, between.as_deref());
         policy.decide(&view).0
     }
 }

@@ -70,8 +70,11 @@ impl Explorer {
             } else {
                 let mut made = None;
                 let layout_cfg = &self.cfg.layout;
-                let charged_s = match self.layout_cost.as_mut() {
-                    Some(cost) => cost(&mut || made = Some(reconstruct_layout(grid, layout_cfg))),
+                let charged_s = match self.layout_cost.as_ref() {
+                    Some(cost) => {
+                        let mut cost = cost.lock().unwrap_or_else(|e| e.into_inner());
+                        cost(&mut || made = Some(reconstruct_layout(grid, layout_cfg)))
+                    }
                     None => 0.0,
                 };
                 let layout = made.unwrap_or_else(|| reconstruct_layout(grid, layout_cfg));

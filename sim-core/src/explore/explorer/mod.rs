@@ -17,7 +17,7 @@ use crate::frontier::blacklist::Blacklist;
 use crate::geom::{Pose, Vec2};
 use crate::grid::{Bitmap, Cell, GridFrame};
 use crate::sim::{RobotId, World};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 pub(crate) mod deciding;
 pub(crate) mod driving;
@@ -56,7 +56,8 @@ pub(crate) struct Explorer {
     pub(crate) plans: u64,
     pub(crate) next_progress_s: f64,
     pub(crate) layouts_computed: u64,
-    pub(crate) layout_cost: Option<LayoutCost>,
+    /// The caller's measure of a layout's compute cost, shared by a team's robots.
+    pub(crate) layout_cost: Option<Arc<Mutex<LayoutCost>>>,
     /// Charged layout compute time the robot still has to wait for (s).
     pub(crate) compute_debt_s: f64,
     /// Layout compute time charged so far (s).
@@ -112,7 +113,6 @@ pub(crate) struct Goal {
 
 /// The state of `robot`'s exploration of `world` (made of `building`), starting at `start`:
 /// `caller` holds the needs of the caller's policy (`None`: the strategy's rule decides).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn new_explorer(
     building: &Building,
     world: &World,
@@ -121,7 +121,6 @@ pub(crate) fn new_explorer(
     cfg: Arc<ExploreConfig>,
     seed: u64,
     caller: Option<Needs>,
-    layout_cost: Option<LayoutCost>,
 ) -> Explorer {
     let policy_needs = match caller {
         Some(needs) => needs,
@@ -153,7 +152,7 @@ pub(crate) fn new_explorer(
         layouts_computed: 0,
         still_at: start.position(),
         still_since_s: 0.0,
-        layout_cost,
+        layout_cost: None,
         compute_debt_s: 0.0,
         layout_compute_s: 0.0,
         policy_needs,
