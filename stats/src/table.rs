@@ -20,7 +20,7 @@ use crate::outcome::{self, coverage_text, end_class, end_classes, label_order, P
 use crate::progress::Sample;
 // A gain in per cent of the reference's time from a mean log ratio `m = ln t_ref - ln t`.
 use crate::sprt::gain_pct_of_effect as gain_pct;
-use crate::store::StoredResult;
+use crate::StoredResult;
 
 /// Mean and sample standard deviation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -228,14 +228,9 @@ impl Configuration {
         Self::new(&r.strategy, &r.settings, program)
     }
 
-    /// The configuration of a planned job.
-    pub fn of_job(j: &crate::grid::PlannedJob) -> Configuration {
-        Self::new(&j.strategy, &j.settings, j.program.as_ref())
-    }
-
     /// The configuration of `settings` and `program`, each as it is written (a setting by its
-    /// name, the program's identity by its fields).
-    fn new(
+    /// name, the program's identity by its fields): a planned job's, for one.
+    pub fn new(
         strategy: &str,
         settings: &floorcast_worker::Settings,
         program: Option<&floorcast_worker::StrategyProgram>,
@@ -334,17 +329,16 @@ pub fn check_label_configurations(results: &[StoredResult]) -> Result<(), String
     Ok(())
 }
 
-/// The labels of a planned grid's jobs have, among the stored `results`, only runs of the same
-/// configuration as the grid gives them; else the first label that has others, in one line.
-pub fn check_plan_labels(
-    jobs: &[crate::grid::PlannedJob],
+/// The labels of a planned grid's jobs (each job's label and configuration, the first of a
+/// label standing for it) have, among the stored `results`, only runs of the same configuration
+/// as the grid gives them; else the first label that has others, in one line.
+pub fn check_planned_labels<'a>(
+    jobs: impl IntoIterator<Item = (&'a str, Configuration)>,
     results: &[StoredResult],
 ) -> Result<(), String> {
     let mut planned: BTreeMap<&str, Configuration> = BTreeMap::new();
-    for j in jobs {
-        planned
-            .entry(&j.label)
-            .or_insert_with(|| Configuration::of_job(j));
+    for (label, c) in jobs {
+        planned.entry(label).or_insert(c);
     }
     for r in results {
         if let Some(c) = planned.get(r.label.as_str()) {
@@ -1484,8 +1478,8 @@ pub fn results_csv(results: &[StoredResult]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fixtures::{progress, set_summary, stored, summary_value};
     use crate::metric::unexplored_area_s;
-    use crate::store::fixtures::{progress, set_summary, stored, summary_value};
 
     /// Gains and their intervals as text: percentages, a time ratio below -100 %, and an
     /// interval with an end below -100 % wholly in time ratios.
@@ -1611,7 +1605,7 @@ mod tests {
         // A failed job stored no program: the same as any, and not the label's reference.
         let mut failed = b.clone();
         failed.summary = None;
-        failed.status = crate::store::JobStatus::Failed;
+        failed.status = floorcast_worker::wire::JobStatus::Failed;
         assert_eq!(
             check_label_configurations(&[failed.clone(), with_program("a.py")]),
             Ok(())
@@ -1854,7 +1848,7 @@ mod tests {
                     let mut r = stored_end(label, seed, t, "complete", f, s0);
                     r.building = building.into();
                     if rng.random::<f64>() < 0.05 {
-                        r.status = crate::store::JobStatus::Failed;
+                        r.status = floorcast_worker::wire::JobStatus::Failed;
                         r.summary = None;
                     }
                     results.push(r);
@@ -1988,7 +1982,7 @@ mod tests {
         };
         let failed = || {
             let mut r = stored("b", "x", 1, 100.0);
-            r.status = crate::store::JobStatus::Failed;
+            r.status = floorcast_worker::wire::JobStatus::Failed;
             r.summary = None;
             outcome_of(&r, 0.99, "b")
         };
