@@ -1495,12 +1495,6 @@ impl rusqlite::types::FromSql for DecisionColumn {
     }
 }
 
-/// Stored results for the crate's tests ([`floorcast_stats::fixtures`]).
-#[cfg(test)]
-pub(crate) mod fixtures {
-    pub(crate) use floorcast_stats::fixtures::{progress, set_summary, stored, summary_value};
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1541,7 +1535,7 @@ mod tests {
     /// A store of one ok row (a real summary) and one failed row, closed (its log merged).
     fn good_store(dir: &Path) {
         let s = Store::open(dir).unwrap();
-        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
+        let mut ok = floorcast_stats::fixtures::stored("b", "baseline", 1, 600.0);
         ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
         s.insert_many(&[ok, row("failed-job")]).unwrap();
     }
@@ -1873,7 +1867,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         good_store(dir.path());
         let s = Store::open_existing(dir.path()).unwrap();
-        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
+        let mut ok = floorcast_stats::fixtures::stored("b", "baseline", 1, 600.0);
         ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
         assert_eq!(s.all().unwrap(), vec![ok.clone(), row("failed-job")]);
         let text: (String, String, Option<String>) = s
@@ -1930,7 +1924,7 @@ mod tests {
         let s = Store::open(dir.path()).unwrap();
         let mut failed = row("j");
         failed.stderr_tail = Some("Traceback (most recent call last):\nValueError: x\n".into());
-        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
+        let mut ok = floorcast_stats::fixtures::stored("b", "baseline", 1, 600.0);
         ok.job_id = "j".into();
         ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
         let retry: BTreeSet<String> = ["j".to_string()].into();

@@ -325,7 +325,7 @@ fn profile(taus: &[f64], strata: &[[Vec<f64>; 2]], own: bool) -> Vec<ProfilePoin
 }
 
 /// The aggregates in `report --json` (`aggregates`).
-pub fn aggregates_json(a: &Aggregates) -> serde_json::Value {
+pub(crate) fn aggregates_json(a: &Aggregates) -> serde_json::Value {
     let mut v = serde_json::to_value(a).unwrap_or_default();
     // NaN (no runs) is not JSON: null.
     if let Some(labels) = v.get_mut("labels").and_then(|l| l.as_array_mut()) {

@@ -160,3 +160,57 @@ impl Report {
         v
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fixtures::stored;
+
+    /// Three labels on two buildings: `fast` 20 % faster than `baseline`, `slow` 25 % slower.
+    fn results() -> Vec<StoredResult> {
+        let mut out = Vec::new();
+        for building in ["a", "b"] {
+            for seed in 1..=4 {
+                let t = 500.0 + 10.0 * seed as f64;
+                out.push(stored(building, "slow", seed, t * 1.25));
+                out.push(stored(building, "baseline", seed, t));
+                out.push(stored(building, "fast", seed, t * 0.8));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn the_default_scope_takes_baseline_as_reference() {
+        let scope = ReportScope::of(&results());
+        assert_eq!(scope.order, ["slow", "baseline", "fast"]);
+        assert_eq!(scope.reference, "baseline");
+        assert_eq!(scope.coverage, crate::outcome::DEFAULT_COVERAGE);
+        assert_eq!(ReportScope::of(&[]).reference, "");
+    }
+
+    #[test]
+    fn the_report_holds_the_numbers_its_text_shows() {
+        let results = results();
+        let report = Report::new(&results, &[], ReportScope::of(&results), Vec::new());
+        assert_eq!((report.runs, report.successful_runs), (24, 24));
+        let ranked: Vec<&str> = report.ranking.iter().map(|p| p.label.as_str()).collect();
+        assert_eq!(ranked, ["fast", "baseline", "slow"]);
+        let fast = report
+            .comparisons
+            .iter()
+            .find(|c| c.label == "fast" && c.building.is_none())
+            .unwrap();
+        let gain = fast.hl_gain_pct.unwrap();
+        assert!((gain - 20.0).abs() < 1e-9, "{gain}");
+        let text = report.text();
+        assert!(text.contains("Ranking by IQM"), "{text}");
+        assert!(text.contains("+20.0 %"), "{text}");
+        // No tours: no efficiency, and the text says why.
+        assert!(report.efficiency.is_empty());
+        assert!(text.contains("no efficiency: 24 successful runs"), "{text}");
+        let json = report.json(&results);
+        assert_eq!(json["ranking"][0]["label"], "fast");
+        assert_eq!(json["reference"], "baseline");
+    }
+}

@@ -170,7 +170,7 @@ impl PairedGain {
 /// A gain in per cent as text: `+9.4` (with ` %` when `unit`), or the time ratio when the gain is
 /// below -100 % (the label more than twice as slow), `2.2x slower`, where a percentage reads
 /// oddly.
-pub fn gain_text(g: f64, unit: bool) -> String {
+pub(crate) fn gain_text(g: f64, unit: bool) -> String {
     if !g.is_finite() {
         "-".to_string()
     } else if g < -100.0 {
@@ -184,7 +184,7 @@ pub fn gain_text(g: f64, unit: bool) -> String {
 
 /// A p-value as text: four decimals, or scientific notation below 0.001 (`3e-5`, not
 /// `0.0000`).
-pub fn p_text(p: Option<f64>) -> String {
+pub(crate) fn p_text(p: Option<f64>) -> String {
     match p {
         None => "-".to_string(),
         Some(p) if p < 1e-3 => format!("{p:.0e}"),
@@ -964,7 +964,7 @@ pub const BOOTSTRAP_MIN_PAIRS: usize = 10;
 /// A gain's interval as text (`[+6.3, +12.4]`), `-` without one. When an end falls below
 /// -100 %, both ends are time ratios to the reference's (`[1.5x, 3.0x the time]`), never a
 /// ratio and a percentage side by side.
-pub fn gain_range_text(r: Option<[f64; 2]>) -> String {
+pub(crate) fn gain_range_text(r: Option<[f64; 2]>) -> String {
     r.map_or("-".to_string(), |[a, b]| {
         if a < -100.0 || b < -100.0 {
             let ratio = |g: f64| 1.0 - g / 100.0;
@@ -986,7 +986,7 @@ fn bootstrap_text(c: &Comparison) -> String {
     }
 }
 
-pub fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
+pub(crate) fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
     let mut out = String::new();
     let overall: Vec<&Comparison> = cs.iter().filter(|c| c.building.is_none()).collect();
     if overall.is_empty() {
@@ -1094,7 +1094,7 @@ pub struct SequentialVerdict {
 
 /// `report --json`: the labels' statistics, every comparison, sequential grids' decisions and
 /// the aggregates across buildings (documented in `docs/report-json.md`).
-pub fn report_json(
+pub(crate) fn report_json(
     results: &[StoredResult],
     order: &[String],
     reference: &str,
@@ -1267,7 +1267,7 @@ pub fn render_text(t: &Table) -> String {
 
 /// How the runs ended: per strategy label (overall, then per building when there are
 /// several), the successful runs of each end class and those below the coverage level.
-pub fn render_ends(t: &Table) -> String {
+pub(crate) fn render_ends(t: &Table) -> String {
     let mut out = String::new();
     let classes = end_classes();
     let below = format!("< {}", coverage_text(t.coverage));
