@@ -1,8 +1,8 @@
-//! A sequential grid's progress: the seeds planned batch by batch while the labels' tests
-//! ([`crate::sprt`], the GSPRT) are undecided, replayed from the store, and rendered.
+//! A sequential grid's progress: the seeds added batch by batch while the labels' tests
+//! ([`crate::sprt`], the GSPRT) are undecided, and its text.
 //!
-//! Nothing here reads a clock or a file: the grid runner feeds it stored results, and plans
-//! each batch's jobs (`floorcast_coordinator::sequential`).
+//! Nothing here reads a clock or a file: the grid runner feeds it stored results, plans each
+//! batch's jobs and replays a grid from its store (`floorcast_coordinator::sequential`).
 
 use std::collections::BTreeSet;
 
