@@ -460,7 +460,7 @@ fn parse_start(s: &str) -> Result<StartArg, String> {
 
 /// `progress.csv`: as the results store keeps a run's curve.
 fn progress_csv(r: &RunResult) -> String {
-    use floorcast_coordinator::progress::Sample;
+    use floorcast_stats::progress::Sample;
     let samples: Vec<Sample> = r
         .progress
         .iter()
@@ -470,7 +470,7 @@ fn progress_csv(r: &RunResult) -> String {
             explored_fraction: p.explored_fraction,
         })
         .collect();
-    floorcast_coordinator::progress::encode(&samples)
+    floorcast_stats::progress::encode(&samples)
 }
 
 fn decisions_csv(r: &RunResult) -> String {

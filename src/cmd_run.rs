@@ -12,9 +12,9 @@ use floorcast_coordinator::inbox::RemoteWorkers;
 use floorcast_coordinator::net::NetConfig;
 use floorcast_coordinator::run::{run_plan, Outcome, RunOptions};
 use floorcast_coordinator::store::{provenance, Store, DB_FILE};
-use floorcast_coordinator::table::{
-    gains_against, labels_of, render_against, render_ends, render_text, results_csv, table,
-    SequentialVerdict,
+use floorcast_stats::report::{Report, ReportScope};
+use floorcast_stats::table::{
+    gains_against, labels_of, render_against, render_text, results_csv, table, SequentialVerdict,
 };
 
 use crate::output::{progress_bar, write_text};
@@ -202,7 +202,7 @@ pub struct ReportArgs {
     /// curve: Explore-Bench's T_90 with --coverage 0.9). The tables show the times to 90 %, 99 %
     /// and the end side by side whichever decides.
     #[arg(long, value_name = "end|coverage", default_value = "end", value_parser = parse_measure)]
-    measure: floorcast_coordinator::outcome::Measure,
+    measure: floorcast_stats::outcome::Measure,
     /// Also write the store's successful runs and its tours to FILE (gzip-compressed JSON
     /// lines: a header, then a line per run and per tour), each progress curve thinned to its
     /// times to every whole percent (every tenth from 95 %): small enough to commit, e.g. a
@@ -351,7 +351,7 @@ fn nothing_to_do(
     a: &RunArgs,
     plan: &Plan,
     store: &Store,
-    progress: &floorcast_coordinator::sequential::Progress,
+    progress: &floorcast_stats::sequential::Progress,
     jobs: &[floorcast_coordinator::grid::PlannedJob],
 ) -> Result<()> {
     let failed = match failed_of(jobs, store)? {
@@ -571,7 +571,7 @@ fn check_stored(
 ) -> Result<()> {
     // A label stands for one configuration: runs of another under it would be merged in the
     // report (refused before anything runs).
-    floorcast_coordinator::table::check_plan_labels(&plan.jobs, stored).map_err(|e| {
+    floorcast_coordinator::grid::check_plan_labels(&plan.jobs, stored).map_err(|e| {
         anyhow::anyhow!(
             "{}: {e} (results in {})",
             plan.grid_path.display(),
@@ -820,9 +820,9 @@ fn stored_of(jobs: &[floorcast_coordinator::grid::PlannedJob], store: &Store) ->
 }
 
 /// A sequential grid's decisions so far.
-fn print_sequential(plan: &Plan, progress: &floorcast_coordinator::sequential::Progress) {
+fn print_sequential(plan: &Plan, progress: &floorcast_stats::sequential::Progress) {
     if let Some(q) = &plan.sequential {
-        say_raw!("{}", floorcast_coordinator::sequential::render(progress, q));
+        say_raw!("{}", floorcast_stats::sequential::render(progress, q));
     }
 }
 
@@ -865,7 +865,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
     let results = store.all()?;
     let failed = floorcast_coordinator::failures::failed_jobs(&results, &store.failures()?);
     // A label stands for one configuration: runs of two are never merged into one row.
-    floorcast_coordinator::table::check_label_configurations(&results)
+    floorcast_stats::table::check_label_configurations(&results)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.results.join(DB_FILE).display()))?;
     let grids = store.grids()?;
     let against = open_against(&a)?;
@@ -879,41 +879,18 @@ pub fn report(a: ReportArgs) -> Result<()> {
     let reference = report_reference(&a, &order)?;
     let coverage = report_coverage(&a, &grids)?;
     let verdicts = last_verdicts(&store, &order)?;
-    let sequential_labels: Vec<String> = verdicts
-        .iter()
-        .filter(|v| v.test.reference == reference)
-        .map(|v| v.test.label.clone())
-        .collect();
-    let measure = a.measure;
-    let t = floorcast_coordinator::table::table_by(
-        &results,
-        &order,
-        Some(&reference),
-        coverage,
-        measure,
-    );
-    let comparisons = floorcast_coordinator::table::comparisons_by(
-        &results, &order, &reference, coverage, measure,
-    );
-    let aggregates = floorcast_coordinator::aggregate::aggregates_by(
-        &results, &order, &reference, coverage, measure,
-    );
     let tours = store.tours()?;
-    let (run_efficiency, efficiency) =
-        floorcast_coordinator::yardstick::efficiencies(&results, &tours, &order, coverage);
-    let ranking = floorcast_coordinator::ranking::ranking(&aggregates, &efficiency);
+    let scope = ReportScope {
+        order,
+        reference,
+        coverage,
+        measure: a.measure,
+    };
+    let report = Report::new(&results, &tours, scope, verdicts);
     // What is printed, kept for --html.
-    let mut text = format!(
-        "{}{}{}{}{}{}",
-        render_text(&t),
-        render_ends(&t),
-        floorcast_coordinator::table::render_comparisons(&comparisons, &sequential_labels),
-        floorcast_coordinator::aggregate::render(&aggregates),
-        floorcast_coordinator::yardstick::render(&efficiency, &results, coverage),
-        floorcast_coordinator::ranking::render(&ranking, &reference)
-    );
+    let mut text = report.text();
     say_raw!("{}", text);
-    text.push_str(&say_verdicts(&verdicts));
+    text.push_str(&say_verdicts(&report.verdicts));
     let cross = against.as_ref().map(|(dir, other)| {
         let gains = gains_against(&results, other, a.against_label.as_deref(), coverage);
         (dir.display().to_string(), gains)
@@ -924,14 +901,10 @@ pub fn report(a: ReportArgs) -> Result<()> {
         text.push_str(&against);
     }
     if let Some(path) = &a.json {
-        let mut v = floorcast_coordinator::table::report_json(
-            &results, &order, &reference, coverage, measure, &verdicts,
-        );
+        let mut v = report.json(&results);
         if let Some((dir, gains)) = &cross {
-            v["against"] = floorcast_coordinator::table::against_json(gains, dir);
+            v["against"] = floorcast_stats::table::against_json(gains, dir);
         }
-        v["efficiency"] = serde_json::json!({"labels": efficiency, "runs": run_efficiency});
-        v["ranking"] = serde_json::to_value(&ranking)?;
         v["failures"] = floorcast_coordinator::failures::to_json(&failed);
         write_text(path, &(serde_json::to_string_pretty(&v)? + "\n"))
             .with_context(|| format!("cannot write {}", path.display()))?;
@@ -943,7 +916,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         say!("wrote {}", csv.display());
     }
     if a.plots.is_some() || a.html.is_some() {
-        let charts = charts(&results, &t, &aggregates, &style);
+        let charts = charts(&results, &report.table, &report.aggregates, &style);
         write_pictures(&a, results.len(), &text, &charts)?;
     }
     if a.failures {
@@ -956,9 +929,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
 }
 
 /// `report --measure`: "end" or "coverage".
-fn parse_measure(
-    word: &str,
-) -> std::result::Result<floorcast_coordinator::outcome::Measure, String> {
+fn parse_measure(word: &str) -> std::result::Result<floorcast_stats::outcome::Measure, String> {
     word.parse()
 }
 
@@ -983,7 +954,7 @@ fn report_style(a: &ReportArgs) -> Result<floorcast_render::chart::ChartStyle> {
         }
     }
     if let Some(c) = a.coverage {
-        floorcast_coordinator::outcome::check_coverage(c)
+        floorcast_stats::outcome::check_coverage(c)
             .map_err(|e| anyhow::anyhow!("--coverage: {e}"))?;
     }
     Ok(floorcast_render::chart::ChartStyle {
@@ -1081,7 +1052,7 @@ fn report_order(
             }
         }
     }
-    floorcast_coordinator::outcome::label_order(results, &order)
+    floorcast_stats::outcome::label_order(results, &order)
 }
 
 /// The reference label: `--reference`, else `baseline`, else the first.
@@ -1119,7 +1090,7 @@ fn report_coverage(a: &ReportArgs, grids: &[(String, Vec<String>, f64)]) -> Resu
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),
-                None => floorcast_coordinator::outcome::DEFAULT_COVERAGE,
+                None => floorcast_stats::outcome::DEFAULT_COVERAGE,
             }
         }
     })
@@ -1133,7 +1104,7 @@ fn say_verdicts(verdicts: &[SequentialVerdict]) -> String {
         let line = format!(
             "sequential grid '{}': {}",
             v.grid,
-            floorcast_coordinator::sequential::render_test(&v.test, None)
+            floorcast_stats::sequential::render_test(&v.test, None)
         );
         say!("{line}");
         text.push_str(&line);
@@ -1203,8 +1174,8 @@ fn write_pictures(
 /// least to the greatest run, and rings where runs stopped early).
 fn charts(
     results: &[floorcast_coordinator::store::StoredResult],
-    t: &floorcast_coordinator::table::Table,
-    aggregates: &floorcast_coordinator::aggregate::Aggregates,
+    t: &floorcast_stats::table::Table,
+    aggregates: &floorcast_stats::aggregate::Aggregates,
     style: &floorcast_render::chart::ChartStyle,
 ) -> Vec<(String, floorcast_render::Figure)> {
     use floorcast_render::chart::{series_color, Interval, IntervalChart, LineChart, Series};
@@ -1213,7 +1184,7 @@ fn charts(
     let order: Vec<String> = t.overall.iter().map(|r| r.label.clone()).collect();
     let color = |l: &str| series_color(order.iter().position(|o| o == l).unwrap_or(0));
     let labels: Vec<String> = order.iter().filter(|l| **l != reference).cloned().collect();
-    let gain = |rows: &[floorcast_coordinator::table::LabelRow], label: &str| {
+    let gain = |rows: &[floorcast_stats::table::LabelRow], label: &str| {
         let p = rows.iter().find(|r| r.label == label)?.paired.as_ref()?;
         let (lo, hi) = p.ci_pct().unwrap_or((p.gain_pct(), p.gain_pct()));
         Some(Interval {
@@ -1222,7 +1193,7 @@ fn charts(
             hi,
         })
     };
-    let time = |rows: &[floorcast_coordinator::table::LabelRow], label: &str| {
+    let time = |rows: &[floorcast_stats::table::LabelRow], label: &str| {
         let s = rows.iter().find(|r| r.label == label)?.time;
         (s.n > 0).then(|| {
             let sd = if s.sd.is_finite() { s.sd } else { 0.0 };
@@ -1252,7 +1223,7 @@ fn charts(
     let gains = IntervalChart {
         title: format!(
             "Exploration time gain over {reference} (paired, {} coverage, 95 % CI)",
-            floorcast_coordinator::outcome::coverage_text(t.coverage)
+            floorcast_stats::outcome::coverage_text(t.coverage)
         ),
         y_label: "gain (%)".into(),
         series: labels
@@ -1312,7 +1283,7 @@ fn progress_chart(
 ) -> Option<(String, floorcast_render::Figure)> {
     use floorcast_render::chart::{series_color, LineChart, Series};
     let color = |l: &str| series_color(order.iter().position(|o| o == l).unwrap_or(0));
-    let curves = floorcast_coordinator::table::progress_curves(results, building, order, 400);
+    let curves = floorcast_stats::table::progress_curves(results, building, order, 400);
     if curves.is_empty() {
         return None;
     }

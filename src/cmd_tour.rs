@@ -172,7 +172,7 @@ fn tour_figure(building: &sim_core::Building, tour: &TourRecord) -> Figure {
 }
 
 /// Makes and stores the known-map tours `jobs` need that `store` lacks
-/// (`floorcast_coordinator::yardstick`), on `how.threads` threads, saying what it does; a tour
+/// (`floorcast_coordinator::tours`), on `how.threads` threads, saying what it does; a tour
 /// whose estimate exceeds `how.budget_s` is skipped with a warning (its runs get no
 /// efficiency). When `interrupt` is set (Ctrl-C, SIGTERM) it ends the process with exit code
 /// 130, the tours made so far stored.
@@ -184,7 +184,7 @@ pub fn make_grid_tours(
     interrupt: &std::sync::atomic::AtomicBool,
 ) -> Result<()> {
     let workers = how.threads;
-    use floorcast_coordinator::yardstick::{missing, planned_tours};
+    use floorcast_coordinator::tours::{missing, planned_tours};
     // Only the runs that succeeded are measured (a failed job's start may be no start at all).
     let ok: std::collections::BTreeSet<String> = store
         .all()?

@@ -229,6 +229,7 @@ pub(crate) const CRATE_SOURCES: &[&str] = &[
     "formats/src",
     "render/src",
     "worker/src",
+    "stats/src",
     "coordinator/src",
     "src",
 ];

@@ -26,6 +26,7 @@ fn non_test_sources() -> Vec<(PathBuf, String)> {
     let mut files = Vec::new();
     for c in [
         "src",
+        "stats/src",
         "coordinator/src",
         "worker/src",
         "formats/src",

@@ -21,8 +21,8 @@ use floorcast_worker::tour::TourRecord;
 use floorcast_worker::FLOORCAST_VERSION;
 use serde::{Deserialize, Serialize};
 
-use crate::progress::Sample;
 use crate::store::{decode_exported, JobStatus, StoredResult};
+use floorcast_stats::progress::Sample;
 
 pub const RUNS_FORMAT: &str = "floorcast-runs";
 pub const RUNS_VERSION: u32 = 1;
@@ -85,7 +85,7 @@ pub struct Exported {
 
 /// The samples of `curve` that the file keeps: the first, the first at or above each whole
 /// percent explored below 95 % and each tenth of a percent from 95 %, and the last. Times to
-/// those fractions ([`crate::metric::time_to_fraction`]) are kept exactly.
+/// those fractions ([`floorcast_stats::metric::time_to_fraction`]) are kept exactly.
 pub fn thin(curve: &[Sample]) -> Vec<Sample> {
     // The level a fraction has reached: whole percents, then tenths of a percent from 95 %.
     let level = |f: f64| -> i64 {
@@ -140,7 +140,9 @@ pub fn export(
             seed: r.seed,
             settings: serde_json::to_value(&r.settings).map_err(|e| e.to_string())?,
             summary: serde_json::to_value(&r.summary).map_err(|e| e.to_string())?,
-            progress: crate::progress::encode(&thin(r.progress.as_deref().unwrap_or(&[]))),
+            progress: floorcast_stats::progress::encode(&thin(
+                r.progress.as_deref().unwrap_or(&[]),
+            )),
             worker: r.worker.clone(),
             wall_time_s: r.wall_time_s,
             floorcast_version: r.floorcast_version.clone(),
@@ -444,7 +446,7 @@ fn run_of(r: RunLine) -> Result<StoredResult, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metric::time_to_fraction;
+    use floorcast_stats::metric::time_to_fraction;
 
     fn curve(points: &[(f64, f64)]) -> Vec<Sample> {
         points

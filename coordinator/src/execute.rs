@@ -6,8 +6,8 @@ use floorcast_worker::wire::{JobOutcome, JobReport, WireJob, WireProgram, WireSt
 use floorcast_worker::Job;
 
 use crate::grid::{Plan, PlannedJob};
-use crate::progress::Sample;
 use crate::store::StoredResult;
+use floorcast_stats::progress::Sample;
 
 /// A planned job as it is handed to a remote worker: [`identity`] with its program's files.
 pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
@@ -83,7 +83,7 @@ pub fn row(plan: &Plan, job: &PlannedJob, worker: &str, report: &JobReport) -> S
             summary.suite_hash = suite.map(|s| s.hash.clone());
             row.summary = Some(*summary);
             let samples: Vec<Sample> = progress.iter().copied().map(Sample::from).collect();
-            row.progress = Some(crate::progress::stored(&samples));
+            row.progress = Some(floorcast_stats::progress::stored(&samples));
         }
         JobOutcome::Failed { error } => {
             row.status = crate::store::JobStatus::Failed;

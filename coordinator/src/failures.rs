@@ -270,9 +270,9 @@ mod tests {
     /// tail.
     #[test]
     fn failed_and_recovered_jobs_are_listed_with_their_attempts() {
-        let mut ok = crate::store::fixtures::stored("b", "ok", 1, 100.0);
+        let mut ok = floorcast_stats::fixtures::stored("b", "ok", 1, 100.0);
         ok.job_id = "ok".into();
-        let mut recovered = crate::store::fixtures::stored("b", "recovered", 1, 100.0);
+        let mut recovered = floorcast_stats::fixtures::stored("b", "recovered", 1, 100.0);
         recovered.job_id = "recovered".into();
         let mut failing = recovered.clone();
         failing.job_id = "failing".into();

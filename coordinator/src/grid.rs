@@ -83,7 +83,7 @@ struct SequentialSpec {
     /// The time the test measures: "end" (default: until the run ended, having explored the
     /// coverage level) or "coverage" (until it first had the coverage level explored).
     #[serde(default)]
-    measure: crate::outcome::Measure,
+    measure: floorcast_stats::outcome::Measure,
 }
 
 fn default_h1_gain_pct() -> f64 {
@@ -226,7 +226,7 @@ pub struct Plan {
     pub program_files: BTreeMap<String, Arc<floorcast_worker::external::ProgramFiles>>,
     /// The sequential test, when the grid has a `[sequential]` table: `jobs` then holds the
     /// first batch of seeds, and [`Plan::jobs_for`] makes the next ones.
-    pub sequential: Option<crate::sprt::SequentialPlan>,
+    pub sequential: Option<floorcast_stats::sprt::SequentialPlan>,
     /// The coverage level of the grid's comparisons (`coverage`, default 0.99).
     pub coverage: f64,
     /// The strategies and each building's start poses, for [`Plan::jobs_for`].
@@ -379,8 +379,10 @@ impl Plan {
             .fold(0.0, f64::max);
         let starts = plan_starts(file.starts.as_ref(), &buildings, radius_m, &invalid)?;
 
-        let coverage = file.coverage.unwrap_or(crate::outcome::DEFAULT_COVERAGE);
-        crate::outcome::check_coverage(coverage).map_err(|e| invalid("coverage", e))?;
+        let coverage = file
+            .coverage
+            .unwrap_or(floorcast_stats::outcome::DEFAULT_COVERAGE);
+        floorcast_stats::outcome::check_coverage(coverage).map_err(|e| invalid("coverage", e))?;
         if let Some(q) = &mut sequential {
             finish_sequential(q, coverage, &strategies.labels, &starts, &invalid)?;
         }
@@ -632,7 +634,7 @@ fn generated_building(
 /// The seeds of the grid (`seeds` or `seed_range`), each once; a sequential grid's first batch.
 fn plan_seeds(
     file: &GridFile,
-    sequential: Option<&crate::sprt::SequentialPlan>,
+    sequential: Option<&floorcast_stats::sprt::SequentialPlan>,
     invalid: &dyn Fn(&str, String) -> GridError,
 ) -> Result<Vec<u64>, GridError> {
     let seeds: Vec<u64> = match (&file.seeds, &file.seed_range) {
@@ -872,7 +874,7 @@ fn external_strategy(
 /// A sequential grid's test completed once the strategies and starts are known: its coverage,
 /// the family's size, a `max_seeds` that can give the pairs the test needs, its reference.
 fn finish_sequential(
-    q: &mut crate::sprt::SequentialPlan,
+    q: &mut floorcast_stats::sprt::SequentialPlan,
     coverage: f64,
     labels: &[String],
     starts: &[Vec<Option<GivenStart>>],
@@ -887,14 +889,14 @@ fn finish_sequential(
         .sum::<u128>()
         .max(1);
     let most = q.max_seeds as u128 * per_seed;
-    if most < crate::sprt::MIN_PAIRS as u128 {
+    if most < floorcast_stats::sprt::MIN_PAIRS as u128 {
         return Err(invalid(
             "sequential.max_seeds",
             format!(
                 "{} seeds give at most {most} pairs ({per_seed} per seed: buildings x starts), fewer than the {} the test needs to decide; raise max_seeds to at least {}",
                 q.max_seeds,
-                crate::sprt::MIN_PAIRS,
-                (crate::sprt::MIN_PAIRS as u128).div_ceil(per_seed)
+                floorcast_stats::sprt::MIN_PAIRS,
+                (floorcast_stats::sprt::MIN_PAIRS as u128).div_ceil(per_seed)
             ),
         ));
     }
@@ -1228,6 +1230,23 @@ pub fn normal_heading_deg(deg: f64) -> f64 {
     }
 }
 
+/// The labels of a planned grid's jobs have, among the stored `results`, only runs of the same
+/// configuration as the grid gives them ([`floorcast_stats::table::Configuration`]); else the
+/// first label that has others, in one line.
+pub fn check_plan_labels(
+    jobs: &[PlannedJob],
+    results: &[floorcast_stats::StoredResult],
+) -> Result<(), String> {
+    use floorcast_stats::table::{check_planned_labels, Configuration};
+    let planned = jobs.iter().map(|j| {
+        (
+            j.label.as_str(),
+            Configuration::new(&j.strategy, &j.settings, j.program.as_ref()),
+        )
+    });
+    check_planned_labels(planned, results)
+}
+
 /// The identity of a job: a hash of everything that determines its result.
 pub fn job_id(building_hash: &str, strategy: &str, seed: u64, settings: &Settings) -> String {
     job_id_from(building_hash, strategy, seed, settings, None)
@@ -1273,14 +1292,14 @@ fn sequential_plan(
     q: &SequentialSpec,
     file: &GridFile,
     invalid: &dyn Fn(&str, String) -> GridError,
-) -> Result<crate::sprt::SequentialPlan, GridError> {
+) -> Result<floorcast_stats::sprt::SequentialPlan, GridError> {
     if file.seeds.is_some() || file.seed_range.is_some() {
         return Err(invalid(
             if file.seeds.is_some() { "seeds" } else { "seed_range" },
             "a grid with [sequential] adds seeds 1, 2, ... in batches itself; leave out seeds and seed_range (max_seeds bounds them)".into(),
         ));
     }
-    let config = crate::sprt::SprtConfig {
+    let config = floorcast_stats::sprt::SprtConfig {
         h0_gain_pct: q.h0_gain_pct,
         h1_gain_pct: q.h1_gain_pct,
         alpha: q.alpha,
@@ -1306,8 +1325,8 @@ fn sequential_plan(
         ));
     }
     let multiplicity = match q.multiplicity.as_deref() {
-        None | Some("bonferroni") => crate::sprt::Multiplicity::Bonferroni,
-        Some("none") => crate::sprt::Multiplicity::None,
+        None | Some("bonferroni") => floorcast_stats::sprt::Multiplicity::Bonferroni,
+        Some("none") => floorcast_stats::sprt::Multiplicity::None,
         Some(other) => {
             return Err(invalid(
                 "sequential.multiplicity",
@@ -1318,12 +1337,12 @@ fn sequential_plan(
             ))
         }
     };
-    Ok(crate::sprt::SequentialPlan {
+    Ok(floorcast_stats::sprt::SequentialPlan {
         config,
         reference: q.reference.clone(),
         batch_seeds: q.batch_seeds,
         max_seeds: q.max_seeds,
-        coverage: crate::outcome::DEFAULT_COVERAGE,
+        coverage: floorcast_stats::outcome::DEFAULT_COVERAGE,
         multiplicity,
         labels_tested: 1,
         measure: q.measure,

@@ -1,5 +1,6 @@
-//! Expands experiment grids into jobs, schedules them over workers, stores and aggregates
-//! results.
+//! Expands experiment grids into jobs, schedules them over workers, stores results and reports
+//! them (the statistics are the `floorcast_stats` crate's: the store's row type,
+//! [`store::StoredResult`], is its).
 //!
 //! - [`grid`]: a grid file as written, validated into a [`grid::Plan`] before anything runs.
 //! - [`schedule`]: the scheduler, a state machine without IO or clock (events in, actions out).
@@ -15,29 +16,17 @@
 //!   `execute` and `schedule`; `run` never names `net`.
 //!
 //! The messages between coordinator and workers are `floorcast_worker::wire`'s.
-//! - [`table`]: the paper's Table 1 for a grid, the comparisons of `report` (and `--json`), and
-//!   CSV export.
 //! - [`suite`]: suites named by grids (found by name or path), and the suites of a store's
 //!   runs.
 //! - [`verify`]: results of remote workers checked by running their jobs again here.
-//! - [`progress`]: a run's progress curve as stored (the one codec of `progress.csv`).
-//! - [`metric`]: the metrics `report` compares besides the exploration time (one enum).
-//! - [`outcome`]: what a run achieved at a coverage level, and the pairs of two labels' runs
-//!   (a run that did not achieve the outcome is a loss against one that did).
-//! - [`stats`]: Wilcoxon, bootstrap, Holm, effect size of paired differences, the anytime-valid
-//!   confidence sequence, the interquartile mean, the stratified bootstrap.
-//! - [`aggregate`]: aggregates across buildings (IQM, probability of improvement, performance
-//!   profiles).
-//! - [`sprt`]: the sequential test (GSPRT) that decides a comparison from paired runs.
-//! - [`sequential`]: a sequential grid's progress, batch by batch, replayed from the store.
-//! - [`ranking`]: the report's leaderboard (labels by their aggregates, with efficiency).
-//! - [`yardstick`]: the known-map tours a grid's runs are measured against, and their
-//!   efficiency.
+//! - [`sequential`]: a sequential grid's batches as planned jobs, and its replay from the store
+//!   (the test itself is `floorcast_stats::sequential`'s).
+//! - [`tours`]: the known-map tours a grid's runs are measured against (their efficiency is
+//!   `floorcast_stats::yardstick`'s).
 //! - [`failures`]: the failed jobs and their attempts, as `report --failures` lists them.
 //! - [`live`]: a running grid's state for the live view; [`live_page`] its HTML page;
 //!   [`http`] serves both (`run --http`; the only module that knows HTTP).
 
-pub mod aggregate;
 pub mod board;
 pub mod execute;
 pub mod failures;
@@ -46,20 +35,12 @@ pub mod http;
 pub mod inbox;
 pub mod live;
 pub mod live_page;
-pub mod measure;
-pub mod metric;
 pub mod names;
 pub mod net;
-pub mod outcome;
-pub mod progress;
-pub mod ranking;
 pub mod run;
 pub mod schedule;
 pub mod sequential;
-pub mod sprt;
-pub mod stats;
 pub mod store;
 pub mod suite;
-pub mod table;
+pub mod tours;
 pub mod verify;
-pub mod yardstick;

@@ -9,7 +9,7 @@ use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
-use crate::sprt::LabelTest;
+use floorcast_stats::sprt::LabelTest;
 
 /// `status.json`'s format name and version (docs/live-view.md).
 pub const STATUS_FORMAT: &str = "floorcast-status";
@@ -344,7 +344,7 @@ pub fn failure_of(r: &crate::store::StoredResult) -> Option<FailureStatus> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sprt::{Decision, SprtState};
+    use floorcast_stats::sprt::{Decision, SprtState};
 
     fn look(label: &str, seed: u64, pairs: usize, llr: f64, decision: Decision) -> LabelTest {
         LabelTest {

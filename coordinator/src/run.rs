@@ -131,7 +131,7 @@ pub enum RunError {
 fn advance(
     plan: &Plan,
     store: &Store,
-    progress: &mut crate::sequential::Progress,
+    progress: &mut floorcast_stats::sequential::Progress,
     sched: &mut Scheduler,
     jobs: &mut BTreeMap<String, PlannedJob>,
     retried: &BTreeSet<String>,
@@ -141,10 +141,10 @@ fn advance(
     while !progress.finished && sched.batch_complete() && sched.held() == 0 {
         let results = store.all()?;
         let before = progress.path.len();
-        let next = progress.advance(plan, &results);
+        let next = crate::sequential::advance(progress, plan, &results);
         store.record_tests(&plan.name, &progress.path[before..])?;
         for t in &progress.path[before..] {
-            if t.state.decision != crate::sprt::Decision::Undecided {
+            if t.state.decision != floorcast_stats::sprt::Decision::Undecided {
                 on_log(&format!(
                     "{} against {}: {} after {} pairs (seeds 1-{})",
                     t.label,
@@ -295,7 +295,7 @@ struct LoopState<'a> {
     opts: &'a RunOptions,
     sched: Scheduler,
     jobs: BTreeMap<String, PlannedJob>,
-    progress: crate::sequential::Progress,
+    progress: floorcast_stats::sequential::Progress,
     /// Embedded workers run jobs that share their beginning together.
     share: bool,
     share_keys: BTreeMap<String, Option<sim_core::explore::ExploreConfig>>,
@@ -331,7 +331,7 @@ impl<'a> LoopState<'a> {
             .map(|j| (j.id.clone(), j.clone()))
             .collect();
         // A sequential grid: batches of seeds added as the tests go (replaying those already run).
-        let mut progress = crate::sequential::Progress::start(plan);
+        let mut progress = crate::sequential::start(plan);
         sched.expect_more(!progress.finished);
         advance(
             plan,

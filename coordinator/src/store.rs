@@ -11,7 +11,7 @@ use floorcast_worker::tour::TourRecord;
 pub use floorcast_worker::wire::JobStatus;
 use floorcast_worker::{RunSummary, Settings};
 
-use crate::progress::Sample;
+pub use floorcast_stats::StoredResult;
 
 /// Version of the database layout.
 pub const STORE_VERSION: u32 = 1;
@@ -73,37 +73,6 @@ pub enum StoreError {
         path: PathBuf,
         owned: PathBuf,
     },
-}
-
-/// One stored job: its identity (from the grid's plan), outcome and provenance. Its contents
-/// are typed: the store decodes a row's text once, when it reads it ([`Store::all`],
-/// [`decode_row`]), and encodes them when it writes it (columns `settings_json`,
-/// `summary_json` and `progress_csv`); no other module reads that text.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StoredResult {
-    pub job_id: String,
-    pub grid: String,
-    pub building: String,
-    pub building_hash: String,
-    pub strategy: String,
-    pub label: String,
-    pub seed: u64,
-    /// The settings the job ran with: each setting a row written by an earlier version does
-    /// not hold is at its default (the value that version ran with).
-    pub settings: Settings,
-    pub status: JobStatus,
-    pub error: Option<String>,
-    /// The run's record (a successful job's; checked against the row's seed and building).
-    pub summary: Option<RunSummary>,
-    /// The run's progress curve as stored ([`crate::progress`]: rounded as the store keeps it).
-    pub progress: Option<Vec<Sample>>,
-    pub worker: String,
-    pub wall_time_s: f64,
-    pub floorcast_version: String,
-    /// The end of what an external strategy wrote to stderr (at most
-    /// [`floorcast_worker::wire::MAX_STDERR_TAIL`] bytes), kept for failed jobs only: a
-    /// successful run's stderr is not stored (`explore` writes it to `strategy-stderr.txt`).
-    pub stderr_tail: Option<String>,
 }
 
 /// One failed attempt of a job, as the `failures` table keeps it: every failure is recorded
@@ -869,7 +838,7 @@ impl Store {
             .summary
             .as_ref()
             .and_then(|s| serde_json::to_string(s).ok());
-        let progress_csv = r.progress.as_deref().map(crate::progress::encode);
+        let progress_csv = r.progress.as_deref().map(floorcast_stats::progress::encode);
         // A failed row about to be replaced keeps its place in the history: one written before
         // failures were recorded becomes the job's first attempt.
         if replace_failed {
@@ -1045,7 +1014,7 @@ impl Store {
     pub fn record_tests(
         &self,
         grid: &str,
-        tests: &[crate::sprt::LabelTest],
+        tests: &[floorcast_stats::sprt::LabelTest],
     ) -> Result<(), StoreError> {
         let tx = self.sql(self.conn.unchecked_transaction())?;
         for t in tests {
@@ -1083,8 +1052,8 @@ impl Store {
     }
 
     /// The stored tests of sequential grids, by grid, label and batch.
-    pub fn tests(&self) -> Result<Vec<(String, crate::sprt::LabelTest)>, StoreError> {
-        use crate::sprt::{Decision, LabelTest, SprtState};
+    pub fn tests(&self) -> Result<Vec<(String, floorcast_stats::sprt::LabelTest)>, StoreError> {
+        use floorcast_stats::sprt::{LabelTest, SprtState};
         if !self.has_table("sequential")? {
             return Ok(Vec::new());
         }
@@ -1094,7 +1063,7 @@ impl Store {
              FROM sequential ORDER BY grid, label, through_seed",
         ))?;
         let rows = self.sql(st.query_map([], |r| {
-            let decision: Decision = r.get(10)?;
+            let DecisionColumn(decision) = r.get(10)?;
             Ok((
                 r.get::<_, String>(0)?,
                 LabelTest {
@@ -1368,7 +1337,7 @@ fn read_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<(i64, RawRow)> {
 /// `ok` with a valid run summary of the row's seed and building
 /// ([`RunSummary::from_json`](floorcast_worker::RunSummary::from_json)), or `failed` with its
 /// error; settings that are a JSON object of settings (those it lacks at their defaults); a
-/// progress curve, if any, that [`crate::progress::decode`] reads; a finite wall time. The
+/// progress curve, if any, that [`floorcast_stats::progress::decode`] reads; a finite wall time. The
 /// error names the field.
 pub fn decode_row(raw: RawRow, seed: u64) -> Result<StoredResult, String> {
     let RawRow {
@@ -1395,7 +1364,7 @@ pub fn decode_row(raw: RawRow, seed: u64) -> Result<StoredResult, String> {
         return Err("field error is empty, expected why the job failed".into());
     }
     if let Some(text) = progress_csv {
-        row.progress = Some(crate::progress::decode(&text).map_err(|e| {
+        row.progress = Some(floorcast_stats::progress::decode(&text).map_err(|e| {
             format!(
                 "field progress_csv: {}",
                 floorcast_worker::text::shown(&e, 200)
@@ -1512,79 +1481,17 @@ pub fn provenance(grid: &str, command: &str, build: &BuildInfo) -> Provenance {
 
 /// The `sequential.decision` column: the words `Decision::as_str` writes, decoded by
 /// `Decision`'s serde codec (a word it does not know is an error naming it).
-impl rusqlite::types::FromSql for crate::sprt::Decision {
+struct DecisionColumn(floorcast_stats::sprt::Decision);
+
+impl rusqlite::types::FromSql for DecisionColumn {
     fn column_result(v: rusqlite::types::ValueRef<'_>) -> rusqlite::types::FromSqlResult<Self> {
         use serde::de::IntoDeserializer;
         use serde::Deserialize;
         let word: serde::de::value::StrDeserializer<'_, serde::de::value::Error> =
             v.as_str()?.into_deserializer();
-        Self::deserialize(word).map_err(|e| rusqlite::types::FromSqlError::Other(Box::new(e)))
-    }
-}
-
-/// Stored results for the crate's tests.
-#[cfg(test)]
-pub(crate) mod fixtures {
-    use super::StoredResult;
-
-    /// A stored run of `label` on `building` with seed `seed` that explored in `time_s`.
-    pub(crate) fn stored(building: &str, label: &str, seed: u64, time_s: f64) -> StoredResult {
-        // A real summary (small.toml, layout, seed 1) with the time replaced.
-        let template: &str = concat!(
-            r#"{"format":"floorcast-run-summary","version":1,"floorcast_version":"0.1.0","build"#,
-            r#"ing":"small","building_hash":"bd6183b04c0805da57279aa53b7844c1","strategy":"layo"#,
-            r#"ut","seed":1,"settings":{"robot_radius_m":0.2,"max_speed_mps":0.5,"max_turn_rate"#,
-            r#"_radps":1.0,"laser_fov_deg":180.0,"laser_range_m":6.0,"laser_beams":181,"laser_r"#,
-            r#"ate_hz":10.0,"laser_noise_sd_m":0.01,"odometry_translation_error":0.01,"odometry"#,
-            r#"_rotation_error_deg_per_rad":2.0,"localization":"slam","map_resolution_m":0.05,""#,
-            r#"alpha":0.5,"min_frontier_m":0.5,"redecide_period_s":10.0,"blacklist_radius_m":0."#,
-            r#"5,"progress_timeout_s":20.0,"time_limit_s":14400.0,"return_home":false,"es_thres"#,
-            r#"hold_m2":1.0,"aes_min_gain_m2":2.0,"layout_update_m2":20.0},"start":[1.199999999"#,
-            r#"9999993,9.81368055441612,0.0],"start_source":"building file","exploration_time_s"#,
-            r#"":606.2000000000693,"total_time_s":606.2000000000693,"explored_area_m2":407.9825"#,
-            r#"000000001,"free_area_m2":408.2100000000001,"explored_fraction":0.999442688812131"#,
-            r#","path_length_m":265.2573756983305,"decisions":166,"stopped_early":false,"unexpl"#,
-            r#"ored_free_m2":0.22750000000002046,"rooms_never_entered":0,"layouts_computed":17,"#,
-            r#""end_reason":"no frontiers","blacklisted_goals":0,"scans":3341,"scan_matches_acc"#,
-            r#"epted":3220,"map_free_precision":0.9946381028273507,"map_occupied_precision":0.8"#,
-            r#"890061565523307,"wall_time_s":11.839814543,"speedup":51.200126302524744}"#,
-        );
-        let mut summary: serde_json::Value = serde_json::from_str(template).unwrap();
-        summary["exploration_time_s"] = serde_json::json!(time_s);
-        summary["total_time_s"] = serde_json::json!(time_s);
-        StoredResult {
-            job_id: format!("{building}-{label}-{seed}"),
-            grid: "g".into(),
-            building: building.into(),
-            building_hash: "h".into(),
-            strategy: label.into(),
-            label: label.into(),
-            seed,
-            settings: floorcast_worker::Settings::default(),
-            status: super::JobStatus::Ok,
-            error: None,
-            summary: Some(floorcast_worker::RunSummary::from_json(&summary.to_string()).unwrap()),
-            progress: None,
-            worker: "w".into(),
-            wall_time_s: 1.0,
-            floorcast_version: "0".into(),
-            stderr_tail: None,
-        }
-    }
-
-    /// A stored row's summary as its JSON, to edit it as a record's text.
-    pub(crate) fn summary_value(r: &StoredResult) -> serde_json::Value {
-        serde_json::to_value(r.summary.as_ref().unwrap()).unwrap()
-    }
-
-    /// Sets a row's summary from its JSON, read as the store reads it.
-    pub(crate) fn set_summary(r: &mut StoredResult, v: &serde_json::Value) {
-        r.summary = Some(floorcast_worker::RunSummary::from_json(&v.to_string()).unwrap());
-    }
-
-    /// A progress curve from its stored text.
-    pub(crate) fn progress(text: &str) -> Vec<crate::progress::Sample> {
-        crate::progress::decode(text).unwrap()
+        floorcast_stats::sprt::Decision::deserialize(word)
+            .map(DecisionColumn)
+            .map_err(|e| rusqlite::types::FromSqlError::Other(Box::new(e)))
     }
 }
 
@@ -1605,7 +1512,9 @@ mod tests {
             status: JobStatus::Failed,
             error: Some("no free space at the start".into()),
             summary: None,
-            progress: Some(vec![Sample::from([0.0, 0.0, 0.0])]),
+            progress: Some(vec![floorcast_stats::progress::Sample::from([
+                0.0, 0.0, 0.0,
+            ])]),
             worker: "local-0".into(),
             wall_time_s: 1.0,
             floorcast_version: "0".into(),
@@ -1626,7 +1535,7 @@ mod tests {
     /// A store of one ok row (a real summary) and one failed row, closed (its log merged).
     fn good_store(dir: &Path) {
         let s = Store::open(dir).unwrap();
-        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
+        let mut ok = floorcast_stats::fixtures::stored("b", "baseline", 1, 600.0);
         ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
         s.insert_many(&[ok, row("failed-job")]).unwrap();
     }
@@ -1958,7 +1867,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         good_store(dir.path());
         let s = Store::open_existing(dir.path()).unwrap();
-        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
+        let mut ok = floorcast_stats::fixtures::stored("b", "baseline", 1, 600.0);
         ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
         assert_eq!(s.all().unwrap(), vec![ok.clone(), row("failed-job")]);
         let text: (String, String, Option<String>) = s
@@ -2015,7 +1924,7 @@ mod tests {
         let s = Store::open(dir.path()).unwrap();
         let mut failed = row("j");
         failed.stderr_tail = Some("Traceback (most recent call last):\nValueError: x\n".into());
-        let mut ok = fixtures::stored("b", "baseline", 1, 600.0);
+        let mut ok = floorcast_stats::fixtures::stored("b", "baseline", 1, 600.0);
         ok.job_id = "j".into();
         ok.building_hash = "bd6183b04c0805da57279aa53b7844c1".into();
         let retry: BTreeSet<String> = ["j".to_string()].into();
@@ -2126,7 +2035,7 @@ mod tests {
     /// by its serde codec; a word that is no decision is an error naming it.
     #[test]
     fn sequential_decisions_are_stored_as_words_and_read_back() {
-        use crate::sprt::{Decision, LabelTest, SprtState};
+        use floorcast_stats::sprt::{Decision, LabelTest, SprtState};
         let dir = tempfile::tempdir().unwrap();
         let s = Store::open(dir.path()).unwrap();
         let test = |label: &str, decision| LabelTest {

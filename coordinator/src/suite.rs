@@ -188,8 +188,8 @@ mod tests {
             ..r.clone()
         };
         let (ha, hb) = ("a".repeat(32), "b".repeat(32));
-        let old = crate::store::fixtures::stored("small", "baseline", 1, 100.0);
-        let second = crate::store::fixtures::stored("small", "baseline", 2, 100.0);
+        let old = floorcast_stats::fixtures::stored("small", "baseline", 1, 100.0);
+        let second = floorcast_stats::fixtures::stored("small", "baseline", 2, 100.0);
         let tagged_text = edit(&second, &|v| {
             v["version"] = 2.into();
             v["suite"] = "s".into();

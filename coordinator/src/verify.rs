@@ -71,7 +71,7 @@ pub fn compare(theirs: &StoredResult, ours: &StoredResult) -> Result<(), String>
 
 /// The lines of a stored progress curve, as they are stored: its header (`None`), then each
 /// sample by its values' bits (none without a curve).
-fn lines(progress: &Option<Vec<crate::progress::Sample>>) -> Vec<Option<[u64; 3]>> {
+fn lines(progress: &Option<Vec<floorcast_stats::progress::Sample>>) -> Vec<Option<[u64; 3]>> {
     progress.as_ref().map_or_else(Vec::new, |p| {
         std::iter::once(None)
             .chain(p.iter().map(|s| Some(s.bits())))

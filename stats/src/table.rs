@@ -20,7 +20,7 @@ use crate::outcome::{self, coverage_text, end_class, end_classes, label_order, P
 use crate::progress::Sample;
 // A gain in per cent of the reference's time from a mean log ratio `m = ln t_ref - ln t`.
 use crate::sprt::gain_pct_of_effect as gain_pct;
-use crate::store::StoredResult;
+use crate::StoredResult;
 
 /// Mean and sample standard deviation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -170,7 +170,7 @@ impl PairedGain {
 /// A gain in per cent as text: `+9.4` (with ` %` when `unit`), or the time ratio when the gain is
 /// below -100 % (the label more than twice as slow), `2.2x slower`, where a percentage reads
 /// oddly.
-pub fn gain_text(g: f64, unit: bool) -> String {
+pub(crate) fn gain_text(g: f64, unit: bool) -> String {
     if !g.is_finite() {
         "-".to_string()
     } else if g < -100.0 {
@@ -184,7 +184,7 @@ pub fn gain_text(g: f64, unit: bool) -> String {
 
 /// A p-value as text: four decimals, or scientific notation below 0.001 (`3e-5`, not
 /// `0.0000`).
-pub fn p_text(p: Option<f64>) -> String {
+pub(crate) fn p_text(p: Option<f64>) -> String {
     match p {
         None => "-".to_string(),
         Some(p) if p < 1e-3 => format!("{p:.0e}"),
@@ -228,14 +228,9 @@ impl Configuration {
         Self::new(&r.strategy, &r.settings, program)
     }
 
-    /// The configuration of a planned job.
-    pub fn of_job(j: &crate::grid::PlannedJob) -> Configuration {
-        Self::new(&j.strategy, &j.settings, j.program.as_ref())
-    }
-
     /// The configuration of `settings` and `program`, each as it is written (a setting by its
-    /// name, the program's identity by its fields).
-    fn new(
+    /// name, the program's identity by its fields): a planned job's, for one.
+    pub fn new(
         strategy: &str,
         settings: &floorcast_worker::Settings,
         program: Option<&floorcast_worker::StrategyProgram>,
@@ -334,17 +329,16 @@ pub fn check_label_configurations(results: &[StoredResult]) -> Result<(), String
     Ok(())
 }
 
-/// The labels of a planned grid's jobs have, among the stored `results`, only runs of the same
-/// configuration as the grid gives them; else the first label that has others, in one line.
-pub fn check_plan_labels(
-    jobs: &[crate::grid::PlannedJob],
+/// The labels of a planned grid's jobs (each job's label and configuration, the first of a
+/// label standing for it) have, among the stored `results`, only runs of the same configuration
+/// as the grid gives them; else the first label that has others, in one line.
+pub fn check_planned_labels<'a>(
+    jobs: impl IntoIterator<Item = (&'a str, Configuration)>,
     results: &[StoredResult],
 ) -> Result<(), String> {
     let mut planned: BTreeMap<&str, Configuration> = BTreeMap::new();
-    for j in jobs {
-        planned
-            .entry(&j.label)
-            .or_insert_with(|| Configuration::of_job(j));
+    for (label, c) in jobs {
+        planned.entry(label).or_insert(c);
     }
     for r in results {
         if let Some(c) = planned.get(r.label.as_str()) {
@@ -970,7 +964,7 @@ pub const BOOTSTRAP_MIN_PAIRS: usize = 10;
 /// A gain's interval as text (`[+6.3, +12.4]`), `-` without one. When an end falls below
 /// -100 %, both ends are time ratios to the reference's (`[1.5x, 3.0x the time]`), never a
 /// ratio and a percentage side by side.
-pub fn gain_range_text(r: Option<[f64; 2]>) -> String {
+pub(crate) fn gain_range_text(r: Option<[f64; 2]>) -> String {
     r.map_or("-".to_string(), |[a, b]| {
         if a < -100.0 || b < -100.0 {
             let ratio = |g: f64| 1.0 - g / 100.0;
@@ -992,7 +986,7 @@ fn bootstrap_text(c: &Comparison) -> String {
     }
 }
 
-pub fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
+pub(crate) fn render_comparisons(cs: &[Comparison], sequential: &[String]) -> String {
     let mut out = String::new();
     let overall: Vec<&Comparison> = cs.iter().filter(|c| c.building.is_none()).collect();
     if overall.is_empty() {
@@ -1100,7 +1094,7 @@ pub struct SequentialVerdict {
 
 /// `report --json`: the labels' statistics, every comparison, sequential grids' decisions and
 /// the aggregates across buildings (documented in `docs/report-json.md`).
-pub fn report_json(
+pub(crate) fn report_json(
     results: &[StoredResult],
     order: &[String],
     reference: &str,
@@ -1273,7 +1267,7 @@ pub fn render_text(t: &Table) -> String {
 
 /// How the runs ended: per strategy label (overall, then per building when there are
 /// several), the successful runs of each end class and those below the coverage level.
-pub fn render_ends(t: &Table) -> String {
+pub(crate) fn render_ends(t: &Table) -> String {
     let mut out = String::new();
     let classes = end_classes();
     let below = format!("< {}", coverage_text(t.coverage));
@@ -1484,8 +1478,8 @@ pub fn results_csv(results: &[StoredResult]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fixtures::{progress, set_summary, stored, summary_value};
     use crate::metric::unexplored_area_s;
-    use crate::store::fixtures::{progress, set_summary, stored, summary_value};
 
     /// Gains and their intervals as text: percentages, a time ratio below -100 %, and an
     /// interval with an end below -100 % wholly in time ratios.
@@ -1611,7 +1605,7 @@ mod tests {
         // A failed job stored no program: the same as any, and not the label's reference.
         let mut failed = b.clone();
         failed.summary = None;
-        failed.status = crate::store::JobStatus::Failed;
+        failed.status = floorcast_worker::wire::JobStatus::Failed;
         assert_eq!(
             check_label_configurations(&[failed.clone(), with_program("a.py")]),
             Ok(())
@@ -1854,7 +1848,7 @@ mod tests {
                     let mut r = stored_end(label, seed, t, "complete", f, s0);
                     r.building = building.into();
                     if rng.random::<f64>() < 0.05 {
-                        r.status = crate::store::JobStatus::Failed;
+                        r.status = floorcast_worker::wire::JobStatus::Failed;
                         r.summary = None;
                     }
                     results.push(r);
@@ -1988,7 +1982,7 @@ mod tests {
         };
         let failed = || {
             let mut r = stored("b", "x", 1, 100.0);
-            r.status = crate::store::JobStatus::Failed;
+            r.status = floorcast_worker::wire::JobStatus::Failed;
             r.summary = None;
             outcome_of(&r, 0.99, "b")
         };

@@ -2,8 +2,8 @@
 //! **efficiency** = yardstick time / exploration time (docs/known-map-tour.md).
 //!
 //! A grid's runs need one tour per building, start pose and [`TourKey`] (six settings and the
-//! grid's coverage level): [`planned_tours`] lists them, `run` makes those its store lacks and
-//! stores them ([`crate::store::Store::record_tour`]). A run's tour is the stored one of its
+//! grid's coverage level): the coordinator lists them (`floorcast_coordinator::tours`), `run`
+//! makes those its store lacks and stores them. A run's tour is the stored one of its
 //! building hash, its summary's start (bit for bit) and its settings' key at the report's
 //! coverage level. A run that did not reach that level (or failed) has efficiency 0: it never
 //! saw what the tour sees, as its time to it is infinite in every comparison
@@ -22,74 +22,11 @@
 use std::collections::BTreeMap;
 
 use floorcast_worker::tour::{TourKey, TourRecord};
-use floorcast_worker::Settings;
-use sim_core::Pose;
 
-use crate::grid::{Plan, PlannedJob};
 use crate::metric::time_to_fraction;
 use crate::outcome::{achieves, coverage_text};
 use crate::stats::interquartile_mean;
-use crate::store::StoredResult;
-
-/// A tour a grid's runs need: its building (an index into [`Plan::buildings`]), start and the
-/// settings its key is made of.
-#[derive(Debug, Clone)]
-pub struct PlannedTour {
-    pub building: usize,
-    pub start: Pose,
-    pub settings: Settings,
-    pub key: TourKey,
-}
-
-/// The tours `jobs` need, one per building, start and key, in the jobs' order; a job whose
-/// start cannot be found (its building has none) needs none (the job fails and says why).
-pub fn planned_tours(plan: &Plan, jobs: &[PlannedJob]) -> Vec<PlannedTour> {
-    let mut seen = std::collections::BTreeSet::new();
-    let mut out = Vec::new();
-    for job in jobs {
-        let building = &plan.buildings[job.building].building;
-        let start = match &job.start {
-            Some(g) => g.pose,
-            None => match building.default_start(job.settings.robot_radius_m) {
-                Ok((pose, _)) => pose,
-                Err(_) => continue,
-            },
-        };
-        let key = TourKey::of(&job.settings, plan.coverage);
-        let id = (job.building, pose_bits(start), key.text());
-        if seen.insert(id) {
-            out.push(PlannedTour {
-                building: job.building,
-                start,
-                settings: job.settings.clone(),
-                key,
-            });
-        }
-    }
-    out
-}
-
-fn pose_bits(p: Pose) -> [u64; 3] {
-    [p.x_m.to_bits(), p.y_m.to_bits(), p.theta_rad.to_bits()]
-}
-
-/// Of `planned`, those `stored` lacks.
-pub fn missing<'a>(
-    plan: &Plan,
-    planned: &'a [PlannedTour],
-    stored: &[TourRecord],
-) -> Vec<&'a PlannedTour> {
-    planned
-        .iter()
-        .filter(|t| {
-            let hash = &plan.buildings[t.building].hash;
-            let start = [t.start.x_m, t.start.y_m, t.start.theta_rad];
-            !stored
-                .iter()
-                .any(|s| &s.building_hash == hash && s.starts_at(&start) && s.key == t.key)
-        })
-        .collect()
-}
+use crate::StoredResult;
 
 /// The yardstick of a building, start and key: the fastest known-map tour there.
 #[derive(Debug, Clone, PartialEq)]
@@ -323,15 +260,13 @@ fn quantile(xs: &[f64], p: f64) -> f64 {
 /// Why a run has no tour, as the report says it.
 const WHY_NO_TOUR: &str = "`run` makes the missing tours when the grid runs again, except those it skipped, saying why: made with --no-tours, a robot that fits nowhere, or a tour whose estimate exceeded `run --tour-budget`";
 
-/// The report's efficiency section of `results`: when no run has a tour, one line saying why
-/// there is no efficiency (nothing without a successful run).
-pub fn render(labels: &[LabelEfficiency], results: &[StoredResult], coverage: f64) -> String {
+/// The report's efficiency section of the results (`successful` of them successful runs with a
+/// summary): when no run has a tour, one line saying why there is no efficiency (nothing
+/// without a successful run).
+pub fn render(labels: &[LabelEfficiency], successful: usize, coverage: f64) -> String {
     use std::fmt::Write;
     if labels.is_empty() {
-        let ok = results
-            .iter()
-            .filter(|r| r.status.is_ok() && r.summary.is_some())
-            .count();
+        let ok = successful;
         if ok == 0 {
             return String::new();
         }

@@ -29,7 +29,7 @@ pub use crate::measure::{coverage_text, Measure};
 use floorcast_worker::RunSummary;
 use sim_core::explore::EndReason;
 
-use crate::store::StoredResult;
+use crate::StoredResult;
 
 /// The default coverage level: a run achieves the outcome with at least 99 % of the explorable
 /// area explored at its end.

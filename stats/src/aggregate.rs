@@ -24,7 +24,7 @@ use std::collections::BTreeMap;
 
 use crate::outcome::RunOutcome;
 use crate::stats::{hierarchical_bootstrap_ci95, interquartile_mean, median, probability_lower};
-use crate::store::StoredResult;
+use crate::StoredResult;
 
 /// Points of a performance profile: `tau = 2^(k / 20 - 1)` for `k = 0..=40` (1/2 to 2).
 pub const PROFILE_POINTS: usize = 41;
@@ -325,7 +325,7 @@ fn profile(taus: &[f64], strata: &[[Vec<f64>; 2]], own: bool) -> Vec<ProfilePoin
 }
 
 /// The aggregates in `report --json` (`aggregates`).
-pub fn aggregates_json(a: &Aggregates) -> serde_json::Value {
+pub(crate) fn aggregates_json(a: &Aggregates) -> serde_json::Value {
     let mut v = serde_json::to_value(a).unwrap_or_default();
     // NaN (no runs) is not JSON: null.
     if let Some(labels) = v.get_mut("labels").and_then(|l| l.as_array_mut()) {
@@ -405,8 +405,8 @@ mod tests {
         assert!((t[20] - 1.0).abs() < 1e-12);
     }
 
-    use crate::store::fixtures::{set_summary, stored, summary_value};
-    use crate::store::StoredResult;
+    use crate::fixtures::{set_summary, stored, summary_value};
+    use crate::StoredResult;
 
     #[test]
     fn medians_of_odd_and_even_counts() {
