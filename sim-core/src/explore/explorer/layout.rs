@@ -3,14 +3,17 @@
 use crate::explore::layout_state::LayoutState;
 
 use crate::explore::explorer::Explorer;
+use crate::explore::explorer::LayoutCost;
 use crate::explore::layout_state::room_view;
 use crate::explore::referee::{
     open_true_doors, open_unseen_walls, open_where_free, true_layout, MapToWorld,
 };
 use crate::explore::strategy::GainModel;
 use crate::grid::Occupancy;
-use crate::layout::reconstruct_layout;
+use crate::grid::OccupancyGrid;
+use crate::layout::{reconstruct_layout, Layout, LayoutConfig};
 use crate::layout_gain::LayoutRaster;
+use std::sync::Mutex;
 
 impl Explorer {
     /// Recomputes the layout when the strategy uses it and the map has grown enough since the
@@ -68,16 +71,8 @@ impl Explorer {
                 open_unseen_walls(&mut raster.walls, &layout, grid);
                 raster
             } else {
-                let mut made = None;
-                let layout_cfg = &self.cfg.layout;
-                let charged_s = match self.layout_cost.as_ref() {
-                    Some(cost) => {
-                        let mut cost = cost.lock().unwrap_or_else(|e| e.into_inner());
-                        cost(&mut || made = Some(reconstruct_layout(grid, layout_cfg)))
-                    }
-                    None => 0.0,
-                };
-                let layout = made.unwrap_or_else(|| reconstruct_layout(grid, layout_cfg));
+                let (layout, charged_s) =
+                    charged_layout(self.layout_cost.as_deref(), grid, &self.cfg.layout);
                 if charged_s.is_finite() && charged_s > 0.0 {
                     self.compute_debt_s += charged_s;
                     self.layout_compute_s += charged_s;
@@ -119,4 +114,24 @@ impl Explorer {
             GainModel::Switch { .. } => self.layout_trusted,
         }
     }
+}
+
+/// The layout reconstructed from `grid`, and the seconds `cost` charges for it (0 without one).
+fn charged_layout(
+    cost: Option<&Mutex<LayoutCost>>,
+    grid: &OccupancyGrid,
+    cfg: &LayoutConfig,
+) -> (Layout, f64) {
+    let mut made = None;
+    let charged_s = match cost {
+        Some(cost) => {
+            let mut cost = cost.lock().unwrap_or_else(|e| e.into_inner());
+            cost(&mut || made = Some(reconstruct_layout(grid, cfg)))
+        }
+        None => 0.0,
+    };
+    (
+        made.unwrap_or_else(|| reconstruct_layout(grid, cfg)),
+        charged_s,
+    )
 }
