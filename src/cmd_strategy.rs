@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use floorcast_worker::external::{check_program, DEFAULT_TIMEOUT_S};
-use floorcast_worker::{run_job, Job, Settings, StrategyProgram};
+use floorcast_worker::{run_job, Job, Settings, StrategyProgram, StrategyRef};
 
 #[derive(Debug, Subcommand)]
 pub enum StrategyCommand {
@@ -172,8 +172,10 @@ fn check(a: CheckArgs) -> Result<()> {
     let job = Job {
         building: &building,
         building_name: name.clone(),
-        strategy: "check".into(),
-        program: Some(program),
+        strategy: StrategyRef::External {
+            label: "check".into(),
+            program,
+        },
         seed: 1,
         settings: Settings {
             time_limit_s: a.time_limit_s,

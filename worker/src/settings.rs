@@ -858,9 +858,18 @@ impl Settings {
     /// The simulation config for strategy `name` (see [`sim_core::explore::Strategy::by_name`]),
     /// with this file's thresholds.
     pub fn to_explore_config_for(&self, name: &str) -> Result<ExploreConfig, SettingsError> {
-        let mut c = self.to_explore_config()?;
-        c.strategy = Strategy::by_name(name, &self.strategy_params())
+        let strategy = sim_core::explore::BuiltIn::find(name)
             .ok_or_else(|| SettingsError::Strategy(shown(name)))?;
+        self.to_explore_config_with(strategy)
+    }
+
+    /// The simulation config for the built-in `strategy`, with this file's thresholds.
+    pub fn to_explore_config_with(
+        &self,
+        strategy: &sim_core::explore::BuiltIn,
+    ) -> Result<ExploreConfig, SettingsError> {
+        let mut c = self.to_explore_config()?;
+        c.strategy = (strategy.make)(&self.strategy_params());
         Ok(c)
     }
 

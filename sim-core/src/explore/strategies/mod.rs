@@ -50,6 +50,9 @@ pub const BUILT_IN: &[BuiltIn] = &[
     random_frontier::STRATEGY,
 ];
 
+/// The paper's baseline (the candidates and gains an external strategy chooses among).
+pub const BASELINE: &BuiltIn = &baseline::STRATEGY;
+
 impl BuiltIn {
     /// The built-in strategy named `name`.
     pub fn find(name: &str) -> Option<&'static BuiltIn> {
