@@ -32,7 +32,7 @@
 use std::process::Command;
 use std::time::Instant;
 
-use floorcast_worker::{run_job, Job, Settings};
+use floorcast_worker::{run_job, Job, Settings, StrategyRef};
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 
 /// The cell budget of the runs (`--max-cells`): a generated 50000 m² office spans about
@@ -118,8 +118,7 @@ fn case(args: &[String]) {
     let job = Job {
         building: &building,
         building_name: format!("gen-{area}"),
-        strategy,
-        program: None,
+        strategy: StrategyRef::built_in(&strategy).expect("--strategy: a built-in strategy"),
         seed: run_seed,
         settings,
         start: None,

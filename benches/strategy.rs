@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use floorcast_worker::external::ExternalStrategy;
-use floorcast_worker::{run_job, Job, Settings, StrategyProgram};
+use floorcast_worker::{run_job, Job, Settings, StrategyProgram, StrategyRef};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -61,8 +61,7 @@ fn main() {
         let job = |program: Option<StrategyProgram>| Job {
             building: &building,
             building_name: name.clone(),
-            strategy: "baseline".into(),
-            program,
+            strategy: StrategyRef::resolve("baseline", program).expect("a built-in strategy"),
             seed,
             settings: Settings::default(),
             start: None,

@@ -10,6 +10,7 @@ use floorcast_worker::external::ExternalStrategy;
 use floorcast_worker::settings::{fmt_num, LocalizationSetting, UtilityDistanceSetting};
 use floorcast_worker::{
     check_job, check_start, run_job, strategy_names, GivenStart, Job, Settings, StrategyProgram,
+    StrategyRef,
 };
 use sim_core::explore::{EndReason, RunResult};
 
@@ -135,12 +136,12 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .unwrap_or_else(|| building.name.clone());
     let settings = explore_settings(&a)?;
     let start = given_start(&a, &building, &name, &settings)?;
-    let (label, program) = strategy_of(&a).map_err(|e| failed_start(&a, &name, e))?;
+    let strategy = strategy_of(&a).map_err(|e| failed_start(&a, &name, e))?;
+    let label = strategy.name().to_string();
     let job = Job {
         building: &building,
         building_name: name.clone(),
-        strategy: label.clone(),
-        program,
+        strategy,
         seed: a.seed,
         settings,
         start,
@@ -341,10 +342,10 @@ fn given_start(
     })
 }
 
-/// The strategy's label and, for `--strategy-command`, its program. An external strategy is
-/// started once to learn its name (and refused here if it cannot start or shake hands), before
-/// any output is created.
-fn strategy_of(a: &ExploreArgs) -> Result<(String, Option<StrategyProgram>)> {
+/// The strategy, resolved: the built-in `--strategy`, or the program of `--strategy-command`
+/// labelled by its name. An external strategy is started once to learn its name (and refused
+/// here if it cannot start or shake hands), before any output is created.
+fn strategy_of(a: &ExploreArgs) -> Result<StrategyRef> {
     Ok(match &a.strategy_command {
         Some(line) => {
             let program = StrategyProgram::from_command_line(
@@ -361,9 +362,12 @@ fn strategy_of(a: &ExploreArgs) -> Result<(String, Option<StrategyProgram>)> {
             let probe = ExternalStrategy::start(&program)?;
             let name = probe.hello().name.clone();
             probe.finish()?;
-            (name, Some(program))
+            StrategyRef::External {
+                label: name,
+                program,
+            }
         }
-        None => (a.strategy.clone(), None),
+        None => StrategyRef::built_in(&a.strategy)?,
     })
 }
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use floorcast_worker::external::{check_program, DEFAULT_TIMEOUT_S};
-use floorcast_worker::{run_job, Job, Settings, StrategyProgram};
+use floorcast_worker::{run_job, Job, Settings, StrategyProgram, StrategyRef};
 
 #[derive(Debug, Subcommand)]
 pub enum StrategyCommand {
@@ -21,8 +21,12 @@ pub enum StrategyCommand {
 #[derive(Debug, Args)]
 pub struct ListArgs {
     /// Print the list as the markdown table of the README.
-    #[arg(long, conflicts_with = "json")]
+    #[arg(long, conflicts_with_all = ["json", "settings_markdown"])]
     markdown: bool,
+    /// Print the settings each strategy reads, with their defaults, as the markdown table of
+    /// docs/settings.md.
+    #[arg(long, conflicts_with = "json")]
+    settings_markdown: bool,
     /// Print the list as JSON: per strategy its name, gain, stop, citation and the settings it
     /// reads with their defaults (those of the layout's use without a value: the run's).
     #[arg(long)]
@@ -62,9 +66,16 @@ pub fn run(c: StrategyCommand) -> Result<()> {
 }
 
 fn list(a: &ListArgs) {
-    use sim_core::explore::strategy::{strategies_markdown, BUILT_IN};
+    use sim_core::explore::strategies::{strategies_markdown, BUILT_IN};
     if a.markdown {
         say_raw!("{}", strategies_markdown());
+        return;
+    }
+    if a.settings_markdown {
+        say_raw!(
+            "{}",
+            floorcast_worker::settings::strategy_settings_markdown()
+        );
         return;
     }
     if a.json {
@@ -81,7 +92,7 @@ fn list(a: &ListArgs) {
 
 /// `strategy list --json`: the built-in strategies with the default settings' parameters.
 fn strategies_json() -> String {
-    use sim_core::explore::strategy::BUILT_IN;
+    use sim_core::explore::strategies::BUILT_IN;
     let params = Settings::default().strategy_params();
     let list: Vec<serde_json::Value> = BUILT_IN
         .iter()
@@ -161,8 +172,10 @@ fn check(a: CheckArgs) -> Result<()> {
     let job = Job {
         building: &building,
         building_name: name.clone(),
-        strategy: "check".into(),
-        program: Some(program),
+        strategy: StrategyRef::External {
+            label: "check".into(),
+            program,
+        },
         seed: 1,
         settings: Settings {
             time_limit_s: a.time_limit_s,

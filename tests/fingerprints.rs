@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use floorcast_worker::{run_job, Job, Settings};
+use floorcast_worker::{run_job, Job, Settings, StrategyRef};
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -186,8 +186,7 @@ fn fingerprint(building: &Path, strategy: &str, seed: u64, changed: Changed) -> 
     let job = Job {
         building: &b,
         building_name: b.name.clone(),
-        strategy: strategy.to_string(),
-        program: None,
+        strategy: StrategyRef::built_in(strategy).unwrap(),
         seed,
         settings: Settings {
             layout_update_fraction: changed.unwrap_or(Settings::default().layout_update_fraction),

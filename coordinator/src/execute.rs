@@ -119,8 +119,7 @@ pub(crate) fn spec<'p>(plan: &'p Plan, job: &PlannedJob) -> Job<'p> {
     Job {
         building: &b.building,
         building_name: b.name.clone(),
-        strategy: job.strategy.clone(),
-        program: job.program.clone(),
+        strategy: job.reference.clone(),
         seed: job.seed,
         settings: job.settings.clone(),
         start: job.start.clone(),

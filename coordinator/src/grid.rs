@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use floorcast_worker::{
-    check_start, strategy_names, GivenSource, GivenStart, Settings, StrategyProgram,
-    JOB_ID_RESULT_FORMAT,
+    check_start, strategy_names, BuiltIn, GivenSource, GivenStart, Settings, StrategyProgram,
+    StrategyRef, JOB_ID_RESULT_FORMAT,
 };
 use serde::Deserialize;
 use sha2::{Digest, Sha256};
@@ -203,6 +203,9 @@ pub struct PlannedJob {
     pub label: String,
     /// An external strategy's program (`None`: the built-in `strategy`).
     pub program: Option<StrategyProgram>,
+    /// `strategy` and `program` (the job's identity, as the wire and the store name it)
+    /// resolved when the grid was planned.
+    pub reference: StrategyRef,
     pub seed: u64,
     pub settings: Settings,
     /// The start pose, when the grid sets one (`[starts]`); `None`: the building's own.
@@ -257,6 +260,7 @@ impl Plan {
                             strategy: r.name.clone(),
                             label: r.label.clone(),
                             program: r.program.clone(),
+                            reference: r.reference.clone(),
                             seed,
                             settings: r.settings.clone(),
                             start: start.clone(),
@@ -712,15 +716,15 @@ fn plan_strategies(
     let grid_dir = dir_of(path);
     for (i, s) in file.strategies.iter().enumerate() {
         let field = format!("strategies[{i}]");
-        let (name, program) = match (&s.name, &s.command) {
-            (Some(name), None) => (built_in_strategy(s, name, &field, invalid)?, None),
+        let reference = match (&s.name, &s.command) {
+            (Some(name), None) => StrategyRef::BuiltIn(built_in_strategy(s, name, &field, invalid)?),
             (None, Some(command)) => {
                 let (label, program, contents) =
                     external_strategy(s, command, grid_dir, &field, invalid)?;
                 planned
                     .program_files
                     .insert(program.files_sha256.clone(), Arc::new(contents));
-                (label, Some(program))
+                StrategyRef::External { label, program }
             }
             (Some(_), Some(_)) => {
                 return Err(invalid(
@@ -738,6 +742,7 @@ fn plan_strategies(
                 ))
             }
         };
+        let (name, program) = (reference.name().to_string(), reference.program().cloned());
         // Labels are compared as normalised: two that differ only by white space at an end,
         // by NFC against NFD or by an invisible character are one label (the last refused).
         let label = crate::names::label(s.label.as_deref().unwrap_or(&name))
@@ -772,8 +777,7 @@ fn plan_strategies(
                 ),
             ));
         }
-        let built_in = if program.is_some() { "baseline" } else { &name };
-        check_strategy_fits(built_in, &settings, buildings, path)
+        check_strategy_fits(reference.base(), &settings, buildings, path)
             .map_err(|(f, p)| invalid(&format!("{field}{f}"), p))?;
         planned.labels.push(label.clone());
         planned.resolved.push(Resolved {
@@ -781,19 +785,20 @@ fn plan_strategies(
             settings,
             label,
             program,
+            reference,
         });
     }
     Ok(planned)
 }
 
-/// A built-in strategy's name, checked, with none of an external strategy's fields.
+/// A built-in strategy named, found, with none of an external strategy's fields.
 fn built_in_strategy(
     s: &StrategySpec,
     name: &str,
     field: &str,
     invalid: &dyn Fn(&str, String) -> GridError,
-) -> Result<String, GridError> {
-    if !strategy_names().contains(&name) {
+) -> Result<&'static BuiltIn, GridError> {
+    let Some(found) = BuiltIn::find(name) else {
         return Err(invalid(
             &format!("{field}.name"),
             format!(
@@ -802,7 +807,7 @@ fn built_in_strategy(
                 strategy_names().join(", ")
             ),
         ));
-    }
+    };
     for (key, given) in [
         ("files", !s.files.is_empty()),
         ("timeout_s", s.timeout_s.is_some()),
@@ -816,7 +821,7 @@ fn built_in_strategy(
             ));
         }
     }
-    Ok(name.to_string())
+    Ok(found)
 }
 
 /// An external strategy: its label, its program (timeout, files, command and parameters
@@ -1063,14 +1068,13 @@ fn check_results(results: Option<&str>) -> Result<(), String> {
 /// ground-truth rooms, and every building's exploration grid at the strategy's map resolution
 /// must fit the cell budget. Returns the field suffix and the problem.
 fn check_strategy_fits(
-    name: &str,
+    strategy: &BuiltIn,
     settings: &Settings,
     buildings: &[PlannedBuilding],
     path: &Path,
 ) -> Result<(), (String, String)> {
-    let params = settings.strategy_params();
-    let truth =
-        sim_core::explore::Strategy::by_name(name, &params).is_some_and(|s| s.layout_from_truth());
+    let name = strategy.name;
+    let truth = (strategy.make)(&settings.strategy_params()).layout_from_truth();
     for b in buildings {
         if truth && b.building.rooms.is_empty() {
             return Err((
@@ -1357,6 +1361,8 @@ struct Resolved {
     settings: Settings,
     label: String,
     program: Option<StrategyProgram>,
+    /// The strategy resolved.
+    reference: StrategyRef,
 }
 
 /// What identifies an external strategy's program: its command as written, its files and

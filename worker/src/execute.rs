@@ -7,7 +7,9 @@ use std::time::Instant;
 use sim_core::{Building, Pose};
 
 use crate::wire::{JobOutcome, JobReport, WireJob};
-use crate::{run_job, run_jobs_shared, GivenSource, GivenStart, Job, JobError, JobOutput};
+use crate::{
+    run_job, run_jobs_shared, GivenSource, GivenStart, Job, JobError, JobOutput, StrategyRef,
+};
 
 /// Runs a job received from the network (see [`crate::process`]) in its building (already
 /// checked against the job's building hash).
@@ -43,11 +45,22 @@ pub fn execute_wire(job: &WireJob, building: &Building) -> JobReport {
             }
         },
     };
+    // The wire names the strategy: resolved here, once.
+    let strategy = match StrategyRef::resolve(&job.strategy, program) {
+        Ok(s) => s,
+        Err(e) => {
+            let (outcome, stderr_tail) = outcome(Err(e));
+            return JobReport {
+                wall_time_s: 0.0,
+                outcome,
+                stderr_tail,
+            };
+        }
+    };
     let out = report(&Job {
         building,
         building_name: job.building_name.clone(),
-        strategy: job.strategy.clone(),
-        program,
+        strategy,
         seed: job.seed,
         settings: job.settings.clone(),
         start,
@@ -149,5 +162,19 @@ mod tests {
         }
         let good = execute_wire(&job("grid"), &b);
         assert!(matches!(good.outcome, JobOutcome::Ok { .. }), "{good:?}");
+        // A strategy this build does not have is the job's error.
+        let unknown = execute_wire(
+            &WireJob {
+                strategy: "nope".into(),
+                ..job("grid")
+            },
+            &b,
+        );
+        match &unknown.outcome {
+            JobOutcome::Failed { error } => {
+                assert!(error.contains("unknown strategy 'nope'"), "{error}")
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }

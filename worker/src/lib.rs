@@ -39,6 +39,7 @@ pub use record::{
     RunSummary, JOB_ID_RESULT_FORMAT, SUMMARY_FORMAT, SUMMARY_OLDEST_VERSION, SUMMARY_VERSION,
 };
 pub use settings::{Settings, SettingsError};
+pub use sim_core::explore::BuiltIn;
 
 /// The floorcast version recorded in every result (the build that made it).
 pub const FLOORCAST_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -118,16 +119,74 @@ pub struct Job<'a> {
     pub building: &'a Building,
     /// Name to record (usually the file stem or the building's name).
     pub building_name: String,
-    /// A built-in strategy's name, or an external strategy's label.
-    pub strategy: String,
-    /// The external strategy's program (`None`: the built-in `strategy`).
-    pub program: Option<StrategyProgram>,
+    /// Its strategy, resolved (records name it by [`StrategyRef::name`]).
+    pub strategy: StrategyRef,
     pub seed: u64,
     pub settings: Settings,
     /// Overrides the building's start pose.
     pub start: Option<GivenStart>,
     /// Explored fractions at which to keep a copy of the map (see `ExploreConfig`).
     pub snapshot_fractions: Vec<f64>,
+}
+
+/// A job's strategy, resolved once: when a grid is planned, a command's arguments are read or
+/// a job comes over the wire. A built-in strategy of sim-core's registry
+/// ([`sim_core::explore::BUILT_IN`]), or an external program with the label its results carry.
+/// Records and wire messages name it as they always have ([`StrategyRef::name`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum StrategyRef {
+    BuiltIn(&'static BuiltIn),
+    External {
+        label: String,
+        program: StrategyProgram,
+    },
+}
+
+impl StrategyRef {
+    /// The built-in strategy `name`.
+    pub fn built_in(name: &str) -> Result<Self, JobError> {
+        BuiltIn::find(name)
+            .map(Self::BuiltIn)
+            .ok_or_else(|| JobError::UnknownStrategy(name.to_string()))
+    }
+
+    /// The strategy a job's name and program give: the external `program` labelled `name`, or
+    /// without one the built-in strategy `name`.
+    pub fn resolve(name: &str, program: Option<StrategyProgram>) -> Result<Self, JobError> {
+        match program {
+            Some(program) => Ok(Self::External {
+                label: name.to_string(),
+                program,
+            }),
+            None => Self::built_in(name),
+        }
+    }
+
+    /// Its name in records and on the wire: the built-in strategy's name, or the external
+    /// strategy's label.
+    pub fn name(&self) -> &str {
+        match self {
+            Self::BuiltIn(b) => b.name,
+            Self::External { label, .. } => label,
+        }
+    }
+
+    /// The external strategy's program (`None`: a built-in strategy).
+    pub fn program(&self) -> Option<&StrategyProgram> {
+        match self {
+            Self::BuiltIn(_) => None,
+            Self::External { program, .. } => Some(program),
+        }
+    }
+
+    /// The built-in strategy whose candidates and gains it chooses among: itself, or for an
+    /// external strategy the baseline (and the layout's, when the program asks for them).
+    pub fn base(&self) -> &'static BuiltIn {
+        match self {
+            Self::BuiltIn(b) => b,
+            Self::External { .. } => sim_core::explore::strategies::BASELINE,
+        }
+    }
 }
 
 /// A start pose chosen outside the building file (on the command line, or by a grid): the one
@@ -257,21 +316,10 @@ fn bench_run() -> sim_core::explore::RunResult {
 pub fn check_job(
     job: &Job<'_>,
 ) -> Result<(sim_core::explore::ExploreConfig, Pose, String), JobError> {
-    // An external strategy chooses among the baseline's candidates and gains (and the layout's,
-    // when it asks for them).
-    let built_in = match job.program {
-        Some(_) => "baseline",
-        None => job.strategy.as_str(),
-    };
-    let params = job.settings.strategy_params();
-    let Some(strategy) = sim_core::explore::Strategy::by_name(built_in, &params) else {
-        return Err(JobError::UnknownStrategy(job.strategy.clone()));
-    };
-    let mut config = job.settings.to_explore_config()?;
-    config.strategy = strategy;
+    let mut config = job.settings.to_explore_config_with(job.strategy.base())?;
     if config.strategy.layout_from_truth() && job.building.rooms.is_empty() {
         return Err(JobError::NoRooms {
-            strategy: job.strategy.clone(),
+            strategy: job.strategy.name().to_string(),
             name: job.building_name.clone(),
         });
     }
@@ -379,7 +427,7 @@ fn start_external(
     config: &ExploreConfig,
     start: Pose,
 ) -> Result<Option<external::ExternalStrategy>, JobError> {
-    let Some(program) = &job.program else {
+    let Some(program) = job.strategy.program() else {
         return Ok(None);
     };
     program.check_files().map_err(|what| StrategyError {
@@ -421,7 +469,7 @@ fn charged(mut episode: Episode, job: &Job<'_>) -> Episode {
 /// [`run_jobs_shared`]): a built-in strategy, compute not charged (charged runs depend on the
 /// machine).
 fn may_run_together(job: &Job<'_>) -> bool {
-    job.program.is_none() && !job.settings.charge_compute
+    job.strategy.program().is_none() && !job.settings.charge_compute
 }
 
 /// What the runs sharing a job's beginning must have in common (`None`: it runs alone): its
@@ -432,7 +480,10 @@ pub fn share_key(job: &Job<'_>) -> Option<sim_core::explore::ExploreConfig> {
     if !may_run_together(job) {
         return None;
     }
-    let mut config = job.settings.to_explore_config_for(&job.strategy).ok()?;
+    let mut config = job
+        .settings
+        .to_explore_config_with(job.strategy.base())
+        .ok()?;
     config.snapshot_fractions = job.snapshot_fractions.clone();
     Some(sim_core::explore::shared_part(&config))
 }
@@ -685,8 +736,7 @@ mod tests {
         Job {
             building: b,
             building_name: "box".into(),
-            strategy: "baseline".into(),
-            program: None,
+            strategy: StrategyRef::built_in("baseline").unwrap(),
             seed: 1,
             settings: Settings {
                 time_limit_s: 2.0,

@@ -773,6 +773,30 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// The settings each built-in strategy reads ([`sim_core::explore::BuiltIn::settings`]) with
+/// their defaults, as a markdown table; docs/settings.md carries it between
+/// `<!-- strategy-settings:begin -->` and `<!-- strategy-settings:end -->`.
+pub fn strategy_settings_markdown() -> String {
+    let mut s = String::from("| strategy | settings it reads (default) |\n|---|---|\n");
+    for b in sim_core::explore::BUILT_IN {
+        let read: Vec<String> = b
+            .settings
+            .iter()
+            .map(|n| match setting_info(n) {
+                Some(i) => format!("`{n}` ({})", i.default_value()),
+                None => format!("`{n}` (not a setting)"),
+            })
+            .collect();
+        let read = if read.is_empty() {
+            "none".to_string()
+        } else {
+            read.join(", ")
+        };
+        s.push_str(&format!("| `{}` | {read} |\n", b.name));
+    }
+    s
+}
+
 /// The settings reference as a markdown table (name, type and range, unit, default, meaning);
 /// docs/settings.md carries it between `<!-- settings:begin -->` and `<!-- settings:end -->`.
 pub fn settings_reference_markdown() -> String {
@@ -834,9 +858,18 @@ impl Settings {
     /// The simulation config for strategy `name` (see [`sim_core::explore::Strategy::by_name`]),
     /// with this file's thresholds.
     pub fn to_explore_config_for(&self, name: &str) -> Result<ExploreConfig, SettingsError> {
-        let mut c = self.to_explore_config()?;
-        c.strategy = Strategy::by_name(name, &self.strategy_params())
+        let strategy = sim_core::explore::BuiltIn::find(name)
             .ok_or_else(|| SettingsError::Strategy(shown(name)))?;
+        self.to_explore_config_with(strategy)
+    }
+
+    /// The simulation config for the built-in `strategy`, with this file's thresholds.
+    pub fn to_explore_config_with(
+        &self,
+        strategy: &sim_core::explore::BuiltIn,
+    ) -> Result<ExploreConfig, SettingsError> {
+        let mut c = self.to_explore_config()?;
+        c.strategy = (strategy.make)(&self.strategy_params());
         Ok(c)
     }
 
@@ -1249,6 +1282,42 @@ mod tests {
         );
     }
 
+    /// Every setting a built-in strategy lists as read is a setting, and docs/settings.md
+    /// carries the table of them (print it with `floorcast strategy list --settings-markdown`).
+    #[test]
+    fn docs_hold_the_settings_of_each_strategy() {
+        for b in sim_core::explore::BUILT_IN {
+            for n in b.settings {
+                assert!(
+                    setting_info(n).is_some(),
+                    "{}: '{n}' is not a setting",
+                    b.name
+                );
+            }
+        }
+        let doc = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/settings.md"),
+        )
+        .unwrap();
+        let (begin, end) = (
+            "<!-- strategy-settings:begin -->\n",
+            "<!-- strategy-settings:end -->",
+        );
+        let a = doc
+            .find(begin)
+            .expect("docs/settings.md has no <!-- strategy-settings:begin --> line")
+            + begin.len();
+        let b = doc[a..]
+            .find(end)
+            .expect("docs/settings.md has no <!-- strategy-settings:end --> line")
+            + a;
+        assert_eq!(
+            &doc[a..b],
+            strategy_settings_markdown(),
+            "docs/settings.md's strategies' settings are stale: replace them with the output of `floorcast strategy list --settings-markdown`"
+        );
+    }
+
     /// The README carries the table generated from sim-core's `BUILT_IN`.
     #[test]
     fn the_readme_holds_the_strategies_table() {
@@ -1267,7 +1336,7 @@ mod tests {
             + a;
         assert_eq!(
             &readme[a..b],
-            sim_core::explore::strategy::strategies_markdown(),
+            sim_core::explore::strategies::strategies_markdown(),
             "README.md's strategies table is stale: replace it with `floorcast strategy list --markdown`"
         );
     }

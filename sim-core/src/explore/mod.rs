@@ -50,7 +50,8 @@
 //!   `referee` (ground truth, the explored area), `layout_state`, `gain_cache`, `follow`,
 //!   `calibration`.
 //! - What crosses the boundary: `config` ([`ExploreConfig`]), `run` ([`RunResult`]), `policy`
-//!   (what a policy sees and replies), `strategy` (the built-in strategies).
+//!   (what a policy sees and replies), `strategy` (strategies as values), `strategies` (the built-in
+//!   ones, one file each).
 
 mod calibration;
 mod config;
@@ -67,6 +68,7 @@ pub mod policy;
 mod referee;
 mod run;
 mod shared;
+pub mod strategies;
 pub mod strategy;
 
 pub use crate::utility::UtilityDistance;
@@ -82,9 +84,8 @@ pub use policy::{
 };
 pub use run::{Decision, EndReason, MapQuality, MapSnapshot, ProgressSample, RunResult};
 pub use shared::{can_share, explore_shared, shared_part};
-pub use strategy::{
-    BuiltIn, Choice, EarlyStop, GainModel, LayoutSource, Strategy, StrategyParams, BUILT_IN,
-};
+pub use strategies::{BuiltIn, BUILT_IN};
+pub use strategy::{Choice, EarlyStop, GainModel, LayoutSource, Strategy, StrategyParams};
 
 #[cfg(test)]
 pub(crate) mod tests;

@@ -1,16 +1,16 @@
 //! Exploration strategies as values. A [`Strategy`] is a gain model (how the information gain
 //! `I(p)` of a candidate is estimated, and from which layout), an early-stopping rule and a
-//! choice rule (how the candidates the stop rule keeps are weighed); the combinations that mean
-//! nothing (an oracle layout without a layout gain, the switch's thresholds on another model)
-//! cannot be written. The built-in strategies are the rows of [`BUILT_IN`]: a name, what it
-//! does in words and the function that makes its value from the user's settings. Their choice
-//! is made by a [`Policy`] ([`BuiltInPolicy`]), as an external strategy's is.
-//!
-//! Adding a strategy: a row of [`BUILT_IN`] (and, for a new way of choosing, a variant of
-//! [`Choice`] with its arm in [`BuiltInPolicy::decide`]), plus its test (ARCHITECTURE.md).
+//! choice (how the candidates the stop rule keeps are weighed: a [`Rule`] with the values of
+//! the settings it reads); the combinations that mean nothing (an oracle layout without a
+//! layout gain, the switch's thresholds on another model) cannot be written. The built-in
+//! strategies are registered in `super::strategies`, one file each: its name, what it does in
+//! words, the settings it reads, the function that makes its value from the user's settings
+//! and, when its way of choosing is its own, its rule. Their choice is made by a [`Policy`]
+//! ([`BuiltInPolicy`]), as an external strategy's is.
+
+use std::sync::Arc;
 
 use super::policy::{CandidateView, DecisionView, Needs, Policy, Reply};
-use crate::utility::{best_candidate, with_gain_floor, CandidateScore};
 
 /// Where a layout comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -73,39 +73,80 @@ pub enum EarlyStop {
     DropCandidatesBelow(f64),
 }
 
-/// How a built-in strategy chooses among the candidates its early stop keeps. `L` below is the
-/// planned path's length to the candidate's goal ([`CandidateView::path_m`]), `I` its gain as
-/// the gain model estimates it; ties go to the candidate listed first.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Choice {
-    /// The paper's utility `alpha * (1 - D/D_max) + (1 - alpha) * I/I_max`
-    /// ([`crate::utility`]; `D` as the setting `utility_distance` defines it), each candidate's
-    /// gain counted as at least `gain_floor_m2`.
-    Utility { alpha: f64, gain_floor_m2: f64 },
-    /// The nearest candidate by path: Yamauchi, "A frontier-based approach for autonomous
-    /// exploration", CIRA 1997.
-    Nearest,
-    /// The largest `I * exp(-lambda_per_m * L)`: González-Baños and Latombe, "Navigation
-    /// strategies for exploring indoor environments", IJRR 21(10-11), 2002.
-    UtilityExp { lambda_per_m: f64 },
-    /// The largest `I - beta_m2_per_m * L`: Burgard, Moors, Stachniss and Schneider,
-    /// "Coordinated multi-robot exploration", IEEE T-RO 21(3), 2005, with one robot.
-    CostUtility { beta_m2_per_m: f64 },
-    /// The nearest candidate by path in the robot's room, while one is left there; then the
-    /// nearest: Holz, Basilico, Amigoni and Behnke, "Evaluating the efficiency of
-    /// frontier-based exploration strategies", ISR/ROBOTIK 2010. Rooms are those of the layout
-    /// predicted from the map (never the building's true rooms); a candidate is in the room
-    /// that holds its cell, the robot in the room whose polygon holds its estimated position.
-    RoomFirst,
-    /// The first candidate of a short open travelling-salesman path from the robot through every
-    /// candidate ([`crate::tsp::open_path`], by the planned path lengths between their goals),
-    /// instead of the greedy nearest: Kulich, Faigl and Přeučil, "On distance utility in the
-    /// exploration task", ICRA 2011.
-    FrontierTsp,
-    /// A candidate drawn at random (uniformly, from the run's seed and the decision), driven
-    /// to until it is reached or gone (a random walk over the frontiers, each goal kept as a
-    /// frontier strategy keeps its goal): the floor every strategy must beat.
-    Random,
+/// A way of choosing among the candidates a built-in strategy's early stop keeps: the value a
+/// strategy file supplies. `L` below is the planned path's length to the candidate's goal
+/// ([`CandidateView::path_m`]), `I` its gain as the gain model estimates it; ties go to the
+/// candidate listed first.
+pub(crate) trait Rule: std::fmt::Debug + Send + Sync {
+    /// Its name (two choices are the same when their names and parameters are).
+    fn name(&self) -> &'static str;
+    /// The settings it reads, by their names, with its values of them.
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
+    /// Whether it needs the rooms of the layout predicted from the map ([`Needs::layout`]).
+    fn needs_layout(&self) -> bool {
+        false
+    }
+    /// Whether it needs the path lengths between the candidates ([`Needs::paths_between`]).
+    fn needs_paths_between(&self) -> bool {
+        false
+    }
+    /// The index in `at.shown` of the candidate chosen (`None`: none is).
+    fn choose(&self, at: &Choosing<'_, '_>, memory: &mut Memory) -> Option<usize>;
+}
+
+/// What a [`Rule`] chooses from.
+#[derive(Debug)]
+pub(crate) struct Choosing<'v, 'a> {
+    pub view: &'v DecisionView<'a>,
+    /// The candidates the early stop kept, in the order of `view.candidates`.
+    pub shown: &'v [&'v CandidateView],
+    /// Their ids.
+    pub kept: &'v [usize],
+}
+
+/// What a [`BuiltInPolicy`] keeps for its rule from one decision to the next.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Memory {
+    /// The run's seed.
+    pub seed: u64,
+    /// The point of the candidate chosen last, for a rule that keeps its goal (map frame, m).
+    pub goal: Option<crate::geom::Vec2>,
+}
+
+/// How a built-in strategy chooses among the candidates its early stop keeps: a [`Rule`] of a
+/// strategy file with the values of the settings it reads.
+#[derive(Clone)]
+pub struct Choice(Arc<dyn Rule>);
+
+impl Choice {
+    /// The choice by `rule`.
+    pub(crate) fn new(rule: impl Rule + 'static) -> Self {
+        Self(Arc::new(rule))
+    }
+
+    /// Its rule's name.
+    pub fn name(&self) -> &'static str {
+        self.0.name()
+    }
+
+    /// The settings it reads, by their names, with its values of them.
+    pub fn parameters(&self) -> Vec<(&'static str, f64)> {
+        self.0.parameters()
+    }
+}
+
+impl PartialEq for Choice {
+    fn eq(&self, other: &Self) -> bool {
+        self.name() == other.name() && self.parameters() == other.parameters()
+    }
+}
+
+impl std::fmt::Debug for Choice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Choice({} {:?})", self.name(), self.parameters())
+    }
 }
 
 /// A strategy: how gains are estimated, when to stop early, how to choose.
@@ -146,227 +187,24 @@ impl Default for StrategyParams {
     }
 }
 
-/// A built-in strategy: its name, what it does in words (the README's table), and its value.
-#[derive(Debug, Clone, Copy)]
-pub struct BuiltIn {
-    pub name: &'static str,
-    /// How `I(p)` is estimated, in words.
-    pub gain: &'static str,
-    /// When it stops, in words.
-    pub stops: &'static str,
-    /// Where it comes from ([`PAPER`]: the paper floorcast first studies).
-    pub citation: &'static str,
-    pub make: fn(&StrategyParams) -> Strategy,
-}
-
-/// The paper whose strategies floorcast first studied.
-pub const PAPER: &str = "Luperto, Fochetta and Amigoni, \"Exploration of indoor environments through predicting the layout of partially observed rooms\"";
-/// floorcast's own variants of the paper's strategies.
-const FLOORCAST: &str = "floorcast, after Luperto, Fochetta and Amigoni";
-
-impl BuiltIn {
-    /// How `I(p)` is estimated, with the citation unless it is the paper's or floorcast's.
-    pub fn gain_cited(&self) -> String {
-        if self.citation == PAPER || self.citation.starts_with("floorcast") {
-            self.gain.to_string()
-        } else {
-            format!("{} ({})", self.gain, self.citation)
-        }
-    }
-}
-
-/// The utility of the settings.
-fn utility(p: &StrategyParams) -> Choice {
-    Choice::Utility {
-        alpha: p.alpha,
-        gain_floor_m2: p.gain_floor_m2,
-    }
-}
-
-/// A strategy choosing by the utility of the settings.
-fn by_utility(gain: GainModel, early_stop: EarlyStop, p: &StrategyParams) -> Strategy {
-    Strategy {
-        gain,
-        early_stop,
-        choice: utility(p),
-    }
-}
-
-const PREDICTED: GainModel = GainModel::PredictedRooms(LayoutSource::Predicted);
-const TRUTH: GainModel = GainModel::PredictedRooms(LayoutSource::Truth);
-const GAPS: GainModel = GainModel::ClosedGaps(LayoutSource::Predicted);
-const NO_FRONTIER: &str = "when no frontier is left";
-const PAPER_ES: &str = "also when the summed `I(p)` of all candidates is below `es_threshold_m2` (1 m², the paper's ES)";
-
-fn es(p: &StrategyParams) -> EarlyStop {
-    EarlyStop::TotalGainBelow(p.es_threshold_m2)
-}
-
-/// The built-in strategies, in the order of the README's table: `baseline`; the paper's
-/// `layout` and `layout-es`; `layout-aes` (aggressive ES) and `layout-switch` (dynamic switch)
-/// from its discussion; floorcast's `layout-gaps` and `layout-gaps-es`; the oracle's
-/// `layout-truth` and `layout-truth-es` (the most a perfect layout prediction could give the
-/// paper's method).
-pub const BUILT_IN: &[BuiltIn] = &[
-    BuiltIn {
-        name: "baseline",
-        gain: "unknown cells within laser range visible from `p`, unknown counted as free (the paper's \"no L\")",
-        stops: NO_FRONTIER,
-        citation: PAPER,
-        make: Strategy::baseline_with,
-    },
-    BuiltIn {
-        name: "layout",
-        gain: "the layout's room walls drawn into a copy of the map as obstacles; unknown cells in range, inside the predicted rooms and visible in that copy (\"with L\"); rooms with an open frontier use the baseline",
-        stops: NO_FRONTIER,
-        citation: PAPER,
-        make: |p| by_utility(PREDICTED, EarlyStop::Never, p),
-    },
-    BuiltIn {
-        name: "layout-es",
-        gain: "as `layout`",
-        stops: PAPER_ES,
-        citation: PAPER,
-        make: |p| by_utility(PREDICTED, es(p), p),
-    },
-    BuiltIn {
-        name: "layout-aes",
-        gain: "as `layout`",
-        stops: "candidates with `I(p)` below `aes_min_gain_m2` (2 m²) are dropped; stops when none is left (the paper's \"more aggressive ES\")",
-        citation: PAPER,
-        make: |p| by_utility(PREDICTED, EarlyStop::DropCandidatesBelow(p.aes_min_gain_m2), p),
-    },
-    BuiltIn {
-        name: "layout-switch",
-        gain: "baseline until the layout's predictions prove right (90 % of 5 m² seen since), then `layout` (the paper's \"dynamic switch\")",
-        stops: NO_FRONTIER,
-        citation: PAPER,
-        make: |p| {
-            let switch = GainModel::Switch {
-                agreement: 0.9,
-                min_area_m2: 5.0,
-            };
-            by_utility(switch, EarlyStop::Never, p)
-        },
-    },
-    BuiltIn {
-        name: "layout-gaps",
-        gain: "the baseline gain through the map with gaps of up to `max_wall_gap_m` (1 m) in observed walls closed by the layout's wall lines",
-        stops: NO_FRONTIER,
-        citation: FLOORCAST,
-        make: |p| by_utility(GAPS, EarlyStop::Never, p),
-    },
-    BuiltIn {
-        name: "layout-gaps-es",
-        gain: "as `layout-gaps`; the stop judges the paper's `I(p)`",
-        stops: "as `layout-es`",
-        citation: FLOORCAST,
-        make: |p| by_utility(GAPS, es(p), p),
-    },
-    BuiltIn {
-        name: "layout-truth",
-        gain: "as `layout`, with the building's true rooms for a layout (an oracle: needs a building with rooms)",
-        stops: NO_FRONTIER,
-        citation: FLOORCAST,
-        make: |p| by_utility(TRUTH, EarlyStop::Never, p),
-    },
-    BuiltIn {
-        name: "layout-truth-es",
-        gain: "as `layout-truth`",
-        stops: "as `layout-es`",
-        citation: FLOORCAST,
-        make: |p| by_utility(TRUTH, es(p), p),
-    },
-    BuiltIn {
-        name: "nearest",
-        gain: "not used: the nearest candidate by path",
-        stops: NO_FRONTIER,
-        citation: "Yamauchi, CIRA 1997",
-        make: |_| plain(Choice::Nearest),
-    },
-    BuiltIn {
-        name: "utility-exp",
-        gain: "as `baseline`; the largest `I(p) * exp(-lambda * L(p))`, `L` the path length, lambda `utility_exp_lambda_per_m` (0.2 per m)",
-        stops: NO_FRONTIER,
-        citation: "González-Baños and Latombe, IJRR 2002",
-        make: |p| {
-            plain(Choice::UtilityExp {
-                lambda_per_m: p.utility_exp_lambda_per_m,
-            })
-        },
-    },
-    BuiltIn {
-        name: "cost-utility",
-        gain: "as `baseline`; the largest `I(p) - beta * L(p)`, `L` the path length, beta `cost_utility_beta_m2_per_m` (1 m² per m)",
-        stops: NO_FRONTIER,
-        citation: "Burgard, Moors, Stachniss and Schneider, IEEE T-RO 2005, one robot",
-        make: |p| {
-            plain(Choice::CostUtility {
-                beta_m2_per_m: p.cost_utility_beta_m2_per_m,
-            })
-        },
-    },
-    BuiltIn {
-        name: "frontier-tsp",
-        gain: "not used: the first goal of a short travelling-salesman path from the robot through every candidate, by planned path lengths (nearest neighbour, 2-opt, Or-opt)",
-        stops: NO_FRONTIER,
-        citation: "Kulich, Faigl and Přeučil, ICRA 2011",
-        make: |_| plain(Choice::FrontierTsp),
-    },
-    BuiltIn {
-        name: "room-first",
-        gain: "not used: the nearest candidate by path in the robot's room while one is left there, then the nearest; rooms from the layout predicted from the map",
-        stops: NO_FRONTIER,
-        citation: "Holz, Basilico, Amigoni and Behnke, ISR/ROBOTIK 2010",
-        make: |_| plain(Choice::RoomFirst),
-    },
-    BuiltIn {
-        name: "random-frontier",
-        gain: "not used: a reachable candidate drawn at random from the run's seed, kept until reached or gone (the floor every strategy must beat)",
-        stops: NO_FRONTIER,
-        citation: "floorcast",
-        make: |_| plain(Choice::Random),
-    },
-];
-
-/// A strategy of the baseline's gains choosing by `choice`, without an early stop.
-fn plain(choice: Choice) -> Strategy {
-    Strategy {
-        gain: GainModel::Baseline,
-        early_stop: EarlyStop::Never,
-        choice,
-    }
-}
-
 impl Strategy {
     /// The settings this strategy reads, by their names, with its values of them: those of
     /// its choice, its early stop and, when it uses the layout, how the layout is used
     /// (`layout_update_m2`, `layout_update_fraction`, `max_wall_gap_m` for closed gaps; their
     /// values are the run's, not the strategy's, so only their names are listed there).
     pub fn parameters(&self) -> Vec<(&'static str, Option<f64>)> {
-        let mut out = Vec::new();
-        match self.choice {
-            Choice::Utility {
-                alpha,
-                gain_floor_m2,
-            } => {
-                out.push(("alpha", Some(alpha)));
-                out.push(("gain_floor_m2", Some(gain_floor_m2)));
-            }
-            Choice::UtilityExp { lambda_per_m } => {
-                out.push(("utility_exp_lambda_per_m", Some(lambda_per_m)));
-            }
-            Choice::CostUtility { beta_m2_per_m } => {
-                out.push(("cost_utility_beta_m2_per_m", Some(beta_m2_per_m)));
-            }
-            Choice::Nearest | Choice::RoomFirst | Choice::FrontierTsp | Choice::Random => {}
-        }
+        let mut out: Vec<(&'static str, Option<f64>)> = self
+            .choice
+            .parameters()
+            .into_iter()
+            .map(|(name, v)| (name, Some(v)))
+            .collect();
         match self.early_stop {
             EarlyStop::Never => {}
             EarlyStop::TotalGainBelow(t) => out.push(("es_threshold_m2", Some(t))),
             EarlyStop::DropCandidatesBelow(t) => out.push(("aes_min_gain_m2", Some(t))),
         }
-        if self.gain.layout_source().is_some() || self.choice == Choice::RoomFirst {
+        if self.gain.layout_source().is_some() || self.choice.0.needs_layout() {
             out.push(("layout_update_m2", None));
             out.push(("layout_update_fraction", None));
         }
@@ -374,29 +212,6 @@ impl Strategy {
             out.push(("max_wall_gap_m", None));
         }
         out
-    }
-
-    /// The paper's baseline with the default settings.
-    pub fn baseline() -> Self {
-        Self::baseline_with(&StrategyParams::default())
-    }
-
-    /// The paper's baseline with the settings `params`.
-    pub fn baseline_with(params: &StrategyParams) -> Self {
-        by_utility(GainModel::Baseline, EarlyStop::Never, params)
-    }
-
-    /// The built-in strategy `name` ([`BUILT_IN`]) with the settings `params`.
-    pub fn by_name(name: &str, params: &StrategyParams) -> Option<Self> {
-        BUILT_IN
-            .iter()
-            .find(|b| b.name == name)
-            .map(|b| (b.make)(params))
-    }
-
-    /// The names of the built-in strategies, in [`BUILT_IN`]'s order.
-    pub fn names() -> Vec<&'static str> {
-        BUILT_IN.iter().map(|b| b.name).collect()
     }
 
     /// Whether this strategy needs the layout at all.
@@ -419,23 +234,9 @@ impl Strategy {
     }
 }
 
-/// The README's table of the built-in strategies (name, `I(p)`, stops), from [`BUILT_IN`].
-pub fn strategies_markdown() -> String {
-    let mut s = String::from("| name | information gain `I(p)` | stops |\n|---|---|---|\n");
-    for b in BUILT_IN {
-        s.push_str(&format!(
-            "| `{}` | {} | {} |\n",
-            b.name,
-            b.gain_cited(),
-            b.stops
-        ));
-    }
-    s
-}
-
 /// Applies the early-stopping rule to the candidates' gains: returns which candidates stay and
 /// whether exploration should stop now.
-pub fn early_stop(rule: EarlyStop, gains_m2: &[f64]) -> (Vec<bool>, bool) {
+pub(crate) fn early_stop(rule: EarlyStop, gains_m2: &[f64]) -> (Vec<bool>, bool) {
     match rule {
         EarlyStop::Never => (vec![true; gains_m2.len()], false),
         EarlyStop::TotalGainBelow(t) => {
@@ -462,28 +263,20 @@ pub fn early_stop(rule: EarlyStop, gains_m2: &[f64]) -> (Vec<bool>, bool) {
 pub struct BuiltInPolicy {
     pub early_stop: EarlyStop,
     pub choice: Choice,
-    /// The run's seed (for [`Choice::Random`]).
-    seed: u64,
     /// The candidates the rule kept at this decision's first attempt.
     kept: Vec<usize>,
-    /// [`Choice::Random`]'s goal: the point of the candidate drawn last (map frame, m).
-    drawn: Option<crate::geom::Vec2>,
+    /// What its rule keeps between decisions (the run's seed, the goal drawn last).
+    memory: Memory,
 }
-
-/// [`Choice::Random`] keeps its goal while a candidate lies this close to the point drawn
-/// (the frontier, moved a little as the map grows) and the robot is farther than this from it
-/// (m).
-const RANDOM_KEEP_M: f64 = 3.0;
 
 impl BuiltInPolicy {
     /// The rule of `strategy` in a run of `seed`.
     pub fn new(strategy: &Strategy, seed: u64) -> Self {
         Self {
             early_stop: strategy.early_stop,
-            choice: strategy.choice,
-            seed,
+            choice: strategy.choice.clone(),
             kept: Vec::new(),
-            drawn: None,
+            memory: Memory { seed, goal: None },
         }
     }
 }
@@ -492,8 +285,8 @@ impl Policy for BuiltInPolicy {
     fn needs(&self) -> Needs {
         Needs {
             layout_gain: self.early_stop != EarlyStop::Never,
-            layout: self.choice == Choice::RoomFirst,
-            paths_between: self.choice == Choice::FrontierTsp,
+            layout: self.choice.0.needs_layout(),
+            paths_between: self.choice.0.needs_paths_between(),
         }
     }
 
@@ -521,55 +314,12 @@ impl Policy for BuiltInPolicy {
             .iter()
             .filter(|c| self.kept.contains(&c.id))
             .collect();
-        let chosen = match self.choice {
-            Choice::Utility {
-                alpha,
-                gain_floor_m2,
-            } => by_utility_of(&shown, alpha, gain_floor_m2),
-            Choice::Nearest => best_of(&shown, |c| -c.path_m),
-            Choice::FrontierTsp => match view.between_m {
-                Some(between) => first_of_tour(view.candidates, &self.kept, between),
-                None => best_of(&shown, |c| -c.path_m),
-            },
-            Choice::RoomFirst => {
-                let here = view
-                    .layout
-                    .and_then(|l| l.room_holding(view.pose.position()));
-                let in_here = |c: &CandidateView| here.is_some() && c.room == here;
-                if shown.iter().any(|c| in_here(c)) {
-                    best_of(&shown, |c| if in_here(c) { -c.path_m } else { f64::NAN })
-                } else {
-                    best_of(&shown, |c| -c.path_m)
-                }
-            }
-            Choice::UtilityExp { lambda_per_m } => {
-                best_of(&shown, |c| c.gain_m2 * (-lambda_per_m * c.path_m).exp())
-            }
-            Choice::CostUtility { beta_m2_per_m } => {
-                best_of(&shown, |c| c.gain_m2 - beta_m2_per_m * c.path_m)
-            }
-            Choice::Random => {
-                // The goal drawn before while it stands (a refused goal, attempt > 0, does
-                // not); else a new draw.
-                let robot = view.pose.position();
-                let standing = self.drawn.filter(|_| view.attempt == 0).and_then(|at| {
-                    best_of(&shown, |c| {
-                        let off = (c.point - at).norm();
-                        if off <= RANDOM_KEEP_M && (c.goal - robot).norm() > RANDOM_KEEP_M {
-                            -off
-                        } else {
-                            f64::NAN
-                        }
-                    })
-                });
-                let chosen = standing.or_else(|| {
-                    let draw = random_draw(self.seed, view.decision, view.attempt);
-                    (!shown.is_empty()).then(|| (draw % shown.len() as u64) as usize)
-                });
-                self.drawn = chosen.map(|i| shown[i].point);
-                chosen
-            }
+        let at = Choosing {
+            view,
+            shown: &shown,
+            kept: &self.kept,
         };
+        let chosen = self.choice.0.choose(&at, &mut self.memory);
         let reply = match chosen {
             Some(i) => Reply::Choose(shown[i].id),
             None => Reply::Pass,
@@ -578,66 +328,10 @@ impl Policy for BuiltInPolicy {
     }
 }
 
-/// The index in `shown` of the candidate of the largest finite `score` (the first of equals).
-fn best_of(shown: &[&CandidateView], score: impl Fn(&CandidateView) -> f64) -> Option<usize> {
-    let mut best: Option<(usize, f64)> = None;
-    for (i, c) in shown.iter().enumerate() {
-        let v = score(c);
-        if v.is_finite() && best.is_none_or(|(_, b)| v > b) {
-            best = Some((i, v));
-        }
-    }
-    best.map(|(i, _)| i)
-}
-
-/// The index among the `kept` candidates (in the order of `all`) of the first goal of a short
-/// open tour from the robot through them all; `between` holds the path lengths between all
-/// of `all` (row-major).
-fn first_of_tour(all: &[CandidateView], kept: &[usize], between: &[f64]) -> Option<usize> {
-    let n = all.len();
-    let idx: Vec<usize> = (0..n).filter(|&k| kept.contains(&all[k].id)).collect();
-    let from: Vec<f64> = idx.iter().map(|&k| all[k].path_m).collect();
-    let mut sub = Vec::with_capacity(idx.len() * idx.len());
-    for &a in &idx {
-        for &b in &idx {
-            sub.push(between.get(a * n + b).copied().unwrap_or(f64::INFINITY));
-        }
-    }
-    crate::tsp::open_path(&from, &sub, TOUR_PASSES)
-        .first()
-        .copied()
-}
-
-/// Rounds of improving moves of `frontier-tsp`'s tour at most.
-const TOUR_PASSES: usize = 50;
-
-/// A number drawn from the run's seed and the decision (SplitMix64 of their mix): the same at
-/// the same decision of the same run, whatever was asked before.
-fn random_draw(seed: u64, decision: usize, attempt: usize) -> u64 {
-    let mut z = seed
-        ^ (decision as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        ^ (attempt as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// The index in `shown` of the candidate of best utility, if any is reachable.
-fn by_utility_of(shown: &[&CandidateView], alpha: f64, gain_floor_m2: f64) -> Option<usize> {
-    let scores: Vec<CandidateScore> = shown
-        .iter()
-        .map(|c| CandidateScore {
-            distance_m: Some(c.distance_m),
-            gain_m2: c.gain_m2,
-        })
-        .collect();
-    best_candidate(&with_gain_floor(&scores, gain_floor_m2), alpha)
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::policy::RoomView;
+    use super::super::strategies::{strategies_markdown, BUILT_IN};
     use super::*;
 
     /// Each name makes the value it stands for, with the settings' thresholds.
@@ -652,91 +346,68 @@ mod tests {
             utility_exp_lambda_per_m: 0.7,
             cost_utility_beta_m2_per_m: 3.0,
         };
-        let choice = Choice::Utility {
-            alpha: 0.3,
-            gain_floor_m2: 0.5,
-        };
+        let utility: &[(&str, f64)] = &[("alpha", 0.3), ("gain_floor_m2", 0.5)];
         let never = EarlyStop::Never;
-        let cases: &[(&str, GainModel, EarlyStop, Choice)] = &[
-            ("baseline", GainModel::Baseline, never, choice),
-            ("layout", PREDICTED, never, choice),
-            (
-                "layout-es",
-                PREDICTED,
-                EarlyStop::TotalGainBelow(1.5),
-                choice,
-            ),
+        let predicted = GainModel::PredictedRooms(LayoutSource::Predicted);
+        let truth = GainModel::PredictedRooms(LayoutSource::Truth);
+        let gaps = GainModel::ClosedGaps(LayoutSource::Predicted);
+        let es = EarlyStop::TotalGainBelow(1.5);
+        let switch = GainModel::Switch {
+            agreement: 0.9,
+            min_area_m2: 5.0,
+        };
+        // (name, gain, stop, the choice's rule and parameters)
+        type Case<'a> = (&'a str, GainModel, EarlyStop, &'a str, &'a [(&'a str, f64)]);
+        let cases: &[Case] = &[
+            ("baseline", GainModel::Baseline, never, "utility", utility),
+            ("layout", predicted, never, "utility", utility),
+            ("layout-es", predicted, es, "utility", utility),
             (
                 "layout-aes",
-                PREDICTED,
+                predicted,
                 EarlyStop::DropCandidatesBelow(2.5),
-                choice,
+                "utility",
+                utility,
             ),
-            (
-                "layout-switch",
-                GainModel::Switch {
-                    agreement: 0.9,
-                    min_area_m2: 5.0,
-                },
-                never,
-                choice,
-            ),
-            ("layout-gaps", GAPS, never, choice),
-            (
-                "layout-gaps-es",
-                GAPS,
-                EarlyStop::TotalGainBelow(1.5),
-                choice,
-            ),
-            ("layout-truth", TRUTH, never, choice),
-            (
-                "layout-truth-es",
-                TRUTH,
-                EarlyStop::TotalGainBelow(1.5),
-                choice,
-            ),
-            ("nearest", GainModel::Baseline, never, Choice::Nearest),
+            ("layout-switch", switch, never, "utility", utility),
+            ("layout-gaps", gaps, never, "utility", utility),
+            ("layout-gaps-es", gaps, es, "utility", utility),
+            ("layout-truth", truth, never, "utility", utility),
+            ("layout-truth-es", truth, es, "utility", utility),
+            ("nearest", GainModel::Baseline, never, "nearest", &[]),
             (
                 "utility-exp",
                 GainModel::Baseline,
                 never,
-                Choice::UtilityExp { lambda_per_m: 0.7 },
+                "utility-exp",
+                &[("utility_exp_lambda_per_m", 0.7)],
             ),
             (
                 "cost-utility",
                 GainModel::Baseline,
                 never,
-                Choice::CostUtility { beta_m2_per_m: 3.0 },
+                "cost-utility",
+                &[("cost_utility_beta_m2_per_m", 3.0)],
             ),
             (
                 "frontier-tsp",
                 GainModel::Baseline,
                 never,
-                Choice::FrontierTsp,
+                "frontier-tsp",
+                &[],
             ),
-            ("room-first", GainModel::Baseline, never, Choice::RoomFirst),
-            (
-                "random-frontier",
-                GainModel::Baseline,
-                never,
-                Choice::Random,
-            ),
+            ("room-first", GainModel::Baseline, never, "room-first", &[]),
+            ("random-frontier", GainModel::Baseline, never, "random", &[]),
         ];
         assert_eq!(
             Strategy::names(),
             cases.iter().map(|c| c.0).collect::<Vec<_>>()
         );
-        for &(name, gain, stop, choice) in cases {
+        for &(name, gain, stop, rule, parameters) in cases {
             let s = Strategy::by_name(name, &p).unwrap();
-            assert_eq!(
-                s,
-                Strategy {
-                    gain,
-                    early_stop: stop,
-                    choice
-                },
-                "{name}"
-            );
+            assert_eq!((s.gain, s.early_stop), (gain, stop), "{name}");
+            assert_eq!(s.choice.name(), rule, "{name}");
+            assert_eq!(s.choice.parameters(), parameters, "{name}");
             assert_eq!(s.uses_layout(), name.starts_with("layout"), "{name}");
             assert_eq!(s.layout_from_truth(), name.contains("truth"), "{name}");
         }
@@ -744,6 +415,17 @@ mod tests {
         assert_eq!(
             Strategy::by_name("baseline", &StrategyParams::default()),
             Some(Strategy::baseline())
+        );
+        // Choices are equal by their rule and its values.
+        let (a, b) = (
+            Strategy::by_name("utility-exp", &p).unwrap(),
+            Strategy::by_name("utility-exp", &StrategyParams::default()).unwrap(),
+        );
+        assert_ne!(a, b);
+        assert_eq!(a, a.clone());
+        assert_ne!(
+            Strategy::by_name("nearest", &p).unwrap(),
+            Strategy::by_name("frontier-tsp", &p).unwrap()
         );
     }
 
