@@ -1,6 +1,8 @@
 //! ARCHITECTURE.md's "Where to add" recipes, checked by counting what each asks for: every map
-//! format `read_building` accepts comes with its reader module, its malformed inputs (the
-//! corpus of `tests/malformed/`) and a valid example in the repository.
+//! format `read_building` accepts comes with its reader, its malformed inputs (the corpus of
+//! `tests/malformed/`) and an example in the repository; every robot, laser and odometry
+//! parameter is a setting; every statistic is tested where it is defined. (A strategy's recipe:
+//! `tests/strategy_registry.rs`.)
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -124,4 +126,69 @@ fn the_format_count_reads_the_dispatch() {
     ] {
         assert!(exts.contains(&(e.to_string(), k.to_string())), "{exts:?}");
     }
+}
+
+/// The `pub` fields of struct `name` in `text` (a struct of named fields, one per line).
+fn struct_fields(text: &str, name: &str) -> Vec<String> {
+    let start = text
+        .find(&format!("pub struct {name} {{"))
+        .unwrap_or_else(|| panic!("no struct {name}"));
+    let body = &text[start..start + text[start..].find("\n}").unwrap()];
+    body.lines()
+        .skip(1)
+        .filter_map(|l| l.trim().strip_prefix("pub "))
+        .filter_map(|l| l.split(':').next())
+        .map(str::to_string)
+        .collect()
+}
+
+/// A robot-level feature: the robot, its laser and its odometry are configured by fields of
+/// `sim`'s configs, and each such field is a user setting (`declare_settings!` applies it to
+/// `cfg.sim.<part>.<field>`), so that a grid file, the command line and every run's record
+/// carry it.
+#[test]
+fn every_robot_laser_and_odometry_parameter_is_a_setting() {
+    let settings = read("worker/src/settings.rs");
+    let mut missing = Vec::new();
+    let mut count = 0;
+    for (file, name, part) in [
+        ("sim-core/src/sim/robot.rs", "RobotConfig", "robot"),
+        ("sim-core/src/sim/laser.rs", "LaserConfig", "laser"),
+        ("sim-core/src/sim/odometry.rs", "OdometryConfig", "odometry"),
+    ] {
+        for field in struct_fields(&read(file), name) {
+            count += 1;
+            let applied = format!("cfg.sim.{part}.{field} =");
+            if !settings.contains(&applied) {
+                missing.push(applied);
+            }
+        }
+    }
+    assert!(count >= 10, "{count} fields read");
+    assert!(missing.is_empty(), "fields no setting applies: {missing:?}");
+}
+
+/// A statistic: a pure function of `floorcast-stats`' `stats.rs`, each tested there (named in
+/// its test module) against published values or a reference implementation.
+#[test]
+fn every_statistic_is_tested_where_it_is_defined() {
+    let text = read("stats/src/stats.rs");
+    let split = text
+        .find("\n#[cfg(test)]")
+        .expect("stats.rs has a test module");
+    let (code, tests) = text.split_at(split);
+    let names: Vec<&str> = code
+        .lines()
+        .filter_map(|l| l.strip_prefix("pub fn "))
+        .map(|l| l.split(['(', '<']).next().unwrap())
+        .collect();
+    assert!(names.len() >= 10, "statistics found: {names:?}");
+    let untested: Vec<&&str> = names
+        .iter()
+        .filter(|n| !tests.contains(&format!("{n}(")) && !tests.contains(&format!("{n}::<")))
+        .collect();
+    assert!(
+        untested.is_empty(),
+        "statistics no test calls: {untested:?}"
+    );
 }
