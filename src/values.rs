@@ -23,6 +23,23 @@ pub fn whole_number<T: TryFrom<u64>>(
     }
 }
 
+/// One of the words of a setting's choice (`all`, each written `as_str`): clap offers, checks
+/// and suggests exactly these words (`[possible values: ...]`), the words files and records use.
+pub fn word_choice<T: Copy + Send + Sync + 'static>(
+    all: &'static [T],
+    as_str: fn(T) -> &'static str,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(all.iter().map(|&v| as_str(v))).try_map(
+        move |word: String| {
+            all.iter()
+                .copied()
+                .find(|&v| as_str(v) == word)
+                .ok_or_else(|| format!("'{word}' is none of the words of this choice"))
+        },
+    )
+}
+
 /// A finite number (its range is the flag's own check, which names the range).
 pub fn number(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
