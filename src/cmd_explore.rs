@@ -61,7 +61,10 @@ pub struct ExploreArgs {
     #[arg(long, value_name = "X,Y,THETA|random", value_parser = parse_start, allow_hyphen_values = true)]
     start: Option<StartArg>,
     /// Where the map's poses come from (default: slam, or the settings file's).
-    #[arg(long, value_enum)]
+    #[arg(
+        long,
+        value_parser = crate::values::word_choice(&LocalizationSetting::ALL, LocalizationSetting::as_str)
+    )]
     localization: Option<LocalizationSetting>,
     /// The utility's weight of distance against information gain, in [0, 1] (default: 0.5, or
     /// the settings file's).
@@ -70,7 +73,10 @@ pub struct ExploreArgs {
     /// What the utility's distance D(p) measures: the planned path's length, or the straight
     /// line from the robot to the candidate as the paper defines it (default: path, or the
     /// settings file's).
-    #[arg(long, value_enum)]
+    #[arg(
+        long,
+        value_parser = crate::values::word_choice(&UtilityDistanceSetting::ALL, UtilityDistanceSetting::as_str)
+    )]
     utility_distance: Option<UtilityDistanceSetting>,
     /// Drive back to the start after exploring.
     #[arg(long)]

@@ -23,6 +23,23 @@ pub fn whole_number<T: TryFrom<u64>>(
     }
 }
 
+/// One of the words of a setting's choice (`all`, each written `as_str`): clap offers, checks
+/// and suggests exactly these words (`[possible values: ...]`), the words files and records use.
+pub fn word_choice<T: Copy + Send + Sync + 'static>(
+    all: &'static [T],
+    as_str: fn(T) -> &'static str,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(all.iter().map(|&v| as_str(v))).try_map(
+        move |word: String| {
+            all.iter()
+                .copied()
+                .find(|&v| as_str(v) == word)
+                .ok_or_else(|| format!("'{word}' is none of the words of this choice"))
+        },
+    )
+}
+
 /// A finite number (its range is the flag's own check, which names the range).
 pub fn number(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
@@ -125,5 +142,41 @@ mod tests {
         ] {
             assert_eq!(number(text), want, "{text:?}");
         }
+    }
+
+    /// A word choice's parser accepts exactly the enum's words, each as its value, and offers
+    /// them in `ALL`'s order.
+    #[test]
+    fn word_choices_take_the_words_of_all() {
+        use clap::builder::TypedValueParser as _;
+        use floorcast_worker::settings::{LocalizationSetting, UtilityDistanceSetting};
+        let cmd = clap::Command::new("t");
+        let parser = word_choice(&LocalizationSetting::ALL, LocalizationSetting::as_str);
+        let offered: Vec<String> = parser
+            .possible_values()
+            .unwrap()
+            .map(|v| v.get_name().to_string())
+            .collect();
+        assert_eq!(offered, ["slam", "odometry", "ground-truth"]);
+        for v in LocalizationSetting::ALL {
+            assert_eq!(
+                parser.parse_ref(&cmd, None, v.as_str().as_ref()).ok(),
+                Some(v)
+            );
+        }
+        for bad in ["", "SLAM", "ground_truth", "slam "] {
+            assert!(
+                parser.parse_ref(&cmd, None, bad.as_ref()).is_err(),
+                "{bad:?}"
+            );
+        }
+        let parser = word_choice(&UtilityDistanceSetting::ALL, UtilityDistanceSetting::as_str);
+        for v in UtilityDistanceSetting::ALL {
+            assert_eq!(
+                parser.parse_ref(&cmd, None, v.as_str().as_ref()).ok(),
+                Some(v)
+            );
+        }
+        assert!(parser.parse_ref(&cmd, None, "Path".as_ref()).is_err());
     }
 }

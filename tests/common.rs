@@ -228,6 +228,7 @@ pub(crate) const CRATE_SOURCES: &[&str] = &[
     "sim-core/src",
     "formats/src",
     "render/src",
+    "settings/src",
     "worker/src",
     "stats/src",
     "coordinator/src",

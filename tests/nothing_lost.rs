@@ -29,6 +29,7 @@ fn non_test_sources() -> Vec<(PathBuf, String)> {
         "stats/src",
         "coordinator/src",
         "worker/src",
+        "settings/src",
         "formats/src",
         "render/src",
         "sim-core/src",

@@ -8,7 +8,8 @@
 //! - [`process`]: the worker process's loop (ask, run, renew, submit), over a link to the
 //!   coordinator that the caller supplies (it knows no transport).
 //! - [`wire`]: the versioned messages between coordinator and workers.
-//! - [`settings`], [`record`], [`external`]: the settings, the run record, external strategies.
+//! - [`settings`], [`record`], [`external`]: the settings (the `floorcast-settings` crate,
+//!   re-exported), the run record, external strategies.
 //! - [`tour`]: the known-map yardstick's record (a building's tour for a run's robot and laser).
 //! - [`text`]: outside text (a program's output, a remote worker's error) made safe to print
 //!   and store.
@@ -22,7 +23,6 @@ pub mod execute;
 pub mod external;
 pub mod process;
 pub mod record;
-pub mod settings;
 pub mod text;
 pub mod tour;
 pub mod wire;
@@ -39,6 +39,12 @@ pub use record::{
     RunSummary, JOB_ID_RESULT_FORMAT, SUMMARY_FORMAT, SUMMARY_OLDEST_VERSION, SUMMARY_VERSION,
 };
 pub use settings::{Settings, SettingsError};
+
+/// The run settings: the `floorcast-settings` crate, under the name other crates have always
+/// used (`floorcast_worker::settings::...`).
+pub mod settings {
+    pub use floorcast_settings::*;
+}
 pub use sim_core::explore::BuiltIn;
 
 /// The floorcast version recorded in every result (the build that made it).

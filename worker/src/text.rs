@@ -145,6 +145,19 @@ mod tests {
         assert!(excerpt(&"\x1b".repeat(500)).len() < 400);
     }
 
+    /// The settings crate cuts a quoted name at its own copy of [`EXCERPT_CHARS`]: the same
+    /// length as here.
+    #[test]
+    fn settings_quote_as_many_characters_as_excerpts() {
+        let long = "k".repeat(EXCERPT_CHARS + 5);
+        let e =
+            crate::settings::settings_from_json_text(&format!("{{\"{long}\": 1}}")).unwrap_err();
+        match e {
+            crate::SettingsError::Unknown { field } => assert_eq!(field, excerpt(&long)),
+            other => panic!("not an unknown setting: {other:?}"),
+        }
+    }
+
     #[test]
     fn invisible_and_bidi_characters_are_not_printable() {
         for c in [

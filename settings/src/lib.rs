@@ -8,7 +8,7 @@ use sim_core::explore::{ExploreConfig, Localization, Strategy, StrategyParams, U
 
 /// Where the map's poses come from (setting `localization`, flag `--localization`): written as
 /// `slam`, `odometry` or `ground-truth`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum LocalizationSetting {
     // Scan matching against the map, odometry as the prior (the default).
@@ -52,7 +52,7 @@ impl From<Localization> for LocalizationSetting {
 
 /// What the utility's distance measures (setting `utility_distance`, flag
 /// `--utility-distance`): written as `path` or `euclidean`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum UtilityDistanceSetting {
     // The planned path's length (the default).
@@ -753,13 +753,15 @@ pub fn settings_from_json_text(text: &str) -> Result<Settings, SettingsError> {
     }
 }
 
-/// A name or word from the file as a message shows it: escaped (a key written `"a\nb"` is shown
-/// `a\nb`, not broken over two lines).
-/// A value or name from the input as a message shows it: escaped, and cut to its first
-/// [`crate::text::EXCERPT_CHARS`] characters with its length when longer (as
-/// [`crate::text::excerpt`]).
+/// The most characters of a value or name from the input that a message quotes: the worker's
+/// `floorcast_worker::text::EXCERPT_CHARS` (its tests check that the two agree).
+const EXCERPT_CHARS: usize = 80;
+
+/// A value or name from the input as a message shows it: escaped (a key written `"a\nb"` is
+/// shown `a\nb`, not broken over two lines), and cut to its first [`EXCERPT_CHARS`] characters
+/// with its length when longer (as the worker's `text::excerpt`).
 fn shown(s: &str) -> String {
-    match s.char_indices().nth(crate::text::EXCERPT_CHARS) {
+    match s.char_indices().nth(EXCERPT_CHARS) {
         None => s.escape_debug().to_string(),
         Some((cut, _)) => format!(
             "{}... ({} characters in all)",
@@ -1045,54 +1047,68 @@ mod tests {
     }
 
     /// A word choice is written the same in the settings table, in files and records (serde)
-    /// and on the command line (clap), and reaches the explorer as the core's value.
+    /// and on the command line (the binary's parsers are made from `ALL` and `as_str`), `ALL`
+    /// holds every value once, and it reaches the explorer as the core's value.
     #[test]
     fn word_choices_are_one_set_of_words_everywhere() {
-        use clap::ValueEnum;
-        /// Per value: its clap name and its serde word.
-        type Words = Vec<(String, String)>;
-        fn words<T: ValueEnum + Serialize>(all: &[T]) -> Words {
+        /// Per value: its `as_str` word, its serde word, and whether serde reads the word back
+        /// as the same value.
+        fn words<T: Serialize + serde::de::DeserializeOwned + PartialEq + Copy>(
+            all: &[T],
+            as_str: fn(T) -> &'static str,
+        ) -> Vec<(&'static str, String, bool)> {
             all.iter()
-                .map(|v| {
-                    let clap = v.to_possible_value().unwrap().get_name().to_string();
+                .map(|&v| {
                     let serde = serde_json::to_value(v)
                         .unwrap()
                         .as_str()
                         .unwrap()
                         .to_string();
-                    (clap, serde)
+                    let back: T = serde_json::from_value(serde_json::json!(as_str(v))).unwrap();
+                    (as_str(v), serde, back == v)
                 })
                 .collect()
         }
-        let cases: [(&str, Words, Vec<&str>); 2] = [
+        // Each value's place in `ALL`, by an exhaustive match: a new value fails to compile here
+        // until it is placed (and so added to `ALL`).
+        let localization_place = |v: LocalizationSetting| match v {
+            LocalizationSetting::Slam => 0,
+            LocalizationSetting::Odometry => 1,
+            LocalizationSetting::GroundTruth => 2,
+        };
+        let distance_place = |v: UtilityDistanceSetting| match v {
+            UtilityDistanceSetting::Path => 0,
+            UtilityDistanceSetting::Euclidean => 1,
+        };
+        for (i, v) in LocalizationSetting::ALL.into_iter().enumerate() {
+            assert_eq!(localization_place(v), i, "{v:?}");
+            assert_eq!(LocalizationSetting::from(Localization::from(v)), v);
+        }
+        for (i, v) in UtilityDistanceSetting::ALL.into_iter().enumerate() {
+            assert_eq!(distance_place(v), i, "{v:?}");
+            assert_eq!(UtilityDistanceSetting::from(UtilityDistance::from(v)), v);
+        }
+        let cases = [
             (
                 "localization",
-                words(&LocalizationSetting::ALL),
-                LocalizationSetting::ALL.map(|v| v.as_str()).to_vec(),
+                words(&LocalizationSetting::ALL, LocalizationSetting::as_str),
             ),
             (
                 "utility_distance",
-                words(&UtilityDistanceSetting::ALL),
-                UtilityDistanceSetting::ALL.map(|v| v.as_str()).to_vec(),
+                words(&UtilityDistanceSetting::ALL, UtilityDistanceSetting::as_str),
             ),
         ];
-        for (name, clap_serde, core) in cases {
+        for (name, words) in cases {
             let SettingKind::Choice(table) = setting_info(name).unwrap().kind else {
                 panic!("{name} is not a choice");
             };
-            assert_eq!(table, &core[..], "{name}");
-            for ((clap, serde), word) in clap_serde.iter().zip(&core) {
-                assert_eq!((clap.as_str(), serde.as_str()), (*word, *word), "{name}");
+            let words_of_as_str: Vec<&str> = words.iter().map(|w| w.0).collect();
+            assert_eq!(table, &words_of_as_str[..], "{name}");
+            for (word, serde, read_back) in &words {
+                assert_eq!(serde, word, "{name}");
+                assert!(read_back, "{name}: {word}");
             }
         }
-        assert_eq!(
-            LocalizationSetting::ALL.len(),
-            LocalizationSetting::value_variants().len()
-        );
-        assert_eq!(
-            UtilityDistanceSetting::ALL.len(),
-            UtilityDistanceSetting::value_variants().len()
-        );
         let c = settings_from_json_text(
             r#"{"localization": "ground-truth", "utility_distance": "euclidean"}"#,
         )
@@ -1347,7 +1363,7 @@ mod tests {
     fn every_setting_reaches_the_run() {
         let default = serde_json::to_value(Settings::default()).unwrap();
         let configs = |s: &Settings| -> Vec<ExploreConfig> {
-            crate::strategy_names()
+            Strategy::names()
                 .into_iter()
                 .map(|n| s.to_explore_config_for(n).unwrap())
                 .collect()
