@@ -148,7 +148,7 @@ fn struct_fields(text: &str, name: &str) -> Vec<String> {
 /// carry it.
 #[test]
 fn every_robot_laser_and_odometry_parameter_is_a_setting() {
-    let settings = read("worker/src/settings.rs");
+    let settings = read("settings/src/lib.rs");
     let mut missing = Vec::new();
     let mut count = 0;
     for (file, name, part) in [
