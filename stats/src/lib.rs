@@ -1,6 +1,6 @@
 //! The statistics of floorcast's reports, usable without the coordinator: no network transport,
-//! async runtime or database in this crate's dependency tree (`tests/dependencies.rs` checks
-//! it). Everything here is a pure function of stored results ([`StoredResult`], the plain data
+//! async runtime or database in this crate's dependency tree (the workspace's
+//! `tests/light_crates.rs` checks it). Everything here is a pure function of stored results ([`StoredResult`], the plain data
 //! of one job) and the known-map tours; the coordinator stores them and calls in.
 //!
 //! - [`report`]: the typed [`Report`], the values `floorcast report` prints, and its text.
