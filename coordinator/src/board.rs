@@ -337,7 +337,7 @@ pub fn check_import(
     let (Some(summary), Some(curve)) = (&r.summary, &r.progress) else {
         return Err("a successful run without its summary or progress curve".into());
     };
-    if summary.strategy_program != job.program {
+    if summary.strategy_program.as_ref() != job.program() {
         return Err(format!(
             "field summary.strategy_program differs from the grid's job {}'s program",
             job.id

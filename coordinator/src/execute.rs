@@ -12,7 +12,7 @@ use floorcast_stats::progress::Sample;
 /// A planned job as it is handed to a remote worker: [`identity`] with its program's files.
 pub fn wire_job(plan: &Plan, job: &PlannedJob) -> WireJob {
     WireJob {
-        program: job.program.as_ref().map(|p| {
+        program: job.program().map(|p| {
             let empty = Vec::new();
             let contents = plan
                 .program_files
@@ -34,7 +34,7 @@ pub fn identity(plan: &Plan, job: &PlannedJob) -> WireJob {
         grid: plan.name.clone(),
         building_name: b.name.clone(),
         building_hash: b.hash.clone(),
-        strategy: job.strategy.clone(),
+        strategy: job.strategy().to_string(),
         label: job.label.clone(),
         seed: job.seed,
         settings: job.settings.clone(),
@@ -54,7 +54,7 @@ pub fn expected_row(plan: &Plan, job: &PlannedJob, worker: &str) -> StoredResult
         grid: plan.name.clone(),
         building: b.name.clone(),
         building_hash: b.hash.clone(),
-        strategy: job.strategy.clone(),
+        strategy: job.strategy().to_string(),
         label: job.label.clone(),
         seed: job.seed,
         settings: job.settings.clone(),

@@ -198,13 +198,9 @@ pub struct PlannedJob {
     pub id: String,
     /// Index into [`Plan::buildings`].
     pub building: usize,
-    /// The built-in strategy's name, or the external strategy's label.
-    pub strategy: String,
     pub label: String,
-    /// An external strategy's program (`None`: the built-in `strategy`).
-    pub program: Option<StrategyProgram>,
-    /// `strategy` and `program` (the job's identity, as the wire and the store name it)
-    /// resolved when the grid was planned.
+    /// The strategy, resolved when the grid was planned (its name and program are the job's
+    /// identity, as the wire and the store name it).
     pub reference: StrategyRef,
     pub seed: u64,
     pub settings: Settings,
@@ -237,6 +233,18 @@ pub struct Plan {
     starts: Vec<Vec<Option<GivenStart>>>,
 }
 
+impl PlannedJob {
+    /// The built-in strategy's name, or the external strategy's label.
+    pub fn strategy(&self) -> &str {
+        self.reference.name()
+    }
+
+    /// An external strategy's program (`None`: a built-in strategy).
+    pub fn program(&self) -> Option<&StrategyProgram> {
+        self.reference.program()
+    }
+}
+
 impl Plan {
     /// The jobs of `seeds` for the labels `labels` (all when `None`): building-major, then
     /// start, then seed, then strategy (so partial grids compare fairly).
@@ -257,9 +265,7 @@ impl Plan {
                         jobs.push(PlannedJob {
                             id,
                             building: bi,
-                            strategy: r.name.clone(),
                             label: r.label.clone(),
-                            program: r.program.clone(),
                             reference: r.reference.clone(),
                             seed,
                             settings: r.settings.clone(),
@@ -1245,7 +1251,7 @@ pub fn check_plan_labels(
     let planned = jobs.iter().map(|j| {
         (
             j.label.as_str(),
-            Configuration::new(&j.strategy, &j.settings, j.program.as_ref()),
+            Configuration::new(j.strategy(), &j.settings, j.program()),
         )
     });
     check_planned_labels(planned, results)
@@ -1858,7 +1864,7 @@ time_limit_s = 600
                 j.id,
                 job_id(
                     &plain.buildings[j.building].hash,
-                    &j.strategy,
+                    j.strategy(),
                     j.seed,
                     &j.settings
                 )

@@ -18,7 +18,7 @@ const MEASURED: [&str; 3] = ["wall_time_s", "speedup", "strategy_compute_s"];
 
 /// Whether `result` of `job` can be checked by running it again.
 pub fn verifiable(job: &PlannedJob, result: &StoredResult) -> bool {
-    result.status.is_ok() && job.program.is_none() && !job.settings.charge_compute
+    result.status.is_ok() && job.program().is_none() && !job.settings.charge_compute
 }
 
 /// Compares a worker's row (`theirs`) with this machine's run of the same job (`ours`): the
