@@ -256,3 +256,18 @@ fn a_team_shares_the_world_and_each_robot_is_scored() {
     assert_ne!(team[0].trajectory, alone.trajectory);
     assert_ne!(team[0].trajectory, team[1].trajectory);
 }
+
+/// A team of no robot is an episode that is over at once, not a panic.
+#[test]
+fn a_team_of_no_robot_is_over_at_once() {
+    let (b, seed) = cases().remove(0);
+    let mut episode = Episode::team(&b, &[], nearest_config(), seed, None);
+    assert_eq!(episode.config(), &nearest_config());
+    assert!(episode.robots().is_empty());
+    assert_eq!(episode.advance(), Event::Finished);
+    assert!(episode.result().is_none());
+    assert_eq!(
+        episode.answer(RobotId(0), Reply::Pass),
+        Err(EpisodeError::NoSuchRobot(RobotId(0), 0))
+    );
+}

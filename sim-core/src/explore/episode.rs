@@ -60,11 +60,14 @@ pub enum EpisodeError {
 impl std::fmt::Display for EpisodeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            EpisodeError::NoSuchRobot(r, 0) => {
+                write!(f, "the episode has no robot {} (it has no robots)", r.0)
+            }
             EpisodeError::NoSuchRobot(r, n) => write!(
                 f,
                 "the episode has no robot {} (its robots are 0 to {})",
                 r.0,
-                n.saturating_sub(1)
+                n - 1
             ),
             EpisodeError::NotDeciding(r) => write!(
                 f,
@@ -142,6 +145,8 @@ pub struct Episode {
     pub(super) world: World,
     /// Each robot's exploration, by [`RobotId`].
     pub(super) robots: Vec<Robot>,
+    /// The settings of the run (every robot's).
+    pub(super) cfg: Arc<ExploreConfig>,
 }
 
 impl std::fmt::Debug for Episode {
@@ -229,7 +234,7 @@ impl Episode {
                 result: None,
             });
         }
-        let mut episode = Episode { world, robots };
+        let mut episode = Episode { world, robots, cfg };
         if let Some(cost) = layout_cost {
             episode.charge_layouts(cost);
         }
@@ -258,7 +263,7 @@ impl Episode {
 
     /// The settings of the run.
     pub fn config(&self) -> &ExploreConfig {
-        &self.robots[0].ex.cfg
+        &self.cfg
     }
 
     /// Simulated time (s).

@@ -238,6 +238,7 @@ impl Episode {
         Episode {
             world: self.world.clone(),
             robots: robots.collect(),
+            cfg,
         }
     }
 
