@@ -492,6 +492,14 @@ impl Episode {
         Ok(())
     }
 
+    /// `robot`'s explored area so far (m2) and its share of the building's free area: the
+    /// referee's figures (ground truth: for rewards and evaluation, never for a policy, which
+    /// sees what [`Episode::view`] shows). `None` for a robot the episode does not have.
+    pub fn explored(&self, robot: RobotId) -> Option<(f64, f64)> {
+        let r = self.robot(robot).ok()?;
+        Some((r.ex.explored_area_m2(), r.ex.explored_fraction()))
+    }
+
     /// Robot 0's result (the run's, for an episode of one robot), once [`Event::Finished`] was
     /// returned.
     pub fn result(&self) -> Option<&RunResult> {
