@@ -56,6 +56,20 @@ def observation_space(spec: EnvSpec) -> spaces.Dict:
                 "time_s": time_s,
             }
         )
+    if spec.observation == "graph":
+        n, k = spec.graph_nodes, spec.graph_k
+        return spaces.Dict(
+            {
+                "node_inputs": spaces.Box(-np.inf, np.inf, shape=(n, 4), dtype=np.float32),
+                "edge_inputs": spaces.Box(0, n - 1, shape=(1, k), dtype=np.int64),
+                "current_index": spaces.Box(0, n - 1, shape=(1, 1), dtype=np.int64),
+                "node_padding_mask": spaces.Box(0, 1, shape=(1, n), dtype=np.int8),
+                "edge_padding_mask": spaces.Box(0, 1, shape=(1, k), dtype=np.int8),
+                "edge_mask": spaces.Box(0, 1, shape=(n, n), dtype=np.int8),
+                "pose": pose,
+                "time_s": time_s,
+            }
+        )
     s = spec.map_size
     return spaces.Dict(
         {
@@ -83,6 +97,8 @@ def action_space(spec: EnvSpec) -> spaces.Space:
     """The action space of a spec: a candidate's index, or a point of the crop."""
     if spec.observation == "candidates":
         return CandidateIndex(spec.max_candidates)
+    if spec.observation == "graph":
+        return CandidateIndex(spec.graph_k)
     return spaces.Box(0.0, 1.0, shape=(2,), dtype=np.float32)
 
 
@@ -96,19 +112,19 @@ def arrays(obs_list) -> dict:
 
 def parse_action(spec: EnvSpec, action, name: str = "action"):
     """``(index, point)`` of an action, or ValueError naming `name`."""
-    if spec.observation == "candidates":
+    if spec.observation in ("candidates", "graph"):
         a = action
         if isinstance(a, np.ndarray):
             if a.size != 1:
-                raise ValueError(f"{name}: an array of shape {a.shape}; expected one candidate index")
+                raise ValueError(f"{name}: an array of shape {a.shape}; expected one index")
             a = a.reshape(()).item()
         if isinstance(a, (bool, np.bool_)):
-            raise ValueError(f"{name}: {a!r}; expected an integer candidate index, not a bool")
+            raise ValueError(f"{name}: {a!r}; expected an integer index, not a bool")
         if not isinstance(a, numbers.Integral):
             if isinstance(a, numbers.Real) and math.isfinite(a) and float(a).is_integer():
                 a = int(a)
             else:
-                raise ValueError(f"{name}: {a!r}; expected an integer candidate index")
+                raise ValueError(f"{name}: {a!r}; expected an integer index (a candidate's, or the graph's edge's)")
         return int(a), None
     try:
         p = np.asarray(action, dtype=np.float64)
@@ -119,6 +135,14 @@ def parse_action(spec: EnvSpec, action, name: str = "action"):
     if not np.all(np.isfinite(p)) or np.any(p < 0) or np.any(p > 1):
         raise ValueError(f"{name}: {p.tolist()}; expected two finite numbers from 0 to 1 (column, row; row 0 at the top)")
     return None, (float(p[0]), float(p[1]))
+
+
+def action_mask(obs: dict) -> np.ndarray:
+    """The indices an action may name: the candidates shown, or the robot node's edges (those
+    not padding; batched observations give one row per environment)."""
+    if "mask" in obs:
+        return obs["mask"].astype(bool)
+    return obs["edge_padding_mask"][..., 0, :] == 0
 
 
 def reward_terms(out: dict, last_fraction: float) -> dict:
@@ -177,6 +201,17 @@ class ExploreEnv(gym.Env):
     ``pose``; ``time_s``. Action: a point [column, row] in [0, 1]² of the crop: the robot
     drives there (the nearest traversable cell within 0.5 m), or when no path leads there to
     the candidate whose goal is nearest to it.
+
+    Observation ``"graph"``: the known free space as a graph in ARiADNE's shapes and order
+    (without its batch axis): ``node_inputs`` (N, 4) float32 ``[x, y, utility / 50,
+    guidepost]``, x and y from the map's lower-left corner over its longer side, node 0 the
+    robot's estimated position, the others a lattice over the known free cells;
+    ``edge_inputs`` (1, K) int64, the robot node's K nearest nodes in sight (itself first; 0
+    pads); ``current_index`` (1, 1) int64 (0); ``node_padding_mask`` (1, N) int8;
+    ``edge_padding_mask`` (1, K) int8 (1 where ``edge_inputs`` is 0); ``edge_mask`` (N, N)
+    int8 (0 where an edge joins two nodes); ``pose``; ``time_s``. Action: an index into
+    ``edge_inputs`` whose ``edge_padding_mask`` is 0: the robot drives to that node (or, when
+    no path leads there, to the candidate whose goal is nearest to it).
 
     Episodes end (``terminated``) as floorcast's runs end: complete, early stop, stuck,
     frontiers unreachable; ``truncated`` at the settings' ``time_limit_s``. ``info`` holds the
@@ -253,7 +288,7 @@ class ExploreEnv(gym.Env):
     def _set_obs(self, out):
         self._obs = arrays(out["obs"])
         if isinstance(self.action_space, CandidateIndex):
-            self.action_space.shown = self._obs["mask"].astype(bool)
+            self.action_space.shown = action_mask(self._obs)
 
     def step(self, action):
         """Answers the pending decision and runs to the next one: ``(obs, reward, terminated,
@@ -267,12 +302,13 @@ class ExploreEnv(gym.Env):
         return self._obs, reward, out["terminated"], out["truncated"], info_of(out, terms)
 
     def action_masks(self) -> np.ndarray:
-        """The candidates an action may name (bool, shape (K,)); candidates mode only."""
-        if self.floorcast_spec.observation != "candidates":
-            raise ValueError("action_masks: only the candidates observation has a discrete action")
+        """The indices an action may name (bool, shape (K,)): the candidates shown, or the
+        graph's edges of the robot's node; not in the map mode."""
+        if self.floorcast_spec.observation == "map":
+            raise ValueError("action_masks: the map observation's action is a point, not an index")
         if self._obs is None:
             raise ValueError("action_masks: call reset() first")
-        return self._obs["mask"].astype(bool)
+        return action_mask(self._obs)
 
 
 def _rebuild(spec, reward):

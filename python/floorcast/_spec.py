@@ -7,7 +7,7 @@ import json
 import math
 from typing import Any, Mapping, Sequence
 
-OBSERVATIONS = ("candidates", "map")
+OBSERVATIONS = ("candidates", "map", "graph")
 NEEDS = ("layout_gain", "layout")
 
 
@@ -26,7 +26,7 @@ class EnvSpec:
         settings: floorcast's run settings by name (``floorcast settings`` lists them with
             units, defaults and ranges), e.g. ``{"localization": "ground-truth", "time_limit_s":
             1800}``. Default: floorcast's defaults (SLAM with laser and odometry noise).
-        observation: ``"candidates"`` (default) or ``"map"``.
+        observation: ``"candidates"`` (default), ``"map"`` or ``"graph"``.
         max_candidates: candidates mode: the padded length K (1 to 4096, default 32); a
             decision with more shows the K nearest by path.
         needs: what floorcast computes besides the baseline gains: ``"layout_gain"`` (each
@@ -36,6 +36,11 @@ class EnvSpec:
         map_cell_m: map mode, egocentric: a crop cell's side (m, 0.01 to 10, default 0.5).
         map_frame: map mode: ``"egocentric"`` (default: centred on the robot's estimated
             position, axis-aligned) or ``"global"`` (the whole map, scaled to fit).
+        graph_nodes: graph mode: N, the nodes padded to (2 to 4096, default 360, ARiADNE's).
+        graph_k: graph mode: K, the edges per node (2 to 64, default 20, ARiADNE's).
+        graph_spacing_m: graph mode: the node lattice's spacing (m, 0.1 to 20, default 1.5).
+        graph_range_m: graph mode: how far a node sees frontier points for its utility (m, 0.1
+            to 100; default ``None``: seven eighths of the laser's range).
         start: ``"building"`` (default: the building's own start, as ``floorcast explore``) or
             ``"random"`` (drawn from the episode's seed, as a grid's random starts).
         split: ``None`` (default: every building), ``"train"`` or ``"test"``: the fixed split
@@ -53,6 +58,10 @@ class EnvSpec:
     map_size: int = 64
     map_cell_m: float = 0.5
     map_frame: str = "egocentric"
+    graph_nodes: int = 360
+    graph_k: int = 20
+    graph_spacing_m: float = 1.5
+    graph_range_m: float | None = None
     start: str = "building"
     split: str | None = None
     base: str = "baseline"
@@ -80,13 +89,17 @@ class EnvSpec:
             if n not in NEEDS:
                 raise ValueError(f"needs: {n!r}; expected a list of {', '.join(NEEDS)}")
         object.__setattr__(self, "needs", needs)
-        for name, lo, hi in (("max_candidates", 1, 4096), ("map_size", 8, 1024)):
+        for name, lo, hi in (("max_candidates", 1, 4096), ("map_size", 8, 1024), ("graph_nodes", 2, 4096), ("graph_k", 2, 64)):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise ValueError(f"{name}: {v!r}; expected an integer from {lo} to {hi}")
-        c = self.map_cell_m
-        if isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c) or not 0.01 <= c <= 10:
-            raise ValueError(f"map_cell_m: {c!r}; expected a number from 0.01 to 10 (m)")
+        for name, lo, hi, optional in (("map_cell_m", 0.01, 10, False), ("graph_spacing_m", 0.1, 20, False),
+                                       ("graph_range_m", 0.1, 100, True)):
+            c = getattr(self, name)
+            if c is None and optional:
+                continue
+            if isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c) or not lo <= c <= hi:
+                raise ValueError(f"{name}: {c!r}; expected a number from {lo} to {hi} (m)")
 
     def to_json(self) -> str:
         """The spec as the native module reads it."""

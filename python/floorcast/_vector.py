@@ -14,6 +14,7 @@ from gymnasium.vector.utils import batch_space
 from . import _native
 from ._env import (
     ExploreEnv,
+    action_mask,
     action_space,
     arrays,
     default_reward,
@@ -120,7 +121,7 @@ class VectorExplore(gym.vector.VectorEnv):
         if a.ndim == 0 or len(a) != self.num_envs:
             raise ValueError(f"actions: shape {a.shape}; expected one action per environment ({self.num_envs})")
         parsed = [parse_action(spec, a[i], name=f"actions[{i}]") for i in range(self.num_envs)]
-        if spec.observation == "candidates":
+        if spec.observation != "map":
             outs = self._native.step([p[0] for p in parsed], None)
         else:
             outs = self._native.step(None, [p[1] for p in parsed])
@@ -140,12 +141,12 @@ class VectorExplore(gym.vector.VectorEnv):
         return obs, rewards, terminations, truncations, infos
 
     def action_masks(self) -> np.ndarray:
-        """(num_envs, K) bool: the candidates each environment's action may name."""
-        if self.floorcast_spec.observation != "candidates":
-            raise ValueError("action_masks: only the candidates observation has a discrete action")
+        """(num_envs, K) bool: the indices each environment's action may name."""
+        if self.floorcast_spec.observation == "map":
+            raise ValueError("action_masks: the map observation's action is a point, not an index")
         if self._obs is None:
             raise ValueError("action_masks: call reset() first")
-        return self._obs["mask"].astype(bool)
+        return action_mask(self._obs)
 
 
 def _rebuild(num_envs, threads, spec, reward):

@@ -18,7 +18,7 @@ given the observation the environment gives (numpy arrays) and answering as the
 environment's action (a candidate index, or a point [column, row]; ``None`` stops the
 exploration early). A module may set ``FLOORCAST_OBSERVATION``, a dict of `EnvSpec`'s
 observation fields (``observation``, ``max_candidates``, ``needs``, ``map_size``,
-``map_cell_m``, ``map_frame``), so that the policy sees what it was trained on; the options
+``map_cell_m``, ``map_frame``, ``graph_*``), so that the policy sees what it was trained on; the options
 below override it. If the callable has a method ``new_run(run)``, it is called with each run
 message (building, seed, start, settings, params).
 
@@ -70,7 +70,8 @@ def load_policy(target: str, default_name: str = "policy"):
 def observation_spec(module, args) -> EnvSpec:
     """The observation fields: the module's ``FLOORCAST_OBSERVATION``, then the options."""
     fields = dict(getattr(module, "FLOORCAST_OBSERVATION", {}) or {})
-    for key in ("observation", "max_candidates", "map_size", "map_cell_m", "map_frame"):
+    for key in ("observation", "max_candidates", "map_size", "map_cell_m", "map_frame", "graph_nodes", "graph_k",
+                "graph_spacing_m", "graph_range_m"):
         v = getattr(args, key)
         if v is not None:
             fields[key] = v
@@ -82,7 +83,7 @@ def observation_spec(module, args) -> EnvSpec:
 def serve(policy, spec: EnvSpec, name: str, stdin, stdout) -> None:
     """The protocol session: hello, run, decisions, end."""
     observer = _native.Observer(spec.to_json())
-    needs = list(spec.needs) + (["map"] if spec.observation == "map" else [])
+    needs = list(spec.needs) + (["map"] if spec.observation in ("map", "graph") else [])
 
     def send(obj_or_line):
         line = obj_or_line if isinstance(obj_or_line, str) else json.dumps(obj_or_line)
@@ -123,12 +124,16 @@ def main(argv=None) -> None:
     p.add_argument("policy", help="FILE.py (its callable `policy`, or --callable's), FILE.py:NAME or MODULE:NAME: a callable policy(obs) -> action")
     p.add_argument("--callable", dest="callable_name", default="policy", help="with a FILE.py alone: the callable's name (default: policy)")
     p.add_argument("--name", help="the strategy's name in results (default: the callable's name)")
-    p.add_argument("--observation", choices=["candidates", "map"], help="as EnvSpec (default: the module's FLOORCAST_OBSERVATION, else candidates)")
+    p.add_argument("--observation", choices=["candidates", "map", "graph"], help="as EnvSpec (default: the module's FLOORCAST_OBSERVATION, else candidates)")
     p.add_argument("--max-candidates", dest="max_candidates", type=int, help="candidates mode: K (1 to 4096, default 32)")
     p.add_argument("--needs", help="comma-separated: layout_gain, layout (default: none)")
     p.add_argument("--map-size", dest="map_size", type=int, help="map mode: the crop's side in cells (8 to 1024, default 64)")
     p.add_argument("--map-cell-m", dest="map_cell_m", type=float, help="map mode: a crop cell's side in m (default 0.5)")
     p.add_argument("--map-frame", dest="map_frame", choices=["egocentric", "global"], help="map mode (default egocentric)")
+    p.add_argument("--graph-nodes", dest="graph_nodes", type=int, help="graph mode: N (2 to 4096, default 360)")
+    p.add_argument("--graph-k", dest="graph_k", type=int, help="graph mode: K (2 to 64, default 20)")
+    p.add_argument("--graph-spacing-m", dest="graph_spacing_m", type=float, help="graph mode: the lattice's spacing in m (default 1.5)")
+    p.add_argument("--graph-range-m", dest="graph_range_m", type=float, help="graph mode: a node's sensing range in m (default: 7/8 of the laser's)")
     args = p.parse_args(argv)
     stdout = sys.stdout
     # Only the protocol goes to stdout: what the policy's module prints on import goes to stderr.

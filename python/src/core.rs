@@ -3,6 +3,7 @@
 //! threads.
 
 use crate::buildings::{self, Named, Split};
+use crate::graph::GraphConfig;
 use crate::observe::{self, Action, Mode, Obs, Snapshot, Window};
 use floorcast_worker::settings::{settings_from_json_text, Settings};
 use floorcast_worker::{check_job, GivenSource, GivenStart, Job, RunSummary, StrategyRef};
@@ -109,7 +110,7 @@ impl Spec {
             .unwrap_or("python-policy")
             .to_string();
         let needs = parse_needs(&v)?;
-        let mode = parse_mode(&v)?;
+        let mode = parse_mode(&v)?.with_laser_range(settings.laser_range_m);
         let start = match field(&v, "start")
             .and_then(|s| s.as_str())
             .unwrap_or("building")
@@ -191,8 +192,30 @@ pub(crate) fn parse_mode(v: &serde_json::Value) -> Result<Mode, String> {
                 egocentric,
             }
         }
+        "graph" => {
+            let range_m = match field(v, "graph_range_m") {
+                None => f64::NAN,
+                Some(x) => x
+                    .as_f64()
+                    .filter(|c| c.is_finite() && (0.1..=100.0).contains(c))
+                    .ok_or_else(|| format!("graph_range_m: {x} is not a number from 0.1 to 100 (m)"))?,
+            };
+            let spacing_m = match field(v, "graph_spacing_m") {
+                None => 1.5,
+                Some(x) => x
+                    .as_f64()
+                    .filter(|c| c.is_finite() && (0.1..=20.0).contains(c))
+                    .ok_or_else(|| format!("graph_spacing_m: {x} is not a number from 0.1 to 20 (m)"))?,
+            };
+            Mode::Graph(GraphConfig {
+                nodes: usize_field(v, "graph_nodes", 360, (2, 4096))?,
+                k: usize_field(v, "graph_k", 20, (2, 64))?,
+                spacing_m,
+                range_m,
+            })
+        }
         other => return Err(format!(
-            "observation: '{other}' is not an observation mode; expected \"candidates\" or \"map\""
+            "observation: '{other}' is not an observation mode; expected \"candidates\", \"map\" or \"graph\""
         )),
     };
     Ok(mode)
@@ -379,7 +402,7 @@ impl Core {
                             .view(r)
                             .ok_or("internal: a decision without a view")?;
                         let snap = Snapshot::of(&view);
-                        if let (Some(p), Mode::Map { .. }) = (snap.unreachable_goal, mode) {
+                        if let (Some(p), true) = (snap.unreachable_goal, mode.points()) {
                             let id = observe::nearest_candidate(&snap, p)
                                 .ok_or("internal: a decision without candidates")?;
                             run.episode
@@ -388,7 +411,7 @@ impl Core {
                             continue;
                         }
                         observe::extend_trail(&mut run.trail, &snap);
-                        let map = matches!(mode, Mode::Map { .. }).then_some(view.map);
+                        let map = mode.needs_map().then_some(view.map);
                         run.obs = observe::observe(mode, &snap, map, &run.trail);
                         run.window = Some(Window::of(mode, snap.pose, Some(view.map.frame)));
                         run.snap = Some(snap);

@@ -6,6 +6,7 @@
 
 mod buildings;
 mod core;
+mod graph;
 mod observe;
 mod serve;
 

@@ -3,6 +3,7 @@
 //! for a policy run as a strategy in grids (from the strategy protocol's decide messages), so
 //! that a policy makes the same decisions in both.
 
+use crate::graph::{self, GraphConfig};
 use sim_core::explore::{CandidateView, DecisionView, Reply};
 use sim_core::grid::{Cell, GridFrame, Occupancy, OccupancyGrid};
 use sim_core::{Pose, Vec2};
@@ -36,6 +37,34 @@ pub(crate) enum Mode {
         cell_m: f64,
         egocentric: bool,
     },
+    /// The known free space as a graph in ARiADNE's shapes; action: an index into the robot
+    /// node's edges.
+    Graph(GraphConfig),
+}
+
+impl Mode {
+    /// Whether the mode's actions are points (answered with goal points, falling back to the
+    /// candidate nearest to a point without a path).
+    pub(crate) fn points(self) -> bool {
+        !matches!(self, Mode::Candidates { .. })
+    }
+
+    /// Whether the mode reads the map.
+    pub(crate) fn needs_map(self) -> bool {
+        self.points()
+    }
+
+    /// The mode with a graph's sensing range taken from the laser's range (m) when it was not
+    /// given (seven eighths of it, as ARiADNE's sensor range less its margin).
+    pub(crate) fn with_laser_range(self, laser_range_m: f64) -> Mode {
+        match self {
+            Mode::Graph(mut g) if g.range_m.is_nan() => {
+                g.range_m = 0.875 * laser_range_m;
+                Mode::Graph(g)
+            }
+            other => other,
+        }
+    }
 }
 
 /// One candidate as the policy's observation needs it.
@@ -114,6 +143,8 @@ pub(crate) struct Obs {
     pub(crate) ids: Vec<usize>,
     /// The candidates shown (for the map mode's fallback to the candidate nearest the goal).
     pub(crate) shown: Vec<Cand>,
+    /// Graph mode: the point each edge of the robot's node leads to (`None`: padding).
+    pub(crate) targets: Vec<Option<Vec2>>,
 }
 
 fn f32_bytes(v: &[f32]) -> Vec<u8> {
@@ -194,6 +225,7 @@ pub(crate) fn observe(
                 arrays,
                 ids: shown.iter().map(|c| c.id).collect(),
                 shown,
+                targets: Vec::new(),
             }
         }
         Mode::Map {
@@ -213,6 +245,26 @@ pub(crate) fn observe(
                 arrays,
                 ids: Vec::new(),
                 shown: snap.ordered(usize::MAX),
+                targets: Vec::new(),
+            }
+        }
+        Mode::Graph(cfg) => {
+            let (mut arrays, targets) = match map {
+                Some(m) => {
+                    let g = graph::build(cfg, m, snap.pose.position(), trail);
+                    let targets = (0..cfg.k)
+                        .map(|i| g.edges[0].get(i).filter(|&&j| j != 0).map(|&j| g.nodes[j]))
+                        .collect();
+                    (graph::arrays(cfg, &g, m), targets)
+                }
+                None => (graph::empty_arrays(cfg), vec![None; cfg.k]),
+            };
+            common(&mut arrays);
+            Obs {
+                arrays,
+                ids: Vec::new(),
+                shown: snap.ordered(usize::MAX),
+                targets,
             }
         }
     }
@@ -399,6 +451,20 @@ pub(crate) fn reply(
             }
             let w = window.ok_or("action: no decision is pending (call reset())")?;
             Ok(Reply::Goal(w.point(a)))
+        }
+        (Mode::Graph(cfg), Action::Index(i)) => {
+            let target = usize::try_from(i)
+                .ok()
+                .and_then(|i| obs.targets.get(i).copied().flatten());
+            target.map(Reply::Goal).ok_or_else(|| {
+                format!(
+                    "action: {i} is not an edge of the robot's node; expected an index from 0 to {} where edge_padding_mask is 0",
+                    cfg.k - 1
+                )
+            })
+        }
+        (Mode::Graph(_), Action::Point(_)) => {
+            Err("action: expected one edge index (an integer) in the graph observation".into())
         }
         (Mode::Candidates { .. }, Action::Point(_)) => Err(
             "action: expected one candidate index (an integer) in the candidates observation"

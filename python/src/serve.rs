@@ -73,6 +73,12 @@ impl Observer {
             h as u32,
         );
         self.map = Some(OccupancyGrid::filled(frame, Occupancy::Unknown));
+        let laser = run
+            .get("settings")
+            .and_then(|s| s.get("laser_range_m"))
+            .and_then(Value::as_f64)
+            .ok_or("run message: settings.laser_range_m: expected a number")?;
+        self.mode = self.mode.with_laser_range(laser);
         self.trail.clear();
         self.snap = None;
         Ok(())
@@ -156,7 +162,7 @@ impl Observer {
                 })
                 .transpose()?,
         };
-        if let (Some(p), Mode::Map { .. }) = (snap.unreachable_goal, self.mode) {
+        if let (Some(p), true) = (snap.unreachable_goal, self.mode.points()) {
             return Ok(observe::nearest_candidate(&snap, p).map(Reply::Choose));
         }
         observe::extend_trail(&mut self.trail, &snap);

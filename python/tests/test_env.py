@@ -20,6 +20,8 @@ MODES = [
     dict(observation="candidates", max_candidates=4, needs=["layout_gain", "layout"]),
     dict(observation="map"),
     dict(observation="map", map_frame="global", map_size=48),
+    dict(observation="graph"),
+    dict(observation="graph", graph_nodes=64, graph_k=8, graph_spacing_m=1.0, graph_range_m=4.0),
 ]
 
 
@@ -247,3 +249,38 @@ def test_the_split_is_fixed_disjoint_and_whole():
     # The same buildings under other names are on the same side (the split is by content).
     again = floorcast.ExploreEnv(buildings=sorted(str(REPO / "maps" / "plans" / f"{b}.xml") for b in test), split="test")
     assert set(again.building_names) == test
+
+
+def test_the_graph_has_ariadnes_shapes_and_its_rules():
+    env = floorcast.ExploreEnv(buildings=str(REPO / "buildings" / "paper" / "paper-02.toml"), observation="graph",
+                               graph_nodes=200, graph_k=12)
+    obs, info = env.reset(seed=1)
+    for step in range(30):
+        n = int((obs["node_padding_mask"][0] == 0).sum())
+        assert 1 < n <= 200 and not obs["node_padding_mask"][0, :n].any() and obs["node_padding_mask"][0, n:].all()
+        nodes = obs["node_inputs"]
+        assert not nodes[n:].any()
+        assert nodes[0, 3] == 1, "the robot's node is visited"
+        assert (nodes[:n, 2] >= 0).all() and set(np.unique(nodes[:n, 3])) <= {0.0, 1.0}
+        assert obs["current_index"][0, 0] == 0
+        edges = obs["edge_inputs"][0]
+        # The robot node's edges are its row of the edge mask; 0 (itself) pads.
+        assert set(np.flatnonzero(obs["edge_mask"][0] == 0)) == set(edges[edges != 0]) | {0}
+        assert (obs["edge_padding_mask"][0] == (edges == 0)).all()
+        assert (obs["edge_mask"][n:] == 1).all() and (obs["edge_mask"][:, n:] == 1).all()
+        # Neighbours by distance, the nearest first.
+        d = np.hypot(*(nodes[edges[edges != 0], :2] - nodes[0, :2]).T)
+        assert (np.diff(d) >= -1e-6).all()
+        mask = env.action_masks()
+        obs, _, term, trunc, info = env.step(int(np.flatnonzero(mask)[-1]))
+        if term or trunc:
+            break
+
+
+def test_a_graph_policy_explores_a_building():
+    from test_serve import GRAPH
+    namespace = {}
+    exec(GRAPH, namespace)
+    env = floorcast.ExploreEnv(buildings=SMALL, **namespace["FLOORCAST_OBSERVATION"])
+    _, _, info = run_episode(env, namespace["policy"], 1)
+    assert info["end_reason"] == "complete" and info["explored_fraction"] > 0.99

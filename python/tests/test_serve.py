@@ -43,6 +43,36 @@ MAP = textwrap.dedent("""
 """)
 
 
+GRAPH = textwrap.dedent("""
+    import collections
+    import numpy as np
+    FLOORCAST_OBSERVATION = {"observation": "graph", "graph_nodes": 300, "graph_k": 16}
+    def policy(obs):
+        # Breadth first over the graph to the nearest node not visited that sees at least 5
+        # frontier points (ARiADNE's utility floor); its first hop.
+        n = int((obs["node_padding_mask"][0] == 0).sum())
+        nodes, edges = obs["node_inputs"], obs["edge_inputs"][0]
+        adjacent = obs["edge_mask"][:n, :n] == 0
+        first, queue = {}, collections.deque()
+        for i in np.flatnonzero(obs["edge_padding_mask"][0] == 0):
+            j = int(edges[i])
+            if j not in first:
+                first[j] = int(i)
+                queue.append(j)
+        seen = set(first) | {0}
+        while queue:
+            u = queue.popleft()
+            if nodes[u, 2] * 50 >= 5 and nodes[u, 3] == 0:
+                return first[u]
+            for v in map(int, np.flatnonzero(adjacent[u])):
+                if v not in seen:
+                    seen.add(v)
+                    first[v] = first[u]
+                    queue.append(v)
+        return int(np.flatnonzero(obs["edge_padding_mask"][0] == 0)[0])
+""")
+
+
 def write_policy(tmp_path, text):
     path = tmp_path / "policy.py"
     path.write_text(text)
@@ -51,8 +81,9 @@ def write_policy(tmp_path, text):
     return path, namespace["policy"], namespace["FLOORCAST_OBSERVATION"]
 
 
-@pytest.mark.parametrize("text,building,seed", [(LINEAR, SMALL, 3), (LINEAR, PAPER, 1), (MAP, SMALL, 2)],
-                         ids=["linear-small", "linear-paper", "map-small"])
+@pytest.mark.parametrize("text,building,seed", [(LINEAR, SMALL, 3), (LINEAR, PAPER, 1), (MAP, SMALL, 2),
+                                                (GRAPH, SMALL, 4)],
+                         ids=["linear-small", "linear-paper", "map-small", "graph-small"])
 def test_a_policy_makes_the_same_run_in_the_env_and_in_explore(tmp_path, text, building, seed):
     path, policy, fields = write_policy(tmp_path, text)
     env = floorcast.ExploreEnv(buildings=building, label="policy", **fields)
