@@ -8,6 +8,8 @@ import math
 from typing import Any, Mapping, Sequence
 
 OBSERVATIONS = ("candidates", "map", "graph")
+#: The version of a pickled spec's layout (checked when it is unpickled).
+SPEC_VERSION = 1
 NEEDS = ("layout_gain", "layout")
 
 
@@ -101,6 +103,11 @@ class EnvSpec:
             if isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c) or not lo <= c <= hi:
                 raise ValueError(f"{name}: {c!r}; expected a number from {lo} to {hi} (m)")
 
+    def __reduce__(self):
+        # Pickled as a versioned plain dict, checked when read back.
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        return (_load, (SPEC_VERSION, fields))
+
     def to_json(self) -> str:
         """The spec as the native module reads it."""
         d = dataclasses.asdict(self)
@@ -113,3 +120,17 @@ class EnvSpec:
         from ._env import ExploreEnv
 
         return ExploreEnv(spec=self, **kwargs)
+
+
+def _load(version, fields):
+    """A pickled spec, read back: its layout's version must be this package's."""
+    if version != SPEC_VERSION:
+        raise ValueError(
+            f"EnvSpec: pickled with spec layout {version!r}; this floorcast reads {SPEC_VERSION}: "
+            "rebuild the spec with this floorcast"
+        )
+    known = {f.name for f in dataclasses.fields(EnvSpec)}
+    unknown = set(fields) - known
+    if unknown:
+        raise ValueError(f"EnvSpec: pickled with unknown fields {sorted(unknown)}")
+    return EnvSpec(**fields)

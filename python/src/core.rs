@@ -301,6 +301,34 @@ impl Core {
         building: Option<usize>,
         start: Option<Pose>,
     ) -> Result<Out, String> {
+        self.guarded(|c| c.reset_inner(seed, building, start))
+    }
+
+    /// Answers the pending decision with `action` and runs to the next one.
+    pub(crate) fn step(&mut self, action: Action) -> Result<Out, String> {
+        self.guarded(|c| c.step_inner(action))
+    }
+
+    /// `f`, a panic of the simulation (a bug) caught as an error that ends the episode.
+    fn guarded(&mut self, f: impl FnOnce(&mut Core) -> Result<Out, String>) -> Result<Out, String> {
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(self))) {
+            Ok(r) => r,
+            Err(p) => {
+                self.run = None;
+                Err(format!(
+                    "internal: the simulation failed (a bug in floorcast, please report it): {}; call reset()",
+                    floorcast_worker::panic_message(&*p)
+                ))
+            }
+        }
+    }
+
+    fn reset_inner(
+        &mut self,
+        seed: u64,
+        building: Option<usize>,
+        start: Option<Pose>,
+    ) -> Result<Out, String> {
         let n = self.spec.buildings.len();
         let building = match building {
             Some(b) if b < n => b,
@@ -362,8 +390,7 @@ impl Core {
         Ok(out)
     }
 
-    /// Answers the pending decision with `action` and runs to the next one.
-    pub(crate) fn step(&mut self, action: Action) -> Result<Out, String> {
+    fn step_inner(&mut self, action: Action) -> Result<Out, String> {
         let mode = self.spec.mode;
         let run = self
             .run

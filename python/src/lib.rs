@@ -12,14 +12,19 @@ mod serve;
 
 use crate::core::{Core, Out, Spec};
 use crate::observe::{Action, Obs, CHANNELS, FEATURES};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyByteArray, PyDict, PyList};
 use sim_core::Pose;
 use std::sync::Arc;
 
+/// A refused argument as ValueError; a bug of floorcast's (an error beginning "internal:") as
+/// RuntimeError.
 fn value_error(e: String) -> PyErr {
-    PyValueError::new_err(e)
+    match e.find("internal: ") {
+        Some(at) => PyRuntimeError::new_err(format!("{}{}", &e[..at], &e[at + 10..])),
+        None => PyValueError::new_err(e),
+    }
 }
 
 /// An observation's arrays: `[(key, dtype, shape, bytearray)]`.
@@ -144,7 +149,8 @@ struct VecEnv {
     pending_reset: Vec<bool>,
 }
 
-/// Runs `f` on each core with its input, on `threads` scoped threads (contiguous chunks).
+/// Runs `f` on each core with its input, on `threads` threads (contiguous chunks: the first on
+/// the calling thread; a chunk whose thread the system refuses runs there too).
 fn par_each<I: Send, T: Send>(
     cores: &mut [Core],
     inputs: Vec<I>,
@@ -153,25 +159,46 @@ fn par_each<I: Send, T: Send>(
 ) -> Vec<T> {
     let n = cores.len();
     let chunk = n.div_ceil(threads.max(1)).max(1);
-    let mut inputs: Vec<Option<I>> = inputs.into_iter().map(Some).collect();
     let f = &f;
+    let run = move |cs: &mut [Core], is: Vec<I>| -> Vec<T> {
+        cs.iter_mut().zip(is).map(|(c, i)| f(c, i)).collect()
+    };
+    let mut inputs = inputs.into_iter();
+    let mut parts: Vec<(&mut [Core], Vec<I>)> = cores
+        .chunks_mut(chunk)
+        .map(|cs| {
+            let is: Vec<I> = inputs.by_ref().take(cs.len()).collect();
+            (cs, is)
+        })
+        .collect();
+    let first = parts.remove(0);
     std::thread::scope(|s| {
-        let handles: Vec<_> = cores
-            .chunks_mut(chunk)
-            .zip(inputs.chunks_mut(chunk))
-            .map(|(cs, is)| {
-                s.spawn(move || {
-                    cs.iter_mut()
-                        .zip(is.iter_mut())
-                        .map(|(c, i)| f(c, i.take().expect("one input per environment")))
-                        .collect::<Vec<T>>()
-                })
+        // Per chunk after the first, in order: its thread, or its work left for this thread
+        // when the system refused the thread.
+        let mut chunks = Vec::new();
+        for (cs, is) in parts {
+            let job = std::sync::Arc::new(std::sync::Mutex::new(Some((cs, is))));
+            let theirs = std::sync::Arc::clone(&job);
+            let handle = floorcast_worker::spawn_scoped_thread(s, move || {
+                let taken = theirs.lock().ok().and_then(|mut j| j.take());
+                taken.map(|(cs, is)| run(cs, is))
             })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
-            .collect()
+            .ok();
+            chunks.push((handle, job));
+        }
+        let mut out = run(first.0, first.1);
+        for (handle, job) in chunks {
+            if let Some(h) = handle {
+                match h.join() {
+                    Ok(Some(v)) => out.extend(v),
+                    Ok(None) => {}
+                    Err(p) => std::panic::resume_unwind(p),
+                }
+            } else if let Some((cs, is)) = job.lock().ok().and_then(|mut j| j.take()) {
+                out.extend(run(cs, is));
+            }
+        }
+        out
     })
 }
 

@@ -152,3 +152,14 @@ def test_an_environment_rebuilt_from_its_pickled_spec_in_another_process_runs_th
     # The environments themselves pickle as their spec.
     env = pickle.loads(pickle.dumps(spec.make()))
     assert env.floorcast_spec == spec
+
+
+def test_a_pickled_spec_of_another_layout_is_refused_by_name():
+    import floorcast._spec as spec_module
+
+    blob = pickle.dumps(floorcast.EnvSpec(buildings="x.toml"))
+    assert pickle.loads(blob) == floorcast.EnvSpec(buildings="x.toml")
+    with pytest.raises(ValueError, match="EnvSpec: pickled with spec layout 99"):
+        spec_module._load(99, {"buildings": "x.toml"})
+    with pytest.raises(ValueError, match="unknown fields"):
+        spec_module._load(spec_module.SPEC_VERSION, {"buildings": "x.toml", "colour": 1})
