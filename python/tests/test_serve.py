@@ -147,3 +147,12 @@ def test_the_observer_refuses_malformed_messages():
                 '{"pose": [0, 0, 0], "time_s": 0, "candidates": [], "map_changes": {"free": [99]}}']:
         with pytest.raises(ValueError, match="decide message|field"):
             obs.decide(bad)
+
+
+@pytest.mark.parametrize("text", [LINEAR, MAP, GRAPH], ids=["candidates", "map", "graph"])
+def test_serve_passes_floorcasts_protocol_checker(tmp_path, text):
+    path, _, _ = write_policy(tmp_path, text)
+    p = subprocess.run([floorcast_bin(), "strategy", "check", f"{sys.executable} -m floorcast.serve {path}"],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert "keeps to the strategy protocol version 2" in p.stdout + p.stderr
