@@ -110,9 +110,9 @@ def main():
               f"{f'{explore_s:.2f} s vs {cpu:.2f} s':>21}{cpu / explore_s:>9.2f}x")
     print("\n(overhead: CPU seconds of the environment's episodes, policy included, over explore's own run time)")
     n_steps = 20 if a.quick else 60
-    one = vector_rate(building, {"localization": "slam"}, 4, 1, n_steps)
-    two = vector_rate(building, {"localization": "slam"}, 4, 2, n_steps)
-    print(f"\nvector environment, 4 environments, SLAM, {n_steps} steps each (one step = one decision of every environment):")
+    one = vector_rate(building, {"localization": "slam"}, 8, 1, n_steps)
+    two = vector_rate(building, {"localization": "slam"}, 8, 2, n_steps)
+    print(f"\nvector environment, 8 environments, SLAM, {n_steps} steps each (one step = one decision of every environment):")
     print(f"  1 thread : {one:7.1f} decisions per wall second")
     print(f"  2 threads: {two:7.1f} decisions per wall second ({two / one:.2f}x; {os.cpu_count()} CPUs)")
 

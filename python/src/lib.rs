@@ -8,10 +8,12 @@ mod buildings;
 mod core;
 mod graph;
 mod observe;
+mod pool;
 mod serve;
 
 use crate::core::{Core, Out, Spec};
 use crate::observe::{Action, Obs, CHANNELS, FEATURES};
+use crate::pool::{Input, Pool};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyByteArray, PyDict, PyList};
@@ -143,63 +145,11 @@ impl Env {
 #[pyclass(module = "floorcast._native")]
 #[derive(Debug)]
 struct VecEnv {
-    cores: Vec<Core>,
-    threads: usize,
+    spec: Arc<Spec>,
+    pool: Pool,
+    n: usize,
     next_seed: Vec<u64>,
     pending_reset: Vec<bool>,
-}
-
-/// Runs `f` on each core with its input, on `threads` threads (contiguous chunks: the first on
-/// the calling thread; a chunk whose thread the system refuses runs there too).
-fn par_each<I: Send, T: Send>(
-    cores: &mut [Core],
-    inputs: Vec<I>,
-    threads: usize,
-    f: impl Fn(&mut Core, I) -> T + Sync,
-) -> Vec<T> {
-    let n = cores.len();
-    let chunk = n.div_ceil(threads.max(1)).max(1);
-    let f = &f;
-    let run = move |cs: &mut [Core], is: Vec<I>| -> Vec<T> {
-        cs.iter_mut().zip(is).map(|(c, i)| f(c, i)).collect()
-    };
-    let mut inputs = inputs.into_iter();
-    let mut parts: Vec<(&mut [Core], Vec<I>)> = cores
-        .chunks_mut(chunk)
-        .map(|cs| {
-            let is: Vec<I> = inputs.by_ref().take(cs.len()).collect();
-            (cs, is)
-        })
-        .collect();
-    let first = parts.remove(0);
-    std::thread::scope(|s| {
-        // Per chunk after the first, in order: its thread, or its work left for this thread
-        // when the system refused the thread.
-        let mut chunks = Vec::new();
-        for (cs, is) in parts {
-            let job = std::sync::Arc::new(std::sync::Mutex::new(Some((cs, is))));
-            let theirs = std::sync::Arc::clone(&job);
-            let handle = floorcast_worker::spawn_scoped_thread(s, move || {
-                let taken = theirs.lock().ok().and_then(|mut j| j.take());
-                taken.map(|(cs, is)| run(cs, is))
-            })
-            .ok();
-            chunks.push((handle, job));
-        }
-        let mut out = run(first.0, first.1);
-        for (handle, job) in chunks {
-            if let Some(h) = handle {
-                match h.join() {
-                    Ok(Some(v)) => out.extend(v),
-                    Ok(None) => {}
-                    Err(p) => std::panic::resume_unwind(p),
-                }
-            } else if let Some((cs, is)) = job.lock().ok().and_then(|mut j| j.take()) {
-                out.extend(run(cs, is));
-            }
-        }
-        out
-    })
 }
 
 #[pymethods]
@@ -217,23 +167,25 @@ impl VecEnv {
             )));
         }
         let spec = Arc::new(py.detach(|| Spec::from_json(spec)).map_err(value_error)?);
+        let cores = (0..num_envs)
+            .map(|_| Core::new(Arc::clone(&spec)))
+            .collect();
         Ok(VecEnv {
-            cores: (0..num_envs)
-                .map(|_| Core::new(Arc::clone(&spec)))
-                .collect(),
-            threads,
+            spec,
+            pool: Pool::new(cores, threads).map_err(value_error)?,
+            n: num_envs,
             next_seed: vec![0; num_envs],
             pending_reset: vec![false; num_envs],
         })
     }
 
     fn reset<'py>(&mut self, py: Python<'py>, seed: u64) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let n = self.cores.len() as u64;
+        let n = self.n as u64;
         let seeds: Vec<u64> = (0..n).map(|i| seed.wrapping_add(i)).collect();
-        let threads = self.threads;
-        let cores = &mut self.cores;
-        let outs =
-            py.detach(|| par_each(cores, seeds.clone(), threads, |c, s| c.reset(s, None, None)));
+        let pool = &self.pool;
+        let outs = py
+            .detach(|| pool.round(seeds.iter().map(|&s| Input::Reset(s)).collect()))
+            .map_err(value_error)?;
         for (i, s) in seeds.iter().enumerate() {
             self.next_seed[i] = s.wrapping_add(n);
             self.pending_reset[i] = false;
@@ -243,7 +195,7 @@ impl VecEnv {
             .collect()
     }
 
-    /// One step of every environment: `indices` (candidates) or `points` (map), one per
+    /// One step of every environment: `indices` (candidates, graph) or `points` (map), one per
     /// environment. Every action is checked before any environment moves.
     #[pyo3(signature = (indices=None, points=None))]
     fn step<'py>(
@@ -252,7 +204,7 @@ impl VecEnv {
         indices: Option<Vec<i64>>,
         points: Option<Vec<(f64, f64)>>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let n = self.cores.len();
+        let n = self.n;
         let actions: Vec<Action> = match (indices, points) {
             (Some(i), None) if i.len() == n => i.into_iter().map(Action::Index).collect(),
             (None, Some(p)) if p.len() == n => {
@@ -264,25 +216,21 @@ impl VecEnv {
                 )))
             }
         };
-        for (i, (c, a)) in self.cores.iter().zip(&actions).enumerate() {
+        let pool = &self.pool;
+        for (i, c) in pool.check(&actions).into_iter().enumerate() {
             if !self.pending_reset[i] {
-                c.check(*a)
-                    .map_err(|e| value_error(format!("actions[{i}]: {e}")))?;
+                c.map_err(|e| value_error(format!("actions[{i}]: {e}")))?;
             }
         }
-        let inputs: Vec<(Action, Option<u64>)> = actions
+        let inputs: Vec<Input> = actions
             .into_iter()
             .enumerate()
-            .map(|(i, a)| (a, self.pending_reset[i].then_some(self.next_seed[i])))
-            .collect();
-        let threads = self.threads;
-        let cores = &mut self.cores;
-        let outs = py.detach(|| {
-            par_each(cores, inputs, threads, |c, (a, reset)| match reset {
-                Some(seed) => c.reset(seed, None, None),
-                None => c.step(a),
+            .map(|(i, a)| match self.pending_reset[i] {
+                true => Input::Reset(self.next_seed[i]),
+                false => Input::Step(a),
             })
-        });
+            .collect();
+        let outs = py.detach(|| pool.round(inputs)).map_err(value_error)?;
         let mut dicts = Vec::with_capacity(n);
         for (i, o) in outs.into_iter().enumerate() {
             let o = o.map_err(|e| value_error(format!("environment {i}: {e}")))?;
@@ -301,12 +249,7 @@ impl VecEnv {
     }
 
     fn building_names(&self) -> Vec<String> {
-        self.cores[0]
-            .spec
-            .buildings
-            .iter()
-            .map(|b| b.name.clone())
-            .collect()
+        self.spec.buildings.iter().map(|b| b.name.clone()).collect()
     }
 }
 
