@@ -246,10 +246,10 @@ fn the_committed_leaderboard_runs_reproduce_its_table() {
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
-        out.contains("1215 of its 1215 runs stored as jobs of this grid (1215 jobs), 27 tours"),
+        out.contains("1296 of its 1296 runs stored as jobs of this grid (1296 jobs), 27 tours"),
         "{out}"
     );
-    assert!(out.contains("nothing to do: all 1215 jobs"), "{out}");
+    assert!(out.contains("nothing to do: all 1296 jobs"), "{out}");
     let o = run(&["report", res.to_str().unwrap(), "--reference", "nearest"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let table = std::fs::read_to_string(board.join("table.txt")).unwrap();
