@@ -337,7 +337,11 @@ pub fn check_import(
     let (Some(summary), Some(curve)) = (&r.summary, &r.progress) else {
         return Err("a successful run without its summary or progress curve".into());
     };
-    if summary.strategy_program.as_ref() != job.program() {
+    let same_program = match (summary.strategy_program.as_ref(), job.program()) {
+        (Some(a), Some(b)) => a.same_identity(b),
+        (a, b) => a.is_none() && b.is_none(),
+    };
+    if !same_program {
         return Err(format!(
             "field summary.strategy_program differs from the grid's job {}'s program",
             job.id

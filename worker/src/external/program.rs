@@ -79,6 +79,17 @@ impl StrategyProgram {
         Ok(p)
     }
 
+    /// Whether `other` is the same program as a record names it: the same command, files,
+    /// their hash, timeout and parameters (where the files lie, `dir`, and whether they were
+    /// received are not part of a program's identity: a record read back has neither).
+    pub fn same_identity(&self, other: &StrategyProgram) -> bool {
+        self.command == other.command
+            && self.files == other.files
+            && self.files_sha256 == other.files_sha256
+            && self.timeout_s == other.timeout_s
+            && self.params == other.params
+    }
+
     /// The program with its own parameters (at most [`MAX_PARAMS_BYTES`] of JSON).
     pub fn with_params(mut self, params: Map<String, Value>) -> Result<Self, String> {
         let bytes = Value::Object(params.clone()).to_string().len();
