@@ -13,7 +13,7 @@ Training buildings: small real floor plans of maps/plans/ from the fixed train s
 (`split="train"`; the test split's plans are held out for grid.toml). Deterministic given
 --seed (floorcast's results do not depend on the threads).
 
-    python3 examples/python/train.py                 # about 7 minutes on 2 cores
+    python3 examples/python/train.py                 # about 5 minutes on 2 cores
     python3 examples/python/train.py --quick         # a few seconds (a smoke test)
 
 Run it from the repository's root (the plans' paths are relative to it), or give --maps.

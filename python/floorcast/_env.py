@@ -12,7 +12,7 @@ import numpy as np
 from gymnasium import spaces
 
 from . import _native
-from ._spec import EnvSpec
+from ._spec import EnvSpec, spec_of
 
 #: The candidates array's features (its last axis), in order. Lengths in metres, areas in m²,
 #: angles in radians; forward/left are the candidate's goal in the robot's estimated frame.
@@ -145,6 +145,15 @@ def action_mask(obs: dict) -> np.ndarray:
     return obs["edge_padding_mask"][..., 0, :] == 0
 
 
+def reward_of(reward):
+    """The reward function an argument names: ``"default"`` or a callable."""
+    if isinstance(reward, str) and reward == "default":
+        return default_reward
+    if not callable(reward):
+        raise ValueError(f"reward: {reward!r}; expected \"default\" or a callable reward(terms) -> float")
+    return reward
+
+
 def reward_terms(out: dict, last_fraction: float) -> dict:
     """The raw reward terms of a step's output."""
     return {
@@ -223,24 +232,11 @@ class ExploreEnv(gym.Env):
 
     def __init__(self, *, spec: EnvSpec | None = None, reward: str | Callable[[dict], float] = "default",
                  localization: str | None = None, strategy_settings=None, render_mode=None, **kwargs: Any):
-        if spec is None:
-            if strategy_settings is not None:
-                if "settings" in kwargs:
-                    raise ValueError("settings: give settings or strategy_settings, not both")
-                kwargs["settings"] = strategy_settings
-            if localization is not None:
-                kwargs["settings"] = dict(kwargs.get("settings") or {}, localization=localization)
-            if "buildings" not in kwargs:
-                raise ValueError("buildings: required (a path, glob, suite name or generator spec, or a list)")
-            spec = EnvSpec(**kwargs)
-        elif kwargs or localization is not None or strategy_settings is not None:
-            raise ValueError("spec: give an EnvSpec or its fields, not both")
+        spec = spec_of(spec, localization, strategy_settings, kwargs)
         if render_mode is not None:
             raise ValueError(f"render_mode: {render_mode!r}; this environment does not render (write figures with `floorcast explore`)")
-        if reward != "default" and not callable(reward):
-            raise ValueError(f"reward: {reward!r}; expected \"default\" or a callable reward(terms) -> float")
         self.floorcast_spec = spec
-        self._reward = default_reward if reward == "default" else reward
+        self._reward = reward_of(reward)
         self._native = _native.Env(spec.to_json())
         self.observation_space = observation_space(spec)
         self.action_space = action_space(spec)

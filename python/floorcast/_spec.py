@@ -122,6 +122,24 @@ class EnvSpec:
         return ExploreEnv(spec=self, **kwargs)
 
 
+def spec_of(spec, localization, strategy_settings, kwargs) -> EnvSpec:
+    """The spec an environment's arguments give: an `EnvSpec`, or its fields (``settings`` or
+    its alias ``strategy_settings``; ``localization`` the shorthand for its setting)."""
+    if spec is not None:
+        if kwargs or localization is not None or strategy_settings is not None:
+            raise ValueError("spec: give an EnvSpec or its fields, not both")
+        return spec
+    if strategy_settings is not None:
+        if "settings" in kwargs:
+            raise ValueError("settings: give settings or strategy_settings, not both")
+        kwargs["settings"] = strategy_settings
+    if localization is not None:
+        kwargs["settings"] = dict(kwargs.get("settings") or {}, localization=localization)
+    if "buildings" not in kwargs:
+        raise ValueError("buildings: required (a path, glob, suite name or generator spec, or a list)")
+    return EnvSpec(**kwargs)
+
+
 def _load(version, fields):
     """A pickled spec, read back: its layout's version must be this package's."""
     if version != SPEC_VERSION:

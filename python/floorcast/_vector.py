@@ -13,7 +13,6 @@ from gymnasium.vector.utils import batch_space
 
 from . import _native
 from ._env import (
-    ExploreEnv,
     action_mask,
     action_space,
     arrays,
@@ -21,9 +20,10 @@ from ._env import (
     info_of,
     observation_space,
     parse_action,
+    reward_of,
     reward_terms,
 )
-from ._spec import EnvSpec
+from ._spec import EnvSpec, spec_of
 
 
 class VectorExplore(gym.vector.VectorEnv):
@@ -49,26 +49,15 @@ class VectorExplore(gym.vector.VectorEnv):
 
     def __init__(self, num_envs: int, threads: int | None = None, *, spec: EnvSpec | None = None,
                  reward="default", localization=None, strategy_settings=None, **kwargs: Any):
-        if spec is None:
-            if strategy_settings is not None:
-                kwargs["settings"] = strategy_settings
-            if localization is not None:
-                kwargs["settings"] = dict(kwargs.get("settings") or {}, localization=localization)
-            if "buildings" not in kwargs:
-                raise ValueError("buildings: required (a path, glob, suite name or generator spec, or a list)")
-            spec = EnvSpec(**kwargs)
-        elif kwargs:
-            raise ValueError("spec: give an EnvSpec or its fields, not both")
+        spec = spec_of(spec, localization, strategy_settings, kwargs)
         if isinstance(num_envs, bool) or not isinstance(num_envs, numbers.Integral) or not 1 <= num_envs <= 4096:
             raise ValueError(f"num_envs: {num_envs!r}; expected an integer from 1 to 4096")
         if threads is None:
             threads = max(1, min(int(num_envs), os.cpu_count() or 1))
         if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or not 1 <= threads <= 256:
             raise ValueError(f"threads: {threads!r}; expected an integer from 1 to 256")
-        if reward != "default" and not callable(reward):
-            raise ValueError(f"reward: {reward!r}; expected \"default\" or a callable reward(terms) -> float")
         self.floorcast_spec = spec
-        self._reward = default_reward if reward == "default" else reward
+        self._reward = reward_of(reward)
         self.num_envs = int(num_envs)
         self.threads = int(threads)
         self._native = _native.VecEnv(spec.to_json(), self.num_envs, self.threads)
