@@ -73,12 +73,16 @@ impl Observer {
             h as u32,
         );
         self.map = Some(OccupancyGrid::filled(frame, Occupancy::Unknown));
-        let laser = run
-            .get("settings")
-            .and_then(|s| s.get("laser_range_m"))
-            .and_then(Value::as_f64)
-            .ok_or("run message: settings.laser_range_m: expected a number")?;
-        self.mode = self.mode.with_laser_range(laser);
+        if let Mode::Graph(g) = self.mode {
+            if g.range_m.is_nan() {
+                let laser = run
+                    .get("settings")
+                    .and_then(|s| s.get("laser_range_m"))
+                    .and_then(Value::as_f64)
+                    .ok_or("run message: settings.laser_range_m: expected a number (the graph's sensing range is drawn from it)")?;
+                self.mode = self.mode.with_laser_range(laser);
+            }
+        }
         self.trail.clear();
         self.snap = None;
         Ok(())

@@ -147,6 +147,9 @@ def test_the_observer_refuses_malformed_messages():
                 '{"pose": [0, 0, 0], "time_s": 0, "candidates": [], "map_changes": {"free": [99]}}']:
         with pytest.raises(ValueError, match="decide message|field"):
             obs.decide(bad)
+    graph = floorcast._native.Observer(json.dumps({"observation": "graph"}))
+    with pytest.raises(ValueError, match="settings.laser_range_m"):
+        graph.begin(json.dumps({"map": {"origin": [0, 0], "width": 4, "height": 4, "resolution_m": 0.05}}))
 
 
 @pytest.mark.parametrize("text", [LINEAR, MAP, GRAPH], ids=["candidates", "map", "graph"])
