@@ -85,7 +85,8 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--quick", action="store_true", help="one seed on a smaller plan, fewer vector steps")
     p.add_argument("--seeds", type=int, default=3, help="runs per localization (default 3)")
-    p.add_argument("--floorcast", default=str(REPO / "target" / "release" / "floorcast"),
+    target = os.environ.get("CARGO_TARGET_DIR") or str(REPO / "target")
+    p.add_argument("--floorcast", default=os.path.join(target, "release", "floorcast"),
                    help="the floorcast binary to compare with (default: this clone's release build)")
     a = p.parse_args()
     if not os.path.isfile(a.floorcast):

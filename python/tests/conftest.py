@@ -13,9 +13,11 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 
 def floorcast_bin() -> str:
     """The floorcast binary the tests compare with: $FLOORCAST_BIN, else the release build of
-    this clone (`cargo build --release`, which the README's test command makes). Missing, the
-    tests that need it fail: they never pass without it."""
-    path = os.environ.get("FLOORCAST_BIN") or str(REPO / "target" / "release" / "floorcast")
+    this clone (`cargo build --release`, which the README's test command makes; in
+    $CARGO_TARGET_DIR when set). Missing, the tests that need it fail: they never pass without
+    it."""
+    target = os.environ.get("CARGO_TARGET_DIR") or str(REPO / "target")
+    path = os.environ.get("FLOORCAST_BIN") or os.path.join(target, "release", "floorcast")
     if not os.path.isfile(path):
         pytest.fail(f"no floorcast binary at {path}: run `cargo build --release` first (or set FLOORCAST_BIN)")
     return path
