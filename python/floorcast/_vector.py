@@ -72,8 +72,9 @@ class VectorExplore(gym.vector.VectorEnv):
     def __reduce__(self):
         return (_rebuild, (self.num_envs, self.threads, self.floorcast_spec, self._reward))
 
-    def _batch(self, outs, rewards):
-        obs = {k: np.stack([arrays(o["obs"])[k] for o in outs]) for k in self.single_observation_space.spaces}
+    def _batch(self, outs):
+        each = [arrays(o["obs"]) for o in outs]
+        obs = {k: np.stack([e[k] for e in each]) for k in self.single_observation_space.spaces}
         infos: dict = {}
         for key in ("explored_fraction", "time_s", "decision", "seed"):
             infos[key] = np.array([o[key] for o in outs])
@@ -97,7 +98,7 @@ class VectorExplore(gym.vector.VectorEnv):
             raise ValueError(f"seed: {seed!r}; expected one integer from 0 to 2**64 - 1 (environment i gets seed + i)")
         outs = self._native.reset(int(seed))
         self._fractions = np.array([o["explored_fraction"] for o in outs])
-        return self._batch(outs, None)
+        return self._batch(outs)
 
     def step(self, actions):
         """One decision of every environment: ``actions`` of shape (num_envs,) (candidates) or
@@ -126,7 +127,7 @@ class VectorExplore(gym.vector.VectorEnv):
             rewards[i] = float(self._reward(terms))
             terminations[i] = o["terminated"]
             truncations[i] = o["truncated"]
-        obs, infos = self._batch(outs, rewards)
+        obs, infos = self._batch(outs)
         return obs, rewards, terminations, truncations, infos
 
     def action_masks(self) -> np.ndarray:
