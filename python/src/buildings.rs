@@ -74,16 +74,11 @@ pub(crate) fn resolve(source: &str) -> Result<Vec<Named>, String> {
         return generated(spec);
     }
     if source.contains(['*', '?', '[']) {
-        let paths = glob::glob(source)
-            .map_err(|e| format!("buildings: '{source}' is not a valid glob: {e}"))?;
-        let mut files: Vec<PathBuf> = paths
-            .filter_map(Result::ok)
-            .filter(|p| p.is_file())
-            .collect();
-        files.sort();
-        if files.is_empty() {
-            return Err(format!("buildings: the glob '{source}' matches no file"));
-        }
+        // Bounded as a grid's patterns are: only below the folder before the first wildcard,
+        // at most `MAX_PATTERN_ENTRIES` entries visited, links not followed.
+        let files =
+            floorcast_worker::pattern::expand_pattern(Path::new(""), source, "the current folder")
+                .map_err(|e| format!("buildings: {e}"))?;
         return files.iter().map(|p| read_file(p)).collect();
     }
     let path = Path::new(source);

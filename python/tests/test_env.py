@@ -129,6 +129,7 @@ BAD_MAKE = [
     (dict(buildings="no/such/file.toml"), "buildings"),
     (dict(buildings="no-such-suite"), "buildings"),
     (dict(buildings="maps/none/*.xml"), "buildings"),
+    (dict(buildings="/**/*.xml"), "whole file system"),  # bounded, as a grid's patterns
     (dict(buildings="generate:castle:900:1"), "buildings"),
     (dict(buildings="generate:school:12:1"), "buildings"),
     (dict(buildings=[]), "buildings"),

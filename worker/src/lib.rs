@@ -21,6 +21,7 @@
 
 pub mod execute;
 pub mod external;
+pub mod pattern;
 pub mod process;
 pub mod record;
 pub mod text;
