@@ -228,17 +228,12 @@ pub(crate) fn observe(
                 targets: Vec::new(),
             }
         }
-        Mode::Map {
-            size,
-            cell_m,
-            egocentric,
-        } => {
+        Mode::Map { size, .. } => {
             let window = Window::of(mode, snap.pose, map.map(|m| m.frame));
             let bytes = match map {
                 Some(m) => render(m, &window, trail),
                 None => vec![0u8; CHANNELS.len() * size * size],
             };
-            let _ = (cell_m, egocentric);
             let mut arrays = vec![("map", "uint8", vec![CHANNELS.len(), size, size], bytes)];
             common(&mut arrays);
             Obs {
