@@ -366,22 +366,57 @@ fn render_cmd(a: RenderArgs) -> Result<()> {
 /// early stop or the time limit, and none after "no frontiers" unless `frontier_clearance_m` had
 /// the explorer ignore some.
 pub fn exploration_figure(r: &RunResult, min_frontier_m: f64) -> Figure {
+    exploration_figure_of(r, std::slice::from_ref(r), min_frontier_m)
+}
+
+/// The robots' colours in a team's picture (robot k the k-th, robot 0 the blue of one robot's).
+pub const TEAM_COLOURS: [(u8, u8, u8); 8] = [
+    (30, 90, 220),
+    (0, 150, 70),
+    (200, 40, 160),
+    (230, 130, 0),
+    (0, 160, 190),
+    (140, 70, 20),
+    (110, 60, 200),
+    (90, 90, 90),
+];
+
+/// A team's picture: the team's map and frontiers, each robot's true path in its own colour
+/// ([`TEAM_COLOURS`]), its estimated path dashed, its goals and its start.
+pub fn team_figure(t: &sim_core::explore::TeamResult, min_frontier_m: f64) -> Figure {
+    exploration_figure_of(&t.team, &t.robots, min_frontier_m)
+}
+
+/// The final map of `whole` with the paths, goals and starts of `robots`.
+fn exploration_figure_of(whole: &RunResult, robots: &[RunResult], min_frontier_m: f64) -> Figure {
+    let r = whole;
     let bounds = r.map.frame.bounds();
     let mut fig = Figure::new(bounds, 20.0);
     fig.grid(&r.map);
-    let traj: Vec<Vec2> = r.trajectory.iter().map(|p| p.position()).collect();
-    fig.polyline(&traj, &Style::stroke(Color::rgb(30, 90, 220), 1.5));
-    let est: Vec<Vec2> = r
-        .estimated_trajectory
-        .iter()
-        .map(|p| p.position())
-        .collect();
-    fig.polyline(
-        &est,
-        &Style::stroke(Color::rgba(220, 120, 30, 160), 1.0).dashed(4.0, 3.0),
-    );
-    for d in &r.decisions {
-        fig.circle(d.goal, 0.25, &Style::fill(Color::rgb(220, 30, 30)));
+    let team = robots.len() > 1;
+    for (k, robot) in robots.iter().enumerate() {
+        let (cr, cg, cb) = TEAM_COLOURS[k % TEAM_COLOURS.len()];
+        let traj: Vec<Vec2> = robot.trajectory.iter().map(|p| p.position()).collect();
+        fig.polyline(&traj, &Style::stroke(Color::rgb(cr, cg, cb), 1.5));
+        let est: Vec<Vec2> = robot
+            .estimated_trajectory
+            .iter()
+            .map(|p| p.position())
+            .collect();
+        let dashed = if team {
+            Color::rgba(cr, cg, cb, 140)
+        } else {
+            Color::rgba(220, 120, 30, 160)
+        };
+        fig.polyline(&est, &Style::stroke(dashed, 1.0).dashed(4.0, 3.0));
+        for d in &robot.decisions {
+            let goal = if team {
+                Color::rgb(cr, cg, cb)
+            } else {
+                Color::rgb(220, 30, 30)
+            };
+            fig.circle(d.goal, 0.25, &Style::fill(goal));
+        }
     }
     let frontier = Color::rgb(200, 0, 200);
     let cfg = FrontierConfig::with_min_length_m(min_frontier_m, r.map.frame.resolution_m);
@@ -396,6 +431,14 @@ pub fn exploration_figure(r: &RunResult, min_frontier_m: f64) -> Figure {
         let candidate = r.map.frame.world_from_cell(f.candidate);
         fig.circle(candidate, 0.35, &Style::stroke(frontier, 2.0));
     }
-    fig.arrow(&r.start, 1.0, &Style::stroke(Color::rgb(0, 150, 0), 3.0));
+    for (k, robot) in robots.iter().enumerate() {
+        let colour = if team {
+            let (cr, cg, cb) = TEAM_COLOURS[k % TEAM_COLOURS.len()];
+            Color::rgb(cr, cg, cb)
+        } else {
+            Color::rgb(0, 150, 0)
+        };
+        fig.arrow(&robot.start, 1.0, &Style::stroke(colour, 3.0));
+    }
     fig
 }

@@ -9,8 +9,8 @@ use floorcast_coordinator::grid::normal_heading_deg;
 use floorcast_worker::external::ExternalStrategy;
 use floorcast_worker::settings::{fmt_num, LocalizationSetting, UtilityDistanceSetting};
 use floorcast_worker::{
-    check_job, check_start, run_job, strategy_names, GivenStart, Job, Settings, StrategyProgram,
-    StrategyRef,
+    check_job, check_start, run_job_from, strategy_names, GivenStart, Job, Settings,
+    StrategyProgram, StrategyRef,
 };
 use sim_core::explore::{EndReason, RunResult};
 
@@ -58,8 +58,19 @@ pub struct ExploreArgs {
     /// over the free cells with room for the body plus a 0.05 m margin that connect to the
     /// largest-clearance point, heading uniform. Default: the building file's [start], else the
     /// free point with the largest clearance, facing +x.
+    /// With a team (--robots N): once for robot 0, the others placed around it (on rings
+    /// 2 radii + 0.3 m apart, reachable from it in a straight line, its heading), or "random"
+    /// for every robot drawn (robot k from draws k * 1000000 + j, at least 2 radii + 0.3 m
+    /// from the others), or N times, once per robot (docs/teams.md).
     #[arg(long, value_name = "X,Y,THETA|random", value_parser = parse_start, allow_hyphen_values = true)]
-    start: Option<StartArg>,
+    start: Vec<StartArg>,
+    /// Robots in the team, 1 to 8 (default: 1, or the settings file's `robots`; with N
+    /// --start poses, N). They explore one shared map, each with its own body, noise,
+    /// odometry and goal; use a team strategy (team-nearest, team-greedy, team-burgard,
+    /// team-hungarian, team-minpos) to coordinate them. The summary then carries the team's
+    /// figures; trajectory.csv and decisions.csv a robot column (docs/teams.md).
+    #[arg(long, value_name = "N", value_parser = crate::values::whole_number::<usize>(1, 8))]
+    robots: Option<usize>,
     /// Where the map's poses come from (default: slam, or the settings file's).
     #[arg(
         long,
@@ -140,8 +151,13 @@ pub fn run(a: ExploreArgs) -> Result<()> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| building.name.clone());
-    let settings = explore_settings(&a)?;
-    let start = given_start(&a, &building, &name, &settings)?;
+    let mut settings = explore_settings(&a)?;
+    if let Some(n) = a.robots {
+        settings.robots = n;
+    } else if a.start.len() > 1 {
+        settings.robots = a.start.len();
+    }
+    let (start, team_starts) = given_starts(&a, &building, &name, &settings)?;
     let strategy = strategy_of(&a).map_err(|e| failed_start(&a, &name, e))?;
     let label = strategy.name().to_string();
     let job = Job {
@@ -162,7 +178,12 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     job.settings
         .validate()
         .map_err(|e| anyhow::anyhow!("{e} (given on the command line)"))?;
-    check_job(&job).with_context(|| format!("{}: cannot explore", a.building.display()))?;
+    let (_, robot0, _) =
+        check_job(&job).with_context(|| format!("{}: cannot explore", a.building.display()))?;
+    if job.settings.robots > 1 {
+        floorcast_worker::team_starts(&job, robot0, team_starts.as_deref())
+            .with_context(|| format!("{}: cannot explore", a.building.display()))?;
+    }
     let out = out_dir(&a, &name, &label);
     // No file `explore` writes in --out is one it reads.
     let mut paths = crate::output::Paths::new();
@@ -184,7 +205,7 @@ pub fn run(a: ExploreArgs) -> Result<()> {
     let dir = staged.dir();
 
     let pb = progress_bar(1000, a.quiet, "{spinner} {msg} [{bar:40}] {pos}‰ explored");
-    let output = match run_job(&job, &mut |s| {
+    let output = match run_job_from(&job, team_starts.as_deref(), &mut |s| {
         pb.set_position((s.explored_fraction * 1000.0) as u64);
         pb.set_message(format!("t = {:.0} s", s.time_s));
     }) {
@@ -317,14 +338,56 @@ fn explore_settings(a: &ExploreArgs) -> Result<Settings> {
     Ok(settings)
 }
 
-/// The start pose of `--start`, checked (`None`: the building's own).
+/// Robot 0's start pose of `--start`, checked (`None`: the building's own), and every robot's
+/// when `--start` gives one per robot of a team.
+fn given_starts(
+    a: &ExploreArgs,
+    building: &sim_core::building::Building,
+    name: &str,
+    settings: &Settings,
+) -> Result<(Option<GivenStart>, Option<Vec<sim_core::Pose>>)> {
+    match a.start.len() {
+        0 | 1 => Ok((given_start(a, building, name, settings)?, None)),
+        n if n != settings.robots => anyhow::bail!(
+            "--start: given {n} times for a team of {} robots (--robots or the settings' robots); give it once (the others start around robot 0) or once per robot",
+            settings.robots
+        ),
+        _ => {
+            let mut poses = Vec::new();
+            for (k, s) in a.start.iter().enumerate() {
+                let StartArg::Pose(pose) = s else {
+                    anyhow::bail!(
+                        "--start random: given among {} starts; give 'random' once for every robot drawn, or a pose per robot",
+                        a.start.len()
+                    );
+                };
+                check_start(
+                    building,
+                    name,
+                    *pose,
+                    settings.robot_radius_m,
+                    &format!("--start (robot {k})"),
+                )
+                .with_context(|| format!("{}: cannot explore", a.building.display()))?;
+                poses.push(*pose);
+            }
+            let first = GivenStart {
+                pose: poses[0],
+                source: floorcast_worker::GivenSource::CommandLine,
+            };
+            Ok((Some(first), Some(poses)))
+        }
+    }
+}
+
+/// The start pose of `--start` given once, checked (`None`: the building's own).
 fn given_start(
     a: &ExploreArgs,
     building: &sim_core::building::Building,
     name: &str,
     settings: &Settings,
 ) -> Result<Option<GivenStart>> {
-    Ok(match a.start {
+    Ok(match a.start.first().cloned() {
         None => None,
         Some(StartArg::Pose(pose)) => {
             check_start(building, name, pose, settings.robot_radius_m, "--start")
@@ -391,16 +454,25 @@ fn write_outputs(
         &(serde_json::to_string_pretty(summary)? + "\n"),
     )?;
     write_text(&dir.join("progress.csv"), &progress_csv(&output.result))?;
-    write_text(&dir.join("decisions.csv"), &decisions_csv(&output.result))?;
-    write_text(&dir.join("trajectory.csv"), &trajectory_csv(&output.result))?;
+    let robots = match &output.team {
+        Some(t) => t.robots.iter().collect(),
+        None => vec![&output.result],
+    };
+    write_text(&dir.join("decisions.csv"), &decisions_csv(&robots))?;
+    write_text(&dir.join("trajectory.csv"), &trajectory_csv(&robots))?;
     if let Some(text) = output.strategy_stderr.as_ref().filter(|t| !t.is_empty()) {
         write_text(&dir.join("strategy-stderr.txt"), text)?;
     }
     floorcast_formats::map_server::write_map(&output.result.map, &dir.join("map.yaml"))?;
     let picture = dir.join(format!("final.{}", a.picture.extension()));
-    crate::cmd_building::exploration_figure(&output.result, job.settings.min_frontier_m)
-        .save(&picture)
-        .with_context(|| format!("cannot write {}", picture.display()))?;
+    match &output.team {
+        Some(t) => crate::cmd_building::team_figure(t, job.settings.min_frontier_m),
+        None => {
+            crate::cmd_building::exploration_figure(&output.result, job.settings.min_frontier_m)
+        }
+    }
+    .save(&picture)
+    .with_context(|| format!("cannot write {}", picture.display()))?;
 
     for snap in &output.result.snapshots {
         let layout = sim_core::layout::reconstruct_layout(
@@ -483,35 +555,52 @@ fn progress_csv(r: &RunResult) -> String {
     floorcast_stats::progress::encode(&samples)
 }
 
-fn decisions_csv(r: &RunResult) -> String {
-    let mut s =
-        String::from("time_s,x_m,y_m,theta_rad,goal_x_m,goal_y_m,candidates,gain_m2,distance_m\n");
-    for d in &r.decisions {
-        let _ = writeln!(
-            s,
-            "{:.1},{:.3},{:.3},{:.4},{:.3},{:.3},{},{:.3},{:.3}",
-            d.time_s,
-            d.pose.x_m,
-            d.pose.y_m,
-            d.pose.theta_rad,
-            d.goal.x,
-            d.goal.y,
-            d.candidates,
-            d.gain_m2,
-            d.distance_m
-        );
+/// `decisions.csv`: one robot's decisions, or a team's (then with a first column `robot`, robot
+/// by robot).
+fn decisions_csv(robots: &[&RunResult]) -> String {
+    let team = robots.len() > 1;
+    let mut s = String::from(if team { "robot," } else { "" });
+    s.push_str("time_s,x_m,y_m,theta_rad,goal_x_m,goal_y_m,candidates,gain_m2,distance_m\n");
+    for (k, r) in robots.iter().enumerate() {
+        for d in &r.decisions {
+            if team {
+                let _ = write!(s, "{k},");
+            }
+            let _ = writeln!(
+                s,
+                "{:.1},{:.3},{:.3},{:.4},{:.3},{:.3},{},{:.3},{:.3}",
+                d.time_s,
+                d.pose.x_m,
+                d.pose.y_m,
+                d.pose.theta_rad,
+                d.goal.x,
+                d.goal.y,
+                d.candidates,
+                d.gain_m2,
+                d.distance_m
+            );
+        }
     }
     s
 }
 
-fn trajectory_csv(r: &RunResult) -> String {
-    let mut s = String::from("x_m,y_m,theta_rad,est_x_m,est_y_m,est_theta_rad\n");
-    for (t, e) in r.trajectory.iter().zip(&r.estimated_trajectory) {
-        let _ = writeln!(
-            s,
-            "{:.3},{:.3},{:.4},{:.3},{:.3},{:.4}",
-            t.x_m, t.y_m, t.theta_rad, e.x_m, e.y_m, e.theta_rad
-        );
+/// `trajectory.csv`: true and estimated poses at each map update, one robot's or a team's (then
+/// with a first column `robot`, robot by robot).
+fn trajectory_csv(robots: &[&RunResult]) -> String {
+    let team = robots.len() > 1;
+    let mut s = String::from(if team { "robot," } else { "" });
+    s.push_str("x_m,y_m,theta_rad,est_x_m,est_y_m,est_theta_rad\n");
+    for (k, r) in robots.iter().enumerate() {
+        for (t, e) in r.trajectory.iter().zip(&r.estimated_trajectory) {
+            if team {
+                let _ = write!(s, "{k},");
+            }
+            let _ = writeln!(
+                s,
+                "{:.3},{:.3},{:.4},{:.3},{:.3},{:.4}",
+                t.x_m, t.y_m, t.theta_rad, e.x_m, e.y_m, e.theta_rad
+            );
+        }
     }
     s
 }

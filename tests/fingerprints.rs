@@ -174,12 +174,67 @@ const CASES: &[(&str, &str, &str, u64, Changed)] = &[
         1,
         PAPER_TRIGGER,
     ),
+    // Teams (issue 81): each team strategy with two robots on one shared map, and the
+    // assignments with three and four on a larger building.
+    (
+        "small-team-nearest-1-x2",
+        "buildings/small.toml",
+        "team-nearest",
+        1,
+        TEAM2,
+    ),
+    (
+        "small-team-greedy-1-x2",
+        "buildings/small.toml",
+        "team-greedy",
+        1,
+        TEAM2,
+    ),
+    (
+        "small-team-burgard-1-x2",
+        "buildings/small.toml",
+        "team-burgard",
+        1,
+        TEAM2,
+    ),
+    (
+        "small-team-hungarian-1-x2",
+        "buildings/small.toml",
+        "team-hungarian",
+        1,
+        TEAM2,
+    ),
+    (
+        "small-team-minpos-1-x2",
+        "buildings/small.toml",
+        "team-minpos",
+        1,
+        TEAM2,
+    ),
+    (
+        "paper-01-team-hungarian-1-x3",
+        "buildings/paper/paper-01.toml",
+        "team-hungarian",
+        1,
+        TEAM3,
+    ),
+    (
+        "paper-01-team-minpos-2-x4",
+        "buildings/paper/paper-01.toml",
+        "team-minpos",
+        2,
+        TEAM4,
+    ),
 ];
 
-/// The settings a case changes from the defaults: `layout_update_fraction`, if it sets one.
-type Changed = Option<f64>;
-const DEFAULT: Changed = None;
-const PAPER_TRIGGER: Changed = Some(0.0);
+/// The settings a case changes from the defaults: `layout_update_fraction`, if it sets one, and
+/// `robots`.
+type Changed = (Option<f64>, usize);
+const DEFAULT: Changed = (None, 1);
+const PAPER_TRIGGER: Changed = (Some(0.0), 1);
+const TEAM2: Changed = (None, 2);
+const TEAM3: Changed = (None, 3);
+const TEAM4: Changed = (None, 4);
 
 fn fingerprint(building: &Path, strategy: &str, seed: u64, changed: Changed) -> String {
     let b = floorcast_formats::read_building(building).unwrap();
@@ -189,7 +244,10 @@ fn fingerprint(building: &Path, strategy: &str, seed: u64, changed: Changed) -> 
         strategy: StrategyRef::built_in(strategy).unwrap(),
         seed,
         settings: Settings {
-            layout_update_fraction: changed.unwrap_or(Settings::default().layout_update_fraction),
+            layout_update_fraction: changed
+                .0
+                .unwrap_or(Settings::default().layout_update_fraction),
+            robots: changed.1,
             ..Settings::default()
         },
         start: None,

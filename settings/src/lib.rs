@@ -456,6 +456,15 @@ declare_settings! {
     charge_compute: bool = false,
         BOOL, "",
         "Add the measured wall time of every layout to simulated time (not reproducible).";
+    /// Robots in the team (1 = one robot). A team shares one map (their relative starts
+    /// known, every map update reaching every robot at once), each robot with its own body,
+    /// noise, odometry, estimate and goal; robots 2 to N start around robot 0's start, or
+    /// drawn at random with a random start (docs/teams.md). Written only when not 1, so that
+    /// the records and job identities of one robot's runs are those of earlier versions.
+    #[serde(skip_serializing_if = "is_one")]
+    robots: usize = 1,
+        integer(1, 8), "",
+        "Robots in the team, exploring one shared map (1 = one robot; docs/teams.md).";
 }
 
 fn is_path(d: &UtilityDistanceSetting) -> bool {
@@ -464,6 +473,10 @@ fn is_path(d: &UtilityDistanceSetting) -> bool {
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
+}
+
+fn is_one(v: &usize) -> bool {
+    *v == 1
 }
 
 fn is_default_lambda(v: &f64) -> bool {

@@ -65,6 +65,9 @@ pub enum StartError {
     NoFreeSpace,
     /// No free point is far enough from solid space for the robot's body.
     NoRoom { needed_m: f64, max_clearance_m: f64 },
+    /// Only `placed` of a team's `robots` found room by the team's start rule
+    /// ([`Building::team_starts`]).
+    NoRoomForTeam { robots: usize, placed: usize },
 }
 
 impl std::fmt::Display for StartError {
@@ -80,6 +83,12 @@ impl std::fmt::Display for StartError {
                  space is {max_clearance_m:.3} m, the robot needs {needed_m:.3} m; use a smaller \
                  robot_radius_m, or check that the map's free space is not walled in by unknown \
                  (grey) cells"
+            ),
+            StartError::NoRoomForTeam { robots, placed } => write!(
+                f,
+                "room for only {placed} of the team's {robots} robots by the team's start rule \
+                 (each robot's body clear of walls, {TEAM_SPACING_EXTRA_M} m between bodies, \
+                 reachable from robot 0's start); use fewer robots or another start"
             ),
         }
     }
@@ -232,6 +241,23 @@ impl<'a> StartSampler<'a> {
 
 /// The ChaCha stream of random start poses (the simulator's streams are 1 and 2).
 const RANDOM_START_STREAM: u64 = 0x0053_5441_5254;
+
+/// The gap kept between two team robots' bodies at their starts (m).
+pub const TEAM_SPACING_EXTRA_M: f64 = 0.3;
+
+/// How a team's robots 1 to N - 1 are placed; robot 0 starts at the run's start pose
+/// ([`Building::team_starts`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TeamStarts {
+    /// Around robot 0, as a team set down together: on rings about its start, 2 radii + 0.3 m
+    /// apart, the nearest free places first (behind it first on each ring), each reached from
+    /// robot 0's start by a straight line the body fits along; robot 0's heading.
+    Together,
+    /// Drawn at random ([`StartSampler`], the stream `seed`): robot `k` takes the first of the
+    /// draws `k * 1_000_000 + index * 64 + j` (`j` = 0 to 63) at least 2 radii + 0.3 m from every
+    /// robot placed before it. `index` is the run's random start index (robot 0's draw).
+    Random { seed: u64, index: u64 },
+}
 
 /// Where a start pose comes from, for reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -426,6 +452,83 @@ impl Building {
         index: u64,
     ) -> Result<Pose, StartError> {
         Ok(StartSampler::new(self, robot_radius_m)?.draw(seed, index))
+    }
+
+    /// The start poses of a team of `robots` robots of `robot_radius_m` whose robot 0 starts at
+    /// `first`, by the rule `rule` (see [`TeamStarts`]). `first` comes first; an error when the
+    /// rule finds room for fewer robots.
+    pub fn team_starts(
+        &self,
+        first: Pose,
+        robots: usize,
+        robot_radius_m: f64,
+        rule: TeamStarts,
+    ) -> Result<Vec<Pose>, StartError> {
+        let spacing = 2.0 * robot_radius_m + TEAM_SPACING_EXTRA_M;
+        let mut placed = vec![first];
+        let apart = |p: Vec2, placed: &[Pose]| {
+            placed
+                .iter()
+                .all(|q| (q.position() - p).norm() >= spacing - 1e-9)
+        };
+        let fits = |pose: Pose| {
+            self.check_start(pose, robot_radius_m + RANDOM_START_MARGIN_M)
+                .is_ok()
+        };
+        match rule {
+            TeamStarts::Together => {
+                // Rings out to 20 spacings; on each, places about `spacing` apart.
+                'rings: for ring in 1..=20 {
+                    let r = ring as f64 * spacing;
+                    let m = ((std::f64::consts::TAU * r / spacing).floor() as usize).max(6);
+                    for a in 0..m {
+                        if placed.len() == robots {
+                            break 'rings;
+                        }
+                        // Behind robot 0 first, then alternately either side of behind.
+                        let step = std::f64::consts::TAU / m as f64;
+                        let k = a.div_ceil(2) as f64 * if a % 2 == 1 { 1.0 } else { -1.0 };
+                        let angle = first.theta_rad + std::f64::consts::PI + k * step;
+                        let p = first.position() + Vec2::new(angle.cos(), angle.sin()) * r;
+                        let pose = Pose::new(p.x, p.y, first.theta_rad);
+                        if !apart(p, &placed) || !fits(pose) {
+                            continue;
+                        }
+                        // Reached from robot 0's start along a straight line the body fits
+                        // along (every 0.05 m).
+                        let steps = (r / 0.05).ceil() as usize;
+                        let clear = (1..steps).all(|i| {
+                            let q = first.position()
+                                + (p - first.position()) * (i as f64 / steps as f64);
+                            self.check_start(Pose::new(q.x, q.y, 0.0), robot_radius_m)
+                                .is_ok()
+                        });
+                        if clear {
+                            placed.push(pose);
+                        }
+                    }
+                }
+            }
+            TeamStarts::Random { seed, index } => {
+                let sampler = StartSampler::new(self, robot_radius_m)?;
+                for k in 1..robots as u64 {
+                    let found = (0..64)
+                        .map(|j| sampler.draw(seed, k * 1_000_000 + index * 64 + j))
+                        .find(|p| apart(p.position(), &placed));
+                    match found {
+                        Some(p) => placed.push(p),
+                        None => break,
+                    }
+                }
+            }
+        }
+        if placed.len() < robots {
+            return Err(StartError::NoRoomForTeam {
+                robots,
+                placed: placed.len(),
+            });
+        }
+        Ok(placed)
     }
 
     /// The clearance of every cell of [`Building::area_frame`] (the raster's own grid or a

@@ -11,7 +11,7 @@
 use sim_core::building::Building;
 use sim_core::explore::{
     explore, DecisionView, Episode, EpisodeError, Event, ExploreConfig, ProgressSample, Reply,
-    RobotId, RunEnd, RunResult, Strategy, StrategyParams,
+    RobotId, RunEnd, RunResult, Strategy, StrategyParams, TeamMap,
 };
 use sim_core::generate::{generate, BuildingKind, GenerateConfig};
 
@@ -215,7 +215,14 @@ fn a_team_shares_the_world_and_each_robot_is_scored() {
         })
         .expect("a free place beside the start");
     let run_team = || {
-        let mut episode = Episode::team(&b, &[start, second], nearest_config(), seed, None);
+        let mut episode = Episode::team(
+            &b,
+            &[start, second],
+            nearest_config(),
+            seed,
+            None,
+            TeamMap::Separate,
+        );
         assert_eq!(episode.robots(), vec![RobotId(0), RobotId(1)]);
         let mut decided = [0usize; 2];
         let mut ended = [false; 2];
@@ -261,7 +268,7 @@ fn a_team_shares_the_world_and_each_robot_is_scored() {
 #[test]
 fn a_team_of_no_robot_is_over_at_once() {
     let (b, seed) = cases().remove(0);
-    let mut episode = Episode::team(&b, &[], nearest_config(), seed, None);
+    let mut episode = Episode::team(&b, &[], nearest_config(), seed, None, TeamMap::Separate);
     assert_eq!(episode.config(), &nearest_config());
     assert!(episode.robots().is_empty());
     assert_eq!(episode.advance(), Event::Finished);

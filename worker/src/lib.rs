@@ -37,7 +37,8 @@ use sim_core::{Building, Pose};
 
 pub use external::{StrategyError, StrategyProgram};
 pub use record::{
-    RunSummary, JOB_ID_RESULT_FORMAT, SUMMARY_FORMAT, SUMMARY_OLDEST_VERSION, SUMMARY_VERSION,
+    RobotSummary, RunSummary, TeamSummary, JOB_ID_RESULT_FORMAT, SUMMARY_FORMAT,
+    SUMMARY_OLDEST_VERSION, SUMMARY_VERSION,
 };
 pub use settings::{Settings, SettingsError};
 
@@ -61,6 +62,17 @@ pub const FLOORCAST_VERSION: &str = env!("CARGO_PKG_VERSION");
 pub const RUNS_CHANGED: &[(&str, Option<&[&str]>)] = &[
     ("0.7.0", None),
     ("0.9.0", Some(&["layout-truth", "layout-truth-es"])),
+    // New: the team strategies (issue 81).
+    (
+        "0.10.0",
+        Some(&[
+            "team-nearest",
+            "team-greedy",
+            "team-burgard",
+            "team-hungarian",
+            "team-minpos",
+        ]),
+    ),
 ];
 
 /// The version in which the runs of `strategy` (a built-in's name, or anything else for an
@@ -266,6 +278,10 @@ pub enum JobError {
     Strategy(#[from] StrategyError),
     #[error("the simulation failed (a bug in floorcast, please report it): {0}")]
     Panicked(String),
+    #[error("strategy {0} is an external program: a team (settings.robots > 1) runs the built-in strategies only in this version (team-nearest, team-greedy, team-burgard, team-hungarian, team-minpos, or any other); run the program with robots = 1")]
+    TeamStrategy(String),
+    #[error("team starts: {0}")]
+    TeamStarts(String),
 }
 
 /// What a job produced.
@@ -275,6 +291,8 @@ pub struct JobOutput {
     pub result: RunResult,
     /// What an external strategy wrote to stderr.
     pub strategy_stderr: Option<String>,
+    /// A team's whole result (`result` is then the team's run as one).
+    pub team: Option<sim_core::explore::TeamResult>,
 }
 
 /// The strategies this version implements.
@@ -389,7 +407,21 @@ pub fn run_job(
     job: &Job<'_>,
     on_progress: &mut dyn FnMut(&ProgressSample),
 ) -> Result<JobOutput, JobError> {
+    run_job_from(job, None, on_progress)
+}
+
+/// [`run_job`] of a team (`settings.robots` > 1) whose robots start at `starts` when given
+/// (robot 0 at the job's start; each checked), else placed by the team's rule
+/// ([`team_starts`]). `on_progress` sees the team's explored area (robot 0's samples).
+pub fn run_job_from(
+    job: &Job<'_>,
+    starts: Option<&[Pose]>,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+) -> Result<JobOutput, JobError> {
     let (config, start, source) = check_job(job)?;
+    if job.settings.robots > 1 || starts.is_some_and(|s| s.len() > 1) {
+        return run_team_job(job, config, start, source, starts, on_progress);
+    }
     let t0 = Instant::now();
     let mut external = start_external(job, &config, start)?;
     let (building, seed) = (job.building, job.seed);
@@ -424,7 +456,115 @@ pub fn run_job(
         summary,
         result,
         strategy_stderr,
+        team: None,
     })
+}
+
+/// A team's job (see [`run_job_from`]).
+fn run_team_job(
+    job: &Job<'_>,
+    config: ExploreConfig,
+    start: Pose,
+    source: String,
+    given: Option<&[Pose]>,
+    on_progress: &mut dyn FnMut(&ProgressSample),
+) -> Result<JobOutput, JobError> {
+    if job.strategy.program().is_some() {
+        return Err(JobError::TeamStrategy(job.strategy.name().to_string()));
+    }
+    let starts = team_starts(job, start, given)?;
+    let t0 = Instant::now();
+    let (building, seed) = (job.building, job.seed);
+    let team = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut rules: Vec<BuiltInPolicy> = starts
+            .iter()
+            .map(|_| BuiltInPolicy::new(&config.strategy, seed))
+            .collect();
+        let mut policies: Vec<&mut dyn sim_core::explore::Policy> = rules
+            .iter_mut()
+            .map(|r| r as &mut dyn sim_core::explore::Policy)
+            .collect();
+        let episode = Episode::team(
+            building,
+            &starts,
+            config.clone(),
+            seed,
+            None,
+            sim_core::explore::TeamMap::Shared,
+        );
+        sim_core::explore::drive_team_to_end(
+            charged(episode, job),
+            &mut policies,
+            &mut |robot, sample| {
+                if robot.0 == 0 {
+                    on_progress(sample)
+                }
+            },
+        )
+    }))
+    .map_err(|p| JobError::Panicked(panic_message(&*p)))?
+    .ok_or_else(|| JobError::Panicked("a team without robots".into()))?;
+    let wall_time_s = t0.elapsed().as_secs_f64();
+    let mut summary = RunSummary::new(job, &team.team, &source, wall_time_s);
+    summary.team = Some(TeamSummary::new(&team));
+    Ok(JobOutput {
+        summary,
+        result: team.team.clone(),
+        strategy_stderr: None,
+        team: Some(team),
+    })
+}
+
+/// The start poses of a job's team of `settings.robots`: `given` (robot 0's must be the job's
+/// `start`; each checked as a start), else robot 0 at `start` and the others by
+/// [`Building::team_starts`]: drawn at random (the job's seed) when the job's start was drawn,
+/// else around robot 0.
+pub fn team_starts(
+    job: &Job<'_>,
+    start: Pose,
+    given: Option<&[Pose]>,
+) -> Result<Vec<Pose>, JobError> {
+    let (robots, radius_m) = (job.settings.robots, job.settings.robot_radius_m);
+    if let Some(poses) = given {
+        if poses.len() != robots {
+            return Err(JobError::TeamStarts(format!(
+                "{} start poses for a team of {robots} robots (settings.robots); give one per robot, or one and let the others start around it",
+                poses.len()
+            )));
+        }
+        for (k, &p) in poses.iter().enumerate().skip(1) {
+            check_start(
+                job.building,
+                &job.building_name,
+                p,
+                radius_m,
+                &format!("robot {k}'s start"),
+            )?;
+            for (j, q) in poses[..k].iter().enumerate() {
+                let gap = (p.position() - q.position()).norm();
+                if gap < 2.0 * radius_m {
+                    return Err(JobError::TeamStarts(format!(
+                        "robots {j} and {k} start {gap:.2} m apart: their bodies ({radius_m} m radius) overlap; start them at least {:.2} m apart",
+                        2.0 * radius_m
+                    )));
+                }
+            }
+        }
+        return Ok(poses.to_vec());
+    }
+    let rule = match &job.start {
+        Some(g) if g.source == GivenSource::Random => sim_core::building::TeamStarts::Random {
+            seed: job.seed,
+            index: 0,
+        },
+        _ => sim_core::building::TeamStarts::Together,
+    };
+    job.building
+        .team_starts(start, robots, radius_m, rule)
+        .map_err(|source| JobError::NoStart {
+            name: job.building_name.clone(),
+            source,
+        })
 }
 
 /// The job's external strategy program, started and told of the run (`None`: a built-in
@@ -476,7 +616,7 @@ fn charged(mut episode: Episode, job: &Job<'_>) -> Episode {
 /// [`run_jobs_shared`]): a built-in strategy, compute not charged (charged runs depend on the
 /// machine).
 fn may_run_together(job: &Job<'_>) -> bool {
-    job.strategy.program().is_none() && !job.settings.charge_compute
+    job.strategy.program().is_none() && !job.settings.charge_compute && job.settings.robots == 1
 }
 
 /// What the runs sharing a job's beginning must have in common (`None`: it runs alone): its
@@ -561,6 +701,7 @@ pub fn run_jobs_shared(jobs: &[Job<'_>]) -> Vec<(Result<JobOutput, JobError>, f6
             summary,
             result,
             strategy_stderr: None,
+            team: None,
         };
         out[i] = Some((Ok(output), wall_s));
     }

@@ -122,6 +122,93 @@ pub struct RunSummary {
     pub wall_time_s: f64,
     /// Simulated seconds per wall second.
     pub speedup: f64,
+    /// A team's figures (`settings.robots` > 1; absent for one robot). The fields above are
+    /// then the team's: its exploration ends when the last robot's does, its explored area is
+    /// the shared map's, its path length the robots' summed, its decisions every robot's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub team: Option<TeamSummary>,
+}
+
+/// A team's figures in a run's summary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TeamSummary {
+    /// Robots in the team.
+    pub robots: usize,
+    /// How they map: "shared" (one map, relative starts known).
+    pub map: String,
+    /// How they communicate: "full" (every map update, pose and goal reaches every robot at
+    /// once).
+    pub communication: String,
+    /// Simulated seconds until the team's map held 99 % of the explorable area (`null`: never).
+    pub time_to_99_s: Option<f64>,
+    /// Map area the laser of more than one robot swept (m2, on a 0.2 m grid), of the area any
+    /// swept, and their ratio.
+    pub overlap_m2: f64,
+    pub seen_m2: f64,
+    pub overlap_fraction: f64,
+    /// Map updates passed on to teammates (one per update and teammate).
+    pub exchanges: u64,
+    /// The closest two robots' centres came (m; two radii when their bodies touched).
+    pub min_separation_m: f64,
+    /// Idle time summed over the robots (s): see `per_robot`.
+    pub idle_s: f64,
+    /// Each robot's figures, by robot number.
+    pub per_robot: Vec<RobotSummary>,
+}
+
+/// One robot's figures in a team's summary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSummary {
+    pub robot: usize,
+    /// Start pose `[x_m, y_m, theta_rad]`.
+    pub start: [f64; 3],
+    pub path_length_m: f64,
+    /// Map area its laser swept (m2, on a 0.2 m grid).
+    pub seen_m2: f64,
+    /// When its own exploration ended (s), and why.
+    pub exploration_time_s: f64,
+    #[serde(with = "end_reason_name")]
+    pub end_reason: EndReason,
+    /// Time it did not explore while the team did (s): from the end of its own exploration to
+    /// the team's, and standing still for charged compute.
+    pub idle_s: f64,
+    pub decisions: usize,
+}
+
+impl TeamSummary {
+    /// The summary of a team's result.
+    pub fn new(t: &sim_core::explore::TeamResult) -> Self {
+        Self {
+            robots: t.robots.len(),
+            map: "shared".into(),
+            communication: "full".into(),
+            time_to_99_s: t.time_to_fraction_s(0.99),
+            overlap_m2: t.overlap_m2,
+            seen_m2: t.seen_m2,
+            overlap_fraction: t.overlap_fraction(),
+            exchanges: t.exchanges,
+            min_separation_m: t.min_separation_m,
+            idle_s: t.figures.iter().map(|f| f.idle_s).sum(),
+            per_robot: t
+                .robots
+                .iter()
+                .zip(&t.figures)
+                .enumerate()
+                .map(|(k, (r, f))| RobotSummary {
+                    robot: k,
+                    start: [r.start.x_m, r.start.y_m, r.start.theta_rad],
+                    path_length_m: f.path_length_m,
+                    seen_m2: f.seen_m2,
+                    exploration_time_s: f.exploration_time_s,
+                    end_reason: f.end_reason,
+                    idle_s: f.idle_s,
+                    decisions: f.decisions,
+                })
+                .collect(),
+        }
+    }
 }
 
 impl RunSummary {
@@ -172,6 +259,7 @@ impl RunSummary {
             } else {
                 0.0
             },
+            team: None,
         }
     }
 

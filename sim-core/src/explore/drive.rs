@@ -1,4 +1,5 @@
-//! The drivers of a run over an [`Episode`]: [`explore`], [`explore_charged`], [`explore_with`].
+//! The drivers of a run over an [`Episode`]: [`explore`], [`explore_charged`], [`explore_with`];
+//! of a team's: [`explore_team`], [`drive_team_to_end`].
 
 use crate::explore::policy::Policy;
 
@@ -6,9 +7,10 @@ use crate::explore::strategy::BuiltInPolicy;
 
 use crate::building::Building;
 use crate::explore::config::ExploreConfig;
-use crate::explore::episode::{Episode, Event};
+use crate::explore::episode::{Episode, Event, RobotId, TeamMap};
 use crate::explore::explorer::LayoutCost;
 use crate::explore::run::{ProgressSample, RunResult};
+use crate::explore::team::TeamResult;
 use crate::geom::Pose;
 
 /// Runs one exploration. `on_progress` sees every progress sample as it is made (for a
@@ -112,6 +114,54 @@ pub fn drive_to_end(
             Event::Progress(_, sample) => on_progress(&sample),
             Event::Ended(_, end) => policy.end(&end),
             Event::Finished => return episode.into_result().expect("a finished run has a result"),
+        }
+    }
+}
+
+/// A team's run: one robot at each of `starts` mapping as `map` says, each robot's decisions
+/// answered by its own instance of the strategy's built-in rule. `on_progress` sees each
+/// robot's progress samples (the team's explored area when the map is shared). A team of one
+/// is [`explore`]'s run, bit for bit.
+pub fn explore_team(
+    building: &Building,
+    starts: &[Pose],
+    cfg: &ExploreConfig,
+    seed: u64,
+    map: TeamMap,
+    on_progress: &mut dyn FnMut(RobotId, &ProgressSample),
+) -> TeamResult {
+    let mut rules: Vec<BuiltInPolicy> = starts
+        .iter()
+        .map(|_| BuiltInPolicy::new(&cfg.strategy, seed))
+        .collect();
+    let mut policies: Vec<&mut dyn Policy> =
+        rules.iter_mut().map(|r| r as &mut dyn Policy).collect();
+    let episode = Episode::team(building, starts, cfg.clone(), seed, None, map);
+    drive_team_to_end(episode, &mut policies, on_progress).expect("a team has robots")
+}
+
+/// Drives a team's `episode` to its end, robot `k`'s decisions answered by `policies[k]` (told
+/// how its run ended), the progress samples shown to `on_progress`. `None` for an episode
+/// without robots. Panics when `policies` has fewer entries than the episode has robots.
+pub fn drive_team_to_end(
+    mut episode: Episode,
+    policies: &mut [&mut dyn Policy],
+    on_progress: &mut dyn FnMut(RobotId, &ProgressSample),
+) -> Option<TeamResult> {
+    loop {
+        match episode.advance() {
+            Event::Decide(robot) => {
+                let policy = &mut policies[robot.0];
+                let (reply, charged_s) = match episode.view(robot) {
+                    Some(view) => policy.decide(&view),
+                    None => unreachable!("a decision is pending"),
+                };
+                let answered = episode.answer_charged(robot, reply, charged_s);
+                debug_assert!(answered.is_ok());
+            }
+            Event::Progress(robot, sample) => on_progress(robot, &sample),
+            Event::Ended(robot, end) => policies[robot.0].end(&end),
+            Event::Finished => return episode.into_team_result(),
         }
     }
 }

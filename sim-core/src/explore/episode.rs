@@ -23,12 +23,18 @@ use crate::building::Building;
 use crate::explore::config::ExploreConfig;
 use crate::explore::explorer::deciding::{Deciding, Step};
 use crate::explore::explorer::{new_explorer, Explorer, LayoutCost};
-use crate::explore::policy::{DecisionView, Needs, Reply, RunEnd};
+use crate::explore::map_state::{MapChanges, MapState};
+use crate::explore::policy::{DecisionView, Mate, Needs, Reply, RunEnd};
+use crate::explore::referee::Referee;
 use crate::explore::run::{EndReason, ProgressSample, RunResult};
+use crate::explore::team::{team_run, Coverage, RobotFigures, TeamResult};
 use crate::geom::Pose;
 pub use crate::sim::RobotId;
 use crate::sim::World;
 use std::sync::{Arc, Mutex};
+
+/// The largest team.
+pub const MAX_ROBOTS: usize = 8;
 
 /// What [`Episode::advance`] stopped for.
 #[derive(Debug, Clone, PartialEq)]
@@ -127,6 +133,19 @@ pub(super) struct Robot {
     pub(super) result: Option<RunResult>,
 }
 
+impl Robot {
+    /// Whether the robot is still exploring (its exploration has not ended).
+    fn is_exploring(&self) -> bool {
+        matches!(
+            self.phase,
+            Phase::Sense
+                | Phase::Deciding(_)
+                | Phase::Drive
+                | Phase::Moving(_, After::Waited(_) | After::Drove)
+        )
+    }
+}
+
 /// What one step of a robot's loop came to.
 enum Poll {
     /// Something for the outside.
@@ -147,6 +166,33 @@ pub struct Episode {
     pub(super) robots: Vec<Robot>,
     /// The settings of the run (every robot's).
     pub(super) cfg: Arc<ExploreConfig>,
+    /// A team's shared map and what goes with it (`None`: one robot, or robots with maps of
+    /// their own).
+    pub(super) shared: Option<Box<Shared>>,
+}
+
+/// How a team's robots map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TeamMap {
+    /// One map that every robot's scans go into and every robot plans on: the robots' relative
+    /// starts are known (their estimates begin in one frame) and every map update reaches every
+    /// robot at once (full communication). Their poses and goals are known to each other.
+    Shared,
+    /// Each robot its own map; nothing is exchanged (each explores as if alone, but among the
+    /// others' bodies).
+    Separate,
+}
+
+/// What the robots of a team with a shared map share: the map (with its frontiers, gains and
+/// layout), the referee's record of the explored area, and which robots' scans changed each
+/// map cell. Lent to a robot's explorer for each of its steps (`Episode::lend`).
+pub(super) struct Shared {
+    map: MapState,
+    referee: Referee,
+    /// Map updates passed on to teammates (one per update and teammate).
+    exchanges: u64,
+    /// The smallest distance between two robots' centres so far (m).
+    min_separation_m: f64,
 }
 
 impl std::fmt::Debug for Episode {
@@ -190,19 +236,126 @@ impl Episode {
         Episode::build(building, &[start], cfg, seed, Some(needs), None)
     }
 
-    /// A team: one robot at each of `starts` (robot `k` at `starts[k]`), in one world, each
-    /// exploring on its own with the settings `cfg` (its own map and estimate; nothing is
-    /// shared but the world), its decisions answered by a policy needing `needs` (`None`: the
-    /// strategy's own rule). Robot 0's random streams are those of a run alone; robot `k`'s
-    /// are its own.
+    /// A team: one robot at each of `starts` (robot `k` at `starts[k]`, at most 8), in one
+    /// world, each with its own body, odometry, estimate, goal and record, mapping as `map`
+    /// says, with the settings `cfg`; their decisions answered by a policy needing `needs`
+    /// (`None`: the strategy's own rule; each robot needs its own, as it keeps memory). Robot
+    /// 0's random streams are those of a run alone; robot `k`'s are its own. A team of one is
+    /// [`Episode::new`]'s run, bit for bit. More than 8 robots panics (the caller checks).
     pub fn team(
         building: &Building,
         starts: &[Pose],
         cfg: ExploreConfig,
         seed: u64,
         needs: Option<Needs>,
+        map: TeamMap,
     ) -> Episode {
-        Episode::build(building, starts, cfg, seed, needs, None)
+        assert!(starts.len() <= MAX_ROBOTS, "at most {MAX_ROBOTS} robots");
+        let mut episode = Episode::build(building, starts, cfg, seed, needs, None);
+        if starts.len() > 1 {
+            let n = starts.len();
+            for r in &mut episode.robots {
+                r.ex.coverage = Some(Coverage::new(r.ex.map.grid.frame));
+                r.ex.team_size = n;
+            }
+            if map == TeamMap::Shared {
+                episode.share_map();
+            }
+        }
+        episode
+    }
+
+    /// Makes robot 0's map and referee the team's (the others' maps dropped: each robot is lent
+    /// the shared one for its steps).
+    fn share_map(&mut self) {
+        let frame = self.robots[0].ex.map.grid.frame;
+        let tiny = crate::grid::GridFrame::new(frame.origin_m, frame.resolution_m, 1, 1);
+        let mut map = None;
+        for (k, r) in self.robots.iter_mut().enumerate() {
+            let own = std::mem::replace(&mut r.ex.map, MapState::new(tiny, 1));
+            // (Robot 0's map becomes the team's.)
+            if k == 0 {
+                map = Some(own);
+            }
+            r.ex.shares_map = true;
+        }
+        let referee = self.robots[0].ex.referee.clone();
+        self.shared = Some(Box::new(Shared {
+            map: map.expect("a team has robots"),
+            referee,
+            exchanges: 0,
+            min_separation_m: self.separation(),
+        }));
+    }
+
+    /// The smallest distance between two robots' centres now (m; infinite for one robot).
+    fn separation(&self) -> f64 {
+        let n = self.robots.len();
+        let mut min = f64::INFINITY;
+        for i in 0..n {
+            for j in i + 1..n {
+                let (a, b) = (
+                    self.world.true_pose(RobotId(i)),
+                    self.world.true_pose(RobotId(j)),
+                );
+                min = min.min((a.position() - b.position()).norm());
+            }
+        }
+        min
+    }
+
+    /// Lends the team's shared map (and referee) to robot `k`'s explorer and tells it its
+    /// mates, for one of its steps; [`Episode::take_back`] returns them. Nothing for a robot
+    /// alone or with a map of its own.
+    fn lend(&mut self, k: usize) {
+        let Some(shared) = self.shared.as_mut() else {
+            return;
+        };
+        let frame = shared.map.grid.frame;
+        let mates: Vec<Mate> = (0..self.robots.len())
+            .filter(|&j| j != k)
+            .map(|j| {
+                let r = &self.robots[j];
+                Mate {
+                    robot: j,
+                    pose: r.ex.localizer.estimate(),
+                    goal: r
+                        .ex
+                        .goal
+                        .as_ref()
+                        .map(|g| frame.world_from_cell(g.candidate)),
+                    exploring: r.is_exploring(),
+                    heard_s: self.world.time_s(),
+                }
+            })
+            .collect();
+        let ex = &mut self.robots[k].ex;
+        ex.mates = mates;
+        std::mem::swap(&mut shared.map, &mut ex.map);
+        std::mem::swap(&mut shared.referee, &mut ex.referee);
+    }
+
+    /// Takes the shared map back from robot `k` (see [`Episode::lend`]).
+    fn take_back(&mut self, k: usize) {
+        if let Some(shared) = self.shared.as_mut() {
+            let ex = &mut self.robots[k].ex;
+            std::mem::swap(&mut shared.map, &mut ex.map);
+            std::mem::swap(&mut shared.referee, &mut ex.referee);
+        }
+    }
+
+    /// Robot `k` updated the map (lent to it) with `changes`: its teammates' planning grids
+    /// are told.
+    fn shared_update(&mut self, k: usize, changes: Option<MapChanges>) {
+        let (Some(shared), Some(changes)) = (self.shared.as_mut(), changes) else {
+            return;
+        };
+        let (before, rest) = self.robots.split_at_mut(k);
+        let (me, after) = rest.split_first_mut().expect("robot k exists");
+        for other in before.iter_mut().chain(after.iter_mut()) {
+            other.ex.nav.map_updated(&me.ex.map, &changes);
+            shared.exchanges += 1;
+        }
     }
 
     pub(super) fn build(
@@ -234,7 +387,12 @@ impl Episode {
                 result: None,
             });
         }
-        let mut episode = Episode { world, robots, cfg };
+        let mut episode = Episode {
+            world,
+            robots,
+            cfg,
+            shared: None,
+        };
         if let Some(cost) = layout_cost {
             episode.charge_layouts(cost);
         }
@@ -285,7 +443,10 @@ impl Episode {
             // each step may record some); the world moves once none has.
             let mut stepped = false;
             for k in 0..self.robots.len() {
-                match self.poll(k) {
+                self.lend(k);
+                let poll = self.poll(k);
+                self.take_back(k);
+                match poll {
                     Poll::Event(e) => return e,
                     Poll::Wait => {}
                     Poll::Again => {
@@ -371,24 +532,50 @@ impl Episode {
             })
             .collect();
         self.world.step(&commands);
+        if let Some(shared) = self.shared.as_mut() {
+            let now = {
+                let n = self.robots.len();
+                let mut min = f64::INFINITY;
+                for i in 0..n {
+                    for j in i + 1..n {
+                        let (a, b) = (
+                            self.world.true_pose(RobotId(i)),
+                            self.world.true_pose(RobotId(j)),
+                        );
+                        min = min.min((a.position() - b.position()).norm());
+                    }
+                }
+                min
+            };
+            shared.min_separation_m = shared.min_separation_m.min(now);
+        }
         for k in 0..self.robots.len() {
-            let r = &mut self.robots[k];
-            let Phase::Moving(_, after) = r.phase else {
+            let Phase::Moving(_, after) = self.robots[k].phase else {
                 continue;
             };
-            match after {
+            if matches!(after, After::Drove) {
+                self.robots[k].phase = Phase::Sense;
+                continue;
+            }
+            self.lend(k);
+            let r = &mut self.robots[k];
+            let changes = match after {
                 After::Waited(t0) => {
                     r.ex.compute_debt_s -= self.world.time_s() - t0;
-                    r.ex.sense(&mut self.world);
+                    let changes = r.ex.sense(&mut self.world);
                     r.ex.record_progress();
                     r.phase = Phase::Drive;
+                    changes
                 }
-                After::Drove => r.phase = Phase::Sense,
+                After::Drove => None,
                 After::Home(reason, exploration_time_s) => {
-                    r.ex.sense(&mut self.world);
+                    let changes = r.ex.sense(&mut self.world);
                     r.phase = Phase::Home(reason, exploration_time_s);
+                    changes
                 }
-            }
+            };
+            self.shared_update(k, changes);
+            self.take_back(k);
         }
     }
 
@@ -428,8 +615,9 @@ impl Episode {
     /// The top of robot `k`'s loop: sense, record progress, end at the time limit, else decide
     /// when a decision is due, or drive.
     fn sense(&mut self, k: usize) {
+        let changes = self.robots[k].ex.sense(&mut self.world);
+        self.shared_update(k, changes);
         let r = &mut self.robots[k];
-        r.ex.sense(&mut self.world);
         r.ex.record_progress();
         r.phase = if self.world.time_s() >= r.ex.cfg.time_limit_s {
             Phase::Ending(EndReason::TimeLimit)
@@ -453,10 +641,12 @@ impl Episode {
         let r = self.robot(robot).ok()?;
         match &r.phase {
             Phase::Deciding(d) => Some(r.ex.decision_view(
+                self.shared.as_ref().map_or(&r.ex.map, |s| &s.map),
                 &d.views,
                 &d.asked,
                 r.ex.policy_needs,
                 d.between.as_deref(),
+                d.mate_paths.as_deref(),
             )),
             _ => None,
         }
@@ -487,8 +677,11 @@ impl Episode {
             }
         };
         let forgiven = d.forgiven;
+        self.lend(robot.0);
+        let r = &mut self.robots[robot.0];
         let step = r.ex.reply(d, reply, compute_s);
         r.phase = after_decision(&mut r.ex, step, forgiven);
+        self.take_back(robot.0);
         Ok(())
     }
 
@@ -497,7 +690,19 @@ impl Episode {
     /// sees what [`Episode::view`] shows). `None` for a robot the episode does not have.
     pub fn explored(&self, robot: RobotId) -> Option<(f64, f64)> {
         let r = self.robot(robot).ok()?;
-        Some((r.ex.explored_area_m2(), r.ex.explored_fraction()))
+        Some(match &self.shared {
+            Some(s) => {
+                let referee = &s.referee;
+                let area = referee.explored_cells as f64 * s.map.grid.frame.cell_area_m2();
+                let fraction = if referee.truth_cells == 0 {
+                    0.0
+                } else {
+                    referee.explored_cells as f64 / referee.truth_cells as f64
+                };
+                (area, fraction)
+            }
+            None => (r.ex.explored_area_m2(), r.ex.explored_fraction()),
+        })
     }
 
     /// Robot 0's result (the run's, for an episode of one robot), once [`Event::Finished`] was
@@ -520,6 +725,112 @@ impl Episode {
     /// Every robot's result (by [`RobotId`]), once [`Event::Finished`] was returned.
     pub fn into_results(self) -> Vec<Option<RunResult>> {
         self.robots.into_iter().map(|r| r.result).collect()
+    }
+
+    /// The team's result (see [`TeamResult`]), once [`Event::Finished`] was returned (`None`
+    /// before, or without robots). For robots with separate maps the team's explored area is
+    /// the union of theirs, and its progress curve the best robot's at each time.
+    pub fn into_team_result(self) -> Option<TeamResult> {
+        if self.robots.is_empty() || self.robots.iter().any(|r| r.result.is_none()) {
+            return None;
+        }
+        let n = self.robots.len();
+        let frame = self.robots[0].ex.referee.truth.frame;
+        let cell_m2 = frame.cell_area_m2();
+        // The area each robot's laser swept, the overlap, the team's explored cells.
+        let coverages: Vec<&Coverage> = self
+            .robots
+            .iter()
+            .filter_map(|r| r.ex.coverage.as_ref())
+            .collect();
+        let (seen, overlap_m2, seen_m2) = if coverages.len() == n {
+            let cell = coverages[0].cell_area_m2();
+            let cells = coverages[0].seen.data.len();
+            let (mut overlap, mut any) = (0usize, 0usize);
+            for i in 0..cells {
+                let k = coverages.iter().filter(|c| c.seen.data[i]).count();
+                any += (k > 0) as usize;
+                overlap += (k > 1) as usize;
+            }
+            let seen: Vec<f64> = coverages
+                .iter()
+                .map(|c| c.seen.count_true() as f64 * cell)
+                .collect();
+            (seen, overlap as f64 * cell, any as f64 * cell)
+        } else {
+            let seen: Vec<f64> = self
+                .robots
+                .iter()
+                .map(|r| r.ex.referee.explored_cells as f64 * cell_m2)
+                .collect();
+            let any = seen.iter().sum();
+            (seen, 0.0, any)
+        };
+        let team_explored = (self.shared.is_none() && n > 1).then(|| {
+            let referee = &self.robots[0].ex.referee;
+            let union = (0..referee.truth.data.len())
+                .filter(|&j| {
+                    referee.truth.data[j]
+                        && self.robots.iter().any(|r| r.ex.referee.explored.data[j])
+                })
+                .count();
+            (union, referee.truth_cells)
+        });
+        let rooms = match &self.shared {
+            Some(sh) => sh.referee.rooms.clone(),
+            None => self.robots[0].ex.referee.rooms.clone(),
+        };
+        let min_separation_m = self
+            .shared
+            .as_ref()
+            .map_or_else(|| self.separation(), |s| s.min_separation_m);
+        let exchanges = self.shared.as_ref().map_or(0, |s| s.exchanges);
+        let robots: Vec<RunResult> = self
+            .robots
+            .into_iter()
+            .map(|r| r.result.expect("checked"))
+            .collect();
+        let last = (0..n)
+            .max_by(|&a, &b| {
+                robots[a]
+                    .exploration_time_s
+                    .total_cmp(&robots[b].exploration_time_s)
+                    .then(b.cmp(&a))
+            })
+            .expect("a team has robots");
+        let team_time_s = robots[last].exploration_time_s;
+        let figures: Vec<RobotFigures> = robots
+            .iter()
+            .zip(&seen)
+            .map(|(r, &seen_m2)| RobotFigures {
+                seen_m2,
+                path_length_m: r.path_length_m,
+                exploration_time_s: r.exploration_time_s,
+                end_reason: r.end_reason,
+                idle_s: (team_time_s - r.exploration_time_s).max(0.0)
+                    + r.layout_compute_s
+                    + r.strategy_compute_s,
+                decisions: r.decisions.len(),
+            })
+            .collect();
+        let union = team_explored.map(|(cells, truth)| {
+            let fraction = if truth == 0 {
+                0.0
+            } else {
+                cells as f64 / truth as f64
+            };
+            (cells as f64 * cell_m2, fraction)
+        });
+        let team = team_run(&robots, last, &rooms, union);
+        Some(TeamResult {
+            team,
+            robots,
+            figures,
+            overlap_m2,
+            seen_m2,
+            exchanges,
+            min_separation_m,
+        })
     }
 }
 

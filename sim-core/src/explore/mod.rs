@@ -70,22 +70,26 @@ mod run;
 mod shared;
 pub mod strategies;
 pub mod strategy;
+mod team;
 
 pub use crate::utility::UtilityDistance;
 pub use config::{map_frame, map_margin_m, ExploreConfig, Localization};
-pub use drive::{drive_to_end, explore, explore_charged, explore_with, Hooks};
-pub use episode::{Episode, EpisodeError, Event, RobotId};
+pub use drive::{
+    drive_team_to_end, drive_to_end, explore, explore_charged, explore_team, explore_with, Hooks,
+};
+pub use episode::{Episode, EpisodeError, Event, RobotId, TeamMap, MAX_ROBOTS};
 pub use explorer::LayoutCost;
 pub use follow::{Command, FollowConfig, PathFollower};
 pub use layout_state::LayoutUse;
 pub use policy::{
-    CandidateView, DecisionView, LayoutView, Needs, Policy, Reply, RoomState, RoomView, RunEnd,
-    MAX_UNREACHABLE_GOALS,
+    CandidateView, DecisionView, LayoutView, Mate, Needs, Policy, Reply, RoomState, RoomView,
+    RunEnd, TeamView, MAX_UNREACHABLE_GOALS,
 };
 pub use run::{Decision, EndReason, MapQuality, MapSnapshot, ProgressSample, RunResult};
 pub use shared::{can_share, explore_shared, shared_part};
 pub use strategies::{BuiltIn, BUILT_IN};
 pub use strategy::{Choice, EarlyStop, GainModel, LayoutSource, Strategy, StrategyParams};
+pub use team::{RobotFigures, TeamResult};
 
 #[cfg(test)]
 pub(crate) mod tests;

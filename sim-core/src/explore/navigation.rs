@@ -464,6 +464,40 @@ impl Navigator {
         })
     }
 
+    /// The planned path lengths (m) on the distance grid from each point of `from` (world) to
+    /// the goal of each of `views`, row-major (`from.len() * views.len()`; infinite where no
+    /// path leads): one search per point. Call after [`Self::plan`] at the same decision on
+    /// `map` (the grids are then up to date).
+    pub(super) fn paths_from(
+        &self,
+        map: &LogOddsMap,
+        from: &[Vec2],
+        views: &[CandidateView],
+    ) -> Vec<f64> {
+        let (far, frame) = (&self.far, map.frame);
+        let targets: Vec<Option<Cell>> = views
+            .iter()
+            .map(|v| far.passable_near(frame.cell_from_world(v.goal), far_search_cells()))
+            .collect();
+        let wanted: Vec<Cell> = targets.iter().flatten().copied().collect();
+        let window = self.far_window(map);
+        let mut out = vec![f64::INFINITY; from.len() * views.len()];
+        for (i, &p) in from.iter().enumerate() {
+            let start = start_cell(far, frame.cell_from_world(p), self.inflation_m());
+            if !far.passable(start) || wanted.is_empty() {
+                continue;
+            }
+            let field =
+                dijkstra_padded_within(far.frame, start, far.padded(), MAX_EXTRA, &wanted, window);
+            for (j, t) in targets.iter().enumerate() {
+                if let Some(d) = t.and_then(|c| field.distance_m(c)) {
+                    out[i * views.len() + j] = d;
+                }
+            }
+        }
+        out
+    }
+
     /// The distance grid's cells that can be passable: those under the box of the map's cells
     /// observed so far (a passable cell covers a traversable map cell, which is free, or one
     /// travelled and free) of `map`. The whole grid before the first scan.

@@ -26,6 +26,9 @@ pub struct Needs {
     /// The planned path lengths between the candidates' goals
     /// ([`DecisionView::between_m`]): one search of the distance grid per candidate.
     pub paths_between: bool,
+    /// In a team: the planned path lengths from each teammate to each candidate's goal
+    /// ([`TeamView::mate_paths_m`]): one search of the distance grid per teammate.
+    pub mate_paths: bool,
 }
 
 /// One reachable frontier candidate.
@@ -134,6 +137,49 @@ pub struct DecisionView<'a> {
     /// When the policy needs them: the planned path lengths (m) between the candidates' goals,
     /// row-major in the order of `candidates` (`n * n` values; infinite where no path leads).
     pub between_m: Option<&'a [f64]>,
+    /// In a team of more than one robot: the teammates as the deciding robot knows them.
+    pub team: Option<TeamView<'a>>,
+}
+
+/// A teammate as the deciding robot knows it (from the team's communication: its estimated pose
+/// and its goal as last exchanged).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mate {
+    /// Its number in the team (0 to N - 1).
+    pub robot: usize,
+    /// Its estimated pose (map frame).
+    pub pose: Pose,
+    /// The goal it drives to (map frame, m): the point of the candidate it chose, `None` while
+    /// it has none.
+    pub goal: Option<Vec2>,
+    /// Whether it is still exploring (its exploration has not ended).
+    pub exploring: bool,
+    /// When this was last heard from it (simulated time, s).
+    pub heard_s: f64,
+}
+
+/// The team as the deciding robot sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct TeamView<'a> {
+    /// The deciding robot's number in the team.
+    pub robot: usize,
+    /// The team's size (the deciding robot included).
+    pub size: usize,
+    /// The other robots, in the order of their numbers.
+    pub mates: &'a [Mate],
+    /// When the policy needs them ([`Needs::mate_paths`]): the planned path lengths (m) from
+    /// each mate's estimated position to each candidate's goal on the deciding robot's map,
+    /// row-major mates by candidates (`mates.len() * candidates.len()` values; infinite where
+    /// no path leads).
+    pub mate_paths_m: Option<&'a [f64]>,
+}
+
+impl TeamView<'_> {
+    /// The path length (m) from mate `m` (an index into `mates`) to candidate `c` (an index into
+    /// the view's candidates), when computed.
+    pub fn mate_path_m(&self, m: usize, c: usize, candidates: usize) -> Option<f64> {
+        self.mate_paths_m.map(|p| p[m * candidates + c])
+    }
 }
 
 /// How many [`Reply::Goal`] points without a drivable path one decision takes: the last of them

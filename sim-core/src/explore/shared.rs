@@ -239,6 +239,7 @@ impl Episode {
             world: self.world.clone(),
             robots: robots.collect(),
             cfg,
+            shared: None,
         }
     }
 
@@ -251,7 +252,7 @@ impl Episode {
         };
         let (views, between) = d.show(&mut r.ex, needs);
         let view =
-            r.ex.decision_view(&views, &d.asked, needs, between.as_deref());
+            r.ex.decision_view(&r.ex.map, &views, &d.asked, needs, between.as_deref(), None);
         policy.decide(&view).0
     }
 }
@@ -295,6 +296,11 @@ impl Explorer {
             nav: self.nav.fork(),
             forgiven_at: self.forgiven_at,
             frontier_cells_left: self.frontier_cells_left,
+            team_robot: self.team_robot,
+            team_size: self.team_size,
+            mates: self.mates.clone(),
+            shares_map: self.shares_map,
+            coverage: self.coverage.clone(),
         }
     }
 }

@@ -92,6 +92,11 @@ pub(crate) trait Rule: std::fmt::Debug + Send + Sync {
     fn needs_paths_between(&self) -> bool {
         false
     }
+    /// Whether it needs the path lengths from the teammates to the candidates
+    /// ([`Needs::mate_paths`]).
+    fn needs_mate_paths(&self) -> bool {
+        false
+    }
     /// The index in `at.shown` of the candidate chosen (`None`: none is).
     fn choose(&self, at: &Choosing<'_, '_>, memory: &mut Memory) -> Option<usize>;
 }
@@ -287,6 +292,7 @@ impl Policy for BuiltInPolicy {
             layout_gain: self.early_stop != EarlyStop::Never,
             layout: self.choice.0.needs_layout(),
             paths_between: self.choice.0.needs_paths_between(),
+            mate_paths: self.choice.0.needs_mate_paths(),
         }
     }
 
@@ -481,6 +487,7 @@ mod tests {
             layout: None,
             map: &map,
             between_m: None,
+            team: None,
         };
         let s = Strategy::by_name(strategy, p).unwrap();
         BuiltInPolicy::new(&s, seed).decide(&view).0
@@ -553,6 +560,7 @@ mod tests {
                 layout: None,
                 map: &map,
                 between_m: given,
+                team: None,
             };
             let got = BuiltInPolicy::new(&s, 1).decide(&view).0;
             let chosen = match got {
@@ -614,6 +622,7 @@ mod tests {
                 }),
                 map: &map,
                 between_m: None,
+                team: None,
             };
             let got = BuiltInPolicy::new(&s, 1).decide(&view).0;
             assert_eq!(got, Reply::Choose(expected), "robot at x = {x}");
@@ -670,6 +679,7 @@ mod tests {
                 layout: None,
                 map: &map,
                 between_m: None,
+                team: None,
             };
             policy.decide(&view).0
         };

@@ -116,6 +116,7 @@ fn check_decisions(
         }),
         map,
         between_m: None,
+        team: None,
     };
     let mut ask = |what, v: &DecisionView<'_>| {
         let (r, _) = s.decide(v);

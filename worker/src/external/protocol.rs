@@ -700,6 +700,7 @@ mod tests {
             layout: Some(LayoutView { number: 2, rooms }),
             map,
             between_m: None,
+            team: None,
         }
     }
 

@@ -358,6 +358,7 @@ impl Policy for ExternalStrategy {
             layout_gain: self.hello.needs_layout_gain,
             layout: self.hello.needs_layout,
             paths_between: false,
+            mate_paths: false,
         }
     }
 

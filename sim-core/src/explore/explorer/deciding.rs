@@ -7,7 +7,8 @@
 //! question or decides.
 
 use crate::explore::explorer::Goal;
-use crate::explore::policy::LayoutView;
+use crate::explore::map_state::MapState;
+use crate::explore::policy::{LayoutView, TeamView};
 use crate::explore::run::Decision;
 
 use crate::explore::explorer::Explorer;
@@ -202,6 +203,7 @@ impl Explorer {
             asked: Asked::default(),
             views: Vec::new(),
             between: None,
+            mate_paths: None,
         }))
     }
 
@@ -246,6 +248,8 @@ impl Explorer {
             self.policy_decisions += 1;
         }
         d.between = needs.paths_between.then(|| self.paths_between(&d.views));
+        d.mate_paths =
+            (needs.mate_paths && !self.mates.is_empty()).then(|| self.mate_paths(&d.views));
         Step::Ask(d)
     }
 
@@ -673,10 +677,12 @@ impl Explorer {
     /// The decision as a policy with `needs` sees it, with `views` for its candidates.
     pub(crate) fn decision_view<'v>(
         &'v self,
+        map: &'v MapState,
         views: &'v [CandidateView],
         asked: &Asked,
         needs: Needs,
         between_m: Option<&'v [f64]>,
+        mate_paths_m: Option<&'v [f64]>,
     ) -> DecisionView<'v> {
         DecisionView {
             decision: self.policy_decisions - 1,
@@ -685,8 +691,7 @@ impl Explorer {
             pose: self.localizer.estimate(),
             candidates: views,
             unreachable_goal: asked.unreachable_goal,
-            layout: self
-                .map
+            layout: map
                 .layout
                 .as_ref()
                 .filter(|_| needs.layout)
@@ -694,8 +699,14 @@ impl Explorer {
                     number: l.number,
                     rooms: &l.rooms,
                 }),
-            map: &self.map.grid.occupancy,
+            map: &map.grid.occupancy,
             between_m,
+            team: (self.team_size > 1).then_some(TeamView {
+                robot: self.team_robot,
+                size: self.team_size,
+                mates: &self.mates,
+                mate_paths_m,
+            }),
         }
     }
 
@@ -811,6 +822,8 @@ pub(crate) struct Deciding {
     pub(crate) asked: Asked,
     pub(crate) views: Vec<CandidateView>,
     pub(crate) between: Option<Vec<f64>>,
+    /// In a team, when the policy needs them: the paths from the mates to the candidates.
+    pub(crate) mate_paths: Option<Vec<f64>>,
 }
 
 impl Deciding {

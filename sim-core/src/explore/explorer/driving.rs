@@ -153,6 +153,13 @@ impl Explorer {
         self.nav.paths_between(&self.map.grid, views)
     }
 
+    /// The planned path lengths from the mates' estimated positions to the goals of `views`
+    /// ([`Navigator::paths_from`]).
+    pub(crate) fn mate_paths(&self, views: &[CandidateView]) -> Vec<f64> {
+        let from: Vec<crate::geom::Vec2> = self.mates.iter().map(|m| m.pose.position()).collect();
+        self.nav.paths_from(&self.map.grid, &from, views)
+    }
+
     /// Plans at `level` from now on ([`Navigator::set_planning`]).
     pub(crate) fn set_planning(&mut self, level: Planning) {
         self.nav.set_planning(level);

@@ -84,6 +84,15 @@ pub(crate) struct Explorer {
     pub(crate) forgiven_at: Option<usize>,
     /// Frontier cells left at the end that the robot had not looked into (see `classify_end`).
     pub(crate) frontier_cells_left: usize,
+    /// In a team: the robot's number, the team's size, and its teammates as it knows them (set
+    /// by the episode before each of its steps; empty alone).
+    pub(crate) team_robot: usize,
+    pub(crate) team_size: usize,
+    pub(crate) mates: Vec<crate::explore::policy::Mate>,
+    /// The map is a team's, lent to this robot: its end copies the map rather than taking it.
+    pub(crate) shares_map: bool,
+    /// In a team: the area its laser swept (for the team's overlap).
+    pub(crate) coverage: Option<crate::explore::team::Coverage>,
 }
 
 #[derive(Clone)]
@@ -167,6 +176,11 @@ pub(crate) fn new_explorer(
         nav: Navigator::new(frame, cfg.sim.robot.radius_m, cfg.safety_margin_m),
         forgiven_at: None,
         frontier_cells_left: 0,
+        team_robot: robot.0,
+        team_size: 1,
+        mates: Vec::new(),
+        shares_map: false,
+        coverage: None,
         cfg,
     }
 }
@@ -202,5 +216,6 @@ pub(crate) fn built_in_needs(policy: &BuiltInPolicy, cfg: &ExploreConfig) -> Nee
         layout_gain: policy.needs().layout_gain && cfg.strategy.uses_layout(),
         layout: policy.needs().layout,
         paths_between: policy.needs().paths_between,
+        mate_paths: policy.needs().mate_paths,
     }
 }

@@ -257,7 +257,11 @@ impl Explorer {
             estimated_trajectory: self.localizer.take_estimated_trajectory(),
             map: crate::grid::Grid {
                 frame: self.map.grid.occupancy.frame,
-                data: std::mem::take(&mut self.map.grid.occupancy.data),
+                data: if self.shares_map {
+                    self.map.grid.occupancy.data.clone()
+                } else {
+                    std::mem::take(&mut self.map.grid.occupancy.data)
+                },
             },
             map_quality,
             plans: self.plans,

@@ -1,6 +1,7 @@
 //! Sensing: the laser and odometry read, the pose estimated, the map updated.
 
 use crate::explore::explorer::Explorer;
+use crate::explore::map_state::MapChanges;
 use crate::explore::referee::MapToWorld;
 use crate::sim::World;
 
@@ -12,22 +13,22 @@ impl Explorer {
     }
 
     /// Observes the world ([`Explorer::observe`]), and updates the map when the robot has moved
-    /// or turned enough, or the period has passed.
-    pub(crate) fn sense(&mut self, world: &mut World) {
+    /// or turned enough, or the period has passed: what the update changed (`None`: no update).
+    pub(crate) fn sense(&mut self, world: &mut World) -> Option<MapChanges> {
         self.observe(world);
         let cfg = &*self.cfg;
-        let Some(due) = self
+        let due = self
             .localizer
-            .advance(world.odometry(self.robot), self.now_s, cfg)
-        else {
-            return;
-        };
+            .advance(world.odometry(self.robot), self.now_s, cfg)?;
         let scan = world.scan(self.robot);
         let seen = (&self.map.grid, &self.map.obstacles);
         let estimate = self
             .localizer
             .localize(&due, &scan, seen, self.true_pose, cfg);
         let changes = self.map.integrate(&estimate, &scan, &cfg.log_odds);
+        if let Some(coverage) = self.coverage.as_mut() {
+            coverage.add_scan(&estimate, &scan);
+        }
         // (The planning cells of every change, and the explored area.)
         self.nav.map_updated(&self.map, &changes);
         let map_to_world = MapToWorld::new(&estimate, &self.true_pose);
@@ -35,5 +36,6 @@ impl Explorer {
         let (from, to) = self.localizer.close_update(due, self.now_s);
         self.mark_travelled(from, to);
         self.trajectory.push(self.true_pose);
+        Some(changes)
     }
 }

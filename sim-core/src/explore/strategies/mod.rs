@@ -22,6 +22,11 @@ mod nearest;
 mod random_frontier;
 mod room_first;
 pub(crate) mod shared;
+mod team_burgard;
+mod team_greedy;
+mod team_hungarian;
+mod team_minpos;
+mod team_nearest;
 mod utility_exp;
 
 use crate::explore::strategy::{Strategy, StrategyParams};
@@ -48,6 +53,11 @@ pub const BUILT_IN: &[BuiltIn] = &[
     frontier_tsp::STRATEGY,
     room_first::STRATEGY,
     random_frontier::STRATEGY,
+    team_nearest::STRATEGY,
+    team_greedy::STRATEGY,
+    team_burgard::STRATEGY,
+    team_hungarian::STRATEGY,
+    team_minpos::STRATEGY,
 ];
 
 /// The paper's baseline (the candidates and gains an external strategy chooses among).

@@ -113,6 +113,34 @@ impl Rule for Utility {
     }
 }
 
+/// The paper's utility of each of `shown` (`None`: no path), its gain (at least
+/// `gain_floor_m2`) first made `gain(candidate, gain)` (a team strategy's discount).
+pub(super) fn utility_of(
+    shown: &[&CandidateView],
+    alpha: f64,
+    gain_floor_m2: f64,
+    gain: impl Fn(&CandidateView, f64) -> f64,
+) -> Vec<Option<f64>> {
+    let scores: Vec<CandidateScore> = with_gain_floor(
+        &shown
+            .iter()
+            .map(|c| CandidateScore {
+                distance_m: Some(c.distance_m),
+                gain_m2: c.gain_m2,
+            })
+            .collect::<Vec<_>>(),
+        gain_floor_m2,
+    )
+    .into_iter()
+    .zip(shown)
+    .map(|(s, c)| CandidateScore {
+        gain_m2: gain(c, s.gain_m2),
+        ..s
+    })
+    .collect();
+    crate::utility::utilities(&scores, alpha)
+}
+
 /// The index in `shown` of the candidate of the largest finite `score` (the first of equals).
 pub(super) fn best_of(
     shown: &[&CandidateView],
