@@ -471,10 +471,15 @@ impl Building {
                 .iter()
                 .all(|q| (q.position() - p).norm() >= spacing - 1e-9)
         };
-        let fits = |pose: Pose| {
-            self.check_start(pose, robot_radius_m + RANDOM_START_MARGIN_M)
-                .is_ok()
+        // (The exact check of `check_start`, the boundary computed once.)
+        let segments = self.boundary_segments();
+        let clear = |p: Vec2, r: f64| {
+            p.x.is_finite()
+                && p.y.is_finite()
+                && self.is_free(p)
+                && segments.iter().all(|s| s.distance_to(p) >= r)
         };
+        let fits = |pose: Pose| clear(pose.position(), robot_radius_m + RANDOM_START_MARGIN_M);
         match rule {
             TeamStarts::Together => {
                 // Rings out to 20 spacings; on each, places about `spacing` apart.
@@ -497,13 +502,12 @@ impl Building {
                         // Reached from robot 0's start along a straight line the body fits
                         // along (every 0.05 m).
                         let steps = (r / 0.05).ceil() as usize;
-                        let clear = (1..steps).all(|i| {
+                        let reached = (1..steps).all(|i| {
                             let q = first.position()
                                 + (p - first.position()) * (i as f64 / steps as f64);
-                            self.check_start(Pose::new(q.x, q.y, 0.0), robot_radius_m)
-                                .is_ok()
+                            clear(q, robot_radius_m)
                         });
-                        if clear {
+                        if reached {
                             placed.push(pose);
                         }
                     }

@@ -89,7 +89,15 @@ pub fn explore_with(
             (&mut built_in, None)
         }
     };
-    let episode = Episode::build(building, &[start], cfg.clone(), seed, caller, layout_cost);
+    let episode = Episode::build(
+        building,
+        &[start],
+        cfg.clone(),
+        seed,
+        caller,
+        layout_cost,
+        TeamMap::Separate,
+    );
     drive_to_end(episode, policy, on_progress)
 }
 

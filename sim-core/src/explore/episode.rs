@@ -24,6 +24,7 @@ use crate::explore::config::ExploreConfig;
 use crate::explore::explorer::deciding::{Deciding, Step};
 use crate::explore::explorer::{new_explorer, Explorer, LayoutCost};
 use crate::explore::map_state::{MapChanges, MapState};
+use crate::explore::navigation::{Navigator, OwnNav};
 use crate::explore::policy::{DecisionView, Mate, Needs, Reply, RunEnd};
 use crate::explore::referee::Referee;
 use crate::explore::run::{EndReason, ProgressSample, RunResult};
@@ -130,6 +131,8 @@ pub(super) struct Robot {
     pub(super) phase: Phase,
     /// Progress samples handed out so far.
     pub(super) progress_sent: usize,
+    /// In a team sharing its planning grids: the robot's own part of the navigator.
+    pub(super) own_nav: OwnNav,
     pub(super) result: Option<RunResult>,
 }
 
@@ -189,6 +192,8 @@ pub enum TeamMap {
 pub(super) struct Shared {
     map: MapState,
     referee: Referee,
+    /// The planning grids (each robot's own part kept with it: `Robot::own_nav`).
+    nav: Navigator,
     /// Map updates passed on to teammates (one per update and teammate).
     exchanges: u64,
     /// The smallest distance between two robots' centres so far (m).
@@ -220,7 +225,7 @@ impl Episode {
     /// strategy's own rule is to answer (the episode computes what that rule needs: the
     /// layout's gains, its rooms, the paths between candidates).
     pub fn new(building: &Building, start: Pose, cfg: ExploreConfig, seed: u64) -> Episode {
-        Episode::build(building, &[start], cfg, seed, None, None)
+        Episode::build(building, &[start], cfg, seed, None, None, TeamMap::Separate)
     }
 
     /// [`Episode::new`], its decisions answered by a policy of the caller's that needs
@@ -233,7 +238,15 @@ impl Episode {
         seed: u64,
         needs: Needs,
     ) -> Episode {
-        Episode::build(building, &[start], cfg, seed, Some(needs), None)
+        Episode::build(
+            building,
+            &[start],
+            cfg,
+            seed,
+            Some(needs),
+            None,
+            TeamMap::Separate,
+        )
     }
 
     /// A team: one robot at each of `starts` (robot `k` at `starts[k]`, at most 8), in one
@@ -251,7 +264,7 @@ impl Episode {
         map: TeamMap,
     ) -> Episode {
         assert!(starts.len() <= MAX_ROBOTS, "at most {MAX_ROBOTS} robots");
-        let mut episode = Episode::build(building, starts, cfg, seed, needs, None);
+        let mut episode = Episode::build(building, starts, cfg, seed, needs, None, map);
         if starts.len() > 1 {
             let n = starts.len();
             for r in &mut episode.robots {
@@ -270,18 +283,24 @@ impl Episode {
     fn share_map(&mut self) {
         let frame = self.robots[0].ex.map.grid.frame;
         let tiny = crate::grid::GridFrame::new(frame.origin_m, frame.resolution_m, 1, 1);
+        let (radius_m, margin_m) = (self.cfg.sim.robot.radius_m, self.cfg.safety_margin_m);
         let mut map = None;
+        let mut nav = None;
         for (k, r) in self.robots.iter_mut().enumerate() {
             let own = std::mem::replace(&mut r.ex.map, MapState::new(tiny, 1));
-            // (Robot 0's map becomes the team's.)
+            let own_nav =
+                std::mem::replace(&mut r.ex.nav, Navigator::new(tiny, radius_m, margin_m));
+            // (Robot 0's map and planning grids become the team's.)
             if k == 0 {
                 map = Some(own);
+                nav = Some(own_nav);
             }
             r.ex.shares_map = true;
         }
         let referee = self.robots[0].ex.referee.clone();
         self.shared = Some(Box::new(Shared {
             map: map.expect("a team has robots"),
+            nav: nav.expect("a team has robots"),
             referee,
             exchanges: 0,
             min_separation_m: self.separation(),
@@ -329,32 +348,40 @@ impl Episode {
                 }
             })
             .collect();
-        let ex = &mut self.robots[k].ex;
-        ex.mates = mates;
-        std::mem::swap(&mut shared.map, &mut ex.map);
-        std::mem::swap(&mut shared.referee, &mut ex.referee);
+        let r = &mut self.robots[k];
+        r.ex.mates = mates;
+        std::mem::swap(&mut shared.map, &mut r.ex.map);
+        std::mem::swap(&mut shared.referee, &mut r.ex.referee);
+        std::mem::swap(&mut shared.nav, &mut r.ex.nav);
+        r.ex.nav.put_own(std::mem::take(&mut r.own_nav));
     }
 
     /// Takes the shared map back from robot `k` (see [`Episode::lend`]).
     fn take_back(&mut self, k: usize) {
         if let Some(shared) = self.shared.as_mut() {
-            let ex = &mut self.robots[k].ex;
-            std::mem::swap(&mut shared.map, &mut ex.map);
-            std::mem::swap(&mut shared.referee, &mut ex.referee);
+            let r = &mut self.robots[k];
+            r.own_nav = r.ex.nav.take_own();
+            std::mem::swap(&mut shared.map, &mut r.ex.map);
+            std::mem::swap(&mut shared.referee, &mut r.ex.referee);
+            std::mem::swap(&mut shared.nav, &mut r.ex.nav);
         }
     }
 
-    /// Robot `k` updated the map (lent to it) with `changes`: its teammates' planning grids
-    /// are told.
+    /// Robot `k` updated the map (lent to it) with `changes`: its teammates are told (they
+    /// check their paths again when walls changed).
     fn shared_update(&mut self, k: usize, changes: Option<MapChanges>) {
         let (Some(shared), Some(changes)) = (self.shared.as_mut(), changes) else {
             return;
         };
-        let (before, rest) = self.robots.split_at_mut(k);
-        let (me, after) = rest.split_first_mut().expect("robot k exists");
-        for other in before.iter_mut().chain(after.iter_mut()) {
-            other.ex.nav.map_updated(&me.ex.map, &changes);
-            shared.exchanges += 1;
+        // (The planning grids, the team's, took in the changes as the robot mapped.)
+        let walls = !changes.flips.is_empty();
+        for (j, other) in self.robots.iter_mut().enumerate() {
+            if j != k {
+                if walls {
+                    other.own_nav.walls_changed();
+                }
+                shared.exchanges += 1;
+            }
         }
     }
 
@@ -365,12 +392,18 @@ impl Episode {
         seed: u64,
         caller: Option<Needs>,
         layout_cost: Option<LayoutCost>,
+        map: TeamMap,
     ) -> Episode {
         let mut world = World::new(building, &cfg.sim, seed);
         let cfg = Arc::new(cfg);
-        let mut robots = Vec::new();
+        let mut robots: Vec<Robot> = Vec::new();
         for &start in starts {
             let robot = world.add_robot(start);
+            // (On a shared map robot 0's ground truth is the team's.)
+            let referee = robots
+                .first()
+                .filter(|_| map == TeamMap::Shared)
+                .map(|r| &r.ex.referee);
             let ex = new_explorer(
                 building,
                 &world,
@@ -379,11 +412,13 @@ impl Episode {
                 Arc::clone(&cfg),
                 seed,
                 caller,
+                referee,
             );
             robots.push(Robot {
                 ex: Box::new(ex),
                 phase: Phase::Sense,
                 progress_sent: 0,
+                own_nav: OwnNav::default(),
                 result: None,
             });
         }

@@ -80,6 +80,36 @@ pub(super) struct Navigator {
     chose_beyond: bool,
 }
 
+/// A robot's own part of a navigator that a team's robots share (`Episode::lend`): the level
+/// it plans at, whether walls changed since it last checked its path, and the bounded search's
+/// memory. The grids are the team's: they depend on the map alone (and at the `Travelled`
+/// level on the cells any robot travelled: a teammate's body, the same, fitted there too).
+#[derive(Debug, Clone)]
+pub(super) struct OwnNav {
+    planning: Planning,
+    walls_changed: bool,
+    chose_beyond: bool,
+    stale: Option<StaleField>,
+}
+
+impl Default for OwnNav {
+    fn default() -> Self {
+        OwnNav {
+            planning: Planning::WithMargin,
+            walls_changed: false,
+            chose_beyond: false,
+            stale: None,
+        }
+    }
+}
+
+impl OwnNav {
+    /// A wall appeared or went on the map: the robot checks its path again.
+    pub(super) fn walls_changed(&mut self) {
+        self.walls_changed = true;
+    }
+}
+
 /// See [`Navigator::stale`].
 #[derive(Debug, Clone)]
 struct StaleField {
@@ -154,6 +184,25 @@ impl Navigator {
             unreachable_memo: self.unreachable_memo.clone(),
             stale: self.stale.clone(),
             chose_beyond: self.chose_beyond,
+        }
+    }
+
+    /// Takes on a robot's own part (see [`OwnNav`]): its planning level (the grids of the level
+    /// left are kept), its walls flag and its bounded search's memory.
+    pub(super) fn put_own(&mut self, own: OwnNav) {
+        self.set_planning(own.planning);
+        self.walls_changed = own.walls_changed;
+        self.chose_beyond = own.chose_beyond;
+        self.stale = own.stale;
+    }
+
+    /// The robot's own part, to keep until its next step (see [`Navigator::put_own`]).
+    pub(super) fn take_own(&mut self) -> OwnNav {
+        OwnNav {
+            planning: self.planning,
+            walls_changed: std::mem::take(&mut self.walls_changed),
+            chose_beyond: std::mem::take(&mut self.chose_beyond),
+            stale: self.stale.take(),
         }
     }
 

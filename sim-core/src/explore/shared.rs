@@ -232,6 +232,7 @@ impl Episode {
                 ex,
                 phase,
                 progress_sent: r.progress_sent,
+                own_nav: r.own_nav.clone(),
                 result: None,
             }
         });

@@ -762,7 +762,7 @@ fn cells_travelled_while_the_travelled_grids_are_kept_are_planned_with() {
     let mut world = crate::sim::World::with_robot(&b, start, &cfg.sim, 1);
     let robot = crate::sim::RobotId(0);
     let cfg = std::sync::Arc::new(cfg);
-    let mut e = new_explorer(&b, &world, robot, start, cfg, 1, None);
+    let mut e = new_explorer(&b, &world, robot, start, cfg, 1, None, None);
     e.sense(&mut world);
     PLANNING_CHECKS.with(|c| c.set(Some([0; 3])));
     e.set_planning(Planning::Travelled);

@@ -121,7 +121,9 @@ pub(crate) struct Goal {
 }
 
 /// The state of `robot`'s exploration of `world` (made of `building`), starting at `start`:
-/// `caller` holds the needs of the caller's policy (`None`: the strategy's rule decides).
+/// `caller` holds the needs of the caller's policy (`None`: the strategy's rule decides);
+/// `referee`, when given, is the ground truth to start from (a teammate's, on a shared map)
+/// rather than one computed from `start`.
 pub(crate) fn new_explorer(
     building: &Building,
     world: &World,
@@ -130,13 +132,17 @@ pub(crate) fn new_explorer(
     cfg: Arc<ExploreConfig>,
     seed: u64,
     caller: Option<Needs>,
+    referee: Option<&Referee>,
 ) -> Explorer {
     let policy_needs = match caller {
         Some(needs) => needs,
         None => built_in_needs(&BuiltInPolicy::new(&cfg.strategy, seed), &cfg),
     };
     let frame = map_frame(&building.bounds(), cfg.map_resolution_m);
-    let referee = new_referee(building, frame, start, &cfg);
+    let referee = match referee {
+        Some(r) => r.clone(),
+        None => new_referee(building, frame, start, &cfg),
+    };
     let cap_cells =
         (((cfg.sim.robot.radius_m + cfg.safety_margin_m) / cfg.map_resolution_m).ceil() as u32 + 4)
             .max(8)
