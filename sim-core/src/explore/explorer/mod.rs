@@ -124,6 +124,7 @@ pub(crate) struct Goal {
 /// `caller` holds the needs of the caller's policy (`None`: the strategy's rule decides);
 /// `referee`, when given, is the ground truth to start from (a teammate's, on a shared map)
 /// rather than one computed from `start`.
+#[allow(clippy::too_many_arguments)] // each a distinct input of the state
 pub(crate) fn new_explorer(
     building: &Building,
     world: &World,
