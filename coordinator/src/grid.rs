@@ -49,6 +49,9 @@ struct GridFile {
     settings: toml::Table,
     /// Start poses as a factor of the grid (default: each building's own start).
     starts: Option<StartsSpec>,
+    /// Team sizes as a factor of the grid (`robots = [1, 2, 4]`): each strategy runs with each,
+    /// labelled `LABEL xN` (docs/teams.md).
+    robots: Option<Vec<u64>>,
     /// Seeds added in batches until a sequential test decides each comparison.
     sequential: Option<SequentialSpec>,
     /// The coverage level of the grid's comparisons and sequential test: a run achieves the
@@ -719,6 +722,36 @@ fn plan_strategies(
         resolved: Vec::new(),
         program_files: BTreeMap::new(),
     };
+    // The team sizes of the grid's `robots` factor (`[None]`: none, each strategy once).
+    let team_sizes: Vec<Option<u64>> = match &file.robots {
+        None => vec![None],
+        Some(sizes) => {
+            if sizes.is_empty() {
+                return Err(invalid(
+                    "robots",
+                    "is empty: list team sizes, e.g. robots = [1, 2, 4], or leave it out".into(),
+                ));
+            }
+            for (i, &n) in sizes.iter().enumerate() {
+                if !(1..=sim_core::explore::MAX_ROBOTS as u64).contains(&n) {
+                    return Err(invalid(
+                        &format!("robots[{i}]"),
+                        format!(
+                            "{n} robots: expected a team size from 1 to {}",
+                            sim_core::explore::MAX_ROBOTS
+                        ),
+                    ));
+                }
+                if sizes[..i].contains(&n) {
+                    return Err(invalid(
+                        &format!("robots[{i}]"),
+                        format!("{n} is listed twice"),
+                    ));
+                }
+            }
+            sizes.iter().map(|&n| Some(n)).collect()
+        }
+    };
     let grid_dir = dir_of(path);
     for (i, s) in file.strategies.iter().enumerate() {
         let field = format!("strategies[{i}]");
@@ -749,50 +782,72 @@ fn plan_strategies(
             }
         };
         let (name, program) = (reference.name().to_string(), reference.program().cloned());
-        // Labels are compared as normalised: two that differ only by white space at an end,
-        // by NFC against NFD or by an invisible character are one label (the last refused).
-        let label = crate::names::label(s.label.as_deref().unwrap_or(&name))
-            .map_err(|p| invalid(&format!("{field}.label"), p))?;
-        if let Some(first) = planned.labels.iter().position(|l| *l == label) {
-            return Err(invalid(
+        let base_label = s.label.as_deref().unwrap_or(&name);
+        for robots in team_sizes.iter().copied() {
+            let labelled = match robots {
+                Some(n) => format!("{base_label} x{n}"),
+                None => base_label.to_string(),
+            };
+            // Labels are compared as normalised: two that differ only by white space at an end,
+            // by NFC against NFD or by an invisible character are one label (the last refused).
+            let label = crate::names::label(&labelled)
+                .map_err(|p| invalid(&format!("{field}.label"), p))?;
+            if let Some(first) = planned.labels.iter().position(|l| *l == label) {
+                return Err(invalid(
                 &format!("{field}.label"),
                 format!(
                     "label '{}' is used twice (strategies[{first}] and {field}; labels are compared after trimming and Unicode normalisation); give each strategy a distinct label",
                     excerpt(&label)
                 ),
             ));
-        }
-        let mut merged = file.settings.clone();
-        for (k, v) in &s.settings {
-            merged.insert(k.clone(), v.clone());
-        }
-        let settings = settings_of(merged, &format!("{field}.settings"))?;
-        if planned.resolved.iter().any(|r: &Resolved| {
-            r.settings == settings
-                && match (&r.program, &program) {
-                    (None, None) => r.name == name,
-                    (Some(a), Some(b)) => program_identity(a) == program_identity(b),
-                    _ => false,
+            }
+            let mut merged = file.settings.clone();
+            for (k, v) in &s.settings {
+                merged.insert(k.clone(), v.clone());
+            }
+            if let Some(n) = robots {
+                if merged.contains_key("robots") {
+                    return Err(invalid(
+                    "robots",
+                    format!("is a factor of the grid, and {field}'s settings (or the grid's) set robots too; give the team size in one place"),
+                ));
                 }
-        }) {
-            return Err(invalid(
+                merged.insert("robots".into(), toml::Value::Integer(n as i64));
+            }
+            let settings = settings_of(merged, &format!("{field}.settings"))?;
+            if settings.robots > 1 && program.is_some() {
+                return Err(invalid(
                 &field,
-                format!(
-                    "strategy '{}' repeats another with the same name and settings",
-                    excerpt(&label)
-                ),
+                format!("an external strategy runs one robot only in this version; team runs ({} robots) take the built-in strategies (team-nearest, team-greedy, team-burgard, team-hungarian, team-minpos, or any other)", settings.robots),
             ));
+            }
+            if planned.resolved.iter().any(|r: &Resolved| {
+                r.settings == settings
+                    && match (&r.program, &program) {
+                        (None, None) => r.name == name,
+                        (Some(a), Some(b)) => program_identity(a) == program_identity(b),
+                        _ => false,
+                    }
+            }) {
+                return Err(invalid(
+                    &field,
+                    format!(
+                        "strategy '{}' repeats another with the same name and settings",
+                        excerpt(&label)
+                    ),
+                ));
+            }
+            check_strategy_fits(reference.base(), &settings, buildings, path)
+                .map_err(|(f, p)| invalid(&format!("{field}{f}"), p))?;
+            planned.labels.push(label.clone());
+            planned.resolved.push(Resolved {
+                name: name.clone(),
+                settings,
+                label,
+                program: program.clone(),
+                reference: reference.clone(),
+            });
         }
-        check_strategy_fits(reference.base(), &settings, buildings, path)
-            .map_err(|(f, p)| invalid(&format!("{field}{f}"), p))?;
-        planned.labels.push(label.clone());
-        planned.resolved.push(Resolved {
-            name,
-            settings,
-            label,
-            program,
-            reference,
-        });
     }
     Ok(planned)
 }

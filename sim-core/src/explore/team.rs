@@ -141,6 +141,9 @@ impl Coverage {
         let frame = self.seen.frame;
         let from = grid_from_world(&frame, pose.position());
         for (i, &r) in scan.ranges_m.iter().enumerate() {
+            if !r.is_finite() {
+                continue;
+            }
             let a = pose.theta_rad + scan.beam_angle_rad(i);
             let end = pose.position()
                 + crate::geom::Vec2::new(a.cos(), a.sin()) * r.min(scan.max_range_m);
