@@ -13,7 +13,7 @@ use crate::explore::strategy::{Choosing, Memory, Rule, StrategyParams};
 
 pub(super) const STRATEGY: BuiltIn = BuiltIn {
     name: "team-burgard",
-    gain: "the baseline's, discounted around the targets teammates head for (linearly to the laser's range)",
+    gain: "as `baseline`, discounted around teammates' targets (linearly to 6 m); the best paper utility",
     stops: NO_FRONTIER,
     citation: "Burgard, Moors, Stachniss and Schneider, IEEE T-RO 2005",
     settings: &["alpha", "gain_floor_m2"],

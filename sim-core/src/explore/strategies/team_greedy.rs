@@ -10,7 +10,7 @@ use crate::explore::strategy::{Choosing, Memory, Rule, StrategyParams};
 
 pub(super) const STRATEGY: BuiltIn = BuiltIn {
     name: "team-greedy",
-    gain: "the baseline's; each robot the best remaining candidate by the paper's utility, those teammates head for left out while others remain",
+    gain: "as `baseline`; the best paper utility among the candidates no teammate heads for (all, when every one is)",
     stops: NO_FRONTIER,
     citation: "floorcast, the greedy assignment of multi-robot exploration",
     settings: &["alpha", "gain_floor_m2"],

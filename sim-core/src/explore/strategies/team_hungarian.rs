@@ -12,7 +12,7 @@ use crate::explore::strategy::{Choosing, Memory, Rule, StrategyParams};
 
 pub(super) const STRATEGY: BuiltIn = BuiltIn {
     name: "team-hungarian",
-    gain: "the baseline's; the robots assigned to candidates by least total path cost minus gain (the Hungarian method)",
+    gain: "as `baseline`; the robots assigned to candidates by least total path cost minus gain",
     stops: NO_FRONTIER,
     citation: "Kuhn 1955; Stachniss 2006",
     settings: &["alpha", "gain_floor_m2"],

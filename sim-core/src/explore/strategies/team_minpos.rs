@@ -10,7 +10,7 @@ use crate::explore::strategy::{Choosing, Memory, Rule};
 
 pub(super) const STRATEGY: BuiltIn = BuiltIn {
     name: "team-minpos",
-    gain: "not used: the candidate where the fewest teammates are nearer by path than the robot, the nearest of those",
+    gain: "not used: where the fewest teammates are nearer by path than the robot, the nearest",
     stops: NO_FRONTIER,
     citation: "Bautin, Simonin and Charpillet, ICIRA 2012",
     settings: &[],

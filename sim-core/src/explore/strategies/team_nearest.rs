@@ -7,7 +7,7 @@ use crate::explore::strategy::{Choosing, Memory, Rule};
 
 pub(super) const STRATEGY: BuiltIn = BuiltIn {
     name: "team-nearest",
-    gain: "not used: each robot its own nearest candidate by path, whatever its teammates do",
+    gain: "not used: each robot its own nearest candidate by path, teammates ignored",
     stops: NO_FRONTIER,
     citation: "Yamauchi, Agents 1998",
     settings: &[],
