@@ -139,7 +139,9 @@ pub struct ReportArgs {
     /// time per building and strategy, ± 1 standard deviation), gains.png (the paired gain over
     /// the reference per building with its 95 % confidence interval) and
     /// progress-<building>.png (the paper's Fig. 4: explored fraction over simulated time per
-    /// strategy, mean line, band from the least to the greatest run, rings at early stops).
+    /// strategy, mean line, band from the least to the greatest run, rings at early stops);
+    /// with labels of a grid's robots factor ("NAME xN"), team-sizes.png (mean exploration time
+    /// against team size per strategy).
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
     /// Also write one offline HTML page with the report's tables and the charts of --plots
@@ -1267,10 +1269,77 @@ fn charts(
     if !aggregates.labels.is_empty() {
         out.push(("profile".to_string(), profile.figure_styled(style)));
     }
+    out.extend(team_sizes_chart(t, style));
     for building in t.per_building.keys() {
         out.extend(progress_chart(results, building, &order, style));
     }
     out
+}
+
+/// `team-sizes`: the mean exploration time (over every building and seed, of the runs that
+/// achieved the outcome, ± 1 sd) against team size per strategy, for the labels a grid's
+/// `robots` factor made (`NAME xN`); `None` unless some strategy has two sizes.
+fn team_sizes_chart(
+    t: &floorcast_stats::table::Table,
+    style: &floorcast_render::chart::ChartStyle,
+) -> Option<(String, floorcast_render::Figure)> {
+    use floorcast_render::chart::{series_color, LineChart, Series};
+    // (name, robots, mean, sd) of each label `NAME xN`.
+    let sized: Vec<(String, usize, f64, f64)> = t
+        .overall
+        .iter()
+        .filter_map(|r| {
+            let (name, n) = r.label.rsplit_once(" x")?;
+            let n: usize = n.parse().ok()?;
+            (r.time.n > 0).then(|| {
+                let sd = if r.time.sd.is_finite() {
+                    r.time.sd
+                } else {
+                    0.0
+                };
+                (name.to_string(), n, r.time.mean, sd)
+            })
+        })
+        .collect();
+    let mut names: Vec<String> = Vec::new();
+    for (name, ..) in &sized {
+        if !names.contains(name) {
+            names.push(name.clone());
+        }
+    }
+    names.retain(|n| sized.iter().filter(|s| &s.0 == n).count() > 1);
+    if names.is_empty() {
+        return None;
+    }
+    let most = sized.iter().map(|s| s.1).max().unwrap_or(1) as f64;
+    let chart = LineChart {
+        title: "Exploration time against team size (mean ± 1 sd over buildings and seeds)".into(),
+        x_label: "robots".into(),
+        x_range: Some((0.5, most + 0.5)),
+        y_label: "exploration time (s)".into(),
+        y_range: None,
+        series: names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| {
+                let mut pts: Vec<&(String, usize, f64, f64)> =
+                    sized.iter().filter(|s| &s.0 == name).collect();
+                pts.sort_by_key(|s| s.1);
+                Series {
+                    label: name.clone(),
+                    color: series_color(k),
+                    points: pts.iter().map(|s| (s.1 as f64, s.2)).collect(),
+                    band: pts
+                        .iter()
+                        .map(|s| (s.1 as f64, s.2 - s.3, s.2 + s.3))
+                        .collect(),
+                    marks: Vec::new(),
+                }
+            })
+            .collect(),
+        marks_label: String::new(),
+    };
+    Some(("team-sizes".to_string(), chart.figure_styled(style)))
 }
 
 /// The paper's Fig. 4 for one building: the explored fraction over time per strategy (`None`

@@ -722,36 +722,7 @@ fn plan_strategies(
         resolved: Vec::new(),
         program_files: BTreeMap::new(),
     };
-    // The team sizes of the grid's `robots` factor (`[None]`: none, each strategy once).
-    let team_sizes: Vec<Option<u64>> = match &file.robots {
-        None => vec![None],
-        Some(sizes) => {
-            if sizes.is_empty() {
-                return Err(invalid(
-                    "robots",
-                    "is empty: list team sizes, e.g. robots = [1, 2, 4], or leave it out".into(),
-                ));
-            }
-            for (i, &n) in sizes.iter().enumerate() {
-                if !(1..=sim_core::explore::MAX_ROBOTS as u64).contains(&n) {
-                    return Err(invalid(
-                        &format!("robots[{i}]"),
-                        format!(
-                            "{n} robots: expected a team size from 1 to {}",
-                            sim_core::explore::MAX_ROBOTS
-                        ),
-                    ));
-                }
-                if sizes[..i].contains(&n) {
-                    return Err(invalid(
-                        &format!("robots[{i}]"),
-                        format!("{n} is listed twice"),
-                    ));
-                }
-            }
-            sizes.iter().map(|&n| Some(n)).collect()
-        }
-    };
+    let team_sizes = team_sizes(file, invalid)?;
     let grid_dir = dir_of(path);
     for (i, s) in file.strategies.iter().enumerate() {
         let field = format!("strategies[{i}]");
@@ -805,22 +776,9 @@ fn plan_strategies(
             for (k, v) in &s.settings {
                 merged.insert(k.clone(), v.clone());
             }
-            if let Some(n) = robots {
-                if merged.contains_key("robots") {
-                    return Err(invalid(
-                    "robots",
-                    format!("is a factor of the grid, and {field}'s settings (or the grid's) set robots too; give the team size in one place"),
-                ));
-                }
-                merged.insert("robots".into(), toml::Value::Integer(n as i64));
-            }
+            with_team_size(&mut merged, robots, &field, invalid)?;
             let settings = settings_of(merged, &format!("{field}.settings"))?;
-            if settings.robots > 1 && program.is_some() {
-                return Err(invalid(
-                &field,
-                format!("an external strategy runs one robot only in this version; team runs ({} robots) take the built-in strategies (team-nearest, team-greedy, team-burgard, team-hungarian, team-minpos, or any other)", settings.robots),
-            ));
-            }
+            check_team_strategy(&settings, program.is_some(), &field, invalid)?;
             if planned.resolved.iter().any(|r: &Resolved| {
                 r.settings == settings
                     && match (&r.program, &program) {
@@ -850,6 +808,80 @@ fn plan_strategies(
         }
     }
     Ok(planned)
+}
+
+/// The settings `merged` with the grid's team size `robots` (its `robots` factor) put in;
+/// refused when they set `robots` themselves.
+fn with_team_size(
+    merged: &mut toml::Table,
+    robots: Option<u64>,
+    field: &str,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<(), GridError> {
+    if let Some(n) = robots {
+        if merged.contains_key("robots") {
+            return Err(invalid(
+                "robots",
+                format!("is a factor of the grid, and {field}'s settings (or the grid's) set robots too; give the team size in one place"),
+            ));
+        }
+        merged.insert("robots".into(), toml::Value::Integer(n as i64));
+    }
+    Ok(())
+}
+
+/// A team (`robots` > 1) runs built-in strategies only: refused for an external one
+/// (`external`) at `field`.
+fn check_team_strategy(
+    settings: &Settings,
+    external: bool,
+    field: &str,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<(), GridError> {
+    if settings.robots > 1 && external {
+        return Err(invalid(
+            field,
+            format!("an external strategy runs one robot only in this version; team runs ({} robots) take the built-in strategies (team-nearest, team-greedy, team-burgard, team-hungarian, team-minpos, or any other)", settings.robots),
+        ));
+    }
+    Ok(())
+}
+
+/// The team sizes of the grid's `robots` factor, checked (`[None]`: no factor, each strategy
+/// once).
+fn team_sizes(
+    file: &GridFile,
+    invalid: &dyn Fn(&str, String) -> GridError,
+) -> Result<Vec<Option<u64>>, GridError> {
+    Ok(match &file.robots {
+        None => vec![None],
+        Some(sizes) => {
+            if sizes.is_empty() {
+                return Err(invalid(
+                    "robots",
+                    "is empty: list team sizes, e.g. robots = [1, 2, 4], or leave it out".into(),
+                ));
+            }
+            for (i, &n) in sizes.iter().enumerate() {
+                if !(1..=sim_core::explore::MAX_ROBOTS as u64).contains(&n) {
+                    return Err(invalid(
+                        &format!("robots[{i}]"),
+                        format!(
+                            "{n} robots: expected a team size from 1 to {}",
+                            sim_core::explore::MAX_ROBOTS
+                        ),
+                    ));
+                }
+                if sizes[..i].contains(&n) {
+                    return Err(invalid(
+                        &format!("robots[{i}]"),
+                        format!("{n} is listed twice"),
+                    ));
+                }
+            }
+            sizes.iter().map(|&n| Some(n)).collect()
+        }
+    })
 }
 
 /// A built-in strategy named, found, with none of an external strategy's fields.

@@ -148,6 +148,10 @@ fn the_assignments_ask_for_teammates_paths() {
         ("team-minpos", true),
     ] {
         let s = Strategy::by_name(name, &StrategyParams::default()).unwrap();
-        assert_eq!(BuiltInPolicy::new(&s, 1).needs().mate_paths, needs, "{name}");
+        assert_eq!(
+            BuiltInPolicy::new(&s, 1).needs().mate_paths,
+            needs,
+            "{name}"
+        );
     }
 }

@@ -301,6 +301,8 @@ impl Explorer {
             team_size: self.team_size,
             mates: self.mates.clone(),
             shares_map: self.shares_map,
+            team_forgiven_s: self.team_forgiven_s,
+            team_retries: self.team_retries,
             coverage: self.coverage.clone(),
         }
     }

@@ -834,6 +834,8 @@ fn a_frontier_through_the_robot_is_faced_and_kept() {
         known_cells_at: 0,
         best_distance_m: 0.0,
         best_distance_at_s: 0.0,
+        checked_s: 0.0,
+        waited_s: 0.0,
     };
     // The paper's rule: the unknown's centre is one cell behind, closer than the 0.05 m the
     // turn needs: no turn.

@@ -43,6 +43,12 @@ impl Blacklist {
         self.push(goal_m, radius_m, false, true);
     }
 
+    /// [`Blacklist::looked`], but [`Blacklist::forgive`] lifts it (a team's: a teammate may have
+    /// stood in the view).
+    pub(crate) fn looked_for_now(&mut self, goal_m: Vec2, radius_m: f64) {
+        self.push(goal_m, radius_m, true, true);
+    }
+
     fn push(&mut self, goal_m: Vec2, radius_m: f64, given_up: bool, looked: bool) {
         self.entries.push(BlacklistEntry {
             goal_m,

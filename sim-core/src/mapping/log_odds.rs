@@ -207,6 +207,8 @@ impl LogOddsMap {
         for i in 0..scan.ranges_m.len() {
             let range_m = scan.ranges_m[i];
             if !range_m.is_finite() {
+                // A beam left out (a teammate's body in a team): no gap is filled across it.
+                prev_hit = None;
                 continue;
             }
             let hit = scan.is_hit(i);

@@ -48,6 +48,18 @@ impl LaserConfig {
         pose: &Pose,
         rng: &mut impl Rng,
     ) -> Scan {
+        self.scan_marked(walls, others, pose, rng).0
+    }
+
+    /// [`LaserConfig::scan_among`], and per beam whether it ended on one of `others` (as a
+    /// laser reads a robot's retro-reflective marker by its return's intensity).
+    pub fn scan_marked(
+        &self,
+        walls: &Walls,
+        others: &[(Vec2, f64)],
+        pose: &Pose,
+        rng: &mut impl Rng,
+    ) -> (Scan, Vec<bool>) {
         let n = self.beams.max(1);
         let inc = if n > 1 {
             self.fov_rad / (n - 1) as f64
@@ -67,12 +79,14 @@ impl LaserConfig {
             })
             .collect();
         let mut hits = walls.cast_fan(origin, first_rad, inc, &dirs, self.max_range_m);
+        let mut on_robot = vec![false; hits.len()];
         for &(centre, radius_m) in others {
-            for (hit, dir) in hits.iter_mut().zip(&dirs) {
+            for ((hit, dir), marked) in hits.iter_mut().zip(&dirs).zip(&mut on_robot) {
                 if let Some(r) = ray_disc(origin, *dir, centre, radius_m)
                     .filter(|&r| r <= self.max_range_m && hit.is_none_or(|h| r < h))
                 {
                     *hit = Some(r);
+                    *marked = true;
                 }
             }
         }
@@ -87,12 +101,15 @@ impl LaserConfig {
                 None => self.max_range_m,
             })
             .collect();
-        Scan {
-            angle_min_rad: angle_min,
-            angle_increment_rad: inc,
-            max_range_m: self.max_range_m,
-            ranges_m,
-        }
+        (
+            Scan {
+                angle_min_rad: angle_min,
+                angle_increment_rad: inc,
+                max_range_m: self.max_range_m,
+                ranges_m,
+            },
+            on_robot,
+        )
     }
 }
 

@@ -192,6 +192,13 @@ impl World {
     /// A laser scan of `robot` from its true pose, with range noise: the walls and the other
     /// robots' bodies stop its beams.
     pub fn scan(&mut self, robot: RobotId) -> Scan {
+        self.scan_marked(robot).0
+    }
+
+    /// [`World::scan`], and per beam whether it ended on another robot's body: the robots carry
+    /// retro-reflective markers that a laser tells by its return's intensity, as real teams tag
+    /// each other. The same scan (the same noise) as [`World::scan`].
+    pub fn scan_marked(&mut self, robot: RobotId) -> (Scan, Vec<bool>) {
         let pose = self.bodies.pose(robot.0);
         let radius_m = self.config.robot.radius_m;
         let others: Vec<(crate::geom::Vec2, f64)> = (0..self.robots.len())
@@ -201,7 +208,7 @@ impl World {
         let rng = &mut self.robots[robot.0].laser_rng;
         self.config
             .laser
-            .scan_among(&self.walls, &others, &pose, rng)
+            .scan_marked(&self.walls, &others, &pose, rng)
     }
 }
 

@@ -139,6 +139,11 @@ impl Explorer {
     /// they last had one (or never had one). A goal given up for a moment of bad luck (a robot
     /// stuck on clutter, a pose estimate briefly off) would otherwise end the run with
     /// frontiers left. Returns whether any were forgiven.
+    ///
+    /// In a team, goals are mostly given up (or looked at in vain) because a teammate's body was
+    /// in the way: while a teammate still explores (and moves), they also get another chance once
+    /// [`TEAM_RETRY_S`] has passed since the last, at most [`TEAM_RETRIES`] times between two
+    /// chances the map's growth gave.
     pub(crate) fn forgive(&mut self) -> bool {
         if self.stopped_early || self.policy_failed {
             return false;
@@ -147,10 +152,20 @@ impl Explorer {
             self.map.known_cells.saturating_sub(at) as f64 * self.map.grid.frame.cell_area_m2()
                 >= 1.0
         });
-        if !grown || self.blacklist.forgive() == 0 {
+        let retry = !grown
+            && self.mates.iter().any(|m| m.exploring)
+            && self.team_retries < TEAM_RETRIES
+            && self.now_s - self.team_forgiven_s >= TEAM_RETRY_S;
+        if !(grown || retry) || self.blacklist.forgive() == 0 {
             return false;
         }
-        self.forgiven_at = Some(self.map.known_cells);
+        if grown {
+            self.forgiven_at = Some(self.map.known_cells);
+            self.team_retries = 0;
+        } else {
+            self.team_retries += 1;
+        }
+        self.team_forgiven_s = self.now_s;
         true
     }
 
@@ -450,7 +465,11 @@ impl Explorer {
                     * 2
                     > g.frontier.len()
             });
-            if again {
+            if again && self.team_size > 1 {
+                // (A teammate may have stood in the view: another chance later, see `forgive`.)
+                self.blacklist
+                    .looked_for_now(p, self.cfg.blacklist_radius_m);
+            } else if again {
                 self.blacklist.looked(p, self.cfg.blacklist_radius_m);
             }
         }
@@ -613,6 +632,8 @@ impl Explorer {
             known_cells_at: self.map.known_cells,
             best_distance_m: dist,
             best_distance_at_s: now,
+            checked_s: now,
+            waited_s: 0.0,
         });
         true
     }
@@ -850,6 +871,12 @@ impl Deciding {
         (views, between)
     }
 }
+
+/// In a team: the least time between two chances for the goals given up without the map
+/// growing (s), and how many such chances between two the map's growth gave (see
+/// `Explorer::forgive`).
+pub(crate) const TEAM_RETRY_S: f64 = 60.0;
+pub(crate) const TEAM_RETRIES: u32 = 3;
 
 /// What the policy chose within one round of a decision (see `Explorer::answered`).
 enum Choice {

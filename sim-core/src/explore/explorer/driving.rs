@@ -9,6 +9,11 @@ use crate::geom::{Pose, Vec2};
 use crate::grid::Cell;
 use crate::plan::inflate::Traversability;
 
+/// In a team: a teammate whose estimated centre is within two radii and this much of the
+/// robot's holds it up (m), and the most a robot waits so per goal (s).
+pub(crate) const TEAM_BESIDE_M: f64 = 0.6;
+pub(crate) const TEAM_WAIT_MAX_S: f64 = 60.0;
+
 impl Explorer {
     pub(crate) fn needs_decision(&mut self) -> bool {
         let cfg = &*self.cfg;
@@ -20,6 +25,22 @@ impl Explorer {
         // between goals it cannot approach, each new one restarting the progress timeout):
         // abandon the current goal.
         let position = self.localizer.estimate().position();
+        // In a team, a teammate's body beside the robot holds it up: its progress clocks wait
+        // (for at most `TEAM_WAIT_MAX_S` per goal, so that two robots holding each other up in
+        // a doorway give up in the end).
+        let dt = now - goal.checked_s;
+        goal.checked_s = now;
+        let beside = cfg.sim.robot.radius_m * 2.0 + TEAM_BESIDE_M;
+        if goal.waited_s < TEAM_WAIT_MAX_S
+            && self
+                .mates
+                .iter()
+                .any(|m| (m.pose.position() - position).norm() <= beside)
+        {
+            goal.waited_s += dt;
+            goal.best_distance_at_s += dt;
+            self.still_since_s += dt;
+        }
         if (position - self.still_at).norm() > STILL_RADIUS_M {
             self.still_at = position;
             self.still_since_s = now;

@@ -91,6 +91,10 @@ pub(crate) struct Explorer {
     pub(crate) mates: Vec<crate::explore::policy::Mate>,
     /// The map is a team's, lent to this robot: its end copies the map rather than taking it.
     pub(crate) shares_map: bool,
+    /// In a team: when the goals given up last had another chance, and how many chances they
+    /// had since the map last grew by 1 m2 (see `forgive`).
+    pub(crate) team_forgiven_s: f64,
+    pub(crate) team_retries: u32,
     /// In a team: the area its laser swept (for the team's overlap).
     pub(crate) coverage: Option<crate::explore::team::Coverage>,
 }
@@ -118,6 +122,10 @@ pub(crate) struct Goal {
     /// Shortest path length left seen so far, and when.
     pub(crate) best_distance_m: f64,
     pub(crate) best_distance_at_s: f64,
+    /// In a team: when the goal's progress was last checked, and how long the robot has waited
+    /// with a teammate's body beside it (its progress clocks paused: see `TEAM_WAIT_MAX_S`).
+    pub(crate) checked_s: f64,
+    pub(crate) waited_s: f64,
 }
 
 /// The state of `robot`'s exploration of `world` (made of `building`), starting at `start`:
@@ -187,6 +195,8 @@ pub(crate) fn new_explorer(
         team_size: 1,
         mates: Vec::new(),
         shares_map: false,
+        team_forgiven_s: 0.0,
+        team_retries: 0,
         coverage: None,
         cfg,
     }

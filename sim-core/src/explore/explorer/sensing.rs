@@ -20,9 +20,13 @@ impl Explorer {
         let due = self
             .localizer
             .advance(world.odometry(self.robot), self.now_s, cfg)?;
-        let mut scan = world.scan(self.robot);
-        if !self.mates.is_empty() {
-            self.drop_teammates(&mut scan);
+        // In a team, a beam that ended on a teammate (its marker) is dropped: neither mapped nor
+        // matched (a robot is not a wall).
+        let (mut scan, on_robot) = world.scan_marked(self.robot);
+        if self.team_size > 1 {
+            for (r, _) in scan.ranges_m.iter_mut().zip(&on_robot).filter(|(_, m)| **m) {
+                *r = f64::NAN;
+            }
         }
         let seen = (&self.map.grid, &self.map.obstacles);
         let estimate = self
@@ -41,30 +45,4 @@ impl Explorer {
         self.trajectory.push(self.true_pose);
         Some(changes)
     }
-
-    /// Drops (makes not finite: neither mapped nor matched) the beams of `scan` that end on a
-    /// teammate: within its radius and [`TEAMMATE_FILTER_M`] of its estimated position, as its
-    /// teammates tell it, measured from the robot's own estimate (a robot is not a wall to map).
-    fn drop_teammates(&self, scan: &mut crate::scan::Scan) {
-        let pose = self.localizer.estimate();
-        let reach = self.cfg.sim.robot.radius_m + TEAMMATE_FILTER_M;
-        for i in 0..scan.ranges_m.len() {
-            if !scan.is_hit(i) {
-                continue;
-            }
-            let a = pose.theta_rad + scan.beam_angle_rad(i);
-            let end = pose.position() + crate::geom::Vec2::new(a.cos(), a.sin()) * scan.ranges_m[i];
-            if self
-                .mates
-                .iter()
-                .any(|m| (m.pose.position() - end).norm() <= reach)
-            {
-                scan.ranges_m[i] = f64::NAN;
-            }
-        }
-    }
 }
-
-/// How far beyond a teammate's body (its estimated position plus its radius) a beam's end is
-/// taken for the teammate, not a wall (m): the estimates' errors.
-pub(crate) const TEAMMATE_FILTER_M: f64 = 0.15;
