@@ -567,22 +567,11 @@ impl Episode {
             })
             .collect();
         self.world.step(&commands);
-        if let Some(shared) = self.shared.as_mut() {
-            let now = {
-                let n = self.robots.len();
-                let mut min = f64::INFINITY;
-                for i in 0..n {
-                    for j in i + 1..n {
-                        let (a, b) = (
-                            self.world.true_pose(RobotId(i)),
-                            self.world.true_pose(RobotId(j)),
-                        );
-                        min = min.min((a.position() - b.position()).norm());
-                    }
-                }
-                min
-            };
-            shared.min_separation_m = shared.min_separation_m.min(now);
+        if self.shared.is_some() {
+            let now = self.separation();
+            if let Some(shared) = self.shared.as_mut() {
+                shared.min_separation_m = shared.min_separation_m.min(now);
+            }
         }
         for k in 0..self.robots.len() {
             let Phase::Moving(_, after) = self.robots[k].phase else {
