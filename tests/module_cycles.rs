@@ -444,7 +444,7 @@ fn the_drivers_of_a_run_are_short_and_over_an_episode() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for (file, name) in [
         ("sim-core/src/explore/drive.rs", "explore_with"),
-        ("worker/src/lib.rs", "run_job"),
+        ("worker/src/lib.rs", "run_job_from"),
     ] {
         let text = std::fs::read_to_string(root.join(file)).unwrap();
         let all = long_functions(&text, 0);

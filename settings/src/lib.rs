@@ -1146,6 +1146,7 @@ mod tests {
             cost_utility_beta_m2_per_m: 2.0,
             layout_update_fraction: 0.025,
             distance_bound_m: 20.0,
+            robots: 2,
             ..Settings::default()
         };
         let v = serde_json::to_value(&all_written).unwrap();
@@ -1370,7 +1371,8 @@ mod tests {
         );
     }
 
-    /// Every setting but `charge_compute` (the worker's) reaches the run: a value other than
+    /// Every setting but `charge_compute` (the worker's) and `robots` (the team's size, not a
+    /// robot's config) reaches the run: a value other than
     /// the default changes the core's config of at least one built-in strategy.
     #[test]
     fn every_setting_reaches_the_run() {
@@ -1400,9 +1402,10 @@ mod tests {
             let mut map = default.as_object().unwrap().clone();
             map.insert(info.name.to_string(), other);
             let changed = settings_from_map(&map).unwrap();
+            // (`charge_compute` is the worker's; `robots` makes a team of the run's config.)
             assert_eq!(
                 configs(&changed) != before,
-                info.name != "charge_compute",
+                !["charge_compute", "robots"].contains(&info.name),
                 "{}",
                 info.name
             );

@@ -28,7 +28,7 @@ use crate::explore::navigation::{Navigator, OwnNav};
 use crate::explore::policy::{DecisionView, Mate, Needs, Reply, RunEnd};
 use crate::explore::referee::Referee;
 use crate::explore::run::{EndReason, ProgressSample, RunResult};
-use crate::explore::team::{team_run, Coverage, RobotFigures, TeamResult};
+use crate::explore::team::{overlap, team_run, Coverage, RobotFigures, TeamResult};
 use crate::geom::Pose;
 pub use crate::sim::RobotId;
 use crate::sim::World;
@@ -768,19 +768,7 @@ impl Episode {
             .filter_map(|r| r.ex.coverage.as_ref())
             .collect();
         let (seen, overlap_m2, seen_m2) = if coverages.len() == n {
-            let cell = coverages[0].cell_area_m2();
-            let cells = coverages[0].seen.data.len();
-            let (mut overlap, mut any) = (0usize, 0usize);
-            for i in 0..cells {
-                let k = coverages.iter().filter(|c| c.seen.data[i]).count();
-                any += (k > 0) as usize;
-                overlap += (k > 1) as usize;
-            }
-            let seen: Vec<f64> = coverages
-                .iter()
-                .map(|c| c.seen.count_true() as f64 * cell)
-                .collect();
-            (seen, overlap as f64 * cell, any as f64 * cell)
+            overlap(&coverages)
         } else {
             let seen: Vec<f64> = self
                 .robots

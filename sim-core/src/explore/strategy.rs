@@ -404,6 +404,41 @@ mod tests {
             ),
             ("room-first", GainModel::Baseline, never, "room-first", &[]),
             ("random-frontier", GainModel::Baseline, never, "random", &[]),
+            (
+                "team-nearest",
+                GainModel::Baseline,
+                never,
+                "team-nearest",
+                &[],
+            ),
+            (
+                "team-greedy",
+                GainModel::Baseline,
+                never,
+                "team-greedy",
+                utility,
+            ),
+            (
+                "team-burgard",
+                GainModel::Baseline,
+                never,
+                "team-burgard",
+                utility,
+            ),
+            (
+                "team-hungarian",
+                GainModel::Baseline,
+                never,
+                "team-hungarian",
+                utility,
+            ),
+            (
+                "team-minpos",
+                GainModel::Baseline,
+                never,
+                "team-minpos",
+                &[],
+            ),
         ];
         assert_eq!(
             Strategy::names(),

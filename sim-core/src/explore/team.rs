@@ -228,3 +228,20 @@ pub(super) fn team_run(
     }
     team
 }
+
+/// The area each of `coverages` swept (m2), the area more than one swept and the area any swept.
+pub(super) fn overlap(coverages: &[&Coverage]) -> (Vec<f64>, f64, f64) {
+    let cell = coverages.first().map_or(0.0, |c| c.cell_area_m2());
+    let cells = coverages.first().map_or(0, |c| c.seen.data.len());
+    let (mut overlap, mut any) = (0usize, 0usize);
+    for i in 0..cells {
+        let k = coverages.iter().filter(|c| c.seen.data[i]).count();
+        any += (k > 0) as usize;
+        overlap += (k > 1) as usize;
+    }
+    let seen = coverages
+        .iter()
+        .map(|c| c.seen.count_true() as f64 * cell)
+        .collect();
+    (seen, overlap as f64 * cell, any as f64 * cell)
+}
