@@ -60,7 +60,7 @@ pub struct ExploreArgs {
     /// free point with the largest clearance, facing +x.
     /// With a team (--robots N): once for robot 0, the others placed around it (on rings
     /// 2 radii + 0.3 m apart, reachable from it in a straight line, its heading), or "random"
-    /// for every robot drawn (robot k from draws k * 1000000 + j, at least 2 radii + 0.3 m
+    /// for every robot drawn (robot k from its own block of draws, at least 2 radii + 0.3 m
     /// from the others), or N times, once per robot (docs/teams.md).
     #[arg(long, value_name = "X,Y,THETA|random", value_parser = parse_start, allow_hyphen_values = true)]
     start: Vec<StartArg>,

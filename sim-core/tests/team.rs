@@ -99,3 +99,52 @@ fn a_team_of_one_is_the_run_alone() {
         assert_eq!(team.fingerprint(), alone.fingerprint());
     }
 }
+
+/// A team's starts: robot 0 where given, the others 2 radii + 0.3 m apart at least, each with
+/// room for its body; together around robot 0 with its heading, or drawn: the same for the
+/// same seed and index, elsewhere for another index.
+#[test]
+fn team_starts_keep_their_distance_and_are_reproducible() {
+    let b = building(BuildingKind::Office, 800.0, 6);
+    let radius = config("team-nearest").sim.robot.radius_m;
+    let first = b.start.unwrap();
+    let spacing = 2.0 * radius + sim_core::building::TEAM_SPACING_EXTRA_M;
+    for rule in [
+        TeamStarts::Together,
+        TeamStarts::Random { seed: 3, index: 0 },
+        TeamStarts::Random { seed: 3, index: 7 },
+    ] {
+        let starts = b.team_starts(first, 6, radius, rule).unwrap();
+        assert_eq!(starts.len(), 6);
+        assert_eq!(starts[0], first);
+        for (i, p) in starts.iter().enumerate() {
+            assert!(b.check_start(*p, radius).is_ok(), "{rule:?}: robot {i}");
+            for q in &starts[..i] {
+                assert!(
+                    (p.position() - q.position()).norm() >= spacing - 1e-9,
+                    "{rule:?}"
+                );
+            }
+            if rule == TeamStarts::Together {
+                assert_eq!(p.theta_rad, first.theta_rad);
+            }
+        }
+        assert_eq!(starts, b.team_starts(first, 6, radius, rule).unwrap());
+    }
+    let drawn = |index| {
+        b.team_starts(first, 3, radius, TeamStarts::Random { seed: 3, index })
+            .unwrap()
+    };
+    assert_ne!(drawn(0)[1], drawn(7)[1]);
+    // Eight robots of 1 m radius do not fit around the start of a small office: an error
+    // naming how many did, not a panic.
+    let tiny = building(BuildingKind::Office, 60.0, 1);
+    let many = tiny.team_starts(tiny.start.unwrap(), 8, 1.0, TeamStarts::Together);
+    assert!(
+        matches!(
+            many,
+            Err(sim_core::building::StartError::NoRoomForTeam { robots: 8, placed }) if placed < 8
+        ),
+        "{many:?}"
+    );
+}

@@ -517,8 +517,8 @@ fn run_team_job(
 
 /// The start poses of a job's team of `settings.robots`: `given` (robot 0's must be the job's
 /// `start`; each checked as a start), else robot 0 at `start` and the others by
-/// [`Building::team_starts`]: drawn at random (the job's seed) when the job's start was drawn,
-/// else around robot 0.
+/// [`Building::team_starts`]: drawn at random (the job's seed, and an index from robot 0's
+/// start) when the job's start was drawn, else around robot 0.
 pub fn team_starts(
     job: &Job<'_>,
     start: Pose,
@@ -552,10 +552,12 @@ pub fn team_starts(
         }
         return Ok(poses.to_vec());
     }
+    // (Drawn teammates depend on robot 0's drawn start too: a grid's random starts of one seed
+    // put the others elsewhere for each.)
     let rule = match &job.start {
         Some(g) if g.source == GivenSource::Random => sim_core::building::TeamStarts::Random {
             seed: job.seed,
-            index: 0,
+            index: (g.pose.x_m.to_bits() ^ g.pose.y_m.to_bits().rotate_left(21)) % 15_000,
         },
         _ => sim_core::building::TeamStarts::Together,
     };
