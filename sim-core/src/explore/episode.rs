@@ -478,6 +478,10 @@ impl Episode {
             // each step may record some); the world moves once none has.
             let mut stepped = false;
             for k in 0..self.robots.len() {
+                // (A robot waiting for the world, or finished, has nothing to do with the map.)
+                if matches!(self.robots[k].phase, Phase::Moving(..) | Phase::Finished) {
+                    continue;
+                }
                 self.lend(k);
                 let poll = self.poll(k);
                 self.take_back(k);
@@ -714,19 +718,9 @@ impl Episode {
     /// sees what [`Episode::view`] shows). `None` for a robot the episode does not have.
     pub fn explored(&self, robot: RobotId) -> Option<(f64, f64)> {
         let r = self.robot(robot).ok()?;
-        Some(match &self.shared {
-            Some(s) => {
-                let referee = &s.referee;
-                let area = referee.explored_cells as f64 * s.map.grid.frame.cell_area_m2();
-                let fraction = if referee.truth_cells == 0 {
-                    0.0
-                } else {
-                    referee.explored_cells as f64 / referee.truth_cells as f64
-                };
-                (area, fraction)
-            }
-            None => (r.ex.explored_area_m2(), r.ex.explored_fraction()),
-        })
+        // (A team's shared referee is with the episode between the robots' steps.)
+        let referee = self.shared.as_ref().map_or(&r.ex.referee, |s| &s.referee);
+        Some((referee.explored_area_m2(), referee.explored_fraction()))
     }
 
     /// Robot 0's result (the run's, for an episode of one robot), once [`Event::Finished`] was
@@ -773,7 +767,7 @@ impl Episode {
             let seen: Vec<f64> = self
                 .robots
                 .iter()
-                .map(|r| r.ex.referee.explored_cells as f64 * cell_m2)
+                .map(|r| r.ex.referee.explored_area_m2())
                 .collect();
             let any = seen.iter().sum();
             (seen, 0.0, any)

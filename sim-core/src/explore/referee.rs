@@ -42,6 +42,22 @@ pub(super) struct Referee {
     pub(super) doors: Vec<(Vec2, Vec2)>,
 }
 
+impl Referee {
+    /// The explored area credited so far (m2; the truth's grid is the map's).
+    pub(super) fn explored_area_m2(&self) -> f64 {
+        self.explored_cells as f64 * self.truth.frame.cell_area_m2()
+    }
+
+    /// Its share of the explorable area (0 when there is none).
+    pub(super) fn explored_fraction(&self) -> f64 {
+        if self.truth_cells == 0 {
+            0.0
+        } else {
+            self.explored_cells as f64 / self.truth_cells as f64
+        }
+    }
+}
+
 /// The rigid motion taking a point of the map (drawn at the estimated pose) to where the sensor
 /// observed it in the building (the true pose): `true ∘ estimate⁻¹`.
 pub(super) struct MapToWorld {

@@ -297,7 +297,6 @@ impl Explorer {
             nav: self.nav.fork(),
             forgiven_at: self.forgiven_at,
             frontier_cells_left: self.frontier_cells_left,
-            team_robot: self.team_robot,
             team_size: self.team_size,
             mates: self.mates.clone(),
             shares_map: self.shares_map,

@@ -723,7 +723,7 @@ impl Explorer {
             map: &map.grid.occupancy,
             between_m,
             team: (self.team_size > 1).then_some(TeamView {
-                robot: self.team_robot,
+                robot: self.robot.0,
                 size: self.team_size,
                 mates: &self.mates,
                 mate_paths_m,

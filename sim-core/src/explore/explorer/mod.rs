@@ -84,9 +84,8 @@ pub(crate) struct Explorer {
     pub(crate) forgiven_at: Option<usize>,
     /// Frontier cells left at the end that the robot had not looked into (see `classify_end`).
     pub(crate) frontier_cells_left: usize,
-    /// In a team: the robot's number, the team's size, and its teammates as it knows them (set
-    /// by the episode before each of its steps; empty alone).
-    pub(crate) team_robot: usize,
+    /// In a team: the team's size, and the robot's teammates as it knows them (set by the
+    /// episode before each of its steps; empty alone).
     pub(crate) team_size: usize,
     pub(crate) mates: Vec<crate::explore::policy::Mate>,
     /// The map is a team's, lent to this robot: its end copies the map rather than taking it.
@@ -191,7 +190,6 @@ pub(crate) fn new_explorer(
         nav: Navigator::new(frame, cfg.sim.robot.radius_m, cfg.safety_margin_m),
         forgiven_at: None,
         frontier_cells_left: 0,
-        team_robot: robot.0,
         team_size: 1,
         mates: Vec::new(),
         shares_map: false,

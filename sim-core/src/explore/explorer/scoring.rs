@@ -83,15 +83,11 @@ impl Explorer {
     }
 
     pub(crate) fn explored_area_m2(&self) -> f64 {
-        self.referee.explored_cells as f64 * self.map.grid.frame.cell_area_m2()
+        self.referee.explored_area_m2()
     }
 
     pub(crate) fn explored_fraction(&self) -> f64 {
-        if self.referee.truth_cells == 0 {
-            0.0
-        } else {
-            self.referee.explored_cells as f64 / self.referee.truth_cells as f64
-        }
+        self.referee.explored_fraction()
     }
 
     pub(crate) fn record_progress(&mut self) {
